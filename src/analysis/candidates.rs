@@ -1,0 +1,337 @@
+//! Finding the nodes of an entry point and sorting them into candidates and
+//! rejected nodes.
+
+use std::collections::{BTreeMap, HashMap};
+use std::ops::Range;
+
+use naga::{Expression, Handle, TypeInner};
+use serde::Serialize;
+
+use super::graph::{ExprGraph, ExprSet};
+use super::{id, Analysis, Candidate, Node, Rejected, SourceSpan};
+use crate::cost::CostModel;
+use crate::front::Shader;
+use crate::proc;
+
+/// Why a node cannot be cached.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RejectReason {
+    InLoop,
+    NotStorable,
+    Trivial,
+    UniformOnly,
+}
+
+impl RejectReason {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            RejectReason::InLoop => "in-loop",
+            RejectReason::NotStorable => "not-storable",
+            RejectReason::Trivial => "trivial",
+            RejectReason::UniformOnly => "uniform-only",
+        }
+    }
+}
+
+pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> Analysis {
+    let module = &shader.module;
+    let entry = &module.entry_points[entry_index];
+    let function = &entry.function;
+    let info = shader.info.get_entry_point(entry_index);
+    let layout = model.layout(function);
+    let graph = ExprGraph::new(function, &layout);
+    let source = &shader.file.text;
+    // Arena handles cannot be made from an index outside naga, so slices
+    // (bit sets by arena index) are read through this table.
+    let exprs: Vec<&Expression> = function.expressions.iter().map(|(_, e)| e).collect();
+
+    // What each expression costs per invocation, loops included.
+    let mut weighted = vec![0.0; function.expressions.len()];
+    for (expr, at) in layout.placed() {
+        weighted[expr.index()] = model.expression(function, info, expr) * at.multiplier;
+    }
+    let total_cost = model.body(function, info, &layout);
+    // (fold from +0.0: an empty float `sum()` is -0.0)
+    let cost_of = |set: &ExprSet| -> f64 { set.ones().fold(0.0, |sum, i| sum + weighted[i]) };
+
+    // One node per source span: where the front end made several
+    // expressions for one piece of source (a load and its pointer, a splat
+    // and its scalar), the last one, which consumes the others, stands for it.
+    let mut by_span: BTreeMap<(usize, usize), Handle<Expression>> = BTreeMap::new();
+    for (handle, _) in function.expressions.iter() {
+        let Some(range) = function.expressions.get_span(handle).to_range() else {
+            continue;
+        };
+        if range.is_empty()
+            || range.end > source.len()
+            || !source.is_char_boundary(range.start)
+            || !source.is_char_boundary(range.end)
+        {
+            continue;
+        }
+        let range = call_extent(source, range);
+        if !is_value(info[handle].ty.inner_with(&module.types)) {
+            continue;
+        }
+        by_span.insert((range.start, range.end), handle);
+    }
+
+    // Ids: the occurrence number counts equal texts in source order.
+    let mut seen: HashMap<String, usize> = HashMap::new();
+    let mut candidates = Vec::new();
+    let mut rejected = Vec::new();
+    for (&(start, end), &expr) in &by_span {
+        let text = source[start..end].to_string();
+        let normalized = id::normalize(&text);
+        let occurrence = seen.entry(normalized).or_insert(0);
+        let node = Node {
+            id: id::node_id(&entry.name, &text, *occurrence),
+            span: SourceSpan {
+                start: shader.file.line_col(start).into(),
+                end: shader.file.line_col(end).into(),
+            },
+            ty: type_name(&module.types, info[expr].ty.inner_with(&module.types)),
+            text,
+            expression: expr,
+            range: start..end,
+        };
+        *occurrence += 1;
+
+        let slice = graph.slice(expr);
+        match classify(module, &exprs, info, &layout, &slice, expr) {
+            Err((reason, detail)) => rejected.push(Rejected {
+                node,
+                reason,
+                detail,
+            }),
+            Ok(components) => {
+                let cost = cost_of(&slice);
+                let mut shared = graph.remainder(expr);
+                shared.intersect_with(&slice);
+                shared.set(expr.index(), false);
+                let derivatives = slice.ones().any(|i| takes_derivatives(&exprs[i]));
+                candidates.push(Candidate {
+                    node,
+                    components,
+                    cost,
+                    ratio: if total_cost > 0.0 {
+                        cost / total_cost
+                    } else {
+                        0.0
+                    },
+                    overlap: cost_of(&shared),
+                    derivatives,
+                });
+            }
+        }
+    }
+
+    candidates.sort_by(|a, b| {
+        b.ratio
+            .total_cmp(&a.ratio)
+            .then(a.node.range.start.cmp(&b.node.range.start))
+    });
+    Analysis {
+        shader: shader.file.path.clone(),
+        entry: entry.name.clone(),
+        total_cost,
+        candidates,
+        rejected,
+        entry_index,
+    }
+}
+
+/// naga spans a call of a built-in function (`mix(a, b, t)`, `dpdx(v)`,
+/// `textureSample(...)`) by its name alone; a person expects the whole call.
+/// When `range` covers just an identifier followed by `(` (after optional
+/// template arguments), this extends it to the matching `)`. The source is
+/// only read here, to show and name the node; nothing is rewritten as text.
+fn call_extent(source: &str, range: Range<usize>) -> Range<usize> {
+    let name = &source[range.clone()];
+    if !name.chars().all(|c| c.is_alphanumeric() || c == '_') {
+        return range;
+    }
+    let bytes = source.as_bytes();
+    let skip_space = |mut i: usize| {
+        while i < bytes.len() && bytes[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        i
+    };
+    let mut i = skip_space(range.end);
+    if bytes.get(i) == Some(&b'<') {
+        let Some(close) = source[i..].find('>') else {
+            return range;
+        };
+        i = skip_space(i + close + 1);
+    }
+    if bytes.get(i) != Some(&b'(') {
+        return range;
+    }
+    let mut depth = 0usize;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'(' => depth += 1,
+            b')' => {
+                depth -= 1;
+                if depth == 0 {
+                    return range.start..i + 1;
+                }
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                i += source[i..].find('\n').unwrap_or(source.len() - i);
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i += source[i..]
+                    .find("*/")
+                    .map_or(source.len() - i, |end| end + 1);
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    range
+}
+
+/// Why `expr` cannot be cached, or its number of components if it can.
+fn classify(
+    module: &naga::Module,
+    exprs: &[&Expression],
+    info: &naga::valid::FunctionInfo,
+    layout: &proc::FunctionLayout,
+    slice: &ExprSet,
+    expr: Handle<Expression>,
+) -> Result<u32, (RejectReason, String)> {
+    if let Some(at) = layout.placement(expr) {
+        if at.loop_depth > 0 {
+            return Err((
+                RejectReason::InLoop,
+                format!(
+                    "evaluated inside {} loop{}: it has no single value per pixel to keep",
+                    at.loop_depth,
+                    if at.loop_depth > 1 { "s" } else { "" }
+                ),
+            ));
+        }
+    }
+
+    let ty = info[expr].ty.inner_with(&module.types);
+    let components = match *ty {
+        TypeInner::Scalar(naga::Scalar::F32) => 1,
+        TypeInner::Vector {
+            size,
+            scalar: naga::Scalar::F32,
+        } => size as u32,
+        _ => {
+            return Err((
+                RejectReason::NotStorable,
+                format!(
+                    "a `{}` does not fit a colour texel without loss; only f32 and vectors of f32 can be cached",
+                    type_name(&module.types, ty)
+                ),
+            ))
+        }
+    };
+
+    let nodes = || slice.ones().map(|i| &exprs[i]);
+    if nodes().all(|e| moves_data_only(e)) {
+        return Err((
+            RejectReason::Trivial,
+            "only reads or rearranges existing values: there is no computation to save".into(),
+        ));
+    }
+    if !nodes().any(|e| matches!(e, Expression::FunctionArgument(_))) {
+        return Err((
+            RejectReason::UniformOnly,
+            "depends only on uniforms, constants and overrides: it is the same for every pixel"
+                .into(),
+        ));
+    }
+    Ok(components)
+}
+
+/// Whether an expression only moves data: no arithmetic, no texture access.
+fn moves_data_only(expr: &Expression) -> bool {
+    matches!(
+        expr,
+        Expression::Literal(_)
+            | Expression::Constant(_)
+            | Expression::Override(_)
+            | Expression::ZeroValue(_)
+            | Expression::FunctionArgument(_)
+            | Expression::GlobalVariable(_)
+            | Expression::LocalVariable(_)
+            | Expression::Load { .. }
+            | Expression::Access { .. }
+            | Expression::AccessIndex { .. }
+            | Expression::Swizzle { .. }
+            | Expression::Splat { .. }
+            | Expression::Compose { .. }
+    )
+}
+
+/// Whether an expression takes implicit derivatives.
+fn takes_derivatives(expr: &Expression) -> bool {
+    match *expr {
+        Expression::Derivative { .. } => true,
+        Expression::ImageSample { level, .. } => {
+            matches!(level, naga::SampleLevel::Auto | naga::SampleLevel::Bias(_))
+        }
+        _ => false,
+    }
+}
+
+/// Whether a type is a value (not a pointer or a resource handle).
+fn is_value(ty: &TypeInner) -> bool {
+    !matches!(
+        ty,
+        TypeInner::Pointer { .. }
+            | TypeInner::ValuePointer { .. }
+            | TypeInner::Image { .. }
+            | TypeInner::Sampler { .. }
+            | TypeInner::AccelerationStructure { .. }
+            | TypeInner::RayQuery { .. }
+            | TypeInner::BindingArray { .. }
+    )
+}
+
+/// The WGSL spelling of a type, for reports.
+pub(crate) fn type_name(types: &naga::UniqueArena<naga::Type>, ty: &TypeInner) -> String {
+    let scalar = |s: naga::Scalar| -> String {
+        match (s.kind, s.width) {
+            (naga::ScalarKind::Float, 4) => "f32".into(),
+            (naga::ScalarKind::Float, 2) => "f16".into(),
+            (naga::ScalarKind::Float, 8) => "f64".into(),
+            (naga::ScalarKind::Sint, 4) => "i32".into(),
+            (naga::ScalarKind::Uint, 4) => "u32".into(),
+            (naga::ScalarKind::Sint, 8) => "i64".into(),
+            (naga::ScalarKind::Uint, 8) => "u64".into(),
+            (naga::ScalarKind::Bool, _) => "bool".into(),
+            (kind, width) => format!("{kind:?}{}", width * 8).to_lowercase(),
+        }
+    };
+    match *ty {
+        TypeInner::Scalar(s) => scalar(s),
+        TypeInner::Vector { size, scalar: s } => format!("vec{}<{}>", size as u8, scalar(s)),
+        TypeInner::Matrix {
+            columns,
+            rows,
+            scalar: s,
+        } => format!("mat{}x{}<{}>", columns as u8, rows as u8, scalar(s)),
+        TypeInner::Atomic(s) => format!("atomic<{}>", scalar(s)),
+        TypeInner::Array { base, .. } => {
+            format!("array<{}>", type_name(types, &types[base].inner))
+        }
+        TypeInner::Struct { .. } => {
+            let name = types
+                .iter()
+                .find(|(_, t)| &t.inner == ty)
+                .and_then(|(_, t)| t.name.clone());
+            format!("struct {}", name.unwrap_or_default())
+                .trim_end()
+                .to_string()
+        }
+        _ => "other".into(),
+    }
+}

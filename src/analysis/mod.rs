@@ -1,0 +1,147 @@
+//! IR → candidates: which values of the fragment entry point could be
+//! cached, and what each would save.
+//!
+//! A *node* is one expression of the fragment entry point's naga IR that has
+//! a span in the source. Each node is either a **candidate** — a value that
+//! could be stored in a colour texture and reused next frame — or
+//! **rejected** with a reason:
+//!
+//! * `in-loop`: evaluated inside a loop, so it has no single value per pixel;
+//! * `not-storable`: not `f32` or a vector of up to four `f32` (integers,
+//!   booleans, matrices and structs do not fit one colour texel without loss);
+//! * `trivial`: only moves data (a literal, an argument, a bare load, a
+//!   swizzle or a constructor of such), so there is nothing to save;
+//! * `uniform-only`: depends on no per-fragment input — only uniforms,
+//!   constants and overrides — so it is the same for every pixel.
+//!
+//! Pointers and resource handles (textures, samplers) are not values and are
+//! not listed at all. Expressions inside helper functions are out of scope:
+//! a call of a helper from the entry point is a node, its body is not.
+//!
+//! For each candidate the [`graph`] gives its backward slice (what the payload
+//! needs) and the remainder (what the rest of the entry point still needs
+//! when the node is read from the cache). The [cost model](crate::cost)
+//! turns them into P (the slice's cost), T (the entry point's cost), P/T, and
+//! the *overlap*: the cost of the part of the slice the remainder also needs,
+//! which a multi-pass variant pays twice (seed 002, fig. 7).
+
+mod candidates;
+mod entry;
+pub mod graph;
+mod id;
+pub mod text;
+
+use std::ops::Range;
+
+use naga::{Expression, Handle};
+use serde::Serialize;
+
+pub use candidates::RejectReason;
+pub use entry::{fragment_entry, stage_name};
+pub use id::node_id;
+
+use crate::cost::{CostModel, Weights};
+use crate::diagnostic::Error;
+use crate::front::Shader;
+
+/// What to analyse and how to cost it.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// The fragment entry point; `None` picks the only one.
+    pub entry: Option<String>,
+    pub weights: Weights,
+}
+
+/// The result of analysing one fragment entry point. Serialises to the JSON
+/// format documented in `docs/analysis-json.md`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Analysis {
+    /// The shader's path as given.
+    pub shader: String,
+    /// The fragment entry point analysed.
+    pub entry: String,
+    /// T: the estimated cost of the whole entry point.
+    pub total_cost: f64,
+    /// Candidates, highest estimated P/T first.
+    pub candidates: Vec<Candidate>,
+    /// Rejected nodes in source order.
+    pub rejected: Vec<Rejected>,
+    /// Index of the entry point in the module.
+    #[serde(skip)]
+    pub entry_index: usize,
+}
+
+/// Where a node is in the source: 1-based `[line, column]` of its first
+/// character and of the position just past its last (columns count
+/// characters).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct SourceSpan {
+    pub start: [usize; 2],
+    pub end: [usize; 2],
+}
+
+/// What every node carries.
+#[derive(Clone, Debug, Serialize)]
+pub struct Node {
+    pub id: String,
+    pub span: SourceSpan,
+    /// The source text the node covers.
+    pub text: String,
+    /// Its WGSL type, e.g. `vec3<f32>`.
+    #[serde(rename = "type")]
+    pub ty: String,
+    /// The expression in the entry point's arena.
+    #[serde(skip)]
+    pub expression: Handle<Expression>,
+    /// Byte range of `text` in the source.
+    #[serde(skip)]
+    pub range: Range<usize>,
+}
+
+/// A value that could be cached.
+#[derive(Clone, Debug, Serialize)]
+pub struct Candidate {
+    #[serde(flatten)]
+    pub node: Node,
+    /// 1 to 4 `f32` components.
+    pub components: u32,
+    /// P: the estimated cost of computing the node (its backward slice).
+    pub cost: f64,
+    /// P/T.
+    pub ratio: f64,
+    /// Estimated cost of the slice's sub-expressions the rest of the entry
+    /// point also uses.
+    pub overlap: f64,
+    /// Whether the slice takes implicit derivatives (`textureSample`,
+    /// `dpdx`...), which a rewrite must keep in uniform control flow.
+    pub derivatives: bool,
+}
+
+/// A node that cannot be cached, and why.
+#[derive(Clone, Debug, Serialize)]
+pub struct Rejected {
+    #[serde(flatten)]
+    pub node: Node,
+    pub reason: RejectReason,
+    /// A sentence saying why, for people.
+    pub detail: String,
+}
+
+/// Analyses the fragment entry point of a parsed and validated shader.
+pub fn analyze(shader: &Shader, options: &Options) -> Result<Analysis, Error> {
+    let entry_index = fragment_entry(shader, options.entry.as_deref())?;
+    let model = CostModel::new(&shader.module, &shader.info, options.weights.clone());
+    Ok(candidates::find(shader, entry_index, &model))
+}
+
+impl Analysis {
+    /// Looks a node up by id among the candidates.
+    pub fn candidate(&self, id: &str) -> Option<&Candidate> {
+        self.candidates.iter().find(|c| c.node.id == id)
+    }
+
+    /// Looks a node up by id among the rejected nodes.
+    pub fn rejected(&self, id: &str) -> Option<&Rejected> {
+        self.rejected.iter().find(|r| r.node.id == id)
+    }
+}

@@ -1,0 +1,76 @@
+//! The analysis as a person reads it: each candidate shown in the source
+//! like a compiler note, highest P/T first.
+
+use super::Analysis;
+use crate::diagnostic::{Diagnostic, Severity};
+
+/// One note per candidate (and, with `all`, per rejected node), in the
+/// order they should be shown.
+pub fn notes(analysis: &Analysis, all: bool) -> Vec<Diagnostic> {
+    let mut out = Vec::new();
+    for (rank, candidate) in analysis.candidates.iter().enumerate() {
+        let node = &candidate.node;
+        let mut note = Diagnostic::new(
+            Severity::Note,
+            format!(
+                "#{} candidate {}: {}, P/T {:.3}",
+                rank + 1,
+                node.id,
+                node.ty,
+                candidate.ratio
+            ),
+        )
+        .with_label(
+            node.range.clone(),
+            format!(
+                "P {:.1} of T {:.1}, overlap {:.1}",
+                candidate.cost, analysis.total_cost, candidate.overlap
+            ),
+        );
+        if candidate.derivatives {
+            note = note.with_note(
+                "its slice takes implicit derivatives: a rewrite must keep them in uniform control flow",
+            );
+        }
+        out.push(note);
+    }
+    if all {
+        for rejected in &analysis.rejected {
+            let node = &rejected.node;
+            out.push(
+                Diagnostic::new(
+                    Severity::Note,
+                    format!(
+                        "rejected {}: {} ({})",
+                        node.id,
+                        node.ty,
+                        rejected.reason.as_str()
+                    ),
+                )
+                .with_label(node.range.clone(), rejected.detail.clone()),
+            );
+        }
+    }
+    out
+}
+
+/// The closing line of the text output.
+pub fn summary(analysis: &Analysis, all: bool) -> String {
+    let mut line = format!(
+        "`{}` in {}: {} candidate{}, {} rejected, estimated total cost T = {:.1}",
+        analysis.entry,
+        analysis.shader,
+        analysis.candidates.len(),
+        if analysis.candidates.len() == 1 {
+            ""
+        } else {
+            "s"
+        },
+        analysis.rejected.len(),
+        analysis.total_cost
+    );
+    if !all && !analysis.rejected.is_empty() {
+        line.push_str(" (--all shows the rejected)");
+    }
+    line
+}

@@ -1,0 +1,89 @@
+//! `shadecache analyze`: list the cache candidates of a fragment shader.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use shadecache::analysis::{self, text, Options};
+use shadecache::cost::Weights;
+use shadecache::diagnostic::{self, Color, Diagnostic, SourceFile};
+use shadecache::{front, Error};
+
+use super::write_stdout;
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The WGSL shader to analyse.
+    pub shader: PathBuf,
+
+    /// The fragment entry point, when the shader has several.
+    #[arg(long, value_name = "NAME")]
+    pub entry: Option<String>,
+
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    pub format: Format,
+
+    /// Also show the rejected expressions and why (text output; JSON always has them).
+    #[arg(long)]
+    pub all: bool,
+
+    /// Cost weights as JSON (see docs/cost-model.md); unlisted weights keep their defaults.
+    #[arg(long, value_name = "FILE.json")]
+    pub weights: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    Text,
+    Json,
+}
+
+pub fn exec(args: Args, color: Color) -> Result<(), Error> {
+    let weights = match &args.weights {
+        Some(path) => read_weights(path)?,
+        None => Weights::default(),
+    };
+    let shader = front::load(&args.shader)?;
+    let options = Options {
+        entry: args.entry,
+        weights,
+    };
+    let analysis = analysis::analyze(&shader, &options)?;
+    match args.format {
+        Format::Json => {
+            let mut json = serde_json::to_string_pretty(&analysis).map_err(|err| {
+                Error::plain(Diagnostic::error(format!("cannot write JSON: {err}")))
+            })?;
+            json.push('\n');
+            write_stdout(&json)
+        }
+        Format::Text => {
+            for note in text::notes(&analysis, args.all) {
+                diagnostic::emit_to_stdout(Some(&shader.file), &note, color);
+            }
+            write_stdout(&format!("{}\n", text::summary(&analysis, args.all)))
+        }
+    }
+}
+
+fn read_weights(path: &std::path::Path) -> Result<Weights, Error> {
+    let file = Arc::new(front::read_source(path)?);
+    Weights::from_json(&file.text).map_err(|err| {
+        let offset = offset_of(&file, err.line(), err.column());
+        Error::in_file(
+            file.clone(),
+            Diagnostic::error("invalid cost weights").with_label(offset..offset, err.to_string()),
+        )
+    })
+}
+
+/// The byte offset of a 1-based line and column as serde_json reports them.
+fn offset_of(file: &SourceFile, line: usize, column: usize) -> usize {
+    let line_start: usize = file
+        .text
+        .split_inclusive('\n')
+        .take(line.saturating_sub(1))
+        .map(str::len)
+        .sum();
+    (line_start + column.saturating_sub(1)).min(file.text.len())
+}

@@ -1,0 +1,48 @@
+//! One module per subcommand.
+
+pub mod analyze;
+
+use shadecache::diagnostic::Color;
+use shadecache::Error;
+
+#[derive(Debug, clap::Subcommand)]
+pub enum Command {
+    /// List the values of a fragment shader that could be cached, ranked by estimated P/T.
+    Analyze(analyze::Args),
+}
+
+pub fn exec(command: Command, color: Color) -> Result<(), Error> {
+    match command {
+        Command::Analyze(args) => analyze::exec(args, color),
+    }
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum ColorArg {
+    Auto,
+    Always,
+    Never,
+}
+
+impl From<ColorArg> for Color {
+    fn from(arg: ColorArg) -> Color {
+        match arg {
+            ColorArg::Auto => Color::Auto,
+            ColorArg::Always => Color::Always,
+            ColorArg::Never => Color::Never,
+        }
+    }
+}
+
+/// Writes to stdout, treating a closed pipe (`shadecache ... | head`) as
+/// the reader having seen enough rather than as an error.
+pub fn write_stdout(text: &str) -> Result<(), Error> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(err) if err.kind() != std::io::ErrorKind::BrokenPipe => Err(Error::plain(
+            shadecache::diagnostic::Diagnostic::error(format!("cannot write to stdout: {err}")),
+        )),
+        _ => Ok(()),
+    }
+}

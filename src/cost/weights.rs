@@ -1,0 +1,64 @@
+use serde::{Deserialize, Serialize};
+
+/// The cost of one scalar operation of each class, in abstract units where a
+/// scalar add costs 1. Vector operations cost per component.
+///
+/// These are starting values chosen from the relative throughputs of current
+/// GPUs (transcendentals on a quarter-rate unit, texture fetches bounded by
+/// the texture units and memory). The profiler calibrates them against
+/// measured pass times; nothing else in the crate hard-codes a cost.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Weights {
+    /// add, subtract, multiply, negate, compare, select, logic, bit
+    /// operations, conversions.
+    pub arithmetic: f64,
+    /// divide and modulo.
+    pub division: f64,
+    /// abs, min, max, clamp, floor, fract, mix, step, smoothstep and the
+    /// like: a few arithmetic operations each.
+    pub simple_math: f64,
+    /// sin, cos, tan, exp, log, pow, sqrt, inverseSqrt and the other
+    /// functions evaluated on the special-function unit.
+    pub transcendental: f64,
+    /// A filtered texture sample (any `textureSample*` or gather).
+    pub texture_sample: f64,
+    /// An unfiltered texel fetch (`textureLoad`).
+    pub texture_load: f64,
+    /// `textureDimensions`, `textureNumLevels` and other queries.
+    pub texture_query: f64,
+    /// `dpdx`, `dpdy`, `fwidth` and their coarse/fine forms.
+    pub derivative: f64,
+    /// A load from uniform or storage memory (per load, not per component).
+    /// Loads of local and private variables are registers and cost nothing.
+    pub load: f64,
+    /// The overhead of a helper call beyond its body (usually inlined).
+    pub call: f64,
+    /// Trip count assumed for a loop whose bounds are not constant.
+    pub default_loop_trips: f64,
+}
+
+impl Default for Weights {
+    fn default() -> Self {
+        Weights {
+            arithmetic: 1.0,
+            division: 4.0,
+            simple_math: 2.0,
+            transcendental: 8.0,
+            texture_sample: 16.0,
+            texture_load: 12.0,
+            texture_query: 2.0,
+            derivative: 2.0,
+            load: 1.0,
+            call: 0.0,
+            default_loop_trips: 8.0,
+        }
+    }
+}
+
+impl Weights {
+    /// Reads weights from JSON; missing fields keep their defaults.
+    pub fn from_json(text: &str) -> Result<Self, serde_json::Error> {
+        serde_json::from_str(text)
+    }
+}

@@ -1,0 +1,105 @@
+//! WGSL → IR: reading a shader file, parsing it with naga's WGSL front end and
+//! validating it with every validation flag and capability.
+//!
+//! Everything downstream works on a [`Shader`]: the source text (kept for
+//! spans, ids and diagnostics), the naga [`Module`](naga::Module) and the
+//! [`ModuleInfo`](naga::valid::ModuleInfo) validation produced (expression
+//! types, uniformity, reference counts). A shader that reaches the later
+//! stages is known to be valid WGSL as far as naga can tell.
+//!
+//! Failures are [`Error`]s with a codespan diagnostic: a missing file, a
+//! directory, bytes that are not UTF-8 (pointing at the first bad byte), a
+//! parse error or a validation error (pointing at naga's spans).
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::Path;
+use std::sync::Arc;
+
+use naga::valid::{Capabilities, ModuleInfo, ValidationFlags, Validator};
+
+use crate::diagnostic::{Diagnostic, Error, SourceFile};
+
+/// A parsed and validated WGSL shader.
+#[derive(Debug)]
+pub struct Shader {
+    pub file: Arc<SourceFile>,
+    pub module: naga::Module,
+    pub info: ModuleInfo,
+}
+
+/// Reads, parses and validates the shader at `path`.
+pub fn load(path: &Path) -> Result<Shader, Error> {
+    let file = read_source(path)?;
+    parse(file)
+}
+
+/// Reads a WGSL file as UTF-8 text.
+pub fn read_source(path: &Path) -> Result<SourceFile, Error> {
+    let shown = path.display().to_string();
+    if path.is_dir() {
+        return Err(Error::plain(
+            Diagnostic::error(format!("`{shown}` is a directory, not a WGSL file"))
+                .with_note("give the path of a .wgsl file"),
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(|err| {
+        let reason = match err.kind() {
+            std::io::ErrorKind::NotFound => "no such file".to_string(),
+            std::io::ErrorKind::PermissionDenied => "permission denied".to_string(),
+            _ => err.to_string(),
+        };
+        Error::plain(Diagnostic::error(format!(
+            "cannot read `{shown}`: {reason}"
+        )))
+    })?;
+    match String::from_utf8(bytes) {
+        Ok(text) => Ok(SourceFile::new(shown, text)),
+        Err(err) => {
+            let valid_up_to = err.utf8_error().valid_up_to();
+            let bad_len = err.utf8_error().error_len().unwrap_or(1);
+            let text = String::from_utf8_lossy(err.as_bytes()).into_owned();
+            let file = Arc::new(SourceFile::new(shown, text));
+            // Lossy decoding keeps every byte before the first bad sequence
+            // where it was, and puts U+FFFD (3 bytes) in its place.
+            let range = valid_up_to..valid_up_to + "\u{FFFD}".len();
+            Err(Error::in_file(
+                file,
+                Diagnostic::error("the shader is not valid UTF-8")
+                    .with_label(range, format!("{bad_len} byte(s) that are not UTF-8"))
+                    .with_note("WGSL source must be UTF-8 text"),
+            ))
+        }
+    }
+}
+
+/// Parses and validates WGSL text.
+pub fn parse(file: SourceFile) -> Result<Shader, Error> {
+    let file = Arc::new(file);
+    let text = file.text.as_str();
+    let outcome = catch_unwind(AssertUnwindSafe(|| {
+        naga::front::wgsl::parse_str(text)
+            .map_err(|err| Diagnostic::from_parse_error(&err))
+            .and_then(|module| {
+                validate(&module)
+                    .map(|info| (module, info))
+                    .map_err(|err| Diagnostic::from_spanned_error(&err))
+            })
+    }));
+    match outcome {
+        Ok(Ok((module, info))) => Ok(Shader { file, module, info }),
+        Ok(Err(diagnostic)) => Err(Error::in_file(file, diagnostic)),
+        Err(_) => Err(Error::in_file(
+            file,
+            Diagnostic::error("naga could not process this shader (it panicked)")
+                .with_note("this input exposes a bug in naga; please report it with the shader"),
+        )),
+    }
+}
+
+/// Validates a module the way every module shadecache reads or writes is
+/// validated: all flags, all capabilities.
+pub fn validate(
+    module: &naga::Module,
+) -> Result<ModuleInfo, naga::WithSpan<naga::valid::ValidationError>> {
+    Validator::new(ValidationFlags::all(), Capabilities::all()).validate(module)
+}

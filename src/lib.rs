@@ -1,0 +1,34 @@
+//! shadecache makes real-time shaders cheaper by reusing work across frames.
+//!
+//! It reads a WGSL shader, finds the intermediate values of its fragment
+//! entry point that are worth keeping from one frame to the next (the
+//! *payload* of a reverse-reprojection cache, after Sitthi-amorn et al.,
+//! "An Improved Shading Cache for Modern GPUs", 2008), and estimates what
+//! each would save.
+//!
+//! The modules follow the pipeline, WGSL → IR → candidates:
+//!
+//! * [`front`]: read, parse and validate a shader (naga's WGSL front end);
+//! * [`proc`]: facts about the IR that several stages share;
+//! * [`cost`]: the static cost model;
+//! * [`analysis`]: the expression graph, the candidates and why the others
+//!   are rejected;
+//! * [`diagnostic`]: the error type and its codespan rendering.
+
+#![forbid(unsafe_code)]
+#![warn(
+    clippy::print_stdout,
+    clippy::print_stderr,
+    clippy::todo,
+    clippy::unimplemented,
+    clippy::panic,
+    missing_debug_implementations
+)]
+
+pub mod analysis;
+pub mod cost;
+pub mod diagnostic;
+pub mod front;
+pub mod proc;
+
+pub use diagnostic::Error;

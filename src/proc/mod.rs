@@ -1,0 +1,57 @@
+//! IR helpers shared by the stages: what an expression reads, where in the
+//! statement tree each expression is evaluated, and how often.
+//!
+//! naga keeps expressions in a per-function arena and says *when* they are
+//! evaluated through `Emit` statements placed in the function's blocks
+//! (see naga's `ir` module documentation). Several stages need the same
+//! facts about that structure — the cost model needs how many times an
+//! expression runs, the analysis needs whether it runs inside a loop and
+//! which branch conditions govern it, the expression graph needs every value
+//! a statement consumes — so they are computed here once per function.
+
+mod operands;
+mod placement;
+
+pub use operands::{operands, pointer_root, PointerRoot};
+pub use placement::{has_effects, layout, CallSite, FunctionLayout, LoopBound, Placement, Store};
+
+/// The number of scalar components of a type: 1 for scalars, n for vectors,
+/// columns × rows for matrices, 1 for everything else.
+pub fn components(inner: &naga::TypeInner) -> u32 {
+    match *inner {
+        naga::TypeInner::Scalar(_) | naga::TypeInner::Atomic(_) => 1,
+        naga::TypeInner::Vector { size, .. } => size as u32,
+        naga::TypeInner::Matrix { columns, rows, .. } => columns as u32 * rows as u32,
+        _ => 1,
+    }
+}
+
+/// Evaluates an expression to an integer when it is an integer literal or a
+/// named constant whose initializer is one.
+pub fn const_int(
+    module: &naga::Module,
+    function: &naga::Function,
+    expr: naga::Handle<naga::Expression>,
+) -> Option<i64> {
+    match function.expressions[expr] {
+        naga::Expression::Literal(literal) => literal_int(literal),
+        naga::Expression::Constant(constant) => {
+            match module.global_expressions[module.constants[constant].init] {
+                naga::Expression::Literal(literal) => literal_int(literal),
+                _ => None,
+            }
+        }
+        _ => None,
+    }
+}
+
+fn literal_int(literal: naga::Literal) -> Option<i64> {
+    match literal {
+        naga::Literal::I32(v) => Some(v as i64),
+        naga::Literal::U32(v) => Some(v as i64),
+        naga::Literal::I64(v) => Some(v),
+        naga::Literal::U64(v) => i64::try_from(v).ok(),
+        naga::Literal::AbstractInt(v) => Some(v),
+        _ => None,
+    }
+}
