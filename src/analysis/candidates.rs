@@ -110,7 +110,7 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
                 let mut shared = graph.remainder(expr);
                 shared.intersect_with(&slice);
                 shared.set(expr.index(), false);
-                let derivatives = slice.ones().any(|i| takes_derivatives(&exprs[i]));
+                let derivatives = slice.ones().any(|i| takes_derivatives(exprs[i]));
                 candidates.push(Candidate {
                     node,
                     components,

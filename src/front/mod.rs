@@ -82,7 +82,7 @@ pub fn parse(file: SourceFile) -> Result<Shader, Error> {
             .and_then(|module| {
                 validate(&module)
                     .map(|info| (module, info))
-                    .map_err(|err| Diagnostic::from_spanned_error(&err))
+                    .map_err(|err| located(Diagnostic::from_spanned_error(&err), &err, text))
             })
     }));
     match outcome {
@@ -96,10 +96,61 @@ pub fn parse(file: SourceFile) -> Result<Shader, Error> {
     }
 }
 
+/// Some validation errors carry no span (naga keeps none for entry points).
+/// Point those at the entry point's `fn NAME` or, failing that, at the top
+/// of the file, so every diagnostic names a line and column.
+fn located(
+    mut diagnostic: Diagnostic,
+    error: &naga::WithSpan<naga::valid::ValidationError>,
+    text: &str,
+) -> Diagnostic {
+    if !diagnostic.labels.is_empty() {
+        return diagnostic;
+    }
+    if let naga::valid::ValidationError::EntryPoint { ref name, .. } = *error.as_inner() {
+        if let Some(range) = find_function_name(text, name) {
+            return diagnostic.with_label(range, "in this entry point");
+        }
+    }
+    diagnostic = diagnostic.with_label(0..0, "while validating this module");
+    diagnostic
+}
+
+/// The byte range of `name` in the first `fn name` of the source. Only
+/// reads the text, to place a label.
+fn find_function_name(text: &str, name: &str) -> Option<std::ops::Range<usize>> {
+    let mut from = 0;
+    while let Some(at) = text[from..].find("fn") {
+        let start = from + at;
+        from = start + 2;
+        let boundary_before = text[..start]
+            .chars()
+            .next_back()
+            .is_none_or(|c| !(c.is_alphanumeric() || c == '_'));
+        let rest = &text[from..];
+        let trimmed = rest.trim_start();
+        if !boundary_before || trimmed.len() == rest.len() || !trimmed.starts_with(name) {
+            continue;
+        }
+        let after = &trimmed[name.len()..];
+        if after
+            .chars()
+            .next()
+            .is_some_and(|c| !(c.is_alphanumeric() || c == '_'))
+        {
+            let name_start = from + (rest.len() - trimmed.len());
+            return Some(name_start..name_start + name.len());
+        }
+    }
+    None
+}
+
 /// Validates a module the way every module shadecache reads or writes is
 /// validated: all flags, all capabilities.
 pub fn validate(
     module: &naga::Module,
-) -> Result<ModuleInfo, naga::WithSpan<naga::valid::ValidationError>> {
-    Validator::new(ValidationFlags::all(), Capabilities::all()).validate(module)
+) -> Result<ModuleInfo, Box<naga::WithSpan<naga::valid::ValidationError>>> {
+    Validator::new(ValidationFlags::all(), Capabilities::all())
+        .validate(module)
+        .map_err(Box::new)
 }

@@ -1,0 +1,9 @@
+//! End-to-end tests: the `shadecache` binary on the corpus and on bad
+//! input, plus library-level checks of the cost model. One binary, one
+//! module per area (as naga's own tests are laid out).
+
+mod analyze;
+mod corpus;
+mod cost;
+mod errors;
+mod util;

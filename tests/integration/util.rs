@@ -1,0 +1,131 @@
+//! The harness every test uses: run the binary, validate with Tint, load
+//! shaders from text.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+use serde_json::Value;
+
+/// The repository root.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Every `corpus/*.wgsl`, sorted, as paths relative to the root.
+pub fn corpus() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(root().join("corpus"))
+        .expect("corpus/ exists")
+        .map(|entry| entry.expect("readable corpus entry").path())
+        .filter(|path| path.extension().is_some_and(|ext| ext == "wgsl"))
+        .map(|path| path.strip_prefix(root()).unwrap().to_path_buf())
+        .collect();
+    files.sort();
+    assert!(files.len() >= 8, "the corpus has at least 8 shaders");
+    files
+}
+
+/// Runs `shadecache ARGS...` from the repository root with colour off.
+pub fn shadecache<I, S>(args: I) -> Output
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<std::ffi::OsStr>,
+{
+    Command::new(env!("CARGO_BIN_EXE_shadecache"))
+        .args(args)
+        .current_dir(root())
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("the shadecache binary runs")
+}
+
+pub fn stdout(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+pub fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+/// `shadecache analyze PATH --format json`, which must succeed.
+pub fn analyze_json(path: &Path) -> Value {
+    use std::ffi::OsStr;
+    let output = shadecache([
+        OsStr::new("analyze"),
+        path.as_os_str(),
+        OsStr::new("--format"),
+        OsStr::new("json"),
+    ]);
+    assert!(
+        output.status.success(),
+        "analyze {} failed:\n{}",
+        path.display(),
+        stderr(&output)
+    );
+    serde_json::from_slice(&output.stdout).expect("analyze prints JSON")
+}
+
+/// A file in a fresh temporary directory, kept alive by the returned guard.
+pub fn temp_file(name: &str, contents: &[u8]) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let path = dir.path().join(name);
+    std::fs::write(&path, contents).expect("write the temporary file");
+    (dir, path)
+}
+
+/// What Tint said about one file.
+#[derive(Debug, serde::Deserialize)]
+pub struct TintResult {
+    pub file: String,
+    pub ok: bool,
+    pub messages: Vec<TintMessage>,
+}
+
+#[derive(Debug, serde::Deserialize)]
+pub struct TintMessage {
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub line: u64,
+    pub column: u64,
+    pub message: String,
+}
+
+/// Validates WGSL files with Tint (Chrome's compiler) through
+/// `tests/tint/validate.mjs`. Panics with setup instructions when the
+/// harness is not installed: a missing validator must fail the test, not
+/// skip it.
+pub fn tint_validate(files: &[PathBuf]) -> Vec<TintResult> {
+    let harness = root().join("tests/tint");
+    assert!(
+        harness.join("node_modules/webgpu").is_dir(),
+        "the Tint harness is not installed: run `npm ci --prefix tests/tint` (needs node and npm)"
+    );
+    let mut child = Command::new("node")
+        .arg(harness.join("validate.mjs"))
+        .arg("-")
+        .current_dir(root())
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("node runs (install nodejs)");
+    let list: String = files.iter().map(|f| format!("{}\n", f.display())).collect();
+    child
+        .stdin
+        .take()
+        .expect("stdin is piped")
+        .write_all(list.as_bytes())
+        .expect("write the file list");
+    let output = child.wait_with_output().expect("node finishes");
+    assert!(
+        matches!(output.status.code(), Some(0) | Some(1)),
+        "the Tint harness failed: {}",
+        stderr(&output)
+    );
+    let results: Vec<TintResult> = stdout(&output)
+        .lines()
+        .map(|line| serde_json::from_str(line).expect("one JSON object per line"))
+        .collect();
+    assert_eq!(results.len(), files.len(), "one result per file");
+    results
+}
