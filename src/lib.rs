@@ -30,5 +30,3 @@ pub mod cost;
 pub mod diagnostic;
 pub mod front;
 pub mod proc;
-
-pub use diagnostic::Error;

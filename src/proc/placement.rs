@@ -305,10 +305,12 @@ impl Walker<'_> {
 /// writes memory other than its own locals, discards, or calls a function
 /// that does.
 pub fn has_effects(module: &naga::Module, function: Handle<naga::Function>) -> bool {
-    fn block(module: &naga::Module, function: &naga::Function, body: &Block) -> bool {
-        body.iter().any(|statement| match *statement {
+    let callee = &module.functions[function];
+    let mut effects = false;
+    each_statement(&callee.body, &mut |statement| {
+        effects |= match *statement {
             Statement::Store { pointer, .. } => {
-                !matches!(pointer_root(function, pointer), Some(PointerRoot::Local(_)))
+                !matches!(pointer_root(callee, pointer), Some(PointerRoot::Local(_)))
             }
             Statement::Kill
             | Statement::ImageStore { .. }
@@ -317,65 +319,54 @@ pub fn has_effects(module: &naga::Module, function: Handle<naga::Function>) -> b
             | Statement::RayQuery { .. }
             | Statement::RayPipelineFunction(_)
             | Statement::CooperativeStore { .. } => true,
-            Statement::Call {
-                function: callee, ..
-            } => has_effects(module, callee),
-            Statement::Block(ref inner) => block(module, function, inner),
-            Statement::If {
-                ref accept,
-                ref reject,
-                ..
-            } => block(module, function, accept) || block(module, function, reject),
-            Statement::Switch { ref cases, .. } => {
-                cases.iter().any(|case| block(module, function, &case.body))
-            }
-            Statement::Loop {
-                ref body,
-                ref continuing,
-                ..
-            } => block(module, function, body) || block(module, function, continuing),
+            Statement::Call { function, .. } => has_effects(module, function),
             _ => false,
-        })
-    }
-    let callee = &module.functions[function];
-    block(module, callee, &callee.body)
+        };
+    });
+    effects
 }
 
-/// Every branch condition, selector and `break if` inside `block`.
-fn collect_conditions(block: &Block, out: &mut Vec<Handle<Expression>>) {
+/// Calls `visit` on every statement of `block`, nested ones included, in
+/// order.
+fn each_statement(block: &Block, visit: &mut impl FnMut(&Statement)) {
     for statement in block.iter() {
+        visit(statement);
         match *statement {
-            Statement::Block(ref inner) => collect_conditions(inner, out),
+            Statement::Block(ref inner) => each_statement(inner, visit),
             Statement::If {
-                condition,
                 ref accept,
                 ref reject,
+                ..
             } => {
-                out.push(condition);
-                collect_conditions(accept, out);
-                collect_conditions(reject, out);
+                each_statement(accept, visit);
+                each_statement(reject, visit);
             }
-            Statement::Switch {
-                selector,
-                ref cases,
-            } => {
-                out.push(selector);
+            Statement::Switch { ref cases, .. } => {
                 for case in cases {
-                    collect_conditions(&case.body, out);
+                    each_statement(&case.body, visit);
                 }
             }
             Statement::Loop {
                 ref body,
                 ref continuing,
-                break_if,
+                ..
             } => {
-                collect_conditions(body, out);
-                collect_conditions(continuing, out);
-                out.extend(break_if);
+                each_statement(body, visit);
+                each_statement(continuing, visit);
             }
             _ => {}
         }
     }
+}
+
+/// Every branch condition, selector and `break if` inside `block`.
+fn collect_conditions(block: &Block, out: &mut Vec<Handle<Expression>>) {
+    each_statement(block, &mut |statement| match *statement {
+        Statement::If { condition, .. } => out.push(condition),
+        Statement::Switch { selector, .. } => out.push(selector),
+        Statement::Loop { break_if, .. } => out.extend(break_if),
+        _ => {}
+    });
 }
 
 /// Infers the trip count of a loop in the shape naga's WGSL front end gives
@@ -493,28 +484,17 @@ fn writes_local(
     function: &naga::Function,
     local: Handle<naga::LocalVariable>,
 ) -> bool {
-    block.iter().any(|statement| match *statement {
-        Statement::Store { pointer, .. } => {
-            pointer_root(function, pointer) == Some(PointerRoot::Local(local))
-        }
-        Statement::Block(ref inner) => writes_local(inner, function, local),
-        Statement::If {
-            ref accept,
-            ref reject,
-            ..
-        } => writes_local(accept, function, local) || writes_local(reject, function, local),
-        Statement::Switch { ref cases, .. } => cases
-            .iter()
-            .any(|case| writes_local(&case.body, function, local)),
-        Statement::Loop {
-            ref body,
-            ref continuing,
-            ..
-        } => writes_local(body, function, local) || writes_local(continuing, function, local),
-        // A call may write the counter through a pointer argument.
-        Statement::Call { ref arguments, .. } => arguments
-            .iter()
-            .any(|&argument| pointer_root(function, argument) == Some(PointerRoot::Local(local))),
-        _ => false,
-    })
+    let target = Some(PointerRoot::Local(local));
+    let mut writes = false;
+    each_statement(block, &mut |statement| {
+        writes |= match *statement {
+            Statement::Store { pointer, .. } => pointer_root(function, pointer) == target,
+            // A call may write the counter through a pointer argument.
+            Statement::Call { ref arguments, .. } => arguments
+                .iter()
+                .any(|&argument| pointer_root(function, argument) == target),
+            _ => false,
+        };
+    });
+    writes
 }

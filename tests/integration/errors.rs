@@ -161,3 +161,42 @@ fn usage_errors_exit_1() {
     let output = shadecache(["analyze", "corpus/noise_marble.wgsl", "--format", "xml"]);
     assert_eq!(output.status.code(), Some(1));
 }
+
+/// Every prefix of every corpus shader (in steps), and every corpus shader
+/// with one character deleted (in steps), goes through parse and analysis
+/// without a panic: each either analyses or gives a diagnostic.
+#[test]
+fn damaged_corpus_shaders_never_panic() {
+    use shadecache::analysis::{analyze, Options};
+    use shadecache::diagnostic::SourceFile;
+
+    let mut inputs = 0;
+    for path in crate::util::corpus() {
+        let source = std::fs::read_to_string(crate::util::root().join(&path)).unwrap();
+        let boundaries: Vec<usize> = (0..=source.len())
+            .filter(|&i| source.is_char_boundary(i))
+            .collect();
+        for (n, &cut) in boundaries.iter().enumerate().step_by(53) {
+            let truncated = &source[..cut];
+            let next = boundaries.get(n + 1).copied().unwrap_or(source.len());
+            let deleted = format!("{}{}", &source[..cut], &source[next..]);
+            for text in [truncated.to_string(), deleted] {
+                inputs += 1;
+                let outcome = std::panic::catch_unwind(|| {
+                    match shadecache::front::parse(SourceFile::new("damaged.wgsl", text.clone())) {
+                        Ok(shader) => analyze(&shader, &Options::default()).map(|_| ()),
+                        Err(err) => Err(err),
+                    }
+                    .map_err(|err| err.render())
+                });
+                let rendered = outcome.unwrap_or_else(|_| {
+                    panic!("a panic on {} damaged at byte {cut}", path.display())
+                });
+                if let Err(message) = rendered {
+                    assert!(message.starts_with("error"), "{message}");
+                }
+            }
+        }
+    }
+    assert!(inputs > 500, "{inputs} inputs");
+}

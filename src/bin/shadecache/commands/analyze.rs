@@ -5,8 +5,9 @@ use std::sync::Arc;
 
 use shadecache::analysis::{self, text, Options};
 use shadecache::cost::Weights;
+use shadecache::diagnostic::Error;
 use shadecache::diagnostic::{self, Color, Diagnostic, SourceFile};
-use shadecache::{front, Error};
+use shadecache::front;
 
 use super::write_stdout;
 

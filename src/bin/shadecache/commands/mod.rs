@@ -3,7 +3,7 @@
 pub mod analyze;
 
 use shadecache::diagnostic::Color;
-use shadecache::Error;
+use shadecache::diagnostic::Error;
 
 #[derive(Debug, clap::Subcommand)]
 pub enum Command {
