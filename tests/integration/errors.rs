@@ -200,3 +200,16 @@ fn damaged_corpus_shaders_never_panic() {
     }
     assert!(inputs > 500, "{inputs} inputs");
 }
+
+/// A valid but deeply nested expression (a 2000-term sum parses to a
+/// 3000-deep tree) must not overflow the stack.
+#[test]
+fn deep_expression_does_not_overflow_the_stack() {
+    let source = format!(
+        "@fragment\nfn fs(@location(0) x: f32) -> @location(0) vec4<f32> {{\n    let v = x{};\n    return vec4<f32>(v);\n}}\n",
+        " + x".repeat(2000)
+    );
+    let (_dir, path) = temp_file("deep.wgsl", source.as_bytes());
+    let output = shadecache(["analyze".as_ref(), path.as_os_str()] as [&std::ffi::OsStr; 2]);
+    assert!(output.status.success(), "{}", stderr(&output));
+}

@@ -29,6 +29,9 @@ struct Cli {
     color: commands::ColorArg,
 }
 
+/// Stack size of the thread that does the work.
+const WORKER_STACK: usize = 256 * 1024 * 1024;
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
@@ -40,19 +43,31 @@ fn main() -> ExitCode {
         }
     };
     let color = cli.color.into();
-    match std::panic::catch_unwind(|| commands::exec(cli.command, color)) {
+    // naga's parser and lowering recurse over the expression tree; a long
+    // chain like `x + x + ... + x` is valid WGSL but deeper than the main
+    // thread's stack in an unoptimised build. Run the work on a thread with
+    // room for it, as rustc does.
+    let outcome = std::thread::Builder::new()
+        .name("shadecache".into())
+        .stack_size(WORKER_STACK)
+        .spawn(move || commands::exec(cli.command, color))
+        .map_err(|err| format!("cannot start a worker thread: {err}"))
+        .and_then(|worker| {
+            // The panic hook has printed the panic's message.
+            worker.join().map_err(|_| {
+                "shadecache panicked; this is a bug, please report it with the input".to_string()
+            })
+        });
+    match outcome {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(err)) => {
             err.emit_to_stderr(color);
             ExitCode::from(1)
         }
-        // The panic hook has printed the message.
-        Err(_) => {
+        Err(message) => {
             shadecache::diagnostic::emit_to_stderr(
                 None,
-                &shadecache::diagnostic::Diagnostic::error(
-                    "internal error: shadecache panicked; this is a bug, please report it with the input",
-                ),
+                &shadecache::diagnostic::Diagnostic::error(format!("internal error: {message}")),
                 color,
             );
             ExitCode::from(2)
