@@ -26,7 +26,10 @@
 )]
 
 pub mod analysis;
+pub mod back;
 pub mod cost;
 pub mod diagnostic;
 pub mod front;
+pub mod plan;
 pub mod proc;
+pub mod rewrite;

@@ -13,7 +13,10 @@ mod operands;
 mod placement;
 
 pub use operands::{operands, pointer_root, PointerRoot};
-pub use placement::{has_effects, layout, CallSite, FunctionLayout, LoopBound, Placement, Store};
+pub use placement::{
+    each_statement, has_effects, layout, CallSite, FunctionLayout, KillSite, LoopBound, Placement,
+    Store,
+};
 
 /// The number of scalar components of a type: 1 for scalars, n for vectors,
 /// columns × rows for matrices, 1 for everything else.

@@ -70,6 +70,17 @@ pub struct FunctionLayout {
     pub loops: Vec<LoopBound>,
     /// Whether the function contains a `discard`.
     pub discards: bool,
+    /// Every `discard`, in statement order.
+    pub kills: Vec<KillSite>,
+}
+
+/// A `discard` statement and where it runs.
+#[derive(Clone, Debug)]
+pub struct KillSite {
+    /// How many expressions are evaluated before it (an index into the
+    /// evaluation order, comparable with [`FunctionLayout::order_of`]).
+    pub after: usize,
+    pub placement: Placement,
 }
 
 impl FunctionLayout {
@@ -78,6 +89,11 @@ impl FunctionLayout {
     /// cost nothing at run time.
     pub fn placement(&self, expr: Handle<Expression>) -> Option<&Placement> {
         self.placements.get(expr.index()).and_then(Option::as_ref)
+    }
+
+    /// Where `expr` comes in the evaluation order.
+    pub fn order_of(&self, expr: Handle<Expression>) -> Option<usize> {
+        self.order.iter().position(|&e| e == expr)
     }
 
     /// All evaluated expressions with their placements, in evaluation order.
@@ -180,7 +196,13 @@ impl Walker<'_> {
                 self.block(continuing, &inner);
             }
             Statement::Return { value } => self.out.roots.extend(value),
-            Statement::Kill => self.out.discards = true,
+            Statement::Kill => {
+                self.out.discards = true;
+                self.out.kills.push(KillSite {
+                    after: self.out.order.len(),
+                    placement: at.clone(),
+                });
+            }
             Statement::Store { pointer, value } => {
                 let target = pointer_root(self.function, pointer);
                 if !matches!(target, Some(PointerRoot::Local(_))) {
@@ -328,7 +350,7 @@ pub fn has_effects(module: &naga::Module, function: Handle<naga::Function>) -> b
 
 /// Calls `visit` on every statement of `block`, nested ones included, in
 /// order.
-fn each_statement(block: &Block, visit: &mut impl FnMut(&Statement)) {
+pub fn each_statement(block: &Block, visit: &mut impl FnMut(&Statement)) {
     for statement in block.iter() {
         visit(statement);
         match *statement {

@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod analyze;
+pub mod rewrite;
 
 use shadecache::diagnostic::Color;
 use shadecache::diagnostic::Error;
@@ -9,11 +10,14 @@ use shadecache::diagnostic::Error;
 pub enum Command {
     /// List the values of a fragment shader that could be cached, ranked by estimated P/T.
     Analyze(analyze::Args),
+    /// Write one-, two- and three-pass reprojection-cache variants of a shader, with their pass plans.
+    Rewrite(rewrite::Args),
 }
 
 pub fn exec(command: Command, color: Color) -> Result<(), Error> {
     match command {
         Command::Analyze(args) => analyze::exec(args, color),
+        Command::Rewrite(args) => rewrite::exec(args, color),
     }
 }
 

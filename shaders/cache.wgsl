@@ -1,0 +1,109 @@
+// Reverse-reprojection cache helpers (seed 002, §2–§3), imported at IR level
+// into every module shadecache rewrites. The rewriter assigns the bind group
+// of these resources (the first group the user's shader leaves free); the
+// bindings below are fixed and the pass plan lists them.
+//
+// The cache of a frame is its payload texture plus the frame's depth
+// buffer. Next frame, both are read here: the payload with a bilinear
+// reconstruction from four texels, the depth to check that the surface
+// point seen now is the one that was cached (no disocclusion).
+
+struct CacheParams {
+    // Render target size in pixels.
+    viewport: vec2<f32>,
+    // A tap is a hit when |cached depth - expected depth| < depth_epsilon.
+    depth_epsilon: f32,
+    // (c mod Δn), advanced by the host each frame as (phase + 1) mod Δn.
+    // Passing the phase rather than c keeps the refresh period exact when the
+    // host's frame counter wraps, whatever Δn is.
+    refresh_phase: u32,
+    // Δn: each pixel is recomputed at least once every Δn frames.
+    refresh_period: u32,
+    // k: refresh decisions are made per k×k block of pixels.
+    refresh_quad: u32,
+    // c, the frame counter (for debugging views; not used by the shaders).
+    frame: u32,
+    _padding: u32,
+}
+
+@group(1) @binding(0) var<uniform> cache_params: CacheParams;
+// Last frame's payload (rgba16float or rgba32float).
+@group(1) @binding(1) var cache_previous_payload: texture_2d<f32>;
+// Last frame's depth buffer.
+@group(1) @binding(2) var cache_previous_depth: texture_depth_2d;
+// This frame's payload, read at the pixel itself (three-pass, pass 3).
+@group(1) @binding(3) var cache_current_payload: texture_2d<f32>;
+
+struct CacheLookup {
+    payload: vec4<f32>,
+    hit: bool,
+}
+
+// PCG hash (O'Neill 2014, "pcg32" output permutation on one u32 of state).
+fn cache_hash(v: u32) -> u32 {
+    let state = (v * 747796405u) + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// The refresh indicator of seed 002, eq. 1: b = (h(x/k, y/k) + c) mod Δn,
+// refresh when b == 0. h is a hash of the k×k block rather than a noise
+// texture: no extra binding, the same offsets on every machine, and every
+// block's offset is uniform in [0, Δn) up to the hash's quality. All u32.
+fn cache_refresh(frag_coord: vec4<f32>) -> bool {
+    let k = max(cache_params.refresh_quad, 1u);
+    let period = max(cache_params.refresh_period, 1u);
+    let block = vec2<u32>(frag_coord.xy) / vec2<u32>(k);
+    let offset = cache_hash(block.x ^ cache_hash(block.y)) % period;
+    return ((offset + (cache_params.refresh_phase % period)) % period) == 0u;
+}
+
+// Where this fragment was last frame: its previous clip position (from the
+// vertex stage evaluated with last frame's uniforms) → NDC → texel
+// coordinates in the cache. A miss when the point was behind the previous
+// camera (w ≤ 0, or NaN), when the bilinear footprint leaves the viewport,
+// or when any of the four depth taps disagrees with the expected depth
+// (disocclusion, or a silhouette inside the footprint).
+fn cache_lookup(previous_clip: vec4<f32>) -> CacheLookup {
+    var result = CacheLookup(vec4<f32>(0.0), false);
+    if (!(previous_clip.w > 0.0)) {
+        return result;
+    }
+    let ndc = previous_clip.xyz / previous_clip.w;
+    let texel = (vec2<f32>((ndc.x * 0.5) + 0.5, 0.5 - (ndc.y * 0.5)) * cache_params.viewport) - vec2<f32>(0.5);
+    let base = floor(texel);
+    let last = cache_params.viewport - vec2<f32>(2.0);
+    // Comparisons with NaN are false, so a NaN position misses here too.
+    if (!(all(base >= vec2<f32>(0.0)) && all(base <= last))) {
+        return result;
+    }
+    let t = vec2<i32>(base);
+    let depths = vec4<f32>(
+        textureLoad(cache_previous_depth, t, 0),
+        textureLoad(cache_previous_depth, t + vec2<i32>(1, 0), 0),
+        textureLoad(cache_previous_depth, t + vec2<i32>(0, 1), 0),
+        textureLoad(cache_previous_depth, t + vec2<i32>(1, 1), 0),
+    );
+    if (!all(abs(depths - vec4<f32>(ndc.z)) < vec4<f32>(cache_params.depth_epsilon))) {
+        return result;
+    }
+    let f = texel - base;
+    let top = mix(
+        textureLoad(cache_previous_payload, t, 0),
+        textureLoad(cache_previous_payload, t + vec2<i32>(1, 0), 0),
+        f.x,
+    );
+    let bottom = mix(
+        textureLoad(cache_previous_payload, t + vec2<i32>(0, 1), 0),
+        textureLoad(cache_previous_payload, t + vec2<i32>(1, 1), 0),
+        f.x,
+    );
+    result.payload = mix(top, bottom, f.y);
+    result.hit = true;
+    return result;
+}
+
+// This frame's cache at the fragment's own pixel (three-pass, pass 3).
+fn cache_current(frag_coord: vec4<f32>) -> vec4<f32> {
+    return textureLoad(cache_current_payload, vec2<i32>(frag_coord.xy), 0);
+}

@@ -1,0 +1,181 @@
+//! IR → text: writing rewritten modules with naga's back ends.
+//!
+//! WGSL is the default and what the tests compile with naga, Tint and wgpu;
+//! SPIR-V, GLSL, MSL and HLSL go through naga's other writers for engines
+//! that consume those.
+
+use naga::valid::ModuleInfo;
+
+/// An output language.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Language {
+    Wgsl,
+    Spv,
+    Glsl,
+    Msl,
+    Hlsl,
+}
+
+/// One written file: its extension and bytes.
+#[derive(Clone, Debug)]
+pub struct Output {
+    /// File name suffix after the pass name, e.g. `.wgsl` or `.vert.glsl`.
+    pub suffix: String,
+    pub bytes: Vec<u8>,
+}
+
+impl Language {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Language::Wgsl => "wgsl",
+            Language::Spv => "spv",
+            Language::Glsl => "glsl",
+            Language::Msl => "msl",
+            Language::Hlsl => "hlsl",
+        }
+    }
+}
+
+/// Writes `module` in `language`. GLSL has one entry point per file, so it
+/// gives one output per entry point.
+pub fn write(
+    module: &naga::Module,
+    info: &ModuleInfo,
+    language: Language,
+) -> Result<Vec<Output>, String> {
+    match language {
+        Language::Wgsl => {
+            let text = naga::back::wgsl::write_string(
+                module,
+                info,
+                naga::back::wgsl::WriterFlags::empty(),
+            )
+            .map_err(|err| err.to_string())?;
+            Ok(vec![Output {
+                suffix: ".wgsl".into(),
+                bytes: text.into_bytes(),
+            }])
+        }
+        Language::Spv => {
+            let words = naga::back::spv::write_vec(
+                module,
+                info,
+                &naga::back::spv::Options::default(),
+                None,
+            )
+            .map_err(|err| err.to_string())?;
+            Ok(vec![Output {
+                suffix: ".spv".into(),
+                bytes: words.iter().flat_map(|w| w.to_le_bytes()).collect(),
+            }])
+        }
+        Language::Msl => {
+            let pipeline = naga::back::msl::PipelineOptions::default();
+            let (text, _) = naga::back::msl::write_string(
+                module,
+                info,
+                &naga::back::msl::Options::default(),
+                &pipeline,
+            )
+            .map_err(|err| err.to_string())?;
+            Ok(vec![Output {
+                suffix: ".metal".into(),
+                bytes: text.into_bytes(),
+            }])
+        }
+        Language::Hlsl => {
+            let mut text = String::new();
+            let options = naga::back::hlsl::Options::default();
+            let pipeline = naga::back::hlsl::PipelineOptions::default();
+            let mut writer = naga::back::hlsl::Writer::new(&mut text, &options, &pipeline);
+            writer
+                .write(module, info, None)
+                .map_err(|err| err.to_string())?;
+            Ok(vec![Output {
+                suffix: ".hlsl".into(),
+                bytes: text.into_bytes(),
+            }])
+        }
+        Language::Glsl => {
+            let mut outputs = Vec::new();
+            for entry in &module.entry_points {
+                let stage = match entry.stage {
+                    naga::ShaderStage::Vertex => "vert",
+                    naga::ShaderStage::Fragment => "frag",
+                    _ => continue,
+                };
+                let options = naga::back::glsl::Options {
+                    version: naga::back::glsl::Version::new_gles(310),
+                    ..naga::back::glsl::Options::default()
+                };
+                let pipeline = naga::back::glsl::PipelineOptions {
+                    shader_stage: entry.stage,
+                    entry_point: entry.name.clone(),
+                    multiview: None,
+                };
+                let mut text = String::new();
+                let mut writer = naga::back::glsl::Writer::new(
+                    &mut text,
+                    module,
+                    info,
+                    &options,
+                    &pipeline,
+                    naga::proc::BoundsCheckPolicies::default(),
+                )
+                .map_err(|err| err.to_string())?;
+                writer.write().map_err(|err| err.to_string())?;
+                outputs.push(Output {
+                    suffix: format!(".{stage}.glsl"),
+                    bytes: text.into_bytes(),
+                });
+            }
+            Ok(outputs)
+        }
+    }
+}
+
+/// Writes a variant into `dir`: one file per pass (per entry point for
+/// GLSL) and `plan.json`. Each file is written beside its final name and
+/// renamed into place, so a reader never sees half a file.
+pub fn write_variant(
+    dir: &std::path::Path,
+    rewritten: &crate::rewrite::Rewritten,
+    language: Language,
+) -> Result<Vec<std::path::PathBuf>, crate::diagnostic::Error> {
+    use crate::diagnostic::{Diagnostic, Error};
+    let io_error = |path: &std::path::Path, err: std::io::Error| {
+        Error::plain(Diagnostic::error(format!(
+            "cannot write `{}`: {err}",
+            path.display()
+        )))
+    };
+    // Render everything before touching the file system.
+    let mut files = Vec::new();
+    for pass in &rewritten.passes {
+        let outputs = write(&pass.module, &pass.info, language).map_err(|err| {
+            Error::plain(Diagnostic::error(format!(
+                "naga cannot write {} as {}: {err}",
+                pass.name,
+                language.as_str()
+            )))
+        })?;
+        for output in outputs {
+            files.push((format!("{}{}", pass.name, output.suffix), output.bytes));
+        }
+    }
+    let mut plan = serde_json::to_string_pretty(&rewritten.plan)
+        .map_err(|err| Error::plain(Diagnostic::error(format!("cannot write the plan: {err}"))))?;
+    plan.push('\n');
+    files.push(("plan.json".into(), plan.into_bytes()));
+
+    std::fs::create_dir_all(dir).map_err(|err| io_error(dir, err))?;
+    let mut written = Vec::new();
+    for (name, bytes) in files {
+        let path = dir.join(&name);
+        let partial = dir.join(format!(".{name}.partial"));
+        std::fs::write(&partial, bytes).map_err(|err| io_error(&partial, err))?;
+        std::fs::rename(&partial, &path).map_err(|err| io_error(&path, err))?;
+        written.push(path);
+    }
+    Ok(written)
+}

@@ -1,0 +1,204 @@
+//! `shadecache rewrite`: write reprojection-cache variants of a shader.
+
+use std::path::PathBuf;
+
+use shadecache::analysis::{self, Options as AnalysisOptions};
+use shadecache::back::{self, Language};
+use shadecache::diagnostic::{self, Color, Diagnostic, Error, Severity};
+use shadecache::front;
+use shadecache::rewrite::{self, CacheFormat, Options, Variant};
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The WGSL shader to rewrite.
+    pub shader: PathBuf,
+
+    /// The node to cache (an id from `shadecache analyze`).
+    #[arg(
+        long,
+        value_name = "ID",
+        required_unless_present = "all_nodes",
+        conflicts_with = "all_nodes"
+    )]
+    pub node: Option<String>,
+
+    /// Rewrite every candidate node, each into DIR/<node-id>/<variant>/.
+    #[arg(long)]
+    pub all_nodes: bool,
+
+    /// Which variant to write.
+    #[arg(long, value_enum, default_value_t = VariantArg::All)]
+    pub variant: VariantArg,
+
+    /// Δn: every pixel is recomputed at least once every N frames.
+    #[arg(long, value_name = "N", default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..))]
+    pub refresh_period: u32,
+
+    /// k: refresh decisions are made per K×K block of pixels.
+    #[arg(long, value_name = "K", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
+    pub refresh_quad: u32,
+
+    /// Texture format of the payload cache.
+    #[arg(long, value_enum, default_value_t = CacheFormatArg::Rgba16float)]
+    pub cache_format: CacheFormatArg,
+
+    /// ε of the cache's depth test, in depth-buffer units.
+    #[arg(long, value_name = "E", default_value_t = 1e-3)]
+    pub depth_epsilon: f32,
+
+    /// Output language (WGSL is what shadecache validates and runs).
+    #[arg(long, value_enum, default_value_t = EmitArg::Wgsl)]
+    pub emit: EmitArg,
+
+    /// The fragment entry point, when the shader has several.
+    #[arg(long, value_name = "NAME")]
+    pub entry: Option<String>,
+
+    /// Where to write the shaders and plan.json.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum VariantArg {
+    OnePass,
+    TwoPass,
+    ThreePass,
+    All,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum CacheFormatArg {
+    Rgba16float,
+    Rgba32float,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum EmitArg {
+    Wgsl,
+    Spv,
+    Glsl,
+    Msl,
+    Hlsl,
+}
+
+pub fn exec(args: Args, color: Color) -> Result<(), Error> {
+    let shader = front::load(&args.shader)?;
+    let analysis = analysis::analyze(
+        &shader,
+        &AnalysisOptions {
+            entry: args.entry.clone(),
+            ..AnalysisOptions::default()
+        },
+    )?;
+    let options = Options {
+        refresh_period: args.refresh_period,
+        refresh_quad: args.refresh_quad,
+        cache_format: match args.cache_format {
+            CacheFormatArg::Rgba16float => CacheFormat::Rgba16float,
+            CacheFormatArg::Rgba32float => CacheFormat::Rgba32float,
+        },
+        depth_epsilon: args.depth_epsilon,
+        ..Options::default()
+    };
+    let language = match args.emit {
+        EmitArg::Wgsl => Language::Wgsl,
+        EmitArg::Spv => Language::Spv,
+        EmitArg::Glsl => Language::Glsl,
+        EmitArg::Msl => Language::Msl,
+        EmitArg::Hlsl => Language::Hlsl,
+    };
+    let variants: Vec<Variant> = match args.variant {
+        VariantArg::OnePass => vec![Variant::OnePass],
+        VariantArg::TwoPass => vec![Variant::TwoPass],
+        VariantArg::ThreePass => vec![Variant::ThreePass],
+        VariantArg::All => Variant::ALL.to_vec(),
+    };
+
+    let nodes: Vec<&analysis::Candidate> = match &args.node {
+        Some(id) => vec![find_node(&shader, &analysis, id)?],
+        None => analysis.candidates.iter().collect(),
+    };
+    let mut refused = 0;
+    let mut written = 0;
+    for candidate in &nodes {
+        for &variant in &variants {
+            let dir = match (args.all_nodes, variants.len()) {
+                (true, _) => args.out.join(&candidate.node.id).join(variant.as_str()),
+                (false, 1) => args.out.clone(),
+                (false, _) => args.out.join(variant.as_str()),
+            };
+            match rewrite::rewrite(&shader, &analysis, candidate, variant, &options) {
+                Ok(rewritten) => {
+                    back::write_variant(&dir, &rewritten, language)?;
+                    written += 1;
+                }
+                Err(refusal) => {
+                    refused += 1;
+                    diagnostic::emit_to_stderr(
+                        None,
+                        &Diagnostic::new(
+                            Severity::Warning,
+                            format!(
+                                "refused: node {} (`{}`), {variant}: {}",
+                                candidate.node.id, candidate.node.text, refusal.reason
+                            ),
+                        ),
+                        color,
+                    );
+                }
+            }
+        }
+    }
+    super::write_stdout(&format!(
+        "wrote {written} variant{} to {}, refused {refused}\n",
+        if written == 1 { "" } else { "s" },
+        args.out.display()
+    ))?;
+    if refused > 0 && args.node.is_some() {
+        return Err(Error::plain(Diagnostic::error(format!(
+            "{refused} variant{} of node {} refused",
+            if refused == 1 { "" } else { "s" },
+            args.node.as_deref().unwrap_or_default()
+        ))));
+    }
+    Ok(())
+}
+
+/// The candidate with id `id`; a rejected or unknown id is an error that
+/// says why.
+fn find_node<'a>(
+    shader: &front::Shader,
+    analysis: &'a analysis::Analysis,
+    id: &str,
+) -> Result<&'a analysis::Candidate, Error> {
+    if let Some(candidate) = analysis.candidate(id) {
+        return Ok(candidate);
+    }
+    if let Some(rejected) = analysis.rejected(id) {
+        return Err(Error::in_file(
+            shader.file.clone(),
+            Diagnostic::error(format!("node {id} cannot be cached: {}", rejected.detail))
+                .with_label(rejected.node.range.clone(), rejected.reason.as_str()),
+        ));
+    }
+    let known: Vec<&str> = analysis
+        .candidates
+        .iter()
+        .take(8)
+        .map(|c| c.node.id.as_str())
+        .collect();
+    Err(Error::plain(
+        Diagnostic::error(format!("unknown node id `{id}` in `{}`", shader.file.path))
+            .with_note(format!(
+                "candidates, highest P/T first: {}{}",
+                known.join(", "),
+                if analysis.candidates.len() > known.len() {
+                    ", ..."
+                } else {
+                    ""
+                }
+            ))
+            .with_note("`shadecache analyze` lists every node and its id"),
+    ))
+}

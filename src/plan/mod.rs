@@ -1,0 +1,493 @@
+//! variants → plans: the data that says how to run a variant.
+//!
+//! A [`Plan`] is written as `plan.json` next to a variant's pass shaders,
+//! and the runtime executes exactly what it says: the passes in order, per
+//! pass its shader and entry points, colour targets and formats, depth
+//! compare and write, whether it discards and which bindings it uses; the
+//! vertex layout; every binding the host supplies (the original resources,
+//! their previous-frame twins, the cache textures, the refresh uniforms);
+//! clear values; and the rule for swapping the double-buffered cache.
+//! `docs/plan-json.md` documents the format.
+
+use naga::{Binding, Module, TypeInner};
+use serde::{Deserialize, Serialize};
+
+use crate::analysis::{Analysis, Candidate};
+use crate::front::Shader;
+use crate::rewrite::fragment::{self, Stage, Writes};
+use crate::rewrite::vertex::VertexStage;
+use crate::rewrite::{self, Options, PassModule, Variant};
+
+/// How to run one variant.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    /// Version of this format.
+    pub format: u32,
+    pub shader: String,
+    pub entry: String,
+    pub node: PlanNode,
+    pub variant: Variant,
+    pub passes: Vec<Pass>,
+    pub vertex_layout: Vec<VertexAttribute>,
+    pub bindings: Bindings,
+    pub cache: Cache,
+    pub refresh: Refresh,
+    pub clear: Clear,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlanNode {
+    pub id: String,
+    pub text: String,
+    #[serde(rename = "type")]
+    pub ty: String,
+    pub components: u32,
+}
+
+/// One render pass.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Pass {
+    /// `pass1`, `pass2`...: also the shader file's stem.
+    pub name: String,
+    /// What the pass does, in words.
+    pub role: String,
+    /// The WGSL file (relative to the plan).
+    pub shader: String,
+    pub vertex_entry: String,
+    pub fragment_entry: String,
+    pub color_targets: Vec<ColorTarget>,
+    pub depth: Depth,
+    pub discards: bool,
+    /// (group, binding) of every resource this pass's shaders use.
+    pub bindings: Vec<[u32; 2]>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ColorTarget {
+    pub location: u32,
+    /// `color` (the frame) or `cache` (this frame's payload texture).
+    pub target: String,
+    pub format: String,
+    /// `clear` (first pass to write the target this frame) or `load`.
+    pub load: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Depth {
+    pub format: String,
+    /// `less` or `equal`.
+    pub compare: String,
+    pub write: bool,
+    /// `clear` or `load`.
+    pub load: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VertexAttribute {
+    pub location: u32,
+    pub name: String,
+    /// A WebGPU vertex format, e.g. `float32x3`.
+    pub format: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Bindings {
+    /// The user's resources, as in the original shader.
+    pub original: Vec<Resource>,
+    /// Previous-frame twins: same type as the binding they shadow, filled
+    /// with last frame's contents (this frame's on the first frame).
+    pub previous: Vec<Twin>,
+    /// The cache's own resources.
+    pub cache: Vec<Resource>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Resource {
+    pub group: u32,
+    pub binding: u32,
+    pub name: String,
+    /// `uniform`, `storage`, `texture`, `depth-texture`, `sampler`...
+    pub kind: String,
+    /// For the cache's resources, what to bind, e.g. `previous payload`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Twin {
+    pub group: u32,
+    pub binding: u32,
+    pub name: String,
+    pub shadows: Resource,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Cache {
+    pub format: String,
+    /// How many components of the payload texture hold the payload.
+    pub components: u32,
+    /// The double-buffering rule.
+    pub swap: String,
+    /// Byte layout of the refresh uniform (`CacheParams`), in order.
+    pub params: Vec<Field>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Field {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub ty: String,
+    pub offset: u32,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Refresh {
+    pub period: u32,
+    pub quad: u32,
+    pub depth_epsilon: f32,
+    /// Where the per-block offsets come from.
+    pub offsets: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Clear {
+    pub color: [f64; 4],
+    pub cache: [f64; 4],
+    pub depth: f64,
+}
+
+/// What [`build`] needs.
+#[derive(Debug)]
+pub struct Inputs<'a> {
+    pub shader: &'a Shader,
+    pub analysis: &'a Analysis,
+    pub candidate: &'a Candidate,
+    pub variant: Variant,
+    pub options: &'a Options,
+    pub group: u32,
+    pub vertex: &'a VertexStage,
+    pub passes: &'a [(Stage, PassModule)],
+    pub result: &'a naga::FunctionResult,
+}
+
+/// The depth buffer's format: it is also last frame's depth in the cache.
+pub const DEPTH_FORMAT: &str = "depth32float";
+
+pub fn build(inputs: Inputs) -> Plan {
+    let Inputs {
+        shader,
+        analysis,
+        candidate,
+        variant,
+        options,
+        group,
+        vertex,
+        passes,
+        result,
+    } = inputs;
+    let module = &shader.module;
+    let entry = &module.entry_points[analysis.entry_index];
+    let vertex_entry = &module.entry_points[vertex.entry_index];
+    let color_locations = output_locations(module, result);
+    let cache_location = fragment::cache_location(module, result);
+
+    let mut plan_passes = Vec::new();
+    for (index, (stage, pass)) in passes.iter().enumerate() {
+        let first = index == 0;
+        let load = |first: bool| if first { "clear" } else { "load" }.to_string();
+        let color = |location: u32| ColorTarget {
+            location,
+            target: "color".into(),
+            format: options.color_format.clone(),
+            load: load(first || matches!(stage, Stage::ShadeFromCache)),
+        };
+        let cache = |location: u32| ColorTarget {
+            location,
+            target: "cache".into(),
+            format: options.cache_format.as_str().into(),
+            load: load(first),
+        };
+        let color_targets = match stage.writes() {
+            Writes::Color => color_locations.iter().map(|&l| color(l)).collect(),
+            Writes::Cache => vec![cache(0)],
+            Writes::ColorAndCache => {
+                let mut targets: Vec<_> = color_locations.iter().map(|&l| color(l)).collect();
+                targets.push(cache(cache_location));
+                targets
+            }
+        };
+        let (compare, write) = match stage {
+            Stage::ShadeFromCache => ("equal", false),
+            _ => ("less", true),
+        };
+        plan_passes.push(Pass {
+            name: pass.name.clone(),
+            role: role(*stage).into(),
+            shader: format!("{}.wgsl", pass.name),
+            vertex_entry: vertex_entry.name.clone(),
+            fragment_entry: entry.name.clone(),
+            color_targets,
+            depth: Depth {
+                format: DEPTH_FORMAT.into(),
+                compare: compare.into(),
+                write,
+                load: load(first),
+            },
+            discards: stage.discards() || pass_discards(&pass.module),
+            bindings: used_bindings(&pass.module),
+        });
+    }
+
+    let original: Vec<Resource> = module
+        .global_variables
+        .iter()
+        .filter_map(|(_, g)| resource(module, g, None))
+        .collect();
+    let previous = vertex
+        .twins
+        .iter()
+        .filter_map(|&(from, to)| {
+            let shadows = resource(module, &module.global_variables[from], None)?;
+            Some(Twin {
+                group,
+                binding: shadows_binding(vertex, to),
+                name: format!("previous_{}", shadows.name),
+                shadows,
+            })
+        })
+        .collect();
+    let cache_resource = |binding: u32, name: &str, kind: &str, source: &str| Resource {
+        group,
+        binding,
+        name: name.into(),
+        kind: kind.into(),
+        source: Some(source.into()),
+    };
+    let cache = vec![
+        cache_resource(
+            rewrite::CACHE_PARAMS_BINDING,
+            "cache_params",
+            "uniform",
+            "the refresh uniform (CacheParams), updated every frame",
+        ),
+        cache_resource(
+            rewrite::PREVIOUS_PAYLOAD_BINDING,
+            "cache_previous_payload",
+            "texture",
+            "last frame's payload texture",
+        ),
+        cache_resource(
+            rewrite::PREVIOUS_DEPTH_BINDING,
+            "cache_previous_depth",
+            "depth-texture",
+            "last frame's depth buffer",
+        ),
+        cache_resource(
+            rewrite::CURRENT_PAYLOAD_BINDING,
+            "cache_current_payload",
+            "texture",
+            "this frame's payload texture, after the passes that write it",
+        ),
+    ];
+
+    Plan {
+        format: 1,
+        shader: shader.file.path.clone(),
+        entry: entry.name.clone(),
+        node: PlanNode {
+            id: candidate.node.id.clone(),
+            text: candidate.node.text.clone(),
+            ty: candidate.node.ty.clone(),
+            components: candidate.components,
+        },
+        variant,
+        passes: plan_passes,
+        vertex_layout: vertex_layout(module, &vertex_entry.function),
+        bindings: Bindings {
+            original,
+            previous,
+            cache,
+        },
+        cache: Cache {
+            format: options.cache_format.as_str().into(),
+            components: candidate.components,
+            swap: "two payload textures and two depth buffers alternate: at the end of a frame, this frame's payload texture and depth buffer become last frame's (bound as cache_previous_payload and cache_previous_depth) and last frame's are rendered into next; on the first frame, after a resize or a camera cut, the previous depth is cleared to 1.0 so every pixel misses".into(),
+            params: vec![
+                field("viewport", "vec2<f32>", 0),
+                field("depth_epsilon", "f32", 8),
+                field("refresh_phase", "u32", 12),
+                field("refresh_period", "u32", 16),
+                field("refresh_quad", "u32", 20),
+                field("frame", "u32", 24),
+                field("_padding", "u32", 28),
+            ],
+        },
+        refresh: Refresh {
+            period: options.refresh_period,
+            quad: options.refresh_quad,
+            depth_epsilon: options.depth_epsilon,
+            offsets: "PCG hash of the k×k block coordinates, modulo the period; refresh when (offset + refresh_phase) mod period == 0, with refresh_phase = frame mod period kept by the host".into(),
+        },
+        clear: Clear {
+            color: [0.0, 0.0, 0.0, 1.0],
+            cache: [0.0, 0.0, 0.0, 0.0],
+            depth: 1.0,
+        },
+    }
+}
+
+fn field(name: &str, ty: &str, offset: u32) -> Field {
+    Field {
+        name: name.into(),
+        ty: ty.into(),
+        offset,
+    }
+}
+
+fn role(stage: Stage) -> &'static str {
+    match stage {
+        Stage::OnePass => "reproject; hit: shade from the cached payload; miss or refresh: compute the payload; write colour and cache",
+        Stage::ReuseOrDiscard => "reproject; hit: shade from the cached payload, write colour and cache; miss or refresh: discard",
+        Stage::Full => "the pixels pass 1 left empty (depth test): compute payload and colour, write colour and cache",
+        Stage::ReprojectOrDiscard => "reproject; hit: write the cached payload to this frame's cache; miss or refresh: discard",
+        Stage::Payload => "the pixels pass 1 left empty (depth test): compute the payload into the cache",
+        Stage::ShadeFromCache => "every pixel (depth equal): shade from this frame's cache at the pixel",
+    }
+}
+
+fn shadows_binding(vertex: &VertexStage, twin: naga::Handle<naga::GlobalVariable>) -> u32 {
+    vertex
+        .twins
+        .iter()
+        .position(|&(_, t)| t == twin)
+        .map_or(0, |i| rewrite::FIRST_TWIN_BINDING + i as u32)
+}
+
+fn pass_discards(module: &Module) -> bool {
+    let mut discards = false;
+    let mut scan = |body: &naga::Block| {
+        crate::proc::each_statement(body, &mut |s| {
+            discards |= matches!(s, naga::Statement::Kill)
+        })
+    };
+    for (_, f) in module.functions.iter() {
+        scan(&f.body);
+    }
+    for ep in &module.entry_points {
+        scan(&ep.function.body);
+    }
+    discards
+}
+
+fn used_bindings(module: &Module) -> Vec<[u32; 2]> {
+    let mut out: Vec<[u32; 2]> = module
+        .global_variables
+        .iter()
+        .filter_map(|(_, g)| g.binding.as_ref().map(|b| [b.group, b.binding]))
+        .collect();
+    out.sort();
+    out
+}
+
+fn resource(
+    module: &Module,
+    global: &naga::GlobalVariable,
+    source: Option<String>,
+) -> Option<Resource> {
+    let binding = global.binding.as_ref()?;
+    let kind = match global.space {
+        naga::AddressSpace::Uniform => "uniform",
+        naga::AddressSpace::Storage { access } if access.contains(naga::StorageAccess::STORE) => {
+            "storage-read-write"
+        }
+        naga::AddressSpace::Storage { .. } => "storage",
+        _ => match module.types[global.ty].inner {
+            TypeInner::Image {
+                class: naga::ImageClass::Depth { .. },
+                ..
+            } => "depth-texture",
+            TypeInner::Image {
+                class: naga::ImageClass::Storage { .. },
+                ..
+            } => "storage-texture",
+            TypeInner::Image {
+                dim: naga::ImageDimension::Cube,
+                ..
+            } => "cube-texture",
+            TypeInner::Image { .. } => "texture",
+            TypeInner::Sampler { comparison: true } => "comparison-sampler",
+            TypeInner::Sampler { .. } => "sampler",
+            _ => "other",
+        },
+    };
+    Some(Resource {
+        group: binding.group,
+        binding: binding.binding,
+        name: global.name.clone().unwrap_or_default(),
+        kind: kind.into(),
+        source,
+    })
+}
+
+fn output_locations(module: &Module, result: &naga::FunctionResult) -> Vec<u32> {
+    match module.types[result.ty].inner {
+        TypeInner::Struct { ref members, .. } => members
+            .iter()
+            .filter_map(|m| match m.binding {
+                Some(Binding::Location { location, .. }) => Some(location),
+                _ => None,
+            })
+            .collect(),
+        _ => match result.binding {
+            Some(Binding::Location { location, .. }) => vec![location],
+            _ => vec![],
+        },
+    }
+}
+
+/// The vertex buffer layout the original vertex entry point expects.
+fn vertex_layout(module: &Module, function: &naga::Function) -> Vec<VertexAttribute> {
+    let mut out = Vec::new();
+    let mut add =
+        |name: Option<&String>, ty: naga::Handle<naga::Type>, binding: &Option<Binding>| {
+            if let Some(Binding::Location { location, .. }) = *binding {
+                out.push(VertexAttribute {
+                    location,
+                    name: name.cloned().unwrap_or_default(),
+                    format: vertex_format(&module.types[ty].inner),
+                });
+            }
+        };
+    for argument in &function.arguments {
+        match module.types[argument.ty].inner {
+            TypeInner::Struct { ref members, .. } => {
+                for member in members {
+                    add(member.name.as_ref(), member.ty, &member.binding);
+                }
+            }
+            _ => add(argument.name.as_ref(), argument.ty, &argument.binding),
+        }
+    }
+    out.sort_by_key(|a| a.location);
+    out
+}
+
+fn vertex_format(inner: &TypeInner) -> String {
+    let (scalar, count) = match *inner {
+        TypeInner::Scalar(s) => (s, 1),
+        TypeInner::Vector { size, scalar } => (scalar, size as u32),
+        _ => return "unsupported".into(),
+    };
+    let base = match scalar.kind {
+        naga::ScalarKind::Float if scalar.width == 2 => "float16",
+        naga::ScalarKind::Float => "float32",
+        naga::ScalarKind::Sint => "sint32",
+        naga::ScalarKind::Uint => "uint32",
+        _ => return "unsupported".into(),
+    };
+    if count == 1 {
+        base.into()
+    } else {
+        format!("{base}x{count}")
+    }
+}

@@ -1,0 +1,388 @@
+//! Copying the live part of a function into a new function of the same
+//! module: the IR builder behind the payload and shading functions.
+//!
+//! Expressions are copied on demand through a handle map and re-emitted in
+//! the new function in the order the statements need them. What is copied
+//! is decided by a *live* set from the expression graph: an `Emit` keeps
+//! only live expressions, a store survives when a live load reads its
+//! variable, a branch when its condition is live, a call when its result is
+//! live or it has effects. Everything else is dead code and is dropped.
+
+use std::collections::HashMap;
+
+use naga::{Block, Expression, Function, Handle, LocalVariable, Span, Statement};
+
+use super::remap::{self, Mapper};
+use crate::analysis::graph::ExprSet;
+use crate::proc;
+
+/// Builds a new function from parts of `source`.
+pub struct FunctionCopy<'a> {
+    module: &'a naga::Module,
+    source: &'a Function,
+    live: &'a ExprSet,
+    /// The function being built.
+    pub target: Function,
+    exprs: HashMap<Handle<Expression>, Handle<Expression>>,
+    locals: HashMap<Handle<LocalVariable>, Handle<LocalVariable>>,
+    /// Expressions to read from somewhere else than their computation.
+    substitutes: HashMap<Handle<Expression>, Expression>,
+    /// Copied expressions that still need an `Emit`.
+    pending: Vec<Handle<Expression>>,
+    /// Stop after this expression is emitted, returning it.
+    stop_at: Option<Handle<Expression>>,
+    stopped: bool,
+    /// Globals and functions to use in place of others.
+    globals: HashMap<Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>>,
+    functions: HashMap<Handle<Function>, Handle<Function>>,
+    /// Return this member of the returned value instead of the value.
+    return_member: Option<u32>,
+}
+
+impl std::fmt::Debug for FunctionCopy<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FunctionCopy")
+            .field("target", &self.target.name)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'a> FunctionCopy<'a> {
+    pub fn new(
+        module: &'a naga::Module,
+        source: &'a Function,
+        live: &'a ExprSet,
+        target: Function,
+    ) -> Self {
+        FunctionCopy {
+            module,
+            source,
+            live,
+            target,
+            exprs: HashMap::new(),
+            locals: HashMap::new(),
+            substitutes: HashMap::new(),
+            pending: Vec::new(),
+            stop_at: None,
+            stopped: false,
+            globals: HashMap::new(),
+            functions: HashMap::new(),
+            return_member: None,
+        }
+    }
+
+    /// Reads `to` wherever the source reads global `from`.
+    pub fn replace_global(
+        &mut self,
+        from: Handle<naga::GlobalVariable>,
+        to: Handle<naga::GlobalVariable>,
+    ) {
+        self.globals.insert(from, to);
+    }
+
+    /// Calls `to` wherever the source calls `from`.
+    pub fn replace_function(&mut self, from: Handle<Function>, to: Handle<Function>) {
+        self.functions.insert(from, to);
+    }
+
+    /// Returns member `index` of each returned value (a struct) instead.
+    pub fn return_member(&mut self, index: u32) {
+        self.return_member = Some(index);
+    }
+
+    /// Reads `expr` as `replacement` (an expression of the new function that
+    /// needs no emit, such as an argument) instead of computing it.
+    pub fn substitute(&mut self, expr: Handle<Expression>, replacement: Expression) {
+        self.substitutes.insert(expr, replacement);
+    }
+
+    /// Copies statements up to the emission of `expr`, then returns it.
+    pub fn return_at(&mut self, expr: Handle<Expression>) {
+        self.stop_at = Some(expr);
+    }
+
+    /// Copies the live part of the source body into the target's body.
+    pub fn run(mut self) -> Function {
+        let body = self.block(&self.source.body);
+        self.target.body = body;
+        self.target
+    }
+
+    fn append(&mut self, expr: Expression, span: Span) -> Handle<Expression> {
+        let needs_emit = !expr.needs_pre_emit()
+            && !matches!(
+                expr,
+                Expression::CallResult(_)
+                    | Expression::AtomicResult { .. }
+                    | Expression::WorkGroupUniformLoadResult { .. }
+                    | Expression::RayQueryProceedResult
+                    | Expression::SubgroupBallotResult
+                    | Expression::SubgroupOperationResult { .. }
+            );
+        let handle = self.target.expressions.append(expr, span);
+        if needs_emit {
+            self.pending.push(handle);
+        }
+        handle
+    }
+
+    /// Emits what was copied since the last statement, as few ranges as
+    /// possible.
+    fn flush(&mut self, block: &mut Block) {
+        let mut pending = std::mem::take(&mut self.pending);
+        pending.sort_by_key(|h| h.index());
+        let mut start = 0;
+        while start < pending.len() {
+            let mut end = start;
+            while end + 1 < pending.len() && pending[end + 1].index() == pending[end].index() + 1 {
+                end += 1;
+            }
+            block.push(
+                Statement::Emit(naga::Range::new_from_bounds(pending[start], pending[end])),
+                Span::UNDEFINED,
+            );
+            start = end + 1;
+        }
+    }
+
+    fn is_live(&self, expr: Handle<Expression>) -> bool {
+        self.live.contains(expr.index())
+    }
+
+    fn block(&mut self, block: &Block) -> Block {
+        let mut out = Block::new();
+        for (statement, &span) in block.span_iter() {
+            if self.stopped {
+                break;
+            }
+            self.statement(statement, span, &mut out);
+        }
+        out
+    }
+
+    fn statement(&mut self, statement: &Statement, span: Span, out: &mut Block) {
+        match *statement {
+            Statement::Emit(ref range) => {
+                for expr in range.clone() {
+                    if self.is_live(expr) || Some(expr) == self.stop_at {
+                        self.expression(expr);
+                    }
+                    if Some(expr) == self.stop_at {
+                        let value = self.expression(expr);
+                        self.flush(out);
+                        out.push(Statement::Return { value: Some(value) }, span);
+                        self.stopped = true;
+                        return;
+                    }
+                }
+                self.flush(out);
+            }
+            Statement::Block(ref inner) => {
+                let inner = self.block(inner);
+                if !inner.is_empty() {
+                    out.push(Statement::Block(inner), span);
+                }
+            }
+            Statement::If {
+                condition,
+                ref accept,
+                ref reject,
+            } => {
+                if !self.is_live(condition) {
+                    return;
+                }
+                let condition = self.expression(condition);
+                self.flush(out);
+                let accept = self.block(accept);
+                let reject = self.block(reject);
+                out.push(
+                    Statement::If {
+                        condition,
+                        accept,
+                        reject,
+                    },
+                    span,
+                );
+            }
+            Statement::Switch {
+                selector,
+                ref cases,
+            } => {
+                if !self.is_live(selector) {
+                    return;
+                }
+                let selector = self.expression(selector);
+                self.flush(out);
+                let cases = cases
+                    .iter()
+                    .map(|case| naga::SwitchCase {
+                        value: case.value,
+                        body: self.block(&case.body),
+                        fall_through: case.fall_through,
+                    })
+                    .collect();
+                out.push(Statement::Switch { selector, cases }, span);
+            }
+            Statement::Loop {
+                ref body,
+                ref continuing,
+                break_if,
+            } => {
+                if !self.loop_is_live(body, continuing, break_if) {
+                    return;
+                }
+                let body = self.block(body);
+                let mut continuing = self.block(continuing);
+                let break_if = break_if.map(|h| self.expression(h));
+                self.flush(&mut continuing);
+                out.push(
+                    Statement::Loop {
+                        body,
+                        continuing,
+                        break_if,
+                    },
+                    span,
+                );
+            }
+            Statement::Return { value: Some(value) } if self.return_member.is_some() => {
+                let base = self.expression(value);
+                let member = self.append(
+                    Expression::AccessIndex {
+                        base,
+                        index: self.return_member.unwrap_or_default(),
+                    },
+                    span,
+                );
+                self.flush(out);
+                out.push(
+                    Statement::Return {
+                        value: Some(member),
+                    },
+                    span,
+                );
+            }
+            // The call's value is read from elsewhere (the cache).
+            Statement::Call {
+                result: Some(result),
+                ..
+            } if self.substitutes.contains_key(&result) => {}
+            Statement::Call {
+                result: Some(result),
+                ..
+            } if Some(result) == self.stop_at => {
+                if let Some(copied) = remap::simple_statement(statement, self) {
+                    self.flush(out);
+                    out.push(copied, span);
+                }
+                let value = self.expression(result);
+                out.push(Statement::Return { value: Some(value) }, span);
+                self.stopped = true;
+            }
+            Statement::Store { pointer, .. } if !self.is_live(pointer) => {}
+            Statement::Call {
+                function, result, ..
+            } if !result.is_some_and(|r| self.is_live(r))
+                && !proc::has_effects(self.module, function) => {}
+            _ => {
+                if let Some(copied) = remap::simple_statement(statement, self) {
+                    self.flush(out);
+                    out.push(copied, span);
+                }
+            }
+        }
+    }
+
+    /// Whether anything a loop computes is needed.
+    fn loop_is_live(
+        &self,
+        body: &Block,
+        continuing: &Block,
+        break_if: Option<Handle<Expression>>,
+    ) -> bool {
+        if break_if.is_some_and(|h| self.is_live(h)) {
+            return true;
+        }
+        let layout_of = |block: &Block| {
+            let mut live = false;
+            proc::each_statement(block, &mut |statement| {
+                live |= match *statement {
+                    Statement::Emit(ref range) => range.clone().any(|h| self.is_live(h)),
+                    Statement::Store { pointer, .. } => self.is_live(pointer),
+                    Statement::Call {
+                        function, result, ..
+                    } => {
+                        result.is_some_and(|r| self.is_live(r))
+                            || proc::has_effects(self.module, function)
+                    }
+                    Statement::Kill | Statement::Return { .. } => true,
+                    _ => false,
+                };
+            });
+            live
+        };
+        layout_of(body) || layout_of(continuing)
+    }
+}
+
+impl Mapper for FunctionCopy<'_> {
+    fn expression(&mut self, handle: Handle<Expression>) -> Handle<Expression> {
+        if let Some(&mapped) = self.exprs.get(&handle) {
+            return mapped;
+        }
+        let span = self.source.expressions.get_span(handle);
+        let copied = match self.substitutes.get(&handle) {
+            Some(replacement) => replacement.clone(),
+            None => remap::expression(&self.source.expressions[handle], self),
+        };
+        let mapped = self.append(copied, span);
+        self.exprs.insert(handle, mapped);
+        if let Some(name) = self.source.named_expressions.get(&handle) {
+            self.target.named_expressions.insert(mapped, name.clone());
+        }
+        mapped
+    }
+
+    fn ty(&mut self, handle: Handle<naga::Type>) -> Handle<naga::Type> {
+        handle
+    }
+
+    fn constant(&mut self, handle: Handle<naga::Constant>) -> Handle<naga::Constant> {
+        handle
+    }
+
+    fn override_(&mut self, handle: Handle<naga::Override>) -> Handle<naga::Override> {
+        handle
+    }
+
+    fn global(&mut self, handle: Handle<naga::GlobalVariable>) -> Handle<naga::GlobalVariable> {
+        self.globals.get(&handle).copied().unwrap_or(handle)
+    }
+
+    fn local(&mut self, handle: Handle<LocalVariable>) -> Handle<LocalVariable> {
+        if let Some(&mapped) = self.locals.get(&handle) {
+            return mapped;
+        }
+        let local = &self.source.local_variables[handle];
+        let span = self.source.local_variables.get_span(handle);
+        // Reserve the variable first: its initializer may not refer to it,
+        // but the map must hold it before the initializer is copied.
+        let mapped = self.target.local_variables.append(
+            LocalVariable {
+                name: local.name.clone(),
+                ty: local.ty,
+                init: None,
+            },
+            span,
+        );
+        self.locals.insert(handle, mapped);
+        if let Some(init) = local.init {
+            let init = self.expression(init);
+            self.target.local_variables.get_mut(mapped).init = Some(init);
+        }
+        mapped
+    }
+
+    fn function(&mut self, handle: Handle<naga::Function>) -> Handle<naga::Function> {
+        self.functions.get(&handle).copied().unwrap_or(handle)
+    }
+}

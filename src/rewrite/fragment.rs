@@ -1,0 +1,393 @@
+//! The fragment stages of the three variants (seed 002, §3).
+//!
+//! The original fragment entry point is split at the node into two helper
+//! functions, each holding only the code it needs (dead code dropped):
+//!
+//! * the **payload** function: the node's backward slice, returning it;
+//! * the **shade** function: everything else, with the node read from an
+//!   extra argument.
+//!
+//! Each pass's entry point is then a few calls: look the payload up in
+//! last frame's cache, decide hit / miss / refresh, call the payload
+//! function where needed, call the shade function, write colour and cache.
+//! The shade function always runs in uniform control flow (after the
+//! branch, or after a `discard`), so derivatives and implicit-LOD sampling
+//! in it stay valid; only the payload function can land in a branch.
+
+use naga::{Binding, Expression, Function, Handle, Module, Statement, TypeInner};
+
+use super::builder::Builder;
+use super::Refusal;
+
+/// The pieces every fragment entry point is built from.
+#[derive(Debug)]
+pub struct Pieces {
+    /// The original fragment entry point's arguments.
+    pub arguments: Vec<naga::FunctionArgument>,
+    /// Its result.
+    pub result: naga::FunctionResult,
+    pub name: String,
+    pub payload: Handle<Function>,
+    pub shade: Handle<Function>,
+    /// The payload's type and component count.
+    pub payload_ty: Handle<naga::Type>,
+    pub components: u32,
+    pub previous_location: u32,
+    pub lookup: Handle<Function>,
+    pub refresh: Handle<Function>,
+    pub current: Handle<Function>,
+    pub vec4: Handle<naga::Type>,
+}
+
+/// What a pass's fragment stage writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Writes {
+    /// The original outputs plus the cache at the next free location.
+    ColorAndCache,
+    /// The cache alone, at location 0.
+    Cache,
+    /// The original outputs alone.
+    Color,
+}
+
+/// The fragment entry point of one pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// One-pass: hit → shade from the cache; miss or refresh → payload.
+    OnePass,
+    /// Two-pass, pass 1: hit → colour + cache; miss or refresh → discard.
+    ReuseOrDiscard,
+    /// The original computation, writing colour and cache (two-pass pass 2).
+    Full,
+    /// Three-pass, pass 1: hit → cache; miss or refresh → discard.
+    ReprojectOrDiscard,
+    /// Three-pass, pass 2: the payload into the cache.
+    Payload,
+    /// Three-pass, pass 3: shade from the cache at the pixel itself.
+    ShadeFromCache,
+}
+
+impl Stage {
+    pub fn writes(self) -> Writes {
+        match self {
+            Stage::OnePass | Stage::ReuseOrDiscard | Stage::Full => Writes::ColorAndCache,
+            Stage::ReprojectOrDiscard | Stage::Payload => Writes::Cache,
+            Stage::ShadeFromCache => Writes::Color,
+        }
+    }
+
+    pub fn discards(self) -> bool {
+        matches!(self, Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard)
+    }
+}
+
+/// Where the colour outputs are and where the cache goes.
+pub fn cache_location(module: &Module, result: &naga::FunctionResult) -> u32 {
+    let locations: Vec<u32> = match module.types[result.ty].inner {
+        TypeInner::Struct { ref members, .. } => members
+            .iter()
+            .filter_map(|m| match m.binding {
+                Some(Binding::Location { location, .. }) => Some(location),
+                _ => None,
+            })
+            .collect(),
+        _ => match result.binding {
+            Some(Binding::Location { location, .. }) => vec![location],
+            _ => vec![],
+        },
+    };
+    locations.into_iter().map(|l| l + 1).max().unwrap_or(0)
+}
+
+/// Builds the fragment entry point for `stage`.
+pub fn entry_point(
+    module: &mut Module,
+    pieces: &Pieces,
+    stage: Stage,
+) -> Result<Function, Refusal> {
+    // Arguments: the original ones, the previous clip position, and the
+    // fragment position when the original does not take it.
+    let mut arguments = pieces.arguments.clone();
+    let previous_index = arguments.len() as u32;
+    arguments.push(naga::FunctionArgument {
+        name: Some("previous_clip_position".into()),
+        ty: pieces.vec4,
+        binding: Some(Binding::Location {
+            location: pieces.previous_location,
+            interpolation: Some(naga::Interpolation::Perspective),
+            sampling: Some(naga::Sampling::Center),
+            blend_src: None,
+            per_primitive: false,
+        }),
+    });
+    let frag_coord_at = find_frag_coord(module, &pieces.arguments);
+    if frag_coord_at.is_none() {
+        arguments.push(naga::FunctionArgument {
+            name: Some("frag_coord".into()),
+            ty: pieces.vec4,
+            binding: Some(Binding::BuiltIn(naga::BuiltIn::Position {
+                invariant: true,
+            })),
+        });
+    }
+
+    let (result_ty, cache_member) = output_type(module, pieces, stage.writes());
+    let mut b = Builder::new(Function {
+        name: Some(pieces.name.clone()),
+        arguments,
+        result: Some(naga::FunctionResult {
+            ty: result_ty,
+            binding: match stage.writes() {
+                Writes::Cache => Some(location(0)),
+                Writes::Color => pieces.result.binding.clone(),
+                // A struct: its members carry the bindings.
+                Writes::ColorAndCache => None,
+            },
+        }),
+        ..Function::default()
+    });
+    let originals: Vec<_> = (0..pieces.arguments.len() as u32)
+        .map(|i| b.argument(i))
+        .collect();
+    let previous = b.argument(previous_index);
+    let frag_coord = match frag_coord_at {
+        Some(FragCoord::Argument(i)) => b.argument(i),
+        Some(FragCoord::Member(i, m)) => {
+            let arg = b.argument(i);
+            b.member(arg, m)
+        }
+        None => b.argument(previous_index + 1),
+    };
+
+    // The payload to shade with.
+    let payload = match stage {
+        Stage::OnePass => {
+            let lookup = b.call(pieces.lookup, vec![previous]);
+            let refresh = b.call(pieces.refresh, vec![frag_coord]);
+            let reuse = reuse_condition(&mut b, lookup, refresh);
+            b.name(lookup, "lookup");
+            b.name(refresh, "refresh");
+            b.name(reuse, "reuse");
+            let local = b.function.local_variables.append(
+                naga::LocalVariable {
+                    name: Some("payload".into()),
+                    ty: pieces.payload_ty,
+                    init: None,
+                },
+                naga::Span::UNDEFINED,
+            );
+            let pointer = b.expr(Expression::LocalVariable(local));
+            let accept = b.nested(|b| {
+                let cached = b.member(lookup, 0);
+                let value = from_vec4(b, cached, pieces.components);
+                b.push(Statement::Store { pointer, value });
+            });
+            let reject = b.nested(|b| {
+                let value = b.call(pieces.payload, originals.clone());
+                b.push(Statement::Store { pointer, value });
+            });
+            b.push(Statement::If {
+                condition: reuse,
+                accept,
+                reject,
+            });
+            b.expr(Expression::Load { pointer })
+        }
+        Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard => {
+            let lookup = b.call(pieces.lookup, vec![previous]);
+            let refresh = b.call(pieces.refresh, vec![frag_coord]);
+            let reuse = reuse_condition(&mut b, lookup, refresh);
+            b.name(lookup, "lookup");
+            b.name(refresh, "refresh");
+            b.name(reuse, "reuse");
+            let kill = b.nested(|b| b.push(Statement::Kill));
+            b.push(Statement::If {
+                condition: reuse,
+                accept: naga::Block::new(),
+                reject: kill,
+            });
+            let cached = b.member(lookup, 0);
+            from_vec4(&mut b, cached, pieces.components)
+        }
+        Stage::Full | Stage::Payload => b.call(pieces.payload, originals.clone()),
+        Stage::ShadeFromCache => {
+            let cached = b.call(pieces.current, vec![frag_coord]);
+            from_vec4(&mut b, cached, pieces.components)
+        }
+    };
+
+    let value = match stage.writes() {
+        Writes::Cache => to_vec4(&mut b, payload, pieces.components, pieces.vec4),
+        Writes::Color => {
+            let mut arguments = originals.clone();
+            arguments.push(payload);
+            b.call(pieces.shade, arguments)
+        }
+        Writes::ColorAndCache => {
+            let mut arguments = originals.clone();
+            arguments.push(payload);
+            let color = b.call(pieces.shade, arguments);
+            b.name(color, "color");
+            let cache = to_vec4(&mut b, payload, pieces.components, pieces.vec4);
+            let mut components: Vec<_> = match cache_member {
+                Some(count) if count > 0 && is_struct(module, pieces.result.ty) => {
+                    (0..count).map(|i| b.member(color, i)).collect()
+                }
+                _ => vec![color],
+            };
+            components.push(cache);
+            b.expr(Expression::Compose {
+                ty: result_ty,
+                components,
+            })
+        }
+    };
+    b.push(Statement::Return { value: Some(value) });
+    Ok(b.finish())
+}
+
+fn is_struct(module: &Module, ty: Handle<naga::Type>) -> bool {
+    matches!(module.types[ty].inner, TypeInner::Struct { .. })
+}
+
+fn location(location: u32) -> Binding {
+    Binding::Location {
+        location,
+        interpolation: None,
+        sampling: None,
+        blend_src: None,
+        per_primitive: false,
+    }
+}
+
+/// The result type of a pass, and for colour + cache the number of
+/// original members before the cache member.
+fn output_type(
+    module: &mut Module,
+    pieces: &Pieces,
+    writes: Writes,
+) -> (Handle<naga::Type>, Option<u32>) {
+    match writes {
+        Writes::Cache => (pieces.vec4, None),
+        Writes::Color => (pieces.result.ty, None),
+        Writes::ColorAndCache => {
+            let cache_at = cache_location(module, &pieces.result);
+            let (mut members, span) = match module.types[pieces.result.ty].inner {
+                TypeInner::Struct { ref members, span } => (members.clone(), span),
+                _ => (
+                    vec![naga::StructMember {
+                        name: Some("color".into()),
+                        ty: pieces.result.ty,
+                        binding: pieces.result.binding.clone(),
+                        offset: 0,
+                    }],
+                    16,
+                ),
+            };
+            let count = members.len() as u32;
+            let offset = span.div_ceil(16) * 16;
+            members.push(naga::StructMember {
+                name: Some("cache".into()),
+                ty: pieces.vec4,
+                binding: Some(location(cache_at)),
+                offset,
+            });
+            let ty = module.types.insert(
+                naga::Type {
+                    name: Some("CacheFragmentOutput".into()),
+                    inner: TypeInner::Struct {
+                        members,
+                        span: offset + 16,
+                    },
+                },
+                naga::Span::UNDEFINED,
+            );
+            (ty, Some(count))
+        }
+    }
+}
+
+/// `lookup.hit && !refresh`.
+fn reuse_condition(
+    b: &mut Builder,
+    lookup: Handle<Expression>,
+    refresh: Handle<Expression>,
+) -> Handle<Expression> {
+    let hit = b.member(lookup, 1);
+    let fresh = b.expr(Expression::Unary {
+        op: naga::UnaryOperator::LogicalNot,
+        expr: refresh,
+    });
+    b.expr(Expression::Binary {
+        op: naga::BinaryOperator::LogicalAnd,
+        left: hit,
+        right: fresh,
+    })
+}
+
+/// The payload's own type from the cache's `vec4<f32>`.
+fn from_vec4(b: &mut Builder, value: Handle<Expression>, components: u32) -> Handle<Expression> {
+    use naga::SwizzleComponent as S;
+    let pattern = [S::X, S::Y, S::Z, S::W];
+    match components {
+        1 => b.member(value, 0),
+        2 => b.expr(Expression::Swizzle {
+            size: naga::VectorSize::Bi,
+            vector: value,
+            pattern,
+        }),
+        3 => b.expr(Expression::Swizzle {
+            size: naga::VectorSize::Tri,
+            vector: value,
+            pattern,
+        }),
+        _ => value,
+    }
+}
+
+/// The payload padded with zeros to the cache's `vec4<f32>`.
+fn to_vec4(
+    b: &mut Builder,
+    value: Handle<Expression>,
+    components: u32,
+    vec4: Handle<naga::Type>,
+) -> Handle<Expression> {
+    if components >= 4 {
+        return value;
+    }
+    let mut parts = vec![value];
+    for _ in components..4 {
+        parts.push(b.literal_f32(0.0));
+    }
+    b.expr(Expression::Compose {
+        ty: vec4,
+        components: parts,
+    })
+}
+
+enum FragCoord {
+    Argument(u32),
+    Member(u32, u32),
+}
+
+fn is_position(binding: &Option<Binding>) -> bool {
+    matches!(
+        binding,
+        Some(Binding::BuiltIn(naga::BuiltIn::Position { .. }))
+    )
+}
+
+/// Where the original arguments carry `@builtin(position)`, if they do.
+fn find_frag_coord(module: &Module, arguments: &[naga::FunctionArgument]) -> Option<FragCoord> {
+    for (i, argument) in arguments.iter().enumerate() {
+        if is_position(&argument.binding) {
+            return Some(FragCoord::Argument(i as u32));
+        }
+        if let TypeInner::Struct { ref members, .. } = module.types[argument.ty].inner {
+            if let Some(m) = members.iter().position(|m| is_position(&m.binding)) {
+                return Some(FragCoord::Member(i as u32, m as u32));
+            }
+        }
+    }
+    None
+}

@@ -1,0 +1,477 @@
+//! candidates → variants: rewriting a shader into reprojection-cache
+//! variants at the level of naga's IR (seed 002, §3).
+//!
+//! For one candidate node and one [`Variant`], [`rewrite`] clones the
+//! module and builds every pass as its own module:
+//!
+//! 1. the toolchain's cache helpers (`shaders/cache.wgsl`: reprojection,
+//!    bilinear lookup with depth test, refresh indicator) are
+//!    [imported](import) into the first free bind group;
+//! 2. the [vertex stage](vertex) gains the previous clip position, computed
+//!    by the same code as the position but with previous-frame twins of the
+//!    uniforms and read-only storage it reads; the position is `@invariant`;
+//! 3. the fragment entry point is split at the node into a payload function
+//!    and a shade function ([copy]: handle-mapped, dead code dropped), and
+//!    each pass's [fragment] entry point is built from calls to them;
+//! 4. each pass module is compacted, checked for derivatives in non-uniform
+//!    control flow ([uniformity]) and validated by naga with every flag.
+//!
+//! A variant that cannot be built is a [`Refusal`] with the reason; nothing
+//! broken is ever returned.
+
+pub mod builder;
+pub mod copy;
+pub mod fragment;
+pub mod import;
+pub mod remap;
+pub mod uniformity;
+pub mod vertex;
+
+use std::fmt;
+
+use naga::valid::ModuleInfo;
+use serde::{Deserialize, Serialize};
+
+use crate::analysis::graph::ExprGraph;
+use crate::analysis::{Analysis, Candidate};
+use crate::front::Shader;
+use crate::plan::{self, Plan};
+use fragment::{Pieces, Stage};
+
+/// The toolchain's cache helpers, imported into every rewritten module.
+pub const CACHE_WGSL: &str = include_str!("../../shaders/cache.wgsl");
+
+/// The three ways of running a cache (seed 002, §3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Variant {
+    OnePass,
+    TwoPass,
+    ThreePass,
+}
+
+impl Variant {
+    pub const ALL: [Variant; 3] = [Variant::OnePass, Variant::TwoPass, Variant::ThreePass];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Variant::OnePass => "one-pass",
+            Variant::TwoPass => "two-pass",
+            Variant::ThreePass => "three-pass",
+        }
+    }
+
+    fn stages(self) -> &'static [Stage] {
+        match self {
+            Variant::OnePass => &[Stage::OnePass],
+            Variant::TwoPass => &[Stage::ReuseOrDiscard, Stage::Full],
+            Variant::ThreePass => &[
+                Stage::ReprojectOrDiscard,
+                Stage::Payload,
+                Stage::ShadeFromCache,
+            ],
+        }
+    }
+}
+
+impl fmt::Display for Variant {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// The texture format of the payload cache.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CacheFormat {
+    Rgba16float,
+    Rgba32float,
+}
+
+impl CacheFormat {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CacheFormat::Rgba16float => "rgba16float",
+            CacheFormat::Rgba32float => "rgba32float",
+        }
+    }
+}
+
+/// How to build the variants.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    /// Δn: every pixel is recomputed at least once every Δn frames.
+    pub refresh_period: u32,
+    /// k: refresh decisions are made per k×k block.
+    pub refresh_quad: u32,
+    pub cache_format: CacheFormat,
+    /// ε of the depth test, in the depth buffer's units.
+    pub depth_epsilon: f32,
+    /// Format of the colour targets, written into the plan.
+    pub color_format: String,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            refresh_period: 32,
+            refresh_quad: 4,
+            cache_format: CacheFormat::Rgba16float,
+            depth_epsilon: 1e-3,
+            color_format: "rgba8unorm".into(),
+        }
+    }
+}
+
+/// Why a variant was not produced.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Refusal {
+    pub reason: String,
+}
+
+impl Refusal {
+    pub fn new(reason: impl Into<String>) -> Self {
+        Refusal {
+            reason: reason.into(),
+        }
+    }
+}
+
+impl fmt::Display for Refusal {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.reason)
+    }
+}
+
+/// One pass's module, validated.
+#[derive(Debug)]
+pub struct PassModule {
+    /// File stem, e.g. `pass1`.
+    pub name: String,
+    pub module: naga::Module,
+    pub info: ModuleInfo,
+}
+
+/// A variant ready to write: its pass modules and its plan.
+#[derive(Debug)]
+pub struct Rewritten {
+    pub variant: Variant,
+    pub node: String,
+    pub passes: Vec<PassModule>,
+    pub plan: Plan,
+}
+
+/// Bindings of the cache helpers within their group.
+pub const CACHE_PARAMS_BINDING: u32 = 0;
+pub const PREVIOUS_PAYLOAD_BINDING: u32 = 1;
+pub const PREVIOUS_DEPTH_BINDING: u32 = 2;
+pub const CURRENT_PAYLOAD_BINDING: u32 = 3;
+/// Previous-frame twins come after the cache's own bindings.
+pub const FIRST_TWIN_BINDING: u32 = 4;
+/// WebGPU's default limit on bind groups.
+const MAX_BIND_GROUPS: u32 = 4;
+
+/// Rewrites `shader` to cache `candidate` with `variant`.
+pub fn rewrite(
+    shader: &Shader,
+    analysis: &Analysis,
+    candidate: &Candidate,
+    variant: Variant,
+    options: &Options,
+) -> Result<Rewritten, Refusal> {
+    let original = &shader.module;
+    let entry = &original.entry_points[analysis.entry_index];
+    let function = &entry.function;
+    let node = candidate.node.expression;
+    let Some(result) = function.result.clone() else {
+        return Err(Refusal::new("the fragment entry point returns nothing"));
+    };
+    if writes_frag_depth(original, &result) {
+        return Err(Refusal::new(
+            "the fragment stage writes @builtin(frag_depth); the cache's depth test needs rasterised depth",
+        ));
+    }
+
+    let layout = crate::proc::layout(original, function, 8.0);
+    let at = layout
+        .placement(node)
+        .ok_or_else(|| Refusal::new("the node is not evaluated by the entry point"))?;
+    if !at.controls.is_empty() {
+        return Err(Refusal::new(
+            "the node is computed under a branch, so it has no value at every pixel to cache",
+        ));
+    }
+    let node_order = layout.order_of(node).unwrap_or(usize::MAX);
+    if returns_before(&function.body, node) {
+        return Err(Refusal::new(
+            "the entry point may return before the node is computed",
+        ));
+    }
+    let discards_after = layout.kills.iter().any(|kill| kill.after > node_order);
+    if discards_after && variant != Variant::OnePass {
+        return Err(Refusal::new(
+            "the shader may discard after the node is computed, so the payload pass cannot know which pixels are cut out",
+        ));
+    }
+    if variant == Variant::OnePass && candidate.derivatives {
+        return Err(Refusal::new(
+            "one-pass computes the payload only on a miss, inside a non-uniform branch, and the payload's slice takes implicit derivatives (textureSample, dpdx...); hoisting them out of the branch is not supported yet — use two-pass or three-pass, where the payload runs in uniform control flow",
+        ));
+    }
+
+    // The first bind group the user's shader leaves free.
+    let group = original
+        .global_variables
+        .iter()
+        .filter_map(|(_, g)| g.binding.as_ref().map(|b| b.group + 1))
+        .max()
+        .unwrap_or(0);
+    if group >= MAX_BIND_GROUPS {
+        return Err(Refusal::new(format!(
+            "the shader uses bind group {}; the cache needs one more and WebGPU allows {MAX_BIND_GROUPS}",
+            group - 1
+        )));
+    }
+
+    let mut module = original.clone();
+    let helpers = crate::front::parse(crate::diagnostic::SourceFile::new(
+        "shaders/cache.wgsl",
+        CACHE_WGSL,
+    ))
+    .map_err(|err| {
+        Refusal::new(format!(
+            "internal error: the cache helpers do not parse: {}",
+            err.render()
+        ))
+    })?;
+    let imported = import::import(&mut module, &helpers.module, group);
+    let helper = |name: &str| {
+        imported.functions.get(name).copied().ok_or_else(|| {
+            Refusal::new(format!(
+                "internal error: `{name}` missing from the cache helpers"
+            ))
+        })
+    };
+    let (lookup, refresh, current) = (
+        helper("cache_lookup")?,
+        helper("cache_refresh")?,
+        helper("cache_current")?,
+    );
+
+    let vertex_index = vertex::vertex_entry(&module)?;
+    let vertex = vertex::instrument(&mut module, vertex_index, group, FIRST_TWIN_BINDING)?;
+    mark_positions_invariant(&mut module);
+
+    // Split the fragment entry point at the node.
+    let graph = ExprGraph::new(function, &layout);
+    let mut payload_live = graph.slice(node);
+    for kill in layout.kills.iter().filter(|k| k.after <= node_order) {
+        for &condition in &kill.placement.controls {
+            payload_live.union_with(&graph.slice(condition));
+        }
+    }
+    let shade_live = graph.remainder(node);
+    let payload_ty = type_of(&mut module, shader, analysis.entry_index, node);
+    let stripped: Vec<naga::FunctionArgument> = function
+        .arguments
+        .iter()
+        .map(|a| naga::FunctionArgument {
+            binding: None,
+            ..a.clone()
+        })
+        .collect();
+    let mut payload_copy = copy::FunctionCopy::new(
+        original,
+        function,
+        &payload_live,
+        naga::Function {
+            name: Some(format!("{}_payload", entry.name)),
+            arguments: stripped.clone(),
+            result: Some(naga::FunctionResult {
+                ty: payload_ty,
+                binding: None,
+            }),
+            ..naga::Function::default()
+        },
+    );
+    payload_copy.return_at(node);
+    let payload_fn = payload_copy.run();
+    let mut shade_arguments = stripped;
+    shade_arguments.push(naga::FunctionArgument {
+        name: Some("cached".into()),
+        ty: payload_ty,
+        binding: None,
+    });
+    let cached_index = shade_arguments.len() as u32 - 1;
+    let mut shade_copy = copy::FunctionCopy::new(
+        original,
+        function,
+        &shade_live,
+        naga::Function {
+            name: Some(format!("{}_shade", entry.name)),
+            arguments: shade_arguments,
+            result: Some(naga::FunctionResult {
+                ty: result.ty,
+                binding: None,
+            }),
+            ..naga::Function::default()
+        },
+    );
+    shade_copy.substitute(node, naga::Expression::FunctionArgument(cached_index));
+    let shade_fn = shade_copy.run();
+    let payload = module.functions.append(payload_fn, naga::Span::UNDEFINED);
+    let shade = module.functions.append(shade_fn, naga::Span::UNDEFINED);
+    let vec4 = module.types.insert(
+        naga::Type {
+            name: None,
+            inner: naga::TypeInner::Vector {
+                size: naga::VectorSize::Quad,
+                scalar: naga::Scalar::F32,
+            },
+        },
+        naga::Span::UNDEFINED,
+    );
+    let pieces = Pieces {
+        arguments: function.arguments.clone(),
+        result,
+        name: entry.name.clone(),
+        payload,
+        shade,
+        payload_ty,
+        components: candidate.components,
+        previous_location: vertex.previous_location,
+        lookup,
+        refresh,
+        current,
+        vec4,
+    };
+
+    let mut passes = Vec::new();
+    for (index, &stage) in variant.stages().iter().enumerate() {
+        let mut pass = module.clone();
+        let fragment = fragment::entry_point(&mut pass, &pieces, stage)?;
+        let vertex_entry = pass.entry_points[vertex.entry_index].clone();
+        pass.entry_points = vec![
+            vertex_entry,
+            naga::EntryPoint {
+                function: fragment,
+                ..entry.clone()
+            },
+        ];
+        naga::compact::compact(&mut pass, naga::compact::KeepUnused::No);
+        let info = crate::front::validate(&pass).map_err(|err| {
+            let diagnostic = crate::diagnostic::Diagnostic::from_spanned_error(&err);
+            Refusal::new(format!(
+                "internal error: pass {} does not validate: {} ({})",
+                index + 1,
+                diagnostic.message,
+                diagnostic.notes.join("; ")
+            ))
+        })?;
+        uniformity::check(&pass, &info)
+            .map_err(|err| Refusal::new(format!("internal error: the rewrite left {err}")))?;
+        passes.push((
+            stage,
+            PassModule {
+                name: format!("pass{}", index + 1),
+                module: pass,
+                info,
+            },
+        ));
+    }
+
+    let plan = plan::build(plan::Inputs {
+        shader,
+        analysis,
+        candidate,
+        variant,
+        options,
+        group,
+        vertex: &vertex,
+        passes: &passes,
+        result: &pieces.result,
+    });
+    Ok(Rewritten {
+        variant,
+        node: candidate.node.id.clone(),
+        passes: passes.into_iter().map(|(_, p)| p).collect(),
+        plan,
+    })
+}
+
+fn writes_frag_depth(module: &naga::Module, result: &naga::FunctionResult) -> bool {
+    let is_depth = |b: &Option<naga::Binding>| {
+        matches!(b, Some(naga::Binding::BuiltIn(naga::BuiltIn::FragDepth)))
+    };
+    is_depth(&result.binding)
+        || matches!(module.types[result.ty].inner, naga::TypeInner::Struct { ref members, .. } if members.iter().any(|m| is_depth(&m.binding)))
+}
+
+/// Whether a `return` can run before `node` is emitted.
+fn returns_before(block: &naga::Block, node: naga::Handle<naga::Expression>) -> bool {
+    let mut seen_node = false;
+    let mut returned = false;
+    crate::proc::each_statement(block, &mut |statement| match *statement {
+        naga::Statement::Emit(ref range) if range.clone().any(|h| h == node) => seen_node = true,
+        naga::Statement::Call {
+            result: Some(result),
+            ..
+        } if result == node => seen_node = true,
+        naga::Statement::Return { .. } if !seen_node => returned = true,
+        _ => {}
+    });
+    returned
+}
+
+/// Marks every `@builtin(position)` of every struct invariant, so the
+/// vertex output and the fragment input agree.
+fn mark_positions_invariant(module: &mut naga::Module) {
+    let handles: Vec<_> = module.types.iter().map(|(h, _)| h).collect();
+    for handle in handles {
+        let ty = &module.types[handle];
+        if let naga::TypeInner::Struct { ref members, span } = ty.inner {
+            if members.iter().any(|m| {
+                matches!(
+                    m.binding,
+                    Some(naga::Binding::BuiltIn(naga::BuiltIn::Position {
+                        invariant: false
+                    }))
+                )
+            }) {
+                let mut members = members.clone();
+                for member in &mut members {
+                    if let Some(naga::Binding::BuiltIn(naga::BuiltIn::Position { invariant })) =
+                        member.binding.as_mut()
+                    {
+                        *invariant = true;
+                    }
+                }
+                let replacement = naga::Type {
+                    name: ty.name.clone(),
+                    inner: naga::TypeInner::Struct { members, span },
+                };
+                module.types.replace(handle, replacement);
+            }
+        }
+    }
+}
+
+/// The type handle of `expr` of the entry point, inserting it if it is
+/// only known by value.
+fn type_of(
+    module: &mut naga::Module,
+    shader: &Shader,
+    entry_index: usize,
+    expr: naga::Handle<naga::Expression>,
+) -> naga::Handle<naga::Type> {
+    match shader.info.get_entry_point(entry_index)[expr].ty {
+        naga::proc::TypeResolution::Handle(h) => h,
+        naga::proc::TypeResolution::Value(ref inner) => module.types.insert(
+            naga::Type {
+                name: None,
+                inner: inner.clone(),
+            },
+            naga::Span::UNDEFINED,
+        ),
+    }
+}

@@ -1,0 +1,369 @@
+//! The vertex stage of every variant: the original position computation,
+//! marked `@invariant`, plus the same computation evaluated with last
+//! frame's resources — the previous clip position the fragment stage
+//! reprojects with.
+//!
+//! Nothing about the user's matrices is assumed. Every uniform and
+//! read-only storage buffer the vertex entry point reads, directly or
+//! through helper functions, gets a *previous-frame twin*: a new binding of
+//! the same type that the host fills with last frame's contents. The whole
+//! vertex function is copied twice into helper functions — once as it is,
+//! once reading the twins — and the new entry point calls both, so the
+//! position is computed by identical code in every pass.
+
+use std::collections::{BTreeSet, HashMap};
+
+use naga::{Binding, BuiltIn, Expression, Function, Handle, Module, Statement, TypeInner};
+
+use super::builder::Builder;
+use super::copy::FunctionCopy;
+use super::Refusal;
+use crate::analysis::graph::ExprSet;
+
+/// What instrumenting the vertex stage produced.
+#[derive(Debug)]
+pub struct VertexStage {
+    /// Index of the vertex entry point in the module.
+    pub entry_index: usize,
+    /// Location of the interpolated previous clip position.
+    pub previous_location: u32,
+    /// (original, twin) global variables.
+    pub twins: Vec<(Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>)>,
+}
+
+/// Finds the module's vertex entry point.
+pub fn vertex_entry(module: &Module) -> Result<usize, Refusal> {
+    let vertices: Vec<usize> = module
+        .entry_points
+        .iter()
+        .enumerate()
+        .filter(|(_, ep)| ep.stage == naga::ShaderStage::Vertex)
+        .map(|(i, _)| i)
+        .collect();
+    match vertices.as_slice() {
+        [only] => Ok(*only),
+        [] => Err(Refusal::new(
+            "the shader has no vertex entry point to compute the previous position with",
+        )),
+        _ => Err(Refusal::new(
+            "the shader has several vertex entry points; which one draws with this fragment stage is ambiguous",
+        )),
+    }
+}
+
+fn is_position(binding: &Option<Binding>) -> bool {
+    matches!(binding, Some(Binding::BuiltIn(BuiltIn::Position { .. })))
+}
+
+/// Adds the previous clip position to the vertex entry point at
+/// `entry_index`, with twins of its resources in bind group `group` from
+/// binding `first_binding` on.
+pub fn instrument(
+    module: &mut Module,
+    entry_index: usize,
+    group: u32,
+    first_binding: u32,
+) -> Result<VertexStage, Refusal> {
+    let entry = module.entry_points[entry_index].clone();
+    let function = &entry.function;
+    let Some(result) = function.result.clone() else {
+        return Err(Refusal::new("the vertex entry point returns nothing"));
+    };
+
+    // Where the position is in the result.
+    let members = match module.types[result.ty].inner {
+        TypeInner::Struct { ref members, span } => Some((members.clone(), span)),
+        _ => None,
+    };
+    let position_member = match (&members, is_position(&result.binding)) {
+        (None, true) => None,
+        (Some((members, _)), false) => match members.iter().position(|m| is_position(&m.binding)) {
+            Some(index) => Some(index as u32),
+            None => {
+                return Err(Refusal::new(
+                    "the vertex entry point does not output @builtin(position)",
+                ))
+            }
+        },
+        _ => {
+            return Err(Refusal::new(
+                "the vertex entry point does not output @builtin(position)",
+            ))
+        }
+    };
+
+    // Helper functions reachable from the entry point, callees first.
+    let mut reachable = Vec::new();
+    collect_callees(module, &function.body, &mut reachable, &mut BTreeSet::new());
+
+    // Resources the position computation may read: uniforms and read-only
+    // storage, in the entry point or any helper it calls.
+    let mut read = BTreeSet::new();
+    let mut note_globals = |f: &Function| {
+        for (_, expr) in f.expressions.iter() {
+            if let Expression::GlobalVariable(g) = *expr {
+                read.insert(g);
+            }
+        }
+    };
+    note_globals(function);
+    for &f in &reachable {
+        note_globals(&module.functions[f]);
+    }
+    let mut twins = Vec::new();
+    let mut binding = first_binding;
+    for g in read {
+        let global = module.global_variables[g].clone();
+        let twin_it = match global.space {
+            naga::AddressSpace::Uniform => true,
+            naga::AddressSpace::Storage { access } => !access.contains(naga::StorageAccess::STORE),
+            _ => false,
+        };
+        if !twin_it {
+            continue;
+        }
+        let twin = module.global_variables.append(
+            naga::GlobalVariable {
+                name: global.name.as_ref().map(|n| format!("previous_{n}")),
+                binding: Some(naga::ResourceBinding { group, binding }),
+                ..global
+            },
+            naga::Span::UNDEFINED,
+        );
+        binding += 1;
+        twins.push((g, twin));
+    }
+    let twin_map: HashMap<_, _> = twins.iter().copied().collect();
+
+    // Previous-frame twins of the helpers that read a twinned resource
+    // (directly or through their callees).
+    let mut function_twins: HashMap<Handle<Function>, Handle<Function>> = HashMap::new();
+    for &f in &reachable {
+        let source = module.functions[f].clone();
+        let reads_twinned = source.expressions.iter().any(|(_, e)| {
+            matches!(*e, Expression::GlobalVariable(g) if twin_map.contains_key(&g))
+                || matches!(*e, Expression::CallResult(c) if function_twins.contains_key(&c))
+        }) || calls_any(&source.body, &function_twins);
+        if !reads_twinned {
+            continue;
+        }
+        let all = everything(&source);
+        let mut copy = FunctionCopy::new(
+            module,
+            &source,
+            &all,
+            Function {
+                name: source.name.as_ref().map(|n| format!("{n}_previous")),
+                arguments: source.arguments.clone(),
+                result: source.result.clone(),
+                ..Function::default()
+            },
+        );
+        for (&from, &to) in &twin_map {
+            copy.replace_global(from, to);
+        }
+        for (&from, &to) in &function_twins {
+            copy.replace_function(from, to);
+        }
+        let twin = copy.run();
+        let handle = module.functions.append(twin, naga::Span::UNDEFINED);
+        function_twins.insert(f, handle);
+    }
+
+    let stripped_arguments: Vec<naga::FunctionArgument> = function
+        .arguments
+        .iter()
+        .map(|a| naga::FunctionArgument {
+            binding: None,
+            ..a.clone()
+        })
+        .collect();
+
+    // The vertex function as a helper, unchanged.
+    let all = everything(function);
+    let current = FunctionCopy::new(
+        module,
+        function,
+        &all,
+        Function {
+            name: Some(format!("{}_current", entry.name)),
+            arguments: stripped_arguments.clone(),
+            result: Some(naga::FunctionResult {
+                ty: result.ty,
+                binding: None,
+            }),
+            ..Function::default()
+        },
+    )
+    .run();
+
+    // ... and with last frame's resources, returning only the position.
+    let vec4 = module.types.insert(
+        naga::Type {
+            name: None,
+            inner: TypeInner::Vector {
+                size: naga::VectorSize::Quad,
+                scalar: naga::Scalar::F32,
+            },
+        },
+        naga::Span::UNDEFINED,
+    );
+    let mut previous = FunctionCopy::new(
+        module,
+        function,
+        &all,
+        Function {
+            name: Some(format!("{}_previous", entry.name)),
+            arguments: stripped_arguments,
+            result: Some(naga::FunctionResult {
+                ty: vec4,
+                binding: None,
+            }),
+            ..Function::default()
+        },
+    );
+    for (&from, &to) in &twin_map {
+        previous.replace_global(from, to);
+    }
+    for (&from, &to) in &function_twins {
+        previous.replace_function(from, to);
+    }
+    if let Some(index) = position_member {
+        previous.return_member(index);
+    }
+    let previous = previous.run();
+    let current = module.functions.append(current, naga::Span::UNDEFINED);
+    let previous = module.functions.append(previous, naga::Span::UNDEFINED);
+
+    // The new output: the old members (position now invariant) and the
+    // previous clip position at the next free location.
+    let (mut new_members, old_span) = members.unwrap_or_else(|| {
+        (
+            vec![naga::StructMember {
+                name: Some("position".into()),
+                ty: vec4,
+                binding: result.binding.clone(),
+                offset: 0,
+            }],
+            16,
+        )
+    });
+    let previous_location = new_members
+        .iter()
+        .filter_map(|m| match m.binding {
+            Some(Binding::Location { location, .. }) => Some(location + 1),
+            _ => None,
+        })
+        .max()
+        .unwrap_or(0);
+    for member in &mut new_members {
+        if let Some(Binding::BuiltIn(BuiltIn::Position { invariant })) = member.binding.as_mut() {
+            *invariant = true;
+        }
+    }
+    let offset = old_span.div_ceil(16) * 16;
+    new_members.push(naga::StructMember {
+        name: Some("previous_clip_position".into()),
+        ty: vec4,
+        binding: Some(Binding::Location {
+            location: previous_location,
+            interpolation: Some(naga::Interpolation::Perspective),
+            sampling: Some(naga::Sampling::Center),
+            blend_src: None,
+            per_primitive: false,
+        }),
+        offset,
+    });
+    let member_count = new_members.len() as u32;
+    let output = module.types.insert(
+        naga::Type {
+            name: Some(format!("{}CacheOutput", pascal(&entry.name))),
+            inner: TypeInner::Struct {
+                members: new_members,
+                span: offset + 16,
+            },
+        },
+        naga::Span::UNDEFINED,
+    );
+
+    // The new entry point: call both, forward every member, add the
+    // previous position.
+    let mut b = Builder::new(Function {
+        name: function.name.clone(),
+        arguments: function.arguments.clone(),
+        result: Some(naga::FunctionResult {
+            ty: output,
+            binding: None,
+        }),
+        ..Function::default()
+    });
+    let arguments: Vec<_> = (0..function.arguments.len() as u32)
+        .map(|i| b.argument(i))
+        .collect();
+    let now = b.call(current, arguments.clone());
+    let before = b.call(previous, arguments);
+    let mut components: Vec<_> = match position_member {
+        Some(_) => (0..member_count - 1).map(|i| b.member(now, i)).collect(),
+        None => vec![now],
+    };
+    components.push(before);
+    let value = b.expr(Expression::Compose {
+        ty: output,
+        components,
+    });
+    b.push(Statement::Return { value: Some(value) });
+    module.entry_points[entry_index].function = b.finish();
+
+    Ok(VertexStage {
+        entry_index,
+        previous_location,
+        twins,
+    })
+}
+
+/// Every expression of `function`: copying with this set keeps it whole.
+fn everything(function: &Function) -> ExprSet {
+    let mut set = ExprSet::with_capacity(function.expressions.len());
+    set.insert_range(..);
+    set
+}
+
+fn collect_callees(
+    module: &Module,
+    block: &naga::Block,
+    out: &mut Vec<Handle<Function>>,
+    seen: &mut BTreeSet<Handle<Function>>,
+) {
+    crate::proc::each_statement(block, &mut |statement| {
+        if let Statement::Call { function, .. } = *statement {
+            if seen.insert(function) {
+                collect_callees(module, &module.functions[function].body, out, seen);
+                out.push(function);
+            }
+        }
+    });
+}
+
+fn calls_any(block: &naga::Block, functions: &HashMap<Handle<Function>, Handle<Function>>) -> bool {
+    let mut found = false;
+    crate::proc::each_statement(block, &mut |statement| {
+        if let Statement::Call { function, .. } = *statement {
+            found |= functions.contains_key(&function);
+        }
+    });
+    found
+}
+
+/// `vs_main` → `VsMain`.
+fn pascal(name: &str) -> String {
+    name.split('_')
+        .filter(|part| !part.is_empty())
+        .map(|part| {
+            let mut chars = part.chars();
+            chars
+                .next()
+                .map(|c| c.to_uppercase().chain(chars).collect::<String>())
+                .unwrap_or_default()
+        })
+        .collect()
+}
