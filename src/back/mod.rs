@@ -71,13 +71,13 @@ pub fn write(
         }
         Language::Msl => {
             let pipeline = naga::back::msl::PipelineOptions::default();
-            let (text, _) = naga::back::msl::write_string(
-                module,
-                info,
-                &naga::back::msl::Options::default(),
-                &pipeline,
-            )
-            .map_err(|err| err.to_string())?;
+            // `[[invariant]]` positions need MSL 2.1.
+            let options = naga::back::msl::Options {
+                lang_version: (2, 1),
+                ..naga::back::msl::Options::default()
+            };
+            let (text, _) = naga::back::msl::write_string(module, info, &options, &pipeline)
+                .map_err(|err| err.to_string())?;
             Ok(vec![Output {
                 suffix: ".metal".into(),
                 bytes: text.into_bytes(),

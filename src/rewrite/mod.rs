@@ -213,12 +213,6 @@ pub fn rewrite(
             "the shader may discard after the node is computed, so the payload pass cannot know which pixels are cut out",
         ));
     }
-    if variant == Variant::OnePass && candidate.derivatives {
-        return Err(Refusal::new(
-            "one-pass computes the payload only on a miss, inside a non-uniform branch, and the payload's slice takes implicit derivatives (textureSample, dpdx...); hoisting them out of the branch is not supported yet — use two-pass or three-pass, where the payload runs in uniform control flow",
-        ));
-    }
-
     // The first bind group the user's shader leaves free.
     let group = original
         .global_variables
@@ -268,6 +262,17 @@ pub fn rewrite(
     for kill in layout.kills.iter().filter(|k| k.after <= node_order) {
         for &condition in &kill.placement.controls {
             payload_live.union_with(&graph.slice(condition));
+        }
+    }
+    if variant == Variant::OnePass {
+        let exprs: Vec<&naga::Expression> = function.expressions.iter().map(|(_, e)| e).collect();
+        if let Some(what) = payload_live
+            .ones()
+            .find_map(|i| uniformity::implicit_derivative(exprs[i]))
+        {
+            return Err(Refusal::new(format!(
+                "one-pass computes the payload only on a miss, inside a non-uniform branch, and the payload takes implicit derivatives ({what}); hoisting them out of the branch is not supported yet — two-pass and three-pass compute the payload in uniform control flow"
+            )));
         }
     }
     let shade_live = graph.remainder(node);

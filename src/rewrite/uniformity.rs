@@ -127,9 +127,16 @@ impl Checker<'_> {
 }
 
 /// Describes `expr` if it takes implicit derivatives.
-fn implicit_derivative(expr: &Expression) -> Option<String> {
+pub fn implicit_derivative(expr: &Expression) -> Option<String> {
     match *expr {
-        Expression::Derivative { axis, .. } => Some(format!("a derivative ({axis:?})")),
+        Expression::Derivative { axis, .. } => Some(
+            match axis {
+                naga::DerivativeAxis::X => "dpdx",
+                naga::DerivativeAxis::Y => "dpdy",
+                naga::DerivativeAxis::Width => "fwidth",
+            }
+            .into(),
+        ),
         Expression::ImageSample {
             level, depth_ref, ..
         } => match level {

@@ -6,4 +6,5 @@ mod analyze;
 mod corpus;
 mod cost;
 mod errors;
+mod rewrite;
 mod util;

@@ -1,0 +1,360 @@
+//! `shadecache rewrite` and the variants it emits.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use shadecache::analysis::{self, Analysis};
+use shadecache::back::{self, Language};
+use shadecache::front::{self, Shader};
+use shadecache::rewrite::{self, Options, Rewritten, Variant};
+
+use crate::util::{corpus, root, shadecache, stderr, stdout, tint_validate};
+
+/// Loads a corpus shader under its path relative to the repository root,
+/// so plans and snapshots do not depend on where the checkout is.
+fn load(path: &Path) -> (Shader, Analysis) {
+    let text = std::fs::read_to_string(root().join(path)).unwrap();
+    let shader = front::parse(shadecache::diagnostic::SourceFile::new(
+        path.display().to_string(),
+        text,
+    ))
+    .unwrap_or_else(|e| panic!("{}", e.render()));
+    let analysis = analysis::analyze(&shader, &analysis::Options::default()).unwrap();
+    (shader, analysis)
+}
+
+fn wgsl(rewritten: &Rewritten) -> Vec<(String, String)> {
+    rewritten
+        .passes
+        .iter()
+        .map(|pass| {
+            let out = back::write(&pass.module, &pass.info, Language::Wgsl).unwrap();
+            (
+                pass.name.clone(),
+                String::from_utf8(out[0].bytes.clone()).unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// Emitted WGSL of two corpus shaders × three variants, so that a change in
+/// output is seen in review. The modules are compacted before writing, so
+/// handle numbering does not churn.
+#[test]
+fn snapshots_of_emitted_wgsl() {
+    for (shader, node) in [
+        ("corpus/noise_marble.wgsl", "nb0c12cc4"),
+        ("corpus/shadow_pcf.wgsl", "nd71b08bc"),
+    ] {
+        let (shader_ir, analysis) = load(Path::new(shader));
+        let candidate = analysis.candidate(node).expect("the node is a candidate");
+        let stem = Path::new(shader).file_stem().unwrap().to_str().unwrap();
+        for variant in Variant::ALL {
+            let rewritten = rewrite::rewrite(
+                &shader_ir,
+                &analysis,
+                candidate,
+                variant,
+                &Options::default(),
+            )
+            .unwrap_or_else(|r| panic!("{shader} {node} {variant}: {r}"));
+            for (pass, text) in wgsl(&rewritten) {
+                insta::assert_snapshot!(format!("{stem}__{node}__{variant}__{pass}"), text);
+            }
+            let plan = serde_json::to_string_pretty(&rewritten.plan).unwrap();
+            insta::assert_snapshot!(format!("{stem}__{node}__{variant}__plan"), plan);
+        }
+    }
+}
+
+/// Every corpus shader × every candidate × every variant: written as WGSL,
+/// each pass re-parses and validates with naga from its text; refusals
+/// carry a reason and are never internal errors.
+fn emit_everything(dir: &Path) -> (Vec<PathBuf>, BTreeMap<String, usize>) {
+    let mut files = Vec::new();
+    let mut refusals = BTreeMap::new();
+    for path in corpus() {
+        let (shader, analysis) = load(&path);
+        let stem = path.file_stem().unwrap().to_str().unwrap().to_string();
+        for candidate in &analysis.candidates {
+            for variant in Variant::ALL {
+                match rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
+                {
+                    Ok(rewritten) => {
+                        let out = dir
+                            .join(&stem)
+                            .join(&candidate.node.id)
+                            .join(variant.as_str());
+                        files.extend(
+                            back::write_variant(&out, &rewritten, Language::Wgsl)
+                                .unwrap()
+                                .into_iter()
+                                .filter(|f| f.extension().is_some_and(|e| e == "wgsl")),
+                        );
+                    }
+                    Err(refusal) => {
+                        assert!(
+                            !refusal.reason.contains("internal error"),
+                            "{stem} {} {variant}: {}",
+                            candidate.node.id,
+                            refusal.reason
+                        );
+                        // Group by the kind of refusal (the reason up to
+                        // its first parenthesis or comma).
+                        let kind = refusal.reason.split([',', '(']).next().unwrap_or_default();
+                        *refusals
+                            .entry(format!("{variant}: {}", kind.trim()))
+                            .or_default() += 1;
+                    }
+                }
+            }
+        }
+    }
+    (files, refusals)
+}
+
+#[test]
+fn every_emitted_module_validates_with_naga_and_tint() {
+    let dir = tempfile::tempdir().unwrap();
+    let (files, refusals) = emit_everything(dir.path());
+    assert!(files.len() > 1000, "{} files", files.len());
+    for file in &files {
+        let text = std::fs::read_to_string(file).unwrap();
+        let reparsed = front::parse(shadecache::diagnostic::SourceFile::new(
+            file.display().to_string(),
+            text,
+        ));
+        if let Err(err) = reparsed {
+            panic!("{} does not re-validate:\n{}", file.display(), err.render());
+        }
+    }
+    let relative: Vec<PathBuf> = files.clone();
+    for result in tint_validate(&relative) {
+        assert!(
+            result.ok,
+            "Tint rejects {}: {:#?}",
+            result.file, result.messages
+        );
+    }
+    // The reasons the corpus is refused for, so a new kind shows in review.
+    let expected = [
+        "one-pass: one-pass computes the payload only on a miss",
+        "two-pass: the shader may discard after the node is computed",
+        "three-pass: the shader may discard after the node is computed",
+    ];
+    for kind in refusals.keys() {
+        assert!(
+            expected.contains(&kind.as_str()),
+            "a new kind of refusal: {kind}"
+        );
+    }
+    eprintln!(
+        "emitted {} pass modules; refused: {refusals:#?}",
+        files.len()
+    );
+}
+
+#[test]
+fn rewrite_all_nodes_writes_every_candidate_and_variant() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = shadecache([
+        "rewrite".as_ref(),
+        "corpus/noise_marble.wgsl".as_ref(),
+        "--all-nodes".as_ref(),
+        "--out".as_ref(),
+        dir.path().as_os_str(),
+    ] as [&std::ffi::OsStr; 5]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let (_, analysis) = load(Path::new("corpus/noise_marble.wgsl"));
+    for candidate in &analysis.candidates {
+        for variant in Variant::ALL {
+            let out = dir.path().join(&candidate.node.id).join(variant.as_str());
+            let plan: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(out.join("plan.json")).unwrap()).unwrap();
+            let passes = plan["passes"].as_array().unwrap();
+            let expected = match variant {
+                Variant::OnePass => 1,
+                Variant::TwoPass => 2,
+                Variant::ThreePass => 3,
+            };
+            assert_eq!(passes.len(), expected);
+            for pass in passes {
+                assert!(out.join(pass["shader"].as_str().unwrap()).is_file());
+            }
+        }
+    }
+    assert!(stdout(&output).contains(&format!("wrote {} variants", analysis.candidates.len() * 3)));
+}
+
+#[test]
+fn plans_describe_the_passes() {
+    let (shader, analysis) = load(Path::new("corpus/noise_marble.wgsl"));
+    let candidate = analysis.candidate("nb0c12cc4").unwrap();
+    let plan = |variant| {
+        rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
+            .unwrap()
+            .plan
+    };
+    let three = plan(Variant::ThreePass);
+    let depth: Vec<(&str, bool)> = three
+        .passes
+        .iter()
+        .map(|p| (p.depth.compare.as_str(), p.depth.write))
+        .collect();
+    assert_eq!(depth, [("less", true), ("less", true), ("equal", false)]);
+    assert_eq!(
+        three.passes.iter().map(|p| p.discards).collect::<Vec<_>>(),
+        [true, false, false]
+    );
+    assert_eq!(three.passes[0].color_targets[0].target, "cache");
+    assert_eq!(three.passes[2].color_targets[0].target, "color");
+    // The uniform the vertex stage reads has a previous-frame twin.
+    assert_eq!(three.bindings.previous.len(), 1);
+    assert_eq!(three.bindings.previous[0].shadows.name, "frame");
+    assert_eq!(three.bindings.previous[0].group, 1);
+    let one = plan(Variant::OnePass);
+    let targets: Vec<&str> = one.passes[0]
+        .color_targets
+        .iter()
+        .map(|t| t.target.as_str())
+        .collect();
+    assert_eq!(targets, ["color", "cache"]);
+    assert_eq!(one.vertex_layout.len(), 2);
+    assert_eq!(one.vertex_layout[0].format, "float32x3");
+}
+
+#[test]
+fn every_emitted_vertex_position_is_invariant() {
+    let (shader, analysis) = load(Path::new("corpus/position_direct.wgsl"));
+    let candidate = &analysis.candidates[0];
+    for variant in Variant::ALL {
+        let rewritten =
+            rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default()).unwrap();
+        for (pass, text) in wgsl(&rewritten) {
+            assert!(
+                text.contains("@builtin(position) @invariant"),
+                "{variant} {pass}:\n{text}"
+            );
+        }
+    }
+}
+
+#[test]
+fn other_languages_go_through_naga_back_ends() {
+    for (emit, suffix) in [
+        ("spv", "pass1.spv"),
+        ("msl", "pass1.metal"),
+        ("hlsl", "pass1.hlsl"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let output = shadecache([
+            "rewrite".as_ref(),
+            "corpus/noise_marble.wgsl".as_ref(),
+            "--node".as_ref(),
+            "nb0c12cc4".as_ref(),
+            "--variant".as_ref(),
+            "three-pass".as_ref(),
+            "--emit".as_ref(),
+            emit.as_ref(),
+            "--out".as_ref(),
+            dir.path().as_os_str(),
+        ] as [&std::ffi::OsStr; 10]);
+        assert!(output.status.success(), "{emit}: {}", stderr(&output));
+        let file = dir.path().join(suffix);
+        assert!(
+            std::fs::metadata(&file)
+                .map(|m| m.len() > 100)
+                .unwrap_or(false),
+            "{emit}: no {suffix}"
+        );
+        assert!(dir.path().join("plan.json").is_file());
+    }
+}
+
+/// naga's GLSL writer cannot load from a depth texture, which the cache's
+/// depth test does: a clear error, not a broken file.
+#[test]
+fn glsl_output_is_refused_with_the_reason() {
+    let err = rewrite_fails(&[
+        "corpus/noise_marble.wgsl",
+        "--node",
+        "nb0c12cc4",
+        "--emit",
+        "glsl",
+    ]);
+    assert!(err.contains("cannot write pass1 as glsl"), "{err}");
+    assert!(err.contains("depth"), "{err}");
+}
+
+fn rewrite_fails(args: &[&str]) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let mut all: Vec<std::ffi::OsString> = vec!["rewrite".into()];
+    all.extend(args.iter().map(Into::into));
+    all.push("--out".into());
+    all.push(dir.path().into());
+    let output = shadecache(&all);
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{args:?}: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    err
+}
+
+#[test]
+fn unknown_node_id_is_an_error() {
+    let err = rewrite_fails(&["corpus/noise_marble.wgsl", "--node", "n00000000"]);
+    assert!(err.contains("unknown node id `n00000000`"), "{err}");
+    assert!(
+        err.contains("nb0c12cc4") || err.contains("candidates"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_node_inside_a_loop_cannot_be_rewritten() {
+    let (_, analysis) = load(Path::new("corpus/texture_loop.wgsl"));
+    let in_loop = analysis
+        .rejected
+        .iter()
+        .find(|r| r.reason == analysis::RejectReason::InLoop)
+        .expect("texture_loop has nodes inside its loop");
+    let err = rewrite_fails(&["corpus/texture_loop.wgsl", "--node", &in_loop.node.id]);
+    assert!(err.contains("cannot be cached"), "{err}");
+    assert!(err.contains("inside 1 loop"), "{err}");
+    assert!(err.contains("corpus/texture_loop.wgsl:"), "{err}");
+}
+
+#[test]
+fn a_variant_refused_for_uniformity_says_why() {
+    // `textureSample` is in this node's slice: one-pass would compute it in
+    // the miss branch, outside uniform control flow.
+    let err = rewrite_fails(&[
+        "corpus/implicit_derivative.wgsl",
+        "--node",
+        "n9be52d42",
+        "--variant",
+        "one-pass",
+    ]);
+    assert!(err.contains("refused"), "{err}");
+    assert!(err.contains("n9be52d42"), "{err}");
+    assert!(err.contains("one-pass"), "{err}");
+    assert!(err.contains("implicit derivatives"), "{err}");
+}
+
+#[test]
+fn uniformity_check_catches_derivatives_in_a_branch() {
+    let source = "@group(0) @binding(0) var t: texture_2d<f32>;\n@group(0) @binding(1) var s: sampler;\n@fragment\nfn fs(@location(0) uv: vec2<f32>) -> @location(0) vec4<f32> {\n    var c = vec4<f32>(0.0);\n    if (uv.x > 0.5) {\n        c = textureSample(t, s, uv);\n    }\n    return c;\n}\n";
+    let shader = front::parse(shadecache::diagnostic::SourceFile::new(
+        "branch.wgsl",
+        source,
+    ))
+    .unwrap();
+    let violation = rewrite::uniformity::check(&shader.module, &shader.info).unwrap_err();
+    assert!(violation.what.contains("textureSample"), "{violation}");
+    // The same sample before the branch is fine.
+    let fine = source.replace(
+        "    var c = vec4<f32>(0.0);\n    if (uv.x > 0.5) {\n        c = textureSample(t, s, uv);\n    }",
+        "    var c = textureSample(t, s, uv);\n    if (uv.x > 0.5) {\n        c = c * 2.0;\n    }",
+    );
+    let shader = front::parse(shadecache::diagnostic::SourceFile::new("fine.wgsl", fine)).unwrap();
+    rewrite::uniformity::check(&shader.module, &shader.info).unwrap();
+}
