@@ -33,3 +33,4 @@ pub mod front;
 pub mod plan;
 pub mod proc;
 pub mod rewrite;
+pub mod runtime;

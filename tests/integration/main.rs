@@ -6,5 +6,6 @@ mod analyze;
 mod corpus;
 mod cost;
 mod errors;
+mod gpu;
 mod rewrite;
 mod util;

@@ -1,0 +1,182 @@
+use std::borrow::Cow;
+
+use crate::plan::{Pass, Plan, VertexAttribute};
+
+/// A headless wgpu device.
+#[derive(Debug)]
+pub struct Gpu {
+    pub adapter: wgpu::AdapterInfo,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+}
+
+impl Gpu {
+    /// The first adapter any backend offers, with default limits. `None`
+    /// when the machine has no GPU and no software driver.
+    pub fn new() -> Result<Option<Gpu>, String> {
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = match pollster::block_on(
+            instance.request_adapter(&wgpu::RequestAdapterOptions::default()),
+        ) {
+            Ok(adapter) => adapter,
+            Err(_) => return Ok(None),
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("shadecache"),
+            ..wgpu::DeviceDescriptor::default()
+        }))
+        .map_err(|err| format!("cannot open a device on {}: {err}", adapter.get_info().name))?;
+        Ok(Some(Gpu {
+            adapter: adapter.get_info(),
+            device,
+            queue,
+        }))
+    }
+}
+
+/// Builds one render pipeline per pass of `plan`; `shader` gives the WGSL
+/// text of a pass's shader file by name. Validation errors from wgpu are
+/// returned, naming the pass.
+pub fn pipelines(
+    gpu: &Gpu,
+    plan: &Plan,
+    shader: impl Fn(&str) -> Option<String>,
+) -> Result<Vec<wgpu::RenderPipeline>, String> {
+    let attributes = vertex_attributes(&plan.vertex_layout)?;
+    let stride = attributes
+        .iter()
+        .map(|a| a.offset + a.format.size())
+        .max()
+        .unwrap_or(0);
+    let buffers = [Some(wgpu::VertexBufferLayout {
+        array_stride: stride,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &attributes,
+    })];
+    plan.passes
+        .iter()
+        .map(|pass| {
+            let source = shader(&pass.shader)
+                .ok_or_else(|| format!("{}: no shader `{}`", pass.name, pass.shader))?;
+            let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+            let pipeline = pipeline(gpu, pass, &source, &buffers)?;
+            match pollster::block_on(scope.pop()) {
+                None => Ok(pipeline),
+                Some(err) => Err(format!("{}: {err}", pass.name)),
+            }
+        })
+        .collect()
+}
+
+fn pipeline(
+    gpu: &Gpu,
+    pass: &Pass,
+    source: &str,
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+) -> Result<wgpu::RenderPipeline, String> {
+    let module = gpu
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(&pass.shader),
+            source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(source)),
+        });
+    let mut targets: Vec<Option<wgpu::ColorTargetState>> = Vec::new();
+    for target in &pass.color_targets {
+        let index = target.location as usize;
+        if targets.len() <= index {
+            targets.resize(index + 1, None);
+        }
+        targets[index] = Some(wgpu::ColorTargetState {
+            format: texture_format(&target.format)?,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        });
+    }
+    let depth_compare = match pass.depth.compare.as_str() {
+        "less" => wgpu::CompareFunction::Less,
+        "less-equal" => wgpu::CompareFunction::LessEqual,
+        "equal" => wgpu::CompareFunction::Equal,
+        "always" => wgpu::CompareFunction::Always,
+        other => return Err(format!("{}: unknown depth compare `{other}`", pass.name)),
+    };
+    Ok(gpu
+        .device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(&pass.name),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some(&pass.vertex_entry),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                buffers,
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: texture_format(&pass.depth.format)?,
+                depth_write_enabled: Some(pass.depth.write),
+                depth_compare: Some(depth_compare),
+                stencil: wgpu::StencilState::default(),
+                bias: wgpu::DepthBiasState::default(),
+            }),
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some(&pass.fragment_entry),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        }))
+}
+
+/// The plan's attributes packed one after another in one buffer.
+fn vertex_attributes(layout: &[VertexAttribute]) -> Result<Vec<wgpu::VertexAttribute>, String> {
+    let mut offset = 0;
+    layout
+        .iter()
+        .map(|attribute| {
+            let format = vertex_format(&attribute.format)?;
+            let out = wgpu::VertexAttribute {
+                format,
+                offset,
+                shader_location: attribute.location,
+            };
+            offset += format.size();
+            Ok(out)
+        })
+        .collect()
+}
+
+fn vertex_format(name: &str) -> Result<wgpu::VertexFormat, String> {
+    use wgpu::VertexFormat as F;
+    Ok(match name {
+        "float32" => F::Float32,
+        "float32x2" => F::Float32x2,
+        "float32x3" => F::Float32x3,
+        "float32x4" => F::Float32x4,
+        "sint32" => F::Sint32,
+        "sint32x2" => F::Sint32x2,
+        "sint32x3" => F::Sint32x3,
+        "sint32x4" => F::Sint32x4,
+        "uint32" => F::Uint32,
+        "uint32x2" => F::Uint32x2,
+        "uint32x3" => F::Uint32x3,
+        "uint32x4" => F::Uint32x4,
+        other => return Err(format!("unsupported vertex format `{other}`")),
+    })
+}
+
+fn texture_format(name: &str) -> Result<wgpu::TextureFormat, String> {
+    use wgpu::TextureFormat as T;
+    Ok(match name {
+        "rgba8unorm" => T::Rgba8Unorm,
+        "rgba8unorm-srgb" => T::Rgba8UnormSrgb,
+        "bgra8unorm" => T::Bgra8Unorm,
+        "rgba16float" => T::Rgba16Float,
+        "rgba32float" => T::Rgba32Float,
+        "depth32float" => T::Depth32Float,
+        other => return Err(format!("unsupported texture format `{other}`")),
+    })
+}
