@@ -27,6 +27,7 @@
 
 pub mod analysis;
 pub mod back;
+pub mod build;
 pub mod cost;
 pub mod diagnostic;
 pub mod front;

@@ -3,6 +3,7 @@
 //! module per area (as naga's own tests are laid out).
 
 mod analyze;
+mod build_api;
 mod corpus;
 mod cost;
 mod errors;

@@ -1,0 +1,342 @@
+//! The build-script API: rewrite chosen shaders, nodes and variants into
+//! `OUT_DIR` from a crate's `build.rs`.
+//!
+//! ```no_run
+//! // build.rs
+//! fn main() -> Result<(), shadecache::build::BuildError> {
+//!     shadecache::build::Build::new()
+//!         .shader("shaders/marble.wgsl")
+//!         .node("nb0c12cc4")
+//!         .variant(shadecache::rewrite::Variant::ThreePass)
+//!         .run()?;
+//!     Ok(())
+//! }
+//! ```
+//!
+//! The files land in `OUT_DIR/shadecache/<shader stem>/<node>/<variant>/`
+//! (`pass1.wgsl`, ..., `plan.json`); [`include_variant!`](crate::include_variant)
+//! includes one in the crate. Every input is printed as
+//! `cargo::rerun-if-changed`, so the build reruns when a shader changes.
+//! Failures are rendered with codespan on stderr (cargo shows them) and
+//! `run` returns a short [`BuildError`].
+
+// Build scripts talk to cargo through stdout.
+#![allow(clippy::print_stdout)]
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use crate::analysis::{self, Analysis};
+use crate::back::{self, Language};
+use crate::diagnostic::{Color, Diagnostic, Error};
+use crate::front;
+use crate::rewrite::{self, Options, Variant};
+
+/// Which nodes of a shader to rewrite.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Nodes {
+    /// These ids (from `shadecache analyze`).
+    Ids(Vec<String>),
+    /// The N candidates with the highest estimated P/T.
+    Top(usize),
+    /// Every candidate.
+    All,
+}
+
+#[derive(Clone, Debug)]
+struct ShaderJob {
+    path: PathBuf,
+    entry: Option<String>,
+    nodes: Nodes,
+    variants: Vec<Variant>,
+}
+
+impl ShaderJob {
+    fn new(path: PathBuf) -> Self {
+        ShaderJob {
+            path,
+            entry: None,
+            nodes: Nodes::Top(1),
+            variants: Variant::ALL.to_vec(),
+        }
+    }
+}
+
+/// A set of shaders to rewrite at build time.
+#[derive(Clone, Debug, Default)]
+pub struct Build {
+    jobs: Vec<ShaderJob>,
+    options: Options,
+    out_dir: Option<PathBuf>,
+    quiet: bool,
+}
+
+/// What a build wrote.
+#[derive(Clone, Debug, Default)]
+pub struct Outputs {
+    /// Every file written.
+    pub files: Vec<PathBuf>,
+    /// (shader, node, variant, reason) of every variant refused.
+    pub refused: Vec<(PathBuf, String, Variant, String)>,
+}
+
+/// The short error a failed build returns; the diagnostics themselves have
+/// been printed on stderr.
+#[derive(Clone, Debug)]
+pub struct BuildError {
+    pub message: String,
+    pub errors: Vec<Error>,
+}
+
+impl fmt::Display for BuildError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for BuildError {}
+
+impl Build {
+    pub fn new() -> Self {
+        Build::default()
+    }
+
+    /// Adds a shader; the node and variant settings that follow apply to it.
+    /// Relative paths are relative to the crate (`CARGO_MANIFEST_DIR`).
+    pub fn shader(mut self, path: impl Into<PathBuf>) -> Self {
+        self.jobs.push(ShaderJob::new(path.into()));
+        self
+    }
+
+    /// The job settings apply to. Settings made before any `.shader()` go
+    /// to a job without a path, which `run` reports as an error.
+    fn last(&mut self) -> &mut ShaderJob {
+        if self.jobs.is_empty() {
+            self.jobs.push(ShaderJob::new(PathBuf::new()));
+        }
+        let index = self.jobs.len() - 1;
+        &mut self.jobs[index]
+    }
+
+    /// Rewrites this node of the last shader added (repeatable).
+    pub fn node(mut self, id: impl Into<String>) -> Self {
+        let job = self.last();
+        match &mut job.nodes {
+            Nodes::Ids(ids) => ids.push(id.into()),
+            other => *other = Nodes::Ids(vec![id.into()]),
+        }
+        self
+    }
+
+    /// Chooses the nodes of the last shader added (default: the top one).
+    pub fn nodes(mut self, nodes: Nodes) -> Self {
+        self.last().nodes = nodes;
+        self
+    }
+
+    /// Writes only this variant of the last shader added (repeatable;
+    /// default: all three).
+    pub fn variant(mut self, variant: Variant) -> Self {
+        let job = self.last();
+        if job.variants.len() == Variant::ALL.len() {
+            job.variants.clear();
+        }
+        if !job.variants.contains(&variant) {
+            job.variants.push(variant);
+        }
+        self
+    }
+
+    /// The fragment entry point of the last shader added.
+    pub fn entry(mut self, name: impl Into<String>) -> Self {
+        self.last().entry = Some(name.into());
+        self
+    }
+
+    /// Rewrite options (refresh period and quad, cache format, ε) for all shaders.
+    pub fn options(mut self, options: Options) -> Self {
+        self.options = options;
+        self
+    }
+
+    /// Where to write; default `$OUT_DIR/shadecache`.
+    pub fn out_dir(mut self, dir: impl Into<PathBuf>) -> Self {
+        self.out_dir = Some(dir.into());
+        self
+    }
+
+    /// Do not print `cargo::` lines (for use outside a build script).
+    pub fn quiet(mut self) -> Self {
+        self.quiet = true;
+        self
+    }
+
+    /// Rewrites everything and writes it. A refused variant that was asked
+    /// for by node id fails the build; with `Top`/`All`, refusals are
+    /// reported as warnings.
+    pub fn run(self) -> Result<Outputs, BuildError> {
+        let out_dir = match self.out_dir.clone().or_else(|| {
+            std::env::var_os("OUT_DIR").map(|dir| PathBuf::from(dir).join("shadecache"))
+        }) {
+            Some(dir) => dir,
+            None => return Err(self.fail(vec![Error::plain(Diagnostic::error(
+                "OUT_DIR is not set: call shadecache::build from a build script, or set out_dir",
+            ))])),
+        };
+        let manifest = std::env::var_os("CARGO_MANIFEST_DIR").map(PathBuf::from);
+        let mut outputs = Outputs::default();
+        let mut errors = Vec::new();
+        for job in &self.jobs {
+            let path = match &manifest {
+                Some(root) if job.path.is_relative() => root.join(&job.path),
+                _ => job.path.clone(),
+            };
+            if !self.quiet {
+                // Printed first, so a failing shader is watched too.
+                println!("cargo::rerun-if-changed={}", path.display());
+            }
+            if let Err(err) = self.job(job, &path, &out_dir, &mut outputs) {
+                errors.push(err);
+            }
+        }
+        if errors.is_empty() {
+            Ok(outputs)
+        } else {
+            Err(self.fail(errors))
+        }
+    }
+
+    fn fail(&self, errors: Vec<Error>) -> BuildError {
+        for err in &errors {
+            err.emit_to_stderr(Color::Auto);
+        }
+        BuildError {
+            message: format!(
+                "shadecache: {} error{} rewriting shaders (see the diagnostics above)",
+                errors.len(),
+                if errors.len() == 1 { "" } else { "s" }
+            ),
+            errors,
+        }
+    }
+
+    fn job(
+        &self,
+        job: &ShaderJob,
+        path: &Path,
+        out_dir: &Path,
+        outputs: &mut Outputs,
+    ) -> Result<(), Error> {
+        if job.path.as_os_str().is_empty() {
+            return Err(Error::plain(Diagnostic::error(
+                "node, variant or entry set before any shader: call .shader(path) first",
+            )));
+        }
+        let shader = front::load(path)?;
+        let analysis = analysis::analyze(
+            &shader,
+            &analysis::Options {
+                entry: job.entry.clone(),
+                ..analysis::Options::default()
+            },
+        )?;
+        let stem = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "shader".into());
+        let explicit = matches!(job.nodes, Nodes::Ids(_));
+        for candidate in select(&shader, &analysis, &job.nodes)? {
+            for &variant in &job.variants {
+                match rewrite::rewrite(&shader, &analysis, candidate, variant, &self.options) {
+                    Ok(rewritten) => {
+                        let dir = out_dir
+                            .join(&stem)
+                            .join(&candidate.node.id)
+                            .join(variant.as_str());
+                        outputs.files.extend(back::write_variant(
+                            &dir,
+                            &rewritten,
+                            Language::Wgsl,
+                        )?);
+                    }
+                    Err(refusal) if explicit => {
+                        return Err(Error::in_file(
+                            shader.file.clone(),
+                            Diagnostic::error(format!(
+                                "refused: node {}, {variant}: {}",
+                                candidate.node.id, refusal.reason
+                            ))
+                            .with_label(candidate.node.range.clone(), "this node"),
+                        ));
+                    }
+                    Err(refusal) => {
+                        if !self.quiet {
+                            println!(
+                                "cargo::warning=shadecache refused node {} of {}, {variant}: {}",
+                                candidate.node.id,
+                                path.display(),
+                                refusal.reason
+                            );
+                        }
+                        outputs.refused.push((
+                            path.to_path_buf(),
+                            candidate.node.id.clone(),
+                            variant,
+                            refusal.reason,
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+fn select<'a>(
+    shader: &front::Shader,
+    analysis: &'a Analysis,
+    nodes: &Nodes,
+) -> Result<Vec<&'a analysis::Candidate>, Error> {
+    match nodes {
+        Nodes::All => Ok(analysis.candidates.iter().collect()),
+        Nodes::Top(n) => Ok(analysis.candidates.iter().take(*n).collect()),
+        Nodes::Ids(ids) => ids
+            .iter()
+            .map(|id| {
+                analysis.candidate(id).ok_or_else(|| {
+                    let reason = analysis
+                        .rejected(id)
+                        .map(|r| format!("it cannot be cached: {}", r.detail))
+                        .unwrap_or_else(|| "no node has that id (run `shadecache analyze`)".into());
+                    Error::in_file(
+                        shader.file.clone(),
+                        Diagnostic::error(format!(
+                            "node `{id}` of `{}`: {reason}",
+                            shader.file.path
+                        )),
+                    )
+                })
+            })
+            .collect(),
+    }
+}
+
+/// Includes a file the build script wrote: `include_variant!("marble",
+/// "nb0c12cc4", "three-pass", "pass1.wgsl")` is the text of
+/// `$OUT_DIR/shadecache/marble/nb0c12cc4/three-pass/pass1.wgsl`.
+#[macro_export]
+macro_rules! include_variant {
+    ($shader:literal, $node:literal, $variant:literal, $file:literal) => {
+        include_str!(concat!(
+            env!("OUT_DIR"),
+            "/shadecache/",
+            $shader,
+            "/",
+            $node,
+            "/",
+            $variant,
+            "/",
+            $file
+        ))
+    };
+}
