@@ -179,9 +179,11 @@ impl Build {
             std::env::var_os("OUT_DIR").map(|dir| PathBuf::from(dir).join("shadecache"))
         }) {
             Some(dir) => dir,
-            None => return Err(self.fail(vec![Error::plain(Diagnostic::error(
+            None => {
+                return Err(self.fail(vec![Error::plain(Diagnostic::error(
                 "OUT_DIR is not set: call shadecache::build from a build script, or set out_dir",
-            ))])),
+            ))]))
+            }
         };
         let manifest = std::env::var_os("CARGO_MANIFEST_DIR").map(PathBuf::from);
         let mut outputs = Outputs::default();

@@ -16,6 +16,10 @@ use super::remap::{self, Mapper};
 use crate::analysis::graph::ExprSet;
 use crate::proc;
 
+/// Builds the replacement of an expression in the new function; it may
+/// copy operands and append new expressions through the copy.
+pub type Hook<'a> = Box<dyn FnMut(&mut FunctionCopy<'a>) -> Expression + 'a>;
+
 /// Builds a new function from parts of `source`.
 pub struct FunctionCopy<'a> {
     module: &'a naga::Module,
@@ -37,6 +41,10 @@ pub struct FunctionCopy<'a> {
     functions: HashMap<Handle<Function>, Handle<Function>>,
     /// Return this member of the returned value instead of the value.
     return_member: Option<u32>,
+    /// Leave `return` statements out (the caller ends the body itself).
+    drop_returns: bool,
+    /// Expressions rebuilt by a hook instead of copied.
+    hooks: HashMap<Handle<Expression>, Hook<'a>>,
 }
 
 impl std::fmt::Debug for FunctionCopy<'_> {
@@ -68,7 +76,42 @@ impl<'a> FunctionCopy<'a> {
             globals: HashMap::new(),
             functions: HashMap::new(),
             return_member: None,
+            drop_returns: false,
+            hooks: HashMap::new(),
         }
+    }
+
+    /// Rebuilds `expr` with `hook` instead of copying it.
+    pub fn rebuild(&mut self, expr: Handle<Expression>, hook: Hook<'a>) {
+        self.hooks.insert(expr, hook);
+    }
+
+    /// Leaves every `return` out; see [`FunctionCopy::copy_body`].
+    pub fn drop_returns(&mut self) {
+        self.drop_returns = true;
+    }
+
+    /// Appends a new expression to the function being built (emitted before
+    /// the next statement).
+    pub fn add(&mut self, expr: Expression) -> Handle<Expression> {
+        self.append(expr, Span::UNDEFINED)
+    }
+
+    /// Copies the live part of the source body and returns it, leaving the
+    /// copy usable: [`Mapper::expression`] gives the new handle of any
+    /// source expression, [`FunctionCopy::add`] appends more, and
+    /// [`FunctionCopy::finish`] ends the body with a statement.
+    pub fn copy_body(&mut self) -> Block {
+        self.block(&self.source.body)
+    }
+
+    /// Emits what is pending into `body`, appends `last`, and returns the
+    /// function.
+    pub fn finish(mut self, mut body: Block, last: Statement) -> Function {
+        self.flush(&mut body);
+        body.push(last, Span::UNDEFINED);
+        self.target.body = body;
+        self.target
     }
 
     /// Reads `to` wherever the source reads global `from`.
@@ -103,7 +146,7 @@ impl<'a> FunctionCopy<'a> {
 
     /// Copies the live part of the source body into the target's body.
     pub fn run(mut self) -> Function {
-        let body = self.block(&self.source.body);
+        let body = self.copy_body();
         self.target.body = body;
         self.target
     }
@@ -244,6 +287,7 @@ impl<'a> FunctionCopy<'a> {
                     span,
                 );
             }
+            Statement::Return { .. } if self.drop_returns => {}
             Statement::Return { value: Some(value) } if self.return_member.is_some() => {
                 let base = self.expression(value);
                 let member = self.append(
@@ -330,9 +374,13 @@ impl Mapper for FunctionCopy<'_> {
             return mapped;
         }
         let span = self.source.expressions.get_span(handle);
-        let copied = match self.substitutes.get(&handle) {
-            Some(replacement) => replacement.clone(),
-            None => remap::expression(&self.source.expressions[handle], self),
+        let copied = if let Some(mut hook) = self.hooks.remove(&handle) {
+            hook(self)
+        } else {
+            match self.substitutes.get(&handle) {
+                Some(replacement) => replacement.clone(),
+                None => remap::expression(&self.source.expressions[handle], self),
+            }
         };
         let mapped = self.append(copied, span);
         self.exprs.insert(handle, mapped);

@@ -28,6 +28,10 @@ pub struct Pieces {
     pub result: naga::FunctionResult,
     pub name: String,
     pub payload: Handle<Function>,
+    /// One-pass with derivatives in the payload: computes them before the
+    /// branch; the payload function then takes its result as a last
+    /// argument (see [`super::gradients`]).
+    pub gradients: Option<Handle<Function>>,
     pub shade: Handle<Function>,
     /// The payload's type and component count.
     pub payload_ty: Handle<naga::Type>,
@@ -168,6 +172,12 @@ pub fn entry_point(
             b.name(lookup, "lookup");
             b.name(refresh, "refresh");
             b.name(reuse, "reuse");
+            let mut payload_arguments = originals.clone();
+            if let Some(gradients) = pieces.gradients {
+                let value = b.call(gradients, originals.clone());
+                b.name(value, "gradients");
+                payload_arguments.push(value);
+            }
             let local = b.function.local_variables.append(
                 naga::LocalVariable {
                     name: Some("payload".into()),
@@ -183,7 +193,7 @@ pub fn entry_point(
                 b.push(Statement::Store { pointer, value });
             });
             let reject = b.nested(|b| {
-                let value = b.call(pieces.payload, originals.clone());
+                let value = b.call(pieces.payload, payload_arguments);
                 b.push(Statement::Store { pointer, value });
             });
             b.push(Statement::If {

@@ -22,6 +22,7 @@
 pub mod builder;
 pub mod copy;
 pub mod fragment;
+pub mod gradients;
 pub mod import;
 pub mod remap;
 pub mod uniformity;
@@ -264,15 +265,27 @@ pub fn rewrite(
             payload_live.union_with(&graph.slice(condition));
         }
     }
+    let exprs: Vec<&naga::Expression> = function.expressions.iter().map(|(_, e)| e).collect();
+    let handles: Vec<naga::Handle<naga::Expression>> =
+        function.expressions.iter().map(|(h, _)| h).collect();
+    let mut hoist_derivatives = false;
     if variant == Variant::OnePass {
-        let exprs: Vec<&naga::Expression> = function.expressions.iter().map(|(_, e)| e).collect();
-        if let Some(what) = payload_live
-            .ones()
-            .find_map(|i| uniformity::implicit_derivative(exprs[i]))
-        {
-            return Err(Refusal::new(format!(
-                "one-pass computes the payload only on a miss, inside a non-uniform branch, and the payload takes implicit derivatives ({what}); hoisting them out of the branch is not supported yet — two-pass and three-pass compute the payload in uniform control flow"
-            )));
+        for i in payload_live.ones() {
+            let Some(what) = uniformity::implicit_derivative(exprs[i]) else {
+                continue;
+            };
+            hoist_derivatives = true;
+            // Gradients can be hoisted only from straight-line code: one
+            // taken inside a loop or a branch has no single value to compute
+            // before one-pass's miss branch.
+            if layout
+                .placement(handles[i])
+                .is_some_and(|at| at.loop_depth > 0 || !at.controls.is_empty())
+            {
+                return Err(Refusal::new(format!(
+                    "one-pass computes the payload only on a miss, in non-uniform control flow, and the payload takes implicit derivatives ({what}) inside a loop or branch, which cannot be computed before the miss branch; two-pass and three-pass compute the payload in uniform control flow"
+                )));
+            }
         }
     }
     let shade_live = graph.remainder(node);
@@ -300,7 +313,27 @@ pub fn rewrite(
         },
     );
     payload_copy.return_at(node);
-    let payload_fn = payload_copy.run();
+    let (payload, gradients) = if hoist_derivatives {
+        let hoisted = gradients::hoist(
+            &mut module,
+            original,
+            function,
+            shader.info.get_entry_point(analysis.entry_index),
+            &graph,
+            &payload_live,
+            node,
+            &stripped,
+            payload_ty,
+            &entry.name,
+        )?;
+        (hoisted.payload, Some(hoisted.gradients))
+    } else {
+        let payload_fn = payload_copy.run();
+        (
+            module.functions.append(payload_fn, naga::Span::UNDEFINED),
+            None,
+        )
+    };
     let mut shade_arguments = stripped;
     shade_arguments.push(naga::FunctionArgument {
         name: Some("cached".into()),
@@ -324,7 +357,6 @@ pub fn rewrite(
     );
     shade_copy.substitute(node, naga::Expression::FunctionArgument(cached_index));
     let shade_fn = shade_copy.run();
-    let payload = module.functions.append(payload_fn, naga::Span::UNDEFINED);
     let shade = module.functions.append(shade_fn, naga::Span::UNDEFINED);
     let vec4 = module.types.insert(
         naga::Type {
@@ -341,6 +373,7 @@ pub fn rewrite(
         result,
         name: entry.name.clone(),
         payload,
+        gradients,
         shade,
         payload_ty,
         components: candidate.components,

@@ -355,7 +355,7 @@ fn calls_any(block: &naga::Block, functions: &HashMap<Handle<Function>, Handle<F
 }
 
 /// `vs_main` → `VsMain`.
-fn pascal(name: &str) -> String {
+pub fn pascal(name: &str) -> String {
     name.split('_')
         .filter(|part| !part.is_empty())
         .map(|part| {

@@ -138,7 +138,6 @@ fn every_emitted_module_validates_with_naga_and_tint() {
     }
     // The reasons the corpus is refused for, so a new kind shows in review.
     let expected = [
-        "one-pass: one-pass computes the payload only on a miss",
         "two-pass: the shader may discard after the node is computed",
         "three-pass: the shader may discard after the node is computed",
     ];
@@ -324,20 +323,58 @@ fn a_node_inside_a_loop_cannot_be_rewritten() {
 }
 
 #[test]
+fn one_pass_hoists_derivatives_out_of_the_miss_branch() {
+    // `textureSample` is in this node's slice: one-pass computes its
+    // gradients before the branch and samples with textureSampleGrad.
+    let (shader, analysis) = load(Path::new("corpus/implicit_derivative.wgsl"));
+    let candidate = analysis.candidate("n9be52d42").unwrap();
+    assert!(candidate.derivatives);
+    let rewritten = rewrite::rewrite(
+        &shader,
+        &analysis,
+        candidate,
+        Variant::OnePass,
+        &Options::default(),
+    )
+    .unwrap();
+    let (_, text) = &wgsl(&rewritten)[0];
+    assert!(text.contains("fn fs_main_gradients("), "{text}");
+    assert!(text.contains("dpdx("), "{text}");
+    assert!(text.contains("textureSampleGrad(albedo_texture"), "{text}");
+    assert!(!text.contains("textureSample(albedo_texture"), "{text}");
+    // The gradients are taken before the branch, the payload inside it.
+    let gradients = text.find("= fs_main_gradients(").unwrap();
+    let branch = text.find("if reuse").unwrap();
+    let payload = text.find("= fs_main_payload(").unwrap();
+    assert!(gradients < branch && branch < payload, "{text}");
+}
+
+/// A payload that takes derivatives inside a loop cannot have them hoisted:
+/// one-pass is refused with the reason, two- and three-pass are written.
+#[test]
 fn a_variant_refused_for_uniformity_says_why() {
-    // `textureSample` is in this node's slice: one-pass would compute it in
-    // the miss branch, outside uniform control flow.
-    let err = rewrite_fails(&[
-        "corpus/implicit_derivative.wgsl",
-        "--node",
-        "n9be52d42",
-        "--variant",
-        "one-pass",
-    ]);
+    let source = "@group(0) @binding(0) var<uniform> clip_from_world: mat4x4<f32>;\n@group(0) @binding(1) var t: texture_2d<f32>;\n@group(0) @binding(2) var s: sampler;\nstruct V { @builtin(position) position: vec4<f32>, @location(0) uv: vec2<f32> }\n@vertex\nfn vs(@location(0) p: vec3<f32>, @location(2) uv: vec2<f32>) -> V {\n    return V(clip_from_world * vec4<f32>(p, 1.0), uv);\n}\n@fragment\nfn fs(in: V) -> @location(0) vec4<f32> {\n    var sum = vec4<f32>(0.0);\n    for (var i = 0; i < 4; i++) {\n        sum += textureSample(t, s, in.uv + vec2<f32>(f32(i) * 0.01, 0.0));\n    }\n    let blurred = sum * 0.25;\n    return blurred;\n}\n";
+    let (_dir, path) = crate::util::temp_file("loop_sample.wgsl", source.as_bytes());
+    let json = crate::util::analyze_json(&path);
+    let id = json["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["text"] == "sum * 0.25")
+        .expect("the blur is a candidate")["id"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let err = rewrite_fails(&[path.to_str().unwrap(), "--node", &id, "--variant", "all"]);
     assert!(err.contains("refused"), "{err}");
-    assert!(err.contains("n9be52d42"), "{err}");
+    assert!(err.contains(&id), "{err}");
     assert!(err.contains("one-pass"), "{err}");
-    assert!(err.contains("implicit derivatives"), "{err}");
+    assert!(
+        err.contains("implicit derivatives (textureSample) inside a loop"),
+        "{err}"
+    );
+    assert!(!err.contains("two-pass:"), "two-pass is written: {err}");
+    assert!(!err.contains("three-pass:"), "three-pass is written: {err}");
 }
 
 #[test]
