@@ -35,6 +35,15 @@ impl Gpu {
     }
 }
 
+/// How to build the pipelines beyond what the plan says.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PipelineOptions {
+    /// A debugging view: the frame's colour targets blend additively, so a
+    /// pixel's value is the sum of every shading of it. With a shader that
+    /// writes a constant, it counts how many times each pixel was shaded.
+    pub count_shading: bool,
+}
+
 /// Builds one render pipeline per pass of `plan`; `shader` gives the WGSL
 /// text of a pass's shader file by name. Validation errors from wgpu are
 /// returned, naming the pass.
@@ -42,6 +51,7 @@ pub fn pipelines(
     gpu: &Gpu,
     plan: &Plan,
     shader: impl Fn(&str) -> Option<String>,
+    options: PipelineOptions,
 ) -> Result<Vec<wgpu::RenderPipeline>, String> {
     let attributes = vertex_attributes(&plan.vertex_layout)?;
     let stride = attributes
@@ -60,7 +70,7 @@ pub fn pipelines(
             let source = shader(&pass.shader)
                 .ok_or_else(|| format!("{}: no shader `{}`", pass.name, pass.shader))?;
             let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-            let pipeline = pipeline(gpu, pass, &source, &buffers)?;
+            let pipeline = pipeline(gpu, pass, &source, &buffers, options)?;
             match pollster::block_on(scope.pop()) {
                 None => Ok(pipeline),
                 Some(err) => Err(format!("{}: {err}", pass.name)),
@@ -74,6 +84,7 @@ fn pipeline(
     pass: &Pass,
     source: &str,
     buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+    options: PipelineOptions,
 ) -> Result<wgpu::RenderPipeline, String> {
     let module = gpu
         .device
@@ -87,9 +98,19 @@ fn pipeline(
         if targets.len() <= index {
             targets.resize(index + 1, None);
         }
+        let additive = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
         targets[index] = Some(wgpu::ColorTargetState {
             format: texture_format(&target.format)?,
-            blend: None,
+            blend: (options.count_shading && target.target == "color").then_some(
+                wgpu::BlendState {
+                    color: additive,
+                    alpha: additive,
+                },
+            ),
             write_mask: wgpu::ColorWrites::ALL,
         });
     }
@@ -168,7 +189,7 @@ fn vertex_format(name: &str) -> Result<wgpu::VertexFormat, String> {
     })
 }
 
-fn texture_format(name: &str) -> Result<wgpu::TextureFormat, String> {
+pub(super) fn texture_format(name: &str) -> Result<wgpu::TextureFormat, String> {
     use wgpu::TextureFormat as T;
     Ok(match name {
         "rgba8unorm" => T::Rgba8Unorm,

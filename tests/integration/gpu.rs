@@ -58,19 +58,185 @@ fn every_pass_of_every_variant_builds_a_wgpu_pipeline() {
                         )
                     })
                     .collect();
-                let pipelines =
-                    runtime::pipelines(&gpu, &rewritten.plan, |name| sources.get(name).cloned())
-                        .unwrap_or_else(|err| {
-                            panic!(
-                                "{} {} {variant}: {err}",
-                                Path::new(&path).display(),
-                                candidate.node.id
-                            )
-                        });
+                let pipelines = runtime::pipelines(
+                    &gpu,
+                    &rewritten.plan,
+                    |name| sources.get(name).cloned(),
+                    runtime::PipelineOptions::default(),
+                )
+                .unwrap_or_else(|err| {
+                    panic!(
+                        "{} {} {variant}: {err}",
+                        Path::new(&path).display(),
+                        candidate.node.id
+                    )
+                });
                 built += pipelines.len();
             }
         }
     }
     assert!(built > 1000, "{built} pipelines");
     eprintln!("built {built} pipelines");
+}
+
+/// A shader whose colour is a constant 0.25 whatever the payload, so that
+/// with additive blending a pixel's red channel counts its shadings.
+const COUNTING_SHADER: &str = r#"
+struct Frame {
+    clip_from_world: mat4x4<f32>,
+    world_from_local: mat4x4<f32>,
+}
+@group(0) @binding(0) var<uniform> frame: Frame;
+
+struct VertexOutput {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) normal: vec3<f32>,
+}
+
+@vertex
+fn vs_main(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) -> VertexOutput {
+    var out: VertexOutput;
+    out.clip_position = frame.clip_from_world * (frame.world_from_local * vec4<f32>(position, 1.0));
+    out.normal = normal;
+    return out;
+}
+
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
+    let pattern = sin(in.normal * 10.0);
+    return vec4<f32>((pattern * 0.0) + vec3<f32>(0.25), 0.25);
+}
+"#;
+
+/// A UV sphere of `rings × segments` quads, as packed positions and
+/// normals (float32x3 each).
+fn sphere(rings: u32, segments: u32) -> runtime::Mesh {
+    let mut vertices = Vec::new();
+    for ring in 0..=rings {
+        let theta = std::f32::consts::PI * ring as f32 / rings as f32;
+        for segment in 0..=segments {
+            let phi = std::f32::consts::TAU * segment as f32 / segments as f32;
+            let n = [
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            ];
+            for value in n.iter().chain(n.iter()) {
+                vertices.extend(value.to_le_bytes());
+            }
+        }
+    }
+    let mut indices = Vec::new();
+    let row = segments + 1;
+    for ring in 0..rings {
+        for segment in 0..segments {
+            let a = ring * row + segment;
+            let (b, c, d) = (a + 1, a + row, a + row + 1);
+            indices.extend([a, c, b, b, c, d]);
+        }
+    }
+    runtime::Mesh { vertices, indices }
+}
+
+/// The depth tests between passes hold only if every pass computes a
+/// bit-identical position (`@invariant`, one position function): pass 3 of
+/// three-pass, drawn with depth `equal`, must shade every covered pixel
+/// exactly once — no holes, no double shading — on a mesh of many small
+/// triangles, with the camera moving so passes 1 and 2 both draw.
+#[test]
+fn three_pass_shades_every_covered_pixel_exactly_once() {
+    let Some(gpu) = gpu() else { return };
+    let shader = shadecache::front::parse(shadecache::diagnostic::SourceFile::new(
+        "counting.wgsl",
+        COUNTING_SHADER,
+    ))
+    .unwrap();
+    let analysis =
+        shadecache::analysis::analyze(&shader, &shadecache::analysis::Options::default()).unwrap();
+    let candidate = analysis
+        .candidates
+        .iter()
+        .find(|c| c.node.text == "sin(in.normal * 10.0)")
+        .unwrap();
+    let options = Options {
+        color_format: "rgba16float".into(),
+        refresh_period: 4,
+        refresh_quad: 2,
+        ..Options::default()
+    };
+    let rewritten =
+        rewrite::rewrite(&shader, &analysis, candidate, Variant::ThreePass, &options).unwrap();
+    let sources: HashMap<String, String> = rewritten
+        .passes
+        .iter()
+        .map(|pass| {
+            let out = back::write(&pass.module, &pass.info, Language::Wgsl).unwrap();
+            (
+                format!("{}.wgsl", pass.name),
+                String::from_utf8(out[0].bytes.clone()).unwrap(),
+            )
+        })
+        .collect();
+    let mesh = sphere(96, 192);
+    assert!(mesh.indices.len() / 3 > 30_000, "many small triangles");
+    let size = (128, 128);
+    let mut runner = runtime::Runner::new(
+        &gpu,
+        &rewritten.plan,
+        |name| sources.get(name).cloned(),
+        &mesh,
+        size,
+        runtime::PipelineOptions {
+            count_shading: true,
+        },
+    )
+    .unwrap();
+    let projection = glam::Mat4::perspective_rh(60f32.to_radians(), 1.0, 0.5, 10.0);
+    for frame in 0..4 {
+        let angle = (frame as f32 * 2.0).to_radians();
+        let eye = glam::Vec3::new(3.0 * angle.sin(), 0.8, 3.0 * angle.cos());
+        let clip_from_world =
+            projection * glam::Mat4::look_at_rh(eye, glam::Vec3::ZERO, glam::Vec3::Y);
+        let world_from_local = glam::Mat4::from_rotation_y((frame as f32 * 1.5).to_radians());
+        let mut uniform = Vec::new();
+        for value in clip_from_world
+            .to_cols_array()
+            .iter()
+            .chain(world_from_local.to_cols_array().iter())
+        {
+            uniform.extend(value.to_le_bytes());
+        }
+        let inputs = runtime::FrameInputs {
+            buffers: HashMap::from([([0, 0], uniform)]),
+        };
+        runner.frame(&gpu, &inputs).unwrap();
+
+        let color = runtime::read_texture(&gpu, runner.color(), 8).unwrap();
+        let depth = runtime::read_texture(&gpu, runner.depth(), 4).unwrap();
+        let (mut covered, mut holes, mut doubled) = (0, 0, 0);
+        for pixel in 0..(size.0 * size.1) as usize {
+            let d = f32::from_le_bytes(depth[pixel * 4..pixel * 4 + 4].try_into().unwrap());
+            let red = half::f16::from_le_bytes([color[pixel * 8], color[pixel * 8 + 1]]).to_f32();
+            let shadings = (red / 0.25).round() as i32;
+            if d < 1.0 {
+                covered += 1;
+                match shadings {
+                    1 => {}
+                    0 => holes += 1,
+                    _ => doubled += 1,
+                }
+            } else {
+                assert_eq!(shadings, 0, "frame {frame}: shaded outside the mesh");
+            }
+        }
+        assert!(
+            covered > 2000,
+            "frame {frame}: the sphere covers {covered} pixels"
+        );
+        assert_eq!(
+            (holes, doubled),
+            (0, 0),
+            "frame {frame}: {covered} covered pixels"
+        );
+    }
 }

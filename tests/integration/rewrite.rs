@@ -395,3 +395,43 @@ fn uniformity_check_catches_derivatives_in_a_branch() {
     let shader = front::parse(shadecache::diagnostic::SourceFile::new("fine.wgsl", fine)).unwrap();
     rewrite::uniformity::check(&shader.module, &shader.info).unwrap();
 }
+
+/// The previous position is recomputed wherever the position comes from:
+/// through helper functions (twinned too) and from an instance storage
+/// buffer (twinned like a uniform).
+#[test]
+fn previous_position_follows_helpers_and_storage_buffers() {
+    let (shader, analysis) = load(Path::new("corpus/helpers_nested.wgsl"));
+    let rewritten = rewrite::rewrite(
+        &shader,
+        &analysis,
+        &analysis.candidates[0],
+        Variant::OnePass,
+        &Options::default(),
+    )
+    .unwrap();
+    let (_, text) = &wgsl(&rewritten)[0];
+    assert!(text.contains("fn to_clip_previous("), "{text}");
+    assert!(text.contains("fn to_world_previous("), "{text}");
+    assert!(text.contains("previous_frame.clip_from_world"), "{text}");
+
+    let (shader, analysis) = load(Path::new("corpus/instanced_storage.wgsl"));
+    let rewritten = rewrite::rewrite(
+        &shader,
+        &analysis,
+        &analysis.candidates[0],
+        Variant::ThreePass,
+        &Options::default(),
+    )
+    .unwrap();
+    let shadowed: Vec<&str> = rewritten
+        .plan
+        .bindings
+        .previous
+        .iter()
+        .map(|twin| twin.shadows.name.as_str())
+        .collect();
+    assert_eq!(shadowed, ["frame", "instances"]);
+    let (_, text) = &wgsl(&rewritten)[0];
+    assert!(text.contains("var<storage> previous_instances"), "{text}");
+}
