@@ -188,7 +188,7 @@ pub fn build(inputs: Inputs) -> Plan {
     let module = &shader.module;
     let entry = &module.entry_points[analysis.entry_index];
     let vertex_entry = &module.entry_points[vertex.entry_index];
-    let color_locations = output_locations(module, result);
+    let color_locations = fragment::output_locations(module, result);
     let cache_location = fragment::cache_location(module, result);
 
     let mut plan_passes = Vec::new();
@@ -427,22 +427,6 @@ fn resource(
         kind: kind.into(),
         source,
     })
-}
-
-fn output_locations(module: &Module, result: &naga::FunctionResult) -> Vec<u32> {
-    match module.types[result.ty].inner {
-        TypeInner::Struct { ref members, .. } => members
-            .iter()
-            .filter_map(|m| match m.binding {
-                Some(Binding::Location { location, .. }) => Some(location),
-                _ => None,
-            })
-            .collect(),
-        _ => match result.binding {
-            Some(Binding::Location { location, .. }) => vec![location],
-            _ => vec![],
-        },
-    }
 }
 
 /// The vertex buffer layout the original vertex entry point expects.

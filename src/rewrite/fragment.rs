@@ -85,9 +85,9 @@ impl Stage {
     }
 }
 
-/// Where the colour outputs are and where the cache goes.
-pub fn cache_location(module: &Module, result: &naga::FunctionResult) -> u32 {
-    let locations: Vec<u32> = match module.types[result.ty].inner {
+/// The `@location`s of a fragment result (a struct's members or the value).
+pub fn output_locations(module: &Module, result: &naga::FunctionResult) -> Vec<u32> {
+    match module.types[result.ty].inner {
         TypeInner::Struct { ref members, .. } => members
             .iter()
             .filter_map(|m| match m.binding {
@@ -99,8 +99,16 @@ pub fn cache_location(module: &Module, result: &naga::FunctionResult) -> u32 {
             Some(Binding::Location { location, .. }) => vec![location],
             _ => vec![],
         },
-    };
-    locations.into_iter().map(|l| l + 1).max().unwrap_or(0)
+    }
+}
+
+/// Where the cache goes: the location after the original outputs.
+pub fn cache_location(module: &Module, result: &naga::FunctionResult) -> u32 {
+    output_locations(module, result)
+        .into_iter()
+        .map(|l| l + 1)
+        .max()
+        .unwrap_or(0)
 }
 
 /// Builds the fragment entry point for `stage`.
@@ -166,12 +174,7 @@ pub fn entry_point(
     // The payload to shade with.
     let payload = match stage {
         Stage::OnePass => {
-            let lookup = b.call(pieces.lookup, vec![previous]);
-            let refresh = b.call(pieces.refresh, vec![frag_coord]);
-            let reuse = reuse_condition(&mut b, lookup, refresh);
-            b.name(lookup, "lookup");
-            b.name(refresh, "refresh");
-            b.name(reuse, "reuse");
+            let (lookup, reuse) = reuse_condition(&mut b, pieces, previous, frag_coord);
             let mut payload_arguments = originals.clone();
             if let Some(gradients) = pieces.gradients {
                 let value = b.call(gradients, originals.clone());
@@ -204,12 +207,7 @@ pub fn entry_point(
             b.expr(Expression::Load { pointer })
         }
         Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard => {
-            let lookup = b.call(pieces.lookup, vec![previous]);
-            let refresh = b.call(pieces.refresh, vec![frag_coord]);
-            let reuse = reuse_condition(&mut b, lookup, refresh);
-            b.name(lookup, "lookup");
-            b.name(refresh, "refresh");
-            b.name(reuse, "reuse");
+            let (lookup, reuse) = reuse_condition(&mut b, pieces, previous, frag_coord);
             let kill = b.nested(|b| b.push(Statement::Kill));
             b.push(Statement::If {
                 condition: reuse,
@@ -317,22 +315,30 @@ fn output_type(
     }
 }
 
-/// `lookup.hit && !refresh`.
+/// Looks the fragment up in last frame's cache and decides whether to
+/// reuse it: `lookup.hit && !refresh`. Returns the lookup and the decision.
 fn reuse_condition(
     b: &mut Builder,
-    lookup: Handle<Expression>,
-    refresh: Handle<Expression>,
-) -> Handle<Expression> {
+    pieces: &Pieces,
+    previous: Handle<Expression>,
+    frag_coord: Handle<Expression>,
+) -> (Handle<Expression>, Handle<Expression>) {
+    let lookup = b.call(pieces.lookup, vec![previous]);
+    let refresh = b.call(pieces.refresh, vec![frag_coord]);
     let hit = b.member(lookup, 1);
     let fresh = b.expr(Expression::Unary {
         op: naga::UnaryOperator::LogicalNot,
         expr: refresh,
     });
-    b.expr(Expression::Binary {
+    let reuse = b.expr(Expression::Binary {
         op: naga::BinaryOperator::LogicalAnd,
         left: hit,
         right: fresh,
-    })
+    });
+    b.name(lookup, "lookup");
+    b.name(refresh, "refresh");
+    b.name(reuse, "reuse");
+    (lookup, reuse)
 }
 
 /// The payload's own type from the cache's `vec4<f32>`.

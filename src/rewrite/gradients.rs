@@ -79,7 +79,7 @@ pub fn hoist(
                 depth_ref: None,
                 ..
             } => {
-                let ty = value_type(module, info, coordinate)?;
+                let ty = super::type_handle(module, info, coordinate);
                 sites.push(Site::Sample {
                     expr: handle,
                     member: members.len() as u32,
@@ -96,7 +96,7 @@ pub fn hoist(
                 ..
             } => sites.push(Site::Compare { expr: handle }),
             Expression::Derivative { expr: operand, .. } => {
-                let ty = value_type(module, info, handle)?;
+                let ty = super::type_handle(module, info, handle);
                 sites.push(Site::Derivative {
                     expr: handle,
                     member: members.len() as u32,
@@ -302,24 +302,6 @@ fn letters(mut i: usize) -> String {
     }
     out.reverse();
     String::from_utf8(out).unwrap_or_default()
-}
-
-/// The type handle of an expression's value.
-fn value_type(
-    module: &mut Module,
-    info: &naga::valid::FunctionInfo,
-    expr: Handle<Expression>,
-) -> Result<Handle<naga::Type>, Refusal> {
-    Ok(match info[expr].ty {
-        naga::proc::TypeResolution::Handle(h) => h,
-        naga::proc::TypeResolution::Value(ref inner) => module.types.insert(
-            naga::Type {
-                name: None,
-                inner: inner.clone(),
-            },
-            naga::Span::UNDEFINED,
-        ),
-    })
 }
 
 /// Size and alignment of f32 scalars and vectors (WGSL's layout rules).

@@ -289,15 +289,12 @@ pub fn rewrite(
         }
     }
     let shade_live = graph.remainder(node);
-    let payload_ty = type_of(&mut module, shader, analysis.entry_index, node);
-    let stripped: Vec<naga::FunctionArgument> = function
-        .arguments
-        .iter()
-        .map(|a| naga::FunctionArgument {
-            binding: None,
-            ..a.clone()
-        })
-        .collect();
+    let payload_ty = type_handle(
+        &mut module,
+        shader.info.get_entry_point(analysis.entry_index),
+        node,
+    );
+    let stripped = without_bindings(&function.arguments);
     let mut payload_copy = copy::FunctionCopy::new(
         original,
         function,
@@ -494,15 +491,14 @@ fn mark_positions_invariant(module: &mut naga::Module) {
     }
 }
 
-/// The type handle of `expr` of the entry point, inserting it if it is
-/// only known by value.
-fn type_of(
+/// The type handle of `expr`, inserting the type when validation only
+/// knows it by value.
+pub(crate) fn type_handle(
     module: &mut naga::Module,
-    shader: &Shader,
-    entry_index: usize,
+    info: &naga::valid::FunctionInfo,
     expr: naga::Handle<naga::Expression>,
 ) -> naga::Handle<naga::Type> {
-    match shader.info.get_entry_point(entry_index)[expr].ty {
+    match info[expr].ty {
         naga::proc::TypeResolution::Handle(h) => h,
         naga::proc::TypeResolution::Value(ref inner) => module.types.insert(
             naga::Type {
@@ -512,4 +508,17 @@ fn type_of(
             naga::Span::UNDEFINED,
         ),
     }
+}
+
+/// A function's arguments as a helper function takes them: no bindings.
+pub(crate) fn without_bindings(
+    arguments: &[naga::FunctionArgument],
+) -> Vec<naga::FunctionArgument> {
+    arguments
+        .iter()
+        .map(|a| naga::FunctionArgument {
+            binding: None,
+            ..a.clone()
+        })
+        .collect()
 }

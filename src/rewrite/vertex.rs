@@ -170,14 +170,7 @@ pub fn instrument(
         function_twins.insert(f, handle);
     }
 
-    let stripped_arguments: Vec<naga::FunctionArgument> = function
-        .arguments
-        .iter()
-        .map(|a| naga::FunctionArgument {
-            binding: None,
-            ..a.clone()
-        })
-        .collect();
+    let stripped_arguments = super::without_bindings(&function.arguments);
 
     // The vertex function as a helper, unchanged.
     let all = everything(function);

@@ -25,6 +25,21 @@ pub fn gpu() -> Option<Gpu> {
     }
 }
 
+/// Each pass's WGSL by file name, as the plan names it.
+fn wgsl_sources(rewritten: &rewrite::Rewritten) -> HashMap<String, String> {
+    rewritten
+        .passes
+        .iter()
+        .map(|pass| {
+            let out = back::write(&pass.module, &pass.info, Language::Wgsl).unwrap();
+            (
+                format!("{}.wgsl", pass.name),
+                String::from_utf8(out[0].bytes.clone()).unwrap(),
+            )
+        })
+        .collect()
+}
+
 #[test]
 fn every_pass_of_every_variant_builds_a_wgpu_pipeline() {
     let Some(gpu) = gpu() else { return };
@@ -47,17 +62,7 @@ fn every_pass_of_every_variant_builds_a_wgpu_pipeline() {
                 else {
                     continue;
                 };
-                let sources: HashMap<String, String> = rewritten
-                    .passes
-                    .iter()
-                    .map(|pass| {
-                        let out = back::write(&pass.module, &pass.info, Language::Wgsl).unwrap();
-                        (
-                            format!("{}.wgsl", pass.name),
-                            String::from_utf8(out[0].bytes.clone()).unwrap(),
-                        )
-                    })
-                    .collect();
+                let sources = wgsl_sources(&rewritten);
                 let pipelines = runtime::pipelines(
                     &gpu,
                     &rewritten.plan,
@@ -166,17 +171,7 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
     };
     let rewritten =
         rewrite::rewrite(&shader, &analysis, candidate, Variant::ThreePass, &options).unwrap();
-    let sources: HashMap<String, String> = rewritten
-        .passes
-        .iter()
-        .map(|pass| {
-            let out = back::write(&pass.module, &pass.info, Language::Wgsl).unwrap();
-            (
-                format!("{}.wgsl", pass.name),
-                String::from_utf8(out[0].bytes.clone()).unwrap(),
-            )
-        })
-        .collect();
+    let sources = wgsl_sources(&rewritten);
     let mesh = sphere(96, 192);
     assert!(mesh.indices.len() / 3 > 30_000, "many small triangles");
     let size = (128, 128);
