@@ -37,6 +37,9 @@ struct CacheParams {
 struct CacheLookup {
     payload: vec4<f32>,
     hit: bool,
+    // Why it missed: 0 hit, 1 off-screen (behind the previous camera or
+    // outside the viewport), 2 disoccluded (depth disagrees).
+    status: u32,
 }
 
 // PCG hash (O'Neill 2014, "pcg32" output permutation on one u32 of state).
@@ -51,6 +54,10 @@ fn cache_hash(v: u32) -> u32 {
 // texture: no extra binding, the same offsets on every machine, and every
 // block's offset is uniform in [0, Δn) up to the hash's quality. All u32.
 fn cache_refresh(frag_coord: vec4<f32>) -> bool {
+    // Δn = 0 turns refresh off.
+    if (cache_params.refresh_period == 0u) {
+        return false;
+    }
     let k = max(cache_params.refresh_quad, 1u);
     let period = max(cache_params.refresh_period, 1u);
     let block = vec2<u32>(frag_coord.xy) / vec2<u32>(k);
@@ -65,7 +72,7 @@ fn cache_refresh(frag_coord: vec4<f32>) -> bool {
 // or when any of the four depth taps disagrees with the expected depth
 // (disocclusion, or a silhouette inside the footprint).
 fn cache_lookup(previous_clip: vec4<f32>) -> CacheLookup {
-    var result = CacheLookup(vec4<f32>(0.0), false);
+    var result = CacheLookup(vec4<f32>(0.0), false, 1u);
     if (!(previous_clip.w > 0.0)) {
         return result;
     }
@@ -85,6 +92,7 @@ fn cache_lookup(previous_clip: vec4<f32>) -> CacheLookup {
         textureLoad(cache_previous_depth, t + vec2<i32>(1, 1), 0),
     );
     if (!all(abs(depths - vec4<f32>(ndc.z)) < vec4<f32>(cache_params.depth_epsilon))) {
+        result.status = 2u;
         return result;
     }
     let f = texel - base;
@@ -100,10 +108,28 @@ fn cache_lookup(previous_clip: vec4<f32>) -> CacheLookup {
     );
     result.payload = mix(top, bottom, f.y);
     result.hit = true;
+    result.status = 0u;
     return result;
 }
 
 // This frame's cache at the fragment's own pixel (three-pass, pass 3).
 fn cache_current(frag_coord: vec4<f32>) -> vec4<f32> {
     return textureLoad(cache_current_payload, vec2<i32>(frag_coord.xy), 0);
+}
+
+// What the cache does at this pixel, as a colour for the profiler's maps:
+// reused (green), refreshed (blue), missed because the point was off-screen
+// last frame (orange) or disoccluded (red).
+fn cache_classify(previous_clip: vec4<f32>, frag_coord: vec4<f32>) -> vec4<f32> {
+    let lookup = cache_lookup(previous_clip);
+    if (lookup.status == 1u) {
+        return vec4<f32>(1.0, 0.5, 0.0, 1.0);
+    }
+    if (lookup.status == 2u) {
+        return vec4<f32>(1.0, 0.0, 0.0, 1.0);
+    }
+    if (cache_refresh(frag_coord)) {
+        return vec4<f32>(0.0, 0.0, 1.0, 1.0);
+    }
+    return vec4<f32>(0.0, 1.0, 0.0, 1.0);
 }

@@ -35,3 +35,4 @@ pub mod plan;
 pub mod proc;
 pub mod rewrite;
 pub mod runtime;
+pub mod scene;

@@ -151,7 +151,7 @@ pub fn write_variant(
     };
     // Render everything before touching the file system.
     let mut files = Vec::new();
-    for pass in &rewritten.passes {
+    for pass in rewritten.passes.iter().chain([&rewritten.classify]) {
         let outputs = write(&pass.module, &pass.info, language).map_err(|err| {
             Error::plain(Diagnostic::error(format!(
                 "naga cannot write {} as {}: {err}",

@@ -28,6 +28,12 @@ pub struct Plan {
     pub node: PlanNode,
     pub variant: Variant,
     pub passes: Vec<Pass>,
+    /// A diagnostic pass, drawn after the frame's passes and before the
+    /// swap: the cache's decision at each visible pixel as a colour (green
+    /// reuse, blue refresh, orange off-screen, red disoccluded). Not part
+    /// of rendering a frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub classify: Option<Pass>,
     pub vertex_layout: Vec<VertexAttribute>,
     pub bindings: Bindings,
     pub cache: Cache,
@@ -167,6 +173,7 @@ pub struct Inputs<'a> {
     pub group: u32,
     pub vertex: &'a VertexStage,
     pub passes: &'a [(Stage, PassModule)],
+    pub classify: &'a PassModule,
     pub result: &'a naga::FunctionResult,
 }
 
@@ -183,6 +190,7 @@ pub fn build(inputs: Inputs) -> Plan {
         group,
         vertex,
         passes,
+        classify,
         result,
     } = inputs;
     let module = &shader.module;
@@ -209,7 +217,7 @@ pub fn build(inputs: Inputs) -> Plan {
         };
         let color_targets = match stage.writes() {
             Writes::Color => color_locations.iter().map(|&l| color(l)).collect(),
-            Writes::Cache => vec![cache(0)],
+            Writes::Cache | Writes::Classes => vec![cache(0)],
             Writes::ColorAndCache => {
                 let mut targets: Vec<_> = color_locations.iter().map(|&l| color(l)).collect();
                 targets.push(cache(cache_location));
@@ -302,6 +310,27 @@ pub fn build(inputs: Inputs) -> Plan {
         },
         variant,
         passes: plan_passes,
+        classify: Some(Pass {
+            name: classify.name.clone(),
+            role: role(Stage::Classify).into(),
+            shader: format!("{}.wgsl", classify.name),
+            vertex_entry: vertex_entry.name.clone(),
+            fragment_entry: entry.name.clone(),
+            color_targets: vec![ColorTarget {
+                location: 0,
+                target: "classes".into(),
+                format: "rgba8unorm".into(),
+                load: "clear".into(),
+            }],
+            depth: Depth {
+                format: DEPTH_FORMAT.into(),
+                compare: "equal".into(),
+                write: false,
+                load: "load".into(),
+            },
+            discards: false,
+            bindings: used_bindings(&classify.module),
+        }),
         vertex_layout: vertex_layout(module, &vertex_entry.function),
         bindings: Bindings {
             original,
@@ -352,6 +381,7 @@ fn role(stage: Stage) -> &'static str {
         Stage::ReprojectOrDiscard => "reproject; hit: write the cached payload to this frame's cache; miss or refresh: discard",
         Stage::Payload => "the pixels pass 1 left empty (depth test): compute the payload into the cache",
         Stage::ShadeFromCache => "every pixel (depth equal): shade from this frame's cache at the pixel",
+        Stage::Classify => "diagnostic, after the frame (depth equal): the cache's decision at each visible pixel",
     }
 }
 
@@ -474,4 +504,82 @@ fn vertex_format(inner: &TypeInner) -> String {
     } else {
         format!("{base}x{count}")
     }
+}
+
+/// The plan of the unmodified shader, which the profiler runs as the
+/// reference: one pass, the original entry points, depth `less`. Its
+/// shader file is the original source (`reference.wgsl`).
+pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Result<Plan, String> {
+    let module = &shader.module;
+    let entry = &module.entry_points[analysis.entry_index];
+    let vertex_index = rewrite::vertex::vertex_entry(module).map_err(|r| r.reason)?;
+    let vertex_entry = &module.entry_points[vertex_index];
+    let Some(result) = entry.function.result.as_ref() else {
+        return Err("the fragment entry point returns nothing".into());
+    };
+    let layout = crate::proc::layout(module, &entry.function, 8.0);
+    Ok(Plan {
+        format: 1,
+        shader: shader.file.path.clone(),
+        entry: entry.name.clone(),
+        node: PlanNode {
+            id: String::new(),
+            text: String::new(),
+            ty: String::new(),
+            components: 0,
+        },
+        variant: Variant::Reference,
+        passes: vec![Pass {
+            name: "reference".into(),
+            role: "the unmodified shader".into(),
+            shader: "reference.wgsl".into(),
+            vertex_entry: vertex_entry.name.clone(),
+            fragment_entry: entry.name.clone(),
+            color_targets: fragment::output_locations(module, result)
+                .into_iter()
+                .map(|location| ColorTarget {
+                    location,
+                    target: "color".into(),
+                    format: options.color_format.clone(),
+                    load: "clear".into(),
+                })
+                .collect(),
+            depth: Depth {
+                format: DEPTH_FORMAT.into(),
+                compare: "less".into(),
+                write: true,
+                load: "clear".into(),
+            },
+            discards: layout.discards,
+            bindings: used_bindings(module),
+        }],
+        classify: None,
+        vertex_layout: vertex_layout(module, &vertex_entry.function),
+        bindings: Bindings {
+            original: module
+                .global_variables
+                .iter()
+                .filter_map(|(_, g)| resource(module, g, None))
+                .collect(),
+            previous: Vec::new(),
+            cache: Vec::new(),
+        },
+        cache: Cache {
+            format: options.cache_format.as_str().into(),
+            components: 0,
+            swap: String::new(),
+            params: Vec::new(),
+        },
+        refresh: Refresh {
+            period: options.refresh_period,
+            quad: options.refresh_quad,
+            depth_epsilon: options.depth_epsilon,
+            offsets: String::new(),
+        },
+        clear: Clear {
+            color: [0.0, 0.0, 0.0, 1.0],
+            cache: [0.0; 4],
+            depth: 1.0,
+        },
+    })
 }

@@ -40,6 +40,7 @@ pub struct Pieces {
     pub lookup: Handle<Function>,
     pub refresh: Handle<Function>,
     pub current: Handle<Function>,
+    pub classify: Handle<Function>,
     pub vec4: Handle<naga::Type>,
 }
 
@@ -52,6 +53,8 @@ pub enum Writes {
     Cache,
     /// The original outputs alone.
     Color,
+    /// The cache's decision as a colour, at location 0.
+    Classes,
 }
 
 /// The fragment entry point of one pass.
@@ -69,6 +72,9 @@ pub enum Stage {
     Payload,
     /// Three-pass, pass 3: shade from the cache at the pixel itself.
     ShadeFromCache,
+    /// A diagnostic pass, drawn after a frame: the cache's decision at each
+    /// visible pixel as a colour (reuse, refresh, off-screen, disoccluded).
+    Classify,
 }
 
 impl Stage {
@@ -77,6 +83,7 @@ impl Stage {
             Stage::OnePass | Stage::ReuseOrDiscard | Stage::Full => Writes::ColorAndCache,
             Stage::ReprojectOrDiscard | Stage::Payload => Writes::Cache,
             Stage::ShadeFromCache => Writes::Color,
+            Stage::Classify => Writes::Classes,
         }
     }
 
@@ -150,7 +157,7 @@ pub fn entry_point(
         result: Some(naga::FunctionResult {
             ty: result_ty,
             binding: match stage.writes() {
-                Writes::Cache => Some(location(0)),
+                Writes::Cache | Writes::Classes => Some(location(0)),
                 Writes::Color => pieces.result.binding.clone(),
                 // A struct: its members carry the bindings.
                 Writes::ColorAndCache => None,
@@ -170,6 +177,14 @@ pub fn entry_point(
         }
         None => b.argument(previous_index + 1),
     };
+
+    if stage == Stage::Classify {
+        let classes = b.call(pieces.classify, vec![previous, frag_coord]);
+        b.push(Statement::Return {
+            value: Some(classes),
+        });
+        return Ok(b.finish());
+    }
 
     // The payload to shade with.
     let payload = match stage {
@@ -222,10 +237,11 @@ pub fn entry_point(
             let cached = b.call(pieces.current, vec![frag_coord]);
             from_vec4(&mut b, cached, pieces.components)
         }
+        Stage::Classify => return Err(Refusal::new("internal error: classify has no payload")),
     };
 
     let value = match stage.writes() {
-        Writes::Cache => to_vec4(&mut b, payload, pieces.components, pieces.vec4),
+        Writes::Cache | Writes::Classes => to_vec4(&mut b, payload, pieces.components, pieces.vec4),
         Writes::Color => {
             let mut arguments = originals.clone();
             arguments.push(payload);
@@ -276,7 +292,7 @@ fn output_type(
     writes: Writes,
 ) -> (Handle<naga::Type>, Option<u32>) {
     match writes {
-        Writes::Cache => (pieces.vec4, None),
+        Writes::Cache | Writes::Classes => (pieces.vec4, None),
         Writes::Color => (pieces.result.ty, None),
         Writes::ColorAndCache => {
             let cache_at = cache_location(module, &pieces.result);

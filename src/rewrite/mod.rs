@@ -49,6 +49,9 @@ pub enum Variant {
     OnePass,
     TwoPass,
     ThreePass,
+    /// The unmodified shader, run by the profiler as the reference; never
+    /// a rewrite.
+    Reference,
 }
 
 impl Variant {
@@ -59,6 +62,7 @@ impl Variant {
             Variant::OnePass => "one-pass",
             Variant::TwoPass => "two-pass",
             Variant::ThreePass => "three-pass",
+            Variant::Reference => "reference",
         }
     }
 
@@ -71,6 +75,7 @@ impl Variant {
                 Stage::Payload,
                 Stage::ShadeFromCache,
             ],
+            Variant::Reference => &[],
         }
     }
 }
@@ -159,6 +164,9 @@ pub struct Rewritten {
     pub variant: Variant,
     pub node: String,
     pub passes: Vec<PassModule>,
+    /// The diagnostic pass that colours the cache's decisions (plan's
+    /// `classify`).
+    pub classify: PassModule,
     pub plan: Plan,
 }
 
@@ -180,6 +188,11 @@ pub fn rewrite(
     variant: Variant,
     options: &Options,
 ) -> Result<Rewritten, Refusal> {
+    if variant == Variant::Reference {
+        return Err(Refusal::new(
+            "the reference is the original shader; there is nothing to rewrite",
+        ));
+    }
     let original = &shader.module;
     let entry = &original.entry_points[analysis.entry_index];
     let function = &entry.function;
@@ -247,10 +260,11 @@ pub fn rewrite(
             ))
         })
     };
-    let (lookup, refresh, current) = (
+    let (lookup, refresh, current, classify) = (
         helper("cache_lookup")?,
         helper("cache_refresh")?,
         helper("cache_current")?,
+        helper("cache_classify")?,
     );
 
     let vertex_index = vertex::vertex_entry(&module)?;
@@ -378,11 +392,11 @@ pub fn rewrite(
         lookup,
         refresh,
         current,
+        classify,
         vec4,
     };
 
-    let mut passes = Vec::new();
-    for (index, &stage) in variant.stages().iter().enumerate() {
+    let build_pass = |stage: Stage, name: String| -> Result<PassModule, Refusal> {
         let mut pass = module.clone();
         let fragment = fragment::entry_point(&mut pass, &pieces, stage)?;
         let vertex_entry = pass.entry_points[vertex.entry_index].clone();
@@ -397,23 +411,24 @@ pub fn rewrite(
         let info = crate::front::validate(&pass).map_err(|err| {
             let diagnostic = crate::diagnostic::Diagnostic::from_spanned_error(&err);
             Refusal::new(format!(
-                "internal error: pass {} does not validate: {} ({})",
-                index + 1,
+                "internal error: {name} does not validate: {} ({})",
                 diagnostic.message,
                 diagnostic.notes.join("; ")
             ))
         })?;
         uniformity::check(&pass, &info)
             .map_err(|err| Refusal::new(format!("internal error: the rewrite left {err}")))?;
-        passes.push((
-            stage,
-            PassModule {
-                name: format!("pass{}", index + 1),
-                module: pass,
-                info,
-            },
-        ));
+        Ok(PassModule {
+            name,
+            module: pass,
+            info,
+        })
+    };
+    let mut passes = Vec::new();
+    for (index, &stage) in variant.stages().iter().enumerate() {
+        passes.push((stage, build_pass(stage, format!("pass{}", index + 1))?));
     }
+    let classify = build_pass(Stage::Classify, "classify".into())?;
 
     let plan = plan::build(plan::Inputs {
         shader,
@@ -424,12 +439,14 @@ pub fn rewrite(
         group,
         vertex: &vertex,
         passes: &passes,
+        classify: &classify,
         result: &pieces.result,
     });
     Ok(Rewritten {
         variant,
         node: candidate.node.id.clone(),
         passes: passes.into_iter().map(|(_, p)| p).collect(),
+        classify,
         plan,
     })
 }

@@ -15,4 +15,4 @@ mod pipelines;
 mod runner;
 
 pub use pipelines::{pipelines, Gpu, PipelineOptions};
-pub use runner::{read_texture, FrameInputs, Mesh, Runner};
+pub use runner::{read_texture, FrameInputs, Mesh, ObjectInputs, RunOptions, Runner};

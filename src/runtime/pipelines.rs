@@ -22,8 +22,12 @@ impl Gpu {
             Ok(adapter) => adapter,
             Err(_) => return Ok(None),
         };
+        // Timestamp queries where the adapter has them (lavapipe does): the
+        // profiler times each pass with them.
+        let features = adapter.features() & wgpu_profiler::GpuProfiler::ALL_WGPU_TIMER_FEATURES;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("shadecache"),
+            required_features: features,
             ..wgpu::DeviceDescriptor::default()
         }))
         .map_err(|err| format!("cannot open a device on {}: {err}", adapter.get_info().name))?;

@@ -3,7 +3,8 @@
 use std::collections::HashMap;
 
 use super::pipelines::{pipelines, texture_format, Gpu, PipelineOptions};
-use crate::plan::Plan;
+use crate::plan::{Pass, Plan};
+use crate::scene::textures::Texels;
 
 /// An indexed triangle mesh whose vertices are laid out as the plan's
 /// `vertex_layout`, attributes packed in order.
@@ -13,47 +14,120 @@ pub struct Mesh {
     pub indices: Vec<u32>,
 }
 
-/// What one frame reads: the contents of the shader's uniform and storage
-/// buffers by `[group, binding]`, as they are this frame.
+/// One draw of one frame: which mesh, and the contents of the shader's
+/// uniform and storage buffers for it by `[group, binding]`.
 #[derive(Clone, Debug, Default)]
-pub struct FrameInputs {
+pub struct ObjectInputs {
+    pub mesh: usize,
     pub buffers: HashMap<[u32; 2], Vec<u8>>,
 }
 
+/// What one frame draws.
+#[derive(Clone, Debug, Default)]
+pub struct FrameInputs {
+    pub objects: Vec<ObjectInputs>,
+}
+
+/// How to run beyond what the plan says.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RunOptions {
+    pub pipelines: PipelineOptions,
+    /// Draw the plan's `classify` pass after each frame (see
+    /// [`Runner::classes`]).
+    pub classify: bool,
+}
+
+struct GpuMesh {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    count: u32,
+}
+
 /// What the GPU holds for a plan: pipelines, the double-buffered cache,
-/// the buffers and their previous-frame twins.
-#[derive(Debug)]
+/// the buffers and their previous-frame twins, textures and samplers.
 pub struct Runner {
     plan: Plan,
     pipelines: Vec<wgpu::RenderPipeline>,
+    classify: Option<(Pass, wgpu::RenderPipeline)>,
     size: (u32, u32),
     color: wgpu::Texture,
+    classes: wgpu::Texture,
     payload: [wgpu::Texture; 2],
     depth: [wgpu::Texture; 2],
     params: wgpu::Buffer,
-    buffers: HashMap<[u32; 2], wgpu::Buffer>,
-    /// Last frame's contents of each buffer a twin shadows.
-    previous: HashMap<[u32; 2], Vec<u8>>,
-    vertices: wgpu::Buffer,
-    indices: wgpu::Buffer,
-    index_count: u32,
+    meshes: Vec<GpuMesh>,
+    /// Buffers by (object, [group, binding]), twins included.
+    buffers: HashMap<(usize, [u32; 2]), wgpu::Buffer>,
+    /// Last frame's contents of each buffer a twin shadows, by object.
+    previous: HashMap<(usize, [u32; 2]), Vec<u8>>,
+    views: HashMap<[u32; 2], wgpu::TextureView>,
+    samplers: HashMap<[u32; 2], wgpu::Sampler>,
     /// Which of the two cache slots is this frame's.
     current: usize,
     frame: u64,
     phase: u32,
 }
 
+impl std::fmt::Debug for Runner {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Runner")
+            .field("variant", &self.plan.variant)
+            .field("size", &self.size)
+            .field("frame", &self.frame)
+            .finish_non_exhaustive()
+    }
+}
+
+fn target(
+    device: &wgpu::Device,
+    label: &str,
+    size: (u32, u32),
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: size.0,
+            height: size.1,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
 impl Runner {
-    /// Builds the pipelines and allocates the targets for a `size` frame.
+    /// Builds the pipelines, uploads the meshes and textures, and
+    /// allocates the targets for a `size` frame. `textures` holds the
+    /// texels of every texture binding of the plan by `[group, binding]`.
     pub fn new(
         gpu: &Gpu,
         plan: &Plan,
         shader: impl Fn(&str) -> Option<String>,
-        mesh: &Mesh,
+        meshes: &[Mesh],
+        textures: &HashMap<[u32; 2], Texels>,
         size: (u32, u32),
-        options: PipelineOptions,
+        options: RunOptions,
     ) -> Result<Runner, String> {
-        let pipelines = pipelines(gpu, plan, shader, options)?;
+        let pipelines = pipelines(gpu, plan, &shader, options.pipelines)?;
+        let classify = match (&plan.classify, options.classify) {
+            (Some(pass), true) => {
+                let single = Plan {
+                    passes: vec![pass.clone()],
+                    ..plan.clone()
+                };
+                let mut built =
+                    super::pipelines::pipelines(gpu, &single, &shader, PipelineOptions::default())?;
+                built.pop().map(|p| (pass.clone(), p))
+            }
+            _ => None,
+        };
         let device = &gpu.device;
         let color_format = plan
             .passes
@@ -63,70 +137,107 @@ impl Runner {
             .map(|t| texture_format(&t.format))
             .transpose()?
             .unwrap_or(wgpu::TextureFormat::Rgba8Unorm);
-        let texture = |label: &str, format: wgpu::TextureFormat| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: size.0,
-                    height: size.1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                    | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            })
-        };
         let cache_format = texture_format(&plan.cache.format)?;
         let depth_format = wgpu::TextureFormat::Depth32Float;
-        let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
-            device.create_buffer(&wgpu::BufferDescriptor {
+        let buffer = |label: &str, bytes: &[u8], usage: wgpu::BufferUsages| {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
-                size: size.max(4),
+                size: (bytes.len() as u64).max(16).div_ceil(4) * 4,
                 usage: usage | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
-            })
+            });
+            gpu.queue.write_buffer(&buffer, 0, bytes);
+            buffer
         };
-        let vertices = buffer(
-            "vertices",
-            mesh.vertices.len() as u64,
-            wgpu::BufferUsages::VERTEX,
-        );
-        gpu.queue.write_buffer(&vertices, 0, &mesh.vertices);
-        let index_bytes: Vec<u8> = mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
-        let indices = buffer(
-            "indices",
-            index_bytes.len() as u64,
-            wgpu::BufferUsages::INDEX,
-        );
-        gpu.queue.write_buffer(&indices, 0, &index_bytes);
+        let meshes = meshes
+            .iter()
+            .map(|mesh| {
+                let index_bytes: Vec<u8> =
+                    mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+                GpuMesh {
+                    vertices: buffer("vertices", &mesh.vertices, wgpu::BufferUsages::VERTEX),
+                    indices: buffer("indices", &index_bytes, wgpu::BufferUsages::INDEX),
+                    count: mesh.indices.len() as u32,
+                }
+            })
+            .collect();
+
+        // The user's textures and samplers.
+        let mut views = HashMap::new();
+        let mut samplers = HashMap::new();
+        for resource in &plan.bindings.original {
+            let key = [resource.group, resource.binding];
+            match resource.kind.as_str() {
+                "texture" | "cube-texture" => {
+                    let texels = textures
+                        .get(&key)
+                        .ok_or_else(|| format!("no texels for texture `{}`", resource.name))?;
+                    views.insert(key, upload(gpu, texels, resource.kind == "cube-texture"));
+                }
+                "depth-texture" => {
+                    let texture = target(device, &resource.name, (64, 64), depth_format);
+                    clear_depth(gpu, &texture, 1.0);
+                    views.insert(
+                        key,
+                        texture.create_view(&wgpu::TextureViewDescriptor::default()),
+                    );
+                }
+                "sampler" | "comparison-sampler" => {
+                    let compare = resource.kind == "comparison-sampler";
+                    samplers.insert(
+                        key,
+                        device.create_sampler(&wgpu::SamplerDescriptor {
+                            label: Some(&resource.name),
+                            address_mode_u: wgpu::AddressMode::Repeat,
+                            address_mode_v: wgpu::AddressMode::Repeat,
+                            address_mode_w: wgpu::AddressMode::Repeat,
+                            mag_filter: wgpu::FilterMode::Linear,
+                            min_filter: wgpu::FilterMode::Linear,
+                            mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                            compare: compare.then_some(wgpu::CompareFunction::LessEqual),
+                            ..wgpu::SamplerDescriptor::default()
+                        }),
+                    );
+                }
+                "uniform" | "storage" => {}
+                other => {
+                    return Err(format!(
+                        "cannot bind `{}`: {other} bindings are not supported",
+                        resource.name
+                    ))
+                }
+            }
+        }
+
         Ok(Runner {
             plan: plan.clone(),
             pipelines,
+            classify,
             size,
-            color: texture("color", color_format),
+            color: target(device, "color", size, color_format),
+            classes: target(device, "classes", size, wgpu::TextureFormat::Rgba8Unorm),
             payload: [
-                texture("payload 0", cache_format),
-                texture("payload 1", cache_format),
+                target(device, "payload 0", size, cache_format),
+                target(device, "payload 1", size, cache_format),
             ],
             depth: [
-                texture("depth 0", depth_format),
-                texture("depth 1", depth_format),
+                target(device, "depth 0", size, depth_format),
+                target(device, "depth 1", size, depth_format),
             ],
-            params: buffer("cache params", 32, wgpu::BufferUsages::UNIFORM),
+            params: buffer("cache params", &[0; 32], wgpu::BufferUsages::UNIFORM),
+            meshes,
             buffers: HashMap::new(),
             previous: HashMap::new(),
-            vertices,
-            indices,
-            index_count: mesh.indices.len() as u32,
+            views,
+            samplers,
             current: 0,
             frame: 0,
             phase: 0,
         })
+    }
+
+    pub fn plan(&self) -> &Plan {
+        &self.plan
     }
 
     /// The frame's colour target.
@@ -134,52 +245,48 @@ impl Runner {
         &self.color
     }
 
-    /// This frame's depth buffer (after [`Runner::frame`]: the last frame's).
+    /// The last frame's classes, when classification is on.
+    pub fn classes(&self) -> &wgpu::Texture {
+        &self.classes
+    }
+
+    /// The last frame's depth buffer.
     pub fn depth(&self) -> &wgpu::Texture {
         &self.depth[1 - self.current]
     }
 
-    /// Renders one frame: every pass of the plan in order, then swaps the
-    /// cache.
-    pub fn frame(&mut self, gpu: &Gpu, inputs: &FrameInputs) -> Result<(), String> {
+    /// The last frame's payload texture.
+    pub fn payload(&self) -> &wgpu::Texture {
+        &self.payload[1 - self.current]
+    }
+
+    /// Renders one frame: every pass of the plan in order (each timed when
+    /// a profiler is given, as `<label>/<pass>`), the classification when
+    /// asked for, then swaps the cache.
+    pub fn frame(
+        &mut self,
+        gpu: &Gpu,
+        inputs: &FrameInputs,
+        mut profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+    ) -> Result<(), String> {
         let device = &gpu.device;
         // The buffers, and their twins with last frame's contents (this
         // frame's on the first frame).
-        for (&key, bytes) in &inputs.buffers {
-            let buffer = self.buffers.entry(key).or_insert_with(|| {
-                device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("shader buffer"),
-                    size: (bytes.len() as u64).max(16),
-                    usage: wgpu::BufferUsages::UNIFORM
-                        | wgpu::BufferUsages::STORAGE
-                        | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                })
-            });
-            gpu.queue.write_buffer(buffer, 0, bytes);
-        }
-        for twin in &self.plan.bindings.previous {
-            let shadowed = [twin.shadows.group, twin.shadows.binding];
-            let bytes = self
-                .previous
-                .get(&shadowed)
-                .or_else(|| inputs.buffers.get(&shadowed))
-                .ok_or_else(|| format!("no contents for `{}`", twin.shadows.name))?
-                .clone();
-            let buffer = self
-                .buffers
-                .entry([twin.group, twin.binding])
-                .or_insert_with(|| {
-                    device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some(&twin.name),
-                        size: (bytes.len() as u64).max(16),
-                        usage: wgpu::BufferUsages::UNIFORM
-                            | wgpu::BufferUsages::STORAGE
-                            | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    })
-                });
-            gpu.queue.write_buffer(buffer, 0, &bytes);
+        for (object, draw) in inputs.objects.iter().enumerate() {
+            for (&key, bytes) in &draw.buffers {
+                self.write_buffer(gpu, (object, key), bytes);
+            }
+            let twins = self.plan.bindings.previous.clone();
+            for twin in &twins {
+                let shadowed = (object, [twin.shadows.group, twin.shadows.binding]);
+                let bytes = self
+                    .previous
+                    .get(&shadowed)
+                    .or_else(|| draw.buffers.get(&shadowed.1))
+                    .ok_or_else(|| format!("no contents for `{}`", twin.shadows.name))?
+                    .clone();
+                self.write_buffer(gpu, (object, [twin.group, twin.binding]), &bytes);
+            }
         }
 
         // CacheParams, laid out as the plan's `cache.params`.
@@ -199,125 +306,180 @@ impl Runner {
         let current = self.current;
         let previous = 1 - current;
         let color_view = view(&self.color);
+        let classes_view = view(&self.classes);
         let payload_views = [view(&self.payload[0]), view(&self.payload[1])];
         let depth_views = [view(&self.depth[0]), view(&self.depth[1])];
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         if self.frame == 0 {
-            // No previous frame: a cleared depth makes every pixel miss.
-            let _clear = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("clear previous depth"),
-                color_attachments: &[],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_views[previous],
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(self.plan.clear.depth as f32),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                ..wgpu::RenderPassDescriptor::default()
-            });
+            // No previous frame: a depth at the far plane makes every pixel
+            // miss (nothing in front of the far plane matches it).
+            clear_depth_in(
+                &mut encoder,
+                &depth_views[previous],
+                self.plan.clear.depth as f32,
+            );
         }
-        for (pass, pipeline) in self.plan.passes.iter().zip(&self.pipelines) {
+        let classify = self
+            .classify
+            .as_ref()
+            .map(|(pass, pipeline)| (pass, pipeline));
+        let passes: Vec<(&Pass, &wgpu::RenderPipeline)> = self
+            .plan
+            .passes
+            .iter()
+            .zip(&self.pipelines)
+            .chain(classify)
+            .collect();
+        for (pass, pipeline) in passes {
+            // Bind groups per object: the objects' buffers differ.
             let mut groups: Vec<u32> = pass.bindings.iter().map(|b| b[0]).collect();
             groups.dedup();
-            let mut bind_groups = Vec::new();
-            for &group in &groups {
-                let layout = pipeline.get_bind_group_layout(group);
-                let mut entries = Vec::new();
-                for &[g, binding] in pass.bindings.iter().filter(|b| b[0] == group) {
-                    let resource =
-                        self.resource(g, binding, current, &payload_views, &depth_views)?;
-                    entries.push(wgpu::BindGroupEntry { binding, resource });
+            let mut per_object = Vec::new();
+            for object in 0..inputs.objects.len() {
+                let mut bind_groups = Vec::new();
+                for &group in &groups {
+                    let layout = pipeline.get_bind_group_layout(group);
+                    let mut entries = Vec::new();
+                    for &[g, binding] in pass.bindings.iter().filter(|b| b[0] == group) {
+                        let resource = self.resource(
+                            object,
+                            [g, binding],
+                            current,
+                            &payload_views,
+                            &depth_views,
+                        )?;
+                        entries.push(wgpu::BindGroupEntry { binding, resource });
+                    }
+                    bind_groups.push((
+                        group,
+                        device.create_bind_group(&wgpu::BindGroupDescriptor {
+                            label: Some(&pass.name),
+                            layout: &layout,
+                            entries: &entries,
+                        }),
+                    ));
                 }
-                bind_groups.push((
-                    group,
-                    device.create_bind_group(&wgpu::BindGroupDescriptor {
-                        label: Some(&pass.name),
-                        layout: &layout,
-                        entries: &entries,
-                    }),
-                ));
+                per_object.push(bind_groups);
             }
-            let load_color = |load: &str, clear: [f64; 4]| wgpu::Operations {
-                load: if load == "clear" {
-                    wgpu::LoadOp::Clear(wgpu::Color {
-                        r: clear[0],
-                        g: clear[1],
-                        b: clear[2],
-                        a: clear[3],
-                    })
-                } else {
-                    wgpu::LoadOp::Load
-                },
-                store: wgpu::StoreOp::Store,
-            };
             let mut attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = Vec::new();
             for target in &pass.color_targets {
                 let index = target.location as usize;
                 if attachments.len() <= index {
                     attachments.resize(index + 1, None);
                 }
-                let (view, clear) = if target.target == "cache" {
-                    (&payload_views[current], self.plan.clear.cache)
-                } else {
-                    (&color_view, self.plan.clear.color)
+                let (view, clear) = match target.target.as_str() {
+                    "cache" => (&payload_views[current], self.plan.clear.cache),
+                    "classes" => (&classes_view, [0.0, 0.0, 0.0, 0.0]),
+                    _ => (&color_view, self.plan.clear.color),
                 };
                 attachments[index] = Some(wgpu::RenderPassColorAttachment {
                     view,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: load_color(&target.load, clear),
-                });
-            }
-            let mut render = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(&pass.name),
-                color_attachments: &attachments,
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_views[current],
-                    depth_ops: Some(wgpu::Operations {
-                        load: if pass.depth.load == "clear" {
-                            wgpu::LoadOp::Clear(self.plan.clear.depth as f32)
+                    ops: wgpu::Operations {
+                        load: if target.load == "clear" {
+                            wgpu::LoadOp::Clear(wgpu::Color {
+                                r: clear[0],
+                                g: clear[1],
+                                b: clear[2],
+                                a: clear[3],
+                            })
                         } else {
                             wgpu::LoadOp::Load
                         },
                         store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                ..wgpu::RenderPassDescriptor::default()
-            });
-            render.set_pipeline(pipeline);
-            for (group, bind_group) in &bind_groups {
-                render.set_bind_group(*group, bind_group, &[]);
+                    },
+                });
             }
-            render.set_vertex_buffer(0, self.vertices.slice(..));
-            render.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-            render.draw_indexed(0..self.index_count, 0, 0..1);
+            let query = profiler.as_mut().map(|(p, label)| {
+                p.begin_pass_query(format!("{label}/{}", pass.name), &mut encoder)
+            });
+            {
+                let mut render = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some(&pass.name),
+                    color_attachments: &attachments,
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &depth_views[current],
+                        depth_ops: Some(wgpu::Operations {
+                            load: if pass.depth.load == "clear" {
+                                wgpu::LoadOp::Clear(self.plan.clear.depth as f32)
+                            } else {
+                                wgpu::LoadOp::Load
+                            },
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: query
+                        .as_ref()
+                        .and_then(|q| q.render_pass_timestamp_writes()),
+                    ..wgpu::RenderPassDescriptor::default()
+                });
+                render.set_pipeline(pipeline);
+                for (draw, bind_groups) in inputs.objects.iter().zip(&per_object) {
+                    let Some(mesh) = self.meshes.get(draw.mesh) else {
+                        return Err(format!("no mesh {}", draw.mesh));
+                    };
+                    for (group, bind_group) in bind_groups {
+                        render.set_bind_group(*group, bind_group, &[]);
+                    }
+                    render.set_vertex_buffer(0, mesh.vertices.slice(..));
+                    render.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    render.draw_indexed(0..mesh.count, 0, 0..1);
+                }
+            }
+            if let (Some((p, _)), Some(query)) = (profiler.as_mut(), query) {
+                p.end_query(&mut encoder, query);
+            }
+        }
+        if let Some((p, _)) = profiler.as_mut() {
+            p.resolve_queries(&mut encoder);
         }
         gpu.queue.submit([encoder.finish()]);
 
         // This frame's contents are next frame's previous.
-        for twin in &self.plan.bindings.previous {
-            let shadowed = [twin.shadows.group, twin.shadows.binding];
-            if let Some(bytes) = inputs.buffers.get(&shadowed) {
-                self.previous.insert(shadowed, bytes.clone());
+        for (object, draw) in inputs.objects.iter().enumerate() {
+            for twin in &self.plan.bindings.previous {
+                let shadowed = [twin.shadows.group, twin.shadows.binding];
+                if let Some(bytes) = draw.buffers.get(&shadowed) {
+                    self.previous.insert((object, shadowed), bytes.clone());
+                }
             }
         }
         self.current = previous;
         self.frame += 1;
-        self.phase = (self.phase + 1) % self.plan.refresh.period.max(1);
+        let period = self.plan.refresh.period;
+        self.phase = if period == 0 {
+            0
+        } else {
+            (self.phase + 1) % period
+        };
         Ok(())
+    }
+
+    fn write_buffer(&mut self, gpu: &Gpu, key: (usize, [u32; 2]), bytes: &[u8]) {
+        let buffer = self.buffers.entry(key).or_insert_with(|| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("shader buffer"),
+                size: (bytes.len() as u64).max(16).div_ceil(16) * 16,
+                usage: wgpu::BufferUsages::UNIFORM
+                    | wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        gpu.queue.write_buffer(buffer, 0, bytes);
     }
 
     fn resource<'a>(
         &'a self,
-        group: u32,
-        binding: u32,
+        object: usize,
+        key: [u32; 2],
         current: usize,
         payload_views: &'a [wgpu::TextureView; 2],
         depth_views: &'a [wgpu::TextureView; 2],
     ) -> Result<wgpu::BindingResource<'a>, String> {
+        let [group, binding] = key;
         let cache = &self.plan.bindings.cache;
         if let Some(resource) = cache
             .iter()
@@ -337,11 +499,97 @@ impl Runner {
                 other => return Err(format!("unknown cache resource `{other}`")),
             });
         }
+        if let Some(view) = self.views.get(&key) {
+            return Ok(wgpu::BindingResource::TextureView(view));
+        }
+        if let Some(sampler) = self.samplers.get(&key) {
+            return Ok(wgpu::BindingResource::Sampler(sampler));
+        }
         self.buffers
-            .get(&[group, binding])
+            .get(&(object, key))
             .map(|b| b.as_entire_binding())
             .ok_or_else(|| format!("nothing to bind at group {group} binding {binding}"))
     }
+}
+
+fn clear_depth_in(encoder: &mut wgpu::CommandEncoder, view: &wgpu::TextureView, depth: f32) {
+    let _pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("clear depth"),
+        color_attachments: &[],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(depth),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        ..wgpu::RenderPassDescriptor::default()
+    });
+}
+
+fn clear_depth(gpu: &Gpu, texture: &wgpu::Texture, depth: f32) {
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    clear_depth_in(
+        &mut encoder,
+        &texture.create_view(&wgpu::TextureViewDescriptor::default()),
+        depth,
+    );
+    gpu.queue.submit([encoder.finish()]);
+}
+
+/// Uploads RGBA8 texels as a 2D texture, or as the six faces of a cube.
+fn upload(gpu: &Gpu, texels: &Texels, cube: bool) -> wgpu::TextureView {
+    let layers = if cube { 6 } else { 1 };
+    let size = wgpu::Extent3d {
+        width: texels.width,
+        height: texels.height,
+        depth_or_array_layers: layers,
+    };
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("scene texture"),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    for layer in 0..layers {
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: layer,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            &texels.rgba,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(texels.width * 4),
+                rows_per_image: Some(texels.height),
+            },
+            wgpu::Extent3d {
+                depth_or_array_layers: 1,
+                ..size
+            },
+        );
+    }
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(if cube {
+            wgpu::TextureViewDimension::Cube
+        } else {
+            wgpu::TextureViewDimension::D2
+        }),
+        ..wgpu::TextureViewDescriptor::default()
+    })
 }
 
 /// Reads a texture back as raw rows of `bytes_per_texel × width` bytes.

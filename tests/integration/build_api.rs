@@ -30,7 +30,8 @@ fn build_writes_the_chosen_variants() {
         .unwrap()
         .count();
     assert_eq!(shadow_variants, 2);
-    assert_eq!(outputs.files.len(), 3 + 2 * 4);
+    // two-pass: 2 passes, classify, plan; three-pass: 3 passes, classify, plan.
+    assert_eq!(outputs.files.len(), 4 + 2 * 5);
 }
 
 #[test]

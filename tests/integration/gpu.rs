@@ -179,10 +179,14 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
         &gpu,
         &rewritten.plan,
         |name| sources.get(name).cloned(),
-        &mesh,
+        &[mesh],
+        &HashMap::new(),
         size,
-        runtime::PipelineOptions {
-            count_shading: true,
+        runtime::RunOptions {
+            pipelines: runtime::PipelineOptions {
+                count_shading: true,
+            },
+            classify: false,
         },
     )
     .unwrap();
@@ -202,9 +206,12 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
             uniform.extend(value.to_le_bytes());
         }
         let inputs = runtime::FrameInputs {
-            buffers: HashMap::from([([0, 0], uniform)]),
+            objects: vec![runtime::ObjectInputs {
+                mesh: 0,
+                buffers: HashMap::from([([0, 0], uniform)]),
+            }],
         };
-        runner.frame(&gpu, &inputs).unwrap();
+        runner.frame(&gpu, &inputs, None).unwrap();
 
         let color = runtime::read_texture(&gpu, runner.color(), 8).unwrap();
         let depth = runtime::read_texture(&gpu, runner.depth(), 4).unwrap();

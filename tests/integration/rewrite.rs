@@ -175,6 +175,7 @@ fn rewrite_all_nodes_writes_every_candidate_and_variant() {
                 Variant::OnePass => 1,
                 Variant::TwoPass => 2,
                 Variant::ThreePass => 3,
+                Variant::Reference => unreachable!("not a rewrite"),
             };
             assert_eq!(passes.len(), expected);
             for pass in passes {

@@ -63,13 +63,22 @@ async function main() {
   // WebGPU constants (GPUBufferUsage, ...) become globals, as in a browser.
   Object.assign(globalThis, globals);
   const gpu = create(['backend=null']);
-  const adapter = await gpu.requestAdapter();
-  if (!adapter) fail('no WebGPU adapter (null backend)');
-  const device = await adapter.requestDevice();
-  if (!device) fail('no WebGPU device');
+  // Dawn aborts after some thousand shader modules on one device (they are
+  // freed only when the garbage collector gets to them), so a fresh device
+  // validates each batch.
+  const BATCH = 250;
+  let device = null;
 
   let allOk = true;
   for (let i = 0; i < files.length; i++) {
+    if (i % BATCH === 0) {
+      if (device) device.destroy();
+      // An adapter gives one device; ask for a new one each batch.
+      const adapter = await gpu.requestAdapter();
+      if (!adapter) fail('no WebGPU adapter (null backend)');
+      device = await adapter.requestDevice();
+      if (!device) fail('no WebGPU device');
+    }
     // The error scope captures the validation error of an invalid module,
     // which Dawn would otherwise print as an uncaptured error.
     device.pushErrorScope('validation');

@@ -1,0 +1,304 @@
+//! Scenes: what a profile renders — meshes, a camera path, object
+//! animation, a light, values for the shader's uniforms, and the effects
+//! the scene exercises. Scenes are TOML files (`corpus/scenes/`, schema in
+//! `docs/scene-toml.md`).
+//!
+//! Only the **declared effects** are simulated: a scene that does not list
+//! `light-motion` keeps its light where it is, whatever motion it
+//! describes. So a profile's misses and refreshes come from the effects the
+//! scene says it has.
+//!
+//! [`Scene::frame`] gives the state of frame n (camera, light, time, each
+//! object's transform); [`uniforms`] turns it into the bytes of the
+//! shader's uniform buffers, filling the well-known members
+//! (`clip_from_world`, `world_from_local`, `camera_position`,
+//! `light_position`, `time`, ...) from the simulation and every other member
+//! from the scene's `[uniforms]`. A member the scene does not provide is an
+//! error naming it: nothing is silently zero.
+
+pub mod mesh;
+pub mod textures;
+pub mod uniforms;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3};
+use serde::Deserialize;
+
+use crate::diagnostic::{Diagnostic, Error, SourceFile};
+pub use mesh::{Mesh, MeshSource};
+
+/// What moves in a scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Deserialize, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Effect {
+    CameraMotion,
+    ObjectMotion,
+    LightMotion,
+    /// Time-varying parameters: the `time` uniform advances.
+    Time,
+    /// Objects moving past each other uncover what was hidden (declared by
+    /// scenes built for it; simulated through `object-motion`).
+    Disocclusion,
+}
+
+/// A scene file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    #[serde(default)]
+    pub description: String,
+    /// Frame size in pixels.
+    #[serde(default = "default_size")]
+    pub size: [u32; 2],
+    /// Frames measured.
+    #[serde(default = "default_frames")]
+    pub frames: u32,
+    /// Frames rendered first and not measured.
+    #[serde(default = "default_warmup")]
+    pub warmup: u32,
+    #[serde(default)]
+    pub effects: Vec<Effect>,
+    #[serde(default)]
+    pub camera: Camera,
+    #[serde(default)]
+    pub light: Light,
+    pub objects: Vec<Object>,
+    /// Values of uniform members by name.
+    #[serde(default)]
+    pub uniforms: BTreeMap<String, toml::Value>,
+    /// Textures by binding name.
+    #[serde(default)]
+    pub textures: BTreeMap<String, textures::TextureSource>,
+    /// Seconds per frame for the `time` uniform.
+    #[serde(default = "default_frame_time")]
+    pub seconds_per_frame: f32,
+}
+
+fn default_size() -> [u32; 2] {
+    [256, 256]
+}
+fn default_frames() -> u32 {
+    32
+}
+fn default_warmup() -> u32 {
+    4
+}
+fn default_frame_time() -> f32 {
+    1.0 / 60.0
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    #[serde(default = "default_eye")]
+    pub eye: [f32; 3],
+    #[serde(default)]
+    pub target: [f32; 3],
+    #[serde(default = "default_fov")]
+    pub fov_degrees: f32,
+    #[serde(default = "default_near")]
+    pub near: f32,
+    #[serde(default = "default_far")]
+    pub far: f32,
+    /// With `camera-motion`: orbit about the target's vertical axis.
+    #[serde(default)]
+    pub orbit_degrees_per_frame: f32,
+    /// With `camera-motion`: translate the eye (and target) every frame.
+    #[serde(default)]
+    pub pan_per_frame: [f32; 3],
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Camera {
+            eye: default_eye(),
+            target: [0.0; 3],
+            fov_degrees: default_fov(),
+            near: default_near(),
+            far: default_far(),
+            orbit_degrees_per_frame: 0.0,
+            pan_per_frame: [0.0; 3],
+        }
+    }
+}
+
+fn default_eye() -> [f32; 3] {
+    [0.0, 0.5, 3.0]
+}
+fn default_fov() -> f32 {
+    45.0
+}
+fn default_near() -> f32 {
+    0.1
+}
+fn default_far() -> f32 {
+    20.0
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Light {
+    #[serde(default = "default_light")]
+    pub position: [f32; 3],
+    /// With `light-motion`: orbit about the vertical axis.
+    #[serde(default)]
+    pub orbit_degrees_per_frame: f32,
+}
+
+impl Default for Light {
+    fn default() -> Self {
+        Light {
+            position: default_light(),
+            orbit_degrees_per_frame: 0.0,
+        }
+    }
+}
+
+fn default_light() -> [f32; 3] {
+    [4.0, 5.0, 3.0]
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Object {
+    pub mesh: MeshSource,
+    #[serde(default)]
+    pub position: [f32; 3],
+    /// Initial rotation, degrees about x, y, z.
+    #[serde(default)]
+    pub rotation_degrees: [f32; 3],
+    #[serde(default = "default_scale")]
+    pub scale: f32,
+    /// With `object-motion`: degrees per frame about x, y, z.
+    #[serde(default)]
+    pub rotation_degrees_per_frame: [f32; 3],
+    /// With `object-motion`: world units per frame.
+    #[serde(default)]
+    pub translation_per_frame: [f32; 3],
+}
+
+fn default_scale() -> f32 {
+    1.0
+}
+
+/// The simulated state of one frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameState {
+    pub clip_from_world: Mat4,
+    pub camera_position: Vec3,
+    pub light_position: Vec3,
+    pub light_clip_from_world: Mat4,
+    pub time: f32,
+    /// Each object's `world_from_local`.
+    pub objects: Vec<Mat4>,
+}
+
+impl Scene {
+    /// Reads and checks a scene file. Errors point into the file.
+    pub fn load(path: &Path) -> Result<Scene, Error> {
+        let file = Arc::new(crate::front::read_source(path)?);
+        Scene::parse(file)
+    }
+
+    pub fn parse(file: Arc<SourceFile>) -> Result<Scene, Error> {
+        let scene: Scene = toml::from_str(&file.text).map_err(|err| {
+            let range = err.span().unwrap_or(0..0);
+            Error::in_file(
+                file.clone(),
+                Diagnostic::error(format!("invalid scene: {}", err.message()))
+                    .with_label(range, "here"),
+            )
+        })?;
+        let fail = |message: String| Err(Error::in_file(file.clone(), Diagnostic::error(message)));
+        if scene.objects.is_empty() {
+            return fail(
+                "the scene has no objects: add at least one [[objects]] with a mesh".into(),
+            );
+        }
+        if scene.size[0] == 0 || scene.size[1] == 0 || scene.size[0] > 8192 || scene.size[1] > 8192
+        {
+            return fail(format!(
+                "size {:?} is not between 1 and 8192 pixels",
+                scene.size
+            ));
+        }
+        if scene.frames == 0 {
+            return fail("frames must be at least 1".into());
+        }
+        if scene.camera.near <= 0.0 || scene.camera.far <= scene.camera.near {
+            return fail("the camera needs 0 < near < far".into());
+        }
+        Ok(scene)
+    }
+
+    pub fn has(&self, effect: Effect) -> bool {
+        self.effects.contains(&effect)
+    }
+
+    /// The state of frame `n` (0-based, warm-up included), simulating only
+    /// the declared effects.
+    pub fn frame(&self, n: u32, aspect: f32) -> FrameState {
+        let t = n as f32;
+        let camera = &self.camera;
+        let (mut eye, mut target) = (Vec3::from(camera.eye), Vec3::from(camera.target));
+        if self.has(Effect::CameraMotion) {
+            let orbit = Mat4::from_rotation_y((camera.orbit_degrees_per_frame * t).to_radians());
+            eye = target + orbit.transform_vector3(eye - target);
+            let pan = Vec3::from(camera.pan_per_frame) * t;
+            eye += pan;
+            target += pan;
+        }
+        let clip_from_view = Mat4::perspective_rh(
+            camera.fov_degrees.to_radians(),
+            aspect,
+            camera.near,
+            camera.far,
+        );
+        let clip_from_world = clip_from_view * Mat4::look_at_rh(eye, target, Vec3::Y);
+
+        let mut light = Vec3::from(self.light.position);
+        if self.has(Effect::LightMotion) {
+            light = Mat4::from_rotation_y((self.light.orbit_degrees_per_frame * t).to_radians())
+                .transform_point3(light);
+        }
+        let light_clip_from_world = Mat4::perspective_rh(50f32.to_radians(), 1.0, 0.5, 30.0)
+            * Mat4::look_at_rh(light, Vec3::ZERO, Vec3::Y);
+
+        let moving = self.has(Effect::ObjectMotion);
+        let objects = self
+            .objects
+            .iter()
+            .map(|object| {
+                let motion = if moving { t } else { 0.0 };
+                let degrees = Vec3::from(object.rotation_degrees)
+                    + Vec3::from(object.rotation_degrees_per_frame) * motion;
+                let rotation = Mat4::from_euler(
+                    glam::EulerRot::XYZ,
+                    degrees.x.to_radians(),
+                    degrees.y.to_radians(),
+                    degrees.z.to_radians(),
+                );
+                let position =
+                    Vec3::from(object.position) + Vec3::from(object.translation_per_frame) * motion;
+                Mat4::from_translation(position)
+                    * rotation
+                    * Mat4::from_scale(Vec3::splat(object.scale))
+            })
+            .collect();
+        FrameState {
+            clip_from_world,
+            camera_position: eye,
+            light_position: light,
+            light_clip_from_world,
+            time: if self.has(Effect::Time) {
+                t * self.seconds_per_frame
+            } else {
+                0.0
+            },
+            objects,
+        }
+    }
+}

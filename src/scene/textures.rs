@@ -1,0 +1,115 @@
+//! Textures a scene provides to the shader, by binding name.
+
+use std::path::Path;
+
+use serde::Deserialize;
+
+/// Where a texture's texels come from.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(untagged, deny_unknown_fields)]
+pub enum TextureSource {
+    /// A PNG file, relative to the scene file.
+    File { file: String },
+    /// A generated pattern.
+    Generate {
+        generate: Pattern,
+        #[serde(default = "default_size")]
+        size: u32,
+    },
+}
+
+fn default_size() -> u32 {
+    256
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Pattern {
+    /// 8×8 black and white checks.
+    Checker,
+    /// Smooth value noise in each channel.
+    Noise,
+    /// A flat normal map (0.5, 0.5, 1).
+    FlatNormal,
+    /// A sky gradient (for environment maps: each face alike).
+    Sky,
+    /// For depth textures (shadow maps): every texel at the far plane, 1.0.
+    Far,
+}
+
+/// RGBA8 texels, row by row.
+#[derive(Clone, Debug)]
+pub struct Texels {
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
+}
+
+impl TextureSource {
+    pub fn load(&self, dir: &Path) -> Result<Texels, String> {
+        match *self {
+            TextureSource::File { ref file } => {
+                let path = dir.join(file);
+                let image = image::open(&path)
+                    .map_err(|err| format!("cannot read `{}`: {err}", path.display()))?;
+                let rgba = image.to_rgba8();
+                Ok(Texels {
+                    width: rgba.width(),
+                    height: rgba.height(),
+                    rgba: rgba.into_raw(),
+                })
+            }
+            TextureSource::Generate { generate, size } => {
+                Ok(generate_pattern(generate, size.clamp(1, 4096)))
+            }
+        }
+    }
+}
+
+fn generate_pattern(pattern: Pattern, size: u32) -> Texels {
+    let mut rgba = Vec::with_capacity((size * size * 4) as usize);
+    // A small hash for value noise, so the pattern is the same everywhere.
+    let hash = |x: u32, y: u32, c: u32| -> f32 {
+        let mut h = x.wrapping_mul(374_761_393)
+            ^ y.wrapping_mul(668_265_263)
+            ^ c.wrapping_mul(2_246_822_519);
+        h = (h ^ (h >> 13)).wrapping_mul(1_274_126_177);
+        (h ^ (h >> 16)) as f32 / u32::MAX as f32
+    };
+    for y in 0..size {
+        for x in 0..size {
+            let (u, v) = (x as f32 / size as f32, y as f32 / size as f32);
+            let texel: [f32; 4] = match pattern {
+                Pattern::Checker => {
+                    let on = ((x * 8 / size) + (y * 8 / size)).is_multiple_of(2);
+                    let c = if on { 0.9 } else { 0.1 };
+                    [c, c, c, 1.0]
+                }
+                Pattern::Noise => {
+                    let cell = 16.0;
+                    let (fx, fy) = (u * cell, v * cell);
+                    let (ix, iy) = (fx.floor() as u32, fy.floor() as u32);
+                    let (tx, ty) = (fx.fract(), fy.fract());
+                    let mut out = [0.0; 4];
+                    for (c, slot) in out.iter_mut().enumerate() {
+                        let c = c as u32;
+                        let a = hash(ix, iy, c) * (1.0 - tx) + hash(ix + 1, iy, c) * tx;
+                        let b = hash(ix, iy + 1, c) * (1.0 - tx) + hash(ix + 1, iy + 1, c) * tx;
+                        *slot = a * (1.0 - ty) + b * ty;
+                    }
+                    out[3] = 0.5 + 0.5 * out[3];
+                    out
+                }
+                Pattern::FlatNormal => [0.5, 0.5, 1.0, 1.0],
+                Pattern::Sky => [0.3 + 0.4 * v, 0.5 + 0.3 * v, 0.9, 1.0],
+                Pattern::Far => [1.0, 1.0, 1.0, 1.0],
+            };
+            rgba.extend(texel.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8));
+        }
+    }
+    Texels {
+        width: size,
+        height: size,
+        rgba,
+    }
+}
