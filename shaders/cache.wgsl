@@ -33,6 +33,9 @@ struct CacheParams {
 @group(1) @binding(2) var cache_previous_depth: texture_depth_2d;
 // This frame's payload, read at the pixel itself (three-pass, pass 3).
 @group(1) @binding(3) var cache_current_payload: texture_2d<f32>;
+// Linear filtering, clamped to the edge: one bilinear sample of an
+// rgba16float payload, and one gather of the four depths around a point.
+@group(1) @binding(4) var cache_sampler: sampler;
 
 struct CacheLookup {
     payload: vec4<f32>,
@@ -52,27 +55,54 @@ fn cache_hash(v: u32) -> u32 {
 // The refresh indicator of seed 002, eq. 1: b = (h(x/k, y/k) + c) mod Δn,
 // refresh when b == 0. h is a hash of the k×k block rather than a noise
 // texture: no extra binding, the same offsets on every machine, and every
-// block's offset is uniform in [0, Δn) up to the hash's quality. All u32.
+// block's offset is uniform in [0, Δn) up to the hash's quality.
+//
+// Integer division is slow on many GPUs and on CPU rasterisers (it is not
+// vectorised), so none is used: the block index divides by k in f32, exact
+// because a pixel centre x + 0.5 is never within rounding of a multiple of
+// k; h is taken on 24 bits, where f32 division gives the quotient to
+// within one, and the remainder is then corrected; (h + c) mod Δn of two
+// numbers below Δn is one conditional subtraction.
 fn cache_refresh(frag_coord: vec4<f32>) -> bool {
     // Δn = 0 turns refresh off.
-    if (cache_params.refresh_period == 0u) {
+    let period = cache_params.refresh_period;
+    if (period == 0u) {
         return false;
     }
-    let k = max(cache_params.refresh_quad, 1u);
-    let period = max(cache_params.refresh_period, 1u);
-    let block = vec2<u32>(frag_coord.xy) / vec2<u32>(k);
-    let offset = cache_hash(block.x ^ cache_hash(block.y)) % period;
-    return ((offset + (cache_params.refresh_phase % period)) % period) == 0u;
+    let k = f32(max(cache_params.refresh_quad, 1u));
+    let block = vec2<u32>(frag_coord.xy / k);
+    let h = cache_hash(block.x ^ cache_hash(block.y)) >> 8u;
+    var offset = h - (u32(f32(h) / f32(period)) * period);
+    if (offset > 0x80000000u) {
+        offset = offset + period;
+    } else if (offset >= period) {
+        offset = offset - period;
+    }
+    var b = offset + cache_params.refresh_phase;
+    if (b >= period) {
+        b = b - period;
+    }
+    return b == 0u;
 }
 
-// Where this fragment was last frame: its previous clip position (from the
-// vertex stage evaluated with last frame's uniforms) → NDC → texel
-// coordinates in the cache. A miss when the point was behind the previous
-// camera (w ≤ 0, or NaN), when the bilinear footprint leaves the viewport,
-// or when any of the four depth taps disagrees with the expected depth
-// (disocclusion, or a silhouette inside the footprint).
-fn cache_lookup(previous_clip: vec4<f32>) -> CacheLookup {
-    var result = CacheLookup(vec4<f32>(0.0), false, 1u);
+// Where a fragment was last frame, in the cache.
+struct CacheFootprint {
+    // 0 the point was visible, 1 off-screen, 2 disoccluded.
+    status: u32,
+    // The top-left texel of the 2×2 bilinear footprint, and the weights.
+    base: vec2<f32>,
+    weights: vec2<f32>,
+}
+
+// Its previous clip position (from the vertex stage evaluated with last
+// frame's uniforms) → NDC → texel coordinates in the cache. Off-screen when
+// the point was behind the previous camera (w ≤ 0, or NaN) or when the 2×2
+// footprint leaves the viewport; disoccluded when any of the four depths of
+// last frame's depth buffer (one gather) disagrees with the point's
+// previous depth by ε or more — which also keeps a footprint straddling a
+// silhouette from being a hit.
+fn cache_footprint(previous_clip: vec4<f32>) -> CacheFootprint {
+    var result = CacheFootprint(1u, vec2<f32>(0.0), vec2<f32>(0.0));
     if (!(previous_clip.w > 0.0)) {
         return result;
     }
@@ -84,31 +114,52 @@ fn cache_lookup(previous_clip: vec4<f32>) -> CacheLookup {
     if (!(all(base >= vec2<f32>(0.0)) && all(base <= last))) {
         return result;
     }
-    let t = vec2<i32>(base);
-    let depths = vec4<f32>(
-        textureLoad(cache_previous_depth, t, 0),
-        textureLoad(cache_previous_depth, t + vec2<i32>(1, 0), 0),
-        textureLoad(cache_previous_depth, t + vec2<i32>(0, 1), 0),
-        textureLoad(cache_previous_depth, t + vec2<i32>(1, 1), 0),
-    );
+    // Between the four texel centres: the gather takes exactly those four.
+    let depths = textureGather(cache_previous_depth, cache_sampler, (base + vec2<f32>(1.0)) / cache_params.viewport);
     if (!all(abs(depths - vec4<f32>(ndc.z)) < vec4<f32>(cache_params.depth_epsilon))) {
         result.status = 2u;
         return result;
     }
-    let f = texel - base;
-    let top = mix(
-        textureLoad(cache_previous_payload, t, 0),
-        textureLoad(cache_previous_payload, t + vec2<i32>(1, 0), 0),
-        f.x,
-    );
-    let bottom = mix(
-        textureLoad(cache_previous_payload, t + vec2<i32>(0, 1), 0),
-        textureLoad(cache_previous_payload, t + vec2<i32>(1, 1), 0),
-        f.x,
-    );
-    result.payload = mix(top, bottom, f.y);
-    result.hit = true;
     result.status = 0u;
+    result.base = base;
+    result.weights = texel - base;
+    return result;
+}
+
+// The cached payload where this fragment was last frame, with one bilinear
+// sample (for the filterable rgba16float cache).
+fn cache_lookup(previous_clip: vec4<f32>) -> CacheLookup {
+    let footprint = cache_footprint(previous_clip);
+    var result = CacheLookup(vec4<f32>(0.0), false, footprint.status);
+    if (footprint.status == 0u) {
+        let at = (footprint.base + vec2<f32>(0.5) + footprint.weights) / cache_params.viewport;
+        result.payload = textureSampleLevel(cache_previous_payload, cache_sampler, at, 0.0);
+        result.hit = true;
+    }
+    return result;
+}
+
+// The same with four loads, for the rgba32float cache, which cannot be
+// filtered.
+fn cache_lookup_loads(previous_clip: vec4<f32>) -> CacheLookup {
+    let footprint = cache_footprint(previous_clip);
+    var result = CacheLookup(vec4<f32>(0.0), false, footprint.status);
+    if (footprint.status == 0u) {
+        let t = vec2<i32>(footprint.base);
+        let f = footprint.weights;
+        let top = mix(
+            textureLoad(cache_previous_payload, t, 0),
+            textureLoad(cache_previous_payload, t + vec2<i32>(1, 0), 0),
+            f.x,
+        );
+        let bottom = mix(
+            textureLoad(cache_previous_payload, t + vec2<i32>(0, 1), 0),
+            textureLoad(cache_previous_payload, t + vec2<i32>(1, 1), 0),
+            f.x,
+        );
+        result.payload = mix(top, bottom, f.y);
+        result.hit = true;
+    }
     return result;
 }
 
@@ -121,11 +172,11 @@ fn cache_current(frag_coord: vec4<f32>) -> vec4<f32> {
 // reused (green), refreshed (blue), missed because the point was off-screen
 // last frame (orange) or disoccluded (red).
 fn cache_classify(previous_clip: vec4<f32>, frag_coord: vec4<f32>) -> vec4<f32> {
-    let lookup = cache_lookup(previous_clip);
-    if (lookup.status == 1u) {
+    let footprint = cache_footprint(previous_clip);
+    if (footprint.status == 1u) {
         return vec4<f32>(1.0, 0.5, 0.0, 1.0);
     }
-    if (lookup.status == 2u) {
+    if (footprint.status == 2u) {
         return vec4<f32>(1.0, 0.0, 0.0, 1.0);
     }
     if (cache_refresh(frag_coord)) {

@@ -33,6 +33,8 @@ pub mod diagnostic;
 pub mod front;
 pub mod plan;
 pub mod proc;
+pub mod profile;
+pub mod report;
 pub mod rewrite;
 pub mod runtime;
 pub mod scene;

@@ -296,6 +296,12 @@ pub fn build(inputs: Inputs) -> Plan {
             "texture",
             "this frame's payload texture, after the passes that write it",
         ),
+        cache_resource(
+            rewrite::SAMPLER_BINDING,
+            "cache_sampler",
+            "sampler",
+            "linear filtering, clamp to edge",
+        ),
     ];
 
     Plan {

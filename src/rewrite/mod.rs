@@ -175,8 +175,9 @@ pub const CACHE_PARAMS_BINDING: u32 = 0;
 pub const PREVIOUS_PAYLOAD_BINDING: u32 = 1;
 pub const PREVIOUS_DEPTH_BINDING: u32 = 2;
 pub const CURRENT_PAYLOAD_BINDING: u32 = 3;
+pub const SAMPLER_BINDING: u32 = 4;
 /// Previous-frame twins come after the cache's own bindings.
-pub const FIRST_TWIN_BINDING: u32 = 4;
+pub const FIRST_TWIN_BINDING: u32 = 5;
 /// WebGPU's default limit on bind groups.
 const MAX_BIND_GROUPS: u32 = 4;
 
@@ -260,8 +261,14 @@ pub fn rewrite(
             ))
         })
     };
+    // rgba16float is filterable: one bilinear sample; rgba32float is not:
+    // four loads.
+    let lookup_name = match options.cache_format {
+        CacheFormat::Rgba16float => "cache_lookup",
+        CacheFormat::Rgba32float => "cache_lookup_loads",
+    };
     let (lookup, refresh, current, classify) = (
-        helper("cache_lookup")?,
+        helper(lookup_name)?,
         helper("cache_refresh")?,
         helper("cache_current")?,
         helper("cache_classify")?,

@@ -62,6 +62,7 @@ pub struct Runner {
     previous: HashMap<(usize, [u32; 2]), Vec<u8>>,
     views: HashMap<[u32; 2], wgpu::TextureView>,
     samplers: HashMap<[u32; 2], wgpu::Sampler>,
+    cache_sampler: wgpu::Sampler,
     /// Which of the two cache slots is this frame's.
     current: usize,
     frame: u64,
@@ -230,6 +231,12 @@ impl Runner {
             previous: HashMap::new(),
             views,
             samplers,
+            cache_sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("cache sampler"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..wgpu::SamplerDescriptor::default()
+            }),
             current: 0,
             frame: 0,
             phase: 0,
@@ -496,6 +503,7 @@ impl Runner {
                 "cache_current_payload" => {
                     wgpu::BindingResource::TextureView(&payload_views[current])
                 }
+                "cache_sampler" => wgpu::BindingResource::Sampler(&self.cache_sampler),
                 other => return Err(format!("unknown cache resource `{other}`")),
             });
         }

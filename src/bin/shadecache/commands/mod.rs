@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod analyze;
+pub mod profile;
 pub mod rewrite;
 
 use shadecache::diagnostic::Color;
@@ -12,12 +13,15 @@ pub enum Command {
     Analyze(analyze::Args),
     /// Write one-, two- and three-pass reprojection-cache variants of a shader, with their pass plans.
     Rewrite(rewrite::Args),
+    /// Run the variants on a scene, measure time and error against the original, and write a report.
+    Profile(profile::Args),
 }
 
 pub fn exec(command: Command, color: Color) -> Result<(), Error> {
     match command {
         Command::Analyze(args) => analyze::exec(args, color),
         Command::Rewrite(args) => rewrite::exec(args, color),
+        Command::Profile(args) => profile::exec(args, color),
     }
 }
 

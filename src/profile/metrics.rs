@@ -1,0 +1,206 @@
+//! Error of a frame against the reference frame, and the cache's decisions
+//! counted from a classification image.
+
+use serde::Serialize;
+
+/// PSNR is capped here: identical frames would be infinite, which JSON
+/// cannot hold.
+pub const PSNR_CAP: f64 = 100.0;
+
+/// How far a frame is from the reference frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct FrameError {
+    /// Peak signal-to-noise ratio over RGB, in dB (capped at 100).
+    pub psnr: f64,
+    /// Mean SSIM of the luminance over 8×8 windows.
+    pub ssim: f64,
+    /// Largest difference of any channel, in [0, 1].
+    pub max_abs_error: f64,
+    /// Share of pixels whose largest channel difference exceeds the
+    /// threshold.
+    pub above_threshold: f64,
+}
+
+/// Compares two RGBA8 frames of `width × height` (alpha ignored).
+pub fn compare(
+    reference: &[u8],
+    frame: &[u8],
+    width: u32,
+    height: u32,
+    threshold: f64,
+) -> FrameError {
+    let pixels = (width * height) as usize;
+    let mut squared = 0.0f64;
+    let mut max = 0u8;
+    let mut above = 0usize;
+    let limit = (threshold * 255.0).round() as u8;
+    for p in 0..pixels {
+        let mut worst = 0u8;
+        for c in 0..3 {
+            let d = reference[p * 4 + c].abs_diff(frame[p * 4 + c]);
+            squared += f64::from(d) * f64::from(d);
+            worst = worst.max(d);
+        }
+        max = max.max(worst);
+        if worst > limit {
+            above += 1;
+        }
+    }
+    let mse = squared / (pixels * 3) as f64 / (255.0 * 255.0);
+    let psnr = if mse == 0.0 {
+        PSNR_CAP
+    } else {
+        (10.0 * (1.0 / mse).log10()).min(PSNR_CAP)
+    };
+    FrameError {
+        psnr,
+        ssim: ssim(reference, frame, width, height),
+        max_abs_error: f64::from(max) / 255.0,
+        above_threshold: above as f64 / pixels as f64,
+    }
+}
+
+fn luma(rgba: &[u8], width: u32, height: u32) -> image::GrayImage {
+    image::GrayImage::from_fn(width, height, |x, y| {
+        let i = ((y * width + x) * 4) as usize;
+        let (r, g, b) = (
+            f32::from(rgba[i]),
+            f32::from(rgba[i + 1]),
+            f32::from(rgba[i + 2]),
+        );
+        image::Luma([(0.2126 * r + 0.7152 * g + 0.0722 * b).round() as u8])
+    })
+}
+
+fn ssim(reference: &[u8], frame: &[u8], width: u32, height: u32) -> f64 {
+    image_compare::gray_similarity_structure(
+        &image_compare::Algorithm::MSSIMSimple,
+        &luma(reference, width, height),
+        &luma(frame, width, height),
+    )
+    .map(|s| s.score)
+    .unwrap_or(0.0)
+}
+
+/// The cache's decisions in one frame, as shares of the covered pixels.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Decisions {
+    /// Pixels the frame covers (the rest is background).
+    pub covered: usize,
+    /// Reused from the cache.
+    pub hit: f64,
+    /// Recomputed because the refresh indicator fired on a hit.
+    pub refresh: f64,
+    /// Missed because the point was behind the previous camera or outside
+    /// the viewport.
+    pub offscreen: f64,
+    /// Missed because last frame's depth disagrees (disocclusion).
+    pub disoccluded: f64,
+}
+
+impl Decisions {
+    pub fn miss(&self) -> f64 {
+        self.offscreen + self.disoccluded
+    }
+}
+
+/// The colour of each class in a classification image (RGBA8).
+pub const HIT: [u8; 3] = [0, 255, 0];
+pub const REFRESH: [u8; 3] = [0, 0, 255];
+pub const OFFSCREEN: [u8; 3] = [255, 128, 0];
+pub const DISOCCLUDED: [u8; 3] = [255, 0, 0];
+
+/// Counts the classes of a classification image.
+pub fn decisions(classes: &[u8]) -> Decisions {
+    let (mut hit, mut refresh, mut offscreen, mut disoccluded) = (0usize, 0usize, 0usize, 0usize);
+    for texel in classes.chunks_exact(4) {
+        match [texel[0], texel[1], texel[2]] {
+            HIT => hit += 1,
+            REFRESH => refresh += 1,
+            DISOCCLUDED => disoccluded += 1,
+            // rgba8unorm stores 0.5 as 127 or 128.
+            [255, 127 | 128, 0] => offscreen += 1,
+            _ => {}
+        }
+    }
+    let covered = hit + refresh + offscreen + disoccluded;
+    let share = |n: usize| {
+        if covered == 0 {
+            0.0
+        } else {
+            n as f64 / covered as f64
+        }
+    };
+    Decisions {
+        covered,
+        hit: share(hit),
+        refresh: share(refresh),
+        offscreen: share(offscreen),
+        disoccluded: share(disoccluded),
+    }
+}
+
+/// The median of a list (the mean of the middle two when even).
+pub fn median(values: &[f64]) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let mid = sorted.len() / 2;
+    if sorted.len().is_multiple_of(2) {
+        (sorted[mid - 1] + sorted[mid]) / 2.0
+    } else {
+        sorted[mid]
+    }
+}
+
+pub fn mean(values: &[f64]) -> f64 {
+    if values.is_empty() {
+        0.0
+    } else {
+        values.iter().sum::<f64>() / values.len() as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn identical_frames_have_capped_psnr_and_full_ssim() {
+        let frame: Vec<u8> = (0..16 * 16 * 4).map(|i| (i * 7 % 256) as u8).collect();
+        let error = compare(&frame, &frame, 16, 16, 0.05);
+        assert_eq!(error.psnr, PSNR_CAP);
+        assert!((error.ssim - 1.0).abs() < 1e-9);
+        assert_eq!(error.max_abs_error, 0.0);
+        assert_eq!(error.above_threshold, 0.0);
+    }
+
+    #[test]
+    fn psnr_of_a_uniform_error() {
+        let a = vec![100u8; 8 * 8 * 4];
+        let b = vec![110u8; 8 * 8 * 4];
+        // MSE = (10/255)², PSNR = 20 log10(255/10) ≈ 28.13 dB.
+        let error = compare(&a, &b, 8, 8, 0.05);
+        assert!((error.psnr - 28.1308).abs() < 1e-3, "{}", error.psnr);
+        assert!((error.max_abs_error - 10.0 / 255.0).abs() < 1e-12);
+        assert_eq!(error.above_threshold, 0.0);
+        assert_eq!(compare(&a, &b, 8, 8, 0.03).above_threshold, 1.0);
+    }
+
+    #[test]
+    fn decisions_count_shares_of_covered_pixels() {
+        let mut classes = Vec::new();
+        for class in [HIT, HIT, REFRESH, DISOCCLUDED, [255, 128, 0], [0, 0, 0]] {
+            classes.extend(class);
+            classes.push(255);
+        }
+        let d = decisions(&classes);
+        assert_eq!(d.covered, 5);
+        assert!((d.hit - 0.4).abs() < 1e-12);
+        assert!((d.refresh - 0.2).abs() < 1e-12);
+        assert!((d.miss() - 0.4).abs() < 1e-12);
+        assert_eq!(median(&[3.0, 1.0, 2.0, 10.0]), 2.5);
+    }
+}

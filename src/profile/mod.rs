@@ -1,0 +1,637 @@
+//! plans + scene → runs: measuring variants against the unmodified shader.
+//!
+//! [`profile`] renders the scene with the reference (the original shader)
+//! and with every requested node × variant × Δn × k, frame after frame,
+//! **interleaved** — each frame renders every configuration in turn — so
+//! machine drift hits all alike. Each pass is timed with GPU timestamp
+//! queries (wgpu-profiler); a frame's time is the sum of its passes, and a
+//! configuration's time the median over the measured frames (after the
+//! warm-up). After the warm-up every frame is read back and compared with
+//! the reference frame of the same index (PSNR, SSIM, largest error, share
+//! of pixels above a threshold), and the classification pass counts hits,
+//! misses (off-screen, disoccluded) and refreshes.
+//!
+//! P/T is measured too: the payload pass of three-pass, drawn over every
+//! pixel, times the node's slice alone; over the reference time it is f,
+//! and with ρ the measured reuse fraction the ideal speed-up is
+//! 1 / (1 − ρ·f) (seed 002, §4), which every result is compared with.
+
+pub mod metrics;
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use crate::analysis::{self, Analysis, Candidate};
+use crate::back::{self, Language};
+use crate::diagnostic::{Diagnostic, Error};
+use crate::front::Shader;
+use crate::plan::{self, Plan};
+use crate::report::{Device, FrameStats, NodeReport, PassTime, Reference, Report, ResultRow};
+use crate::rewrite::{self, CacheFormat, Options as RewriteOptions, Variant};
+use crate::runtime::{self, FrameInputs, Gpu, ObjectInputs, RunOptions, Runner};
+use crate::scene::{self, Scene};
+use metrics::{Decisions, FrameError};
+
+/// Which nodes to profile.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Nodes {
+    All,
+    /// The N highest estimated P/T.
+    Top(usize),
+    Ids(Vec<String>),
+}
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct Options {
+    pub nodes: Nodes,
+    pub variants: Vec<Variant>,
+    pub refresh_periods: Vec<u32>,
+    pub refresh_quads: Vec<u32>,
+    pub cache_format: CacheFormat,
+    pub depth_epsilon: f32,
+    /// Frames measured and warm-up frames; `None` takes the scene's.
+    pub frames: Option<u32>,
+    pub warmup: Option<u32>,
+    /// Frame size; `None` takes the scene's.
+    pub size: Option<[u32; 2]>,
+    /// A pixel counts as wrong when a channel differs by more than this
+    /// (in [0, 1]).
+    pub error_threshold: f64,
+    /// The command line, recorded in the report.
+    pub command: String,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            nodes: Nodes::Top(3),
+            variants: Variant::ALL.to_vec(),
+            refresh_periods: vec![32],
+            refresh_quads: vec![4],
+            cache_format: CacheFormat::Rgba16float,
+            depth_epsilon: RewriteOptions::default().depth_epsilon,
+            frames: None,
+            warmup: None,
+            size: None,
+            error_threshold: 0.05,
+            command: String::new(),
+        }
+    }
+}
+
+/// Progress reports while profiling.
+pub trait Progress {
+    /// `total` frame renders will be made.
+    fn start(&mut self, total: u64);
+    /// One more, of `what`.
+    fn step(&mut self, what: &str);
+    /// A configuration that could not be built, and why.
+    fn refused(&mut self, what: &str, reason: &str);
+    fn finish(&mut self);
+}
+
+/// Progress that says nothing.
+#[derive(Debug, Default)]
+pub struct Quiet;
+
+impl Progress for Quiet {
+    fn start(&mut self, _: u64) {}
+    fn step(&mut self, _: &str) {}
+    fn refused(&mut self, _: &str, _: &str) {}
+    fn finish(&mut self) {}
+}
+
+/// The last measured frames, for the report's pictures.
+#[derive(Clone, Debug)]
+pub struct Pictures {
+    pub reference: Vec<u8>,
+    /// Colour and classes of each result, in `Report::results` order.
+    pub results: Vec<Picture>,
+}
+
+/// A result's last measured colour and classes (RGBA8).
+type Picture = (Vec<u8>, Vec<u8>);
+
+struct Config {
+    node: usize,
+    variant: Variant,
+    period: u32,
+    quad: u32,
+    runner: Runner,
+    label: String,
+    times: Vec<f64>,
+    passes: HashMap<String, Vec<f64>>,
+    errors: Vec<FrameError>,
+    decisions: Vec<Decisions>,
+    last: Picture,
+}
+
+/// Profiles `shader` on `scene`. `scene_path` names the scene file (its
+/// folder resolves relative files).
+pub fn profile(
+    shader: &Shader,
+    scene: &Scene,
+    scene_path: &Path,
+    options: &Options,
+    progress: &mut dyn Progress,
+) -> Result<(Report, Pictures), Error> {
+    let fail = |message: String| Error::plain(Diagnostic::error(message));
+    let analysis = analysis::analyze(shader, &analysis::Options::default())?;
+    let nodes = select(shader, &analysis, &options.nodes)?;
+    let size = options.size.unwrap_or(scene.size);
+    let (frames, warmup) = (
+        options.frames.unwrap_or(scene.frames).max(1),
+        options.warmup.unwrap_or(scene.warmup),
+    );
+    let base = RewriteOptions {
+        cache_format: options.cache_format,
+        depth_epsilon: options.depth_epsilon,
+        ..RewriteOptions::default()
+    };
+    let reference_plan = plan::reference(shader, &analysis, &base).map_err(fail)?;
+
+    // The scene must provide everything the shader binds.
+    let uniforms = scene::uniforms::buffers(&shader.module);
+    scene::uniforms::check(&uniforms, scene).map_err(fail)?;
+    let dir = scene_path.parent().unwrap_or(Path::new("."));
+    let mut textures = HashMap::new();
+    for resource in &reference_plan.bindings.original {
+        match resource.kind.as_str() {
+            "texture" | "cube-texture" | "depth-texture" => {
+                let source = scene.textures.get(&resource.name).ok_or_else(|| {
+                    fail(format!(
+                        "the shader binds texture `{}` (group {}, binding {}) and the scene does not provide it: add [textures.{}]",
+                        resource.name, resource.group, resource.binding, resource.name
+                    ))
+                })?;
+                textures.insert(
+                    [resource.group, resource.binding],
+                    source.load(dir).map_err(fail)?,
+                );
+            }
+            "storage" | "storage-read-write" | "storage-texture" => {
+                return Err(fail(format!(
+                    "the shader binds storage `{}`, which scenes cannot provide yet",
+                    resource.name
+                )))
+            }
+            _ => {}
+        }
+    }
+    let meshes: Vec<runtime::Mesh> = scene
+        .objects
+        .iter()
+        .map(|object| {
+            let mesh = object.mesh.build(dir)?;
+            Ok(runtime::Mesh {
+                vertices: mesh.vertex_bytes(&reference_plan.vertex_layout)?,
+                indices: mesh.indices,
+            })
+        })
+        .collect::<Result<_, String>>()
+        .map_err(fail)?;
+
+    let gpu = Gpu::new().map_err(fail)?.ok_or_else(|| {
+        fail("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers gives lavapipe)".into())
+    })?;
+    let timestamps = gpu
+        .device
+        .features()
+        .contains(wgpu::Features::TIMESTAMP_QUERY);
+    let mut profiler =
+        wgpu_profiler::GpuProfiler::new(&gpu.device, wgpu_profiler::GpuProfilerSettings::default())
+            .map_err(|err| fail(format!("cannot start the GPU profiler: {err}")))?;
+
+    let source_of = |sources: &HashMap<String, String>| {
+        let sources = sources.clone();
+        move |name: &str| sources.get(name).cloned()
+    };
+    let run_options = RunOptions {
+        classify: true,
+        ..RunOptions::default()
+    };
+    let reference_sources =
+        HashMap::from([("reference.wgsl".to_string(), shader.file.text.clone())]);
+    let mut reference = Runner::new(
+        &gpu,
+        &reference_plan,
+        source_of(&reference_sources),
+        &meshes,
+        &textures,
+        (size[0], size[1]),
+        RunOptions::default(),
+    )
+    .map_err(|err| fail(format!("the reference does not run: {err}")))?;
+
+    // Per node: a payload pass over every pixel, for P/T.
+    let mut payloads = Vec::new();
+    for candidate in &nodes {
+        let rewritten = rewrite::rewrite(shader, &analysis, candidate, Variant::ThreePass, &base)
+            .map_err(|r| fail(format!("node {}: {}", candidate.node.id, r.reason)))?;
+        let mut pass = rewritten.plan.passes[1].clone();
+        pass.depth.load = "clear".into();
+        for target in &mut pass.color_targets {
+            target.load = "clear".into();
+        }
+        let plan = Plan {
+            passes: vec![pass],
+            classify: None,
+            ..rewritten.plan.clone()
+        };
+        let runner = Runner::new(
+            &gpu,
+            &plan,
+            source_of(&sources_of(&rewritten)?),
+            &meshes,
+            &textures,
+            (size[0], size[1]),
+            RunOptions::default(),
+        )
+        .map_err(fail)?;
+        payloads.push((runner, Vec::new()));
+    }
+
+    let mut configs = Vec::new();
+    for (node, candidate) in nodes.iter().enumerate() {
+        for &variant in &options.variants {
+            for &period in &options.refresh_periods {
+                for &quad in &options.refresh_quads {
+                    let what = format!("{} {variant} Δn={period} k={quad}", candidate.node.id);
+                    let rewrite_options = RewriteOptions {
+                        refresh_period: period,
+                        refresh_quad: quad,
+                        ..base.clone()
+                    };
+                    let rewritten = match rewrite::rewrite(
+                        shader,
+                        &analysis,
+                        candidate,
+                        variant,
+                        &rewrite_options,
+                    ) {
+                        Ok(rewritten) => rewritten,
+                        Err(refusal) => {
+                            progress.refused(&what, &refusal.reason);
+                            continue;
+                        }
+                    };
+                    let runner = Runner::new(
+                        &gpu,
+                        &rewritten.plan,
+                        source_of(&sources_of(&rewritten)?),
+                        &meshes,
+                        &textures,
+                        (size[0], size[1]),
+                        run_options,
+                    )
+                    .map_err(|err| fail(format!("{what}: {err}")))?;
+                    configs.push(Config {
+                        node,
+                        variant,
+                        period,
+                        quad,
+                        runner,
+                        label: what,
+                        times: Vec::new(),
+                        passes: HashMap::new(),
+                        errors: Vec::new(),
+                        decisions: Vec::new(),
+                        last: (Vec::new(), Vec::new()),
+                    });
+                }
+            }
+        }
+    }
+
+    let per_frame = 1 + payloads.len() + configs.len();
+    progress.start(u64::from(warmup + frames) * per_frame as u64);
+    let aspect = size[0] as f32 / size[1] as f32;
+    let mut reference_times = Vec::new();
+    let mut reference_pixels = Vec::new();
+    for frame in 0..warmup + frames {
+        let measured = frame >= warmup;
+        let state = scene.frame(frame, aspect);
+        let mut inputs = FrameInputs::default();
+        for (object, _) in scene.objects.iter().enumerate() {
+            let mut buffers = HashMap::new();
+            for buffer in &uniforms {
+                let bytes = scene::uniforms::fill(buffer, scene, &state, object).map_err(fail)?;
+                buffers.insert([buffer.group, buffer.binding], bytes);
+            }
+            inputs.objects.push(ObjectInputs {
+                mesh: object,
+                buffers,
+            });
+        }
+
+        let (time, _) = timed(
+            &gpu,
+            &mut profiler,
+            timestamps,
+            &mut reference,
+            &inputs,
+            "reference",
+        )
+        .map_err(fail)?;
+        progress.step("reference");
+        if measured {
+            reference_times.push(time);
+            reference_pixels = runtime::read_texture(&gpu, reference.color(), 4).map_err(fail)?;
+        }
+        for (runner, times) in &mut payloads {
+            let (time, _) =
+                timed(&gpu, &mut profiler, timestamps, runner, &inputs, "payload").map_err(fail)?;
+            progress.step("payload");
+            if measured {
+                times.push(time);
+            }
+        }
+        for config in &mut configs {
+            let (time, passes) = timed(
+                &gpu,
+                &mut profiler,
+                timestamps,
+                &mut config.runner,
+                &inputs,
+                &config.label,
+            )
+            .map_err(fail)?;
+            progress.step(&config.label);
+            if !measured {
+                continue;
+            }
+            config.times.push(time);
+            for (name, ms) in passes {
+                config.passes.entry(name).or_default().push(ms);
+            }
+            let color = runtime::read_texture(&gpu, config.runner.color(), 4).map_err(fail)?;
+            let classes = runtime::read_texture(&gpu, config.runner.classes(), 4).map_err(fail)?;
+            config.errors.push(metrics::compare(
+                &reference_pixels,
+                &color,
+                size[0],
+                size[1],
+                options.error_threshold,
+            ));
+            config.decisions.push(metrics::decisions(&classes));
+            config.last = (color, classes);
+        }
+    }
+    progress.finish();
+
+    let reference_ms = metrics::median(&reference_times);
+    let node_reports: Vec<NodeReport> = nodes
+        .iter()
+        .zip(&payloads)
+        .map(|(candidate, (_, times))| {
+            let payload_ms = metrics::median(times);
+            node_report(shader, candidate, payload_ms, reference_ms)
+        })
+        .collect();
+    let mut rows: Vec<(ResultRow, Picture)> = configs
+        .into_iter()
+        .map(|config| {
+            let node = &node_reports[config.node];
+            let time_ms = metrics::median(&config.times);
+            let column = |f: fn(&Decisions) -> f64| {
+                metrics::mean(&config.decisions.iter().map(f).collect::<Vec<_>>())
+            };
+            let hit_rate = column(|d| d.hit);
+            let f = node.p_over_t.clamp(0.0, 1.0);
+            let ideal = 1.0 / (1.0 - hit_rate * f).max(1e-6);
+            let speedup = if time_ms > 0.0 {
+                reference_ms / time_ms
+            } else {
+                0.0
+            };
+            let mut passes: Vec<PassTime> = config
+                .passes
+                .iter()
+                .map(|(name, times)| PassTime {
+                    name: name.clone(),
+                    time_ms: metrics::median(times),
+                })
+                .collect();
+            passes.sort_by(|a, b| a.name.cmp(&b.name));
+            let row = ResultRow {
+                node: node.id.clone(),
+                node_text: node.text.clone(),
+                variant: config.variant,
+                refresh_period: config.period,
+                refresh_quad: config.quad,
+                cache_format: options.cache_format.as_str().into(),
+                depth_epsilon: options.depth_epsilon,
+                time_ms,
+                passes,
+                speedup,
+                psnr: metrics::mean(&config.errors.iter().map(|e| e.psnr).collect::<Vec<_>>()),
+                ssim: metrics::mean(&config.errors.iter().map(|e| e.ssim).collect::<Vec<_>>()),
+                max_abs_error: config
+                    .errors
+                    .iter()
+                    .map(|e| e.max_abs_error)
+                    .fold(0.0, f64::max),
+                above_threshold: metrics::mean(
+                    &config
+                        .errors
+                        .iter()
+                        .map(|e| e.above_threshold)
+                        .collect::<Vec<_>>(),
+                ),
+                hit_rate,
+                miss_rate: column(Decisions::miss),
+                offscreen_rate: column(|d| d.offscreen),
+                disocclusion_rate: column(|d| d.disoccluded),
+                refresh_rate: column(|d| d.refresh),
+                p_over_t: node.p_over_t,
+                ideal_speedup: ideal,
+                share_of_ideal: if ideal > 0.0 { speedup / ideal } else { 0.0 },
+                frame_stats: config
+                    .times
+                    .iter()
+                    .zip(&config.errors)
+                    .zip(&config.decisions)
+                    .map(|((&time_ms, e), d)| FrameStats {
+                        time_ms,
+                        psnr: e.psnr,
+                        ssim: e.ssim,
+                        hit_rate: d.hit,
+                        miss_rate: d.miss(),
+                        refresh_rate: d.refresh,
+                    })
+                    .collect(),
+            };
+            (row, config.last)
+        })
+        .collect();
+    rows.sort_by(|a, b| b.0.speedup.total_cmp(&a.0.speedup));
+    let (results, pictures): (Vec<_>, Vec<_>) = rows.into_iter().unzip();
+
+    let report = Report {
+        format: 1,
+        shader: shader.file.path.clone(),
+        entry: analysis.entry.clone(),
+        scene: scene_path.display().to_string(),
+        scene_description: scene.description.clone(),
+        effects: scene.effects.clone(),
+        size,
+        frames,
+        warmup,
+        device: Device {
+            name: gpu.adapter.name.clone(),
+            backend: format!("{:?}", gpu.adapter.backend),
+            driver: format!("{} {}", gpu.adapter.driver, gpu.adapter.driver_info)
+                .trim()
+                .to_string(),
+        },
+        timing: if timestamps {
+            "gpu-timestamps"
+        } else {
+            "cpu-wall-clock"
+        }
+        .into(),
+        command: options.command.clone(),
+        reference: Reference {
+            time_ms: reference_ms,
+            frame_ms: reference_times,
+        },
+        nodes: node_reports,
+        results,
+    };
+    Ok((
+        report,
+        Pictures {
+            reference: reference_pixels,
+            results: pictures,
+        },
+    ))
+}
+
+/// Renders one frame of `runner` and returns its time and each pass's, in
+/// ms: from GPU timestamps when the device has them, else from submission
+/// to completion on the CPU.
+fn timed(
+    gpu: &Gpu,
+    profiler: &mut wgpu_profiler::GpuProfiler,
+    timestamps: bool,
+    runner: &mut Runner,
+    inputs: &FrameInputs,
+    label: &str,
+) -> Result<(f64, Vec<(String, f64)>), String> {
+    let start = std::time::Instant::now();
+    runner.frame(gpu, inputs, timestamps.then_some((&mut *profiler, label)))?;
+    if timestamps {
+        profiler.end_frame().map_err(|err| err.to_string())?;
+    }
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|err| err.to_string())?;
+    let wall = start.elapsed().as_secs_f64() * 1e3;
+    if !timestamps {
+        return Ok((wall, Vec::new()));
+    }
+    let results = profiler
+        .process_finished_frame(gpu.queue.get_timestamp_period())
+        .unwrap_or_default();
+    let mut passes = Vec::new();
+    for result in results {
+        if let Some(range) = result.time {
+            let name = result
+                .label
+                .rsplit('/')
+                .next()
+                .unwrap_or_default()
+                .to_string();
+            // The classification is a diagnostic, not part of the frame.
+            if name != "classify" {
+                passes.push((name, (range.end - range.start) * 1e3));
+            }
+        }
+    }
+    let total = passes.iter().map(|(_, ms)| ms).sum();
+    Ok((total, passes))
+}
+
+fn sources_of(rewritten: &rewrite::Rewritten) -> Result<HashMap<String, String>, Error> {
+    let mut sources = HashMap::new();
+    for pass in rewritten.passes.iter().chain([&rewritten.classify]) {
+        let outputs = back::write(&pass.module, &pass.info, Language::Wgsl).map_err(|err| {
+            Error::plain(Diagnostic::error(format!(
+                "cannot write {}: {err}",
+                pass.name
+            )))
+        })?;
+        for output in outputs {
+            sources.insert(
+                format!("{}{}", pass.name, output.suffix),
+                String::from_utf8_lossy(&output.bytes).into_owned(),
+            );
+        }
+    }
+    Ok(sources)
+}
+
+fn select<'a>(
+    shader: &Shader,
+    analysis: &'a Analysis,
+    nodes: &Nodes,
+) -> Result<Vec<&'a Candidate>, Error> {
+    let chosen: Vec<&Candidate> = match nodes {
+        Nodes::All => analysis.candidates.iter().collect(),
+        Nodes::Top(n) => analysis.candidates.iter().take(*n).collect(),
+        Nodes::Ids(ids) => ids
+            .iter()
+            .map(|id| {
+                analysis.candidate(id).ok_or_else(|| {
+                    let why = analysis
+                        .rejected(id)
+                        .map(|r| format!("it cannot be cached: {}", r.detail))
+                        .unwrap_or_else(|| {
+                            "no node has that id (`shadecache analyze` lists them)".into()
+                        });
+                    Error::in_file(
+                        shader.file.clone(),
+                        Diagnostic::error(format!("node `{id}`: {why}")),
+                    )
+                })
+            })
+            .collect::<Result<_, _>>()?,
+    };
+    if chosen.is_empty() {
+        return Err(Error::in_file(
+            shader.file.clone(),
+            Diagnostic::error("no node to profile: the shader has no cache candidates"),
+        ));
+    }
+    Ok(chosen)
+}
+
+fn node_report(
+    shader: &Shader,
+    candidate: &Candidate,
+    payload_ms: f64,
+    reference_ms: f64,
+) -> NodeReport {
+    let node = &candidate.node;
+    let lines: Vec<&str> = shader.file.text.lines().collect();
+    let source = lines
+        .get(node.span.start[0].saturating_sub(1)..node.span.end[0].min(lines.len()))
+        .map(|l| l.join("\n"))
+        .unwrap_or_default();
+    NodeReport {
+        id: node.id.clone(),
+        text: node.text.clone(),
+        start: node.span.start,
+        end: node.span.end,
+        ty: node.ty.clone(),
+        source,
+        estimated_p_over_t: candidate.ratio,
+        p_over_t: if reference_ms > 0.0 {
+            payload_ms / reference_ms
+        } else {
+            0.0
+        },
+        payload_ms,
+    }
+}

@@ -1,0 +1,312 @@
+//! The report as one self-contained HTML page: the answer first, then the
+//! tables, the nodes in their source, the charts (inline SVG) and the
+//! pictures (inline PNG).
+
+use std::fmt::Write;
+use std::path::Path;
+
+use base64::Engine;
+
+use super::plots::{chart, escape, Series};
+use super::{images, Report};
+use crate::rewrite::Variant;
+
+/// Renders `report`; PNGs under `dir` (from [`super::write_images`]) are
+/// embedded.
+pub fn html(report: &Report, dir: &Path) -> String {
+    let mut page = String::new();
+    let _ = write!(
+        page,
+        "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>shadecache profile: {}</title><style>{}</style></head><body>",
+        escape(&report.shader),
+        STYLE
+    );
+    let _ = write!(
+        page,
+        "<h1>shadecache profile of <code>{}</code></h1>",
+        escape(&report.shader)
+    );
+    let _ = write!(
+        page,
+        "<p class=\"meta\">Scene <code>{}</code>{} — {}×{}, {} measured frames after {} warm-up — effects: {} — {} ({}, {}) — timing: {}<br>Command: <code>{}</code></p>",
+        escape(&report.scene),
+        if report.scene_description.is_empty() { String::new() } else { format!(" ({})", escape(&report.scene_description)) },
+        report.size[0],
+        report.size[1],
+        report.frames,
+        report.warmup,
+        if report.effects.is_empty() {
+            "none".to_string()
+        } else {
+            report.effects.iter().map(|e| format!("{e:?}")).collect::<Vec<_>>().join(", ")
+        },
+        escape(&report.device.name),
+        escape(&report.device.backend),
+        escape(&report.device.driver),
+        escape(&report.timing),
+        escape(&report.command),
+    );
+
+    // The answer.
+    page.push_str("<h2>Which value to cache</h2>");
+    match report.results.first() {
+        Some(best) => {
+            let _ = write!(
+                page,
+                "<p class=\"answer\">Cache <code>{}</code> (node <code>{}</code>) with the <b>{}</b> variant (Δn = {}, k = {}): <b>{:.2}×</b> faster than the original ({:.3} ms against {:.3} ms), {:.0}% of the ideal {:.2}× for P/T = {:.2} and {:.0}% reuse; PSNR {:.1} dB, SSIM {:.4}, largest error {:.3}.</p>",
+                escape(&best.node_text),
+                escape(&best.node),
+                best.variant,
+                best.refresh_period,
+                best.refresh_quad,
+                best.speedup,
+                best.time_ms,
+                report.reference.time_ms,
+                best.share_of_ideal * 100.0,
+                best.ideal_speedup,
+                best.p_over_t,
+                best.hit_rate * 100.0,
+                best.psnr,
+                best.ssim,
+                best.max_abs_error
+            );
+        }
+        None => page.push_str("<p>No configuration could be measured.</p>"),
+    }
+
+    // All results.
+    page.push_str("<h2>Results</h2><table><tr><th>#</th><th>node</th><th>variant</th><th>Δn</th><th>k</th><th>time ms</th><th>passes ms</th><th>speed-up</th><th>ideal</th><th>share</th><th>P/T</th><th>hit</th><th>miss (off-screen / disoccluded)</th><th>refresh</th><th>PSNR dB</th><th>SSIM</th><th>max err</th><th>map</th></tr>");
+    let _ = write!(
+        page,
+        "<tr class=\"reference\"><td></td><td colspan=\"4\">reference (unmodified shader)</td><td>{:.3}</td><td colspan=\"12\"></td></tr>",
+        report.reference.time_ms
+    );
+    for (rank, row) in report.results.iter().enumerate() {
+        let passes: Vec<String> = row
+            .passes
+            .iter()
+            .map(|p| format!("{} {:.3}", p.name, p.time_ms))
+            .collect();
+        let _ = write!(
+            page,
+            "<tr><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{}</td><td>{:.2}×</td><td>{:.2}×</td><td>{:.0}%</td><td>{:.2}</td><td>{:.1}%</td><td>{:.1}% ({:.1} / {:.1})</td><td>{:.1}%</td><td>{:.1}</td><td>{:.4}</td><td>{:.3}</td><td><a href=\"maps/{}\">png</a></td></tr>",
+            rank + 1,
+            escape(&row.node),
+            row.variant,
+            row.refresh_period,
+            row.refresh_quad,
+            row.time_ms,
+            escape(&passes.join(", ")),
+            row.speedup,
+            row.ideal_speedup,
+            row.share_of_ideal * 100.0,
+            row.p_over_t,
+            row.hit_rate * 100.0,
+            row.miss_rate * 100.0,
+            row.offscreen_rate * 100.0,
+            row.disocclusion_rate * 100.0,
+            row.refresh_rate * 100.0,
+            row.psnr,
+            row.ssim,
+            row.max_abs_error,
+            images::map_name(rank, row),
+        );
+    }
+    page.push_str("</table>");
+
+    // The nodes in their source.
+    page.push_str("<h2>Nodes</h2>");
+    for node in &report.nodes {
+        let _ = write!(
+            page,
+            "<h3><code>{}</code> — {} at {}:{}</h3><p>P/T estimated {:.3}, measured {:.3} (payload pass {:.3} ms)</p><pre>{}</pre>",
+            escape(&node.id),
+            escape(&node.ty),
+            node.start[0],
+            node.start[1],
+            node.estimated_p_over_t,
+            node.p_over_t,
+            node.payload_ms,
+            highlight(&node.source, node.start, node.end)
+        );
+    }
+
+    // Charts.
+    page.push_str("<h2>Charts</h2>");
+    page.push_str(&time_per_node(report));
+    page.push_str(&speedup_per_period(report));
+    page.push_str(&error_against_time(report));
+
+    // Pictures.
+    page.push_str("<h2>Pictures</h2><p>Maps of the cache's decisions: <span style=\"color:#0a0\">hit</span>, <span style=\"color:#00f\">refresh</span>, <span style=\"color:#f00\">miss (disoccluded)</span>, <span style=\"color:#f80\">miss (off-screen)</span>.</p><div class=\"pictures\">");
+    for (caption, path) in [
+        ("reference", dir.join("images/reference.png")),
+        ("best result", dir.join("images/best.png")),
+        ("difference ×4", dir.join("images/difference.png")),
+    ] {
+        embed(&mut page, caption, &path);
+    }
+    for (rank, row) in report.results.iter().enumerate().take(12) {
+        let name = images::map_name(rank, row);
+        embed(
+            &mut page,
+            &format!("#{} {} {}", rank + 1, row.node, row.variant),
+            &dir.join("maps").join(name),
+        );
+    }
+    page.push_str("</div></body></html>\n");
+    page
+}
+
+fn embed(page: &mut String, caption: &str, path: &Path) {
+    if let Ok(bytes) = std::fs::read(path) {
+        let _ = write!(
+            page,
+            "<figure><img alt=\"{0}\" src=\"data:image/png;base64,{1}\"><figcaption>{0}</figcaption></figure>",
+            escape(caption),
+            base64::engine::general_purpose::STANDARD.encode(bytes)
+        );
+    }
+}
+
+/// The node's lines with the node itself marked.
+fn highlight(source: &str, start: [usize; 2], end: [usize; 2]) -> String {
+    let mut out = String::new();
+    for (i, line) in source.lines().enumerate() {
+        let number = start[0] + i;
+        let chars: Vec<char> = line.chars().collect();
+        let from = if number == start[0] {
+            start[1].saturating_sub(1)
+        } else {
+            0
+        };
+        let to = if number == end[0] {
+            end[1].saturating_sub(1)
+        } else {
+            chars.len()
+        };
+        let (from, to) = (
+            from.min(chars.len()),
+            to.min(chars.len()).max(from.min(chars.len())),
+        );
+        let piece = |a: usize, b: usize| escape(&chars[a..b].iter().collect::<String>());
+        let _ = writeln!(
+            out,
+            "{:>4} | {}<mark>{}</mark>{}",
+            number,
+            piece(0, from),
+            piece(from, to),
+            piece(to, chars.len())
+        );
+    }
+    out
+}
+
+/// Seed 002 fig. 8: render time per node, nodes in order of measured P/T,
+/// one line per variant and the reference.
+fn time_per_node(report: &Report) -> String {
+    let mut nodes = report.nodes.clone();
+    nodes.sort_by(|a, b| a.p_over_t.total_cmp(&b.p_over_t));
+    let labels: Vec<String> = nodes
+        .iter()
+        .map(|n| format!("{} ({:.2})", n.id, n.p_over_t))
+        .collect();
+    let mut series = vec![Series {
+        name: "reference".into(),
+        points: (0..nodes.len())
+            .map(|i| (i as f64, report.reference.time_ms))
+            .collect(),
+        line: true,
+    }];
+    for variant in Variant::ALL {
+        let points: Vec<(f64, f64)> = nodes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, node)| {
+                report
+                    .results
+                    .iter()
+                    .filter(|r| r.node == node.id && r.variant == variant)
+                    .map(|r| r.time_ms)
+                    .min_by(f64::total_cmp)
+                    .map(|t| (i as f64, t))
+            })
+            .collect();
+        if !points.is_empty() {
+            series.push(Series {
+                name: variant.to_string(),
+                points,
+                line: true,
+            });
+        }
+    }
+    chart(
+        "Render time per node (nodes by measured P/T)",
+        "node (P/T)",
+        "ms per frame",
+        &series,
+        Some(&labels),
+    )
+}
+
+/// Seed 002 fig. 9: speed-up against Δn, one line per k, for the best
+/// node and variant.
+fn speedup_per_period(report: &Report) -> String {
+    let Some(best) = report.results.first() else {
+        return String::new();
+    };
+    let mut quads: Vec<u32> = report.results.iter().map(|r| r.refresh_quad).collect();
+    quads.sort_unstable();
+    quads.dedup();
+    let series: Vec<Series> = quads
+        .iter()
+        .map(|&k| {
+            let mut points: Vec<(f64, f64)> = report
+                .results
+                .iter()
+                .filter(|r| r.node == best.node && r.variant == best.variant && r.refresh_quad == k)
+                .map(|r| (f64::from(r.refresh_period), r.speedup))
+                .collect();
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            Series {
+                name: format!("k = {k}"),
+                points,
+                line: true,
+            }
+        })
+        .collect();
+    chart(
+        &format!("Speed-up against Δn ({} {})", best.node, best.variant),
+        "Δn (refresh period, frames)",
+        "speed-up",
+        &series,
+        None,
+    )
+}
+
+/// Error against time: every configuration, one colour per variant.
+fn error_against_time(report: &Report) -> String {
+    let series: Vec<Series> = Variant::ALL
+        .iter()
+        .map(|&variant| Series {
+            name: variant.to_string(),
+            points: report
+                .results
+                .iter()
+                .filter(|r| r.variant == variant)
+                .map(|r| (r.time_ms, r.psnr))
+                .collect(),
+            line: false,
+        })
+        .filter(|s| !s.points.is_empty())
+        .collect();
+    chart(
+        "Error against time",
+        "ms per frame",
+        "PSNR (dB)",
+        &series,
+        None,
+    )
+}
+
+const STYLE: &str = "body{font-family:sans-serif;margin:2em;max-width:1200px}table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:3px 6px;text-align:right}th{background:#eee}tr.reference{background:#f6f6f6}code{background:#f3f3f3;padding:0 3px}pre{background:#f8f8f8;padding:8px;overflow-x:auto}mark{background:#ffe08a}.answer{font-size:15px;background:#eef7ee;padding:10px;border-left:4px solid #2a2}.meta{color:#555}.pictures{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}figure img{image-rendering:pixelated;width:256px;border:1px solid #ccc}svg{display:block;margin:12px 0}";

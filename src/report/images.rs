@@ -1,0 +1,77 @@
+//! The report's pictures: maps of the cache's decisions (hits green,
+//! misses red — orange when off-screen — refreshes blue, as in seed 002
+//! fig. 5) and the reference, variant and difference images of the best
+//! result.
+
+use std::path::{Path, PathBuf};
+
+use super::Report;
+use crate::profile::Pictures;
+
+/// Writes `maps/<rank>-<node>-<variant>-dn<Δn>-k<k>.png` for every result,
+/// and `reference.png`, `best.png` and `difference.png` (×4 amplified)
+/// into `dir/images/`. Returns the files written.
+pub fn write_images(
+    dir: &Path,
+    report: &Report,
+    pictures: &Pictures,
+) -> Result<Vec<PathBuf>, String> {
+    let [width, height] = report.size;
+    let maps = dir.join("maps");
+    let images = dir.join("images");
+    std::fs::create_dir_all(&maps)
+        .map_err(|e| format!("cannot create `{}`: {e}", maps.display()))?;
+    std::fs::create_dir_all(&images)
+        .map_err(|e| format!("cannot create `{}`: {e}", images.display()))?;
+    let save = |path: PathBuf, rgba: &[u8]| -> Result<PathBuf, String> {
+        let opaque: Vec<u8> = rgba
+            .chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect();
+        image::save_buffer(
+            &path,
+            &opaque,
+            width,
+            height,
+            image::ExtendedColorType::Rgba8,
+        )
+        .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+        Ok(path)
+    };
+    let mut written = Vec::new();
+    for (rank, (row, (_, classes))) in report.results.iter().zip(&pictures.results).enumerate() {
+        if classes.is_empty() {
+            continue;
+        }
+        let name = map_name(rank, row);
+        written.push(save(maps.join(name), classes)?);
+    }
+    if !pictures.reference.is_empty() {
+        written.push(save(images.join("reference.png"), &pictures.reference)?);
+        if let Some((color, _)) = pictures.results.first() {
+            if !color.is_empty() {
+                written.push(save(images.join("best.png"), color)?);
+                let difference: Vec<u8> = pictures
+                    .reference
+                    .iter()
+                    .zip(color)
+                    .map(|(a, b)| a.abs_diff(*b).saturating_mul(4))
+                    .collect();
+                written.push(save(images.join("difference.png"), &difference)?);
+            }
+        }
+    }
+    Ok(written)
+}
+
+/// The file name of a result's map.
+pub fn map_name(rank: usize, row: &super::ResultRow) -> String {
+    format!(
+        "{:02}-{}-{}-dn{}-k{}.png",
+        rank + 1,
+        row.node,
+        row.variant,
+        row.refresh_period,
+        row.refresh_quad
+    )
+}

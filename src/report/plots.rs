@@ -1,0 +1,195 @@
+//! Small SVG charts for the HTML report.
+//!
+//! Written by hand rather than with a plotting crate: plotters and its
+//! peers lay text out with a font backend (system fonts or a bundled TTF),
+//! which a headless CI machine may not have, while in SVG the browser lays
+//! the text out itself. Line and scatter charts with axes and a legend are
+//! all the report needs.
+
+use std::fmt::Write;
+
+/// A named series of (x, y) points.
+#[derive(Clone, Debug)]
+pub struct Series {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+    /// Draw a line through the points (else only markers).
+    pub line: bool,
+}
+
+const COLORS: [&str; 6] = [
+    "#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#666666",
+];
+
+/// An SVG chart of `series` with axis labels; `x_labels` names integer x
+/// positions when given (a categorical axis).
+pub fn chart(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series],
+    x_labels: Option<&[String]>,
+) -> String {
+    let (width, height) = (640.0, 360.0);
+    let (left, right, top, bottom) = (
+        64.0,
+        16.0,
+        32.0,
+        if x_labels.is_some() { 96.0 } else { 48.0 },
+    );
+    let points = series.iter().flat_map(|s| &s.points);
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, 0.0f64, f64::MIN);
+    for &(x, y) in points {
+        if x.is_finite() && y.is_finite() {
+            x0 = x0.min(x);
+            x1 = x1.max(x);
+            y0 = y0.min(y);
+            y1 = y1.max(y);
+        }
+    }
+    if x0 > x1 {
+        (x0, x1, y1) = (0.0, 1.0, 1.0);
+    }
+    if x1 - x0 < 1e-9 {
+        x1 = x0 + 1.0;
+    }
+    if y1 - y0 < 1e-9 {
+        y1 = y0 + 1.0;
+    }
+    y1 *= 1.05;
+    let sx = |x: f64| left + (x - x0) / (x1 - x0) * (width - left - right);
+    let sy = |y: f64| height - bottom - (y - y0) / (y1 - y0) * (height - top - bottom);
+    let mut svg = String::new();
+    let _ = write!(
+        svg,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 {width} {height}" width="{width}" height="{height}" font-family="sans-serif" font-size="11">"#
+    );
+    let _ = write!(
+        svg,
+        r#"<text x="{}" y="18" text-anchor="middle" font-size="13" font-weight="bold">{}</text>"#,
+        width / 2.0,
+        escape(title)
+    );
+    // Axes and ticks.
+    let _ = write!(
+        svg,
+        r##"<line x1="{left}" y1="{}" x2="{}" y2="{}" stroke="#333"/><line x1="{left}" y1="{top}" x2="{left}" y2="{}" stroke="#333"/>"##,
+        height - bottom,
+        width - right,
+        height - bottom,
+        height - bottom
+    );
+    for i in 0..=5 {
+        let y = y0 + (y1 - y0) * f64::from(i) / 5.0;
+        let _ = write!(
+            svg,
+            r##"<line x1="{left}" y1="{py}" x2="{}" y2="{py}" stroke="#ddd"/><text x="{}" y="{}" text-anchor="end">{}</text>"##,
+            width - right,
+            left - 4.0,
+            sy(y) + 4.0,
+            number(y),
+            py = sy(y)
+        );
+    }
+    match x_labels {
+        Some(labels) => {
+            for (i, label) in labels.iter().enumerate() {
+                let x = sx(i as f64);
+                let _ = write!(
+                    svg,
+                    r#"<text x="{x}" y="{}" text-anchor="end" transform="rotate(-40 {x} {})">{}</text>"#,
+                    height - bottom + 14.0,
+                    height - bottom + 14.0,
+                    escape(label)
+                );
+            }
+        }
+        None => {
+            for i in 0..=5 {
+                let x = x0 + (x1 - x0) * f64::from(i) / 5.0;
+                let _ = write!(
+                    svg,
+                    r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
+                    sx(x),
+                    height - bottom + 14.0,
+                    number(x)
+                );
+            }
+        }
+    }
+    let _ = write!(
+        svg,
+        r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
+        (left + width - right) / 2.0,
+        height - 6.0,
+        escape(x_label)
+    );
+    let _ = write!(
+        svg,
+        r#"<text x="14" y="{}" text-anchor="middle" transform="rotate(-90 14 {})">{}</text>"#,
+        (top + height - bottom) / 2.0,
+        (top + height - bottom) / 2.0,
+        escape(y_label)
+    );
+    // Series and legend.
+    for (i, s) in series.iter().enumerate() {
+        let color = COLORS[i % COLORS.len()];
+        let finite: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .copied()
+            .filter(|(x, y)| x.is_finite() && y.is_finite())
+            .collect();
+        if s.line && finite.len() > 1 {
+            let path: Vec<String> = finite
+                .iter()
+                .map(|&(x, y)| format!("{:.1},{:.1}", sx(x), sy(y)))
+                .collect();
+            let _ = write!(
+                svg,
+                r#"<polyline fill="none" stroke="{color}" stroke-width="2" points="{}"/>"#,
+                path.join(" ")
+            );
+        }
+        for &(x, y) in &finite {
+            let _ = write!(
+                svg,
+                r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{color}"><title>{}: {} , {}</title></circle>"#,
+                sx(x),
+                sy(y),
+                escape(&s.name),
+                number(x),
+                number(y)
+            );
+        }
+        let ly = top + 4.0 + 14.0 * i as f64;
+        let _ = write!(
+            svg,
+            r#"<rect x="{}" y="{}" width="10" height="10" fill="{color}"/><text x="{}" y="{}">{}</text>"#,
+            width - right - 150.0,
+            ly,
+            width - right - 136.0,
+            ly + 9.0,
+            escape(&s.name)
+        );
+    }
+    svg.push_str("</svg>");
+    svg
+}
+
+fn number(v: f64) -> String {
+    if v.abs() >= 100.0 {
+        format!("{v:.0}")
+    } else if v.abs() >= 1.0 {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
+pub fn escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
