@@ -96,11 +96,14 @@ struct CacheFootprint {
 
 // Its previous clip position (from the vertex stage evaluated with last
 // frame's uniforms) → NDC → texel coordinates in the cache. Off-screen when
-// the point was behind the previous camera (w ≤ 0, or NaN) or when the 2×2
-// footprint leaves the viewport; disoccluded when any of the four depths of
-// last frame's depth buffer (one gather) disagrees with the point's
-// previous depth by ε or more — which also keeps a footprint straddling a
-// silhouette from being a hit.
+// the point was behind the previous camera (w ≤ 0, or NaN) or outside the
+// viewport's texel centres; disoccluded when a texel of the 2×2 bilinear
+// footprint (one gather from last frame's depth buffer) disagrees with the
+// point's previous depth by ε or more. Texels whose bilinear weight is
+// below 0.001 do not count: without that, a point that reprojects exactly
+// onto a texel centre next to a silhouette (a static scene) would miss
+// because of a neighbour it does not read; with it, a footprint that
+// really straddles a silhouette still misses.
 fn cache_footprint(previous_clip: vec4<f32>) -> CacheFootprint {
     var result = CacheFootprint(1u, vec2<f32>(0.0), vec2<f32>(0.0));
     if (!(previous_clip.w > 0.0)) {
@@ -108,21 +111,24 @@ fn cache_footprint(previous_clip: vec4<f32>) -> CacheFootprint {
     }
     let ndc = previous_clip.xyz / previous_clip.w;
     let texel = (vec2<f32>((ndc.x * 0.5) + 0.5, 0.5 - (ndc.y * 0.5)) * cache_params.viewport) - vec2<f32>(0.5);
-    let base = floor(texel);
-    let last = cache_params.viewport - vec2<f32>(2.0);
+    let slack = vec2<f32>(0.001);
     // Comparisons with NaN are false, so a NaN position misses here too.
-    if (!(all(base >= vec2<f32>(0.0)) && all(base <= last))) {
+    if (!(all(texel >= -slack) && all(texel <= ((cache_params.viewport - vec2<f32>(1.0)) + slack)))) {
         return result;
     }
-    // Between the four texel centres: the gather takes exactly those four.
+    let base = floor(texel);
+    let f = texel - base;
+    // textureGather's order: (0, 1), (1, 1), (1, 0), (0, 0) from `base`.
+    let weights = vec4<f32>((1.0 - f.x) * f.y, f.x * f.y, f.x * (1.0 - f.y), (1.0 - f.x) * (1.0 - f.y));
     let depths = textureGather(cache_previous_depth, cache_sampler, (base + vec2<f32>(1.0)) / cache_params.viewport);
-    if (!all(abs(depths - vec4<f32>(ndc.z)) < vec4<f32>(cache_params.depth_epsilon))) {
+    let agree = (abs(depths - vec4<f32>(ndc.z)) < vec4<f32>(cache_params.depth_epsilon)) | (weights < vec4<f32>(0.001));
+    if (!all(agree)) {
         result.status = 2u;
         return result;
     }
     result.status = 0u;
     result.base = base;
-    result.weights = texel - base;
+    result.weights = f;
     return result;
 }
 
@@ -145,16 +151,19 @@ fn cache_lookup_loads(previous_clip: vec4<f32>) -> CacheLookup {
     let footprint = cache_footprint(previous_clip);
     var result = CacheLookup(vec4<f32>(0.0), false, footprint.status);
     if (footprint.status == 0u) {
-        let t = vec2<i32>(footprint.base);
+        // Taps just outside the viewport (weight below 0.001) read the edge.
+        let last = vec2<i32>(cache_params.viewport) - vec2<i32>(1);
+        let t0 = clamp(vec2<i32>(footprint.base), vec2<i32>(0), last);
+        let t1 = clamp(vec2<i32>(footprint.base) + vec2<i32>(1), vec2<i32>(0), last);
         let f = footprint.weights;
         let top = mix(
-            textureLoad(cache_previous_payload, t, 0),
-            textureLoad(cache_previous_payload, t + vec2<i32>(1, 0), 0),
+            textureLoad(cache_previous_payload, t0, 0),
+            textureLoad(cache_previous_payload, vec2<i32>(t1.x, t0.y), 0),
             f.x,
         );
         let bottom = mix(
-            textureLoad(cache_previous_payload, t + vec2<i32>(0, 1), 0),
-            textureLoad(cache_previous_payload, t + vec2<i32>(1, 1), 0),
+            textureLoad(cache_previous_payload, vec2<i32>(t0.x, t1.y), 0),
+            textureLoad(cache_previous_payload, t1, 0),
             f.x,
         );
         result.payload = mix(top, bottom, f.y);

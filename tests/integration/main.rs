@@ -8,5 +8,6 @@ mod corpus;
 mod cost;
 mod errors;
 mod gpu;
+mod profile;
 mod rewrite;
 mod util;

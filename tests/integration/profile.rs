@@ -1,0 +1,334 @@
+//! The profiler on lavapipe: small frames, few of them.
+
+use std::path::Path;
+
+use shadecache::profile::{self, Nodes, Options, Quiet};
+use shadecache::rewrite::{CacheFormat, Variant};
+use shadecache::scene::Scene;
+
+use crate::util::{root, shadecache, stderr, temp_file};
+
+/// A scene for the marble shader: one sphere; `extra` adds TOML.
+fn marble_scene(effects: &str, extra: &str) -> String {
+    format!(
+        r#"
+size = [128, 128]
+frames = 4
+warmup = 1
+effects = [{effects}]
+[camera]
+eye = [0.0, 0.3, 3.2]
+[[objects]]
+mesh = {{ kind = "sphere", rings = 32, segments = 48 }}
+rotation_degrees_per_frame = [0.0, 0.6, 0.0]
+[uniforms]
+marble_frequency = 4.0
+turbulence_amount = 6.0
+light_color = [1.0, 1.0, 1.0]
+{extra}
+"#
+    )
+}
+
+fn run(
+    scene_text: &str,
+    options: Options,
+) -> Option<(profile::Pictures, shadecache::report::Report, Scene)> {
+    crate::gpu::gpu()?;
+    let (_dir, scene_path) = temp_file("scene.toml", scene_text.as_bytes());
+    let scene = Scene::load(&scene_path).unwrap_or_else(|e| panic!("{}", e.render()));
+    let shader = shadecache::front::load(&root().join("corpus/noise_marble.wgsl")).unwrap();
+    let (report, pictures) = profile::profile(&shader, &scene, &scene_path, &options, &mut Quiet)
+        .unwrap_or_else(|e| panic!("{}", e.render()));
+    Some((pictures, report, scene))
+}
+
+fn options(periods: &[u32], quads: &[u32]) -> Options {
+    Options {
+        nodes: Nodes::Ids(vec!["nb0c12cc4".into()]),
+        refresh_periods: periods.to_vec(),
+        refresh_quads: quads.to_vec(),
+        ..Options::default()
+    }
+}
+
+/// Static camera, static scene, refresh off: after the first frame every
+/// covered pixel is reused and the image equals the reference within the
+/// cache format's tolerance.
+#[test]
+fn static_scene_without_refresh_reuses_every_pixel() {
+    let Some((_, report, _)) = run(&marble_scene("", ""), options(&[0], &[4])) else {
+        return;
+    };
+    assert_eq!(report.results.len(), 3);
+    for row in &report.results {
+        for (frame, stats) in row.frame_stats.iter().enumerate() {
+            assert_eq!(
+                stats.hit_rate, 1.0,
+                "{} frame {frame}: {stats:?}",
+                row.variant
+            );
+            assert_eq!(stats.miss_rate, 0.0);
+            assert_eq!(stats.refresh_rate, 0.0);
+        }
+        // rgba16float holds the turbulence sum to 11 bits: at most one
+        // step of the 8-bit output.
+        assert!(
+            row.max_abs_error <= 1.0 / 255.0 + 1e-9,
+            "{} {}",
+            row.variant,
+            row.max_abs_error
+        );
+        assert!(row.psnr > 45.0, "{} {}", row.variant, row.psnr);
+    }
+}
+
+/// Δn = 1 recomputes every pixel every frame: each variant's image is the
+/// reference's (differential test; an rgba32float cache so that three-pass,
+/// which reads its payload back, loses nothing).
+#[test]
+fn refresh_period_one_equals_the_reference() {
+    let mut opts = options(&[1], &[1]);
+    opts.cache_format = CacheFormat::Rgba32float;
+    let Some((_, report, _)) = run(
+        &marble_scene("\"object-motion\", \"camera-motion\"", ""),
+        opts,
+    ) else {
+        return;
+    };
+    assert_eq!(report.results.len(), 3);
+    for row in &report.results {
+        assert_eq!(row.hit_rate, 0.0, "{}", row.variant);
+        assert!(
+            row.max_abs_error <= 1.0 / 255.0 + 1e-9,
+            "{} {}",
+            row.variant,
+            row.max_abs_error
+        );
+        assert!(row.above_threshold == 0.0, "{}", row.variant);
+    }
+}
+
+/// Over Δn consecutive frames of a static scene each pixel is refreshed
+/// exactly once, so the mean refresh fraction is 1/Δn for any block size.
+#[test]
+fn refresh_fraction_is_one_over_the_period() {
+    let mut opts = options(&[8], &[1, 2, 4]);
+    opts.variants = vec![Variant::ThreePass];
+    opts.frames = Some(8);
+    let Some((_, report, _)) = run(&marble_scene("", ""), opts) else {
+        return;
+    };
+    assert_eq!(report.results.len(), 3);
+    for row in &report.results {
+        assert!(
+            (row.refresh_rate - 1.0 / 8.0).abs() < 0.002,
+            "k = {}: refresh {}",
+            row.refresh_quad,
+            row.refresh_rate
+        );
+        assert!(((row.hit_rate + row.refresh_rate) - 1.0).abs() < 1e-9);
+        // Per frame, the blocks due are a random share around 1/Δn.
+        for stats in &row.frame_stats {
+            assert!(
+                stats.refresh_rate < 0.3,
+                "k = {}: {:?}",
+                row.refresh_quad,
+                stats
+            );
+        }
+    }
+}
+
+/// A cube sliding over a plane uncovers a band of the plane each frame:
+/// those pixels, and only those (give or take a pixel at the edges, and the
+/// cube's own newly seen sides), miss.
+#[test]
+fn sliding_cube_misses_exactly_at_the_disoccluded_band() {
+    let scene_text = r#"
+size = [128, 128]
+frames = 1
+warmup = 1
+effects = ["object-motion", "disocclusion"]
+[camera]
+eye = [0.0, 40.0, 0.01]
+target = [0.0, 0.0, 0.0]
+fov_degrees = 8.0
+near = 30.0
+far = 50.0
+[[objects]]
+mesh = { kind = "plane", size = 8.0, subdivisions = 8 }
+[[objects]]
+mesh = { kind = "cube", size = 1.5 }
+position = [-0.6, 0.75, 0.0]
+translation_per_frame = [0.4, 0.0, 0.0]
+[uniforms]
+marble_frequency = 4.0
+turbulence_amount = 6.0
+light_color = [1.0, 1.0, 1.0]
+"#;
+    let mut opts = options(&[0], &[4]);
+    opts.variants = vec![Variant::ThreePass];
+    let Some((pictures, _, scene)) = run(scene_text, opts) else {
+        return;
+    };
+    let classes = &pictures.results[0].1;
+    let (w, h) = (128usize, 128usize);
+
+    // The cube's silhouette in frames 0 and 1, rasterised on the CPU at
+    // pixel centres with the same matrices.
+    let cube = scene.objects[1].mesh.build(Path::new(".")).unwrap();
+    let silhouette = |frame: u32| -> Vec<bool> {
+        let state = scene.frame(frame, 1.0);
+        let clip = state.clip_from_world * state.objects[1];
+        let points: Vec<glam::Vec2> = cube
+            .positions
+            .iter()
+            .map(|p| {
+                let c = clip * p.extend(1.0);
+                glam::Vec2::new(c.x / c.w, c.y / c.w)
+            })
+            .collect();
+        let mut mask = vec![false; w * h];
+        for (i, covered) in mask.iter_mut().enumerate() {
+            let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+            let p = glam::Vec2::new(x / w as f32 * 2.0 - 1.0, 1.0 - y / h as f32 * 2.0);
+            *covered = cube.indices.chunks(3).any(|t| {
+                let [a, b, c] = [
+                    points[t[0] as usize],
+                    points[t[1] as usize],
+                    points[t[2] as usize],
+                ];
+                let side = |u: glam::Vec2, v: glam::Vec2| (v - u).perp_dot(p - u);
+                let (s0, s1, s2) = (side(a, b), side(b, c), side(c, a));
+                (s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0) || (s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0)
+            });
+        }
+        mask
+    };
+    let (before, now) = (silhouette(0), silhouette(1));
+    let band: Vec<bool> = (0..w * h).map(|i| before[i] && !now[i]).collect();
+    let near = |mask: &[bool], i: usize| {
+        let (x, y) = ((i % w) as i64, (i / w) as i64);
+        (-1..=1).any(|dy| {
+            (-1..=1).any(|dx| {
+                let (nx, ny) = (x + dx, y + dy);
+                nx >= 0
+                    && ny >= 0
+                    && nx < w as i64
+                    && ny < h as i64
+                    && mask[(ny as usize) * w + nx as usize]
+            })
+        })
+    };
+    let inside = |mask: &[bool], i: usize| !near(&mask.iter().map(|m| !m).collect::<Vec<_>>(), i);
+    let miss = |i: usize| classes[i * 4] == 255 && classes[i * 4 + 2] == 0;
+    let band_pixels = band.iter().filter(|&&b| b).count();
+    assert!(band_pixels > 100, "the band is {band_pixels} pixels");
+    let mut unmissed = 0;
+    let mut stray = 0;
+    for i in 0..w * h {
+        if inside(&band, i) && !miss(i) {
+            unmissed += 1;
+        }
+        if miss(i) && !near(&band, i) && !near(&now, i) {
+            stray += 1;
+        }
+    }
+    assert_eq!(
+        unmissed, 0,
+        "band pixels (one pixel in from its edge) that did not miss"
+    );
+    assert_eq!(stray, 0, "misses away from the band and the cube");
+}
+
+#[test]
+fn a_missing_uniform_is_an_error_naming_it() {
+    let scene = marble_scene("", "").replace("marble_frequency = 4.0\n", "");
+    let (_dir, path) = temp_file("scene.toml", scene.as_bytes());
+    let output = shadecache([
+        "profile".as_ref(),
+        "corpus/noise_marble.wgsl".as_ref(),
+        "--scene".as_ref(),
+        path.as_os_str(),
+        "--quiet".as_ref(),
+    ] as [&std::ffi::OsStr; 5]);
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{err}");
+    assert!(err.contains("`frame.marble_frequency`"), "{err}");
+    assert!(err.contains("[uniforms]"), "{err}");
+}
+
+#[test]
+fn a_bad_scene_file_points_at_the_error() {
+    let (_dir, path) = temp_file("scene.toml", b"size = [128, 128]\nframes = \"many\"\n");
+    let output = shadecache([
+        "profile".as_ref(),
+        "corpus/noise_marble.wgsl".as_ref(),
+        "--scene".as_ref(),
+        path.as_os_str(),
+    ] as [&std::ffi::OsStr; 4]);
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{err}");
+    assert!(err.contains("scene.toml:2:"), "{err}");
+}
+
+#[test]
+fn report_json_carries_the_documented_fields() {
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let scene = marble_scene("\"object-motion\"", "");
+    let (_dir, path) = temp_file("scene.toml", scene.as_bytes());
+    let out = tempfile::tempdir().unwrap();
+    let output = shadecache([
+        "profile".as_ref(),
+        "corpus/noise_marble.wgsl".as_ref(),
+        "--scene".as_ref(),
+        path.as_os_str(),
+        "--nodes".as_ref(),
+        "top:2".as_ref(),
+        "--frames".as_ref(),
+        "2".as_ref(),
+        "--out".as_ref(),
+        out.path().as_os_str(),
+        "--quiet".as_ref(),
+    ] as [&std::ffi::OsStr; 11]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.path().join("report.json")).unwrap()).unwrap();
+    let results = report["results"].as_array().unwrap();
+    assert_eq!(results.len(), 2 * 3);
+    for row in results {
+        for key in [
+            "node",
+            "variant",
+            "speedup",
+            "psnr",
+            "ssim",
+            "hit_rate",
+            "miss_rate",
+            "refresh_rate",
+            "p_over_t",
+            "ideal_speedup",
+            "passes",
+            "time_ms",
+        ] {
+            assert!(!row[key].is_null(), "{key} missing: {row}");
+        }
+        assert!(["one-pass", "two-pass", "three-pass"].contains(&row["variant"].as_str().unwrap()));
+        assert!(row["speedup"].as_f64().unwrap() > 0.0);
+    }
+    assert!(report["reference"]["time_ms"].as_f64().unwrap() > 0.0);
+    let html = std::fs::read_to_string(out.path().join("report.html")).unwrap();
+    assert!(html.contains("<svg") && html.contains("data:image/png;base64,"));
+    assert!(html.contains("Which value to cache"));
+    let maps = std::fs::read_dir(out.path().join("maps")).unwrap().count();
+    assert_eq!(maps, 6);
+    assert!(out.path().join("images/difference.png").is_file());
+    assert!(stdout_has(&output, "report: "));
+}
+
+fn stdout_has(output: &std::process::Output, text: &str) -> bool {
+    String::from_utf8_lossy(&output.stdout).contains(text)
+}
