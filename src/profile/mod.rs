@@ -207,9 +207,17 @@ pub fn profile(
         let sources = sources.clone();
         move |name: &str| sources.get(name).cloned()
     };
+    let pipeline_options = runtime::PipelineOptions {
+        cull_back_faces: scene.cull_back_faces,
+        ..runtime::PipelineOptions::default()
+    };
     let run_options = RunOptions {
         classify: true,
-        ..RunOptions::default()
+        pipelines: pipeline_options,
+    };
+    let plain = RunOptions {
+        classify: false,
+        pipelines: pipeline_options,
     };
     let reference_sources =
         HashMap::from([("reference.wgsl".to_string(), shader.file.text.clone())]);
@@ -220,7 +228,7 @@ pub fn profile(
         &meshes,
         &textures,
         (size[0], size[1]),
-        RunOptions::default(),
+        plain,
     )
     .map_err(|err| fail(format!("the reference does not run: {err}")))?;
 
@@ -246,7 +254,7 @@ pub fn profile(
             &meshes,
             &textures,
             (size[0], size[1]),
-            RunOptions::default(),
+            plain,
         )
         .map_err(fail)?;
         payloads.push((runner, Vec::new()));

@@ -46,6 +46,9 @@ pub struct PipelineOptions {
     /// pixel's value is the sum of every shading of it. With a shader that
     /// writes a constant, it counts how many times each pixel was shaded.
     pub count_shading: bool,
+    /// Cull back faces (counter-clockwise triangles face front), as the
+    /// scene says; the same for the reference and every variant.
+    pub cull_back_faces: bool,
 }
 
 /// Builds one render pipeline per pass of `plan`; `shader` gives the WGSL
@@ -136,7 +139,10 @@ fn pipeline(
                 compilation_options: wgpu::PipelineCompilationOptions::default(),
                 buffers,
             },
-            primitive: wgpu::PrimitiveState::default(),
+            primitive: wgpu::PrimitiveState {
+                cull_mode: options.cull_back_faces.then_some(wgpu::Face::Back),
+                ..wgpu::PrimitiveState::default()
+            },
             depth_stencil: Some(wgpu::DepthStencilState {
                 format: texture_format(&pass.depth.format)?,
                 depth_write_enabled: Some(pass.depth.write),

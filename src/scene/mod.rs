@@ -75,6 +75,14 @@ pub struct Scene {
     /// Seconds per frame for the `time` uniform.
     #[serde(default = "default_frame_time")]
     pub seconds_per_frame: f32,
+    /// Cull back faces (the procedural meshes face outwards,
+    /// counter-clockwise). Off for open or two-sided geometry.
+    #[serde(default = "default_true")]
+    pub cull_back_faces: bool,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 fn default_size() -> [u32; 2] {

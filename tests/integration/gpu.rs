@@ -185,6 +185,7 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
         runtime::RunOptions {
             pipelines: runtime::PipelineOptions {
                 count_shading: true,
+                cull_back_faces: false,
             },
             classify: false,
         },
