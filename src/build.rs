@@ -26,22 +26,13 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use crate::analysis::{self, Analysis};
+use crate::analysis;
 use crate::back::{self, Language};
 use crate::diagnostic::{Color, Diagnostic, Error};
 use crate::front;
 use crate::rewrite::{self, Options, Variant};
 
-/// Which nodes of a shader to rewrite.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Nodes {
-    /// These ids (from `shadecache analyze`).
-    Ids(Vec<String>),
-    /// The N candidates with the highest estimated P/T.
-    Top(usize),
-    /// Every candidate.
-    All,
-}
+pub use crate::analysis::Nodes;
 
 #[derive(Clone, Debug)]
 struct ShaderJob {
@@ -247,7 +238,7 @@ impl Build {
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "shader".into());
         let explicit = matches!(job.nodes, Nodes::Ids(_));
-        for candidate in select(&shader, &analysis, &job.nodes)? {
+        for candidate in analysis.select(&shader.file, &job.nodes)? {
             for &variant in &job.variants {
                 match rewrite::rewrite(&shader, &analysis, candidate, variant, &self.options) {
                     Ok(rewritten) => {
@@ -291,35 +282,6 @@ impl Build {
             }
         }
         Ok(())
-    }
-}
-
-fn select<'a>(
-    shader: &front::Shader,
-    analysis: &'a Analysis,
-    nodes: &Nodes,
-) -> Result<Vec<&'a analysis::Candidate>, Error> {
-    match nodes {
-        Nodes::All => Ok(analysis.candidates.iter().collect()),
-        Nodes::Top(n) => Ok(analysis.candidates.iter().take(*n).collect()),
-        Nodes::Ids(ids) => ids
-            .iter()
-            .map(|id| {
-                analysis.candidate(id).ok_or_else(|| {
-                    let reason = analysis
-                        .rejected(id)
-                        .map(|r| format!("it cannot be cached: {}", r.detail))
-                        .unwrap_or_else(|| "no node has that id (run `shadecache analyze`)".into());
-                    Error::in_file(
-                        shader.file.clone(),
-                        Diagnostic::error(format!(
-                            "node `{id}` of `{}`: {reason}",
-                            shader.file.path
-                        )),
-                    )
-                })
-            })
-            .collect(),
     }
 }
 

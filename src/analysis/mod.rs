@@ -134,7 +134,77 @@ pub fn analyze(shader: &Shader, options: &Options) -> Result<Analysis, Error> {
     Ok(candidates::find(shader, entry_index, &model))
 }
 
+/// Which nodes a command works on.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Nodes {
+    /// Every candidate.
+    All,
+    /// The N candidates with the highest estimated P/T.
+    Top(usize),
+    /// These ids (from `shadecache analyze`).
+    Ids(Vec<String>),
+}
+
 impl Analysis {
+    /// The candidates `nodes` names. An id that names a rejected node is an
+    /// error pointing at it with the reason; an unknown id is an error
+    /// listing the candidates.
+    pub fn select(
+        &self,
+        file: &std::sync::Arc<crate::diagnostic::SourceFile>,
+        nodes: &Nodes,
+    ) -> Result<Vec<&Candidate>, Error> {
+        use crate::diagnostic::Diagnostic;
+        let chosen: Vec<&Candidate> = match nodes {
+            Nodes::All => self.candidates.iter().collect(),
+            Nodes::Top(n) => self.candidates.iter().take(*n).collect(),
+            Nodes::Ids(ids) => ids
+                .iter()
+                .map(|id| {
+                    if let Some(candidate) = self.candidate(id) {
+                        return Ok(candidate);
+                    }
+                    if let Some(rejected) = self.rejected(id) {
+                        return Err(Error::in_file(
+                            file.clone(),
+                            Diagnostic::error(format!(
+                                "node {id} cannot be cached: {}",
+                                rejected.detail
+                            ))
+                            .with_label(rejected.node.range.clone(), rejected.reason.as_str()),
+                        ));
+                    }
+                    let known: Vec<&str> = self
+                        .candidates
+                        .iter()
+                        .take(8)
+                        .map(|c| c.node.id.as_str())
+                        .collect();
+                    Err(Error::plain(
+                        Diagnostic::error(format!("unknown node id `{id}` in `{}`", file.path))
+                            .with_note(format!(
+                                "candidates, highest P/T first: {}{}",
+                                known.join(", "),
+                                if self.candidates.len() > known.len() {
+                                    ", ..."
+                                } else {
+                                    ""
+                                }
+                            ))
+                            .with_note("`shadecache analyze` lists every node and its id"),
+                    ))
+                })
+                .collect::<Result<_, _>>()?,
+        };
+        if chosen.is_empty() {
+            return Err(Error::in_file(
+                file.clone(),
+                Diagnostic::error(format!("`{}` has no cache candidates", file.path)),
+            ));
+        }
+        Ok(chosen)
+    }
+
     /// Looks a node up by id among the candidates.
     pub fn candidate(&self, id: &str) -> Option<&Candidate> {
         self.candidates.iter().find(|c| c.node.id == id)

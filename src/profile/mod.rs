@@ -21,7 +21,7 @@ pub mod metrics;
 use std::collections::HashMap;
 use std::path::Path;
 
-use crate::analysis::{self, Analysis, Candidate};
+use crate::analysis::{self, Candidate};
 use crate::back::{self, Language};
 use crate::diagnostic::{Diagnostic, Error};
 use crate::front::Shader;
@@ -32,14 +32,7 @@ use crate::runtime::{self, FrameInputs, Gpu, ObjectInputs, RunOptions, Runner};
 use crate::scene::{self, Scene};
 use metrics::{Decisions, FrameError};
 
-/// Which nodes to profile.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Nodes {
-    All,
-    /// The N highest estimated P/T.
-    Top(usize),
-    Ids(Vec<String>),
-}
+pub use crate::analysis::Nodes;
 
 /// What to measure.
 #[derive(Clone, Debug)]
@@ -138,7 +131,7 @@ pub fn profile(
 ) -> Result<(Report, Pictures), Error> {
     let fail = |message: String| Error::plain(Diagnostic::error(message));
     let analysis = analysis::analyze(shader, &analysis::Options::default())?;
-    let nodes = select(shader, &analysis, &options.nodes)?;
+    let nodes = analysis.select(&shader.file, &options.nodes)?;
     let size = options.size.unwrap_or(scene.size);
     let (frames, warmup) = (
         options.frames.unwrap_or(scene.frames).max(1),
@@ -578,41 +571,6 @@ fn sources_of(rewritten: &rewrite::Rewritten) -> Result<HashMap<String, String>,
         }
     }
     Ok(sources)
-}
-
-fn select<'a>(
-    shader: &Shader,
-    analysis: &'a Analysis,
-    nodes: &Nodes,
-) -> Result<Vec<&'a Candidate>, Error> {
-    let chosen: Vec<&Candidate> = match nodes {
-        Nodes::All => analysis.candidates.iter().collect(),
-        Nodes::Top(n) => analysis.candidates.iter().take(*n).collect(),
-        Nodes::Ids(ids) => ids
-            .iter()
-            .map(|id| {
-                analysis.candidate(id).ok_or_else(|| {
-                    let why = analysis
-                        .rejected(id)
-                        .map(|r| format!("it cannot be cached: {}", r.detail))
-                        .unwrap_or_else(|| {
-                            "no node has that id (`shadecache analyze` lists them)".into()
-                        });
-                    Error::in_file(
-                        shader.file.clone(),
-                        Diagnostic::error(format!("node `{id}`: {why}")),
-                    )
-                })
-            })
-            .collect::<Result<_, _>>()?,
-    };
-    if chosen.is_empty() {
-        return Err(Error::in_file(
-            shader.file.clone(),
-            Diagnostic::error("no node to profile: the shader has no cache candidates"),
-        ));
-    }
-    Ok(chosen)
 }
 
 fn node_report(

@@ -48,7 +48,9 @@ fn build_fails_short_on_a_bad_node() {
         err.to_string(),
         "shadecache: 1 error rewriting shaders (see the diagnostics above)"
     );
-    assert!(err.errors[0].render().contains("no node has that id"));
+    assert!(err.errors[0]
+        .render()
+        .contains("unknown node id `n00000000`"));
     // Nothing half-written.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }

@@ -115,10 +115,13 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         VariantArg::All => Variant::ALL.to_vec(),
     };
 
-    let nodes: Vec<&analysis::Candidate> = match &args.node {
-        Some(id) => vec![find_node(&shader, &analysis, id)?],
-        None => analysis.candidates.iter().collect(),
-    };
+    let nodes = analysis.select(
+        &shader.file,
+        &match &args.node {
+            Some(id) => analysis::Nodes::Ids(vec![id.clone()]),
+            None => analysis::Nodes::All,
+        },
+    )?;
     let mut refused = 0;
     let mut written = 0;
     for candidate in &nodes {
@@ -163,42 +166,4 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         ))));
     }
     Ok(())
-}
-
-/// The candidate with id `id`; a rejected or unknown id is an error that
-/// says why.
-fn find_node<'a>(
-    shader: &front::Shader,
-    analysis: &'a analysis::Analysis,
-    id: &str,
-) -> Result<&'a analysis::Candidate, Error> {
-    if let Some(candidate) = analysis.candidate(id) {
-        return Ok(candidate);
-    }
-    if let Some(rejected) = analysis.rejected(id) {
-        return Err(Error::in_file(
-            shader.file.clone(),
-            Diagnostic::error(format!("node {id} cannot be cached: {}", rejected.detail))
-                .with_label(rejected.node.range.clone(), rejected.reason.as_str()),
-        ));
-    }
-    let known: Vec<&str> = analysis
-        .candidates
-        .iter()
-        .take(8)
-        .map(|c| c.node.id.as_str())
-        .collect();
-    Err(Error::plain(
-        Diagnostic::error(format!("unknown node id `{id}` in `{}`", shader.file.path))
-            .with_note(format!(
-                "candidates, highest P/T first: {}{}",
-                known.join(", "),
-                if analysis.candidates.len() > known.len() {
-                    ", ..."
-                } else {
-                    ""
-                }
-            ))
-            .with_note("`shadecache analyze` lists every node and its id"),
-    ))
 }
