@@ -26,7 +26,9 @@ use crate::back::{self, Language};
 use crate::diagnostic::{Diagnostic, Error};
 use crate::front::Shader;
 use crate::plan::{self, Plan};
-use crate::report::{Device, FrameStats, NodeReport, PassTime, Reference, Report, ResultRow};
+use crate::report::{
+    Device, FrameStats, MissCause, NodeReport, PassTime, Reference, Report, ResultRow,
+};
 use crate::rewrite::{self, CacheFormat, Options as RewriteOptions, Variant};
 use crate::runtime::{self, FrameInputs, Gpu, ObjectInputs, RunOptions, Runner};
 use crate::scene::{self, Scene};
@@ -95,12 +97,15 @@ impl Progress for Quiet {
     fn finish(&mut self) {}
 }
 
-/// The last measured frames, for the report's pictures.
+/// What the report shows besides its numbers: the last measured frames,
+/// and the GPU timer scopes of the last frame.
 #[derive(Clone, Debug)]
 pub struct Pictures {
     pub reference: Vec<u8>,
     /// Colour and classes of each result, in `Report::results` order.
     pub results: Vec<Picture>,
+    /// Every pass of every run in the last frame, for a Chrome trace.
+    pub trace: Vec<wgpu_profiler::GpuTimerQueryResult>,
 }
 
 /// A result's last measured colour and classes (RGBA8).
@@ -172,18 +177,45 @@ pub fn profile(
             _ => {}
         }
     }
-    let meshes: Vec<runtime::Mesh> = scene
+    let scene_meshes: Vec<scene::Mesh> = scene
         .objects
         .iter()
-        .map(|object| {
-            let mesh = object.mesh.build(dir)?;
+        .map(|object| object.mesh.build(dir))
+        .collect::<Result<_, String>>()
+        .map_err(fail)?;
+    let layout = &reference_plan.vertex_layout;
+    let meshes: Vec<runtime::Mesh> = scene_meshes
+        .iter()
+        .map(|mesh| {
             Ok(runtime::Mesh {
-                vertices: mesh.vertex_bytes(&reference_plan.vertex_layout)?,
-                indices: mesh.indices,
+                vertices: mesh.vertex_bytes(layout)?,
+                indices: mesh.indices.clone(),
             })
         })
         .collect::<Result<_, String>>()
         .map_err(fail)?;
+    let inputs_of = |scene: &Scene, frame: u32| -> Result<FrameInputs, Error> {
+        let state = scene.frame(frame, size[0] as f32 / size[1] as f32);
+        let mut inputs = FrameInputs::default();
+        for (object, mesh) in scene_meshes.iter().enumerate() {
+            let mut buffers = HashMap::new();
+            for buffer in &uniforms {
+                let bytes = scene::uniforms::fill(buffer, scene, &state, object).map_err(fail)?;
+                buffers.insert([buffer.group, buffer.binding], bytes);
+            }
+            let vertices = scene
+                .deformed(object, mesh, frame)
+                .map(|m| m.vertex_bytes(layout))
+                .transpose()
+                .map_err(fail)?;
+            inputs.objects.push(ObjectInputs {
+                mesh: object,
+                buffers,
+                vertices,
+            });
+        }
+        Ok(inputs)
+    };
 
     let gpu = Gpu::new().map_err(fail)?.ok_or_else(|| {
         fail("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers gives lavapipe)".into())
@@ -307,26 +339,15 @@ pub fn profile(
 
     let per_frame = 1 + payloads.len() + configs.len();
     progress.start(u64::from(warmup + frames) * per_frame as u64);
-    let aspect = size[0] as f32 / size[1] as f32;
     let mut reference_times = Vec::new();
     let mut reference_pixels = Vec::new();
+    let mut trace = Vec::new();
     for frame in 0..warmup + frames {
         let measured = frame >= warmup;
-        let state = scene.frame(frame, aspect);
-        let mut inputs = FrameInputs::default();
-        for (object, _) in scene.objects.iter().enumerate() {
-            let mut buffers = HashMap::new();
-            for buffer in &uniforms {
-                let bytes = scene::uniforms::fill(buffer, scene, &state, object).map_err(fail)?;
-                buffers.insert([buffer.group, buffer.binding], bytes);
-            }
-            inputs.objects.push(ObjectInputs {
-                mesh: object,
-                buffers,
-            });
-        }
+        let last = frame + 1 == warmup + frames;
+        let inputs = inputs_of(scene, frame)?;
 
-        let (time, _) = timed(
+        let (time, _, raw) = timed(
             &gpu,
             &mut profiler,
             timestamps,
@@ -335,21 +356,27 @@ pub fn profile(
             "reference",
         )
         .map_err(fail)?;
+        if last {
+            trace.extend(raw);
+        }
         progress.step("reference");
         if measured {
             reference_times.push(time);
             reference_pixels = runtime::read_texture(&gpu, reference.color(), 4).map_err(fail)?;
         }
         for (runner, times) in &mut payloads {
-            let (time, _) =
+            let (time, _, raw) =
                 timed(&gpu, &mut profiler, timestamps, runner, &inputs, "payload").map_err(fail)?;
+            if last {
+                trace.extend(raw);
+            }
             progress.step("payload");
             if measured {
                 times.push(time);
             }
         }
         for config in &mut configs {
-            let (time, passes) = timed(
+            let (time, passes, raw) = timed(
                 &gpu,
                 &mut profiler,
                 timestamps,
@@ -358,6 +385,9 @@ pub fn profile(
                 &config.label,
             )
             .map_err(fail)?;
+            if last {
+                trace.extend(raw);
+            }
             progress.step(&config.label);
             if !measured {
                 continue;
@@ -469,6 +499,66 @@ pub fn profile(
     rows.sort_by(|a, b| b.0.speedup.total_cmp(&a.0.speedup));
     let (results, pictures): (Vec<_>, Vec<_>) = rows.into_iter().unzip();
 
+    // What causes the misses: the best configuration again, with one
+    // declared effect at a time.
+    let mut miss_causes = Vec::new();
+    if let Some(best) = results.first() {
+        let candidate = nodes
+            .iter()
+            .find(|c| c.node.id == best.node)
+            .ok_or_else(|| {
+                fail("internal error: the best node is not among the profiled".into())
+            })?;
+        let rewrite_options = RewriteOptions {
+            refresh_period: best.refresh_period,
+            refresh_quad: best.refresh_quad,
+            ..base.clone()
+        };
+        let rewritten =
+            rewrite::rewrite(shader, &analysis, candidate, best.variant, &rewrite_options)
+                .map_err(|r| fail(r.reason))?;
+        let sources = sources_of(&rewritten)?;
+        let moving = scene
+            .effects
+            .iter()
+            .filter(|e| !matches!(e, scene::Effect::Disocclusion));
+        for &effect in moving {
+            let alone = Scene {
+                effects: vec![effect],
+                ..scene.clone()
+            };
+            let mut runner = Runner::new(
+                &gpu,
+                &rewritten.plan,
+                source_of(&sources),
+                &meshes,
+                &textures,
+                (size[0], size[1]),
+                run_options,
+            )
+            .map_err(fail)?;
+            let mut decisions = Vec::new();
+            for frame in 0..warmup + frames {
+                runner
+                    .frame(&gpu, &inputs_of(&alone, frame)?, None)
+                    .map_err(fail)?;
+                if frame >= warmup {
+                    let classes = runtime::read_texture(&gpu, runner.classes(), 4).map_err(fail)?;
+                    decisions.push(metrics::decisions(&classes));
+                }
+            }
+            let column = |f: fn(&Decisions) -> f64| {
+                metrics::mean(&decisions.iter().map(f).collect::<Vec<_>>())
+            };
+            miss_causes.push(MissCause {
+                effect,
+                miss_rate: column(Decisions::miss),
+                offscreen_rate: column(|d| d.offscreen),
+                disocclusion_rate: column(|d| d.disoccluded),
+            });
+        }
+    }
+
     let report = Report {
         format: 1,
         shader: shader.file.path.clone(),
@@ -499,15 +589,24 @@ pub fn profile(
         },
         nodes: node_reports,
         results,
+        miss_causes,
     };
     Ok((
         report,
         Pictures {
             reference: reference_pixels,
             results: pictures,
+            trace,
         },
     ))
 }
+
+/// A frame's time, each pass's (ms), and the profiler's raw scopes.
+type Timed = (
+    f64,
+    Vec<(String, f64)>,
+    Vec<wgpu_profiler::GpuTimerQueryResult>,
+);
 
 /// Renders one frame of `runner` and returns its time and each pass's, in
 /// ms: from GPU timestamps when the device has them, else from submission
@@ -519,7 +618,7 @@ fn timed(
     runner: &mut Runner,
     inputs: &FrameInputs,
     label: &str,
-) -> Result<(f64, Vec<(String, f64)>), String> {
+) -> Result<Timed, String> {
     let start = std::time::Instant::now();
     runner.frame(gpu, inputs, timestamps.then_some((&mut *profiler, label)))?;
     if timestamps {
@@ -530,14 +629,14 @@ fn timed(
         .map_err(|err| err.to_string())?;
     let wall = start.elapsed().as_secs_f64() * 1e3;
     if !timestamps {
-        return Ok((wall, Vec::new()));
+        return Ok((wall, Vec::new(), Vec::new()));
     }
     let results = profiler
         .process_finished_frame(gpu.queue.get_timestamp_period())
         .unwrap_or_default();
     let mut passes = Vec::new();
-    for result in results {
-        if let Some(range) = result.time {
+    for result in &results {
+        if let Some(range) = &result.time {
             let name = result
                 .label
                 .rsplit('/')
@@ -551,7 +650,7 @@ fn timed(
         }
     }
     let total = passes.iter().map(|(_, ms)| ms).sum();
-    Ok((total, passes))
+    Ok((total, passes, results))
 }
 
 fn sources_of(rewritten: &rewrite::Rewritten) -> Result<HashMap<String, String>, Error> {

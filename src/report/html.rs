@@ -114,6 +114,21 @@ pub fn html(report: &Report, dir: &Path) -> String {
     }
     page.push_str("</table>");
 
+    if !report.miss_causes.is_empty() {
+        page.push_str("<h2>What causes the misses</h2><p>The fastest configuration again, with one declared effect at a time (refreshes come from the refresh pattern alone).</p><table><tr><th>effect</th><th>miss</th><th>off-screen</th><th>disoccluded</th></tr>");
+        for cause in &report.miss_causes {
+            let _ = write!(
+                page,
+                "<tr><td>{:?}</td><td>{:.2}%</td><td>{:.2}%</td><td>{:.2}%</td></tr>",
+                cause.effect,
+                cause.miss_rate * 100.0,
+                cause.offscreen_rate * 100.0,
+                cause.disocclusion_rate * 100.0
+            );
+        }
+        page.push_str("</table>");
+    }
+
     // The nodes in their source.
     page.push_str("<h2>Nodes</h2>");
     for node in &report.nodes {

@@ -40,6 +40,20 @@ pub struct Report {
     pub nodes: Vec<NodeReport>,
     /// One row per node × variant × Δn × k, fastest first.
     pub results: Vec<ResultRow>,
+    /// What causes the misses of the fastest configuration: the scene
+    /// again with one declared effect at a time. Refreshes are caused by
+    /// the refresh pattern alone (Δn, k) and are not listed.
+    #[serde(default)]
+    pub miss_causes: Vec<MissCause>,
+}
+
+/// The misses of the best configuration when only `effect` is simulated.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct MissCause {
+    pub effect: Effect,
+    pub miss_rate: f64,
+    pub offscreen_rate: f64,
+    pub disocclusion_rate: f64,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]

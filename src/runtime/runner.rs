@@ -20,6 +20,9 @@ pub struct Mesh {
 pub struct ObjectInputs {
     pub mesh: usize,
     pub buffers: HashMap<[u32; 2], Vec<u8>>,
+    /// New vertex data for the mesh this frame (a deforming mesh), laid
+    /// out as at creation.
+    pub vertices: Option<Vec<u8>>,
 }
 
 /// What one frame draws.
@@ -280,6 +283,11 @@ impl Runner {
         // The buffers, and their twins with last frame's contents (this
         // frame's on the first frame).
         for (object, draw) in inputs.objects.iter().enumerate() {
+            if let (Some(vertices), Some(mesh)) = (&draw.vertices, self.meshes.get(draw.mesh)) {
+                if vertices.len() as u64 <= mesh.vertices.size() {
+                    gpu.queue.write_buffer(&mesh.vertices, 0, vertices);
+                }
+            }
             for (&key, bytes) in &draw.buffers {
                 self.write_buffer(gpu, (object, key), bytes);
             }

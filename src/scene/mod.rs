@@ -42,6 +42,9 @@ pub enum Effect {
     /// Objects moving past each other uncover what was hidden (declared by
     /// scenes built for it; simulated through `object-motion`).
     Disocclusion,
+    /// Vertices move in the object's own space (a ripple along the
+    /// normals): a motion the previous-frame uniforms cannot describe.
+    Deformation,
 }
 
 /// A scene file.
@@ -65,6 +68,7 @@ pub struct Scene {
     pub camera: Camera,
     #[serde(default)]
     pub light: Light,
+    #[serde(default)]
     pub objects: Vec<Object>,
     /// Values of uniform members by name.
     #[serde(default)]
@@ -186,6 +190,29 @@ pub struct Object {
     /// With `object-motion`: world units per frame.
     #[serde(default)]
     pub translation_per_frame: [f32; 3],
+    /// With `deformation`: a ripple along the normals.
+    #[serde(default)]
+    pub deformation: Option<Deformation>,
+}
+
+/// A ripple along the normals: each vertex moves by
+/// `amplitude · sin(frequency · y + speed · frame)` along its normal.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Deformation {
+    pub amplitude: f32,
+    #[serde(default = "default_ripple_frequency")]
+    pub frequency: f32,
+    /// Radians per frame.
+    #[serde(default = "default_ripple_speed")]
+    pub speed: f32,
+}
+
+fn default_ripple_frequency() -> f32 {
+    6.0
+}
+fn default_ripple_speed() -> f32 {
+    0.1
 }
 
 fn default_scale() -> f32 {
@@ -244,6 +271,22 @@ impl Scene {
 
     pub fn has(&self, effect: Effect) -> bool {
         self.effects.contains(&effect)
+    }
+
+    /// Object `index`'s mesh as frame `n` deforms it, when the scene
+    /// declares `deformation` and the object has one; `None` when its mesh
+    /// does not change.
+    pub fn deformed(&self, index: usize, mesh: &Mesh, n: u32) -> Option<Mesh> {
+        let ripple = self.objects.get(index)?.deformation?;
+        if !self.has(Effect::Deformation) {
+            return None;
+        }
+        let phase = ripple.speed * n as f32;
+        let mut out = mesh.clone();
+        for (p, normal) in out.positions.iter_mut().zip(&mesh.normals) {
+            *p += *normal * (ripple.amplitude * (ripple.frequency * p.y + phase).sin());
+        }
+        Some(out)
     }
 
     /// The state of frame `n` (0-based, warm-up included), simulating only
@@ -308,5 +351,56 @@ impl Scene {
             },
             objects,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(effects: &str) -> Scene {
+        let text = format!(
+            "effects = [{effects}]\n[camera]\norbit_degrees_per_frame = 2.0\n[light]\norbit_degrees_per_frame = 5.0\n[[objects]]\nmesh = {{ kind = \"cube\" }}\nrotation_degrees_per_frame = [0.0, 3.0, 0.0]\ndeformation = {{ amplitude = 0.1 }}\n"
+        );
+        Scene::parse(Arc::new(SourceFile::new("scene.toml", text))).unwrap()
+    }
+
+    #[test]
+    fn only_declared_effects_move() {
+        let still = scene("");
+        assert_eq!(still.frame(0, 1.0), still.frame(10, 1.0));
+        let mesh = still.objects[0].mesh.build(Path::new(".")).unwrap();
+        assert!(still.deformed(0, &mesh, 10).is_none());
+
+        let light = scene("\"light-motion\"");
+        let (a, b) = (light.frame(0, 1.0), light.frame(10, 1.0));
+        assert_ne!(a.light_position, b.light_position);
+        assert_eq!(a.clip_from_world, b.clip_from_world);
+        assert_eq!(a.objects, b.objects);
+
+        let camera = scene("\"camera-motion\"");
+        let (a, b) = (camera.frame(0, 1.0), camera.frame(10, 1.0));
+        assert_ne!(a.clip_from_world, b.clip_from_world);
+        assert_eq!(a.light_position, b.light_position);
+
+        let deforming = scene("\"deformation\"");
+        let moved = deforming.deformed(0, &mesh, 3).unwrap();
+        assert_ne!(moved.positions, mesh.positions);
+        assert_eq!(deforming.frame(0, 1.0), deforming.frame(3, 1.0));
+    }
+
+    #[test]
+    fn bad_scenes_are_diagnostics() {
+        let parse = |text: &str| {
+            Scene::parse(Arc::new(SourceFile::new("s.toml", text)))
+                .unwrap_err()
+                .render()
+        };
+        assert!(parse("[[objects]]\nmesh = { kind = \"blob\" }\n").contains("s.toml:2:"));
+        assert!(
+            parse("size = [0, 10]\n[[objects]]\nmesh = { kind = \"cube\" }\n").contains("size")
+        );
+        assert!(parse("effects = [\"wind\"]\n").contains("s.toml:1:"));
+        assert!(parse("").contains("no objects"));
     }
 }

@@ -210,6 +210,7 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
             objects: vec![runtime::ObjectInputs {
                 mesh: 0,
                 buffers: HashMap::from([([0, 0], uniform)]),
+                vertices: None,
             }],
         };
         runner.frame(&gpu, &inputs, None).unwrap();

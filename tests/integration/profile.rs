@@ -326,9 +326,55 @@ fn report_json_carries_the_documented_fields() {
     let maps = std::fs::read_dir(out.path().join("maps")).unwrap().count();
     assert_eq!(maps, 6);
     assert!(out.path().join("images/difference.png").is_file());
+    let trace: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.path().join("trace.json")).unwrap()).unwrap();
+    assert!(
+        trace.to_string().contains("pass1"),
+        "the Chrome trace names the passes"
+    );
     assert!(stdout_has(&output, "report: "));
 }
 
 fn stdout_has(output: &std::process::Output, text: &str) -> bool {
     String::from_utf8_lossy(&output.stdout).contains(text)
+}
+
+/// With camera and object motion declared, the report says what each
+/// causes alone; a deforming mesh, which the previous-frame uniforms cannot
+/// describe, misses where a rigid one hits.
+#[test]
+fn misses_are_attributed_to_the_effects_that_cause_them() {
+    let mut opts = options(&[0], &[4]);
+    opts.variants = vec![Variant::TwoPass];
+    let scene = marble_scene("\"object-motion\", \"camera-motion\"", "")
+        .replace("[camera]\n", "[camera]\norbit_degrees_per_frame = 1.5\n");
+    let Some((_, report, _)) = run(&scene, opts.clone()) else {
+        return;
+    };
+    let effects: Vec<String> = report
+        .miss_causes
+        .iter()
+        .map(|c| format!("{:?}", c.effect))
+        .collect();
+    assert_eq!(effects, ["ObjectMotion", "CameraMotion"]);
+    for cause in &report.miss_causes {
+        assert!(cause.miss_rate > 0.0 && cause.miss_rate < 0.2, "{cause:?}");
+    }
+
+    let rigid = marble_scene("", "");
+    let deforming = marble_scene("\"deformation\"", "")
+        .replace("rotation_degrees_per_frame", "deformation = { amplitude = 0.04, frequency = 8.0, speed = 0.5 }\nrotation_degrees_per_frame");
+    let Some((_, still, _)) = run(&rigid, opts.clone()) else {
+        return;
+    };
+    let Some((_, rippling, _)) = run(&deforming, opts) else {
+        return;
+    };
+    assert_eq!(still.results[0].miss_rate, 0.0);
+    assert!(
+        rippling.results[0].miss_rate > 0.01,
+        "{}",
+        rippling.results[0].miss_rate
+    );
+    assert!(rippling.miss_causes[0].disocclusion_rate > 0.01);
 }

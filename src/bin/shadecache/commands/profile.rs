@@ -194,6 +194,9 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         report::html(&report, &args.out),
     )
     .map_err(|e| io("report.html", e.to_string()))?;
+    // The last frame's GPU scopes, for chrome://tracing or Perfetto.
+    wgpu_profiler::chrometrace::write_chrometrace(&args.out.join("trace.json"), &pictures.trace)
+        .map_err(|e| io("trace.json", e.to_string()))?;
 
     let mut summary = format!(
         "{} on {} ({}×{}, {} frames, {}): reference {:.3} ms\n",
@@ -219,6 +222,15 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
             row.refresh_rate * 100.0,
             row.psnr,
             row.ssim
+        ));
+    }
+    for cause in &report.miss_causes {
+        summary.push_str(&format!(
+            "  misses with {:?} alone: {:.2}% ({:.2}% off-screen, {:.2}% disoccluded)\n",
+            cause.effect,
+            cause.miss_rate * 100.0,
+            cause.offscreen_rate * 100.0,
+            cause.disocclusion_rate * 100.0
         ));
     }
     summary.push_str(&format!(
