@@ -130,6 +130,9 @@ pub struct Twin {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Cache {
     pub format: String,
+    /// `bilinear` or `nearest`.
+    #[serde(default = "bilinear")]
+    pub reconstruction: String,
     /// How many components of the payload texture hold the payload.
     pub components: u32,
     /// The double-buffering rule.
@@ -160,6 +163,10 @@ pub struct Clear {
     pub color: [f64; 4],
     pub cache: [f64; 4],
     pub depth: f64,
+}
+
+fn bilinear() -> String {
+    "bilinear".into()
 }
 
 /// What [`build`] needs.
@@ -345,6 +352,7 @@ pub fn build(inputs: Inputs) -> Plan {
         },
         cache: Cache {
             format: options.cache_format.as_str().into(),
+            reconstruction: options.reconstruction.as_str().into(),
             components: candidate.components,
             swap: "two payload textures and two depth buffers alternate: at the end of a frame, this frame's payload texture and depth buffer become last frame's (bound as cache_previous_payload and cache_previous_depth) and last frame's are rendered into next; on the first frame, after a resize or a camera cut, the previous depth is cleared to 1.0 so every pixel misses".into(),
             params: vec![
@@ -572,6 +580,7 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
         },
         cache: Cache {
             format: options.cache_format.as_str().into(),
+            reconstruction: options.reconstruction.as_str().into(),
             components: 0,
             swap: String::new(),
             params: Vec::new(),

@@ -29,7 +29,7 @@ use crate::plan::{self, Plan};
 use crate::report::{
     Device, FrameStats, MissCause, NodeReport, PassTime, Reference, Report, ResultRow,
 };
-use crate::rewrite::{self, CacheFormat, Options as RewriteOptions, Variant};
+use crate::rewrite::{self, CacheFormat, Options as RewriteOptions, Reconstruction, Variant};
 use crate::runtime::{self, FrameInputs, Gpu, ObjectInputs, RunOptions, Runner};
 use crate::scene::{self, Scene};
 use metrics::{Decisions, FrameError};
@@ -45,6 +45,8 @@ pub struct Options {
     pub refresh_quads: Vec<u32>,
     pub cache_format: CacheFormat,
     pub depth_epsilon: f32,
+    /// Reconstructions to measure.
+    pub reconstructions: Vec<Reconstruction>,
     /// Frames measured and warm-up frames; `None` takes the scene's.
     pub frames: Option<u32>,
     pub warmup: Option<u32>,
@@ -66,6 +68,7 @@ impl Default for Options {
             refresh_quads: vec![4],
             cache_format: CacheFormat::Rgba16float,
             depth_epsilon: RewriteOptions::default().depth_epsilon,
+            reconstructions: vec![Reconstruction::Bilinear],
             frames: None,
             warmup: None,
             size: None,
@@ -116,6 +119,7 @@ struct Config {
     variant: Variant,
     period: u32,
     quad: u32,
+    reconstruction: Reconstruction,
     runner: Runner,
     label: String,
     times: Vec<f64>,
@@ -289,11 +293,20 @@ pub fn profile(
     for (node, candidate) in nodes.iter().enumerate() {
         for &variant in &options.variants {
             for &period in &options.refresh_periods {
-                for &quad in &options.refresh_quads {
-                    let what = format!("{} {variant} Δn={period} k={quad}", candidate.node.id);
+                for (&quad, &reconstruction) in options
+                    .refresh_quads
+                    .iter()
+                    .flat_map(|q| options.reconstructions.iter().map(move |r| (q, r)))
+                {
+                    let what = format!(
+                        "{} {variant} Δn={period} k={quad} {}",
+                        candidate.node.id,
+                        reconstruction.as_str()
+                    );
                     let rewrite_options = RewriteOptions {
                         refresh_period: period,
                         refresh_quad: quad,
+                        reconstruction,
                         ..base.clone()
                     };
                     let rewritten = match rewrite::rewrite(
@@ -324,6 +337,7 @@ pub fn profile(
                         variant,
                         period,
                         quad,
+                        reconstruction,
                         runner,
                         label: what,
                         times: Vec::new(),
@@ -451,6 +465,7 @@ pub fn profile(
                 variant: config.variant,
                 refresh_period: config.period,
                 refresh_quad: config.quad,
+                reconstruction: config.reconstruction,
                 cache_format: options.cache_format.as_str().into(),
                 depth_epsilon: options.depth_epsilon,
                 time_ms,
@@ -512,6 +527,7 @@ pub fn profile(
         let rewrite_options = RewriteOptions {
             refresh_period: best.refresh_period,
             refresh_quad: best.refresh_quad,
+            reconstruction: best.reconstruction,
             ..base.clone()
         };
         let rewritten =

@@ -75,10 +75,10 @@ pub fn html(report: &Report, dir: &Path) -> String {
     }
 
     // All results.
-    page.push_str("<h2>Results</h2><table><tr><th>#</th><th>node</th><th>variant</th><th>Δn</th><th>k</th><th>time ms</th><th>passes ms</th><th>speed-up</th><th>ideal</th><th>share</th><th>P/T</th><th>hit</th><th>miss (off-screen / disoccluded)</th><th>refresh</th><th>PSNR dB</th><th>SSIM</th><th>max err</th><th>map</th></tr>");
+    page.push_str("<h2>Results</h2><table><tr><th>#</th><th>node</th><th>variant</th><th>Δn</th><th>k</th><th>recon.</th><th>time ms</th><th>passes ms</th><th>speed-up</th><th>ideal</th><th>share</th><th>P/T</th><th>hit</th><th>miss (off-screen / disoccluded)</th><th>refresh</th><th>PSNR dB</th><th>SSIM</th><th>max err</th><th>map</th></tr>");
     let _ = write!(
         page,
-        "<tr class=\"reference\"><td></td><td colspan=\"4\">reference (unmodified shader)</td><td>{:.3}</td><td colspan=\"12\"></td></tr>",
+        "<tr class=\"reference\"><td></td><td colspan=\"5\">reference (unmodified shader)</td><td>{:.3}</td><td colspan=\"12\"></td></tr>",
         report.reference.time_ms
     );
     for (rank, row) in report.results.iter().enumerate() {
@@ -89,12 +89,13 @@ pub fn html(report: &Report, dir: &Path) -> String {
             .collect();
         let _ = write!(
             page,
-            "<tr><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{}</td><td>{:.2}×</td><td>{:.2}×</td><td>{:.0}%</td><td>{:.2}</td><td>{:.1}%</td><td>{:.1}% ({:.1} / {:.1})</td><td>{:.1}%</td><td>{:.1}</td><td>{:.4}</td><td>{:.3}</td><td><a href=\"maps/{}\">png</a></td></tr>",
+            "<tr><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{}</td><td>{:.2}×</td><td>{:.2}×</td><td>{:.0}%</td><td>{:.2}</td><td>{:.1}%</td><td>{:.1}% ({:.1} / {:.1})</td><td>{:.1}%</td><td>{:.1}</td><td>{:.4}</td><td>{:.3}</td><td><a href=\"maps/{}\">png</a></td></tr>",
             rank + 1,
             escape(&row.node),
             row.variant,
             row.refresh_period,
             row.refresh_quad,
+            row.reconstruction.as_str(),
             row.time_ms,
             escape(&passes.join(", ")),
             row.speedup,

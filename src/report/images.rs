@@ -67,11 +67,12 @@ pub fn write_images(
 /// The file name of a result's map.
 pub fn map_name(rank: usize, row: &super::ResultRow) -> String {
     format!(
-        "{:02}-{}-{}-dn{}-k{}.png",
+        "{:02}-{}-{}-dn{}-k{}-{}.png",
         rank + 1,
         row.node,
         row.variant,
         row.refresh_period,
-        row.refresh_quad
+        row.refresh_quad,
+        row.reconstruction.as_str()
     )
 }

@@ -8,7 +8,7 @@ mod plots;
 
 use serde::{Deserialize, Serialize};
 
-use crate::rewrite::Variant;
+use crate::rewrite::{Reconstruction, Variant};
 use crate::scene::Effect;
 
 pub use html::html;
@@ -98,6 +98,7 @@ pub struct ResultRow {
     pub variant: Variant,
     pub refresh_period: u32,
     pub refresh_quad: u32,
+    pub reconstruction: Reconstruction,
     pub cache_format: String,
     pub depth_epsilon: f32,
     /// Median frame time (sum of the passes), ms.

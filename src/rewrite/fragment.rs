@@ -179,7 +179,9 @@ pub fn entry_point(
     };
 
     if stage == Stage::Classify {
-        let classes = b.call(pieces.classify, vec![previous, frag_coord]);
+        let lookup = b.call(pieces.lookup, vec![previous]);
+        let status = b.member(lookup, 2);
+        let classes = b.call(pieces.classify, vec![status, frag_coord]);
         b.push(Statement::Return {
             value: Some(classes),
         });

@@ -103,6 +103,26 @@ impl CacheFormat {
     }
 }
 
+/// How the payload is read back where a point was last frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Reconstruction {
+    /// Bilinear over the 2×2 texels around the point; all four (those with
+    /// weight) must pass the depth test.
+    Bilinear,
+    /// The texel the point falls in, tested on its own depth.
+    Nearest,
+}
+
+impl Reconstruction {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Reconstruction::Bilinear => "bilinear",
+            Reconstruction::Nearest => "nearest",
+        }
+    }
+}
+
 /// How to build the variants.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {
@@ -113,6 +133,7 @@ pub struct Options {
     pub cache_format: CacheFormat,
     /// ε of the depth test, in the depth buffer's units.
     pub depth_epsilon: f32,
+    pub reconstruction: Reconstruction,
     /// Format of the colour targets, written into the plan.
     pub color_format: String,
 }
@@ -124,6 +145,7 @@ impl Default for Options {
             refresh_quad: 4,
             cache_format: CacheFormat::Rgba16float,
             depth_epsilon: 1e-3,
+            reconstruction: Reconstruction::Bilinear,
             color_format: "rgba8unorm".into(),
         }
     }
@@ -262,10 +284,11 @@ pub fn rewrite(
         })
     };
     // rgba16float is filterable: one bilinear sample; rgba32float is not:
-    // four loads.
-    let lookup_name = match options.cache_format {
-        CacheFormat::Rgba16float => "cache_lookup",
-        CacheFormat::Rgba32float => "cache_lookup_loads",
+    // four loads. Nearest reads one texel of each.
+    let lookup_name = match (options.reconstruction, options.cache_format) {
+        (Reconstruction::Nearest, _) => "cache_lookup_nearest",
+        (Reconstruction::Bilinear, CacheFormat::Rgba16float) => "cache_lookup",
+        (Reconstruction::Bilinear, CacheFormat::Rgba32float) => "cache_lookup_loads",
     };
     let (lookup, refresh, current, classify) = (
         helper(lookup_name)?,

@@ -421,3 +421,42 @@ fn previous_position_follows_helpers_and_storage_buffers() {
     let (_, text) = &wgsl(&rewritten)[0];
     assert!(text.contains("var<storage> previous_instances"), "{text}");
 }
+
+/// Nearest reconstruction reads one texel of depth and payload: every
+/// variant of the noise shader's nodes is written with it and passes
+/// naga and Tint.
+#[test]
+fn nearest_reconstruction_reads_one_texel() {
+    let (shader, analysis) = load(Path::new("corpus/noise_marble.wgsl"));
+    let options = Options {
+        reconstruction: rewrite::Reconstruction::Nearest,
+        ..Options::default()
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    for candidate in analysis.candidates.iter().take(5) {
+        for variant in Variant::ALL {
+            let rewritten =
+                rewrite::rewrite(&shader, &analysis, candidate, variant, &options).unwrap();
+            assert_eq!(rewritten.plan.cache.reconstruction, "nearest");
+            // Pass 1 of every variant reprojects.
+            let (_, text) = &wgsl(&rewritten)[0];
+            assert!(text.contains("fn cache_lookup_nearest("), "{text}");
+            assert!(!text.contains("textureGather"), "{text}");
+            let out = dir.path().join(&candidate.node.id).join(variant.as_str());
+            files.extend(
+                back::write_variant(&out, &rewritten, Language::Wgsl)
+                    .unwrap()
+                    .into_iter()
+                    .filter(|f| f.extension().is_some_and(|e| e == "wgsl")),
+            );
+        }
+    }
+    for result in tint_validate(&files) {
+        assert!(
+            result.ok,
+            "Tint rejects {}: {:#?}",
+            result.file, result.messages
+        );
+    }
+}

@@ -10,7 +10,7 @@ use shadecache::report;
 use shadecache::rewrite::{CacheFormat, Variant};
 use shadecache::scene::Scene;
 
-use super::rewrite::{CacheFormatArg, VariantArg};
+use super::rewrite::{CacheFormatArg, ReconstructionArg, VariantArg};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -49,6 +49,16 @@ pub struct Args {
     /// ε of the cache's depth test.
     #[arg(long, value_name = "E", default_value_t = 1e-3)]
     pub depth_epsilon: f32,
+
+    /// Reconstructions to measure, separated by commas.
+    #[arg(
+        long,
+        value_name = "bilinear,nearest",
+        value_enum,
+        value_delimiter = ',',
+        default_value = "bilinear"
+    )]
+    pub reconstruction: Vec<ReconstructionArg>,
 
     /// Frames to measure (default: the scene's).
     #[arg(long, value_name = "N")]
@@ -168,6 +178,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
             CacheFormatArg::Rgba32float => CacheFormat::Rgba32float,
         },
         depth_epsilon: args.depth_epsilon,
+        reconstructions: args.reconstruction.iter().map(|&r| r.into()).collect(),
         frames: args.frames,
         warmup: args.warmup,
         size: args.size,

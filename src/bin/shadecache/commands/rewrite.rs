@@ -6,7 +6,7 @@ use shadecache::analysis::{self, Options as AnalysisOptions};
 use shadecache::back::{self, Language};
 use shadecache::diagnostic::{self, Color, Diagnostic, Error, Severity};
 use shadecache::front;
-use shadecache::rewrite::{self, CacheFormat, Options, Variant};
+use shadecache::rewrite::{self, CacheFormat, Options, Reconstruction, Variant};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -46,6 +46,10 @@ pub struct Args {
     #[arg(long, value_name = "E", default_value_t = 1e-3)]
     pub depth_epsilon: f32,
 
+    /// How the payload is read back where a point was last frame.
+    #[arg(long, value_enum, default_value_t = ReconstructionArg::Bilinear)]
+    pub reconstruction: ReconstructionArg,
+
     /// Output language (WGSL is what shadecache validates and runs).
     #[arg(long, value_enum, default_value_t = EmitArg::Wgsl)]
     pub emit: EmitArg,
@@ -74,6 +78,21 @@ pub enum CacheFormatArg {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ReconstructionArg {
+    Bilinear,
+    Nearest,
+}
+
+impl From<ReconstructionArg> for Reconstruction {
+    fn from(arg: ReconstructionArg) -> Reconstruction {
+        match arg {
+            ReconstructionArg::Bilinear => Reconstruction::Bilinear,
+            ReconstructionArg::Nearest => Reconstruction::Nearest,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum EmitArg {
     Wgsl,
     Spv,
@@ -99,6 +118,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
             CacheFormatArg::Rgba32float => CacheFormat::Rgba32float,
         },
         depth_epsilon: args.depth_epsilon,
+        reconstruction: args.reconstruction.into(),
         ..Options::default()
     };
     let language = match args.emit {
