@@ -23,7 +23,9 @@ struct CacheParams {
     refresh_quad: u32,
     // c, the frame counter (for debugging views; not used by the shaders).
     frame: u32,
-    _padding: u32,
+    // The largest payload magnitude the cache format holds: 65504 for
+    // rgba16float, the largest f32 for rgba32float.
+    payload_limit: f32,
 }
 
 @group(1) @binding(0) var<uniform> cache_params: CacheParams;
@@ -41,8 +43,30 @@ struct CacheLookup {
     payload: vec4<f32>,
     hit: bool,
     // Why it missed: 0 hit, 1 off-screen (behind the previous camera or
-    // outside the viewport), 2 disoccluded (depth disagrees).
+    // outside the viewport), 2 disoccluded (depth disagrees), 3 the cached
+    // payload read back is not finite.
     status: u32,
+}
+
+// Whether every component is finite, by its exponent bits: WGSL lets
+// compilers assume floats are never NaN or infinite, so `x != x` may be
+// folded away, but integer tests on the bits may not.
+fn cache_finite(v: vec4<f32>) -> bool {
+    let exponent = bitcast<vec4<u32>>(v) & vec4<u32>(0x7f800000u);
+    return all(exponent != vec4<u32>(0x7f800000u));
+}
+
+// A lookup whose reconstructed payload is not finite, or not below the
+// format's limit, is a miss (status 3). So a NaN or an infinity the shader
+// produced at one pixel is recomputed there every frame rather than reused,
+// and never spreads to the neighbours whose bilinear footprint touches it:
+// they miss and recompute too. Payloads beyond an rgba16float cache's range
+// were written as NaN (`cache_encode`), so they are recomputed rather than
+// reused wrong.
+fn cache_checked(payload: vec4<f32>, status: u32) -> CacheLookup {
+    let valid = cache_finite(payload) & all(abs(payload) < vec4<f32>(cache_params.payload_limit));
+    let checked = select(status, 3u, (status == 0u) & !valid);
+    return CacheLookup(payload, checked == 0u, checked);
 }
 
 // PCG hash (O'Neill 2014, "pcg32" output permutation on one u32 of state).
@@ -126,7 +150,7 @@ fn cache_lookup(previous_clip: vec4<f32>) -> CacheLookup {
     let footprint = cache_footprint(previous_clip);
     let at = (footprint.base + vec2<f32>(0.5) + footprint.weights) / cache_params.viewport;
     let payload = textureSampleLevel(cache_previous_payload, cache_sampler, at, 0.0);
-    return CacheLookup(payload, footprint.status == 0u, footprint.status);
+    return cache_checked(payload, footprint.status);
 }
 
 // The same with four loads, for the rgba32float cache, which cannot be
@@ -149,7 +173,7 @@ fn cache_lookup_loads(previous_clip: vec4<f32>) -> CacheLookup {
         textureLoad(cache_previous_payload, t1, 0),
         f.x,
     );
-    return CacheLookup(mix(top, bottom, f.y), footprint.status == 0u, footprint.status);
+    return cache_checked(mix(top, bottom, f.y), footprint.status);
 }
 
 // Nearest reconstruction: the texel the point falls in, tested on its own
@@ -163,7 +187,23 @@ fn cache_lookup_nearest(previous_clip: vec4<f32>) -> CacheLookup {
     let t = clamp(vec2<i32>(floor(position)), vec2<i32>(0), vec2<i32>(cache_params.viewport) - vec2<i32>(1));
     let agree = abs(textureLoad(cache_previous_depth, t, 0) - ndc.z) < cache_params.depth_epsilon;
     let status = select(1u, select(2u, 0u, agree), inside);
-    return CacheLookup(textureLoad(cache_previous_payload, t, 0), status == 0u, status);
+    return cache_checked(textureLoad(cache_previous_payload, t, 0), status);
+}
+
+// A payload on its way into the cache. Finite components at or beyond the
+// format's limit become NaN: left alone, an rgba16float target may store
+// them as its largest finite value (lavapipe does), which a bilinear read
+// would blend into plausible wrong values; a NaN spreads through the
+// filter instead, so every footprint touching it reads as invalid and
+// misses (see `cache_checked`). Infinities and NaNs the shader produced
+// are kept as they are: three-pass shades from this texel in the same
+// frame and must see the shader's own value. The NaN is made at run time
+// from the uniform, since a NaN constant is not valid WGSL.
+fn cache_encode(payload: vec4<f32>) -> vec4<f32> {
+    let nan = bitcast<f32>(0x7fc00000u | (cache_params.frame & 0u));
+    let finite = (bitcast<vec4<u32>>(payload) & vec4<u32>(0x7f800000u)) != vec4<u32>(0x7f800000u);
+    let beyond = abs(payload) >= vec4<f32>(cache_params.payload_limit);
+    return select(payload, vec4<f32>(nan), finite & beyond);
 }
 
 // This frame's cache at the fragment's own pixel (three-pass, pass 3).
@@ -173,9 +213,12 @@ fn cache_current(frag_coord: vec4<f32>) -> vec4<f32> {
 
 // What the cache does at this pixel, as a colour for the profiler's maps,
 // from the status of the variant's own lookup: reused (green), refreshed
-// (blue), missed because the point was off-screen last frame (orange) or
-// disoccluded (red).
+// (blue), missed because the point was off-screen last frame (orange),
+// disoccluded (red), or because the cached payload is not finite (magenta).
 fn cache_classify(status: u32, frag_coord: vec4<f32>) -> vec4<f32> {
+    if (status == 3u) {
+        return vec4<f32>(1.0, 0.0, 1.0, 1.0);
+    }
     if (status == 1u) {
         return vec4<f32>(1.0, 0.5, 0.0, 1.0);
     }

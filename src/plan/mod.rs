@@ -362,7 +362,7 @@ pub fn build(inputs: Inputs) -> Plan {
                 field("refresh_period", "u32", 16),
                 field("refresh_quad", "u32", 20),
                 field("frame", "u32", 24),
-                field("_padding", "u32", 28),
+                field("payload_limit", "f32", 28),
             ],
         },
         refresh: Refresh {

@@ -96,11 +96,13 @@ pub struct Decisions {
     pub offscreen: f64,
     /// Missed because last frame's depth disagrees (disocclusion).
     pub disoccluded: f64,
+    /// Missed because the cached payload read back is not finite.
+    pub invalid: f64,
 }
 
 impl Decisions {
     pub fn miss(&self) -> f64 {
-        self.offscreen + self.disoccluded
+        self.offscreen + self.disoccluded + self.invalid
     }
 }
 
@@ -109,21 +111,24 @@ pub const HIT: [u8; 3] = [0, 255, 0];
 pub const REFRESH: [u8; 3] = [0, 0, 255];
 pub const OFFSCREEN: [u8; 3] = [255, 128, 0];
 pub const DISOCCLUDED: [u8; 3] = [255, 0, 0];
+pub const INVALID: [u8; 3] = [255, 0, 255];
 
 /// Counts the classes of a classification image.
 pub fn decisions(classes: &[u8]) -> Decisions {
-    let (mut hit, mut refresh, mut offscreen, mut disoccluded) = (0usize, 0usize, 0usize, 0usize);
+    let (mut hit, mut refresh, mut offscreen, mut disoccluded, mut invalid) =
+        (0usize, 0usize, 0usize, 0usize, 0usize);
     for texel in classes.chunks_exact(4) {
         match [texel[0], texel[1], texel[2]] {
             HIT => hit += 1,
             REFRESH => refresh += 1,
             DISOCCLUDED => disoccluded += 1,
+            INVALID => invalid += 1,
             // rgba8unorm stores 0.5 as 127 or 128.
             [255, 127 | 128, 0] => offscreen += 1,
             _ => {}
         }
     }
-    let covered = hit + refresh + offscreen + disoccluded;
+    let covered = hit + refresh + offscreen + disoccluded + invalid;
     let share = |n: usize| {
         if covered == 0 {
             0.0
@@ -137,6 +142,7 @@ pub fn decisions(classes: &[u8]) -> Decisions {
         refresh: share(refresh),
         offscreen: share(offscreen),
         disoccluded: share(disoccluded),
+        invalid: share(invalid),
     }
 }
 

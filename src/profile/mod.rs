@@ -489,6 +489,7 @@ pub fn profile(
                 miss_rate: column(Decisions::miss),
                 offscreen_rate: column(|d| d.offscreen),
                 disocclusion_rate: column(|d| d.disoccluded),
+                invalid_rate: column(|d| d.invalid),
                 refresh_rate: column(|d| d.refresh),
                 p_over_t: node.p_over_t,
                 ideal_speedup: ideal,

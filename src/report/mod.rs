@@ -118,6 +118,10 @@ pub struct ResultRow {
     pub miss_rate: f64,
     pub offscreen_rate: f64,
     pub disocclusion_rate: f64,
+    /// Missed because the cached payload was not finite (NaN, infinity,
+    /// an rgba16float overflow).
+    #[serde(default)]
+    pub invalid_rate: f64,
     pub refresh_rate: f64,
     /// Measured P/T of the node (see [`NodeReport::p_over_t`]).
     pub p_over_t: f64,

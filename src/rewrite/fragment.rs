@@ -41,6 +41,8 @@ pub struct Pieces {
     pub refresh: Handle<Function>,
     pub current: Handle<Function>,
     pub classify: Handle<Function>,
+    /// Applied to every payload written to the cache (`cache_encode`).
+    pub encode: Handle<Function>,
     pub vec4: Handle<naga::Type>,
 }
 
@@ -243,7 +245,10 @@ pub fn entry_point(
     };
 
     let value = match stage.writes() {
-        Writes::Cache | Writes::Classes => to_vec4(&mut b, payload, pieces.components, pieces.vec4),
+        Writes::Cache | Writes::Classes => {
+            let cache = to_vec4(&mut b, payload, pieces.components, pieces.vec4);
+            b.call(pieces.encode, vec![cache])
+        }
         Writes::Color => {
             let mut arguments = originals.clone();
             arguments.push(payload);
@@ -255,6 +260,7 @@ pub fn entry_point(
             let color = b.call(pieces.shade, arguments);
             b.name(color, "color");
             let cache = to_vec4(&mut b, payload, pieces.components, pieces.vec4);
+            let cache = b.call(pieces.encode, vec![cache]);
             let mut components: Vec<_> = match cache_member {
                 Some(count) if count > 0 && is_struct(module, pieces.result.ty) => {
                     (0..count).map(|i| b.member(color, i)).collect()

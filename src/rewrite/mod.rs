@@ -423,6 +423,7 @@ pub fn rewrite(
         refresh,
         current,
         classify,
+        encode: helper("cache_encode")?,
         vec4,
     };
 

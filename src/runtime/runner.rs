@@ -314,7 +314,12 @@ impl Runner {
         params.extend(refresh.period.to_le_bytes());
         params.extend(refresh.quad.to_le_bytes());
         params.extend((self.frame as u32).to_le_bytes());
-        params.extend(0u32.to_le_bytes());
+        let limit = if self.plan.cache.format == "rgba16float" {
+            65504.0f32
+        } else {
+            f32::MAX
+        };
+        params.extend(limit.to_le_bytes());
         gpu.queue.write_buffer(&self.params, 0, &params);
 
         let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());

@@ -34,10 +34,25 @@ fn run(
     scene_text: &str,
     options: Options,
 ) -> Option<(profile::Pictures, shadecache::report::Report, Scene)> {
+    let marble = std::fs::read_to_string(root().join("corpus/noise_marble.wgsl")).unwrap();
+    run_shader(&marble, scene_text, options)
+}
+
+/// Profiles `shader_text` on `scene_text`; `None` (said on stderr) without
+/// a GPU adapter outside CI.
+fn run_shader(
+    shader_text: &str,
+    scene_text: &str,
+    options: Options,
+) -> Option<(profile::Pictures, shadecache::report::Report, Scene)> {
     crate::gpu::gpu()?;
     let (_dir, scene_path) = temp_file("scene.toml", scene_text.as_bytes());
     let scene = Scene::load(&scene_path).unwrap_or_else(|e| panic!("{}", e.render()));
-    let shader = shadecache::front::load(&root().join("corpus/noise_marble.wgsl")).unwrap();
+    let shader = shadecache::front::parse(shadecache::diagnostic::SourceFile::new(
+        "test.wgsl",
+        shader_text,
+    ))
+    .unwrap_or_else(|e| panic!("{}", e.render()));
     let (report, pictures) = profile::profile(&shader, &scene, &scene_path, &options, &mut Quiet)
         .unwrap_or_else(|e| panic!("{}", e.render()));
     Some((pictures, report, scene))
@@ -377,4 +392,180 @@ fn misses_are_attributed_to_the_effects_that_cause_them() {
         rippling.results[0].miss_rate
     );
     assert!(rippling.miss_causes[0].disocclusion_rate > 0.01);
+}
+
+/// A shader whose payload is not finite on part of the object: `PAYLOAD`
+/// is replaced by the node's expression, `SHADE` by the colour from it.
+fn non_finite_shader(payload: &str, shade: &str) -> String {
+    format!(
+        r#"
+struct Frame {{
+    clip_from_world: mat4x4<f32>,
+    world_from_local: mat4x4<f32>,
+}}
+@group(0) @binding(0) var<uniform> frame: Frame;
+struct VertexOutput {{
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) local: vec3<f32>,
+}}
+@vertex
+fn vs_main(@location(0) position: vec3<f32>) -> VertexOutput {{
+    var out: VertexOutput;
+    out.clip_position = frame.clip_from_world * (frame.world_from_local * vec4<f32>(position, 1.0));
+    out.local = position;
+    return out;
+}}
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {{
+    let payload = {payload};
+    let shade = {shade};
+    return vec4<f32>(shade, 0.5 * shade, 0.2, 1.0);
+}}
+"#
+    )
+}
+
+fn rotating_sphere() -> String {
+    r#"
+size = [128, 128]
+frames = 6
+warmup = 2
+effects = ["object-motion"]
+[camera]
+eye = [0.0, 0.3, 3.2]
+[[objects]]
+mesh = { kind = "sphere", rings = 32, segments = 48 }
+rotation_degrees_per_frame = [0.0, 2.0, 0.0]
+"#
+    .to_string()
+}
+
+fn non_finite_options(node_text: &str, shader: &str, format: CacheFormat) -> Options {
+    let parsed =
+        shadecache::front::parse(shadecache::diagnostic::SourceFile::new("test.wgsl", shader))
+            .unwrap();
+    let analysis = shadecache::analysis::analyze(&parsed, &Default::default()).unwrap();
+    let id = analysis
+        .candidates
+        .iter()
+        .find(|c| c.node.text == node_text)
+        .unwrap_or_else(|| panic!("no candidate `{node_text}`"))
+        .node
+        .id
+        .clone();
+    Options {
+        nodes: Nodes::Ids(vec![id]),
+        cache_format: format,
+        ..Options::default()
+    }
+}
+
+/// NaN payloads (sqrt of a negative) must not spread to the neighbours
+/// whose bilinear footprint touches them, nor outlive a refresh: a
+/// non-finite reconstruction is a miss, so the image stays the reference's.
+#[test]
+fn nan_payload_does_not_spread() {
+    // NaN on the half x < 0, a gentle ramp on the other half.
+    let node = "select(0.5 + (0.3 * in.local.y), sqrt(-1.0 - (in.local.y * in.local.y)), in.local.x < 0.0)";
+    let shader = non_finite_shader(node, "clamp(payload, 0.0, 1.0)");
+    let options = non_finite_options(node, &shader, CacheFormat::Rgba16float);
+    let Some((_, report, _)) = run_shader(&shader, &rotating_sphere(), options) else {
+        return;
+    };
+    for row in &report.results {
+        assert!(
+            row.invalid_rate > 0.1,
+            "{}: the NaN half is detected: {}",
+            row.variant,
+            row.invalid_rate
+        );
+        assert!(
+            row.hit_rate > 0.3,
+            "{}: the finite half is reused: {}",
+            row.variant,
+            row.hit_rate
+        );
+        // A NaN read by a neighbour would shade it 0 or 1 instead of about
+        // 0.5: only the cache's ordinary resampling error remains.
+        assert!(
+            row.max_abs_error < 0.05,
+            "{}: {}",
+            row.variant,
+            row.max_abs_error
+        );
+    }
+}
+
+/// Infinite payloads likewise: bilinear weights would turn them into
+/// infinities and NaNs (0 · ∞) at the neighbours.
+#[test]
+fn inf_payload_does_not_spread() {
+    // Infinite (exp overflows) on the side x > 0.5, a gentle ramp elsewhere.
+    let node = "(0.3 + (0.2 * in.local.y)) * exp(select(0.0, 200.0, in.local.x > 0.5))";
+    let shader = non_finite_shader(node, "select(clamp(payload, 0.0, 1.0), 0.9, payload > 1.0)");
+    let options = non_finite_options(node, &shader, CacheFormat::Rgba32float);
+    let Some((_, report, _)) = run_shader(&shader, &rotating_sphere(), options) else {
+        return;
+    };
+    for row in &report.results {
+        assert!(
+            row.invalid_rate > 0.01,
+            "{}: {}",
+            row.variant,
+            row.invalid_rate
+        );
+        assert!(
+            row.max_abs_error < 0.05,
+            "{}: {}",
+            row.variant,
+            row.max_abs_error
+        );
+    }
+}
+
+/// A payload beyond the range of an rgba16float cache is written as NaN,
+/// so reading it back is a miss and one- and two-pass recompute it: the
+/// image stays correct, at the cost of the reuse of those pixels, which an
+/// rgba32float cache keeps. Three-pass shades from the cache texel itself,
+/// so an overflowing payload cannot be right there with rgba16float: it is
+/// detected, and such a node needs an rgba32float cache.
+#[test]
+fn f16_overflow_is_recomputed_not_reused() {
+    let node = "exp(in.local.x * 40.0)";
+    let shader = non_finite_shader(node, "clamp(log(payload) / 40.0, 0.0, 1.0)");
+    let half = non_finite_options(node, &shader, CacheFormat::Rgba16float);
+    let full = non_finite_options(node, &shader, CacheFormat::Rgba32float);
+    let Some((_, narrow, _)) = run_shader(&shader, &rotating_sphere(), half) else {
+        return;
+    };
+    let Some((_, wide, _)) = run_shader(&shader, &rotating_sphere(), full) else {
+        return;
+    };
+    for variant in Variant::ALL {
+        let narrow = narrow
+            .results
+            .iter()
+            .find(|r| r.variant == variant)
+            .unwrap();
+        let wide = wide.results.iter().find(|r| r.variant == variant).unwrap();
+        // exp(40 x) exceeds 65504 where x > 0.28: a good part of the sphere.
+        assert!(
+            narrow.invalid_rate > 0.05,
+            "{variant}: {}",
+            narrow.invalid_rate
+        );
+        assert_eq!(wide.invalid_rate, 0.0, "{variant}");
+        // One- and two-pass recompute the overflowing pixels: the f16 cache
+        // is no worse than the f32 one (whose own error is the ordinary
+        // resampling of a steep exponential). Blending the saturated
+        // 65504s into their neighbours would be far worse.
+        if variant != Variant::ThreePass {
+            assert!(
+                narrow.max_abs_error <= wide.max_abs_error + 0.02,
+                "{variant}: rgba16float {} against rgba32float {}",
+                narrow.max_abs_error,
+                wide.max_abs_error
+            );
+        }
+    }
 }
