@@ -134,6 +134,29 @@ pub fn write(
     }
 }
 
+/// Every shader file of a variant — its passes and the classify pass — as
+/// (file name, contents), the names the plan gives them.
+pub fn render_variant(
+    rewritten: &crate::rewrite::Rewritten,
+    language: Language,
+) -> Result<Vec<(String, Vec<u8>)>, crate::diagnostic::Error> {
+    use crate::diagnostic::{Diagnostic, Error};
+    let mut files = Vec::new();
+    for pass in rewritten.passes.iter().chain([&rewritten.classify]) {
+        let outputs = write(&pass.module, &pass.info, language).map_err(|err| {
+            Error::plain(Diagnostic::error(format!(
+                "naga cannot write {} as {}: {err}",
+                pass.name,
+                language.as_str()
+            )))
+        })?;
+        for output in outputs {
+            files.push((format!("{}{}", pass.name, output.suffix), output.bytes));
+        }
+    }
+    Ok(files)
+}
+
 /// Writes a variant into `dir`: one file per pass (per entry point for
 /// GLSL) and `plan.json`. Each file is written beside its final name and
 /// renamed into place, so a reader never sees half a file.
@@ -150,19 +173,7 @@ pub fn write_variant(
         )))
     };
     // Render everything before touching the file system.
-    let mut files = Vec::new();
-    for pass in rewritten.passes.iter().chain([&rewritten.classify]) {
-        let outputs = write(&pass.module, &pass.info, language).map_err(|err| {
-            Error::plain(Diagnostic::error(format!(
-                "naga cannot write {} as {}: {err}",
-                pass.name,
-                language.as_str()
-            )))
-        })?;
-        for output in outputs {
-            files.push((format!("{}{}", pass.name, output.suffix), output.bytes));
-        }
-    }
+    let mut files = render_variant(rewritten, language)?;
     let mut plan = serde_json::to_string_pretty(&rewritten.plan)
         .map_err(|err| Error::plain(Diagnostic::error(format!("cannot write the plan: {err}"))))?;
     plan.push('\n');

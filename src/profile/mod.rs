@@ -167,6 +167,14 @@ pub fn profile(
                         resource.name, resource.group, resource.binding, resource.name
                     ))
                 })?;
+                // A depth texture (a shadow map) is made by the runtime,
+                // every texel at the far plane; RGBA texels cannot fill it.
+                if resource.kind == "depth-texture" && !source.is_far() {
+                    return Err(fail(format!(
+                        "texture `{}` is a depth texture: the scene can only give it as `generate = \"far\"`",
+                        resource.name
+                    )));
+                }
                 textures.insert(
                     [resource.group, resource.binding],
                     source.load(dir).map_err(fail)?,
@@ -232,10 +240,6 @@ pub fn profile(
         wgpu_profiler::GpuProfiler::new(&gpu.device, wgpu_profiler::GpuProfilerSettings::default())
             .map_err(|err| fail(format!("cannot start the GPU profiler: {err}")))?;
 
-    let source_of = |sources: &HashMap<String, String>| {
-        let sources = sources.clone();
-        move |name: &str| sources.get(name).cloned()
-    };
     let pipeline_options = runtime::PipelineOptions {
         cull_back_faces: scene.cull_back_faces,
         ..runtime::PipelineOptions::default()
@@ -670,23 +674,18 @@ fn timed(
     Ok((total, passes, results))
 }
 
+/// Looks shader files up by name, for `Runner::new` (which reads them
+/// only while it builds its pipelines).
+fn source_of(sources: &HashMap<String, String>) -> impl Fn(&str) -> Option<String> + '_ {
+    move |name| sources.get(name).cloned()
+}
+
+/// Each shader file of a variant as WGSL text, by the name its plan uses.
 fn sources_of(rewritten: &rewrite::Rewritten) -> Result<HashMap<String, String>, Error> {
-    let mut sources = HashMap::new();
-    for pass in rewritten.passes.iter().chain([&rewritten.classify]) {
-        let outputs = back::write(&pass.module, &pass.info, Language::Wgsl).map_err(|err| {
-            Error::plain(Diagnostic::error(format!(
-                "cannot write {}: {err}",
-                pass.name
-            )))
-        })?;
-        for output in outputs {
-            sources.insert(
-                format!("{}{}", pass.name, output.suffix),
-                String::from_utf8_lossy(&output.bytes).into_owned(),
-            );
-        }
-    }
-    Ok(sources)
+    Ok(back::render_variant(rewritten, Language::Wgsl)?
+        .into_iter()
+        .map(|(name, bytes)| (name, String::from_utf8_lossy(&bytes).into_owned()))
+        .collect())
 }
 
 fn node_report(

@@ -280,7 +280,12 @@ fn speedup_per_period(report: &Report) -> String {
             let mut points: Vec<(f64, f64)> = report
                 .results
                 .iter()
-                .filter(|r| r.node == best.node && r.variant == best.variant && r.refresh_quad == k)
+                .filter(|r| {
+                    r.node == best.node
+                        && r.variant == best.variant
+                        && r.reconstruction == best.reconstruction
+                        && r.refresh_quad == k
+                })
                 .map(|r| (f64::from(r.refresh_period), r.speedup))
                 .collect();
             points.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -292,7 +297,12 @@ fn speedup_per_period(report: &Report) -> String {
         })
         .collect();
     chart(
-        &format!("Speed-up against Δn ({} {})", best.node, best.variant),
+        &format!(
+            "Speed-up against Δn ({} {}, {})",
+            best.node,
+            best.variant,
+            best.reconstruction.as_str()
+        ),
         "Δn (refresh period, frames)",
         "speed-up",
         &series,

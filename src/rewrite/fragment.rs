@@ -129,6 +129,15 @@ pub fn entry_point(
     // Arguments: the original ones, the previous clip position, and the
     // fragment position when the original does not take it.
     let mut arguments = pieces.arguments.clone();
+    // A bare `@builtin(position)` argument is invariant like the struct
+    // members `mark_positions_invariant` handles.
+    for argument in &mut arguments {
+        if let Some(Binding::BuiltIn(naga::BuiltIn::Position { invariant })) =
+            argument.binding.as_mut()
+        {
+            *invariant = true;
+        }
+    }
     let previous_index = arguments.len() as u32;
     arguments.push(naga::FunctionArgument {
         name: Some("previous_clip_position".into()),
@@ -410,7 +419,8 @@ enum FragCoord {
     Member(u32, u32),
 }
 
-fn is_position(binding: &Option<Binding>) -> bool {
+/// Whether a binding is `@builtin(position)`, invariant or not.
+pub(super) fn is_position(binding: &Option<Binding>) -> bool {
     matches!(
         binding,
         Some(Binding::BuiltIn(naga::BuiltIn::Position { .. }))

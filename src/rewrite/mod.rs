@@ -203,6 +203,26 @@ pub const FIRST_TWIN_BINDING: u32 = 5;
 /// WebGPU's default limit on bind groups.
 const MAX_BIND_GROUPS: u32 = 4;
 
+/// `shaders/cache.wgsl` parsed and validated, once per process.
+fn cache_helpers() -> Result<&'static naga::Module, Refusal> {
+    static HELPERS: std::sync::OnceLock<Result<naga::Module, String>> = std::sync::OnceLock::new();
+    HELPERS
+        .get_or_init(|| {
+            crate::front::parse(crate::diagnostic::SourceFile::new(
+                "shaders/cache.wgsl",
+                CACHE_WGSL,
+            ))
+            .map(|shader| shader.module)
+            .map_err(|err| err.render())
+        })
+        .as_ref()
+        .map_err(|err| {
+            Refusal::new(format!(
+                "internal error: the cache helpers do not parse: {err}"
+            ))
+        })
+}
+
 /// Rewrites `shader` to cache `candidate` with `variant`.
 pub fn rewrite(
     shader: &Shader,
@@ -229,7 +249,12 @@ pub fn rewrite(
         ));
     }
 
-    let layout = crate::proc::layout(original, function, 8.0);
+    // Trip counts do not matter here, only where expressions run.
+    let layout = crate::proc::layout(
+        original,
+        function,
+        crate::cost::Weights::default().default_loop_trips,
+    );
     let at = layout
         .placement(node)
         .ok_or_else(|| Refusal::new("the node is not evaluated by the entry point"))?;
@@ -265,17 +290,7 @@ pub fn rewrite(
     }
 
     let mut module = original.clone();
-    let helpers = crate::front::parse(crate::diagnostic::SourceFile::new(
-        "shaders/cache.wgsl",
-        CACHE_WGSL,
-    ))
-    .map_err(|err| {
-        Refusal::new(format!(
-            "internal error: the cache helpers do not parse: {}",
-            err.render()
-        ))
-    })?;
-    let imported = import::import(&mut module, &helpers.module, group);
+    let imported = import::import(&mut module, cache_helpers()?, group);
     let helper = |name: &str| {
         imported.functions.get(name).copied().ok_or_else(|| {
             Refusal::new(format!(
@@ -339,21 +354,6 @@ pub fn rewrite(
         node,
     );
     let stripped = without_bindings(&function.arguments);
-    let mut payload_copy = copy::FunctionCopy::new(
-        original,
-        function,
-        &payload_live,
-        naga::Function {
-            name: Some(format!("{}_payload", entry.name)),
-            arguments: stripped.clone(),
-            result: Some(naga::FunctionResult {
-                ty: payload_ty,
-                binding: None,
-            }),
-            ..naga::Function::default()
-        },
-    );
-    payload_copy.return_at(node);
     let (payload, gradients) = if hoist_derivatives {
         let hoisted = gradients::hoist(
             &mut module,
@@ -369,6 +369,21 @@ pub fn rewrite(
         )?;
         (hoisted.payload, Some(hoisted.gradients))
     } else {
+        let mut payload_copy = copy::FunctionCopy::new(
+            original,
+            function,
+            &payload_live,
+            naga::Function {
+                name: Some(format!("{}_payload", entry.name)),
+                arguments: stripped.clone(),
+                result: Some(naga::FunctionResult {
+                    ty: payload_ty,
+                    binding: None,
+                }),
+                ..naga::Function::default()
+            },
+        );
+        payload_copy.return_at(node);
         let payload_fn = payload_copy.run();
         (
             module.functions.append(payload_fn, naga::Span::UNDEFINED),

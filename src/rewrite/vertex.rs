@@ -17,6 +17,7 @@ use naga::{Binding, BuiltIn, Expression, Function, Handle, Module, Statement, Ty
 
 use super::builder::Builder;
 use super::copy::FunctionCopy;
+use super::fragment::is_position;
 use super::Refusal;
 use crate::analysis::graph::ExprSet;
 
@@ -49,10 +50,6 @@ pub fn vertex_entry(module: &Module) -> Result<usize, Refusal> {
             "the shader has several vertex entry points; which one draws with this fragment stage is ambiguous",
         )),
     }
-}
-
-fn is_position(binding: &Option<Binding>) -> bool {
-    matches!(binding, Some(Binding::BuiltIn(BuiltIn::Position { .. })))
 }
 
 /// Adds the previous clip position to the vertex entry point at
@@ -140,10 +137,10 @@ pub fn instrument(
     let mut function_twins: HashMap<Handle<Function>, Handle<Function>> = HashMap::new();
     for &f in &reachable {
         let source = module.functions[f].clone();
-        let reads_twinned = source.expressions.iter().any(|(_, e)| {
-            matches!(*e, Expression::GlobalVariable(g) if twin_map.contains_key(&g))
-                || matches!(*e, Expression::CallResult(c) if function_twins.contains_key(&c))
-        }) || calls_any(&source.body, &function_twins);
+        let reads_twinned =
+            source.expressions.iter().any(
+                |(_, e)| matches!(*e, Expression::GlobalVariable(g) if twin_map.contains_key(&g)),
+            ) || calls_any(&source.body, &function_twins);
         if !reads_twinned {
             continue;
         }

@@ -126,8 +126,14 @@ impl Runner {
                     passes: vec![pass.clone()],
                     ..plan.clone()
                 };
+                // The same culling as the passes it classifies; never
+                // additive, its colours are codes.
+                let classify_options = PipelineOptions {
+                    count_shading: false,
+                    ..options.pipelines
+                };
                 let mut built =
-                    super::pipelines::pipelines(gpu, &single, &shader, PipelineOptions::default())?;
+                    super::pipelines::pipelines(gpu, &single, &shader, classify_options)?;
                 built.pop().map(|p| (pass.clone(), p))
             }
             _ => None,

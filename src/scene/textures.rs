@@ -46,6 +46,17 @@ pub struct Texels {
 }
 
 impl TextureSource {
+    /// Whether this is the far-plane pattern a depth texture takes.
+    pub fn is_far(&self) -> bool {
+        matches!(
+            self,
+            TextureSource::Generate {
+                generate: Pattern::Far,
+                ..
+            }
+        )
+    }
+
     pub fn load(&self, dir: &Path) -> Result<Texels, String> {
         match *self {
             TextureSource::File { ref file } => {
