@@ -11,7 +11,9 @@
 struct CacheParams {
     // Render target size in pixels.
     viewport: vec2<f32>,
-    // A tap is a hit when |cached depth - expected depth| < depth_epsilon.
+    // A tap agrees when |cached depth - expected depth| < depth_epsilon, the
+    // expected depth following the surface's slope (see
+    // `cache_expected_depth`).
     depth_epsilon: f32,
     // (c mod Δn), advanced by the host each frame as (phase + 1) mod Δn.
     // Passing the phase rather than c keeps the refresh period exact when the
@@ -106,6 +108,18 @@ fn cache_refresh(frag_coord: vec4<f32>) -> bool {
     return (period != 0u) & (b == 0u);
 }
 
+// The depth a cached texel should hold if it shows the same surface as
+// the point: the point's previous depth, carried along the surface's depth
+// slope (dpdx, dpdy) by the texel's offset from the point in pixels. On a
+// sloped surface the texels of the footprint legitimately differ from the
+// point's own depth by up to a pixel's worth of slope; extrapolating along
+// the surface's plane accounts for that, while a texel across a silhouette
+// lies far off the plane and still misses. Derivatives are taken here, so
+// this runs at the top of every pass, in uniform control flow.
+fn cache_expected_depth(depth: f32, offset_x: vec4<f32>, offset_y: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(depth) + (offset_x * dpdx(depth)) + (offset_y * dpdy(depth));
+}
+
 // Where a fragment was last frame, in the cache.
 struct CacheFootprint {
     // 0 the point was visible, 1 off-screen, 2 disoccluded.
@@ -138,7 +152,12 @@ fn cache_footprint(previous_clip: vec4<f32>) -> CacheFootprint {
     // textureGather's order: (0, 1), (1, 1), (1, 0), (0, 0) from `base`.
     let weights = vec4<f32>((1.0 - f.x) * f.y, f.x * f.y, f.x * (1.0 - f.y), (1.0 - f.x) * (1.0 - f.y));
     let depths = textureGather(cache_previous_depth, cache_sampler, (base + vec2<f32>(1.0)) / cache_params.viewport);
-    let agree = all((abs(depths - vec4<f32>(ndc.z)) < vec4<f32>(cache_params.depth_epsilon)) | (weights < vec4<f32>(0.001)));
+    let expected = cache_expected_depth(
+        ndc.z,
+        vec4<f32>(-f.x, 1.0 - f.x, 1.0 - f.x, -f.x),
+        vec4<f32>(1.0 - f.y, 1.0 - f.y, -f.y, -f.y),
+    );
+    let agree = all((abs(depths - expected) < vec4<f32>(cache_params.depth_epsilon)) | (weights < vec4<f32>(0.001)));
     let status = select(1u, select(2u, 0u, agree), inside);
     return CacheFootprint(status, base, f);
 }
@@ -185,7 +204,9 @@ fn cache_lookup_nearest(previous_clip: vec4<f32>) -> CacheLookup {
     // Comparisons with NaN are false, so a NaN position is off-screen.
     let inside = (previous_clip.w > 0.0) & all(position >= vec2<f32>(0.0)) & all(position < cache_params.viewport);
     let t = clamp(vec2<i32>(floor(position)), vec2<i32>(0), vec2<i32>(cache_params.viewport) - vec2<i32>(1));
-    let agree = abs(textureLoad(cache_previous_depth, t, 0) - ndc.z) < cache_params.depth_epsilon;
+    let offset = (vec2<f32>(t) + vec2<f32>(0.5)) - position;
+    let expected = cache_expected_depth(ndc.z, vec4<f32>(offset.x), vec4<f32>(offset.y)).x;
+    let agree = abs(textureLoad(cache_previous_depth, t, 0) - expected) < cache_params.depth_epsilon;
     let status = select(1u, select(2u, 0u, agree), inside);
     return cache_checked(textureLoad(cache_previous_payload, t, 0), status);
 }

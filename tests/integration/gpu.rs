@@ -27,16 +27,10 @@ pub fn gpu() -> Option<Gpu> {
 
 /// Each pass's WGSL by file name, as the plan names it.
 fn wgsl_sources(rewritten: &rewrite::Rewritten) -> HashMap<String, String> {
-    rewritten
-        .passes
-        .iter()
-        .map(|pass| {
-            let out = back::write(&pass.module, &pass.info, Language::Wgsl).unwrap();
-            (
-                format!("{}.wgsl", pass.name),
-                String::from_utf8(out[0].bytes.clone()).unwrap(),
-            )
-        })
+    back::render_variant(rewritten, Language::Wgsl)
+        .unwrap()
+        .into_iter()
+        .map(|(name, bytes)| (name, String::from_utf8(bytes).unwrap()))
         .collect()
 }
 
@@ -187,7 +181,7 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
                 count_shading: true,
                 cull_back_faces: false,
             },
-            classify: false,
+            classify: true,
         },
     )
     .unwrap();
@@ -217,6 +211,14 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
 
         let color = runtime::read_texture(&gpu, runner.color(), 8).unwrap();
         let depth = runtime::read_texture(&gpu, runner.depth(), 4).unwrap();
+        // After the first frame most pixels are reused: pass 1 writes their
+        // depth and pass 2 is depth-tested against it, so all three passes'
+        // positions must agree.
+        if frame > 0 {
+            let classes = runtime::read_texture(&gpu, runner.classes(), 4).unwrap();
+            let decisions = shadecache::profile::metrics::decisions(&classes);
+            assert!(decisions.hit > 0.5, "frame {frame}: {decisions:?}");
+        }
         let (mut covered, mut holes, mut doubled) = (0, 0, 0);
         for pixel in 0..(size.0 * size.1) as usize {
             let d = f32::from_le_bytes(depth[pixel * 4..pixel * 4 + 4].try_into().unwrap());

@@ -361,8 +361,14 @@ fn stdout_has(output: &std::process::Output, text: &str) -> bool {
 fn misses_are_attributed_to_the_effects_that_cause_them() {
     let mut opts = options(&[0], &[4]);
     opts.variants = vec![Variant::TwoPass];
-    let scene = marble_scene("\"object-motion\", \"camera-motion\"", "")
-        .replace("[camera]\n", "[camera]\norbit_degrees_per_frame = 1.5\n");
+    // The light moves too, but moving it changes no geometry: alone, it
+    // causes no miss — which the report shows only if each effect really
+    // runs on its own.
+    let scene = marble_scene(
+        "\"object-motion\", \"camera-motion\", \"light-motion\"",
+        "[light]\norbit_degrees_per_frame = 5.0\n",
+    )
+    .replace("[camera]\n", "[camera]\norbit_degrees_per_frame = 1.5\n");
     let Some((_, report, _)) = run(&scene, opts.clone()) else {
         return;
     };
@@ -371,10 +377,15 @@ fn misses_are_attributed_to_the_effects_that_cause_them() {
         .iter()
         .map(|c| format!("{:?}", c.effect))
         .collect();
-    assert_eq!(effects, ["ObjectMotion", "CameraMotion"]);
-    for cause in &report.miss_causes {
+    assert_eq!(effects, ["ObjectMotion", "CameraMotion", "LightMotion"]);
+    for cause in &report.miss_causes[..2] {
         assert!(cause.miss_rate > 0.0 && cause.miss_rate < 0.2, "{cause:?}");
     }
+    assert_eq!(
+        report.miss_causes[2].miss_rate, 0.0,
+        "{:?}",
+        report.miss_causes[2]
+    );
 
     let rigid = marble_scene("", "");
     let deforming = marble_scene("\"deformation\"", "")
