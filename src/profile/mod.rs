@@ -16,6 +16,7 @@
 //! and with ρ the measured reuse fraction the ideal speed-up is
 //! 1 / (1 − ρ·f) (seed 002, §4), which every result is compared with.
 
+pub mod grid;
 pub mod metrics;
 
 use std::collections::HashMap;
@@ -27,26 +28,35 @@ use crate::diagnostic::{Diagnostic, Error};
 use crate::front::Shader;
 use crate::plan::{self, Plan};
 use crate::report::{
-    Device, FrameStats, MissCause, NodeReport, PassTime, Reference, Report, ResultRow,
+    self, Device, FrameStats, GridReport, MissCause, NodeReport, PassTime, Reference, Report,
+    ResultRow,
 };
 use crate::rewrite::{self, CacheFormat, Options as RewriteOptions, Reconstruction, Variant};
 use crate::runtime::{self, FrameInputs, Gpu, ObjectInputs, RunOptions, Runner};
 use crate::scene::{self, Scene};
+use grid::{Axes, Design, Grid, Setting};
 use metrics::{Decisions, FrameError};
 
 pub use crate::analysis::Nodes;
+pub use crate::report::Budget;
 
 /// What to measure.
 #[derive(Clone, Debug)]
 pub struct Options {
     pub nodes: Nodes,
     pub variants: Vec<Variant>,
+    /// The values of each knob to measure: Δn, k, reconstruction, cache
+    /// format, depth ε.
     pub refresh_periods: Vec<u32>,
     pub refresh_quads: Vec<u32>,
-    pub cache_format: CacheFormat,
-    pub depth_epsilon: f32,
-    /// Reconstructions to measure.
     pub reconstructions: Vec<Reconstruction>,
+    pub cache_formats: Vec<CacheFormat>,
+    pub depth_epsilons: Vec<f32>,
+    /// Measure their full product, or prune it as a sweep does (see
+    /// [`grid`]).
+    pub design: Design,
+    /// Pick the fastest configuration within this error budget.
+    pub max_error: Option<Budget>,
     /// Frames measured and warm-up frames; `None` takes the scene's.
     pub frames: Option<u32>,
     pub warmup: Option<u32>,
@@ -59,6 +69,33 @@ pub struct Options {
     pub command: String,
 }
 
+impl Options {
+    /// The sweep of `profile --sweep`: every knob over [`Axes::sweep`],
+    /// pruned (see [`grid`]).
+    pub fn sweep(self) -> Self {
+        let axes = Axes::sweep();
+        Options {
+            refresh_periods: axes.refresh_periods,
+            refresh_quads: axes.refresh_quads,
+            reconstructions: axes.reconstructions,
+            cache_formats: axes.cache_formats,
+            depth_epsilons: axes.depth_epsilons,
+            design: Design::Planes,
+            ..self
+        }
+    }
+
+    fn axes(&self) -> Axes {
+        Axes {
+            refresh_periods: self.refresh_periods.clone(),
+            refresh_quads: self.refresh_quads.clone(),
+            reconstructions: self.reconstructions.clone(),
+            cache_formats: self.cache_formats.clone(),
+            depth_epsilons: self.depth_epsilons.clone(),
+        }
+    }
+}
+
 impl Default for Options {
     fn default() -> Self {
         Options {
@@ -66,9 +103,11 @@ impl Default for Options {
             variants: Variant::ALL.to_vec(),
             refresh_periods: vec![32],
             refresh_quads: vec![4],
-            cache_format: CacheFormat::Rgba16float,
-            depth_epsilon: RewriteOptions::default().depth_epsilon,
             reconstructions: vec![Reconstruction::Bilinear],
+            cache_formats: vec![CacheFormat::Rgba16float],
+            depth_epsilons: vec![RewriteOptions::default().depth_epsilon],
+            design: Design::Full,
+            max_error: None,
             frames: None,
             warmup: None,
             size: None,
@@ -117,9 +156,7 @@ type Picture = (Vec<u8>, Vec<u8>);
 struct Config {
     node: usize,
     variant: Variant,
-    period: u32,
-    quad: u32,
-    reconstruction: Reconstruction,
+    setting: Setting,
     runner: Runner,
     label: String,
     times: Vec<f64>,
@@ -146,11 +183,26 @@ pub fn profile(
         options.frames.unwrap_or(scene.frames).max(1),
         options.warmup.unwrap_or(scene.warmup),
     );
-    let base = RewriteOptions {
-        cache_format: options.cache_format,
-        depth_epsilon: options.depth_epsilon,
-        ..RewriteOptions::default()
-    };
+    let estimates: Vec<(String, f64)> =
+        nodes.iter().map(|c| (c.node.id.clone(), c.ratio)).collect();
+    let grid = Grid::new(
+        options.axes(),
+        options.design,
+        &estimates,
+        options.variants.len(),
+    );
+    let base_setting = grid
+        .axes
+        .base()
+        .ok_or_else(|| fail("every knob needs at least one value to measure".into()))?;
+    let base = base_setting.rewrite_options(&RewriteOptions::default());
+    // The nodes the grid kept, with their settings.
+    let nodes: Vec<(&Candidate, &[Setting])> = nodes
+        .iter()
+        .zip(&grid.settings)
+        .filter(|(_, settings)| !settings.is_empty())
+        .map(|(candidate, settings)| (*candidate, settings.as_slice()))
+        .collect();
     let reference_plan = plan::reference(shader, &analysis, &base).map_err(fail)?;
 
     // The scene must provide everything the shader binds.
@@ -267,7 +319,7 @@ pub fn profile(
 
     // Per node: a payload pass over every pixel, for P/T.
     let mut payloads = Vec::new();
-    for candidate in &nodes {
+    for (candidate, _) in &nodes {
         let rewritten = rewrite::rewrite(shader, &analysis, candidate, Variant::ThreePass, &base)
             .map_err(|r| fail(format!("node {}: {}", candidate.node.id, r.reason)))?;
         let mut pass = rewritten.plan.passes[1].clone();
@@ -294,63 +346,53 @@ pub fn profile(
     }
 
     let mut configs = Vec::new();
-    for (node, candidate) in nodes.iter().enumerate() {
+    for (node, (candidate, settings)) in nodes.iter().enumerate() {
         for &variant in &options.variants {
-            for &period in &options.refresh_periods {
-                for (&quad, &reconstruction) in options
-                    .refresh_quads
-                    .iter()
-                    .flat_map(|q| options.reconstructions.iter().map(move |r| (q, r)))
-                {
-                    let what = format!(
-                        "{} {variant} Δn={period} k={quad} {}",
-                        candidate.node.id,
-                        reconstruction.as_str()
-                    );
-                    let rewrite_options = RewriteOptions {
-                        refresh_period: period,
-                        refresh_quad: quad,
-                        reconstruction,
-                        ..base.clone()
-                    };
-                    let rewritten = match rewrite::rewrite(
-                        shader,
-                        &analysis,
-                        candidate,
-                        variant,
-                        &rewrite_options,
-                    ) {
-                        Ok(rewritten) => rewritten,
-                        Err(refusal) => {
-                            progress.refused(&what, &refusal.reason);
-                            continue;
-                        }
-                    };
-                    let runner = Runner::new(
-                        &gpu,
-                        &rewritten.plan,
-                        source_of(&sources_of(&rewritten)?),
-                        &meshes,
-                        &textures,
-                        (size[0], size[1]),
-                        run_options,
-                    )
-                    .map_err(|err| fail(format!("{what}: {err}")))?;
-                    configs.push(Config {
-                        node,
-                        variant,
-                        period,
-                        quad,
-                        reconstruction,
-                        runner,
-                        label: what,
-                        times: Vec::new(),
-                        passes: HashMap::new(),
-                        errors: Vec::new(),
-                        decisions: Vec::new(),
-                        last: (Vec::new(), Vec::new()),
-                    });
-                }
+            for setting in settings.iter() {
+                let what = format!(
+                    "{} {variant} Δn={} k={} {} {} ε={}",
+                    candidate.node.id,
+                    setting.refresh_period,
+                    setting.refresh_quad,
+                    setting.reconstruction.as_str(),
+                    setting.cache_format.as_str(),
+                    setting.depth_epsilon
+                );
+                let rewritten = match rewrite::rewrite(
+                    shader,
+                    &analysis,
+                    candidate,
+                    variant,
+                    &setting.rewrite_options(&base),
+                ) {
+                    Ok(rewritten) => rewritten,
+                    Err(refusal) => {
+                        progress.refused(&what, &refusal.reason);
+                        continue;
+                    }
+                };
+                let runner = Runner::new(
+                    &gpu,
+                    &rewritten.plan,
+                    source_of(&sources_of(&rewritten)?),
+                    &meshes,
+                    &textures,
+                    (size[0], size[1]),
+                    run_options,
+                )
+                .map_err(|err| fail(format!("{what}: {err}")))?;
+                configs.push(Config {
+                    node,
+                    variant,
+                    setting: *setting,
+                    runner,
+                    label: what,
+                    times: Vec::new(),
+                    passes: HashMap::new(),
+                    errors: Vec::new(),
+                    decisions: Vec::new(),
+                    last: (Vec::new(), Vec::new()),
+                });
             }
         }
     }
@@ -433,7 +475,7 @@ pub fn profile(
     let node_reports: Vec<NodeReport> = nodes
         .iter()
         .zip(&payloads)
-        .map(|(candidate, (_, times))| {
+        .map(|((candidate, _), (_, times))| {
             let payload_ms = metrics::median(times);
             node_report(shader, candidate, payload_ms, reference_ms)
         })
@@ -467,11 +509,11 @@ pub fn profile(
                 node: node.id.clone(),
                 node_text: node.text.clone(),
                 variant: config.variant,
-                refresh_period: config.period,
-                refresh_quad: config.quad,
-                reconstruction: config.reconstruction,
-                cache_format: options.cache_format.as_str().into(),
-                depth_epsilon: options.depth_epsilon,
+                refresh_period: config.setting.refresh_period,
+                refresh_quad: config.setting.refresh_quad,
+                reconstruction: config.setting.reconstruction,
+                cache_format: config.setting.cache_format,
+                depth_epsilon: config.setting.depth_epsilon,
                 time_ms,
                 passes,
                 speedup,
@@ -498,6 +540,8 @@ pub fn profile(
                 p_over_t: node.p_over_t,
                 ideal_speedup: ideal,
                 share_of_ideal: if ideal > 0.0 { speedup / ideal } else { 0.0 },
+                pareto_psnr: false,
+                pareto_ssim: false,
                 frame_stats: config
                     .times
                     .iter()
@@ -517,27 +561,14 @@ pub fn profile(
         })
         .collect();
     rows.sort_by(|a, b| b.0.speedup.total_cmp(&a.0.speedup));
-    let (results, pictures): (Vec<_>, Vec<_>) = rows.into_iter().unzip();
+    let (mut results, pictures): (Vec<_>, Vec<_>) = rows.into_iter().unzip();
+    report::mark_pareto_fronts(reference_ms, &mut results);
 
     // What causes the misses: the best configuration again, with one
     // declared effect at a time.
     let mut miss_causes = Vec::new();
     if let Some(best) = results.first() {
-        let candidate = nodes
-            .iter()
-            .find(|c| c.node.id == best.node)
-            .ok_or_else(|| {
-                fail("internal error: the best node is not among the profiled".into())
-            })?;
-        let rewrite_options = RewriteOptions {
-            refresh_period: best.refresh_period,
-            refresh_quad: best.refresh_quad,
-            reconstruction: best.reconstruction,
-            ..base.clone()
-        };
-        let rewritten =
-            rewrite::rewrite(shader, &analysis, candidate, best.variant, &rewrite_options)
-                .map_err(|r| fail(r.reason))?;
+        let rewritten = rewrite_of(shader, &analysis, best)?;
         let sources = sources_of(&rewritten)?;
         let moving = scene
             .effects
@@ -609,8 +640,21 @@ pub fn profile(
             frame_ms: reference_times,
         },
         nodes: node_reports,
+        grid: Some(GridReport {
+            design: grid.design,
+            base: grid.axes.base().unwrap_or(base_setting),
+            axes: grid.axes.clone(),
+            full: grid.full,
+            measured: results.len(),
+            pruned: grid.pruned.clone(),
+        }),
         results,
         miss_causes,
+        choice: None,
+    };
+    let report = Report {
+        choice: options.max_error.map(|budget| report.choose(budget)),
+        ..report
     };
     Ok((
         report,
@@ -620,6 +664,41 @@ pub fn profile(
             trace,
         },
     ))
+}
+
+/// The rewrite a result measured: its node and variant, with its knobs.
+pub fn rewrite_of(
+    shader: &Shader,
+    analysis: &analysis::Analysis,
+    row: &ResultRow,
+) -> Result<rewrite::Rewritten, Error> {
+    let candidates = analysis.select(&shader.file, &Nodes::Ids(vec![row.node.clone()]))?;
+    let candidate = candidates.first().ok_or_else(|| {
+        Error::plain(Diagnostic::error(format!(
+            "no node {} in the shader",
+            row.node
+        )))
+    })?;
+    let setting = Setting {
+        refresh_period: row.refresh_period,
+        refresh_quad: row.refresh_quad,
+        reconstruction: row.reconstruction,
+        cache_format: row.cache_format,
+        depth_epsilon: row.depth_epsilon,
+    };
+    rewrite::rewrite(
+        shader,
+        analysis,
+        candidate,
+        row.variant,
+        &setting.rewrite_options(&RewriteOptions::default()),
+    )
+    .map_err(|refusal| {
+        Error::plain(Diagnostic::error(format!(
+            "node {} {}: {}",
+            row.node, row.variant, refusal.reason
+        )))
+    })
 }
 
 /// A frame's time, each pass's (ms), and the profiler's raw scopes.

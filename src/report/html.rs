@@ -8,7 +8,7 @@ use std::path::Path;
 use base64::Engine;
 
 use super::plots::{chart, escape, Series};
-use super::{images, Report};
+use super::{images, Report, ResultRow};
 use crate::rewrite::Variant;
 
 /// Renders `report`; PNGs under `dir` (from [`super::write_images`]) are
@@ -73,12 +73,39 @@ pub fn html(report: &Report, dir: &Path) -> String {
         }
         None => page.push_str("<p>No configuration could be measured.</p>"),
     }
+    if let Some(choice) = &report.choice {
+        match choice.result.map(|i| &report.results[i]) {
+            Some(row) => {
+                let _ = write!(
+                    page,
+                    "<p class=\"answer\">Within the budget {}: node <code>{}</code>, <b>{}</b>, Δn = {}, k = {}, {}, {}, ε = {} — {}. Its shaders and plan are in <code>choice/</code>.</p>",
+                    escape(&choice.budget.to_string()),
+                    escape(&row.node),
+                    row.variant,
+                    row.refresh_period,
+                    row.refresh_quad,
+                    row.reconstruction.as_str(),
+                    row.cache_format.as_str(),
+                    row.depth_epsilon,
+                    escape(&choice.reason)
+                );
+            }
+            None => {
+                let _ = write!(
+                    page,
+                    "<p class=\"answer\">Within the budget {}: {}.</p>",
+                    escape(&choice.budget.to_string()),
+                    escape(&choice.reason)
+                );
+            }
+        }
+    }
 
     // All results.
-    page.push_str("<h2>Results</h2><table><tr><th>#</th><th>node</th><th>variant</th><th>Δn</th><th>k</th><th>recon.</th><th>time ms</th><th>passes ms</th><th>speed-up</th><th>ideal</th><th>share</th><th>P/T</th><th>hit</th><th>miss (off-screen / disoccluded)</th><th>refresh</th><th>PSNR dB</th><th>SSIM</th><th>max err</th><th>map</th></tr>");
+    page.push_str("<h2>Results</h2><table><tr><th>#</th><th>node</th><th>variant</th><th>Δn</th><th>k</th><th>recon.</th><th>format</th><th>ε</th><th>time ms</th><th>passes ms</th><th>speed-up</th><th>ideal</th><th>share</th><th>P/T</th><th>hit</th><th>miss (off-screen / disoccluded)</th><th>refresh</th><th>PSNR dB</th><th>SSIM</th><th>max err</th><th>map</th></tr>");
     let _ = write!(
         page,
-        "<tr class=\"reference\"><td></td><td colspan=\"5\">reference (unmodified shader)</td><td>{:.3}</td><td colspan=\"12\"></td></tr>",
+        "<tr class=\"reference\"><td></td><td colspan=\"7\">reference (unmodified shader)</td><td>{:.3}</td><td colspan=\"12\"></td></tr>",
         report.reference.time_ms
     );
     for (rank, row) in report.results.iter().enumerate() {
@@ -89,13 +116,15 @@ pub fn html(report: &Report, dir: &Path) -> String {
             .collect();
         let _ = write!(
             page,
-            "<tr><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{}</td><td>{:.2}×</td><td>{:.2}×</td><td>{:.0}%</td><td>{:.2}</td><td>{:.1}%</td><td>{:.1}% ({:.1} / {:.1})</td><td>{:.1}%</td><td>{:.1}</td><td>{:.4}</td><td>{:.3}</td><td><a href=\"maps/{}\">png</a></td></tr>",
+            "<tr><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{}</td><td>{:.2}×</td><td>{:.2}×</td><td>{:.0}%</td><td>{:.2}</td><td>{:.1}%</td><td>{:.1}% ({:.1} / {:.1})</td><td>{:.1}%</td><td>{:.1}</td><td>{:.4}</td><td>{:.3}</td><td><a href=\"maps/{}\">png</a></td></tr>",
             rank + 1,
             escape(&row.node),
             row.variant,
             row.refresh_period,
             row.refresh_quad,
             row.reconstruction.as_str(),
+            row.cache_format.as_str(),
+            row.depth_epsilon,
             row.time_ms,
             escape(&passes.join(", ")),
             row.speedup,
@@ -151,7 +180,20 @@ pub fn html(report: &Report, dir: &Path) -> String {
     page.push_str("<h2>Charts</h2>");
     page.push_str(&time_per_node(report));
     page.push_str(&speedup_per_period(report));
-    page.push_str(&error_against_time(report));
+    page.push_str(&error_against_time(
+        report,
+        "PSNR (dB)",
+        |r| r.psnr,
+        |r| r.pareto_psnr,
+    ));
+    page.push_str(&error_against_time(
+        report,
+        "SSIM",
+        |r| r.ssim,
+        |r| r.pareto_ssim,
+    ));
+    page.push_str(&pareto_table(report));
+    page.push_str(&grid_section(report));
 
     // Pictures.
     page.push_str("<h2>Pictures</h2><p>Maps of the cache's decisions: <span style=\"color:#0a0\">hit</span>, <span style=\"color:#00f\">refresh</span>, <span style=\"color:#f00\">miss (disoccluded)</span>, <span style=\"color:#f80\">miss (off-screen)</span>.</p><div class=\"pictures\">");
@@ -310,9 +352,16 @@ fn speedup_per_period(report: &Report) -> String {
     )
 }
 
-/// Error against time: every configuration, one colour per variant.
-fn error_against_time(report: &Report) -> String {
-    let series: Vec<Series> = Variant::ALL
+/// Error against time: every configuration, one colour per variant, and
+/// the Pareto front through them (from the unmodified shader's exact image
+/// at its time, see [`super::mark_pareto_fronts`]).
+fn error_against_time(
+    report: &Report,
+    metric: &str,
+    value: fn(&ResultRow) -> f64,
+    on_front: fn(&ResultRow) -> bool,
+) -> String {
+    let mut series: Vec<Series> = Variant::ALL
         .iter()
         .map(|&variant| Series {
             name: variant.to_string(),
@@ -320,19 +369,111 @@ fn error_against_time(report: &Report) -> String {
                 .results
                 .iter()
                 .filter(|r| r.variant == variant)
-                .map(|r| (r.time_ms, r.psnr))
+                .map(|r| (r.time_ms, value(r)))
                 .collect(),
             line: false,
         })
         .filter(|s| !s.points.is_empty())
         .collect();
+    let mut front: Vec<(f64, f64)> = report
+        .results
+        .iter()
+        .filter(|r| on_front(r))
+        .map(|r| (r.time_ms, value(r)))
+        .collect();
+    front.sort_by(|a, b| a.0.total_cmp(&b.0));
+    if !front.is_empty() {
+        series.push(Series {
+            name: "Pareto front".into(),
+            points: front,
+            line: true,
+        });
+    }
     chart(
-        "Error against time",
+        &format!("{metric} against time"),
         "ms per frame",
-        "PSNR (dB)",
+        metric,
         &series,
         None,
     )
+}
+
+/// The Pareto front of time against PSNR as a table, fastest first.
+fn pareto_table(report: &Report) -> String {
+    let mut page = String::from("<h2>Pareto front</h2><p>The configurations no other beats on time without losing PSNR (the unmodified shader counts as exact at its own time, so nothing slower than it is on the front). <b>S</b> marks those also on the SSIM front.</p><table><tr><th>#</th><th>node</th><th>variant</th><th>Δn</th><th>k</th><th>recon.</th><th>format</th><th>ε</th><th>time ms</th><th>speed-up</th><th>PSNR dB</th><th>SSIM</th><th>SSIM front</th></tr>");
+    let mut rows: Vec<(usize, &ResultRow)> = report
+        .results
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.pareto_psnr)
+        .collect();
+    rows.sort_by(|a, b| a.1.time_ms.total_cmp(&b.1.time_ms));
+    for (rank, row) in rows {
+        let _ = write!(
+            page,
+            "<tr><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.2}×</td><td>{:.1}</td><td>{:.4}</td><td>{}</td></tr>",
+            rank + 1,
+            escape(&row.node),
+            row.variant,
+            row.refresh_period,
+            row.refresh_quad,
+            row.reconstruction.as_str(),
+            row.cache_format.as_str(),
+            row.depth_epsilon,
+            row.time_ms,
+            row.speedup,
+            row.psnr,
+            row.ssim,
+            if row.pareto_ssim { "S" } else { "" },
+        );
+    }
+    page.push_str("</table>");
+    page
+}
+
+/// What was measured of the grid, and what was pruned.
+fn grid_section(report: &Report) -> String {
+    let Some(grid) = &report.grid else {
+        return String::new();
+    };
+    let axes = &grid.axes;
+    let list = |values: Vec<String>| values.join(", ");
+    let mut page = format!(
+        "<h2>Grid</h2><p>Δn ∈ {{{}}}, k ∈ {{{}}}, reconstruction ∈ {{{}}}, cache format ∈ {{{}}}, ε ∈ {{{}}}, for every node and variant asked: {} configurations in the full product, {} measured ({} design; base Δn = {}, k = {}, {}, {}, ε = {}).</p>",
+        list(axes.refresh_periods.iter().map(u32::to_string).collect()),
+        list(axes.refresh_quads.iter().map(u32::to_string).collect()),
+        list(axes.reconstructions.iter().map(|r| r.as_str().to_string()).collect()),
+        list(axes.cache_formats.iter().map(|f| f.as_str().to_string()).collect()),
+        list(axes.depth_epsilons.iter().map(f32::to_string).collect()),
+        grid.full,
+        grid.measured,
+        match grid.design {
+            crate::profile::grid::Design::Full => "full",
+            crate::profile::grid::Design::Planes => "planes",
+        },
+        grid.base.refresh_period,
+        grid.base.refresh_quad,
+        grid.base.reconstruction.as_str(),
+        grid.base.cache_format.as_str(),
+        grid.base.depth_epsilon,
+    );
+    if !grid.pruned.is_empty() {
+        page.push_str(
+            "<table><tr><th>rule</th><th>node</th><th>configurations</th><th>why</th></tr>",
+        );
+        for pruned in &grid.pruned {
+            let _ = write!(
+                page,
+                "<tr><td>{}</td><td><code>{}</code></td><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
+                escape(&pruned.rule),
+                escape(pruned.node.as_deref().unwrap_or("")),
+                pruned.configurations,
+                escape(&pruned.reason)
+            );
+        }
+        page.push_str("</table>");
+    }
+    page
 }
 
 const STYLE: &str = "body{font-family:sans-serif;margin:2em;max-width:1200px}table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:3px 6px;text-align:right}th{background:#eee}tr.reference{background:#f6f6f6}code{background:#f3f3f3;padding:0 3px}pre{background:#f8f8f8;padding:8px;overflow-x:auto}mark{background:#ffe08a}.answer{font-size:15px;background:#eef7ee;padding:10px;border-left:4px solid #2a2}.meta{color:#555}.pictures{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}figure img{image-rendering:pixelated;width:256px;border:1px solid #ccc}svg{display:block;margin:12px 0}";

@@ -104,7 +104,7 @@ fn static_scene_without_refresh_reuses_every_pixel() {
 #[test]
 fn refresh_period_one_equals_the_reference() {
     let mut opts = options(&[1], &[1]);
-    opts.cache_format = CacheFormat::Rgba32float;
+    opts.cache_formats = vec![CacheFormat::Rgba32float];
     let Some((_, report, _)) = run(
         &marble_scene("\"object-motion\", \"camera-motion\"", ""),
         opts,
@@ -466,7 +466,7 @@ fn non_finite_options(node_text: &str, shader: &str, format: CacheFormat) -> Opt
         .clone();
     Options {
         nodes: Nodes::Ids(vec![id]),
-        cache_format: format,
+        cache_formats: vec![format],
         ..Options::default()
     }
 }
@@ -578,5 +578,117 @@ fn f16_overflow_is_recomputed_not_reused() {
                 wide.max_abs_error
             );
         }
+    }
+}
+
+/// `--sweep` measures the pruned grid, says what it pruned, marks the
+/// Pareto front of time against PSNR and SSIM, and `--max-error` writes
+/// the fastest configuration within the budget as a valid rewrite.
+#[test]
+fn sweep_marks_the_pareto_front_and_writes_the_choice() {
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let scene = marble_scene("\"object-motion\"", "");
+    let (_dir, path) = temp_file("scene.toml", scene.as_bytes());
+    let out = tempfile::tempdir().unwrap();
+    let output = shadecache(
+        [
+            "profile",
+            "corpus/noise_marble.wgsl",
+            "--scene",
+            path.to_str().unwrap(),
+            "--sweep",
+            "--nodes",
+            "top:1",
+            "--variant",
+            "two-pass",
+            // Narrower than the sweep's own axes, to stay quick; the
+            // format, reconstruction and ε axes keep their sweep values.
+            "--refresh-period",
+            "8,32",
+            "--refresh-quad",
+            "1,4",
+            "--size",
+            "48x48",
+            "--frames",
+            "2",
+            "--warmup",
+            "1",
+            "--max-error",
+            "psnr:10",
+            "--out",
+            out.path().to_str().unwrap(),
+            "--quiet",
+        ]
+        .map(std::ffi::OsStr::new),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let report: shadecache::report::Report =
+        serde_json::from_slice(&std::fs::read(out.path().join("report.json")).unwrap()).unwrap();
+
+    // 2 Δn × 2 k × 2 reconstructions × 2 formats × 3 ε = 48 settings; the
+    // planes through the base (Δn 32, k 4, bilinear, rgba16float, the
+    // default ε) keep 4 + 12 − 1 = 15.
+    let grid = report.grid.as_ref().expect("a sweep reports its grid");
+    assert_eq!(grid.full, 48);
+    assert_eq!(grid.measured, 15);
+    assert_eq!(report.results.len(), 15);
+    let pruned: usize = grid.pruned.iter().map(|p| p.configurations).sum();
+    assert_eq!(pruned, 48 - 15);
+    assert!(grid.pruned.iter().all(|p| !p.reason.is_empty()));
+    for format in ["rgba16float", "rgba32float"] {
+        assert!(report
+            .results
+            .iter()
+            .any(|r| r.cache_format.as_str() == format));
+    }
+
+    // The front: no row on it is beaten on both time and PSNR by another.
+    let front: Vec<_> = report.results.iter().filter(|r| r.pareto_psnr).collect();
+    assert!(!front.is_empty() || report.results.iter().all(|r| r.speedup <= 1.0));
+    for a in &front {
+        assert!(a.time_ms <= report.reference.time_ms);
+        for b in &report.results {
+            assert!(
+                !(b.time_ms < a.time_ms && b.psnr > a.psnr),
+                "a front row is dominated"
+            );
+        }
+    }
+    let html = std::fs::read_to_string(out.path().join("report.html")).unwrap();
+    assert!(html.contains("Pareto front") && html.contains("SSIM against time"));
+
+    // The choice: the fastest row within the budget, if it beats the
+    // original; its rewrite is on disk and valid.
+    let choice = report
+        .choice
+        .as_ref()
+        .expect("--max-error records a choice");
+    let within = report
+        .results
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.psnr >= 10.0)
+        .min_by(|a, b| a.1.time_ms.total_cmp(&b.1.time_ms))
+        .map(|(i, _)| i);
+    let chosen = choice.result;
+    if let Some(i) = chosen {
+        assert_eq!(Some(i), within);
+        let plan: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.path().join("choice/plan.json")).unwrap())
+                .unwrap();
+        assert_eq!(plan["variant"], "two-pass");
+        for entry in std::fs::read_dir(out.path().join("choice")).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "wgsl") {
+                shadecache::front::load(&path)
+                    .unwrap_or_else(|e| panic!("{}: {e:?}", path.display()));
+            }
+        }
+        assert!(stdout_has(&output, "wrote its shaders and plan"));
+    } else {
+        assert!(!out.path().join("choice").exists());
+        assert!(stdout_has(&output, "keep the original"));
     }
 }

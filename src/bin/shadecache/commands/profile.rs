@@ -3,11 +3,13 @@
 
 use std::path::PathBuf;
 
+use shadecache::analysis;
+use shadecache::back::{self, Language};
 use shadecache::diagnostic::{Color, Diagnostic, Error};
 use shadecache::front;
-use shadecache::profile::{self, Nodes, Options, Progress};
+use shadecache::profile::{self, Budget, Nodes, Options, Progress};
 use shadecache::report;
-use shadecache::rewrite::{CacheFormat, Variant};
+use shadecache::rewrite::Variant;
 use shadecache::scene::Scene;
 
 use super::rewrite::{CacheFormatArg, ReconstructionArg, VariantArg};
@@ -29,36 +31,47 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = VariantArg::All)]
     pub variant: VariantArg,
 
-    /// Refresh periods Δn to measure, separated by commas (0 turns refresh off).
-    #[arg(
-        long,
-        value_name = "N,...",
-        value_delimiter = ',',
-        default_value = "32"
-    )]
-    pub refresh_period: Vec<u32>,
+    /// Refresh periods Δn to measure, separated by commas (0 turns refresh
+    /// off) [default: 32; with --sweep 4,8,16,32,64].
+    #[arg(long, value_name = "N,...", value_delimiter = ',')]
+    pub refresh_period: Option<Vec<u32>>,
 
-    /// Refresh block sizes k to measure, separated by commas.
-    #[arg(long, value_name = "K,...", value_delimiter = ',', default_value = "4")]
-    pub refresh_quad: Vec<u32>,
+    /// Refresh block sizes k to measure, separated by commas [default: 4;
+    /// with --sweep 1,2,4,8].
+    #[arg(long, value_name = "K,...", value_delimiter = ',')]
+    pub refresh_quad: Option<Vec<u32>>,
 
-    /// Texture format of the payload cache.
-    #[arg(long, value_enum, default_value_t = CacheFormatArg::Rgba16float)]
-    pub cache_format: CacheFormatArg,
+    /// Texture formats of the payload cache to measure [default:
+    /// rgba16float; with --sweep both].
+    #[arg(long, value_enum, value_name = "FORMAT,...", value_delimiter = ',')]
+    pub cache_format: Option<Vec<CacheFormatArg>>,
 
-    /// ε of the cache's depth test.
-    #[arg(long, value_name = "E", default_value_t = 1e-3)]
-    pub depth_epsilon: f32,
+    /// ε values of the cache's depth test to measure [default: 0.001; with
+    /// --sweep 0.00025,0.001,0.004].
+    #[arg(long, value_name = "E,...", value_delimiter = ',')]
+    pub depth_epsilon: Option<Vec<f32>>,
 
-    /// Reconstructions to measure, separated by commas.
+    /// Reconstructions to measure, separated by commas [default: bilinear;
+    /// with --sweep both].
     #[arg(
         long,
         value_name = "bilinear,nearest",
         value_enum,
-        value_delimiter = ',',
-        default_value = "bilinear"
+        value_delimiter = ','
     )]
-    pub reconstruction: Vec<ReconstructionArg>,
+    pub reconstruction: Option<Vec<ReconstructionArg>>,
+
+    /// Sweep accuracy against time: every knob over its sweep values (lists
+    /// given explicitly are kept), pruned with the cost model and by
+    /// measuring the refresh and read-back planes (docs/accuracy.md).
+    #[arg(long)]
+    pub sweep: bool,
+
+    /// An error budget, `psnr:DB` or `ssim:S` (mean over the measured
+    /// frames): pick the fastest configuration within it and write its
+    /// shaders and plan to DIR/choice.
+    #[arg(long, value_name = "psnr:DB|ssim:S", value_parser = clap::value_parser!(Budget))]
+    pub max_error: Option<Budget>,
 
     /// Frames to measure (default: the scene's).
     #[arg(long, value_name = "N")]
@@ -163,6 +176,11 @@ impl Progress for Bar {
 pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     let shader = front::load(&args.shader)?;
     let scene = Scene::load(&args.scene)?;
+    let defaults = if args.sweep {
+        Options::default().sweep()
+    } else {
+        Options::default()
+    };
     let options = Options {
         nodes: parse_nodes(&args.nodes)?,
         variants: match args.variant {
@@ -171,19 +189,26 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
             VariantArg::ThreePass => vec![Variant::ThreePass],
             VariantArg::All => Variant::ALL.to_vec(),
         },
-        refresh_periods: args.refresh_period.clone(),
-        refresh_quads: args.refresh_quad.iter().map(|&k| k.max(1)).collect(),
-        cache_format: match args.cache_format {
-            CacheFormatArg::Rgba16float => CacheFormat::Rgba16float,
-            CacheFormatArg::Rgba32float => CacheFormat::Rgba32float,
-        },
-        depth_epsilon: args.depth_epsilon,
-        reconstructions: args.reconstruction.iter().map(|&r| r.into()).collect(),
+        refresh_periods: args.refresh_period.unwrap_or(defaults.refresh_periods),
+        refresh_quads: args
+            .refresh_quad
+            .map(|quads| quads.iter().map(|&k| k.max(1)).collect())
+            .unwrap_or(defaults.refresh_quads),
+        cache_formats: args
+            .cache_format
+            .map(|formats| formats.iter().map(|&f| f.into()).collect())
+            .unwrap_or(defaults.cache_formats),
+        depth_epsilons: args.depth_epsilon.unwrap_or(defaults.depth_epsilons),
+        reconstructions: args
+            .reconstruction
+            .map(|r| r.iter().map(|&r| r.into()).collect())
+            .unwrap_or(defaults.reconstructions),
+        max_error: args.max_error,
         frames: args.frames,
         warmup: args.warmup,
         size: args.size,
         command: std::env::args().collect::<Vec<_>>().join(" "),
-        ..Options::default()
+        ..defaults
     };
     let mut bar = Bar {
         bar: None,
@@ -243,6 +268,42 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
             cause.offscreen_rate * 100.0,
             cause.disocclusion_rate * 100.0
         ));
+    }
+    if let Some(grid) = &report.grid {
+        let pruned: usize = grid.pruned.iter().map(|p| p.configurations).sum();
+        if grid.measured < grid.full {
+            summary.push_str(&format!(
+                "  measured {} of the grid's {} configurations: {} pruned, {} refused (see the report)\n",
+                grid.measured,
+                grid.full,
+                pruned,
+                grid.full.saturating_sub(pruned + grid.measured)
+            ));
+        }
+    }
+    if let Some(choice) = &report.choice {
+        match choice.result.map(|i| &report.results[i]) {
+            Some(row) => {
+                let dir = args.out.join("choice");
+                let analysis = analysis::analyze(&shader, &analysis::Options::default())?;
+                let rewritten = profile::rewrite_of(&shader, &analysis, row)?;
+                back::write_variant(&dir, &rewritten, Language::Wgsl)?;
+                summary.push_str(&format!(
+                    "  within {}: {} {} Δn={} k={} {} {} ε={}: {}\n  wrote its shaders and plan to {}\n",
+                    choice.budget,
+                    row.node,
+                    row.variant,
+                    row.refresh_period,
+                    row.refresh_quad,
+                    row.reconstruction.as_str(),
+                    row.cache_format.as_str(),
+                    row.depth_epsilon,
+                    choice.reason,
+                    dir.display()
+                ));
+            }
+            None => summary.push_str(&format!("  {}: {}\n", choice.budget, choice.reason)),
+        }
     }
     summary.push_str(&format!(
         "report: {}\n",

@@ -92,6 +92,15 @@ impl From<ReconstructionArg> for Reconstruction {
     }
 }
 
+impl From<CacheFormatArg> for CacheFormat {
+    fn from(arg: CacheFormatArg) -> CacheFormat {
+        match arg {
+            CacheFormatArg::Rgba16float => CacheFormat::Rgba16float,
+            CacheFormatArg::Rgba32float => CacheFormat::Rgba32float,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum EmitArg {
     Wgsl,
@@ -113,10 +122,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
     let options = Options {
         refresh_period: args.refresh_period,
         refresh_quad: args.refresh_quad,
-        cache_format: match args.cache_format {
-            CacheFormatArg::Rgba16float => CacheFormat::Rgba16float,
-            CacheFormatArg::Rgba32float => CacheFormat::Rgba32float,
-        },
+        cache_format: args.cache_format.into(),
         depth_epsilon: args.depth_epsilon,
         reconstruction: args.reconstruction.into(),
         ..Options::default()
