@@ -77,6 +77,8 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
         by_span.insert((range.start, range.end), handle);
     }
 
+    let mut ranges = super::range::EntryRanges::new(module, &shader.info, entry_index);
+
     // Ids: the occurrence number counts equal texts in source order.
     let mut seen: HashMap<String, usize> = HashMap::new();
     let mut candidates = Vec::new();
@@ -111,6 +113,7 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
                 shared.intersect_with(&slice);
                 shared.set(expr.index(), false);
                 let derivatives = slice.ones().any(|i| takes_derivatives(exprs[i]));
+                let range = ranges.of(expr);
                 candidates.push(Candidate {
                     node,
                     components,
@@ -122,6 +125,8 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
                     },
                     overlap: cost_of(&shared),
                     derivatives,
+                    range: [range.lo, range.hi].map(|v| v.is_finite().then_some(v)),
+                    fits_f16: range.fits_f16(),
                 });
             }
         }

@@ -29,6 +29,7 @@ mod candidates;
 mod entry;
 pub mod graph;
 mod id;
+pub mod range;
 pub mod text;
 
 use std::ops::Range;
@@ -115,6 +116,13 @@ pub struct Candidate {
     /// Whether the slice takes implicit derivatives (`textureSample`,
     /// `dpdx`...), which a rewrite must keep in uniform control flow.
     pub derivatives: bool,
+    /// Bounds of the node's value from interval arithmetic ([`range`]);
+    /// `null` ends are unbounded.
+    pub range: [Option<f64>; 2],
+    /// Whether the value provably fits an rgba16float cache (|x| < 65504).
+    /// When it may not, the three-pass rewrite keeps its cache in
+    /// rgba32float (docs/rewrite.md).
+    pub fits_f16: bool,
 }
 
 /// A node that cannot be cached, and why.

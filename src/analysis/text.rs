@@ -32,6 +32,11 @@ pub fn notes(analysis: &Analysis, all: bool) -> Vec<Diagnostic> {
                 "its slice takes implicit derivatives: a rewrite must keep them in uniform control flow",
             );
         }
+        if !candidate.fits_f16 {
+            note = note.with_note(
+                "its value may not fit an rgba16float cache (the analysis cannot bound it below 65504): three-pass keeps it in rgba32float",
+            );
+        }
         out.push(note);
     }
     if all {

@@ -130,6 +130,9 @@ pub struct Twin {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Cache {
     pub format: String,
+    /// Why the format is not the one asked for, when it is not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub format_note: Option<String>,
     /// `bilinear` or `nearest`.
     #[serde(default = "bilinear")]
     pub reconstruction: String,
@@ -352,6 +355,7 @@ pub fn build(inputs: Inputs) -> Plan {
         },
         cache: Cache {
             format: options.cache_format.as_str().into(),
+            format_note: None,
             reconstruction: options.reconstruction.as_str().into(),
             components: candidate.components,
             swap: "two payload textures and two depth buffers alternate: at the end of a frame, this frame's payload texture and depth buffer become last frame's (bound as cache_previous_payload and cache_previous_depth) and last frame's are rendered into next; on the first frame, after a resize or a camera cut, the previous depth is cleared to 1.0 so every pixel misses".into(),
@@ -580,6 +584,7 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
         },
         cache: Cache {
             format: options.cache_format.as_str().into(),
+            format_note: None,
             reconstruction: options.reconstruction.as_str().into(),
             components: 0,
             swap: String::new(),

@@ -346,6 +346,8 @@ pub fn profile(
     }
 
     let mut configs = Vec::new();
+    // Configurations set up, to measure each once.
+    let mut seen = std::collections::HashSet::new();
     for (node, (candidate, settings)) in nodes.iter().enumerate() {
         for &variant in &options.variants {
             for setting in settings.iter() {
@@ -371,6 +373,19 @@ pub fn profile(
                         continue;
                     }
                 };
+                // The rewrite may keep a three-pass cache in rgba32float
+                // (a payload that may not fit f16): record what runs, and
+                // measure it once.
+                let mut setting = *setting;
+                if let Some(note) = &rewritten.plan.cache.format_note {
+                    setting.cache_format = CacheFormat::Rgba32float;
+                    if !seen.insert((node, variant, format!("{setting:?}"))) {
+                        progress.refused(&what, &format!("measured as {note}"));
+                        continue;
+                    }
+                } else if !seen.insert((node, variant, format!("{setting:?}"))) {
+                    continue;
+                }
                 let runner = Runner::new(
                     &gpu,
                     &rewritten.plan,
@@ -384,7 +399,7 @@ pub fn profile(
                 configs.push(Config {
                     node,
                     variant,
-                    setting: *setting,
+                    setting,
                     runner,
                     label: what,
                     times: Vec::new(),

@@ -236,6 +236,30 @@ pub fn rewrite(
             "the reference is the original shader; there is nothing to rewrite",
         ));
     }
+    // Three-pass shades from the cached value itself, so a payload an
+    // rgba16float cache cannot hold would be wrong on screen (one- and
+    // two-pass recompute it instead: the lookup misses, see
+    // `cache_encode`). Where the analysis cannot bound the node's value
+    // below 65504, three-pass keeps its cache in rgba32float.
+    let widened;
+    let (options, format_note) = if variant == Variant::ThreePass
+        && options.cache_format == CacheFormat::Rgba16float
+        && !candidate.fits_f16
+    {
+        widened = Options {
+            cache_format: CacheFormat::Rgba32float,
+            ..options.clone()
+        };
+        (
+            &widened,
+            Some(format!(
+                "rgba32float instead of rgba16float: the node's value may reach 65504 ({}), and three-pass shades from the cached value",
+                describe_range(candidate.range)
+            )),
+        )
+    } else {
+        (options, None)
+    };
     let original = &shader.module;
     let entry = &original.entry_points[analysis.entry_index];
     let function = &entry.function;
@@ -488,6 +512,8 @@ pub fn rewrite(
         classify: &classify,
         result: &pieces.result,
     });
+    let mut plan = plan;
+    plan.cache.format_note = format_note;
     Ok(Rewritten {
         variant,
         node: candidate.node.id.clone(),
@@ -495,6 +521,16 @@ pub fn rewrite(
         classify,
         plan,
     })
+}
+
+/// `[lo, hi]` for people, with unbounded ends as infinities.
+fn describe_range(range: [Option<f64>; 2]) -> String {
+    match range {
+        [Some(lo), Some(hi)] => format!("bounded only to [{lo}, {hi}]"),
+        [None, None] => "unbounded".into(),
+        [Some(lo), None] => format!("bounded below by {lo} only"),
+        [None, Some(hi)] => format!("bounded above by {hi} only"),
+    }
 }
 
 fn writes_frag_depth(module: &naga::Module, result: &naga::FunctionResult) -> bool {

@@ -559,25 +559,37 @@ fn f16_overflow_is_recomputed_not_reused() {
             .find(|r| r.variant == variant)
             .unwrap();
         let wide = wide.results.iter().find(|r| r.variant == variant).unwrap();
+        assert_eq!(wide.invalid_rate, 0.0, "{variant}");
+        if variant == Variant::ThreePass {
+            // Three-pass shades from the cached value, so it cannot
+            // recompute: the analysis cannot bound exp() below 65504, and
+            // the rewrite keeps this cache in rgba32float.
+            assert_eq!(narrow.cache_format, CacheFormat::Rgba32float);
+            assert_eq!(narrow.invalid_rate, 0.0);
+            assert!(
+                (narrow.max_abs_error - wide.max_abs_error).abs() <= 0.02,
+                "three-pass: {} against {}",
+                narrow.max_abs_error,
+                wide.max_abs_error
+            );
+            continue;
+        }
         // exp(40 x) exceeds 65504 where x > 0.28: a good part of the sphere.
         assert!(
             narrow.invalid_rate > 0.05,
             "{variant}: {}",
             narrow.invalid_rate
         );
-        assert_eq!(wide.invalid_rate, 0.0, "{variant}");
         // One- and two-pass recompute the overflowing pixels: the f16 cache
         // is no worse than the f32 one (whose own error is the ordinary
         // resampling of a steep exponential). Blending the saturated
         // 65504s into their neighbours would be far worse.
-        if variant != Variant::ThreePass {
-            assert!(
-                narrow.max_abs_error <= wide.max_abs_error + 0.02,
-                "{variant}: rgba16float {} against rgba32float {}",
-                narrow.max_abs_error,
-                wide.max_abs_error
-            );
-        }
+        assert!(
+            narrow.max_abs_error <= wide.max_abs_error + 0.02,
+            "{variant}: rgba16float {} against rgba32float {}",
+            narrow.max_abs_error,
+            wide.max_abs_error
+        );
     }
 }
 

@@ -461,3 +461,77 @@ fn nearest_reconstruction_reads_one_texel() {
         );
     }
 }
+
+/// f16 overflow, detected statically: the analysis bounds each candidate
+/// with interval arithmetic, and a three-pass rewrite of a node it cannot
+/// bound below 65504 keeps its cache in rgba32float, saying why in the
+/// plan. One- and two-pass keep rgba16float (they recompute an overflowing
+/// payload: `f16_overflow_is_recomputed_not_reused`).
+#[test]
+fn f16_overflow_flagged_nodes_widen_the_three_pass_cache() {
+    let source = "
+struct VertexOutput {
+    @builtin(position) position: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+}
+
+@vertex
+fn vs(@location(0) p: vec3<f32>) -> VertexOutput {
+    return VertexOutput(vec4<f32>(p, 1.0), p.xy);
+}
+
+@fragment
+fn fs(in: VertexOutput) -> @location(0) vec4<f32> {
+    let wave = sin(in.uv.x * 30.0) * 0.5 + 0.5;
+    let growth = exp(in.uv.y * 40.0);
+    return vec4<f32>(wave, fract(growth), 0.0, 1.0);
+}
+";
+    let shader =
+        shadecache::front::parse(shadecache::diagnostic::SourceFile::new("f16.wgsl", source))
+            .unwrap();
+    let analysis = shadecache::analysis::analyze(&shader, &Default::default()).unwrap();
+    let find = |text: &str| {
+        analysis
+            .candidates
+            .iter()
+            .find(|c| c.node.text == text)
+            .unwrap_or_else(|| panic!("no candidate `{text}`"))
+    };
+    let wave = find("sin(in.uv.x * 30.0) * 0.5 + 0.5");
+    let growth = find("exp(in.uv.y * 40.0)");
+    assert!(wave.fits_f16);
+    assert_eq!(wave.range, [Some(0.0), Some(1.0)]);
+    assert!(!growth.fits_f16);
+
+    let options = shadecache::rewrite::Options::default();
+    assert_eq!(options.cache_format.as_str(), "rgba16float");
+    let plan = |candidate, variant| {
+        shadecache::rewrite::rewrite(&shader, &analysis, candidate, variant, &options)
+            .unwrap()
+            .plan
+    };
+    let widened = plan(growth, Variant::ThreePass);
+    assert_eq!(widened.cache.format, "rgba32float");
+    assert!(widened
+        .cache
+        .format_note
+        .as_deref()
+        .unwrap()
+        .contains("65504"));
+    assert!(widened
+        .passes
+        .iter()
+        .flat_map(|p| &p.color_targets)
+        .filter(|t| t.target == "cache")
+        .all(|t| t.format == "rgba32float"));
+    for (candidate, variant) in [
+        (wave, Variant::ThreePass),
+        (growth, Variant::TwoPass),
+        (growth, Variant::OnePass),
+    ] {
+        let kept = plan(candidate, variant);
+        assert_eq!(kept.cache.format, "rgba16float", "{variant}");
+        assert_eq!(kept.cache.format_note, None);
+    }
+}
