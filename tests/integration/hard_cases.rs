@@ -585,12 +585,12 @@ fn flat_cache() -> Cache {
     })
 }
 
-/// A point whose previous clip position has w ≤ 0 (behind last frame's
-/// camera, or on its plane), or is NaN, is off-screen (status 1) for every
-/// lookup, though dividing by a negative w lands it on a texel whose depth
-/// agrees: without the `w > 0` test that is a false hit.
+/// Previous clip w ≤ 0 (w = 0, -0.0, negative) or NaN: off-screen (status
+/// 1) for all three lookups, never the wrapped-around hit a negative w gives.
 #[test]
 fn behind_previous_camera() {
+    // Dividing by a negative w lands the point on a texel whose depth
+    // agrees: without the `w > 0` test that is a false hit.
     let Some(gpu) = crate::gpu::gpu() else { return };
     let cache = flat_cache();
     let behind = |x: f32, y: f32, w: f32| Case {
@@ -684,15 +684,16 @@ struct Expected {
     nearest: u32,
 }
 
-/// The reprojected point, or its bilinear footprint, leaves the viewport:
-/// a miss (off-screen). Points just outside each edge miss for every
-/// lookup; a point inside the viewport whose footprint has taps outside it
-/// weighing ≥ 0.001 misses for the bilinear lookups (nearest reads its own
-/// texel and hits); a point exactly on an edge texel's centre, or within
-/// 0.0005 texel of it, hits: its outside taps weigh < 0.001 and are
-/// ignored, and it reads the edge texel itself.
+/// Point or bilinear footprint outside the viewport (taps outside weighing
+/// ≥ 0.001): off-screen; exactly on an edge texel's centre: a hit on it.
 #[test]
 fn offscreen_reprojection() {
+    // Points just outside each edge miss for every lookup; a point inside
+    // the viewport whose footprint has taps outside it weighing ≥ 0.001
+    // misses for the bilinear lookups (nearest reads its own texel and
+    // hits); a point exactly on an edge texel's centre, or within 0.0005
+    // texel of it, hits: its outside taps weigh < 0.001 and are ignored,
+    // and it reads the edge texel itself.
     let Some(gpu) = crate::gpu::gpu() else { return };
     let last = 15.0;
     let expect = |x: f32, y: f32, footprint: u32, nearest: u32| Expected {
@@ -812,15 +813,13 @@ fn silhouette(texel: Vec2) -> (f32, f32) {
     }
 }
 
-/// Across a silhouette (foreground 0.3 against background 0.9), a
-/// bilinear footprint with a tap on the other side weighing ≥ 0.001 is
-/// disoccluded, so no payload is ever blended across the step; nearest
-/// hits wherever its own texel is on the point's side. At a contact (two
-/// surfaces meeting with no depth step: a box resting on a floor, seed
-/// 001 fig. 3) the depth test cannot tell them apart: see
-/// `depth_discontinuity_at_contact_points` for the measured bound.
+/// A bilinear footprint straddling a depth step (0.3 against 0.9) misses:
+/// nothing blends across it; nearest hits where its own texel agrees.
 #[test]
 fn depth_discontinuity() {
+    // At a contact, two surfaces meeting with no depth step, the depth
+    // test cannot tell them apart: see
+    // `depth_discontinuity_at_contact_points` for the measured bound.
     let Some(gpu) = crate::gpu::gpu() else { return };
     let cache = silhouette_cache();
     // (texel, the point's material: 0 foreground, 1 background,
@@ -1034,23 +1033,26 @@ struct ContactStats {
     material_error: f32,
 }
 
-/// Contact points (seed 001, fig. 3): a box resting on the floor slides
-/// away from the camera (and sideways), uncovering floor along its bottom
-/// edge and beside it. Where the box's face met the floor there is no depth
-/// step, so the depth test cannot tell them apart: uncovered floor pixels
-/// next to last frame's contact line falsely hit and read the box's
-/// payload (a wrong material: the full payload difference). The bound,
-/// measured at 64×64 with ε = 1e-3 and the box 3.8 units from the eye
-/// (near 0.5, far 20): every false hit reads surface points within 0.03
-/// world units of its own point, the depth-test limit ε·d²·(f − n)/(f·n)
-/// at that distance, so it happens only where surfaces touch, never across
-/// a depth step; so a payload continuous across the contact is off by at
-/// most its world-space gradient × 0.03; false hits are at most 10% of the
-/// uncovered pixels (measured: 6 of 135, for both reconstructions); and
-/// there are some (the depth test alone cannot see contacts: material ids
-/// would, as in the seed). Pixels seen in both frames hit (≥ 95%).
+/// Contact points (seed 001, fig. 3): floor uncovered next to a sliding box
+/// may falsely hit, but only ≤ 10% of it, reading points ≤ 0.03 units away.
 #[test]
 fn depth_discontinuity_at_contact_points() {
+    // A box resting on the floor slides away from the camera (and
+    // sideways), uncovering floor along its bottom edge and beside it.
+    // Where the box's face met the floor there is no depth step, so the
+    // depth test cannot tell them apart: uncovered floor pixels next to
+    // last frame's contact line falsely hit and read the box's payload (a
+    // wrong material: the full payload difference). The bound, measured at
+    // 64×64 with ε = 1e-3 and the box 3.8 units from the eye (near 0.5, far
+    // 20): every false hit reads surface points within 0.03 world units of
+    // its own point, the depth-test limit ε·d²·(f − n)/(f·n) at that
+    // distance, so it happens only where surfaces touch, never across a
+    // depth step, and a payload continuous across the contact is off by at
+    // most its world-space gradient × 0.03; false hits are at most 10% of
+    // the uncovered pixels (measured: 6 of 135, for both reconstructions);
+    // and there are some (the depth test alone cannot see contacts:
+    // material ids would, as in the seed). Pixels seen in both frames hit
+    // (≥ 95%).
     let Some(gpu) = crate::gpu::gpu() else { return };
     let scene = ContactScene::new();
     let (cache, previous_points) = scene.previous_frame();
@@ -1276,14 +1278,13 @@ fn refresh_maps(gpu: &Gpu, period: u32, quad: u32, start: u64, frames: usize) ->
     maps
 }
 
-/// With the frame counter started near u32::MAX (and near u64::MAX) and
-/// run across the wrap, periods that do not divide 2^32 (7, 12) and one
-/// that does (8): every k×k block is refreshed exactly once in every Δn
-/// consecutive frames (never later, never twice), so the refresh fraction
-/// is 1/Δn across the wrap; and each frame's refreshes are eq. 1's with the
-/// unwrapped counter: b = (h(block) + c) mod Δn = 0.
+/// Across the frame counter's wrap (u32 and u64), for Δn = 7, 12 and 8,
+/// every block is refreshed exactly once every Δn frames: fraction 1/Δn.
 #[test]
 fn frame_counter_wrap() {
+    // Periods that do not divide 2^32 (7, 12) and one that does (8). Each
+    // frame's refreshes are also eq. 1's with the unwrapped counter:
+    // b = (h(block) + c) mod Δn = 0.
     let Some(gpu) = crate::gpu::gpu() else { return };
     let near_u32 = u64::from(u32::MAX) - 20;
     for (period, quad, start) in [
