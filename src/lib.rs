@@ -13,7 +13,9 @@
 //! * [`cost`]: the static cost model;
 //! * [`analysis`]: the expression graph, the candidates and why the others
 //!   are rejected;
-//! * [`diagnostic`]: the error type and its codespan rendering.
+//! * [`diagnostic`]: the error type and its codespan rendering;
+//! * [`reprojection`]: the cache shader's reprojection arithmetic on the CPU,
+//!   for tests and reasoning (kept in step with `shaders/cache.wgsl`).
 
 #![forbid(unsafe_code)]
 #![warn(
@@ -35,6 +37,7 @@ pub mod plan;
 pub mod proc;
 pub mod profile;
 pub mod report;
+pub mod reprojection;
 pub mod rewrite;
 pub mod runtime;
 pub mod scene;

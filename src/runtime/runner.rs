@@ -68,8 +68,12 @@ pub struct Runner {
     cache_sampler: wgpu::Sampler,
     /// Which of the two cache slots is this frame's.
     current: usize,
+    /// c, the frame counter, and c mod Δn, advanced together.
     frame: u64,
     phase: u32,
+    /// Whether a frame has been rendered: until then the cache holds no
+    /// previous frame (whatever the counter says).
+    rendered: bool,
 }
 
 impl std::fmt::Debug for Runner {
@@ -249,7 +253,30 @@ impl Runner {
             current: 0,
             frame: 0,
             phase: 0,
+            rendered: false,
         })
+    }
+
+    /// Sets the frame counter c to `frame`, as if that many frames had
+    /// been run, and the refresh phase to c mod Δn (the phase then advances
+    /// by one modulo Δn per frame, never from the counter itself: so the
+    /// refresh period stays exact when the counter's u32 copy in
+    /// `CacheParams`, or the counter, wraps). The cache is left as it is:
+    /// before the first frame, that frame still has no previous one. For
+    /// tests of long runs, and to resume a sequence.
+    pub fn set_frame_counter(&mut self, frame: u64) {
+        let period = u64::from(self.plan.refresh.period);
+        self.frame = frame;
+        self.phase = if period == 0 {
+            0
+        } else {
+            (frame % period) as u32
+        };
+    }
+
+    /// The frame counter c: frames run, plus where it was set to.
+    pub fn frame_counter(&self) -> u64 {
+        self.frame
     }
 
     pub fn plan(&self) -> &Plan {
@@ -336,7 +363,7 @@ impl Runner {
         let payload_views = [view(&self.payload[0]), view(&self.payload[1])];
         let depth_views = [view(&self.depth[0]), view(&self.depth[1])];
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        if self.frame == 0 {
+        if !self.rendered {
             // No previous frame: a depth at the far plane makes every pixel
             // miss (nothing in front of the far plane matches it).
             clear_depth_in(
@@ -473,7 +500,8 @@ impl Runner {
             }
         }
         self.current = previous;
-        self.frame += 1;
+        self.rendered = true;
+        self.frame = self.frame.wrapping_add(1);
         let period = self.plan.refresh.period;
         self.phase = if period == 0 {
             0
