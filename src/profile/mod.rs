@@ -149,6 +149,7 @@ pub fn profile(
     let base = RewriteOptions {
         cache_format: options.cache_format,
         depth_epsilon: options.depth_epsilon,
+        depth: scene.camera.depth,
         ..RewriteOptions::default()
     };
     let reference_plan = plan::reference(shader, &analysis, &base).map_err(fail)?;

@@ -46,8 +46,9 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = CacheFormatArg::Rgba16float)]
     pub cache_format: CacheFormatArg,
 
-    /// ε of the cache's depth test.
-    #[arg(long, value_name = "E", default_value_t = 1e-3)]
+    /// ε of the cache's depth test, relative: about the share of a point's
+    /// distance by which two surfaces must differ to be told apart.
+    #[arg(long, value_name = "E", default_value_t = shadecache::rewrite::DEFAULT_DEPTH_EPSILON, value_parser = super::rewrite::epsilon)]
     pub depth_epsilon: f32,
 
     /// Reconstructions to measure, separated by commas.
