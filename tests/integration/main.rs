@@ -8,6 +8,7 @@ mod corpus;
 mod cost;
 mod errors;
 mod gpu;
+mod hard_cases;
 mod profile;
 mod rewrite;
 mod util;

@@ -1,0 +1,269 @@
+//! Hard cases for the cache, each named after its case: `reversed_z`,
+//! `long_run_drift`, `fast_motion`. Each one fails when the handling it
+//! checks is taken out (said in its comment); docs/rewrite.md explains the
+//! handling.
+
+use std::path::Path;
+
+use shadecache::rewrite::Variant;
+use shadecache::scene::Scene;
+
+use crate::profile::{marble_scene, options, run};
+
+/// Which pixels object `object` covers in frame `frame`, rasterised on the
+/// CPU at pixel centres with the scene's own matrices (`w × h`, row-major,
+/// y down).
+fn silhouette(scene: &Scene, object: usize, frame: u32, w: usize, h: usize) -> Vec<bool> {
+    let mesh = scene.objects[object].mesh.build(Path::new(".")).unwrap();
+    let state = scene.frame(frame, w as f32 / h as f32);
+    let clip = state.clip_from_world * state.objects[object];
+    let points: Vec<glam::Vec2> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let c = clip * p.extend(1.0);
+            glam::Vec2::new(c.x / c.w, c.y / c.w)
+        })
+        .collect();
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+            let p = glam::Vec2::new(x / w as f32 * 2.0 - 1.0, 1.0 - y / h as f32 * 2.0);
+            mesh.indices.chunks(3).any(|t| {
+                let [a, b, c] = [
+                    points[t[0] as usize],
+                    points[t[1] as usize],
+                    points[t[2] as usize],
+                ];
+                let side = |u: glam::Vec2, v: glam::Vec2| (v - u).perp_dot(p - u);
+                let (s0, s1, s2) = (side(a, b), side(b, c), side(c, a));
+                (s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0) || (s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0)
+            })
+        })
+        .collect()
+}
+
+/// Whether a pixel of `mask` lies within one pixel (8-neighbourhood) of
+/// `i`.
+fn near(mask: &[bool], w: usize, i: usize) -> bool {
+    let h = mask.len() / w;
+    let (x, y) = ((i % w) as i64, (i / w) as i64);
+    (-1..=1).any(|dy| {
+        (-1..=1).any(|dx| {
+            let (nx, ny) = (x + dx, y + dy);
+            nx >= 0
+                && ny >= 0
+                && nx < w as i64
+                && ny < h as i64
+                && mask[(ny as usize) * w + nx as usize]
+        })
+    })
+}
+
+/// Whether `i` and its whole 8-neighbourhood are in `mask`: a pixel of
+/// the mask one pixel in from its edge, where rasterisation rounding
+/// cannot matter.
+fn inside(mask: &[bool], w: usize, i: usize) -> bool {
+    let outside: Vec<bool> = mask.iter().map(|m| !m).collect();
+    !near(&outside, w, i)
+}
+
+/// A class of the classification image (RGBA8) at pixel `i`.
+fn class(classes: &[u8], i: usize) -> [u8; 3] {
+    [classes[i * 4], classes[i * 4 + 1], classes[i * 4 + 2]]
+}
+
+/// Missed (off-screen or disoccluded): red, with no blue.
+fn missed(classes: &[u8], i: usize) -> bool {
+    let [r, _, b] = class(classes, i);
+    r == 255 && b == 0
+}
+
+/// The largest channel difference at pixel `i` of two RGBA8 images.
+fn difference(a: &[u8], b: &[u8], i: usize) -> u8 {
+    (0..3)
+        .map(|c| a[i * 4 + c].abs_diff(b[i * 4 + c]))
+        .max()
+        .unwrap_or(0)
+}
+
+/// The camera lines of a scene for `depth` and `far` (TOML values).
+fn camera(depth: &str, far: &str) -> String {
+    format!("depth = \"{depth}\"\nfar = {far}\n")
+}
+
+/// A cube sliding over a plane, seen from above: the plane `110·scale`
+/// units from the eye, the cube's top `100·scale` (a 10% difference in
+/// distance at any scale); the cube moves 2.7·scale units (about 11 px) a
+/// frame and uncovers a band of the plane. Objects are scaled as a whole,
+/// so the marble pattern, in object space, is the same at every scale.
+fn far_and_near_scene(scale: f32, camera_lines: &str) -> String {
+    let s = |v: f32| v * scale;
+    format!(
+        r#"
+size = [128, 128]
+frames = 1
+warmup = 1
+effects = ["object-motion", "disocclusion"]
+[camera]
+eye = [0.0, {eye}, {eye_z}]
+target = [0.0, 0.0, 0.0]
+fov_degrees = 16.5
+near = 0.1
+{camera_lines}
+[[objects]]
+mesh = {{ kind = "plane", size = 40.0, subdivisions = 8 }}
+scale = {scale}
+[[objects]]
+mesh = {{ kind = "cube", size = 10.0 }}
+scale = {scale}
+position = [{x}, {y}, 0.0]
+translation_per_frame = [{dx}, 0.0, 0.0]
+[uniforms]
+marble_frequency = 4.0
+turbulence_amount = 6.0
+light_color = [1.0, 1.0, 1.0]
+"#,
+        eye = s(110.0),
+        eye_z = s(0.01),
+        x = s(-4.0),
+        y = s(5.0),
+        dx = s(2.7),
+    )
+}
+
+/// Misses in the band the cube uncovers (one pixel in from its edges)
+/// that did not happen, misses away from the band and the cube, and the
+/// band's size, for one run of [`far_and_near_scene`].
+fn band_misses(scene_text: &str) -> Option<(usize, usize, usize)> {
+    let mut opts = options(&[0], &[4]);
+    opts.variants = vec![Variant::ThreePass];
+    let (pictures, _, scene) = run(scene_text, opts)?;
+    let classes = &pictures.results[0].1;
+    let (w, h) = (128, 128);
+    let (before, now) = (
+        silhouette(&scene, 1, 0, w, h),
+        silhouette(&scene, 1, 1, w, h),
+    );
+    let band: Vec<bool> = (0..w * h).map(|i| before[i] && !now[i]).collect();
+    let band_pixels = band.iter().filter(|&&b| b).count();
+    let unmissed = (0..w * h)
+        .filter(|&i| inside(&band, w, i) && !missed(classes, i))
+        .count();
+    let stray = (0..w * h)
+        .filter(|&i| missed(classes, i) && !near(&band, w, i) && !near(&now, w, i))
+        .count();
+    Some((unmissed, stray, band_pixels))
+}
+
+/// Reversed-Z and infinite-far projections keep the depth test's ε
+/// meaningful.
+///
+/// Case: the scene's camera says `depth = "reversed"` and/or
+/// `far = "infinity"`; the plans flip their depth compares, clear depth to
+/// 0, and the cache's depth test measures from the far plane's depth.
+///
+/// (a) A static scene (marble sphere, refresh off) under reversed Z with an
+/// infinite far plane renders the same image as under standard Z (within
+/// one 8-bit step), and after the first frame every covered pixel of every
+/// variant is reused, the image within one step of the reference.
+///
+/// (b) A cube sliding over a plane uncovers a band: with the plane at 110
+/// units and the cube's top at 100, every band pixel (one in from its
+/// edges) misses and nothing away from the band and the cube does, under
+/// reversed Z with an infinite far plane and under standard Z with its far
+/// plane at 1000 — as with the same scene scaled down by 40 (2.75 and 2.5
+/// units from the eye), near the camera.
+///
+/// Fails with the old absolute test, |d − e| < 0.001: in the far scenes
+/// the plane's and the cube's depths differ by 0.00009 (reversed, n/z) and
+/// 0.00009 (standard, crowded near 1), so the band is reused as if it were
+/// the cube (measured: all 420 band pixels one in from the edge); the near
+/// scenes, 0.0036 apart, still pass. Fails too with `far_depth` stuck at 1
+/// (both reversed cases reuse the band: the tolerance becomes ε, absolute),
+/// and, at (a), with the depth compares not flipped (nothing is drawn).
+#[test]
+fn reversed_z() {
+    // (a)
+    let reversed = camera("reversed", "\"infinity\"");
+    let standard_scene = marble_scene("", "");
+    let reversed_scene = standard_scene.replace("[camera]\n", &format!("[camera]\n{reversed}"));
+    let Some((standard_pictures, _, _)) = run(&standard_scene, options(&[0], &[4])) else {
+        return;
+    };
+    let Some((pictures, report, scene)) = run(&reversed_scene, options(&[0], &[4])) else {
+        return;
+    };
+    assert_eq!(
+        scene.camera.depth,
+        shadecache::scene::DepthConvention::Reversed
+    );
+    let pixels = 128 * 128;
+    let covered = (0..pixels)
+        .filter(|&i| pictures.reference[i * 4..i * 4 + 3] != [0, 0, 0])
+        .count();
+    assert!(
+        covered > pixels / 5,
+        "the reversed-Z reference draws the sphere: {covered} pixels"
+    );
+    let worst = (0..pixels)
+        .map(|i| difference(&pictures.reference, &standard_pictures.reference, i))
+        .max()
+        .unwrap();
+    assert!(worst <= 1, "reversed against standard Z: {worst}/255");
+    assert_eq!(report.results.len(), 3);
+    for row in &report.results {
+        for (frame, stats) in row.frame_stats.iter().enumerate() {
+            assert_eq!(
+                stats.hit_rate, 1.0,
+                "{} frame {frame}: {stats:?}",
+                row.variant
+            );
+        }
+        assert!(
+            row.max_abs_error <= 1.0 / 255.0 + 1e-9,
+            "{} {}",
+            row.variant,
+            row.max_abs_error
+        );
+    }
+
+    // (b)
+    let cases = [
+        (
+            "far, reversed Z, infinite far plane",
+            1.0,
+            camera("reversed", "\"infinity\""),
+        ),
+        (
+            "far, standard Z, far plane at 1000",
+            1.0,
+            camera("standard", "1000.0"),
+        ),
+        (
+            "near, reversed Z, infinite far plane",
+            1.0 / 40.0,
+            camera("reversed", "\"infinity\""),
+        ),
+        (
+            "near, standard Z, far plane at 20",
+            1.0 / 40.0,
+            camera("standard", "20.0"),
+        ),
+    ];
+    let mut failures = Vec::new();
+    for (what, scale, camera_lines) in cases {
+        let Some((unmissed, stray, band)) = band_misses(&far_and_near_scene(scale, &camera_lines))
+        else {
+            return;
+        };
+        eprintln!("{what}: band {band} px, {unmissed} not missed, {stray} stray misses");
+        assert!(band > 300, "{what}: the band is {band} pixels");
+        if unmissed > 0 || stray > 0 {
+            failures.push(format!(
+                "{what}: {unmissed} band pixels reused, {stray} misses away from the band"
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
