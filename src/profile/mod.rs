@@ -508,6 +508,7 @@ pub fn profile(
                         time_ms,
                         psnr: e.psnr,
                         ssim: e.ssim,
+                        max_abs_error: e.max_abs_error,
                         hit_rate: d.hit,
                         miss_rate: d.miss(),
                         refresh_rate: d.refresh,
