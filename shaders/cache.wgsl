@@ -11,9 +11,9 @@
 struct CacheParams {
     // Render target size in pixels.
     viewport: vec2<f32>,
-    // A tap agrees when |cached depth - expected depth| < depth_epsilon, the
-    // expected depth following the surface's slope (see
-    // `cache_expected_depth`).
+    // ε, relative: a tap agrees when |cached depth - expected depth| <
+    // depth_epsilon * |expected depth - far_depth|, the expected depth
+    // following the surface's slope (see `cache_depth_agrees`).
     depth_epsilon: f32,
     // (c mod Δn), advanced by the host each frame as (phase + 1) mod Δn.
     // Passing the phase rather than c keeps the refresh period exact when the
@@ -28,6 +28,9 @@ struct CacheParams {
     // The largest payload magnitude the cache format holds: 65504 for
     // rgba16float, the largest f32 for rgba32float.
     payload_limit: f32,
+    // The depth buffer's value at the far plane (at infinity when the far
+    // plane is infinite): 1 for standard depth, 0 for reversed Z.
+    far_depth: f32,
 }
 
 @group(1) @binding(0) var<uniform> cache_params: CacheParams;
@@ -120,6 +123,22 @@ fn cache_expected_depth(depth: f32, offset_x: vec4<f32>, offset_y: vec4<f32>) ->
     return vec4<f32>(depth) + (offset_x * dpdx(depth)) + (offset_y * dpdy(depth));
 }
 
+// Whether cached depths agree with the expected ones, tested relative to
+// the far plane's depth. In a perspective projection a point's depth lies
+// n/z (infinite far plane) or n(f - z)/((f - n)z) (far plane f) from the
+// far plane's, for standard and reversed Z alike, so
+// |d - e| < ε·|e - far_depth| bounds the relative difference in distance,
+// |Δz|/z < ε (tighter by (f - z)/f towards a finite far plane): two
+// surfaces 10% apart are told apart at 1 unit as at 1000. An absolute ε is
+// not: with reversed Z and an infinite far plane, depth is n/z, and the
+// surfaces at 100 and 110 units (n = 0.1) differ by 0.00009; with standard
+// Z, depth crowds towards 1 the same way. A depth at the far plane itself
+// (the cleared "no previous frame") never agrees, as ε < 1.
+fn cache_depth_agrees(taps: vec4<f32>, expected: vec4<f32>) -> vec4<bool> {
+    let tolerance = cache_params.depth_epsilon * abs(expected - vec4<f32>(cache_params.far_depth));
+    return abs(taps - expected) < tolerance;
+}
+
 // Where a fragment was last frame, in the cache.
 struct CacheFootprint {
     // 0 the point was visible, 1 off-screen, 2 disoccluded.
@@ -134,7 +153,7 @@ struct CacheFootprint {
 // the point was behind the previous camera (w ≤ 0, or NaN) or outside the
 // viewport's texel centres; disoccluded when a texel of the 2×2 bilinear
 // footprint (one gather from last frame's depth buffer) disagrees with the
-// point's previous depth by ε or more. Texels whose bilinear weight is
+// point's previous depth (`cache_depth_agrees`). Texels whose bilinear weight is
 // below 0.001 do not count: without that, a point that reprojects exactly
 // onto a texel centre next to a silhouette (a static scene) would miss
 // because of a neighbour it does not read; with it, a footprint that
@@ -157,7 +176,7 @@ fn cache_footprint(previous_clip: vec4<f32>) -> CacheFootprint {
         vec4<f32>(-f.x, 1.0 - f.x, 1.0 - f.x, -f.x),
         vec4<f32>(1.0 - f.y, 1.0 - f.y, -f.y, -f.y),
     );
-    let agree = all((abs(depths - expected) < vec4<f32>(cache_params.depth_epsilon)) | (weights < vec4<f32>(0.001)));
+    let agree = all(cache_depth_agrees(depths, expected) | (weights < vec4<f32>(0.001)));
     let status = select(1u, select(2u, 0u, agree), inside);
     return CacheFootprint(status, base, f);
 }
@@ -205,8 +224,8 @@ fn cache_lookup_nearest(previous_clip: vec4<f32>) -> CacheLookup {
     let inside = (previous_clip.w > 0.0) & all(position >= vec2<f32>(0.0)) & all(position < cache_params.viewport);
     let t = clamp(vec2<i32>(floor(position)), vec2<i32>(0), vec2<i32>(cache_params.viewport) - vec2<i32>(1));
     let offset = (vec2<f32>(t) + vec2<f32>(0.5)) - position;
-    let expected = cache_expected_depth(ndc.z, vec4<f32>(offset.x), vec4<f32>(offset.y)).x;
-    let agree = abs(textureLoad(cache_previous_depth, t, 0) - expected) < cache_params.depth_epsilon;
+    let expected = cache_expected_depth(ndc.z, vec4<f32>(offset.x), vec4<f32>(offset.y));
+    let agree = cache_depth_agrees(vec4<f32>(textureLoad(cache_previous_depth, t, 0)), expected).x;
     let status = select(1u, select(2u, 0u, agree), inside);
     return cache_checked(textureLoad(cache_previous_payload, t, 0), status);
 }

@@ -47,17 +47,25 @@ pub const NEGLIGIBLE_WEIGHT: f32 = 0.001;
 /// [`NEGLIGIBLE_WEIGHT`]).
 pub const EDGE_SLACK: f32 = 0.001;
 
-/// Last frame's depth buffer as the lookups read it, and the depth test's
-/// ε (`CacheParams::depth_epsilon`).
+/// Last frame's depth buffer as the lookups read it, the depth test's
+/// relative ε (`CacheParams::depth_epsilon`) and the far plane's depth
+/// (`CacheParams::far_depth`: 1, or 0 with reversed Z).
 #[derive(Clone, Copy, Debug)]
 pub struct PreviousDepth<'a> {
     pub size: UVec2,
     /// Row-major, top row first.
     pub depth: &'a [f32],
     pub epsilon: f32,
+    pub far_depth: f32,
 }
 
 impl PreviousDepth<'_> {
+    /// `cache_depth_agrees`: a tap agrees with the expected depth when
+    /// |tap − expected| < ε·|expected − far depth|.
+    pub fn agrees(&self, tap: f32, expected: f32) -> bool {
+        (tap - expected).abs() < self.epsilon * (expected - self.far_depth).abs()
+    }
+
     /// The viewport in pixels, as `CacheParams::viewport`.
     pub fn viewport(&self) -> Vec2 {
         self.size.as_vec2()
@@ -159,7 +167,7 @@ pub fn footprint(clip: Vec4, slope: Vec2, previous: &PreviousDepth) -> Footprint
     let agree = footprint.taps().iter().all(|&(tap, weight)| {
         let offset = tap.as_vec2() - texel;
         let expected = expected_depth(depth, offset, slope);
-        (previous.at(tap) - expected).abs() < previous.epsilon || weight < NEGLIGIBLE_WEIGHT
+        previous.agrees(previous.at(tap), expected) || weight < NEGLIGIBLE_WEIGHT
     });
     footprint.status = if !footprint_inside(clip, viewport) {
         Status::Offscreen
@@ -184,7 +192,7 @@ pub fn nearest(clip: Vec4, slope: Vec2, previous: &PreviousDepth) -> (Status, IV
         .clamp(IVec2::ZERO, previous.size.as_ivec2() - IVec2::ONE);
     let offset = (texel.as_vec2() + Vec2::splat(0.5)) - position;
     let expected = expected_depth(ndc(clip).z, offset, slope);
-    let agree = (previous.at(texel) - expected).abs() < previous.epsilon;
+    let agree = previous.agrees(previous.at(texel), expected);
     let status = if !nearest_inside(clip, viewport) {
         Status::Offscreen
     } else if agree {
@@ -592,7 +600,7 @@ mod tests {
             prop_assert!(!footprint_inside(clip, viewport));
             prop_assert!(!nearest_inside(clip, viewport));
             let depth = vec![0.5; (viewport.x * viewport.y) as usize];
-            let cache = PreviousDepth { size: viewport.as_uvec2(), depth: &depth, epsilon: 1e-3 };
+            let cache = PreviousDepth { size: viewport.as_uvec2(), depth: &depth, epsilon: 1e-3, far_depth: 1.0 };
             prop_assert_eq!(footprint(clip, Vec2::ZERO, &cache).status, Status::Offscreen);
             prop_assert_eq!(nearest(clip, Vec2::ZERO, &cache).0, Status::Offscreen);
         }
@@ -607,6 +615,7 @@ mod tests {
             size: UVec2::new(16, 16),
             depth: &depth,
             epsilon: 1e-3,
+            far_depth: 1.0,
         };
         let found = footprint(clip, Vec2::ZERO, &cache);
         assert_eq!(found.status, Status::Hit);

@@ -81,7 +81,8 @@ pub struct ColorTarget {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Depth {
     pub format: String,
-    /// `less` or `equal`.
+    /// `less` (`greater` with reversed Z) or `equal`; a host's plan may
+    /// also say `less-equal`, `greater-equal` or `always`.
     pub compare: String,
     pub write: bool,
     /// `clear` or `load`.
@@ -165,6 +166,8 @@ pub struct Refresh {
 pub struct Clear {
     pub color: [f64; 4],
     pub cache: [f64; 4],
+    /// The far plane's depth: 1.0, or 0.0 with reversed Z. Also the
+    /// `far_depth` of `CacheParams`.
     pub depth: f64,
 }
 
@@ -236,7 +239,7 @@ pub fn build(inputs: Inputs) -> Plan {
         };
         let (compare, write) = match stage {
             Stage::ShadeFromCache => ("equal", false),
-            _ => ("less", true),
+            _ => (options.depth.nearer(), true),
         };
         plan_passes.push(Pass {
             name: pass.name.clone(),
@@ -358,7 +361,7 @@ pub fn build(inputs: Inputs) -> Plan {
             format_note: None,
             reconstruction: options.reconstruction.as_str().into(),
             components: candidate.components,
-            swap: "two payload textures and two depth buffers alternate: at the end of a frame, this frame's payload texture and depth buffer become last frame's (bound as cache_previous_payload and cache_previous_depth) and last frame's are rendered into next; on the first frame, after a resize or a camera cut, the previous depth is cleared to 1.0 so every pixel misses".into(),
+            swap: "two payload textures and two depth buffers alternate: at the end of a frame, this frame's payload texture and depth buffer become last frame's (bound as cache_previous_payload and cache_previous_depth) and last frame's are rendered into next; on the first frame, after a resize or a camera cut, the previous depth is cleared to the far-plane depth (clear.depth) so every pixel misses".into(),
             params: vec![
                 field("viewport", "vec2<f32>", 0),
                 field("depth_epsilon", "f32", 8),
@@ -367,6 +370,7 @@ pub fn build(inputs: Inputs) -> Plan {
                 field("refresh_quad", "u32", 20),
                 field("frame", "u32", 24),
                 field("payload_limit", "f32", 28),
+                field("far_depth", "f32", 32),
             ],
         },
         refresh: Refresh {
@@ -378,7 +382,7 @@ pub fn build(inputs: Inputs) -> Plan {
         clear: Clear {
             color: [0.0, 0.0, 0.0, 1.0],
             cache: [0.0, 0.0, 0.0, 0.0],
-            depth: 1.0,
+            depth: options.depth.far_depth().into(),
         },
     }
 }
@@ -525,7 +529,8 @@ fn vertex_format(inner: &TypeInner) -> String {
 }
 
 /// The plan of the unmodified shader, which the profiler runs as the
-/// reference: one pass, the original entry points, depth `less`. Its
+/// reference: one pass, the original entry points, depth `less`
+/// (`greater` with reversed Z). Its
 /// shader file is the original source (`reference.wgsl`).
 pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Result<Plan, String> {
     let module = &shader.module;
@@ -564,7 +569,7 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
                 .collect(),
             depth: Depth {
                 format: DEPTH_FORMAT.into(),
-                compare: "less".into(),
+                compare: options.depth.nearer().into(),
                 write: true,
                 load: "clear".into(),
             },
@@ -599,7 +604,7 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
         clear: Clear {
             color: [0.0, 0.0, 0.0, 1.0],
             cache: [0.0; 4],
-            depth: 1.0,
+            depth: options.depth.far_depth().into(),
         },
     })
 }

@@ -195,7 +195,11 @@ pub fn profile(
         .axes
         .base()
         .ok_or_else(|| fail("every knob needs at least one value to measure".into()))?;
-    let base = base_setting.rewrite_options(&RewriteOptions::default());
+    let defaults = RewriteOptions {
+        depth: scene.camera.depth,
+        ..RewriteOptions::default()
+    };
+    let base = base_setting.rewrite_options(&defaults);
     // The nodes the grid kept, with their settings.
     let nodes: Vec<(&Candidate, &[Setting])> = nodes
         .iter()
@@ -566,6 +570,7 @@ pub fn profile(
                         time_ms,
                         psnr: e.psnr,
                         ssim: e.ssim,
+                        max_abs_error: e.max_abs_error,
                         hit_rate: d.hit,
                         miss_rate: d.miss(),
                         refresh_rate: d.refresh,
@@ -583,7 +588,7 @@ pub fn profile(
     // declared effect at a time.
     let mut miss_causes = Vec::new();
     if let Some(best) = results.first() {
-        let rewritten = rewrite_of(shader, &analysis, best)?;
+        let rewritten = rewrite_of(shader, &analysis, best, &defaults)?;
         let sources = sources_of(&rewritten)?;
         let moving = scene
             .effects
@@ -681,11 +686,13 @@ pub fn profile(
     ))
 }
 
-/// The rewrite a result measured: its node and variant, with its knobs.
+/// The rewrite a result measured: its node and variant, with its knobs
+/// over `defaults` (which carry the scene's depth convention).
 pub fn rewrite_of(
     shader: &Shader,
     analysis: &analysis::Analysis,
     row: &ResultRow,
+    defaults: &RewriteOptions,
 ) -> Result<rewrite::Rewritten, Error> {
     let candidates = analysis.select(&shader.file, &Nodes::Ids(vec![row.node.clone()]))?;
     let candidate = candidates.first().ok_or_else(|| {
@@ -706,7 +713,7 @@ pub fn rewrite_of(
         analysis,
         candidate,
         row.variant,
-        &setting.rewrite_options(&RewriteOptions::default()),
+        &setting.rewrite_options(defaults),
     )
     .map_err(|refusal| {
         Error::plain(Diagnostic::error(format!(

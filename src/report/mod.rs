@@ -182,6 +182,9 @@ pub struct FrameStats {
     pub time_ms: f64,
     pub psnr: f64,
     pub ssim: f64,
+    /// Largest channel difference from the reference frame, in [0, 1].
+    #[serde(default)]
+    pub max_abs_error: f64,
     pub hit_rate: f64,
     pub miss_rate: f64,
     pub refresh_rate: f64,

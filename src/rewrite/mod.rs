@@ -123,6 +123,52 @@ impl Reconstruction {
     }
 }
 
+/// Which way the depth buffer runs: the host's projection decides, and the
+/// plan follows it (depth compares, the clear value, and the far-plane
+/// depth the cache's depth test measures from).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DepthConvention {
+    /// Near plane at depth 0, far plane (or infinity) at 1; nearer is
+    /// `less`.
+    #[default]
+    Standard,
+    /// Reversed Z: near plane at 1, far plane (or infinity) at 0; nearer
+    /// is `greater`.
+    Reversed,
+}
+
+impl DepthConvention {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            DepthConvention::Standard => "standard",
+            DepthConvention::Reversed => "reversed",
+        }
+    }
+
+    /// The depth-buffer value of the far plane, or of infinity with an
+    /// infinite far plane: the depth buffer's clear value.
+    pub fn far_depth(self) -> f32 {
+        match self {
+            DepthConvention::Standard => 1.0,
+            DepthConvention::Reversed => 0.0,
+        }
+    }
+
+    /// The depth compare that keeps the nearer fragment, as a plan
+    /// writes it.
+    pub fn nearer(self) -> &'static str {
+        match self {
+            DepthConvention::Standard => "less",
+            DepthConvention::Reversed => "greater",
+        }
+    }
+}
+
+/// The default ε of the cache's depth test (relative; see
+/// [`Options::depth_epsilon`]).
+pub const DEFAULT_DEPTH_EPSILON: f32 = 0.02;
+
 /// How to build the variants.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {
@@ -131,8 +177,14 @@ pub struct Options {
     /// k: refresh decisions are made per k×k block.
     pub refresh_quad: u32,
     pub cache_format: CacheFormat,
-    /// ε of the depth test, in the depth buffer's units.
+    /// ε of the depth test, relative: a cached depth d agrees with the
+    /// expected depth e when |d − e| < ε·|e − far depth|. In a perspective
+    /// projection |e − far depth| is proportional to 1/distance, so ε bounds
+    /// the relative difference in distance, |Δz|/z, the same near and far
+    /// and for either [`DepthConvention`]. Must be below 1.
     pub depth_epsilon: f32,
+    /// Which way the host's depth buffer runs.
+    pub depth: DepthConvention,
     pub reconstruction: Reconstruction,
     /// Format of the colour targets, written into the plan.
     pub color_format: String,
@@ -144,7 +196,8 @@ impl Default for Options {
             refresh_period: 32,
             refresh_quad: 4,
             cache_format: CacheFormat::Rgba16float,
-            depth_epsilon: 1e-3,
+            depth_epsilon: DEFAULT_DEPTH_EPSILON,
+            depth: DepthConvention::Standard,
             reconstruction: Reconstruction::Bilinear,
             color_format: "rgba8unorm".into(),
         }

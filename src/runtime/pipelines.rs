@@ -124,6 +124,8 @@ fn pipeline(
     let depth_compare = match pass.depth.compare.as_str() {
         "less" => wgpu::CompareFunction::Less,
         "less-equal" => wgpu::CompareFunction::LessEqual,
+        "greater" => wgpu::CompareFunction::Greater,
+        "greater-equal" => wgpu::CompareFunction::GreaterEqual,
         "equal" => wgpu::CompareFunction::Equal,
         "always" => wgpu::CompareFunction::Always,
         other => return Err(format!("{}: unknown depth compare `{other}`", pass.name)),

@@ -40,6 +40,10 @@ pub struct RunOptions {
     pub classify: bool,
 }
 
+/// Bytes of the `CacheParams` uniform: the plan's fields (36 bytes) up to
+/// the struct's 8-byte alignment, rounded to 16.
+const PARAMS_SIZE: usize = 48;
+
 struct GpuMesh {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
@@ -238,7 +242,11 @@ impl Runner {
                 target(device, "depth 0", size, depth_format),
                 target(device, "depth 1", size, depth_format),
             ],
-            params: buffer("cache params", &[0; 32], wgpu::BufferUsages::UNIFORM),
+            params: buffer(
+                "cache params",
+                &[0; PARAMS_SIZE],
+                wgpu::BufferUsages::UNIFORM,
+            ),
             meshes,
             buffers: HashMap::new(),
             previous: HashMap::new(),
@@ -339,7 +347,7 @@ impl Runner {
 
         // CacheParams, laid out as the plan's `cache.params`.
         let refresh = &self.plan.refresh;
-        let mut params = Vec::with_capacity(32);
+        let mut params = Vec::with_capacity(PARAMS_SIZE);
         params.extend((self.size.0 as f32).to_le_bytes());
         params.extend((self.size.1 as f32).to_le_bytes());
         params.extend(refresh.depth_epsilon.to_le_bytes());
@@ -353,6 +361,8 @@ impl Runner {
             f32::MAX
         };
         params.extend(limit.to_le_bytes());
+        // far_depth: the depth test's tolerance is relative to it.
+        params.extend((self.plan.clear.depth as f32).to_le_bytes());
         gpu.queue.write_buffer(&self.params, 0, &params);
 
         let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
@@ -364,8 +374,10 @@ impl Runner {
         let depth_views = [view(&self.depth[0]), view(&self.depth[1])];
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         if !self.rendered {
-            // No previous frame: a depth at the far plane makes every pixel
-            // miss (nothing in front of the far plane matches it).
+            // No previous frame: a depth at the far plane (1.0, or 0.0 with
+            // reversed Z) makes every pixel miss: the depth test's
+            // tolerance, ε·|expected − far depth|, is below the distance of
+            // anything in front of the far plane from it.
             clear_depth_in(
                 &mut encoder,
                 &depth_views[previous],

@@ -28,6 +28,7 @@ use glam::{Mat4, Vec3};
 use serde::Deserialize;
 
 use crate::diagnostic::{Diagnostic, Error, SourceFile};
+pub use crate::rewrite::DepthConvention;
 pub use mesh::{Mesh, MeshSource};
 
 /// What moves in a scene.
@@ -113,8 +114,14 @@ pub struct Camera {
     pub fov_degrees: f32,
     #[serde(default = "default_near")]
     pub near: f32,
+    /// A distance, or `"infinity"` for an infinite far plane.
     #[serde(default = "default_far")]
-    pub far: f32,
+    pub far: Far,
+    /// `standard` (near at depth 0, far at 1) or `reversed` (near at 1,
+    /// far at 0). The plans follow it: depth compares, clear value, and
+    /// the far-plane depth the cache's depth test is relative to.
+    #[serde(default)]
+    pub depth: DepthConvention,
     /// With `camera-motion`: orbit about the target's vertical axis.
     #[serde(default)]
     pub orbit_degrees_per_frame: f32,
@@ -131,6 +138,7 @@ impl Default for Camera {
             fov_degrees: default_fov(),
             near: default_near(),
             far: default_far(),
+            depth: DepthConvention::Standard,
             orbit_degrees_per_frame: 0.0,
             pan_per_frame: [0.0; 3],
         }
@@ -146,8 +154,68 @@ fn default_fov() -> f32 {
 fn default_near() -> f32 {
     0.1
 }
-fn default_far() -> f32 {
-    20.0
+fn default_far() -> Far {
+    Far::Distance(20.0)
+}
+
+/// Where the camera's far plane is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Far {
+    Distance(f32),
+    /// No far plane: depth tends to the far value as distance grows.
+    Infinity,
+}
+
+impl<'de> Deserialize<'de> for Far {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Far, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = Far;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a distance or \"infinity\"")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Far, E> {
+                Ok(Far::Distance(v as f32))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Far, E> {
+                Ok(Far::Distance(v as f32))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Far, E> {
+                Ok(Far::Distance(v as f32))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Far, E> {
+                match v {
+                    "infinity" => Ok(Far::Infinity),
+                    _ => Err(E::invalid_value(serde::de::Unexpected::Str(v), &self)),
+                }
+            }
+        }
+        deserializer.deserialize_any(Visitor)
+    }
+}
+
+impl Camera {
+    /// The projection (right-handed, depth in [0, 1]) for the camera's
+    /// near and far planes and depth convention.
+    pub fn projection(&self, aspect: f32) -> Mat4 {
+        let fov = self.fov_degrees.to_radians();
+        match (self.depth, self.far) {
+            (DepthConvention::Standard, Far::Distance(far)) => {
+                Mat4::perspective_rh(fov, aspect, self.near, far)
+            }
+            (DepthConvention::Standard, Far::Infinity) => {
+                Mat4::perspective_infinite_rh(fov, aspect, self.near)
+            }
+            // Swapping the planes maps near to 1 and far to 0: depth is
+            // exactly 1 minus the standard one.
+            (DepthConvention::Reversed, Far::Distance(far)) => {
+                Mat4::perspective_rh(fov, aspect, far, self.near)
+            }
+            (DepthConvention::Reversed, Far::Infinity) => {
+                Mat4::perspective_infinite_reverse_rh(fov, aspect, self.near)
+            }
+        }
+    }
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -263,8 +331,12 @@ impl Scene {
         if scene.frames == 0 {
             return fail("frames must be at least 1".into());
         }
-        if scene.camera.near <= 0.0 || scene.camera.far <= scene.camera.near {
-            return fail("the camera needs 0 < near < far".into());
+        let far_ok = match scene.camera.far {
+            Far::Distance(far) => far > scene.camera.near && far.is_finite(),
+            Far::Infinity => true,
+        };
+        if !(scene.camera.near > 0.0 && scene.camera.near.is_finite() && far_ok) {
+            return fail("the camera needs 0 < near < far (far may be \"infinity\")".into());
         }
         Ok(scene)
     }
@@ -302,12 +374,7 @@ impl Scene {
             eye += pan;
             target += pan;
         }
-        let clip_from_view = Mat4::perspective_rh(
-            camera.fov_degrees.to_radians(),
-            aspect,
-            camera.near,
-            camera.far,
-        );
+        let clip_from_view = camera.projection(aspect);
         let clip_from_world = clip_from_view * Mat4::look_at_rh(eye, target, Vec3::Y);
 
         let mut light = Vec3::from(self.light.position);
@@ -389,6 +456,42 @@ mod tests {
         assert_eq!(deforming.frame(0, 1.0), deforming.frame(3, 1.0));
     }
 
+    /// Depth of a point `distance` in front of the camera.
+    fn depth_at(camera: &Camera, distance: f32) -> f32 {
+        let clip = camera.projection(1.0) * glam::Vec4::new(0.0, 0.0, -distance, 1.0);
+        clip.z / clip.w
+    }
+
+    #[test]
+    fn depth_conventions_put_near_and_far_where_they_say() {
+        let camera = |depth: &str, far: &str| {
+            let text = format!(
+                "[camera]\nnear = 0.5\nfar = {far}\ndepth = \"{depth}\"\n[[objects]]\nmesh = {{ kind = \"cube\" }}\n"
+            );
+            Scene::parse(Arc::new(SourceFile::new("s.toml", text)))
+                .map_err(|e| e.render())
+                .unwrap()
+                .camera
+        };
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-5;
+        let standard = camera("standard", "40");
+        let reversed = camera("reversed", "40");
+        assert!(close(depth_at(&standard, 0.5), 0.0) && close(depth_at(&standard, 40.0), 1.0));
+        assert!(close(depth_at(&reversed, 0.5), 1.0) && close(depth_at(&reversed, 40.0), 0.0));
+        for d in [1.0, 3.0, 17.0] {
+            assert!(close(depth_at(&reversed, d), 1.0 - depth_at(&standard, d)));
+        }
+        let standard = camera("standard", "\"infinity\"");
+        let reversed = camera("reversed", "\"infinity\"");
+        for d in [0.5, 5.0, 500.0] {
+            // 1 − near/distance and near/distance.
+            assert!(close(depth_at(&standard, d), 1.0 - 0.5 / d));
+            assert!(close(depth_at(&reversed, d), 0.5 / d));
+        }
+        assert_eq!(standard.far, Far::Infinity);
+        assert_eq!(camera("reversed", "40").depth, DepthConvention::Reversed);
+    }
+
     #[test]
     fn bad_scenes_are_diagnostics() {
         let parse = |text: &str| {
@@ -402,5 +505,9 @@ mod tests {
         );
         assert!(parse("effects = [\"wind\"]\n").contains("s.toml:1:"));
         assert!(parse("").contains("no objects"));
+        let cube = "[[objects]]\nmesh = { kind = \"cube\" }\n";
+        assert!(parse(&format!("[camera]\nfar = \"far\"\n{cube}")).contains("s.toml:2:"));
+        assert!(parse(&format!("[camera]\ndepth = \"inverted\"\n{cube}")).contains("s.toml:2:"));
+        assert!(parse(&format!("[camera]\nnear = 2.0\nfar = 1.0\n{cube}")).contains("near < far"));
     }
 }

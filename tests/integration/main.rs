@@ -9,6 +9,7 @@ mod cost;
 mod errors;
 mod gpu;
 mod hard_cases;
+mod hard_runs;
 mod profile;
 mod rewrite;
 mod util;

@@ -9,7 +9,7 @@ use shadecache::scene::Scene;
 use crate::util::{root, shadecache, stderr, temp_file};
 
 /// A scene for the marble shader: one sphere; `extra` adds TOML.
-fn marble_scene(effects: &str, extra: &str) -> String {
+pub(crate) fn marble_scene(effects: &str, extra: &str) -> String {
     format!(
         r#"
 size = [128, 128]
@@ -30,7 +30,7 @@ light_color = [1.0, 1.0, 1.0]
     )
 }
 
-fn run(
+pub(crate) fn run(
     scene_text: &str,
     options: Options,
 ) -> Option<(profile::Pictures, shadecache::report::Report, Scene)> {
@@ -40,7 +40,7 @@ fn run(
 
 /// Profiles `shader_text` on `scene_text`; `None` (said on stderr) without
 /// a GPU adapter outside CI.
-fn run_shader(
+pub(crate) fn run_shader(
     shader_text: &str,
     scene_text: &str,
     options: Options,
@@ -58,7 +58,7 @@ fn run_shader(
     Some((pictures, report, scene))
 }
 
-fn options(periods: &[u32], quads: &[u32]) -> Options {
+pub(crate) fn options(periods: &[u32], quads: &[u32]) -> Options {
     Options {
         nodes: Nodes::Ids(vec!["nb0c12cc4".into()]),
         refresh_periods: periods.to_vec(),

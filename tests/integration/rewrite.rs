@@ -221,6 +221,42 @@ fn plans_describe_the_passes() {
     assert_eq!(targets, ["color", "cache"]);
     assert_eq!(one.vertex_layout.len(), 2);
     assert_eq!(one.vertex_layout[0].format, "float32x3");
+    assert_eq!(three.clear.depth, 1.0);
+
+    // Reversed Z: nearer is `greater`, the far plane (and the clear) is 0,
+    // which the host passes as CacheParams' far_depth.
+    let reversed = rewrite::rewrite(
+        &shader,
+        &analysis,
+        candidate,
+        Variant::ThreePass,
+        &Options {
+            depth: rewrite::DepthConvention::Reversed,
+            ..Options::default()
+        },
+    )
+    .unwrap()
+    .plan;
+    let depth: Vec<&str> = reversed
+        .passes
+        .iter()
+        .map(|p| p.depth.compare.as_str())
+        .collect();
+    assert_eq!(depth, ["greater", "greater", "equal"]);
+    assert_eq!(reversed.clear.depth, 0.0);
+    let reference = shadecache::plan::reference(
+        &shader,
+        &analysis,
+        &Options {
+            depth: rewrite::DepthConvention::Reversed,
+            ..Options::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(reference.passes[0].depth.compare, "greater");
+    assert_eq!(reference.clear.depth, 0.0);
+    let far = three.cache.params.last().unwrap();
+    assert_eq!((far.name.as_str(), far.offset), ("far_depth", 32));
 }
 
 #[test]

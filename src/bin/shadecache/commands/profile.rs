@@ -46,9 +46,10 @@ pub struct Args {
     #[arg(long, value_enum, value_name = "FORMAT,...", value_delimiter = ',')]
     pub cache_format: Option<Vec<CacheFormatArg>>,
 
-    /// ε values of the cache's depth test to measure [default: 0.001; with
-    /// --sweep 0.00025,0.001,0.004].
-    #[arg(long, value_name = "E,...", value_delimiter = ',')]
+    /// ε values of the cache's depth test to measure, relative: about the
+    /// share of a point's distance by which two surfaces must differ to be
+    /// told apart [default: 0.02; with --sweep 0.005,0.02,0.08].
+    #[arg(long, value_name = "E,...", value_delimiter = ',', value_parser = super::rewrite::epsilon)]
     pub depth_epsilon: Option<Vec<f32>>,
 
     /// Reconstructions to measure, separated by commas [default: bilinear;
@@ -286,7 +287,11 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
             Some(row) => {
                 let dir = args.out.join("choice");
                 let analysis = analysis::analyze(&shader, &analysis::Options::default())?;
-                let rewritten = profile::rewrite_of(&shader, &analysis, row)?;
+                let defaults = shadecache::rewrite::Options {
+                    depth: scene.camera.depth,
+                    ..shadecache::rewrite::Options::default()
+                };
+                let rewritten = profile::rewrite_of(&shader, &analysis, row, &defaults)?;
                 back::write_variant(&dir, &rewritten, Language::Wgsl)?;
                 summary.push_str(&format!(
                     "  within {}: {} {} Δn={} k={} {} {} ε={}: {}\n  wrote its shaders and plan to {}\n",

@@ -6,7 +6,7 @@ use shadecache::analysis::{self, Options as AnalysisOptions};
 use shadecache::back::{self, Language};
 use shadecache::diagnostic::{self, Color, Diagnostic, Error, Severity};
 use shadecache::front;
-use shadecache::rewrite::{self, CacheFormat, Options, Reconstruction, Variant};
+use shadecache::rewrite::{self, CacheFormat, DepthConvention, Options, Reconstruction, Variant};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -42,9 +42,15 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = CacheFormatArg::Rgba16float)]
     pub cache_format: CacheFormatArg,
 
-    /// ε of the cache's depth test, in depth-buffer units.
-    #[arg(long, value_name = "E", default_value_t = 1e-3)]
+    /// ε of the cache's depth test, relative: about the share of a point's
+    /// distance by which two surfaces must differ to be told apart.
+    #[arg(long, value_name = "E", default_value_t = rewrite::DEFAULT_DEPTH_EPSILON, value_parser = epsilon)]
     pub depth_epsilon: f32,
+
+    /// Which way the host's depth buffer runs: standard (near 0, far 1) or
+    /// reversed (near 1, far 0).
+    #[arg(long, value_enum, default_value_t = DepthArg::Standard)]
+    pub depth: DepthArg,
 
     /// How the payload is read back where a point was last frame.
     #[arg(long, value_enum, default_value_t = ReconstructionArg::Bilinear)]
@@ -75,6 +81,23 @@ pub enum VariantArg {
 pub enum CacheFormatArg {
     Rgba16float,
     Rgba32float,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum DepthArg {
+    Standard,
+    Reversed,
+}
+
+/// ε of the depth test: 0 ≤ ε < 1 (at 1 a depth at the far plane, the
+/// "no previous frame" value, would agree with everything).
+pub fn epsilon(text: &str) -> Result<f32, String> {
+    let value: f32 = text.parse().map_err(|err| format!("{err}"))?;
+    if (0.0..1.0).contains(&value) {
+        Ok(value)
+    } else {
+        Err("ε must be at least 0 and below 1".into())
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -124,6 +147,10 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         refresh_quad: args.refresh_quad,
         cache_format: args.cache_format.into(),
         depth_epsilon: args.depth_epsilon,
+        depth: match args.depth {
+            DepthArg::Standard => DepthConvention::Standard,
+            DepthArg::Reversed => DepthConvention::Reversed,
+        },
         reconstruction: args.reconstruction.into(),
         ..Options::default()
     };
