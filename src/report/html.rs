@@ -116,15 +116,9 @@ pub fn html(report: &Report, dir: &Path) -> String {
             .collect();
         let _ = write!(
             page,
-            "<tr><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{}</td><td>{:.2}×</td><td>{:.2}×</td><td>{:.0}%</td><td>{:.2}</td><td>{:.1}%</td><td>{:.1}% ({:.1} / {:.1})</td><td>{:.1}%</td><td>{:.1}</td><td>{:.4}</td><td>{:.3}</td><td><a href=\"maps/{}\">png</a></td></tr>",
+            "<tr><td>{}</td>{}<td>{:.3}</td><td>{}</td><td>{:.2}×</td><td>{:.2}×</td><td>{:.0}%</td><td>{:.2}</td><td>{:.1}%</td><td>{:.1}% ({:.1} / {:.1})</td><td>{:.1}%</td><td>{:.1}</td><td>{:.4}</td><td>{:.3}</td><td><a href=\"maps/{}\">png</a></td></tr>",
             rank + 1,
-            escape(&row.node),
-            row.variant,
-            row.refresh_period,
-            row.refresh_quad,
-            row.reconstruction.as_str(),
-            row.cache_format.as_str(),
-            row.depth_epsilon,
+            configuration_cells(row),
             row.time_ms,
             escape(&passes.join(", ")),
             row.speedup,
@@ -398,6 +392,21 @@ fn error_against_time(
     )
 }
 
+/// The cells naming a result's configuration: node, variant, Δn, k,
+/// reconstruction, cache format, ε.
+fn configuration_cells(row: &ResultRow) -> String {
+    format!(
+        "<td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+        escape(&row.node),
+        row.variant,
+        row.refresh_period,
+        row.refresh_quad,
+        row.reconstruction.as_str(),
+        row.cache_format.as_str(),
+        row.depth_epsilon
+    )
+}
+
 /// The Pareto front of time against PSNR as a table, fastest first.
 fn pareto_table(report: &Report) -> String {
     let mut page = String::from("<h2>Pareto front</h2><p>The configurations no other beats on time without losing PSNR (the unmodified shader counts as exact at its own time, so nothing slower than it is on the front). <b>S</b> marks those also on the SSIM front.</p><table><tr><th>#</th><th>node</th><th>variant</th><th>Δn</th><th>k</th><th>recon.</th><th>format</th><th>ε</th><th>time ms</th><th>speed-up</th><th>PSNR dB</th><th>SSIM</th><th>SSIM front</th></tr>");
@@ -411,15 +420,9 @@ fn pareto_table(report: &Report) -> String {
     for (rank, row) in rows {
         let _ = write!(
             page,
-            "<tr><td>{}</td><td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.2}×</td><td>{:.1}</td><td>{:.4}</td><td>{}</td></tr>",
+            "<tr><td>{}</td>{}<td>{:.3}</td><td>{:.2}×</td><td>{:.1}</td><td>{:.4}</td><td>{}</td></tr>",
             rank + 1,
-            escape(&row.node),
-            row.variant,
-            row.refresh_period,
-            row.refresh_quad,
-            row.reconstruction.as_str(),
-            row.cache_format.as_str(),
-            row.depth_epsilon,
+            configuration_cells(row),
             row.time_ms,
             row.speedup,
             row.psnr,

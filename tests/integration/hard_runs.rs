@@ -10,6 +10,7 @@ use shadecache::rewrite::Variant;
 use shadecache::scene::Scene;
 
 use crate::profile::{marble_scene, options, run};
+use crate::util::near;
 
 /// Which pixels object `object` covers in frame `frame`, rasterised on the
 /// CPU at pixel centres with the scene's own matrices (`w × h`, row-major,
@@ -42,23 +43,6 @@ fn silhouette(scene: &Scene, object: usize, frame: u32, w: usize, h: usize) -> V
             })
         })
         .collect()
-}
-
-/// Whether a pixel of `mask` lies within one pixel (8-neighbourhood) of
-/// `i`.
-fn near(mask: &[bool], w: usize, i: usize) -> bool {
-    let h = mask.len() / w;
-    let (x, y) = ((i % w) as i64, (i / w) as i64);
-    (-1..=1).any(|dy| {
-        (-1..=1).any(|dx| {
-            let (nx, ny) = (x + dx, y + dy);
-            nx >= 0
-                && ny >= 0
-                && nx < w as i64
-                && ny < h as i64
-                && mask[(ny as usize) * w + nx as usize]
-        })
-    })
 }
 
 /// The pixels of `mask` whose whole 8-neighbourhood is in `mask`: one

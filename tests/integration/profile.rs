@@ -223,19 +223,7 @@ light_color = [1.0, 1.0, 1.0]
     };
     let (before, now) = (silhouette(0), silhouette(1));
     let band: Vec<bool> = (0..w * h).map(|i| before[i] && !now[i]).collect();
-    let near = |mask: &[bool], i: usize| {
-        let (x, y) = ((i % w) as i64, (i / w) as i64);
-        (-1..=1).any(|dy| {
-            (-1..=1).any(|dx| {
-                let (nx, ny) = (x + dx, y + dy);
-                nx >= 0
-                    && ny >= 0
-                    && nx < w as i64
-                    && ny < h as i64
-                    && mask[(ny as usize) * w + nx as usize]
-            })
-        })
-    };
+    let near = |mask: &[bool], i: usize| crate::util::near(mask, w, i);
     let inside = |mask: &[bool], i: usize| !near(&mask.iter().map(|m| !m).collect::<Vec<_>>(), i);
     let miss = |i: usize| classes[i * 4] == 255 && classes[i * 4 + 2] == 0;
     let band_pixels = band.iter().filter(|&&b| b).count();

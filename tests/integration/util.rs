@@ -129,3 +129,20 @@ pub fn tint_validate(files: &[PathBuf]) -> Vec<TintResult> {
     assert_eq!(results.len(), files.len(), "one result per file");
     results
 }
+
+/// Whether a pixel of `mask` lies within one pixel (8-neighbourhood) of
+/// `i`.
+pub fn near(mask: &[bool], w: usize, i: usize) -> bool {
+    let h = mask.len() / w;
+    let (x, y) = ((i % w) as i64, (i / w) as i64);
+    (-1..=1).any(|dy| {
+        (-1..=1).any(|dx| {
+            let (nx, ny) = (x + dx, y + dy);
+            nx >= 0
+                && ny >= 0
+                && nx < w as i64
+                && ny < h as i64
+                && mask[(ny as usize) * w + nx as usize]
+        })
+    })
+}
