@@ -301,6 +301,21 @@ mod tests {
             })
     }
 
+    /// Scale, then a rotation about `axis` (the y axis when `axis` is
+    /// nearly zero), then a translation.
+    fn transform(axis: DVec3, angle: f64, translation: DVec3, scale: f64) -> DMat4 {
+        let axis = if axis.length() < 1e-3 {
+            DVec3::Y
+        } else {
+            axis.normalize()
+        };
+        DMat4::from_scale_rotation_translation(
+            DVec3::splat(scale),
+            DQuat::from_axis_angle(axis, angle),
+            translation,
+        )
+    }
+
     /// Scale, rotation and translation: a rigid motion with uniform scale.
     fn object() -> impl Strategy<Value = DMat4> {
         (
@@ -310,16 +325,7 @@ mod tests {
             0.25..4.0f64,
         )
             .prop_map(|(axis, angle, translation, scale)| {
-                let axis = if axis.length() < 1e-3 {
-                    DVec3::Y
-                } else {
-                    axis.normalize()
-                };
-                DMat4::from_scale_rotation_translation(
-                    DVec3::splat(scale),
-                    DQuat::from_axis_angle(axis, angle),
-                    translation,
-                )
+                transform(axis, angle, translation, scale)
             })
     }
 
@@ -429,18 +435,7 @@ mod tests {
     /// unit of translation and 10% of scale, applied in world space.
     fn object_step() -> impl Strategy<Value = DMat4> {
         (vec3(1.0), -0.2..0.2f64, vec3(0.5), 0.9..1.1f64).prop_map(
-            |(axis, angle, translation, scale)| {
-                let axis = if axis.length() < 1e-3 {
-                    DVec3::Y
-                } else {
-                    axis.normalize()
-                };
-                DMat4::from_scale_rotation_translation(
-                    DVec3::splat(scale),
-                    DQuat::from_axis_angle(axis, angle),
-                    translation,
-                )
-            },
+            |(axis, angle, translation, scale)| transform(axis, angle, translation, scale),
         )
     }
 

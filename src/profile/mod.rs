@@ -351,7 +351,7 @@ pub fn profile(
 
     let mut configs = Vec::new();
     // Configurations set up, to measure each once.
-    let mut seen = std::collections::HashSet::new();
+    let mut seen = Vec::new();
     for (node, (candidate, settings)) in nodes.iter().enumerate() {
         for &variant in &options.variants {
             for setting in settings.iter() {
@@ -381,15 +381,15 @@ pub fn profile(
                 // (a payload that may not fit f16): record what runs, and
                 // measure it once.
                 let mut setting = *setting;
-                if let Some(note) = &rewritten.plan.cache.format_note {
+                if rewritten.plan.cache.format_note.is_some() {
                     setting.cache_format = CacheFormat::Rgba32float;
-                    if !seen.insert((node, variant, format!("{setting:?}"))) {
-                        progress.refused(&what, &format!("measured as {note}"));
-                        continue;
-                    }
-                } else if !seen.insert((node, variant, format!("{setting:?}"))) {
+                }
+                if seen.contains(&(node, variant, setting)) {
+                    let note = rewritten.plan.cache.format_note.as_deref().unwrap_or("");
+                    progress.refused(&what, &format!("measured already: {note}"));
                     continue;
                 }
+                seen.push((node, variant, setting));
                 let runner = Runner::new(
                     &gpu,
                     &rewritten.plan,
@@ -662,7 +662,7 @@ pub fn profile(
         nodes: node_reports,
         grid: Some(GridReport {
             design: grid.design,
-            base: grid.axes.base().unwrap_or(base_setting),
+            base: base_setting,
             axes: grid.axes.clone(),
             full: grid.full,
             measured: results.len(),

@@ -78,15 +78,11 @@ pub fn html(report: &Report, dir: &Path) -> String {
             Some(row) => {
                 let _ = write!(
                     page,
-                    "<p class=\"answer\">Within the budget {}: node <code>{}</code>, <b>{}</b>, Δn = {}, k = {}, {}, {}, ε = {} — {}. Its shaders and plan are in <code>choice/</code>.</p>",
+                    "<p class=\"answer\">Within the budget {}: node <code>{}</code>, <b>{}</b>, {} — {}. Its shaders and plan are in <code>choice/</code>.</p>",
                     escape(&choice.budget.to_string()),
                     escape(&row.node),
                     row.variant,
-                    row.refresh_period,
-                    row.refresh_quad,
-                    row.reconstruction.as_str(),
-                    row.cache_format.as_str(),
-                    row.depth_epsilon,
+                    row.setting(),
                     escape(&choice.reason)
                 );
             }

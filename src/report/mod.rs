@@ -269,6 +269,20 @@ pub fn mark_pareto_fronts(reference_ms: f64, rows: &mut [ResultRow]) {
     }
 }
 
+impl ResultRow {
+    /// Its knobs in words: `Δn = 32, k = 4, bilinear, rgba16float, ε = 0.02`.
+    pub fn setting(&self) -> String {
+        format!(
+            "Δn = {}, k = {}, {}, {}, ε = {}",
+            self.refresh_period,
+            self.refresh_quad,
+            self.reconstruction.as_str(),
+            self.cache_format.as_str(),
+            self.depth_epsilon
+        )
+    }
+}
+
 impl Report {
     /// The fastest result of each variant.
     pub fn best_per_variant(&self) -> Vec<&ResultRow> {

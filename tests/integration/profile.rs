@@ -1,7 +1,5 @@
 //! The profiler on lavapipe: small frames, few of them.
 
-use std::path::Path;
-
 use shadecache::profile::{self, Nodes, Options, Quiet};
 use shadecache::rewrite::{CacheFormat, Variant};
 use shadecache::scene::Scene;
@@ -192,46 +190,18 @@ light_color = [1.0, 1.0, 1.0]
 
     // The cube's silhouette in frames 0 and 1, rasterised on the CPU at
     // pixel centres with the same matrices.
-    let cube = scene.objects[1].mesh.build(Path::new(".")).unwrap();
-    let silhouette = |frame: u32| -> Vec<bool> {
-        let state = scene.frame(frame, 1.0);
-        let clip = state.clip_from_world * state.objects[1];
-        let points: Vec<glam::Vec2> = cube
-            .positions
-            .iter()
-            .map(|p| {
-                let c = clip * p.extend(1.0);
-                glam::Vec2::new(c.x / c.w, c.y / c.w)
-            })
-            .collect();
-        let mut mask = vec![false; w * h];
-        for (i, covered) in mask.iter_mut().enumerate() {
-            let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
-            let p = glam::Vec2::new(x / w as f32 * 2.0 - 1.0, 1.0 - y / h as f32 * 2.0);
-            *covered = cube.indices.chunks(3).any(|t| {
-                let [a, b, c] = [
-                    points[t[0] as usize],
-                    points[t[1] as usize],
-                    points[t[2] as usize],
-                ];
-                let side = |u: glam::Vec2, v: glam::Vec2| (v - u).perp_dot(p - u);
-                let (s0, s1, s2) = (side(a, b), side(b, c), side(c, a));
-                (s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0) || (s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0)
-            });
-        }
-        mask
-    };
+    let silhouette = |frame: u32| crate::util::silhouette(&scene, 1, frame, w, h);
     let (before, now) = (silhouette(0), silhouette(1));
     let band: Vec<bool> = (0..w * h).map(|i| before[i] && !now[i]).collect();
     let near = |mask: &[bool], i: usize| crate::util::near(mask, w, i);
-    let inside = |mask: &[bool], i: usize| !near(&mask.iter().map(|m| !m).collect::<Vec<_>>(), i);
+    let band_interior = crate::util::interior(&band, w);
     let miss = |i: usize| classes[i * 4] == 255 && classes[i * 4 + 2] == 0;
     let band_pixels = band.iter().filter(|&&b| b).count();
     assert!(band_pixels > 100, "the band is {band_pixels} pixels");
     let mut unmissed = 0;
     let mut stray = 0;
-    for i in 0..w * h {
-        if inside(&band, i) && !miss(i) {
+    for (i, &in_band) in band_interior.iter().enumerate() {
+        if in_band && !miss(i) {
             unmissed += 1;
         }
         if miss(i) && !near(&band, i) && !near(&now, i) {
@@ -688,6 +658,8 @@ fn sweep_marks_the_pareto_front_and_writes_the_choice() {
         }
         assert!(stdout_has(&output, "wrote its shaders and plan"));
     } else {
+        // No choice only when nothing within the budget beats the original.
+        assert!(within.is_none_or(|i| report.results[i].speedup <= 1.0));
         assert!(!out.path().join("choice").exists());
         assert!(stdout_has(&output, "keep the original"));
     }

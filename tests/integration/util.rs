@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
 use serde_json::Value;
+use shadecache::scene::Scene;
 
 /// The repository root.
 pub fn root() -> PathBuf {
@@ -145,4 +146,44 @@ pub fn near(mask: &[bool], w: usize, i: usize) -> bool {
                 && mask[(ny as usize) * w + nx as usize]
         })
     })
+}
+
+/// Which pixels object `object` covers in frame `frame`, rasterised on the
+/// CPU at pixel centres with the scene's own matrices (`w × h`, row-major,
+/// y down).
+pub fn silhouette(scene: &Scene, object: usize, frame: u32, w: usize, h: usize) -> Vec<bool> {
+    let mesh = scene.objects[object].mesh.build(Path::new(".")).unwrap();
+    let state = scene.frame(frame, w as f32 / h as f32);
+    let clip = state.clip_from_world * state.objects[object];
+    let points: Vec<glam::Vec2> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let c = clip * p.extend(1.0);
+            glam::Vec2::new(c.x / c.w, c.y / c.w)
+        })
+        .collect();
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+            let p = glam::Vec2::new(x / w as f32 * 2.0 - 1.0, 1.0 - y / h as f32 * 2.0);
+            mesh.indices.chunks(3).any(|t| {
+                let [a, b, c] = [
+                    points[t[0] as usize],
+                    points[t[1] as usize],
+                    points[t[2] as usize],
+                ];
+                let side = |u: glam::Vec2, v: glam::Vec2| (v - u).perp_dot(p - u);
+                let (s0, s1, s2) = (side(a, b), side(b, c), side(c, a));
+                (s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0) || (s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0)
+            })
+        })
+        .collect()
+}
+
+/// The pixels of `mask` whose whole 8-neighbourhood is in `mask`: one
+/// pixel in from its edge, where rasterisation rounding cannot matter.
+pub fn interior(mask: &[bool], w: usize) -> Vec<bool> {
+    let outside: Vec<bool> = mask.iter().map(|m| !m).collect();
+    (0..mask.len()).map(|i| !near(&outside, w, i)).collect()
 }

@@ -294,15 +294,11 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
                 let rewritten = profile::rewrite_of(&shader, &analysis, row, &defaults)?;
                 back::write_variant(&dir, &rewritten, Language::Wgsl)?;
                 summary.push_str(&format!(
-                    "  within {}: {} {} Δn={} k={} {} {} ε={}: {}\n  wrote its shaders and plan to {}\n",
+                    "  within {}: {} {}, {}: {}\n  wrote its shaders and plan to {}\n",
                     choice.budget,
                     row.node,
                     row.variant,
-                    row.refresh_period,
-                    row.refresh_quad,
-                    row.reconstruction.as_str(),
-                    row.cache_format.as_str(),
-                    row.depth_epsilon,
+                    row.setting(),
                     choice.reason,
                     dir.display()
                 ));
