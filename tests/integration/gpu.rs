@@ -145,18 +145,8 @@ fn sphere(rings: u32, segments: u32) -> runtime::Mesh {
 #[test]
 fn three_pass_shades_every_covered_pixel_exactly_once() {
     let Some(gpu) = gpu() else { return };
-    let shader = shadecache::front::parse(shadecache::diagnostic::SourceFile::new(
-        "counting.wgsl",
-        COUNTING_SHADER,
-    ))
-    .unwrap();
-    let analysis =
-        shadecache::analysis::analyze(&shader, &shadecache::analysis::Options::default()).unwrap();
-    let candidate = analysis
-        .candidates
-        .iter()
-        .find(|c| c.node.text == "sin(in.normal * 10.0)")
-        .unwrap();
+    let (shader, analysis) = crate::util::analyzed("counting.wgsl", COUNTING_SHADER);
+    let candidate = crate::util::candidate(&analysis, "sin(in.normal * 10.0)");
     let options = Options {
         color_format: "rgba16float".into(),
         refresh_period: 4,

@@ -1191,18 +1191,8 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
 /// after checking that every pixel of the first frame misses and every
 /// later one hits or refreshes.
 fn refresh_maps(gpu: &Gpu, period: u32, quad: u32, start: u64, frames: usize) -> Vec<Vec<bool>> {
-    let shader = shadecache::front::parse(shadecache::diagnostic::SourceFile::new(
-        "quad.wgsl",
-        QUAD_SHADER,
-    ))
-    .unwrap();
-    let analysis =
-        shadecache::analysis::analyze(&shader, &shadecache::analysis::Options::default()).unwrap();
-    let candidate = analysis
-        .candidates
-        .iter()
-        .find(|c| c.node.text == "sin(in.local * 10.0)")
-        .unwrap();
+    let (shader, analysis) = crate::util::analyzed("quad.wgsl", QUAD_SHADER);
+    let candidate = crate::util::candidate(&analysis, "sin(in.local * 10.0)");
     let options = Options {
         refresh_period: period,
         refresh_quad: quad,

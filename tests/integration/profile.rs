@@ -410,18 +410,8 @@ rotation_degrees_per_frame = [0.0, 2.0, 0.0]
 }
 
 fn non_finite_options(node_text: &str, shader: &str, format: CacheFormat) -> Options {
-    let parsed =
-        shadecache::front::parse(shadecache::diagnostic::SourceFile::new("test.wgsl", shader))
-            .unwrap();
-    let analysis = shadecache::analysis::analyze(&parsed, &Default::default()).unwrap();
-    let id = analysis
-        .candidates
-        .iter()
-        .find(|c| c.node.text == node_text)
-        .unwrap_or_else(|| panic!("no candidate `{node_text}`"))
-        .node
-        .id
-        .clone();
+    let (_, analysis) = crate::util::analyzed("test.wgsl", shader);
+    let id = crate::util::candidate(&analysis, node_text).node.id.clone();
     Options {
         nodes: Nodes::Ids(vec![id]),
         cache_formats: vec![format],

@@ -523,19 +523,9 @@ fn fs(in: VertexOutput) -> @location(0) vec4<f32> {
     return vec4<f32>(wave, fract(growth), 0.0, 1.0);
 }
 ";
-    let shader =
-        shadecache::front::parse(shadecache::diagnostic::SourceFile::new("f16.wgsl", source))
-            .unwrap();
-    let analysis = shadecache::analysis::analyze(&shader, &Default::default()).unwrap();
-    let find = |text: &str| {
-        analysis
-            .candidates
-            .iter()
-            .find(|c| c.node.text == text)
-            .unwrap_or_else(|| panic!("no candidate `{text}`"))
-    };
-    let wave = find("sin(in.uv.x * 30.0) * 0.5 + 0.5");
-    let growth = find("exp(in.uv.y * 40.0)");
+    let (shader, analysis) = crate::util::analyzed("f16.wgsl", source);
+    let wave = crate::util::candidate(&analysis, "sin(in.uv.x * 30.0) * 0.5 + 0.5");
+    let growth = crate::util::candidate(&analysis, "exp(in.uv.y * 40.0)");
     assert!(wave.fits_f16);
     assert_eq!(wave.range, [Some(0.0), Some(1.0)]);
     assert!(!growth.fits_f16);

@@ -187,3 +187,26 @@ pub fn interior(mask: &[bool], w: usize) -> Vec<bool> {
     let outside: Vec<bool> = mask.iter().map(|m| !m).collect();
     (0..mask.len()).map(|i| !near(&outside, w, i)).collect()
 }
+
+/// Parses, validates and analyses a shader given as text.
+pub fn analyzed(
+    name: &str,
+    source: &str,
+) -> (shadecache::front::Shader, shadecache::analysis::Analysis) {
+    let shader = shadecache::front::parse(shadecache::diagnostic::SourceFile::new(name, source))
+        .unwrap_or_else(|err| panic!("{name}: {err:?}"));
+    let analysis = shadecache::analysis::analyze(&shader, &Default::default()).unwrap();
+    (shader, analysis)
+}
+
+/// The candidate whose source text is `text`.
+pub fn candidate<'a>(
+    analysis: &'a shadecache::analysis::Analysis,
+    text: &str,
+) -> &'a shadecache::analysis::Candidate {
+    analysis
+        .candidates
+        .iter()
+        .find(|c| c.node.text == text)
+        .unwrap_or_else(|| panic!("no candidate `{text}`"))
+}
