@@ -125,7 +125,7 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
                     },
                     overlap: cost_of(&shared),
                     derivatives,
-                    range: [range.lo, range.hi].map(|v| v.is_finite().then_some(v)),
+                    range: range.ends(),
                     fits_f16: range.fits_f16(),
                 });
             }

@@ -154,6 +154,24 @@ pub enum Nodes {
 }
 
 impl Analysis {
+    /// Bounds every candidate's value again, knowing the uniform values
+    /// `uniforms` take (the profiler knows them from its scene): a node
+    /// that reads a uniform is unbounded to the shader alone, and may fit
+    /// f16 for the values a scene gives it.
+    pub fn bound_uniforms(&mut self, shader: &Shader, uniforms: &range::UniformBounds) {
+        let mut ranges = range::EntryRanges::with_uniforms(
+            &shader.module,
+            &shader.info,
+            self.entry_index,
+            uniforms,
+        );
+        for candidate in &mut self.candidates {
+            let range = ranges.of(candidate.node.expression);
+            candidate.range = range.ends();
+            candidate.fits_f16 = range.fits_f16();
+        }
+    }
+
     /// The candidates `nodes` names. An id that names a rejected node is an
     /// error pointing at it with the reason; an unknown id is an error
     /// listing the candidates.

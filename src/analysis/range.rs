@@ -11,6 +11,11 @@
 //! `saturate`, `clamp`, comparisons, and arithmetic on bounded values.
 //! Helper functions are followed: a call's result is its body's return
 //! value for the intervals of the call's arguments.
+//!
+//! Uniform values are unbounded to the analysis of a shader alone. Where the
+//! values are known — the profiler knows every value a scene writes, over
+//! all its frames — [`UniformBounds`] gives them, and the loads of those
+//! members are bounded by them.
 
 use std::collections::HashMap;
 
@@ -59,6 +64,11 @@ impl Interval {
         Interval::new(self.lo.min(other.lo), self.hi.max(other.hi))
     }
 
+    /// The ends, `None` where unbounded.
+    pub fn ends(self) -> [Option<f64>; 2] {
+        [self.lo, self.hi].map(|v| v.is_finite().then_some(v))
+    }
+
     pub fn is_bounded(self) -> bool {
         self.lo.is_finite() && self.hi.is_finite()
     }
@@ -77,19 +87,15 @@ impl Interval {
     }
 
     fn mul(self, o: Interval) -> Self {
-        if !self.is_bounded() || !o.is_bounded() {
-            // 0 × ∞ would be NaN; an unbounded factor gives an unbounded
-            // product unless the other is exactly zero.
-            if (self.lo == 0.0 && self.hi == 0.0) || (o.lo == 0.0 && o.hi == 0.0) {
-                return Interval::point(0.0);
-            }
-            return Interval::ALL;
-        }
+        // The ends are limits of reals: a zero end times an infinite one
+        // contributes 0 (IEEE's 0 × ∞ = NaN would lose the bound), so
+        // [0, 1] × [0, ∞) is [0, ∞) and [1, 2] × [0, ∞) too.
+        let times = |a: f64, b: f64| if a == 0.0 || b == 0.0 { 0.0 } else { a * b };
         let p = [
-            self.lo * o.lo,
-            self.lo * o.hi,
-            self.hi * o.lo,
-            self.hi * o.hi,
+            times(self.lo, o.lo),
+            times(self.lo, o.hi),
+            times(self.hi, o.lo),
+            times(self.hi, o.hi),
         ];
         Interval::new(
             p.iter().copied().fold(f64::INFINITY, f64::min),
@@ -101,6 +107,7 @@ impl Interval {
         if o.lo <= 0.0 && o.hi >= 0.0 {
             return Interval::ALL;
         }
+        // 1/∞ is 0: the reciprocal of [1, ∞) is [0, 1].
         self.mul(Interval::new(1.0 / o.hi, 1.0 / o.lo))
     }
 
@@ -110,6 +117,42 @@ impl Interval {
 
     fn max(self, o: Interval) -> Self {
         Interval::new(self.lo.max(o.lo), self.hi.max(o.hi))
+    }
+}
+
+/// Known bounds of uniform values: for each uniform buffer (group,
+/// binding), an interval for each struct member by its index, or for the
+/// whole value (index 0) where the uniform is not a struct. One interval
+/// bounds every component of a member.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct UniformBounds(HashMap<(u32, u32, u32), Interval>);
+
+impl UniformBounds {
+    /// Widens the bound of member `member` of the uniform at (`group`,
+    /// `binding`) to hold `values`. A NaN value leaves it unbounded.
+    pub fn observe(&mut self, group: u32, binding: u32, member: u32, values: &[f64]) {
+        for &v in values {
+            let seen = if v.is_nan() {
+                Interval::ALL
+            } else {
+                Interval::point(v)
+            };
+            self.0
+                .entry((group, binding, member))
+                .and_modify(|known| *known = known.union(seen))
+                .or_insert(seen);
+        }
+    }
+
+    fn get(&self, group: u32, binding: u32, member: u32) -> Interval {
+        self.0
+            .get(&(group, binding, member))
+            .copied()
+            .unwrap_or(Interval::ALL)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
     }
 }
 
@@ -126,10 +169,21 @@ impl std::fmt::Debug for EntryRanges<'_> {
 }
 
 impl<'a> EntryRanges<'a> {
+    /// Uniform values unbounded.
     pub fn new(
         module: &'a naga::Module,
         info: &'a naga::valid::ModuleInfo,
         entry_index: usize,
+    ) -> Self {
+        Self::with_uniforms(module, info, entry_index, &NO_BOUNDS)
+    }
+
+    /// Uniform values within `uniforms`.
+    pub fn with_uniforms(
+        module: &'a naga::Module,
+        info: &'a naga::valid::ModuleInfo,
+        entry_index: usize,
+        uniforms: &'a UniformBounds,
     ) -> Self {
         let function = &module.entry_points[entry_index].function;
         EntryRanges(Ranges {
@@ -137,6 +191,7 @@ impl<'a> EntryRanges<'a> {
             function,
             info: info.get_entry_point(entry_index),
             module_info: info,
+            uniforms,
             arguments: vec![Interval::ALL; function.arguments.len()],
             memo: HashMap::new(),
             depth: 0,
@@ -148,6 +203,28 @@ impl<'a> EntryRanges<'a> {
         self.0.of(expr)
     }
 }
+
+/// Bounds in words: "in [lo, hi]", "unbounded", "at least lo" or "at most hi".
+pub fn describe(range: [Option<f64>; 2]) -> String {
+    fn number(v: f64) -> String {
+        if v != 0.0 && !(1e-3..1e5).contains(&v.abs()) {
+            format!("{v:.3e}")
+        } else {
+            // Four significant decimals, without trailing zeros.
+            let text = format!("{v:.4}");
+            text.trim_end_matches('0').trim_end_matches('.').to_string()
+        }
+    }
+    match range {
+        [Some(lo), Some(hi)] => format!("in [{}, {}]", number(lo), number(hi)),
+        [None, None] => "unbounded".into(),
+        [Some(lo), None] => format!("at least {}", number(lo)),
+        [None, Some(hi)] => format!("at most {}", number(hi)),
+    }
+}
+
+static NO_BOUNDS: std::sync::LazyLock<UniformBounds> =
+    std::sync::LazyLock::new(UniformBounds::default);
 
 /// Calls nest no deeper than this before their results count as unbounded
 /// (WGSL has no recursion; this only bounds the work).
@@ -161,6 +238,7 @@ struct Ranges<'a> {
     function: &'a Function,
     info: &'a naga::valid::FunctionInfo,
     module_info: &'a naga::valid::ModuleInfo,
+    uniforms: &'a UniformBounds,
     arguments: Vec<Interval>,
     /// `None` while an expression is being evaluated (a cycle through a
     /// variable counts as unbounded).
@@ -381,12 +459,28 @@ impl Ranges<'_> {
                 let y = second();
                 if x.lo >= 0.0 && x.hi <= 1.0 && y.lo >= 0.0 {
                     unit
+                } else if x.lo >= 0.0 && x.is_bounded() && y.is_bounded() {
+                    // For x ≥ 0, x^y is monotone in x and in y: its
+                    // extremes over the box are at the corners.
+                    let corners = [
+                        x.lo.powf(y.lo),
+                        x.lo.powf(y.hi),
+                        x.hi.powf(y.lo),
+                        x.hi.powf(y.hi),
+                    ];
+                    Interval::new(
+                        corners.iter().copied().fold(f64::INFINITY, f64::min),
+                        corners.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                    )
                 } else {
                     Interval::ALL
                 }
             }
+            M::Dot => match arg1 {
+                Some(b) => self.dot(arg, b),
+                None => Interval::ALL,
+            },
             // Vectors of at most four components.
-            M::Dot => Interval::symmetric(4.0 * x.magnitude() * second().magnitude()),
             M::Cross => Interval::symmetric(2.0 * x.magnitude() * second().magnitude()),
             M::Length => Interval::new(0.0, 2.0 * x.magnitude()),
             M::Distance => Interval::new(0.0, 2.0 * x.sub(second()).magnitude()),
@@ -409,7 +503,7 @@ impl Ranges<'_> {
     /// stored to it, where it is stored whole.
     fn load(&mut self, pointer: Handle<Expression>) -> Interval {
         let Expression::LocalVariable(variable) = self.function.expressions[pointer] else {
-            return Interval::ALL;
+            return self.uniform(pointer);
         };
         let mut values = Vec::new();
         let mut partial = false;
@@ -438,6 +532,77 @@ impl Ranges<'_> {
             range = range.union(self.of(value));
         }
         range
+    }
+
+    /// A load from a uniform: the bound the caller knows for its member
+    /// (any component of it), or unbounded.
+    fn uniform(&self, pointer: Handle<Expression>) -> Interval {
+        // Walk down to the global, remembering the index taken just above it.
+        let (mut at, mut member) = (pointer, None);
+        let global = loop {
+            match self.function.expressions[at] {
+                Expression::AccessIndex { base, index } => {
+                    member = Some(index);
+                    at = base;
+                }
+                Expression::Access { base, .. } => {
+                    member = None;
+                    at = base;
+                }
+                Expression::GlobalVariable(global) => break global,
+                _ => return Interval::ALL,
+            }
+        };
+        let variable = &self.module.global_variables[global];
+        let (naga::AddressSpace::Uniform, Some(binding)) = (variable.space, &variable.binding)
+        else {
+            return Interval::ALL;
+        };
+        let member = match self.module.types[variable.ty].inner {
+            // A whole struct is not one value; a dynamic index into it
+            // cannot occur.
+            naga::TypeInner::Struct { .. } => match member {
+                Some(index) => index,
+                None => return Interval::ALL,
+            },
+            _ => 0,
+        };
+        self.uniforms.get(binding.group, binding.binding, member)
+    }
+
+    /// Whether `expr` is a unit vector: `normalize(...)`.
+    fn is_unit(&self, expr: Handle<Expression>) -> bool {
+        matches!(
+            self.function.expressions[expr],
+            Expression::Math {
+                fun: MathFunction::Normalize,
+                ..
+            }
+        )
+    }
+
+    /// The number of components of a vector value (1 for a scalar).
+    fn components(&self, expr: Handle<Expression>) -> f64 {
+        match *self.info[expr].ty.inner_with(&self.module.types) {
+            naga::TypeInner::Vector { size, .. } => size as u8 as f64,
+            _ => 1.0,
+        }
+    }
+
+    /// A dot product: of two unit vectors, in [−1, 1]; of a vector with
+    /// itself, non-negative; else a sum of `n` products.
+    fn dot(&mut self, a: Handle<Expression>, b: Handle<Expression>) -> Interval {
+        if self.is_unit(a) && self.is_unit(b) {
+            return Interval::new(-1.0, 1.0);
+        }
+        let (x, y) = (self.of(a), self.of(b));
+        let n = self.components(a);
+        if a == b {
+            let m = x.magnitude();
+            return Interval::new(0.0, if m.is_finite() { n * m * m } else { m });
+        }
+        let product = x.mul(y);
+        Interval::new(n * product.lo, n * product.hi)
     }
 
     /// A call's result: the callee's return values for these arguments.
@@ -496,6 +661,7 @@ impl Ranges<'_> {
             function,
             info: &self.module_info[callee],
             module_info: self.module_info,
+            uniforms: self.uniforms,
             arguments,
             memo: HashMap::new(),
             depth: self.depth + 1,
@@ -606,5 +772,93 @@ fn fs(@location(0) uv: vec2<f32>) -> @location(0) vec4<f32> {
         assert!(turbulence.fits_f16(), "{turbulence:?}");
         // The colour reads the light's colour, a uniform: unbounded.
         assert!(!range_of(&source, "(ambient_light * albedo) + direct").fits_f16());
+    }
+
+    fn range_with(source: &str, node_text: &str, uniforms: &UniformBounds) -> Interval {
+        let shader =
+            crate::front::parse(crate::diagnostic::SourceFile::new("t.wgsl", source)).unwrap();
+        let analysis = crate::analysis::analyze(&shader, &Default::default()).unwrap();
+        let candidate = analysis
+            .candidates
+            .iter()
+            .find(|c| c.node.text == node_text)
+            .expect("the test names a candidate");
+        EntryRanges::with_uniforms(&shader.module, &shader.info, analysis.entry_index, uniforms)
+            .of(candidate.node.expression)
+    }
+
+    #[test]
+    fn known_uniform_values_bound_the_marble_colour() {
+        let source = std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus/noise_marble.wgsl"),
+        )
+        .unwrap();
+        // `Frame.light_color` is member 6 of the uniform at group 0, binding 0.
+        let mut uniforms = UniformBounds::default();
+        uniforms.observe(0, 0, 6, &[1.0, 0.97, 0.92]);
+        let colour = range_with(&source, "(ambient_light * albedo) + direct", &uniforms);
+        // light × (0.08·albedo + attenuation·(albedo·n·l + 0.35·specular)),
+        // with attenuation in [0, 1] (a reciprocal of 1 + 0.05·|d|²), n·l
+        // and the specular power of unit vectors in [0, 1].
+        assert!(colour.is_bounded() && colour.fits_f16(), "{colour:?}");
+        assert!(colour.hi < 2.0, "{colour:?}");
+        // A light bright enough to overflow f16 is flagged.
+        let mut bright = UniformBounds::default();
+        bright.observe(0, 0, 6, &[1.0e5, 0.0, 0.0]);
+        assert!(!range_with(&source, "(ambient_light * albedo) + direct", &bright).fits_f16());
+        // Another member's bound does not bound the light's colour.
+        let mut other = UniformBounds::default();
+        other.observe(0, 0, 5, &[4.0]);
+        assert!(!range_with(&source, "(ambient_light * albedo) + direct", &other).is_bounded());
+    }
+
+    #[test]
+    fn bounds_in_words() {
+        assert_eq!(describe([Some(0.0), Some(1.5)]), "in [0, 1.5]");
+        assert_eq!(
+            describe([Some(-1e6), Some(2e-5)]),
+            "in [-1.000e6, 2.000e-5]"
+        );
+        assert_eq!(describe([None, None]), "unbounded");
+        assert_eq!(describe([Some(0.25), None]), "at least 0.25");
+        assert_eq!(describe([None, Some(3.0)]), "at most 3");
+    }
+
+    #[test]
+    fn products_with_unbounded_ends_keep_their_sign() {
+        let half = Interval::new(0.0, f64::INFINITY);
+        assert_eq!(Interval::new(0.0, 1.0).mul(half), half);
+        assert_eq!(
+            Interval::point(0.0).mul(Interval::ALL),
+            Interval::point(0.0)
+        );
+        assert_eq!(Interval::new(-1.0, 1.0).mul(half), Interval::ALL);
+        // 1 / (1 + [0, ∞)) is in [0, 1].
+        assert_eq!(
+            Interval::point(1.0).div(Interval::point(1.0).add(half)),
+            Interval::new(0.0, 1.0)
+        );
+    }
+
+    #[test]
+    fn dot_products_of_unit_vectors_and_of_a_vector_with_itself() {
+        const DOTS: &str = "
+@fragment
+fn fs(@location(0) a: vec3<f32>, @location(1) b: vec3<f32>) -> @location(0) vec4<f32> {
+    let cosine = dot(normalize(a), normalize(b));
+    let falloff = 1.0 / (1.0 + dot(a, a));
+    let raw = dot(a, b);
+    return vec4<f32>(cosine, falloff, raw, 1.0);
+}
+";
+        assert_eq!(
+            range_of(DOTS, "dot(normalize(a), normalize(b))"),
+            Interval::new(-1.0, 1.0)
+        );
+        assert_eq!(
+            range_of(DOTS, "1.0 / (1.0 + dot(a, a))"),
+            Interval::new(0.0, 1.0)
+        );
+        assert!(!range_of(DOTS, "dot(a, b)").is_bounded());
     }
 }

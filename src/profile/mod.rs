@@ -176,13 +176,22 @@ pub fn profile(
     progress: &mut dyn Progress,
 ) -> Result<(Report, Pictures), Error> {
     let fail = |message: String| Error::plain(Diagnostic::error(message));
-    let analysis = analysis::analyze(shader, &analysis::Options::default())?;
-    let nodes = analysis.select(&shader.file, &options.nodes)?;
     let size = options.size.unwrap_or(scene.size);
     let (frames, warmup) = (
         options.frames.unwrap_or(scene.frames).max(1),
         options.warmup.unwrap_or(scene.warmup),
     );
+    // The scene must provide every uniform the shader reads; the values it
+    // gives bound the candidates' values (whether a payload fits f16 here).
+    let uniforms = scene::uniforms::buffers(&shader.module);
+    scene::uniforms::check(&uniforms, scene).map_err(fail)?;
+    let mut analysis = analysis::analyze(shader, &analysis::Options::default())?;
+    let aspect = size[0] as f32 / size[1] as f32;
+    analysis.bound_uniforms(
+        shader,
+        &scene::uniforms::bounds(&uniforms, scene, aspect, warmup + frames).map_err(fail)?,
+    );
+    let nodes = analysis.select(&shader.file, &options.nodes)?;
     let estimates: Vec<(String, f64)> =
         nodes.iter().map(|c| (c.node.id.clone(), c.ratio)).collect();
     let grid = Grid::new(
@@ -209,9 +218,7 @@ pub fn profile(
         .collect();
     let reference_plan = plan::reference(shader, &analysis, &base).map_err(fail)?;
 
-    // The scene must provide everything the shader binds.
-    let uniforms = scene::uniforms::buffers(&shader.module);
-    scene::uniforms::check(&uniforms, scene).map_err(fail)?;
+    // The scene must provide everything else the shader binds.
     let dir = scene_path.parent().unwrap_or(Path::new("."));
     let mut textures = HashMap::new();
     for resource in &reference_plan.bindings.original {
@@ -263,7 +270,7 @@ pub fn profile(
         .collect::<Result<_, String>>()
         .map_err(fail)?;
     let inputs_of = |scene: &Scene, frame: u32| -> Result<FrameInputs, Error> {
-        let state = scene.frame(frame, size[0] as f32 / size[1] as f32);
+        let state = scene.frame(frame, aspect);
         let mut inputs = FrameInputs::default();
         for (object, mesh) in scene_meshes.iter().enumerate() {
             let mut buffers = HashMap::new();
@@ -815,5 +822,7 @@ fn node_report(
             0.0
         },
         payload_ms,
+        range: candidate.range,
+        fits_f16: candidate.fits_f16,
     }
 }

@@ -154,7 +154,7 @@ pub fn html(report: &Report, dir: &Path) -> String {
     for node in &report.nodes {
         let _ = write!(
             page,
-            "<h3><code>{}</code> — {} at {}:{}</h3><p>P/T estimated {:.3}, measured {:.3} (payload pass {:.3} ms)</p><pre>{}</pre>",
+            "<h3><code>{}</code> — {} at {}:{}</h3><p>P/T estimated {:.3}, measured {:.3} (payload pass {:.3} ms). Value {} in this scene: {}.</p><pre>{}</pre>",
             escape(&node.id),
             escape(&node.ty),
             node.start[0],
@@ -162,6 +162,12 @@ pub fn html(report: &Report, dir: &Path) -> String {
             node.estimated_p_over_t,
             node.p_over_t,
             node.payload_ms,
+            escape(&crate::analysis::range::describe(node.range)),
+            if node.fits_f16 {
+                "fits an rgba16float cache"
+            } else {
+                "may not fit rgba16float, so a three-pass cache of it runs in rgba32float"
+            },
             highlight(&node.source, node.start, node.end)
         );
     }

@@ -121,6 +121,15 @@ pub struct NodeReport {
     pub p_over_t: f64,
     /// Median time of that payload pass, ms.
     pub payload_ms: f64,
+    /// Bounds of the node's value over the scene's frames, by interval
+    /// arithmetic with the uniform values the scene gives; `null` ends are
+    /// unbounded.
+    #[serde(default)]
+    pub range: [Option<f64>; 2],
+    /// Whether those bounds fit an rgba16float cache; when not, a
+    /// three-pass cache runs in rgba32float.
+    #[serde(default)]
+    pub fits_f16: bool,
 }
 
 /// One configuration's measurements.

@@ -306,8 +306,8 @@ pub fn rewrite(
         (
             &widened,
             Some(format!(
-                "rgba32float instead of rgba16float: the node's value may reach 65504 ({}), and three-pass shades from the cached value",
-                describe_range(candidate.range)
+                "rgba32float instead of rgba16float: the node's value may reach 65504 (it is {}), and three-pass shades from the cached value",
+                crate::analysis::range::describe(candidate.range)
             )),
         )
     } else {
@@ -577,15 +577,6 @@ pub fn rewrite(
 }
 
 /// `[lo, hi]` for people, with unbounded ends as infinities.
-fn describe_range(range: [Option<f64>; 2]) -> String {
-    match range {
-        [Some(lo), Some(hi)] => format!("bounded only to [{lo}, {hi}]"),
-        [None, None] => "unbounded".into(),
-        [Some(lo), None] => format!("bounded below by {lo} only"),
-        [None, Some(hi)] => format!("bounded above by {hi} only"),
-    }
-}
-
 fn writes_frag_depth(module: &naga::Module, result: &naga::FunctionResult) -> bool {
     let is_depth = |b: &Option<naga::Binding>| {
         matches!(b, Some(naga::Binding::BuiltIn(naga::BuiltIn::FragDepth)))

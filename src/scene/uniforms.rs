@@ -3,6 +3,7 @@
 use naga::{Module, TypeInner};
 
 use super::{FrameState, Scene};
+use crate::analysis::range::UniformBounds;
 
 /// Members the simulation fills; every other member comes from the
 /// scene's `[uniforms]`.
@@ -183,6 +184,16 @@ fn put(bytes: &mut [u8], offset: usize, word: [u8; 4]) {
     }
 }
 
+/// Bytes between a matrix's columns: WGSL aligns a column of three or four
+/// f32 to 16 bytes, of two to 8.
+fn column_stride(rows: u32) -> usize {
+    if rows == 2 {
+        8
+    } else {
+        16
+    }
+}
+
 /// Writes f32s in the member's layout (matrix columns padded to 16 bytes
 /// when they have three rows, as WGSL lays them out).
 fn write_floats(bytes: &mut [u8], member: &Member, floats: &[f32]) -> Result<(), String> {
@@ -198,7 +209,7 @@ fn write_floats(bytes: &mut [u8], member: &Member, floats: &[f32]) -> Result<(),
             }
         }
         Shape::Matrix(columns, rows) => {
-            let stride = if rows == 2 { 8 } else { 16 };
+            let stride = column_stride(rows);
             // Simulated matrices are 4×4; a smaller member takes its top-left.
             for c in 0..columns as usize {
                 for r in 0..rows as usize {
@@ -275,4 +286,56 @@ fn write_value(bytes: &mut [u8], member: &Member, value: &toml::Value) -> Result
         Shape::Other => return Err("unsupported member type".into()),
     }
     Ok(())
+}
+
+/// Every value the scene writes into `buffers`, for every object, over
+/// frames `0..frames` at `aspect`: the bounds the range analysis needs to
+/// tell whether a payload computed from uniforms fits f16 in this scene.
+pub fn bounds(
+    buffers: &[UniformBuffer],
+    scene: &Scene,
+    aspect: f32,
+    frames: u32,
+) -> Result<UniformBounds, String> {
+    let mut bounds = UniformBounds::default();
+    for n in 0..frames {
+        let state = scene.frame(n, aspect);
+        for object in 0..scene.objects.len() {
+            for buffer in buffers {
+                let bytes = fill(buffer, scene, &state, object)?;
+                for (index, member) in buffer.members.iter().enumerate() {
+                    let values = read_member(&bytes, member);
+                    bounds.observe(buffer.group, buffer.binding, index as u32, &values);
+                }
+            }
+        }
+    }
+    Ok(bounds)
+}
+
+/// The numbers of `member` in `bytes`, as written by [`fill`] (padding
+/// skipped); none for a shape a scene cannot write.
+fn read_member(bytes: &[u8], member: &Member) -> Vec<f64> {
+    let word = |at: usize| -> Option<[u8; 4]> { bytes.get(at..at + 4)?.try_into().ok() };
+    let base = member.offset as usize;
+    let at: Vec<usize> = match member.shape {
+        Shape::F32(n) | Shape::U32(n) | Shape::I32(n) => {
+            (0..n as usize).map(|i| base + i * 4).collect()
+        }
+        Shape::Matrix(columns, rows) => {
+            let stride = column_stride(rows);
+            (0..columns as usize)
+                .flat_map(|c| (0..rows as usize).map(move |r| base + c * stride + r * 4))
+                .collect()
+        }
+        Shape::Other => Vec::new(),
+    };
+    at.into_iter()
+        .filter_map(word)
+        .map(|w| match member.shape {
+            Shape::U32(_) => f64::from(u32::from_le_bytes(w)),
+            Shape::I32(_) => f64::from(i32::from_le_bytes(w)),
+            _ => f64::from(f32::from_le_bytes(w)),
+        })
+        .collect()
 }

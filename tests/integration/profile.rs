@@ -541,6 +541,38 @@ fn f16_overflow_is_recomputed_not_reused() {
     }
 }
 
+/// The marble's colour reads `light_color`, a uniform: the shader alone
+/// cannot bound it, but the scene gives its value, so the profiler knows
+/// the colour stays within [0, 1.5] and its three-pass cache runs in
+/// rgba16float. A light bright enough to overflow f16 widens it again.
+#[test]
+fn scene_uniform_values_bound_the_payload_range() {
+    let colour = "n5c3eb6af"; // (ambient_light * albedo) + direct
+    let three_pass = || Options {
+        nodes: Nodes::Ids(vec![colour.into()]),
+        variants: vec![Variant::ThreePass],
+        frames: Some(2),
+        ..Options::default()
+    };
+    let scene = marble_scene("\"object-motion\"", "");
+    let Some((_, report, _)) = run(&scene, three_pass()) else {
+        return;
+    };
+    let node = &report.nodes[0];
+    assert!(node.fits_f16, "{:?}", node.range);
+    assert!(node.range[1].is_some_and(|hi| hi < 1.5), "{:?}", node.range);
+    assert_eq!(report.results[0].cache_format, CacheFormat::Rgba16float);
+
+    let bright = scene.replace(
+        "light_color = [1.0, 1.0, 1.0]",
+        "light_color = [1.0e5, 1.0, 1.0]",
+    );
+    assert_ne!(bright, scene);
+    let (_, report, _) = run(&bright, three_pass()).unwrap();
+    assert!(!report.nodes[0].fits_f16, "{:?}", report.nodes[0].range);
+    assert_eq!(report.results[0].cache_format, CacheFormat::Rgba32float);
+}
+
 /// `--sweep` measures the pruned grid, says what it pruned, marks the
 /// Pareto front of time against PSNR and SSIM, and `--max-error` writes
 /// the fastest configuration within the budget as a valid rewrite.
