@@ -212,20 +212,24 @@ pub fn hash(v: u32) -> u32 {
 
 /// `cache_refresh`, seed 002's eq. 1: whether the pixel at framebuffer
 /// position `pixel` is recomputed this frame, given the host's refresh
-/// phase (c mod Δn), the period Δn (0: never) and the block size k. The
-/// shader takes the block's offset h mod Δn with an f32 division and a
-/// correction; the exact remainder here is the same number.
+/// phase (c mod Δn, below Δn), the period Δn (0: never, at most 65535) and
+/// the block size k.
 pub fn refresh(pixel: Vec2, phase: u32, period: u32, quad: u32) -> bool {
-    let p = period.max(1);
     let k = quad.max(1) as f32;
     let block = (pixel / k).as_uvec2();
-    let h = hash(block.x ^ hash(block.y)) >> 8;
-    let offset = h % p;
-    let mut b = offset + (phase % p);
-    if b >= p {
-        b -= p;
+    let offset = refresh_offset(block.x, block.y, period);
+    let mut b = offset + phase;
+    if b >= period {
+        b -= period;
     }
     period != 0 && b == 0
+}
+
+/// The offset in [0, Δn) of the block at (`x`, `y`): 16 bits of one hash
+/// of both coordinates, times Δn, over 2^16.
+pub fn refresh_offset(x: u32, y: u32, period: u32) -> u32 {
+    let h = hash(x ^ y.wrapping_mul(0x9e37_79b9)) >> 16;
+    (h * period) >> 16
 }
 
 #[cfg(test)]
@@ -621,5 +625,46 @@ mod tests {
             nearest(clip, Vec2::ZERO, &cache),
             (Status::Hit, IVec2::new(5, 3))
         );
+    }
+
+    /// Block offsets fall in [0, Δn) and spread evenly: over 256×256
+    /// blocks, every offset's count is within 5 standard deviations of
+    /// blocks/Δn, and no two neighbouring blocks agree much more often than
+    /// 1/Δn (a pattern, not noise, would).
+    #[test]
+    fn refresh_offsets_are_uniform_over_the_period() {
+        for period in [1u32, 2, 7, 8, 32, 64, 100, 1000] {
+            let mut counts = vec![0u32; period as usize];
+            let mut same_as_left = 0u32;
+            for y in 0..256 {
+                for x in 0..256 {
+                    let offset = refresh_offset(x, y, period);
+                    assert!(offset < period, "Δn {period}: offset {offset}");
+                    counts[offset as usize] += 1;
+                    if x > 0 && refresh_offset(x - 1, y, period) == offset {
+                        same_as_left += 1;
+                    }
+                }
+            }
+            let blocks = 65536.0;
+            let expected = blocks / f64::from(period);
+            let sigma = (expected * (1.0 - 1.0 / f64::from(period))).sqrt();
+            for (offset, &count) in counts.iter().enumerate() {
+                assert!(
+                    (f64::from(count) - expected).abs() <= 5.0 * sigma + 1e-9,
+                    "Δn {period}: offset {offset} taken {count} times, expected {expected:.0}"
+                );
+            }
+            let pairs = 256.0 * 255.0;
+            let agree = f64::from(same_as_left) / pairs;
+            assert!(
+                agree <= 1.0 / f64::from(period) + 5.0 * (1.0 / f64::from(period) / pairs).sqrt(),
+                "Δn {period}: neighbours agree {agree:.4}"
+            );
+        }
+        // The largest period keeps h·Δn within a u32 and offsets in range.
+        for x in 0..64 {
+            assert!(refresh_offset(x, 3 * x, 65535) < 65535);
+        }
     }
 }

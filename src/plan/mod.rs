@@ -377,7 +377,7 @@ pub fn build(inputs: Inputs) -> Plan {
             period: options.refresh_period,
             quad: options.refresh_quad,
             depth_epsilon: options.depth_epsilon,
-            offsets: "PCG hash of the k×k block coordinates, modulo the period; refresh when (offset + refresh_phase) mod period == 0, with refresh_phase = frame mod period kept by the host".into(),
+            offsets: "16 bits of a PCG hash of the k×k block coordinates, times the period, over 2^16; refresh when (offset + refresh_phase) mod period == 0, with refresh_phase = frame mod period kept by the host".into(),
         },
         clear: Clear {
             color: [0.0, 0.0, 0.0, 1.0],

@@ -165,6 +165,11 @@ impl DepthConvention {
     }
 }
 
+/// The largest refresh period Δn: the refresh indicator maps 16 hash bits
+/// onto [0, Δn) with a product that must fit a u32 (shaders/cache.wgsl,
+/// `cache_refresh`). 65535 frames is 18 minutes at 60 Hz.
+pub const MAX_REFRESH_PERIOD: u32 = 65535;
+
 /// The default ε of the cache's depth test (relative; see
 /// [`Options::depth_epsilon`]).
 pub const DEFAULT_DEPTH_EPSILON: f32 = 0.02;
@@ -172,7 +177,8 @@ pub const DEFAULT_DEPTH_EPSILON: f32 = 0.02;
 /// How to build the variants.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Options {
-    /// Δn: every pixel is recomputed at least once every Δn frames.
+    /// Δn: every pixel is recomputed once every Δn frames; 0 never, at
+    /// most [`MAX_REFRESH_PERIOD`].
     pub refresh_period: u32,
     /// k: refresh decisions are made per k×k block.
     pub refresh_quad: u32,
@@ -288,6 +294,12 @@ pub fn rewrite(
         return Err(Refusal::new(
             "the reference is the original shader; there is nothing to rewrite",
         ));
+    }
+    if options.refresh_period > MAX_REFRESH_PERIOD {
+        return Err(Refusal::new(format!(
+            "a refresh period of {} frames is beyond the largest the refresh indicator takes, {MAX_REFRESH_PERIOD}",
+            options.refresh_period
+        )));
     }
     // Three-pass shades from the cached value itself, so a payload an
     // rgba16float cache cannot hold would be wrong on screen (one- and

@@ -213,3 +213,29 @@ fn deep_expression_does_not_overflow_the_stack() {
     let output = shadecache(["analyze".as_ref(), path.as_os_str()] as [&std::ffi::OsStr; 2]);
     assert!(output.status.success(), "{}", stderr(&output));
 }
+
+/// A refresh period beyond what the refresh indicator can map (65535) is
+/// refused at the command line, before anything is written.
+#[test]
+fn a_refresh_period_beyond_the_largest_is_refused() {
+    let out = tempfile::tempdir().unwrap();
+    for (command, period) in [("rewrite", "65536"), ("profile", "8,70000")] {
+        let mut args = vec![
+            command,
+            "corpus/noise_marble.wgsl",
+            "--refresh-period",
+            period,
+            "--out",
+            out.path().to_str().unwrap(),
+        ];
+        if command == "profile" {
+            args.extend(["--scene", "corpus/scenes/marble_sphere.toml"]);
+        }
+        let output = shadecache(&args);
+        let err = stderr(&output);
+        assert_eq!(output.status.code(), Some(1), "{command}: {err}");
+        assert!(err.contains("--refresh-period"), "{command}: {err}");
+        assert!(err.contains("65535"), "{command}: {err}");
+    }
+    assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0);
+}

@@ -32,8 +32,8 @@ pub struct Args {
     pub variant: VariantArg,
 
     /// Refresh periods Δn to measure, separated by commas (0 turns refresh
-    /// off) [default: 32; with --sweep 4,8,16,32,64].
-    #[arg(long, value_name = "N,...", value_delimiter = ',')]
+    /// off; at most 65535) [default: 32; with --sweep 4,8,16,32,64].
+    #[arg(long, value_name = "N,...", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(0..=shadecache::rewrite::MAX_REFRESH_PERIOD as i64))]
     pub refresh_period: Option<Vec<u32>>,
 
     /// Refresh block sizes k to measure, separated by commas [default: 4;

@@ -31,7 +31,7 @@ pub struct Args {
     pub variant: VariantArg,
 
     /// Δn: every pixel is recomputed at least once every N frames.
-    #[arg(long, value_name = "N", default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_name = "N", default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=shadecache::rewrite::MAX_REFRESH_PERIOD as i64))]
     pub refresh_period: u32,
 
     /// k: refresh decisions are made per K×K block of pixels.
