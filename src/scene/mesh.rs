@@ -1,4 +1,4 @@
-//! Meshes a scene draws: procedural shapes, or an OBJ file.
+//! Meshes a scene draws: procedural shapes, or an OBJ or glTF file.
 
 use std::f32::consts::{PI, TAU};
 use std::path::Path;
@@ -59,6 +59,10 @@ pub enum MeshSource {
     },
     /// A Wavefront OBJ file, relative to the scene file.
     Obj { file: String },
+    /// A glTF 2.0 file (`.gltf` with its buffers, or `.glb`), relative to
+    /// the scene file: every triangle primitive of the default scene (or
+    /// of the first), placed by its nodes' transforms.
+    Gltf { file: String },
 }
 
 fn one() -> f32 {
@@ -134,6 +138,7 @@ impl MeshSource {
             }
             MeshSource::Cube { size } => cube(size),
             MeshSource::Obj { ref file } => obj(&dir.join(file))?,
+            MeshSource::Gltf { ref file } => gltf(&dir.join(file))?,
         })
     }
 }
@@ -235,21 +240,152 @@ fn obj(path: &Path) -> Result<Mesh, String> {
         mesh.indices.extend(m.indices.iter().map(|i| base + i));
     }
     if mesh.normals.iter().all(|n| *n == Vec3::ZERO) {
-        // No normals in the file: area-weighted face normals.
-        for tri in mesh.indices.chunks(3) {
-            let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| i as usize);
-            let face = (mesh.positions[b] - mesh.positions[a])
-                .cross(mesh.positions[c] - mesh.positions[a]);
-            for i in [a, b, c] {
-                mesh.normals[i] += face;
-            }
-        }
-        for n in &mut mesh.normals {
-            *n = n.normalize_or_zero();
-        }
+        // No normals in the file.
+        face_normals(&mut mesh, 0);
     }
     if mesh.indices.is_empty() {
         return Err(format!("`{}` has no triangles", path.display()));
+    }
+    Ok(mesh)
+}
+
+/// Area-weighted face normals for the vertices from `first` on (a part
+/// whose file gives none).
+fn face_normals(mesh: &mut Mesh, first: usize) {
+    for n in &mut mesh.normals[first..] {
+        *n = Vec3::ZERO;
+    }
+    for tri in mesh.indices.chunks(3) {
+        let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| i as usize);
+        if a < first {
+            continue;
+        }
+        let face =
+            (mesh.positions[b] - mesh.positions[a]).cross(mesh.positions[c] - mesh.positions[a]);
+        for i in [a, b, c] {
+            mesh.normals[i] += face;
+        }
+    }
+    for n in &mut mesh.normals[first..] {
+        *n = n.normalize_or_zero();
+    }
+}
+
+/// A glTF 2.0 file: the triangles of every mesh of the default scene (the
+/// first scene when none is marked), each vertex moved by its node's
+/// world transform (normals by the inverse transpose). Buffers may be the
+/// `.glb` blob, `data:` URIs, or files beside it. Textures and materials
+/// are not read: the scene gives the shader's textures.
+fn gltf(path: &Path) -> Result<Mesh, String> {
+    use base64::Engine;
+    let fail = |what: String| format!("cannot load `{}`: {what}", path.display());
+    let bytes = std::fs::read(path).map_err(|err| fail(err.to_string()))?;
+    let document = gltf::Gltf::from_slice(&bytes).map_err(|err| fail(err.to_string()))?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut buffers = Vec::new();
+    for buffer in document.buffers() {
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => document
+                .blob
+                .clone()
+                .ok_or_else(|| fail("a buffer refers to a binary chunk the file lacks".into()))?,
+            gltf::buffer::Source::Uri(uri) => match uri.strip_prefix("data:") {
+                Some(data) => {
+                    let (_, encoded) = data
+                        .split_once(";base64,")
+                        .ok_or_else(|| fail("a data URI that is not base64".into()))?;
+                    base64::engine::general_purpose::STANDARD
+                        .decode(encoded)
+                        .map_err(|err| fail(format!("a data URI: {err}")))?
+                }
+                None => std::fs::read(dir.join(uri))
+                    .map_err(|err| fail(format!("buffer `{uri}`: {err}")))?,
+            },
+        };
+        if data.len() < buffer.length() {
+            return Err(fail(format!(
+                "buffer {} holds {} bytes, fewer than its declared {}",
+                buffer.index(),
+                data.len(),
+                buffer.length()
+            )));
+        }
+        buffers.push(data);
+    }
+    let scene = document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+        .ok_or_else(|| fail("the file has no scene".into()))?;
+
+    let mut mesh = Mesh::default();
+    let mut stack: Vec<(gltf::Node, glam::Mat4)> =
+        scene.nodes().map(|n| (n, glam::Mat4::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let world = parent * glam::Mat4::from_cols_array_2d(&node.transform().matrix());
+        let normal_matrix = glam::Mat3::from_mat4(world).inverse().transpose();
+        stack.extend(node.children().map(|child| (child, world)));
+        let Some(node_mesh) = node.mesh() else {
+            continue;
+        };
+        for primitive in node_mesh.primitives() {
+            if primitive.mode() != gltf::mesh::Mode::Triangles {
+                continue;
+            }
+            let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+            let Some(positions) = reader.read_positions() else {
+                continue;
+            };
+            let first = mesh.positions.len();
+            mesh.positions
+                .extend(positions.map(|p| world.transform_point3(Vec3::from_array(p))));
+            let count = mesh.positions.len() - first;
+            let has_normals = match reader.read_normals() {
+                Some(normals) => {
+                    mesh.normals.extend(
+                        normals.map(|n| (normal_matrix * Vec3::from_array(n)).normalize_or_zero()),
+                    );
+                    true
+                }
+                None => {
+                    mesh.normals.resize(first + count, Vec3::ZERO);
+                    false
+                }
+            };
+            match reader.read_tex_coords(0) {
+                Some(uvs) => mesh.uvs.extend(uvs.into_f32().map(Vec2::from_array)),
+                None => mesh.uvs.resize(first + count, Vec2::ZERO),
+            }
+            if mesh.normals.len() != first + count || mesh.uvs.len() != first + count {
+                return Err(fail(format!(
+                    "a primitive of mesh {} has attributes of different lengths",
+                    node_mesh.index()
+                )));
+            }
+            let indices: Vec<u32> = match reader.read_indices() {
+                Some(indices) => indices.into_u32().collect(),
+                None => (0..count as u32).collect(),
+            };
+            if let Some(bad) = indices.iter().find(|&&i| i as usize >= count) {
+                return Err(fail(format!(
+                    "a primitive of mesh {} indexes vertex {bad} of {count}",
+                    node_mesh.index()
+                )));
+            }
+            // A mirroring transform flips the winding; keep triangles
+            // counter-clockwise from outside, as back-face culling expects.
+            let mirrored = world.determinant() < 0.0;
+            for tri in indices.chunks_exact(3) {
+                let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| i + first as u32);
+                mesh.indices
+                    .extend(if mirrored { [a, c, b] } else { [a, b, c] });
+            }
+            if !has_normals {
+                face_normals(&mut mesh, first);
+            }
+        }
+    }
+    if mesh.indices.is_empty() {
+        return Err(fail("no triangles in its scene".into()));
     }
     Ok(mesh)
 }
@@ -282,5 +418,185 @@ impl Mesh {
 
     pub fn triangles(&self) -> usize {
         self.indices.len() / 3
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use base64::Engine;
+
+    /// `mesh` as a glTF document: one buffer (positions, normals unless
+    /// `normals` is false, uvs, u32 indices) given by `uri`, or inline as a
+    /// data URI; one mesh under a parent node translated by `translation`
+    /// with a child node scaled by `scale`.
+    fn to_gltf(mesh: &Mesh, normals: bool, translation: Vec3, scale: f32) -> (String, Vec<u8>) {
+        let mut data = Vec::new();
+        let mut views = Vec::new();
+        let mut accessors = Vec::new();
+        let mut attributes = Vec::new();
+        let mut push = |floats: Vec<f32>, kind: &str, name: &str, count: usize| {
+            let offset = data.len();
+            for f in &floats {
+                data.extend(f.to_le_bytes());
+            }
+            views.push(format!(
+                r#"{{"buffer":0,"byteOffset":{offset},"byteLength":{}}}"#,
+                floats.len() * 4
+            ));
+            let (min, max) = if name == "POSITION" {
+                let lo = mesh.positions.iter().fold(Vec3::MAX, |a, &b| a.min(b));
+                let hi = mesh.positions.iter().fold(Vec3::MIN, |a, &b| a.max(b));
+                (
+                    format!(r#","min":[{},{},{}]"#, lo.x, lo.y, lo.z),
+                    format!(r#","max":[{},{},{}]"#, hi.x, hi.y, hi.z),
+                )
+            } else {
+                (String::new(), String::new())
+            };
+            accessors.push(format!(
+                r#"{{"bufferView":{},"componentType":5126,"count":{count},"type":"{kind}"{min}{max}}}"#,
+                views.len() - 1
+            ));
+            attributes.push(format!(r#""{name}":{}"#, accessors.len() - 1));
+        };
+        let n = mesh.positions.len();
+        push(
+            mesh.positions.iter().flat_map(|p| p.to_array()).collect(),
+            "VEC3",
+            "POSITION",
+            n,
+        );
+        if normals {
+            push(
+                mesh.normals.iter().flat_map(|p| p.to_array()).collect(),
+                "VEC3",
+                "NORMAL",
+                n,
+            );
+        }
+        push(
+            mesh.uvs.iter().flat_map(|p| p.to_array()).collect(),
+            "VEC2",
+            "TEXCOORD_0",
+            n,
+        );
+        let offset = data.len();
+        for i in &mesh.indices {
+            data.extend(i.to_le_bytes());
+        }
+        views.push(format!(
+            r#"{{"buffer":0,"byteOffset":{offset},"byteLength":{}}}"#,
+            mesh.indices.len() * 4
+        ));
+        accessors.push(format!(
+            r#"{{"bufferView":{},"componentType":5125,"count":{},"type":"SCALAR"}}"#,
+            views.len() - 1,
+            mesh.indices.len()
+        ));
+        let json = format!(
+            r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+"nodes":[{{"translation":[{},{},{}],"children":[1]}},{{"scale":[{scale},{scale},{scale}],"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{{}}},"indices":{}}}]}}],
+"accessors":[{}],"bufferViews":[{}],
+"buffers":[{{"byteLength":{},"uri":"URI"}}]}}"#,
+            translation.x,
+            translation.y,
+            translation.z,
+            attributes.join(","),
+            accessors.len() - 1,
+            accessors.join(","),
+            views.join(","),
+            data.len()
+        );
+        (json, data)
+    }
+
+    fn load(dir: &Path, name: &str) -> Result<Mesh, String> {
+        MeshSource::Gltf { file: name.into() }.build(dir)
+    }
+
+    #[test]
+    fn a_gltf_cube_loads_placed_by_its_nodes() {
+        let cube = cube(1.0);
+        let (json, data) = to_gltf(&cube, true, Vec3::new(0.0, 1.0, 0.0), 2.0);
+        let uri = format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&data)
+        );
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("cube.gltf"), json.replace("URI", &uri)).unwrap();
+        let loaded = load(dir.path(), "cube.gltf").unwrap();
+        assert_eq!(loaded.indices, cube.indices);
+        assert_eq!(loaded.uvs, cube.uvs);
+        for (got, want) in loaded.positions.iter().zip(&cube.positions) {
+            assert!(got.distance(*want * 2.0 + Vec3::Y) < 1e-6, "{got} {want}");
+        }
+        for (got, want) in loaded.normals.iter().zip(&cube.normals) {
+            assert!(got.distance(*want) < 1e-6, "{got} {want}");
+        }
+    }
+
+    /// A mirroring node (scale −1) flips the winding back, so triangles
+    /// stay counter-clockwise seen from outside (back-face culling).
+    #[test]
+    fn a_mirroring_node_keeps_triangles_facing_outwards() {
+        let (json, data) = to_gltf(&cube(1.0), true, Vec3::ZERO, -1.0);
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("cube.bin"), &data).unwrap();
+        std::fs::write(
+            dir.path().join("cube.gltf"),
+            json.replace("URI", "cube.bin"),
+        )
+        .unwrap();
+        let loaded = load(dir.path(), "cube.gltf").unwrap();
+        for tri in loaded.indices.chunks(3) {
+            let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| loaded.positions[i as usize]);
+            let face = (b - a).cross(c - a);
+            let centre = (a + b + c) / 3.0;
+            assert!(face.dot(centre) > 0.0, "a triangle faces inwards");
+            assert!(face.dot(loaded.normals[tri[0] as usize]) > 0.0);
+        }
+    }
+
+    #[test]
+    fn a_gltf_without_normals_gets_face_normals_from_a_side_file() {
+        let cube = cube(1.0);
+        let (json, data) = to_gltf(&cube, false, Vec3::ZERO, 1.0);
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("cube.bin"), &data).unwrap();
+        std::fs::write(
+            dir.path().join("cube.gltf"),
+            json.replace("URI", "cube.bin"),
+        )
+        .unwrap();
+        let loaded = load(dir.path(), "cube.gltf").unwrap();
+        // The cube's faces have their own vertices: the face normals are
+        // the cube's normals.
+        for (got, want) in loaded.normals.iter().zip(&cube.normals) {
+            assert!(got.distance(*want) < 1e-6, "{got} {want}");
+        }
+    }
+
+    #[test]
+    fn bad_gltf_files_are_errors_naming_them() {
+        let dir = tempfile::tempdir().unwrap();
+        let err = load(dir.path(), "missing.gltf").unwrap_err();
+        assert!(err.contains("missing.gltf"), "{err}");
+        std::fs::write(dir.path().join("junk.gltf"), "{ not json").unwrap();
+        let err = load(dir.path(), "junk.gltf").unwrap_err();
+        assert!(err.contains("junk.gltf"), "{err}");
+        // An index past the vertices.
+        let mut cube = cube(1.0);
+        cube.indices[5] = 1000;
+        let (json, data) = to_gltf(&cube, true, Vec3::ZERO, 1.0);
+        std::fs::write(dir.path().join("bad.bin"), &data).unwrap();
+        std::fs::write(dir.path().join("bad.gltf"), json.replace("URI", "bad.bin")).unwrap();
+        let err = load(dir.path(), "bad.gltf").unwrap_err();
+        assert!(err.contains("indexes vertex 1000"), "{err}");
+        // A buffer file shorter than declared.
+        std::fs::write(dir.path().join("bad.bin"), &data[..10]).unwrap();
+        let err = load(dir.path(), "bad.gltf").unwrap_err();
+        assert!(err.contains("bad.gltf"), "{err}");
     }
 }
