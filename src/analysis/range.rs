@@ -703,6 +703,10 @@ mod tests {
     use super::*;
 
     fn range_of(source: &str, node_text: &str) -> Interval {
+        range_with(source, node_text, &UniformBounds::default())
+    }
+
+    fn range_with(source: &str, node_text: &str, uniforms: &UniformBounds) -> Interval {
         let shader =
             crate::front::parse(crate::diagnostic::SourceFile::new("t.wgsl", source)).unwrap();
         let analysis = crate::analysis::analyze(&shader, &Default::default()).unwrap();
@@ -711,7 +715,7 @@ mod tests {
             .iter()
             .find(|c| c.node.text == node_text)
             .expect("the test names a candidate");
-        EntryRanges::new(&shader.module, &shader.info, analysis.entry_index)
+        EntryRanges::with_uniforms(&shader.module, &shader.info, analysis.entry_index, uniforms)
             .of(candidate.node.expression)
     }
 
@@ -772,19 +776,6 @@ fn fs(@location(0) uv: vec2<f32>) -> @location(0) vec4<f32> {
         assert!(turbulence.fits_f16(), "{turbulence:?}");
         // The colour reads the light's colour, a uniform: unbounded.
         assert!(!range_of(&source, "(ambient_light * albedo) + direct").fits_f16());
-    }
-
-    fn range_with(source: &str, node_text: &str, uniforms: &UniformBounds) -> Interval {
-        let shader =
-            crate::front::parse(crate::diagnostic::SourceFile::new("t.wgsl", source)).unwrap();
-        let analysis = crate::analysis::analyze(&shader, &Default::default()).unwrap();
-        let candidate = analysis
-            .candidates
-            .iter()
-            .find(|c| c.node.text == node_text)
-            .expect("the test names a candidate");
-        EntryRanges::with_uniforms(&shader.module, &shader.info, analysis.entry_index, uniforms)
-            .of(candidate.node.expression)
     }
 
     #[test]

@@ -512,6 +512,16 @@ mod tests {
         (json, data)
     }
 
+    /// Writes `name.gltf` with its buffer in `name.bin` beside it.
+    fn write_with_side_buffer(dir: &Path, name: &str, json: &str, data: &[u8]) {
+        std::fs::write(dir.join(format!("{name}.bin")), data).unwrap();
+        std::fs::write(
+            dir.join(format!("{name}.gltf")),
+            json.replace("URI", &format!("{name}.bin")),
+        )
+        .unwrap();
+    }
+
     fn load(dir: &Path, name: &str) -> Result<Mesh, String> {
         MeshSource::Gltf { file: name.into() }.build(dir)
     }
@@ -543,12 +553,7 @@ mod tests {
     fn a_mirroring_node_keeps_triangles_facing_outwards() {
         let (json, data) = to_gltf(&cube(1.0), true, Vec3::ZERO, -1.0);
         let dir = tempfile::tempdir().unwrap();
-        std::fs::write(dir.path().join("cube.bin"), &data).unwrap();
-        std::fs::write(
-            dir.path().join("cube.gltf"),
-            json.replace("URI", "cube.bin"),
-        )
-        .unwrap();
+        write_with_side_buffer(dir.path(), "cube", &json, &data);
         let loaded = load(dir.path(), "cube.gltf").unwrap();
         for tri in loaded.indices.chunks(3) {
             let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| loaded.positions[i as usize]);
@@ -564,12 +569,7 @@ mod tests {
         let cube = cube(1.0);
         let (json, data) = to_gltf(&cube, false, Vec3::ZERO, 1.0);
         let dir = tempfile::tempdir().unwrap();
-        std::fs::write(dir.path().join("cube.bin"), &data).unwrap();
-        std::fs::write(
-            dir.path().join("cube.gltf"),
-            json.replace("URI", "cube.bin"),
-        )
-        .unwrap();
+        write_with_side_buffer(dir.path(), "cube", &json, &data);
         let loaded = load(dir.path(), "cube.gltf").unwrap();
         // The cube's faces have their own vertices: the face normals are
         // the cube's normals.
@@ -590,8 +590,7 @@ mod tests {
         let mut cube = cube(1.0);
         cube.indices[5] = 1000;
         let (json, data) = to_gltf(&cube, true, Vec3::ZERO, 1.0);
-        std::fs::write(dir.path().join("bad.bin"), &data).unwrap();
-        std::fs::write(dir.path().join("bad.gltf"), json.replace("URI", "bad.bin")).unwrap();
+        write_with_side_buffer(dir.path(), "bad", &json, &data);
         let err = load(dir.path(), "bad.gltf").unwrap_err();
         assert!(err.contains("indexes vertex 1000"), "{err}");
         // A buffer file shorter than declared.
