@@ -141,6 +141,28 @@ fn cache_depth_agrees(taps: vec4<f32>, expected: vec4<f32>) -> vec4<bool> {
     return abs(taps - expected) < tolerance;
 }
 
+// Where a fragment was last frame: its depth then, its position in texel
+// units (texel centres at whole numbers), and whether it was on screen.
+struct CachePoint {
+    depth: f32,
+    texel: vec2<f32>,
+    inside: bool,
+}
+
+// Off-screen when the point was behind the previous camera (w ≤ 0, or NaN)
+// or outside the viewport's texel centres by more than a thousandth of a
+// texel (a bilinear footprint there has weight only inside).
+fn cache_point(previous_clip: vec4<f32>) -> CachePoint {
+    let ndc = previous_clip.xyz / previous_clip.w;
+    let texel = (vec2<f32>((ndc.x * 0.5) + 0.5, 0.5 - (ndc.y * 0.5)) * cache_params.viewport) - vec2<f32>(0.5);
+    let slack = vec2<f32>(0.001);
+    // Comparisons with NaN are false, so a NaN position is off-screen too.
+    let inside = (previous_clip.w > 0.0)
+        & all(texel >= -slack)
+        & all(texel <= ((cache_params.viewport - vec2<f32>(1.0)) + slack));
+    return CachePoint(ndc.z, texel, inside);
+}
+
 // Where a fragment was last frame, in the cache.
 struct CacheFootprint {
     // 0 the point was visible, 1 off-screen, 2 disoccluded.
@@ -161,25 +183,20 @@ struct CacheFootprint {
 // because of a neighbour it does not read; with it, a footprint that
 // really straddles a silhouette still misses.
 fn cache_footprint(previous_clip: vec4<f32>) -> CacheFootprint {
-    let ndc = previous_clip.xyz / previous_clip.w;
-    let texel = (vec2<f32>((ndc.x * 0.5) + 0.5, 0.5 - (ndc.y * 0.5)) * cache_params.viewport) - vec2<f32>(0.5);
-    let slack = vec2<f32>(0.001);
-    // Comparisons with NaN are false, so a NaN position is off-screen too.
-    let inside = (previous_clip.w > 0.0)
-        & all(texel >= -slack)
-        & all(texel <= ((cache_params.viewport - vec2<f32>(1.0)) + slack));
+    let point = cache_point(previous_clip);
+    let texel = point.texel;
     let base = floor(texel);
     let f = texel - base;
     // textureGather's order: (0, 1), (1, 1), (1, 0), (0, 0) from `base`.
     let weights = vec4<f32>((1.0 - f.x) * f.y, f.x * f.y, f.x * (1.0 - f.y), (1.0 - f.x) * (1.0 - f.y));
     let depths = textureGather(cache_previous_depth, cache_sampler, (base + vec2<f32>(1.0)) / cache_params.viewport);
     let expected = cache_expected_depth(
-        ndc.z,
+        point.depth,
         vec4<f32>(-f.x, 1.0 - f.x, 1.0 - f.x, -f.x),
         vec4<f32>(1.0 - f.y, 1.0 - f.y, -f.y, -f.y),
     );
     let agree = all(cache_depth_agrees(depths, expected) | (weights < vec4<f32>(0.001)));
-    let status = select(1u, select(2u, 0u, agree), inside);
+    let status = select(1u, select(2u, 0u, agree), point.inside);
     return CacheFootprint(status, base, f);
 }
 
@@ -197,12 +214,17 @@ fn cache_lookup(previous_clip: vec4<f32>) -> CacheLookup {
 // filtered.
 fn cache_lookup_loads(previous_clip: vec4<f32>) -> CacheLookup {
     let footprint = cache_footprint(previous_clip);
-    // Taps just outside the viewport (weight below 0.001) read the edge;
-    // a NaN position is clamped to some texel and is a miss anyway.
+    return cache_checked(cache_bilinear_loads(footprint.base, footprint.weights), footprint.status);
+}
+
+// Bilinear interpolation of last frame's payload between the texel `base`
+// and its right, lower and lower-right neighbours, with weights `f`, by
+// four loads. Taps just outside the viewport (weight below 0.001) read the
+// edge; a NaN position is clamped to some texel and is a miss anyway.
+fn cache_bilinear_loads(base: vec2<f32>, f: vec2<f32>) -> vec4<f32> {
     let last = vec2<i32>(cache_params.viewport) - vec2<i32>(1);
-    let t0 = clamp(vec2<i32>(footprint.base), vec2<i32>(0), last);
-    let t1 = clamp(vec2<i32>(footprint.base) + vec2<i32>(1), vec2<i32>(0), last);
-    let f = footprint.weights;
+    let t0 = clamp(vec2<i32>(base), vec2<i32>(0), last);
+    let t1 = clamp(vec2<i32>(base) + vec2<i32>(1), vec2<i32>(0), last);
     let top = mix(
         textureLoad(cache_previous_payload, t0, 0),
         textureLoad(cache_previous_payload, vec2<i32>(t1.x, t0.y), 0),
@@ -213,13 +235,29 @@ fn cache_lookup_loads(previous_clip: vec4<f32>) -> CacheLookup {
         textureLoad(cache_previous_payload, t1, 0),
         f.x,
     );
-    return cache_checked(mix(top, bottom, f.y), footprint.status);
+    return mix(top, bottom, f.y);
 }
 
 // Nearest reconstruction: the texel the point falls in, tested on its own
 // depth. Two loads instead of a gather and a filtered sample: cheaper,
 // blockier under motion, and it never blends across a silhouette.
 fn cache_lookup_nearest(previous_clip: vec4<f32>) -> CacheLookup {
+    let texel = cache_nearest(previous_clip);
+    let agree = cache_depth_agrees(vec4<f32>(textureLoad(cache_previous_depth, texel.at, 0)), vec4<f32>(texel.expected)).x;
+    let status = select(1u, select(2u, 0u, agree), texel.inside);
+    return cache_checked(textureLoad(cache_previous_payload, texel.at, 0), status);
+}
+
+// The texel a point falls in, whether the point was on screen, and the
+// depth the texel should hold (the point's, carried to the texel's centre
+// along the surface's slope).
+struct CacheNearest {
+    at: vec2<i32>,
+    inside: bool,
+    expected: f32,
+}
+
+fn cache_nearest(previous_clip: vec4<f32>) -> CacheNearest {
     let ndc = previous_clip.xyz / previous_clip.w;
     let position = vec2<f32>((ndc.x * 0.5) + 0.5, 0.5 - (ndc.y * 0.5)) * cache_params.viewport;
     // Comparisons with NaN are false, so a NaN position is off-screen.
@@ -227,9 +265,61 @@ fn cache_lookup_nearest(previous_clip: vec4<f32>) -> CacheLookup {
     let t = clamp(vec2<i32>(floor(position)), vec2<i32>(0), vec2<i32>(cache_params.viewport) - vec2<i32>(1));
     let offset = (vec2<f32>(t) + vec2<f32>(0.5)) - position;
     let expected = cache_expected_depth(ndc.z, vec4<f32>(offset.x), vec4<f32>(offset.y));
-    let agree = cache_depth_agrees(vec4<f32>(textureLoad(cache_previous_depth, t, 0)), expected).x;
+    return CacheNearest(t, inside, expected.x);
+}
+
+// Packed reconstructions (`bilinear-packed`, `nearest-packed`) keep the
+// depth in the payload texture's fourth channel, which a payload of up to
+// three components leaves free, as seed 002 §2.1 describes: "efficient
+// hardware support for bilinear texture filtering to reconstruct the cache
+// payload and depth". One read then gives both: no gather of the depth
+// buffer (on lavapipe at 512², the gather is about 0.5 of the reprojection
+// pass's 4.2 ms). The channel holds the depth measured from the far
+// plane's, d − far_depth, small and signed: f16 keeps 11 bits of it at any
+// distance, ample for the relative test (ε = 0.02 of the same quantity),
+// and a cleared texel (0) reads as the far plane, so it never agrees.
+//
+// The bilinear test differs from the separate one: it compares the
+// filtered depth at the point with the point's depth (a plane's depth
+// interpolates exactly, so no slope correction is needed) rather than
+// every tap with the slope-corrected depth. A footprint straddling a
+// silhouette still misses unless the far side's weight w is below
+// ε·|e − far|/|Δd|: at most that share of the other surface's payload
+// blends in (the conservative behaviour near depth boundaries seed 002
+// attributes to filtered depth).
+fn cache_pack(cache: vec4<f32>, frag_coord: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(cache.xyz, frag_coord.z - cache_params.far_depth);
+}
+
+// The packed payload and depth agree with the point's depth, and are valid.
+fn cache_packed_checked(texel: vec4<f32>, expected: f32, inside: bool) -> CacheLookup {
+    let agree = cache_depth_agrees(vec4<f32>(texel.w + cache_params.far_depth), vec4<f32>(expected)).x;
     let status = select(1u, select(2u, 0u, agree), inside);
-    return cache_checked(textureLoad(cache_previous_payload, t, 0), status);
+    return cache_checked(vec4<f32>(texel.xyz, 0.0), status);
+}
+
+// `bilinear-packed` with an rgba16float cache: one filtered sample.
+fn cache_lookup_packed(previous_clip: vec4<f32>) -> CacheLookup {
+    let point = cache_point(previous_clip);
+    let at = (point.texel + vec2<f32>(0.5)) / cache_params.viewport;
+    let texel = textureSampleLevel(cache_previous_payload, cache_sampler, at, 0.0);
+    return cache_packed_checked(texel, point.depth, point.inside);
+}
+
+// `bilinear-packed` with an rgba32float cache, which cannot be filtered:
+// four loads.
+fn cache_lookup_loads_packed(previous_clip: vec4<f32>) -> CacheLookup {
+    let point = cache_point(previous_clip);
+    let base = floor(point.texel);
+    let texel = cache_bilinear_loads(base, point.texel - base);
+    return cache_packed_checked(texel, point.depth, point.inside);
+}
+
+// `nearest-packed`: one load.
+fn cache_lookup_nearest_packed(previous_clip: vec4<f32>) -> CacheLookup {
+    let nearest = cache_nearest(previous_clip);
+    let texel = textureLoad(cache_previous_payload, nearest.at, 0);
+    return cache_packed_checked(texel, nearest.expected, nearest.inside);
 }
 
 // A payload on its way into the cache. Finite components at or beyond the

@@ -10,7 +10,10 @@
 //! reprojection under arbitrary camera and object motion, and reason about
 //! hard cases without a GPU. The hard-case tests run the same cases through
 //! both and require the same decisions, so **a change to the shader's
-//! helpers must be made here too**, in step.
+//! helpers must be made here too**, in step. The packed lookups
+//! (`cache_lookup_packed`...) share `cache_point` and `cache_nearest` with
+//! these, and are tested on the GPU against the separate ones rather than
+//! mirrored here.
 //!
 //! Conventions (wgpu's): NDC x and y in [-1, 1] with y up, depth in [0, 1];
 //! framebuffer positions in pixels from the top-left corner with pixel

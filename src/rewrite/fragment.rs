@@ -43,6 +43,9 @@ pub struct Pieces {
     pub classify: Handle<Function>,
     /// Applied to every payload written to the cache (`cache_encode`).
     pub encode: Handle<Function>,
+    /// With a packed reconstruction, puts the fragment's depth into the
+    /// cache's fourth channel (`cache_pack`), before `encode`.
+    pub pack: Option<Handle<Function>>,
     pub vec4: Handle<naga::Type>,
 }
 
@@ -255,7 +258,7 @@ pub fn entry_point(
 
     let value = match stage.writes() {
         Writes::Cache | Writes::Classes => {
-            let cache = to_vec4(&mut b, payload, pieces.components, pieces.vec4);
+            let cache = cache_texel(&mut b, pieces, payload, frag_coord);
             b.call(pieces.encode, vec![cache])
         }
         Writes::Color => {
@@ -268,7 +271,7 @@ pub fn entry_point(
             arguments.push(payload);
             let color = b.call(pieces.shade, arguments);
             b.name(color, "color");
-            let cache = to_vec4(&mut b, payload, pieces.components, pieces.vec4);
+            let cache = cache_texel(&mut b, pieces, payload, frag_coord);
             let cache = b.call(pieces.encode, vec![cache]);
             let mut components: Vec<_> = match cache_member {
                 Some(count) if count > 0 && is_struct(module, pieces.result.ty) => {
@@ -391,6 +394,21 @@ fn from_vec4(b: &mut Builder, value: Handle<Expression>, components: u32) -> Han
             pattern,
         }),
         _ => value,
+    }
+}
+
+/// What the cache keeps of `payload`: padded to a `vec4<f32>`, with the
+/// fragment's depth in the fourth channel when the reconstruction packs it.
+fn cache_texel(
+    b: &mut Builder,
+    pieces: &Pieces,
+    payload: Handle<Expression>,
+    frag_coord: Handle<Expression>,
+) -> Handle<Expression> {
+    let cache = to_vec4(b, payload, pieces.components, pieces.vec4);
+    match pieces.pack {
+        Some(pack) => b.call(pack, vec![cache, frag_coord]),
+        None => cache,
     }
 }
 

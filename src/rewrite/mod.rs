@@ -103,23 +103,48 @@ impl CacheFormat {
     }
 }
 
-/// How the payload is read back where a point was last frame.
+/// How the payload and depth are read back where a point was last frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
+#[serde(rename_all = "kebab-case")]
 pub enum Reconstruction {
     /// Bilinear over the 2×2 texels around the point; all four (those with
-    /// weight) must pass the depth test.
+    /// weight) must pass the depth test against last frame's depth buffer.
     Bilinear,
     /// The texel the point falls in, tested on its own depth.
     Nearest,
+    /// Payload and depth filtered together from one texture, the depth in
+    /// its fourth channel (seed 002 §2.1): one read instead of a sample and
+    /// a gather. For payloads of up to three components.
+    BilinearPacked,
+    /// The texel the point falls in, its depth in its fourth channel: one
+    /// load instead of two. For payloads of up to three components.
+    NearestPacked,
 }
 
 impl Reconstruction {
+    pub const ALL: [Reconstruction; 4] = [
+        Reconstruction::Bilinear,
+        Reconstruction::Nearest,
+        Reconstruction::BilinearPacked,
+        Reconstruction::NearestPacked,
+    ];
+
     pub fn as_str(self) -> &'static str {
         match self {
             Reconstruction::Bilinear => "bilinear",
             Reconstruction::Nearest => "nearest",
+            Reconstruction::BilinearPacked => "bilinear-packed",
+            Reconstruction::NearestPacked => "nearest-packed",
         }
+    }
+
+    /// Whether the cache keeps the depth in the payload texture's fourth
+    /// channel rather than reading last frame's depth buffer.
+    pub fn packs_depth(self) -> bool {
+        matches!(
+            self,
+            Reconstruction::BilinearPacked | Reconstruction::NearestPacked
+        )
     }
 }
 
@@ -388,11 +413,28 @@ pub fn rewrite(
         })
     };
     // rgba16float is filterable: one bilinear sample; rgba32float is not:
-    // four loads. Nearest reads one texel of each.
+    // four loads. Nearest reads one texel of each. Packed reconstructions
+    // read the depth from the payload texture instead.
     let lookup_name = match (options.reconstruction, options.cache_format) {
         (Reconstruction::Nearest, _) => "cache_lookup_nearest",
         (Reconstruction::Bilinear, CacheFormat::Rgba16float) => "cache_lookup",
         (Reconstruction::Bilinear, CacheFormat::Rgba32float) => "cache_lookup_loads",
+        (Reconstruction::NearestPacked, _) => "cache_lookup_nearest_packed",
+        (Reconstruction::BilinearPacked, CacheFormat::Rgba16float) => "cache_lookup_packed",
+        (Reconstruction::BilinearPacked, CacheFormat::Rgba32float) => "cache_lookup_loads_packed",
+    };
+    let pack = if options.reconstruction.packs_depth() {
+        if candidate.components > 3 {
+            return Err(Refusal::new(format!(
+                "{} keeps the depth in the cache's fourth channel, and this payload has four components; use {} or {}",
+                options.reconstruction.as_str(),
+                Reconstruction::Bilinear.as_str(),
+                Reconstruction::Nearest.as_str()
+            )));
+        }
+        Some(helper("cache_pack")?)
+    } else {
+        None
     };
     let (lookup, refresh, current, classify) = (
         helper(lookup_name)?,
@@ -528,6 +570,7 @@ pub fn rewrite(
         current,
         classify,
         encode: helper("cache_encode")?,
+        pack,
         vec4,
     };
 

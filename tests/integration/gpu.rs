@@ -26,7 +26,7 @@ pub fn gpu() -> Option<Gpu> {
 }
 
 /// Each pass's WGSL by file name, as the plan names it.
-fn wgsl_sources(rewritten: &rewrite::Rewritten) -> HashMap<String, String> {
+pub(crate) fn wgsl_sources(rewritten: &rewrite::Rewritten) -> HashMap<String, String> {
     back::render_variant(rewritten, Language::Wgsl)
         .unwrap()
         .into_iter()

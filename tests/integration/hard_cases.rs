@@ -196,6 +196,18 @@ fn status_of(code: f32) -> u32 {
 
 /// Runs `cases` through the cache helpers on the GPU against `cache`.
 fn lookups(gpu: &Gpu, cache: &Cache, cases: &[Case]) -> Vec<Outcome> {
+    run_harness(gpu, cache, cases, false)
+}
+
+/// The same through the packed lookups (`cache_lookup_packed`,
+/// `cache_lookup_loads_packed`, `cache_lookup_nearest_packed` in the
+/// outcome's bilinear, loads and nearest), the payload texture holding
+/// each texel's depth, from the far plane, in its fourth channel.
+fn packed_lookups(gpu: &Gpu, cache: &Cache, cases: &[Case]) -> Vec<Outcome> {
+    run_harness(gpu, cache, cases, true)
+}
+
+fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Outcome> {
     let device = &gpu.device;
     let size = wgpu::Extent3d {
         width: cache.size.x,
@@ -294,6 +306,15 @@ fn lookups(gpu: &Gpu, cache: &Cache, cases: &[Case]) -> Vec<Outcome> {
     let texels: Vec<u8> = cache
         .payload
         .iter()
+        .zip(&cache.depth)
+        // Standard Z: the far plane at depth 1 (`CacheParams.far_depth`).
+        .map(|(p, d)| {
+            if packed {
+                p.truncate().extend(d - 1.0)
+            } else {
+                *p
+            }
+        })
         .flat_map(|p| p.to_array())
         .flat_map(|v| half::f16::from_f32(v).to_le_bytes())
         .collect();
@@ -310,7 +331,21 @@ fn lookups(gpu: &Gpu, cache: &Cache, cases: &[Case]) -> Vec<Outcome> {
 
     // The lookups. CacheParams as the runner fills it.
     let helpers = std::fs::read_to_string(crate::util::root().join("shaders/cache.wgsl")).unwrap();
-    let lookup_module = module("harness", &format!("{helpers}\n{HARNESS}"));
+    let harness = if packed {
+        HARNESS
+            .replace("cache_lookup(clip)", "cache_lookup_packed(clip)")
+            .replace(
+                "cache_lookup_loads(clip)",
+                "cache_lookup_loads_packed(clip)",
+            )
+            .replace(
+                "cache_lookup_nearest(clip)",
+                "cache_lookup_nearest_packed(clip)",
+            )
+    } else {
+        HARNESS.to_string()
+    };
+    let lookup_module = module("harness", &format!("{helpers}\n{harness}"));
     let columns = 32u32.min(cases.len() as u32).max(1);
     let rows = (cases.len() as u32).div_ceil(columns).max(1);
     let target = device.create_texture(&wgpu::TextureDescriptor {
@@ -887,6 +922,153 @@ fn depth_discontinuity() {
         }
     }
     assert_cpu_agrees(&cache, &cases, &outcomes);
+}
+
+/// The packed lookups keep the depth in the payload's fourth channel.
+/// They share the off-screen test with the separate ones (behind the
+/// previous camera, outside the viewport), nearest-packed decides exactly
+/// as nearest, and bilinear-packed tests the depth filtered at the point:
+/// a footprint straddling a silhouette misses unless the far side weighs
+/// under ε·|e − far|/|Δd| — which, unlike the separate test's fixed 0.001
+/// weight, is tighter next to a surface near the far plane.
+#[test]
+fn packed_lookups_behind_offscreen_and_at_silhouettes() {
+    let Some(gpu) = crate::gpu::gpu() else { return };
+    let statuses = |o: &Outcome| [o.bilinear.status, o.loads.status, o.nearest.status];
+
+    // Behind the previous camera or NaN: off-screen; the mirrored points
+    // in front hit and read the payload.
+    let flat = flat_cache();
+    let mut cases = Vec::new();
+    for (x, y, w) in [(5.0, 7.0, -1.0), (8.3, 2.9, -2.5), (3.0, 3.0, -1e-3)] {
+        cases.push(Case {
+            clip: flat.clip_at(Vec2::new(x, y), 0.5, w),
+            slope: Vec2::ZERO,
+        });
+    }
+    for clip in [
+        Vec4::new(0.0, 0.0, 0.5, 0.0),
+        Vec4::new(0.0, 0.0, 0.5, -0.0),
+        Vec4::new(0.1, 0.1, 0.5, f32::NAN),
+        Vec4::new(f32::NAN, 0.1, 0.5, 1.0),
+    ] {
+        cases.push(Case {
+            clip,
+            slope: Vec2::ZERO,
+        });
+    }
+    for outcome in packed_lookups(&gpu, &flat, &cases) {
+        assert_eq!(statuses(&outcome), [1, 1, 1], "{outcome:?}");
+    }
+    let mirrored: Vec<Case> = cases[..3]
+        .iter()
+        .map(|c| Case {
+            clip: -c.clip,
+            ..*c
+        })
+        .collect();
+    for outcome in packed_lookups(&gpu, &flat, &mirrored) {
+        assert_eq!(statuses(&outcome), [0, 0, 0], "{outcome:?}");
+        for lookup in [outcome.bilinear, outcome.loads, outcome.nearest] {
+            let read = lookup.payload.truncate();
+            assert!((read - flat.payload[0].truncate()).abs().max_element() < 1e-3);
+        }
+    }
+
+    // Leaving the viewport, on the sloped cache: bilinear-packed is
+    // off-screen exactly where the separate footprint is, and hits on the
+    // edge texel centres; nearest-packed decides as nearest.
+    let sloped = sloped_cache();
+    let cases: Vec<Case> = [
+        (-0.6, 8.0),
+        (15.6, 8.0),
+        (8.0, -0.3),
+        (8.0, 15.3),
+        (-0.002, 8.0),
+        (-0.0005, 8.0),
+        (0.0, 8.0),
+        (15.0, 15.0),
+        (8.0, 0.0),
+        (8.4, 7.7),
+    ]
+    .iter()
+    .map(|&(x, y)| {
+        let texel = Vec2::new(x, y);
+        Case {
+            clip: sloped.clip_at(texel, sloped_depth(texel), 1.0),
+            slope: Vec2::new(0.01, 0.005),
+        }
+    })
+    .collect();
+    let separate = lookups(&gpu, &sloped, &cases);
+    let packed = packed_lookups(&gpu, &sloped, &cases);
+    for ((case, separate), packed) in cases.iter().zip(&separate).zip(&packed) {
+        let what = format!("{case:?}: separate {separate:?}, packed {packed:?}");
+        let offscreen = u32::from(separate.footprint_status == 1);
+        assert_eq!(packed.bilinear.status, offscreen, "{what}");
+        assert_eq!(packed.loads.status, offscreen, "{what}");
+        assert_eq!(packed.nearest.status, separate.nearest.status, "{what}");
+    }
+
+    // At the silhouette (foreground 0.3 + 0.004 x left of x = 8, background
+    // 0.9 right of it): (texel, material, bilinear-packed status).
+    let cache = silhouette_cache();
+    let expected = [
+        (Vec2::new(3.5, 4.5), 0.0, 0),
+        (Vec2::new(12.2, 9.9), 1.0, 0),
+        // The background weighs 0.3, 0.3, 0.002: the filtered depth is off
+        // by 0.17, 0.17, 0.0011 against a tolerance of 0.00067.
+        (Vec2::new(7.3, 4.0), 0.0, 2),
+        (Vec2::new(7.3, 4.6), 0.0, 2),
+        (Vec2::new(7.002, 4.0), 0.0, 2),
+        // 0.0005: off by 0.0003, a hit reading 0.0005 of the background.
+        (Vec2::new(7.0005, 4.0), 0.0, 0),
+        (Vec2::new(7.6, 4.0), 0.0, 2),
+        (Vec2::new(7.7, 4.0), 1.0, 2),
+        (Vec2::new(7.5, 11.25), 1.0, 2),
+        (Vec2::new(7.998, 4.0), 1.0, 2),
+        // The foreground weighs 0.0005: off by 0.0003, but the background
+        // is 0.1 from the far plane, so the tolerance is 0.0001: a miss
+        // (the separate test ignores the tap and hits).
+        (Vec2::new(7.9995, 4.0), 1.0, 2),
+        (Vec2::new(7.3, 4.0), 1.0, 2),
+        (Vec2::new(3.5, 4.5), 0.5, 2),
+    ];
+    let surface = |texel: Vec2, material: f32| -> (f32, f32) {
+        match material {
+            0.0 => (0.3 + 0.004 * texel.x, 0.004),
+            1.0 => (0.9, 0.0),
+            _ => (0.6, 0.0),
+        }
+    };
+    let cases: Vec<Case> = expected
+        .iter()
+        .map(|&(texel, material, _)| {
+            let (depth, slope) = surface(texel, material);
+            Case {
+                clip: cache.clip_at(texel, depth, 1.0),
+                slope: Vec2::new(slope, 0.0),
+            }
+        })
+        .collect();
+    let separate = lookups(&gpu, &cache, &cases);
+    let packed = packed_lookups(&gpu, &cache, &cases);
+    for (((&(texel, material, status), case), separate), packed) in
+        expected.iter().zip(&cases).zip(&separate).zip(&packed)
+    {
+        let what = format!("texel {texel}, material {material}: {case:?} {packed:?}");
+        assert_eq!(packed.bilinear.status, status, "bilinear-packed, {what}");
+        assert_eq!(packed.loads.status, status, "loads-packed, {what}");
+        assert_eq!(
+            packed.nearest.status, separate.nearest.status,
+            "nearest-packed, {what}"
+        );
+        for lookup in [packed.bilinear, packed.loads, packed.nearest] {
+            if lookup.status == 0 {
+                assert!((lookup.payload.x - material).abs() < 0.002, "{what}");
+            }
+        }
+    }
 }
 
 /// A floor (y = 0) and a unit box resting on it, ray cast at pixel

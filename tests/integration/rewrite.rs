@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use shadecache::analysis::{self, Analysis};
 use shadecache::back::{self, Language};
 use shadecache::front::{self, Shader};
-use shadecache::rewrite::{self, Options, Rewritten, Variant};
+use shadecache::rewrite::{self, CacheFormat, Options, Rewritten, Variant};
 
 use crate::util::{corpus, root, shadecache, stderr, stdout, tint_validate};
 
@@ -459,36 +459,104 @@ fn previous_position_follows_helpers_and_storage_buffers() {
     assert!(text.contains("var<storage> previous_instances"), "{text}");
 }
 
-/// Nearest reconstruction reads one texel of depth and payload: every
-/// variant of the noise shader's nodes is written with it and passes
-/// naga and Tint.
+/// Every reconstruction, with both cache formats, is written for the
+/// noise shader's nodes and passes naga, Tint and (on a GPU) wgpu's
+/// pipeline creation. Nearest reads one texel of depth and payload; the
+/// packed reconstructions never read last frame's depth buffer (the depth
+/// is in the payload's fourth channel), and refuse a four-component
+/// payload, which leaves no channel for it.
 #[test]
-fn nearest_reconstruction_reads_one_texel() {
+fn every_reconstruction_validates_and_builds() {
     let (shader, analysis) = load(Path::new("corpus/noise_marble.wgsl"));
-    let options = Options {
-        reconstruction: rewrite::Reconstruction::Nearest,
-        ..Options::default()
-    };
+    let gpu = crate::gpu::gpu();
     let dir = tempfile::tempdir().unwrap();
     let mut files = Vec::new();
-    for candidate in analysis.candidates.iter().take(5) {
-        for variant in Variant::ALL {
-            let rewritten =
-                rewrite::rewrite(&shader, &analysis, candidate, variant, &options).unwrap();
-            assert_eq!(rewritten.plan.cache.reconstruction, "nearest");
-            // Pass 1 of every variant reprojects.
-            let (_, text) = &wgsl(&rewritten)[0];
-            assert!(text.contains("fn cache_lookup_nearest("), "{text}");
-            assert!(!text.contains("textureGather"), "{text}");
-            let out = dir.path().join(&candidate.node.id).join(variant.as_str());
-            files.extend(
-                back::write_variant(&out, &rewritten, Language::Wgsl)
-                    .unwrap()
-                    .into_iter()
-                    .filter(|f| f.extension().is_some_and(|e| e == "wgsl")),
-            );
+    let mut refused = 0;
+    for reconstruction in rewrite::Reconstruction::ALL {
+        for cache_format in [CacheFormat::Rgba16float, CacheFormat::Rgba32float] {
+            let options = Options {
+                reconstruction,
+                cache_format,
+                ..Options::default()
+            };
+            for candidate in analysis.candidates.iter().take(5) {
+                for variant in Variant::ALL {
+                    let rewritten =
+                        match rewrite::rewrite(&shader, &analysis, candidate, variant, &options) {
+                            Ok(rewritten) => rewritten,
+                            Err(refusal) => {
+                                assert!(
+                                    reconstruction.packs_depth() && candidate.components == 4,
+                                    "{} {variant} {}: {}",
+                                    candidate.node.id,
+                                    reconstruction.as_str(),
+                                    refusal.reason
+                                );
+                                assert!(refusal.reason.contains("fourth channel"));
+                                refused += 1;
+                                continue;
+                            }
+                        };
+                    assert_eq!(rewritten.plan.cache.reconstruction, reconstruction.as_str());
+                    // A three-pass cache may be widened to rgba32float.
+                    let filterable = rewritten.plan.cache.format == "rgba16float";
+                    let lookup = match (reconstruction, filterable) {
+                        (rewrite::Reconstruction::Bilinear, true) => "cache_lookup",
+                        (rewrite::Reconstruction::Bilinear, false) => "cache_lookup_loads",
+                        (rewrite::Reconstruction::Nearest, _) => "cache_lookup_nearest",
+                        (rewrite::Reconstruction::BilinearPacked, true) => "cache_lookup_packed",
+                        (rewrite::Reconstruction::BilinearPacked, false) => {
+                            "cache_lookup_loads_packed"
+                        }
+                        (rewrite::Reconstruction::NearestPacked, _) => {
+                            "cache_lookup_nearest_packed"
+                        }
+                    };
+                    // Pass 1 of every variant reprojects.
+                    let (_, text) = &wgsl(&rewritten)[0];
+                    assert!(text.contains(&format!("fn {lookup}(")), "{text}");
+                    if reconstruction != rewrite::Reconstruction::Bilinear {
+                        assert!(!text.contains("textureGather"), "{text}");
+                    }
+                    if reconstruction.packs_depth() {
+                        assert!(!text.contains("cache_previous_depth"), "{text}");
+                        assert!(text.contains("fn cache_pack("), "{text}");
+                    }
+                    let out = dir
+                        .path()
+                        .join(reconstruction.as_str())
+                        .join(cache_format.as_str())
+                        .join(&candidate.node.id)
+                        .join(variant.as_str());
+                    files.extend(
+                        back::write_variant(&out, &rewritten, Language::Wgsl)
+                            .unwrap()
+                            .into_iter()
+                            .filter(|f| f.extension().is_some_and(|e| e == "wgsl")),
+                    );
+                    if let Some(gpu) = &gpu {
+                        let sources = crate::gpu::wgsl_sources(&rewritten);
+                        shadecache::runtime::pipelines(
+                            gpu,
+                            &rewritten.plan,
+                            |name| sources.get(name).cloned(),
+                            shadecache::runtime::PipelineOptions::default(),
+                        )
+                        .unwrap_or_else(|err| {
+                            panic!(
+                                "{} {variant} {}: {err}",
+                                candidate.node.id,
+                                reconstruction.as_str()
+                            )
+                        });
+                    }
+                }
+            }
         }
     }
+    // `vec4<f32>(color, 1.0)` is among the first five, for both packed
+    // reconstructions, both formats and three variants.
+    assert_eq!(refused, 2 * 2 * 3);
     for result in tint_validate(&files) {
         assert!(
             result.ok,

@@ -52,14 +52,11 @@ pub struct Args {
     #[arg(long, value_name = "E,...", value_delimiter = ',', value_parser = super::rewrite::epsilon)]
     pub depth_epsilon: Option<Vec<f32>>,
 
-    /// Reconstructions to measure, separated by commas [default: bilinear;
-    /// with --sweep both].
-    #[arg(
-        long,
-        value_name = "bilinear,nearest",
-        value_enum,
-        value_delimiter = ','
-    )]
+    /// Reconstructions to measure, separated by commas: bilinear, nearest,
+    /// bilinear-packed, nearest-packed (the packed ones keep the depth in
+    /// the payload's fourth channel) [default: bilinear; with --sweep
+    /// bilinear,nearest].
+    #[arg(long, value_name = "R,...", value_enum, value_delimiter = ',')]
     pub reconstruction: Option<Vec<ReconstructionArg>>,
 
     /// Sweep accuracy against time: every knob over its sweep values (lists

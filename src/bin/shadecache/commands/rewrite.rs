@@ -52,7 +52,10 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = DepthArg::Standard)]
     pub depth: DepthArg,
 
-    /// How the payload is read back where a point was last frame.
+    /// How payload and depth are read back where a point was last frame:
+    /// bilinear or nearest from the payload and last frame's depth buffer,
+    /// or their packed forms, which keep the depth in the payload's fourth
+    /// channel (payloads of up to three components).
     #[arg(long, value_enum, default_value_t = ReconstructionArg::Bilinear)]
     pub reconstruction: ReconstructionArg,
 
@@ -104,6 +107,8 @@ pub fn epsilon(text: &str) -> Result<f32, String> {
 pub enum ReconstructionArg {
     Bilinear,
     Nearest,
+    BilinearPacked,
+    NearestPacked,
 }
 
 impl From<ReconstructionArg> for Reconstruction {
@@ -111,6 +116,8 @@ impl From<ReconstructionArg> for Reconstruction {
         match arg {
             ReconstructionArg::Bilinear => Reconstruction::Bilinear,
             ReconstructionArg::Nearest => Reconstruction::Nearest,
+            ReconstructionArg::BilinearPacked => Reconstruction::BilinearPacked,
+            ReconstructionArg::NearestPacked => Reconstruction::NearestPacked,
         }
     }
 }
