@@ -16,6 +16,7 @@
 //! from the scene's `[uniforms]`. A member the scene does not provide is an
 //! error naming it: nothing is silently zero.
 
+pub mod layout;
 pub mod mesh;
 pub mod textures;
 pub mod uniforms;
