@@ -280,6 +280,7 @@ pub fn profile(
                 mesh: object,
                 buffers,
                 vertices,
+                instances: 1,
             });
         }
         Ok(inputs)
