@@ -92,7 +92,8 @@ pub struct Scene {
     #[serde(default)]
     pub textures: BTreeMap<String, textures::TextureSource>,
     /// Read-only storage buffers by binding name: values of their
-    /// elements' members.
+    /// elements' members, for every object (an object's own `storage`
+    /// table sets members for it alone).
     #[serde(default)]
     pub storage: BTreeMap<String, toml::Spanned<StorageTable>>,
     /// Seconds per frame for the `time` uniform.
@@ -287,6 +288,10 @@ pub struct Object {
     /// and moved per instance.
     #[serde(default)]
     pub instances: Option<Instances>,
+    /// This object's values of storage members by binding name, over the
+    /// scene's `[storage]`.
+    #[serde(default)]
+    pub storage: BTreeMap<String, toml::Spanned<StorageTable>>,
 }
 
 impl Object {

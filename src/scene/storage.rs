@@ -6,9 +6,10 @@
 //! simulation: each element's is its instance's transform — in the
 //! object's space when a uniform buffer carries the object's own
 //! `world_from_local` (the shader multiplies the two), in the world
-//! otherwise. Every other member comes from the scene's
-//! `[storage.<binding>]` table, as one value for every instance, a list of
-//! one per instance, a cycled list or a palette
+//! otherwise. Every other member comes from the object's own
+//! `[objects.storage.<binding>]` table or, failing that, the scene's
+//! `[storage.<binding>]` (shared by every object), as one value for every
+//! instance, a list of one per instance, a cycled list or a palette
 //! ([`super::instances::per_instance`]). A member the scene does not set, a
 //! value of the wrong shape, or an instance count a fixed-size array
 //! cannot hold is an error naming it.
@@ -113,86 +114,97 @@ pub fn buffers(module: &Module) -> Vec<StorageBuffer> {
     out
 }
 
+/// Where a member's value comes from: the object's own
+/// `[objects.storage.<binding>]`, else the scene's `[storage.<binding>]`.
+/// The flag says whether it is the scene's, shared by every object.
+fn lookup<'a>(
+    scene: &'a Scene,
+    object: usize,
+    binding: &str,
+    member: &str,
+) -> Option<(&'a toml::Spanned<toml::Value>, bool)> {
+    let own = scene
+        .objects
+        .get(object)
+        .and_then(|o| o.storage.get(binding))
+        .and_then(|t| t.get_ref().get(member));
+    let shared = scene
+        .storage
+        .get(binding)
+        .and_then(|t| t.get_ref().get(member));
+    own.map(|v| (v, false)).or(shared.map(|v| (v, true)))
+}
+
 /// Checks that the scene provides every member of every storage buffer,
 /// in values of the members' shapes, for every object's instance count.
 /// Errors point into the scene file where they can.
 pub fn check(buffers: &[StorageBuffer], scene: &Scene) -> Result<(), Error> {
-    // Per buffer: the members missing, and where to add them.
-    let mut missing: Vec<(Vec<String>, &str)> = Vec::new();
+    // Members missing: the element, its binding, the objects lacking it.
+    let mut missing: Vec<(String, &str, Vec<usize>)> = Vec::new();
     let mut missing_span = None;
     for buffer in buffers {
-        let table = scene.storage.get(&buffer.name);
+        let name = &buffer.name;
         let at = |span: Range<usize>, message: String| Err(scene.error(message, Some(span)));
         if buffer.elements == Elements::Override {
             return Err(scene.error(
                 format!(
-                    "storage `{}` is an array sized by a pipeline override, which a scene cannot size",
-                    buffer.name
+                    "storage `{name}` is an array sized by a pipeline override, which a scene cannot size"
                 ),
                 None,
             ));
         }
-        let mut absent = Vec::new();
-        for member in &buffer.members {
-            if is_padding(&member.name) {
-                continue;
-            }
-            if member.shape == Shape::Other {
-                return Err(scene.error(
-                    format!(
-                        "storage member {} has a type a scene cannot write (f32, u32, i32, their vectors and f32 matrices are supported)",
-                        buffer.element(&member.name)
-                    ),
-                    None,
-                ));
-            }
-            let simulated = SIMULATED.contains(&member.name.as_str());
-            let given = table.and_then(|t| t.get_ref().get(&member.name));
-            match (simulated, given) {
-                (false, None) => absent.push(buffer.element(&member.name)),
-                (true, Some(value)) => {
-                    return at(
-                        value.span(),
-                        format!(
-                            "storage member {} is filled by the simulation (each instance's own); remove it from [storage.{}]",
-                            buffer.element(&member.name),
-                            buffer.name
-                        ),
-                    )
-                }
-                _ => {}
-            }
+        if let Some(member) = buffer
+            .members
+            .iter()
+            .find(|m| m.shape == Shape::Other && !is_padding(&m.name))
+        {
+            return Err(scene.error(
+                format!(
+                    "storage member {} has a type a scene cannot write (f32, u32, i32, their vectors and f32 matrices are supported)",
+                    buffer.element(&member.name)
+                ),
+                None,
+            ));
         }
-        if let Some(table) = table {
+        // Every table that sets this buffer's members: the scene's and the
+        // objects' own.
+        let tables = scene
+            .storage
+            .get(name)
+            .into_iter()
+            .chain(scene.objects.iter().filter_map(|o| o.storage.get(name)));
+        for table in tables {
             for (key, value) in table.get_ref() {
-                if !buffer.members.iter().any(|m| &m.name == key) {
+                let Some(member) = buffer.members.iter().find(|m| &m.name == key) else {
                     let names: Vec<&str> = buffer.members.iter().map(|m| m.name.as_str()).collect();
                     return at(
                         value.span(),
                         format!(
-                            "[storage.{}] sets `{key}`, which its elements have no member of (members: {})",
-                            buffer.name,
+                            "storage `{name}` has no member `{key}` (its elements have {})",
                             names.join(", ")
+                        ),
+                    );
+                };
+                if SIMULATED.contains(&member.name.as_str()) {
+                    return at(
+                        value.span(),
+                        format!(
+                            "storage member {} is filled by the simulation (each instance's own): remove it",
+                            buffer.element(&member.name),
                         ),
                     );
                 }
             }
         }
-        if !absent.is_empty() {
-            missing_span = missing_span.or(table.map(|t| t.span()));
-            missing.push((absent, &buffer.name));
-            continue;
-        }
-        // Every object's instance count against the array, and every value
-        // against its member's shape and that count.
+        // Per object: its instance count against the array, and every
+        // value against its member's shape and that count.
         for (index, object) in scene.objects.iter().enumerate() {
             let instances = object.instance_count();
             if let Elements::Fixed(n) = buffer.elements {
                 if n != instances {
                     return Err(scene.error(
                         format!(
-                            "storage `{}` holds {n} elements, and object {index} draws {instances} instance{}: set its `instances` to {n}",
-                            buffer.name,
+                            "storage `{name}` holds {n} elements, and object {index} draws {instances} instance{}: set its `instances` to {n}",
                             if instances == 1 { "" } else { "s" }
                         ),
                         None,
@@ -200,16 +212,31 @@ pub fn check(buffers: &[StorageBuffer], scene: &Scene) -> Result<(), Error> {
                 }
             }
             for member in &buffer.members {
-                let Some(value) = table.and_then(|t| t.get_ref().get(&member.name)) else {
+                if is_padding(&member.name) || SIMULATED.contains(&member.name.as_str()) {
+                    continue;
+                }
+                let element = buffer.element(&member.name);
+                let Some((value, shared)) = lookup(scene, index, name, &member.name) else {
+                    match missing.iter_mut().find(|(e, ..)| *e == element) {
+                        Some((.., objects)) => objects.push(index),
+                        None => missing.push((element, name, vec![index])),
+                    }
+                    missing_span = missing_span
+                        .or(object.storage.get(name).map(|t| t.span()))
+                        .or(scene.storage.get(name).map(|t| t.span()));
                     continue;
                 };
                 if let Err(err) = values(buffer, member, value.get_ref(), instances) {
+                    let hint = if shared && scene.objects.len() > 1 {
+                        format!(
+                            "; [storage.{name}] is every object's: give object {index} its own values under [objects.storage.{name}]"
+                        )
+                    } else {
+                        String::new()
+                    };
                     return at(
                         value.span(),
-                        format!(
-                            "storage member {} (object {index}): {err}",
-                            buffer.element(&member.name)
-                        ),
+                        format!("storage member {element} (object {index}): {err}{hint}"),
                     );
                 }
             }
@@ -218,21 +245,28 @@ pub fn check(buffers: &[StorageBuffer], scene: &Scene) -> Result<(), Error> {
     if missing.is_empty() {
         return Ok(());
     }
-    let count: usize = missing.iter().map(|(absent, _)| absent.len()).sum();
     let parts: Vec<String> = missing
         .iter()
-        .map(|(absent, name)| {
+        .map(|(element, name, objects)| {
+            let which = if objects.len() == scene.objects.len() {
+                String::new()
+            } else {
+                let list: Vec<String> = objects.iter().map(usize::to_string).collect();
+                format!(
+                    " for object{} {}",
+                    if objects.len() == 1 { "" } else { "s" },
+                    list.join(", ")
+                )
+            };
             format!(
-                "{}: add {} under [storage.{name}]",
-                absent.join(", "),
-                if absent.len() == 1 { "it" } else { "them" },
+                "{element}{which} (add it under [storage.{name}], for every object, or under an object's own [objects.storage.{name}])"
             )
         })
         .collect();
     Err(scene.error(
         format!(
             "the scene does not set storage member{} {}",
-            if count == 1 { "" } else { "s" },
+            if missing.len() == 1 { "" } else { "s" },
             parts.join("; ")
         ),
         missing_span,
@@ -272,14 +306,12 @@ pub fn fill(
     let instances = scene.objects.get(object).map_or(1, |o| o.instance_count());
     let len = buffer.len(instances);
     let mut bytes = vec![0u8; len as usize * buffer.stride as usize];
-    let table = scene.storage.get(&buffer.name);
     for member in &buffer.members {
         if is_padding(&member.name) {
             continue;
         }
-        let given = table
-            .and_then(|t| t.get_ref().get(&member.name))
-            .map(|value| values(buffer, member, value.get_ref(), instances))
+        let given = lookup(scene, object, &buffer.name, &member.name)
+            .map(|(value, _)| values(buffer, member, value.get_ref(), instances))
             .transpose()
             .map_err(|err| format!("storage member {}: {err}", buffer.element(&member.name)))?;
         for element in 0..len {
@@ -475,5 +507,49 @@ fn vs_main(@builtin(instance_index) i: u32) -> @builtin(position) vec4<f32> {
         // Alpha 1 for each instance, distinct hues.
         assert!((0..4).all(|i| f32_at(&bytes, i * 80 + 76) == 1.0));
         assert_ne!(bytes[64..76], bytes[80 + 64..80 + 76]);
+    }
+
+    /// An object's own table sets its members over the scene's, so objects
+    /// of different instance counts can each have a list.
+    #[test]
+    fn an_objects_own_values_come_before_the_scenes() {
+        let module = module(SHADER);
+        let buffers = buffers(&module);
+        let objects = "[[objects]]\nmesh = { kind = \"plane\" }\n[[objects]]\nmesh = { kind = \"cube\" }\ninstances = 2\n";
+        let own = "[objects.storage.instances]\ncolor = [[1, 0, 0, 1], [0, 0, 1, 1]]\n";
+        let shared = "[storage.instances]\ncolor = [0.5, 0.5, 0.5, 1]\n";
+
+        let both = scene(&format!("{objects}{own}{shared}"));
+        check(&buffers, &both).unwrap();
+        let state = both.frame(0, 1.0);
+        let plane = fill(&buffers[0], &both, &state, 0).unwrap();
+        let cubes = fill(&buffers[0], &both, &state, 1).unwrap();
+        assert_eq!((plane.len(), cubes.len()), (80, 160));
+        assert_eq!(f32_at(&plane, 64), 0.5);
+        assert_eq!(
+            (f32_at(&cubes, 64), f32_at(&cubes, 80 + 64 + 8)),
+            (1.0, 1.0)
+        );
+        assert_eq!(f32_at(&cubes, 80 + 64), 0.0);
+
+        // Without the scene's, the plane has no colour: said for it alone.
+        let err = check(&buffers, &scene(&format!("{objects}{own}")))
+            .unwrap_err()
+            .render();
+        assert!(err.contains("`instances.color` for object 0"), "{err}");
+        assert!(err.contains("[objects.storage.instances]"), "{err}");
+
+        // A shared list cannot fit both objects: the error says how to give
+        // each its own.
+        let err = check(
+            &buffers,
+            &scene(&format!(
+                "{objects}[storage.instances]\ncolor = [[1, 0, 0, 1], [0, 0, 1, 1]]\n"
+            )),
+        )
+        .unwrap_err()
+        .render();
+        assert!(err.contains("lists 2 values for 1 instance"), "{err}");
+        assert!(err.contains("give object 0 its own"), "{err}");
     }
 }
