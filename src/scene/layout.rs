@@ -190,15 +190,9 @@ pub fn numbers(value: &toml::Value) -> Result<Vec<f64>, String> {
     Ok(out)
 }
 
-/// Writes one value of the member's shape, given as its numbers, `base`
-/// bytes into `bytes`: checks their count, and that integer members get
-/// integers.
-pub fn write_numbers(
-    bytes: &mut [u8],
-    base: usize,
-    member: &Member,
-    numbers: &[f64],
-) -> Result<(), String> {
+/// Checks that `numbers` are one value of the member's shape: as many as
+/// it has components, integers in range for integer members.
+pub fn check_numbers(member: &Member, numbers: &[f64]) -> Result<(), String> {
     let expected = member.shape.components();
     if numbers.len() != expected {
         return Err(format!(
@@ -206,29 +200,46 @@ pub fn write_numbers(
             numbers.len()
         ));
     }
+    let (integer, range, ty) = match member.shape {
+        Shape::U32(_) => (true, (0.0, f64::from(u32::MAX)), "a u32"),
+        Shape::I32(_) => (true, (f64::from(i32::MIN), f64::from(i32::MAX)), "an i32"),
+        Shape::Other => return Err("unsupported member type".into()),
+        _ => (false, (f64::MIN, f64::MAX), ""),
+    };
+    match numbers
+        .iter()
+        .find(|v| integer && (v.fract() != 0.0 || **v < range.0 || **v > range.1))
+    {
+        Some(v) => Err(format!("{v} is not {ty}")),
+        None => Ok(()),
+    }
+}
+
+/// Writes one value of the member's shape, given as its numbers, `base`
+/// bytes into `bytes`, after [`check_numbers`].
+pub fn write_numbers(
+    bytes: &mut [u8],
+    base: usize,
+    member: &Member,
+    numbers: &[f64],
+) -> Result<(), String> {
+    check_numbers(member, numbers)?;
     let at = base + member.offset as usize;
     match member.shape {
-        Shape::F32(_) | Shape::Matrix(..) => {
-            let floats: Vec<f32> = numbers.iter().map(|&v| v as f32).collect();
-            write_floats(bytes, base, member, &floats)?;
-        }
         Shape::U32(_) => {
             for (i, v) in numbers.iter().enumerate() {
-                if *v < 0.0 || v.fract() != 0.0 || *v > f64::from(u32::MAX) {
-                    return Err(format!("{v} is not a u32"));
-                }
                 put(bytes, at + i * 4, (*v as u32).to_le_bytes());
             }
         }
         Shape::I32(_) => {
             for (i, v) in numbers.iter().enumerate() {
-                if v.fract() != 0.0 || *v < f64::from(i32::MIN) || *v > f64::from(i32::MAX) {
-                    return Err(format!("{v} is not an i32"));
-                }
                 put(bytes, at + i * 4, (*v as i32).to_le_bytes());
             }
         }
-        Shape::Other => return Err("unsupported member type".into()),
+        _ => {
+            let floats: Vec<f32> = numbers.iter().map(|&v| v as f32).collect();
+            write_floats(bytes, base, member, &floats)?;
+        }
     }
     Ok(())
 }

@@ -288,10 +288,8 @@ fn values(
         buffer.len(instances),
         colour,
     )?;
-    // Integer members take integers: try writing every value once.
-    let mut scratch = vec![0u8; (member.offset as usize) + 64];
     for numbers in &values {
-        layout::write_numbers(&mut scratch, 0, member, numbers)?;
+        layout::check_numbers(member, numbers)?;
     }
     Ok(values)
 }
@@ -316,19 +314,14 @@ pub fn fill(
             .map_err(|err| format!("storage member {}: {err}", buffer.element(&member.name)))?;
         for element in 0..len {
             let base = (element * buffer.stride) as usize;
-            let world_from_local = match buffer.elements {
-                Elements::Single => state.objects[object],
-                _ => {
-                    let instance = state.instances[object]
-                        .get(element as usize)
-                        .copied()
-                        .unwrap_or_default();
-                    if buffer.relative {
-                        instance
-                    } else {
-                        state.objects[object] * instance
-                    }
-                }
+            let instance = state.instances[object]
+                .get(element as usize)
+                .copied()
+                .unwrap_or(glam::Mat4::IDENTITY);
+            let world_from_local = if buffer.relative {
+                instance
+            } else {
+                state.objects[object] * instance
             };
             if let Some(floats) = layout::simulated(&member.name, state, world_from_local) {
                 layout::write_floats(&mut bytes, base, member, &floats)?;
@@ -450,6 +443,11 @@ fn vs_main(@builtin(instance_index) i: u32) -> @builtin(position) vec4<f32> {
             let x = f32_at(&bytes, base + 16 + 48);
             assert_eq!(x, 5.0 + layout.position(element as u32).x);
         }
+
+        // A u32 member takes integers.
+        let half = scene(&text.replace("level = 7", "level = 7.5"));
+        let err = check(&buffers, &half).unwrap_err().render();
+        assert!(err.contains("7.5 is not a u32"), "{err}");
 
         // Two instances cannot fill an array of three.
         let two = scene(
