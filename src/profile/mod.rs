@@ -219,6 +219,9 @@ pub fn profile(
     let reference_plan = plan::reference(shader, &analysis, &base).map_err(fail)?;
 
     // The scene must provide everything else the shader binds.
+    let storage = scene::storage::buffers(&shader.module);
+    scene::storage::check(&storage, scene)?;
+    check_instancing(shader, scene)?;
     let dir = scene_path.parent().unwrap_or(Path::new("."));
     let mut textures = HashMap::new();
     for resource in &reference_plan.bindings.original {
@@ -243,10 +246,16 @@ pub fn profile(
                     source.load(dir).map_err(fail)?,
                 );
             }
-            "storage" | "storage-read-write" | "storage-texture" => {
+            "storage-read-write" => {
                 return Err(fail(format!(
-                    "the shader binds storage `{}`, which scenes cannot provide yet",
-                    resource.name
+                    "the shader binds read-write storage `{}` (group {}, binding {}): a scene provides read-only storage only (`var<storage, read>`)",
+                    resource.name, resource.group, resource.binding
+                )))
+            }
+            "storage-texture" => {
+                return Err(fail(format!(
+                    "the shader binds storage texture `{}` (group {}, binding {}), which a scene cannot provide",
+                    resource.name, resource.group, resource.binding
                 )))
             }
             _ => {}
@@ -278,6 +287,10 @@ pub fn profile(
                 let bytes = scene::uniforms::fill(buffer, scene, &state, object).map_err(fail)?;
                 buffers.insert([buffer.group, buffer.binding], bytes);
             }
+            for buffer in &storage {
+                let bytes = scene::storage::fill(buffer, scene, &state, object).map_err(fail)?;
+                buffers.insert([buffer.group, buffer.binding], bytes);
+            }
             let vertices = scene
                 .deformed(object, mesh, frame)
                 .map(|m| m.vertex_bytes(layout))
@@ -287,6 +300,7 @@ pub fn profile(
                 mesh: object,
                 buffers,
                 vertices,
+                instances: scene.objects[object].instance_count(),
             });
         }
         Ok(inputs)
@@ -690,6 +704,51 @@ pub fn profile(
             results: pictures,
             trace,
         },
+    ))
+}
+
+/// An object drawn as several instances needs a shader that tells them
+/// apart: one that reads `@builtin(instance_index)` in its vertex stage.
+/// Otherwise every instance would be drawn at the same place.
+fn check_instancing(shader: &Shader, scene: &Scene) -> Result<(), Error> {
+    let Some((index, object)) = scene
+        .objects
+        .iter()
+        .enumerate()
+        .find(|(_, o)| o.instance_count() > 1)
+    else {
+        return Ok(());
+    };
+    let module = &shader.module;
+    let reads_instance_index = module
+        .entry_points
+        .iter()
+        .filter(|ep| ep.stage == naga::ShaderStage::Vertex)
+        .flat_map(|ep| &ep.function.arguments)
+        .any(|argument| {
+            let builtin = |binding: &Option<naga::Binding>| {
+                matches!(
+                    binding,
+                    Some(naga::Binding::BuiltIn(naga::BuiltIn::InstanceIndex))
+                )
+            };
+            builtin(&argument.binding)
+                || match module.types[argument.ty].inner {
+                    naga::TypeInner::Struct { ref members, .. } => {
+                        members.iter().any(|m| builtin(&m.binding))
+                    }
+                    _ => false,
+                }
+        });
+    if reads_instance_index {
+        return Ok(());
+    }
+    Err(scene.error(
+        format!(
+            "object {index} draws {} instances, and the shader's vertex stage does not read @builtin(instance_index): every instance would be drawn at the same place",
+            object.instance_count()
+        ),
+        None,
     ))
 }
 

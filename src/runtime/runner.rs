@@ -14,15 +14,30 @@ pub struct Mesh {
     pub indices: Vec<u32>,
 }
 
-/// One draw of one frame: which mesh, and the contents of the shader's
-/// uniform and storage buffers for it by `[group, binding]`.
-#[derive(Clone, Debug, Default)]
+/// One draw of one frame: which mesh, how many instances of it, and the
+/// contents of the shader's uniform and storage buffers for it by
+/// `[group, binding]`.
+#[derive(Clone, Debug)]
 pub struct ObjectInputs {
     pub mesh: usize,
     pub buffers: HashMap<[u32; 2], Vec<u8>>,
     /// New vertex data for the mesh this frame (a deforming mesh), laid
     /// out as at creation.
     pub vertices: Option<Vec<u8>>,
+    /// Instances drawn, in one instanced draw call (1 by default), by
+    /// every pass alike: `@builtin(instance_index)` runs from 0 to this.
+    pub instances: u32,
+}
+
+impl Default for ObjectInputs {
+    fn default() -> Self {
+        ObjectInputs {
+            mesh: 0,
+            buffers: HashMap::new(),
+            vertices: None,
+            instances: 1,
+        }
+    }
 }
 
 /// What one frame draws.
@@ -490,7 +505,7 @@ impl Runner {
                     }
                     render.set_vertex_buffer(0, mesh.vertices.slice(..));
                     render.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-                    render.draw_indexed(0..mesh.count, 0, 0..1);
+                    render.draw_indexed(0..mesh.count, 0, 0..draw.instances);
                 }
             }
             if let (Some((p, _)), Some(query)) = (profiler.as_mut(), query) {
@@ -523,14 +538,44 @@ impl Runner {
         Ok(())
     }
 
+    /// Writes `bytes` to the buffer bound at `key` for an object, creating
+    /// it (or a larger one) as needed: a storage buffer when the plan binds
+    /// storage there (or a twin of it), a uniform buffer otherwise.
     fn write_buffer(&mut self, gpu: &Gpu, key: (usize, [u32; 2]), bytes: &[u8]) {
+        let size = (bytes.len() as u64).max(16).div_ceil(16) * 16;
+        let [group, binding] = key.1;
+        let bindings = &self.plan.bindings;
+        // A twin is of the kind it shadows.
+        let storage = bindings
+            .original
+            .iter()
+            .find(|r| r.group == group && r.binding == binding)
+            .or_else(|| {
+                bindings
+                    .previous
+                    .iter()
+                    .find(|t| t.group == group && t.binding == binding)
+                    .map(|t| &t.shadows)
+            })
+            .is_some_and(|resource| resource.kind == "storage");
+        let usage = if storage {
+            wgpu::BufferUsages::STORAGE
+        } else {
+            wgpu::BufferUsages::UNIFORM
+        };
+        let stale = self.buffers.get(&key).is_some_and(|b| b.size() < size);
+        if stale {
+            self.buffers.remove(&key);
+        }
         let buffer = self.buffers.entry(key).or_insert_with(|| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("shader buffer"),
-                size: (bytes.len() as u64).max(16).div_ceil(16) * 16,
-                usage: wgpu::BufferUsages::UNIFORM
-                    | wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_DST,
+                label: Some(if storage {
+                    "shader storage buffer"
+                } else {
+                    "shader uniform buffer"
+                }),
+                size,
+                usage: usage | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             })
         });

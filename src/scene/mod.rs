@@ -15,12 +15,22 @@
 //! `light_position`, `time`, ...) from the simulation and every other member
 //! from the scene's `[uniforms]`. A member the scene does not provide is an
 //! error naming it: nothing is silently zero.
+//!
+//! An object may be drawn as `instances` in one instanced draw call
+//! ([`instances`]); the shader's read-only storage buffers then hold one
+//! element per instance, filled by [`storage`] from each instance's
+//! transform and the scene's `[storage.<binding>]` tables. [`layout`]
+//! writes values at naga's offsets for both kinds of buffer.
 
+pub mod instances;
+pub mod layout;
 pub mod mesh;
+pub mod storage;
 pub mod textures;
 pub mod uniforms;
 
 use std::collections::BTreeMap;
+use std::ops::Range;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -29,7 +39,11 @@ use serde::Deserialize;
 
 use crate::diagnostic::{Diagnostic, Error, SourceFile};
 pub use crate::rewrite::DepthConvention;
+pub use instances::Instances;
 pub use mesh::{Mesh, MeshSource};
+
+/// A `[storage.<binding>]` table: values of the elements' members by name.
+pub type StorageTable = BTreeMap<String, toml::Spanned<toml::Value>>;
 
 /// What moves in a scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Deserialize, serde::Serialize)]
@@ -77,6 +91,11 @@ pub struct Scene {
     /// Textures by binding name.
     #[serde(default)]
     pub textures: BTreeMap<String, textures::TextureSource>,
+    /// Read-only storage buffers by binding name: values of their
+    /// elements' members, for every object (an object's own `storage`
+    /// table sets members for it alone).
+    #[serde(default)]
+    pub storage: BTreeMap<String, toml::Spanned<StorageTable>>,
     /// Seconds per frame for the `time` uniform.
     #[serde(default = "default_frame_time")]
     pub seconds_per_frame: f32,
@@ -84,6 +103,10 @@ pub struct Scene {
     /// counter-clockwise). Off for open or two-sided geometry.
     #[serde(default = "default_true")]
     pub cull_back_faces: bool,
+    /// The file the scene was read from, for errors found later (values
+    /// checked against the shader).
+    #[serde(skip)]
+    pub file: Option<Arc<SourceFile>>,
 }
 
 fn default_true() -> bool {
@@ -261,6 +284,21 @@ pub struct Object {
     /// With `deformation`: a ripple along the normals.
     #[serde(default)]
     pub deformation: Option<Deformation>,
+    /// Draw the mesh this many times in one instanced draw call, placed
+    /// and moved per instance.
+    #[serde(default)]
+    pub instances: Option<Instances>,
+    /// This object's values of storage members by binding name, over the
+    /// scene's `[storage]`.
+    #[serde(default)]
+    pub storage: BTreeMap<String, toml::Spanned<StorageTable>>,
+}
+
+impl Object {
+    /// How many instances the object's draw call draws.
+    pub fn instance_count(&self) -> u32 {
+        self.instances.as_ref().map_or(1, |i| i.count)
+    }
 }
 
 /// A ripple along the normals: each vertex moves by
@@ -297,6 +335,9 @@ pub struct FrameState {
     pub time: f32,
     /// Each object's `world_from_local`.
     pub objects: Vec<Mat4>,
+    /// Each object's instances' transforms in the object's space (one
+    /// identity for an object that is not instanced).
+    pub instances: Vec<Vec<Mat4>>,
 }
 
 impl Scene {
@@ -307,7 +348,7 @@ impl Scene {
     }
 
     pub fn parse(file: Arc<SourceFile>) -> Result<Scene, Error> {
-        let scene: Scene = toml::from_str(&file.text).map_err(|err| {
+        let mut scene: Scene = toml::from_str(&file.text).map_err(|err| {
             let range = err.span().unwrap_or(0..0);
             Error::in_file(
                 file.clone(),
@@ -338,7 +379,21 @@ impl Scene {
         if !(scene.camera.near > 0.0 && scene.camera.near.is_finite() && far_ok) {
             return fail("the camera needs 0 < near < far (far may be \"infinity\")".into());
         }
+        scene.file = Some(file);
         Ok(scene)
+    }
+
+    /// An error about the scene, pointing at `span` of its file when the
+    /// scene was read from one.
+    pub fn error(&self, message: String, span: Option<Range<usize>>) -> Error {
+        let diagnostic = Diagnostic::error(message);
+        match (&self.file, span) {
+            (Some(file), Some(span)) => {
+                Error::in_file(file.clone(), diagnostic.with_label(span, "here"))
+            }
+            (Some(file), None) => Error::in_file(file.clone(), diagnostic),
+            (None, _) => Error::plain(diagnostic),
+        }
     }
 
     pub fn has(&self, effect: Effect) -> bool {
@@ -406,6 +461,19 @@ impl Scene {
                     * Mat4::from_scale(Vec3::splat(object.scale))
             })
             .collect();
+        let instances = self
+            .objects
+            .iter()
+            .map(|object| match &object.instances {
+                None => vec![Mat4::IDENTITY],
+                Some(instances) => {
+                    let motion = if moving { t } else { 0.0 };
+                    (0..instances.count)
+                        .map(|i| instances.transform(i, motion))
+                        .collect()
+                }
+            })
+            .collect();
         FrameState {
             clip_from_world,
             camera_position: eye,
@@ -417,6 +485,7 @@ impl Scene {
                 0.0
             },
             objects,
+            instances,
         }
     }
 }
@@ -509,5 +578,55 @@ mod tests {
         assert!(parse(&format!("[camera]\nfar = \"far\"\n{cube}")).contains("s.toml:2:"));
         assert!(parse(&format!("[camera]\ndepth = \"inverted\"\n{cube}")).contains("s.toml:2:"));
         assert!(parse(&format!("[camera]\nnear = 2.0\nfar = 1.0\n{cube}")).contains("near < far"));
+
+        // Instances: the error points at the object's `instances`.
+        let instanced = |instances: &str| parse(&format!("{cube}instances = {instances}\n"));
+        for (instances, says) in [
+            ("0", "1 to 65536 instances"),
+            ("{ count = 4, radius = 2.0 }", "a grid takes `spacing`"),
+            ("{ count = 4, layout = \"hexagon\" }", "hexagon"),
+            (
+                "{ count = 4, spin_degrees_per_frame = [[0, 1, 0]] }",
+                "lists 1 value for 4",
+            ),
+            (
+                "{ count = 4, orbit_degrees_per_frame = [1, 2, 3] }",
+                "lists 3 values for 4",
+            ),
+            ("{ count = 2, spacing = 1.0, speed = 3 }", "speed"),
+        ] {
+            let err = instanced(instances);
+            assert!(
+                err.contains(says) && err.contains("s.toml:3:"),
+                "{instances}: {err}"
+            );
+        }
+    }
+
+    #[test]
+    fn instances_move_only_with_object_motion() {
+        let text = |effects: &str| {
+            format!("effects = [{effects}]\n[[objects]]\nmesh = {{ kind = \"cube\" }}\ninstances = {{ count = 4, layout = \"ring\", orbit_degrees_per_frame = [1, -1, 2, 0], spin_degrees_per_frame = [0, 3, 0] }}\n[[objects]]\nmesh = {{ kind = \"cube\" }}\n")
+        };
+        let still = Scene::parse(Arc::new(SourceFile::new("s.toml", text("")))).unwrap();
+        assert_eq!(still.frame(0, 1.0), still.frame(5, 1.0));
+        let state = still.frame(0, 1.0);
+        assert_eq!(state.instances[0].len(), 4);
+        assert_eq!(state.instances[1], [Mat4::IDENTITY]);
+        let moving = Scene::parse(Arc::new(SourceFile::new(
+            "s.toml",
+            text("\"object-motion\""),
+        )))
+        .unwrap();
+        let (a, b) = (moving.frame(0, 1.0), moving.frame(5, 1.0));
+        // Each instance moves by its own orbit and spin; the object stays.
+        assert_eq!(a.objects, b.objects);
+        for i in 0..4 {
+            assert_ne!(a.instances[0][i], b.instances[0][i], "instance {i}");
+        }
+        let centre = |s: &FrameState, i: usize| s.instances[0][i].transform_point3(Vec3::ZERO);
+        // Instance 3 does not orbit: only spins about its own centre.
+        assert!((centre(&a, 3) - centre(&b, 3)).length() < 1e-5);
+        assert!((centre(&a, 0) - centre(&b, 0)).length() > 0.1);
     }
 }

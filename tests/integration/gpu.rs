@@ -195,6 +195,7 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
                 mesh: 0,
                 buffers: HashMap::from([([0, 0], uniform)]),
                 vertices: None,
+                instances: 1,
             }],
         };
         runner.frame(&gpu, &inputs, None).unwrap();

@@ -1426,6 +1426,7 @@ fn refresh_maps(gpu: &Gpu, period: u32, quad: u32, start: u64, frames: usize) ->
             mesh: 0,
             buffers: HashMap::from([([0, 0], identity)]),
             vertices: None,
+            instances: 1,
         }],
     };
     let mut maps = Vec::new();

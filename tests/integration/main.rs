@@ -10,6 +10,7 @@ mod errors;
 mod gpu;
 mod hard_cases;
 mod hard_runs;
+mod instanced;
 mod profile;
 mod rewrite;
 mod util;

@@ -148,34 +148,40 @@ pub fn near(mask: &[bool], w: usize, i: usize) -> bool {
     })
 }
 
-/// Which pixels object `object` covers in frame `frame`, rasterised on the
-/// CPU at pixel centres with the scene's own matrices (`w × h`, row-major,
-/// y down).
+/// Which pixels object `object` (all its instances) covers in frame
+/// `frame`, rasterised on the CPU at pixel centres with the scene's own
+/// matrices (`w × h`, row-major, y down).
 pub fn silhouette(scene: &Scene, object: usize, frame: u32, w: usize, h: usize) -> Vec<bool> {
     let mesh = scene.objects[object].mesh.build(Path::new(".")).unwrap();
     let state = scene.frame(frame, w as f32 / h as f32);
-    let clip = state.clip_from_world * state.objects[object];
-    let points: Vec<glam::Vec2> = mesh
-        .positions
+    let instances: Vec<Vec<glam::Vec2>> = state.instances[object]
         .iter()
-        .map(|p| {
-            let c = clip * p.extend(1.0);
-            glam::Vec2::new(c.x / c.w, c.y / c.w)
+        .map(|instance| {
+            let clip = state.clip_from_world * state.objects[object] * *instance;
+            mesh.positions
+                .iter()
+                .map(|p| {
+                    let c = clip * p.extend(1.0);
+                    glam::Vec2::new(c.x / c.w, c.y / c.w)
+                })
+                .collect()
         })
         .collect();
     (0..w * h)
         .map(|i| {
             let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
             let p = glam::Vec2::new(x / w as f32 * 2.0 - 1.0, 1.0 - y / h as f32 * 2.0);
-            mesh.indices.chunks(3).any(|t| {
-                let [a, b, c] = [
-                    points[t[0] as usize],
-                    points[t[1] as usize],
-                    points[t[2] as usize],
-                ];
-                let side = |u: glam::Vec2, v: glam::Vec2| (v - u).perp_dot(p - u);
-                let (s0, s1, s2) = (side(a, b), side(b, c), side(c, a));
-                (s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0) || (s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0)
+            instances.iter().any(|points| {
+                mesh.indices.chunks(3).any(|t| {
+                    let [a, b, c] = [
+                        points[t[0] as usize],
+                        points[t[1] as usize],
+                        points[t[2] as usize],
+                    ];
+                    let side = |u: glam::Vec2, v: glam::Vec2| (v - u).perp_dot(p - u);
+                    let (s0, s1, s2) = (side(a, b), side(b, c), side(c, a));
+                    (s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0) || (s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0)
+                })
             })
         })
         .collect()

@@ -1,0 +1,293 @@
+//! Writing values into the bytes of a host-shareable WGSL type, as naga
+//! lays it out: the members of a struct at their offsets, matrix columns
+//! at their stride. Uniform buffers ([`super::uniforms`]) and storage
+//! buffers ([`super::storage`]) are both filled through it.
+
+use glam::Mat4;
+use naga::{Handle, Module, Type, TypeInner};
+
+use super::FrameState;
+
+/// Members the simulation fills; every other member comes from the
+/// scene.
+pub const SIMULATED: &[&str] = &[
+    "clip_from_world",
+    "world_from_local",
+    "camera_position",
+    "light_position",
+    "light_clip_from_world",
+    "time",
+];
+
+/// One member of a struct and where it lives in it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Member {
+    pub name: String,
+    /// Bytes from the start of the struct.
+    pub offset: u32,
+    pub shape: Shape,
+}
+
+/// The shapes a scene can write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shape {
+    F32(u32),
+    U32(u32),
+    I32(u32),
+    /// columns, rows (f32)
+    Matrix(u32, u32),
+    Other,
+}
+
+impl Shape {
+    /// How many numbers a value of this shape has (0 for `Other`).
+    pub fn components(self) -> usize {
+        (match self {
+            Shape::F32(n) | Shape::U32(n) | Shape::I32(n) => n,
+            Shape::Matrix(columns, rows) => columns * rows,
+            Shape::Other => 0,
+        }) as usize
+    }
+}
+
+/// The members of type `ty` and its size in bytes. A type that is not a
+/// struct is one member at offset 0, named `name`.
+pub fn members(module: &Module, ty: Handle<Type>, name: &str) -> (u32, Vec<Member>) {
+    match module.types[ty].inner {
+        TypeInner::Struct { ref members, span } => (
+            span,
+            members
+                .iter()
+                .map(|m| Member {
+                    name: m.name.clone().unwrap_or_default(),
+                    offset: m.offset,
+                    shape: shape(&module.types[m.ty].inner),
+                })
+                .collect(),
+        ),
+        ref other => (
+            other.size(module.to_ctx()),
+            vec![Member {
+                name: name.to_string(),
+                offset: 0,
+                shape: shape(other),
+            }],
+        ),
+    }
+}
+
+pub fn shape(inner: &TypeInner) -> Shape {
+    match *inner {
+        TypeInner::Scalar(s) => scalar_shape(s, 1),
+        TypeInner::Vector { size, scalar } => scalar_shape(scalar, size as u32),
+        TypeInner::Matrix {
+            columns,
+            rows,
+            scalar: naga::Scalar::F32,
+        } => Shape::Matrix(columns as u32, rows as u32),
+        _ => Shape::Other,
+    }
+}
+
+fn scalar_shape(scalar: naga::Scalar, n: u32) -> Shape {
+    match (scalar.kind, scalar.width) {
+        (naga::ScalarKind::Float, 4) => Shape::F32(n),
+        (naga::ScalarKind::Uint, 4) => Shape::U32(n),
+        (naga::ScalarKind::Sint, 4) => Shape::I32(n),
+        _ => Shape::Other,
+    }
+}
+
+/// The value of a simulated member `name` in frame `state`, for a draw
+/// placed by `world_from_local`; `None` when the simulation does not fill
+/// `name`.
+pub fn simulated(name: &str, state: &FrameState, world_from_local: Mat4) -> Option<Vec<f32>> {
+    Some(match name {
+        "clip_from_world" => state.clip_from_world.to_cols_array().to_vec(),
+        "world_from_local" => world_from_local.to_cols_array().to_vec(),
+        "light_clip_from_world" => state.light_clip_from_world.to_cols_array().to_vec(),
+        "camera_position" => state.camera_position.to_array().to_vec(),
+        "light_position" => state.light_position.to_array().to_vec(),
+        "time" => vec![state.time],
+        _ => return None,
+    })
+}
+
+/// Whether a member is padding, left zero.
+pub fn is_padding(name: &str) -> bool {
+    name.starts_with('_')
+}
+
+/// Bytes between a matrix's columns: WGSL aligns a column of three or four
+/// f32 to 16 bytes, of two to 8.
+fn column_stride(rows: u32) -> usize {
+    if rows == 2 {
+        8
+    } else {
+        16
+    }
+}
+
+/// The numbers of `member` as [`write_floats`] and [`write_numbers`] lay
+/// them out `base` bytes into `bytes` (padding skipped); none for a shape a
+/// scene cannot write.
+pub fn read_numbers(bytes: &[u8], base: usize, member: &Member) -> Vec<f64> {
+    let word = |at: usize| -> Option<[u8; 4]> { bytes.get(at..at + 4)?.try_into().ok() };
+    let base = base + member.offset as usize;
+    let at: Vec<usize> = match member.shape {
+        Shape::F32(n) | Shape::U32(n) | Shape::I32(n) => {
+            (0..n as usize).map(|i| base + i * 4).collect()
+        }
+        Shape::Matrix(columns, rows) => {
+            let stride = column_stride(rows);
+            (0..columns as usize)
+                .flat_map(|c| (0..rows as usize).map(move |r| base + c * stride + r * 4))
+                .collect()
+        }
+        Shape::Other => Vec::new(),
+    };
+    at.into_iter()
+        .filter_map(word)
+        .map(|w| match member.shape {
+            Shape::U32(_) => f64::from(u32::from_le_bytes(w)),
+            Shape::I32(_) => f64::from(i32::from_le_bytes(w)),
+            _ => f64::from(f32::from_le_bytes(w)),
+        })
+        .collect()
+}
+
+fn put(bytes: &mut [u8], offset: usize, word: [u8; 4]) {
+    if let Some(slot) = bytes.get_mut(offset..offset + 4) {
+        slot.copy_from_slice(&word);
+    }
+}
+
+/// Writes f32s in the member's layout, `base` bytes into `bytes` (matrix
+/// columns padded to 16 bytes when they have three rows, as WGSL lays them
+/// out). A 16-float value given to a smaller matrix fills its top-left.
+pub fn write_floats(
+    bytes: &mut [u8],
+    base: usize,
+    member: &Member,
+    floats: &[f32],
+) -> Result<(), String> {
+    let base = base + member.offset as usize;
+    match member.shape {
+        Shape::F32(n) => {
+            for i in 0..n as usize {
+                put(
+                    bytes,
+                    base + i * 4,
+                    floats.get(i).copied().unwrap_or(0.0).to_le_bytes(),
+                );
+            }
+        }
+        Shape::Matrix(columns, rows) => {
+            let stride = column_stride(rows);
+            // Simulated matrices are 4×4; a smaller member takes its top-left.
+            for c in 0..columns as usize {
+                for r in 0..rows as usize {
+                    let value = if floats.len() == 16 {
+                        floats[c * 4 + r]
+                    } else {
+                        floats.get(c * rows as usize + r).copied().unwrap_or(0.0)
+                    };
+                    put(bytes, base + c * stride + r * 4, value.to_le_bytes());
+                }
+            }
+        }
+        _ => return Err(format!("`{}` is not a float member", member.name)),
+    }
+    Ok(())
+}
+
+/// The numbers of a TOML value: a number, an array of numbers, or an array
+/// of arrays (matrix columns), flattened in order.
+pub fn numbers(value: &toml::Value) -> Result<Vec<f64>, String> {
+    fn flatten(value: &toml::Value, out: &mut Vec<f64>) -> Result<(), String> {
+        match value {
+            toml::Value::Integer(i) => out.push(*i as f64),
+            toml::Value::Float(f) => out.push(*f),
+            toml::Value::Boolean(b) => out.push(if *b { 1.0 } else { 0.0 }),
+            toml::Value::Array(items) => {
+                for item in items {
+                    flatten(item, out)?;
+                }
+            }
+            other => {
+                return Err(format!(
+                    "expected a number or an array of numbers, found {}",
+                    other.type_str()
+                ))
+            }
+        }
+        Ok(())
+    }
+    let mut out = Vec::new();
+    flatten(value, &mut out)?;
+    Ok(out)
+}
+
+/// Checks that `numbers` are one value of the member's shape: as many as
+/// it has components, integers in range for integer members.
+pub fn check_numbers(member: &Member, numbers: &[f64]) -> Result<(), String> {
+    let expected = member.shape.components();
+    if numbers.len() != expected {
+        return Err(format!(
+            "expected {expected} number(s), found {}",
+            numbers.len()
+        ));
+    }
+    let (integer, range, ty) = match member.shape {
+        Shape::U32(_) => (true, (0.0, f64::from(u32::MAX)), "a u32"),
+        Shape::I32(_) => (true, (f64::from(i32::MIN), f64::from(i32::MAX)), "an i32"),
+        Shape::Other => return Err("unsupported member type".into()),
+        _ => (false, (f64::MIN, f64::MAX), ""),
+    };
+    match numbers
+        .iter()
+        .find(|v| integer && (v.fract() != 0.0 || **v < range.0 || **v > range.1))
+    {
+        Some(v) => Err(format!("{v} is not {ty}")),
+        None => Ok(()),
+    }
+}
+
+/// Writes one value of the member's shape, given as its numbers, `base`
+/// bytes into `bytes`, after [`check_numbers`].
+pub fn write_numbers(
+    bytes: &mut [u8],
+    base: usize,
+    member: &Member,
+    numbers: &[f64],
+) -> Result<(), String> {
+    check_numbers(member, numbers)?;
+    let at = base + member.offset as usize;
+    match member.shape {
+        Shape::U32(_) => {
+            for (i, v) in numbers.iter().enumerate() {
+                put(bytes, at + i * 4, (*v as u32).to_le_bytes());
+            }
+        }
+        Shape::I32(_) => {
+            for (i, v) in numbers.iter().enumerate() {
+                put(bytes, at + i * 4, (*v as i32).to_le_bytes());
+            }
+        }
+        _ => {
+            let floats: Vec<f32> = numbers.iter().map(|&v| v as f32).collect();
+            write_floats(bytes, base, member, &floats)?;
+        }
+    }
+    Ok(())
+}
+
+/// Writes a TOML value in the member's shape, `base` bytes into `bytes`.
+pub fn write_value(
+    bytes: &mut [u8],
+    base: usize,
+    member: &Member,
+    value: &toml::Value,
+) -> Result<(), String> {
+    write_numbers(bytes, base, member, &numbers(value)?)
+}

@@ -1,0 +1,224 @@
+//! Instanced objects whose per-instance data a storage buffer holds
+//! (`corpus/instanced_storage.wgsl`), profiled on lavapipe.
+
+use shadecache::profile::{Nodes, Options};
+use shadecache::rewrite::{CacheFormat, Variant};
+
+use crate::profile::run_shader;
+use crate::util::{root, shadecache, stderr, temp_file};
+
+fn instanced_shader() -> String {
+    std::fs::read_to_string(root().join("corpus/instanced_storage.wgsl")).unwrap()
+}
+
+/// The `[uniforms]` of the instanced shader.
+const UNIFORMS: &str = r#"
+[uniforms]
+shininess = 32.0
+light_color = [1.0, 1.0, 1.0]
+rim_strength = 0.3
+sky_color = [0.6, 0.7, 0.9]
+ambient = 0.4
+ground_color = [0.3, 0.25, 0.2]
+specular = 0.5
+"#;
+
+/// Seen from straight above: a plane, and two cubes in a ring that orbit
+/// the vertical axis 16° a frame (each about 9 pixels), given as instances
+/// of one object. `effects` and the storage table are the caller's.
+fn orbiting_cubes(effects: &str, storage: &str) -> String {
+    format!(
+        r#"
+size = [128, 128]
+frames = 1
+warmup = 1
+effects = [{effects}]
+[camera]
+eye = [0.0, 12.0, 0.01]
+target = [0.0, 0.0, 0.0]
+fov_degrees = 26.0
+near = 5.0
+far = 20.0
+{PLANE}[[objects]]
+mesh = {{ kind = "cube", size = 1.0 }}
+position = [0.0, 0.5, 0.0]
+instances = {{ count = 2, layout = "ring", radius = 1.5, orbit_degrees_per_frame = 16.0, spin_degrees_per_frame = [0.0, 5.0, 0.0] }}
+{storage}
+{UNIFORMS}
+"#
+    )
+}
+
+const PLANE: &str = "[[objects]]\nmesh = { kind = \"plane\", size = 8.0, subdivisions = 4 }\n";
+
+const COLOURS: &str = "[storage.instances]\ncolor = { palette = \"rainbow\" }\n";
+
+fn options(periods: &[u32]) -> Options {
+    Options {
+        nodes: Nodes::Top(1),
+        refresh_periods: periods.to_vec(),
+        refresh_quads: vec![1],
+        ..Options::default()
+    }
+}
+
+/// Δn = 1 recomputes every pixel every frame: on the corpus's instanced
+/// scene (tori passing each other, each drawn from the storage buffer)
+/// every variant's image is the reference's.
+#[test]
+fn instanced_refresh_period_one_equals_the_reference() {
+    let scene = std::fs::read_to_string(root().join("corpus/scenes/instanced_rings.toml")).unwrap();
+    let mut opts = options(&[1]);
+    opts.cache_formats = vec![CacheFormat::Rgba32float];
+    opts.size = Some([64, 64]);
+    opts.frames = Some(3);
+    opts.warmup = Some(1);
+    let Some((_, report, scene)) = run_shader(&instanced_shader(), &scene, opts) else {
+        return;
+    };
+    assert_eq!(scene.objects[0].instance_count(), 12);
+    assert_eq!(report.results.len(), 3);
+    for row in &report.results {
+        assert_eq!(row.hit_rate, 0.0, "{}", row.variant);
+        assert!(
+            row.max_abs_error <= 1.0 / 255.0 + 1e-9,
+            "{} {}",
+            row.variant,
+            row.max_abs_error
+        );
+        assert_eq!(row.above_threshold, 0.0, "{}", row.variant);
+    }
+}
+
+/// Nothing declared moves: the instances' orbit and spin are ignored, and
+/// after the first frame every covered pixel of every variant is reused.
+/// Both instances are drawn, where the scene puts them.
+#[test]
+fn static_instances_hit_everywhere_after_the_first_frame() {
+    // The cubes alone, so that the covered pixels are theirs.
+    let scene = orbiting_cubes("", COLOURS)
+        .replace("frames = 1", "frames = 3")
+        .replace(PLANE, "");
+    let Some((pictures, report, scene)) = run_shader(&instanced_shader(), &scene, options(&[0]))
+    else {
+        return;
+    };
+    assert_eq!(report.results.len(), 3);
+    for row in &report.results {
+        for (frame, stats) in row.frame_stats.iter().enumerate() {
+            assert_eq!(
+                stats.hit_rate, 1.0,
+                "{} frame {frame}: {stats:?}",
+                row.variant
+            );
+        }
+    }
+    // The covered pixels are the CPU's silhouettes of both instances.
+    let (w, h) = (128usize, 128usize);
+    let cubes = crate::util::silhouette(&scene, 0, 0, w, h);
+    let inside = crate::util::interior(&cubes, w);
+    assert!(inside.iter().filter(|&&i| i).count() > 500);
+    for (result, (_, classes)) in report.results.iter().zip(&pictures.results) {
+        let covered = |i: usize| classes[i * 4..i * 4 + 3] != [0, 0, 0];
+        for (i, &inside) in inside.iter().enumerate() {
+            assert!(
+                !inside || covered(i),
+                "{}: pixel {i} is not drawn",
+                result.variant
+            );
+            assert!(
+                !covered(i) || crate::util::near(&cubes, w, i),
+                "{}: pixel {i} is drawn outside the silhouettes",
+                result.variant
+            );
+        }
+    }
+}
+
+/// The cubes orbit: the pixels they newly cover this frame (the leading
+/// band, two pixels in from its edges) were the plane last frame at the
+/// same place, and the cube top at the place the previous-frame storage
+/// twin reprojects them to. So they hit only if that twin holds last
+/// frame's instance transforms.
+#[test]
+fn moving_instances_reproject_with_last_frames_storage() {
+    let scene = orbiting_cubes("\"object-motion\", \"disocclusion\"", COLOURS);
+    let mut opts = options(&[0]);
+    opts.variants = vec![Variant::ThreePass];
+    let Some((pictures, _, scene)) = run_shader(&instanced_shader(), &scene, opts) else {
+        return;
+    };
+    let (w, h) = (128usize, 128usize);
+    let (before, now) = (
+        crate::util::silhouette(&scene, 1, 0, w, h),
+        crate::util::silhouette(&scene, 1, 1, w, h),
+    );
+    let leading: Vec<bool> = (0..w * h).map(|i| now[i] && !before[i]).collect();
+    let inner = crate::util::interior(&crate::util::interior(&leading, w), w);
+    let classes = &pictures.results[0].1;
+    let hit = |i: usize| classes[i * 4..i * 4 + 3] == shadecache::profile::metrics::HIT;
+    let band: Vec<usize> = (0..w * h).filter(|&i| inner[i]).collect();
+    assert!(band.len() > 50, "the leading band is {} pixels", band.len());
+    let missed = band.iter().filter(|&&i| !hit(i)).count();
+    assert_eq!(missed, 0, "of {} leading-band pixels", band.len());
+
+    // And the band they uncovered misses.
+    let trailing: Vec<bool> = (0..w * h).map(|i| before[i] && !now[i]).collect();
+    let trailing = crate::util::interior(&trailing, w);
+    let uncovered: Vec<usize> = (0..w * h).filter(|&i| trailing[i]).collect();
+    assert!(uncovered.len() > 50);
+    assert!(uncovered.iter().all(|&i| !hit(i)));
+}
+
+fn profile_error(scene: &str) -> String {
+    let (_dir, path) = temp_file("scene.toml", scene.as_bytes());
+    let output = shadecache([
+        "profile".as_ref(),
+        "corpus/instanced_storage.wgsl".as_ref(),
+        "--scene".as_ref(),
+        path.as_os_str(),
+        "--quiet".as_ref(),
+    ] as [&std::ffi::OsStr; 5]);
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{err}");
+    err
+}
+
+/// A storage member the scene does not set is an error naming it, not
+/// zeros.
+#[test]
+fn a_missing_storage_member_is_an_error_naming_it() {
+    let err = profile_error(&orbiting_cubes("", ""));
+    assert!(err.contains("`instances.color`"), "{err}");
+    assert!(err.contains("[storage.instances]"), "{err}");
+}
+
+/// A list of values per instance must have one per instance of its
+/// object: the error says so and points at the list.
+#[test]
+fn a_list_that_disagrees_with_the_instance_count_is_an_error() {
+    let storage = "[objects.storage.instances]\ncolor = [[1.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 1.0], [0.0, 0.0, 1.0, 1.0]]\n[storage.instances]\ncolor = [0.5, 0.5, 0.5, 1.0]\n";
+    let scene = orbiting_cubes("", storage);
+    let err = profile_error(&scene);
+    assert!(err.contains("`instances.color`"), "{err}");
+    assert!(err.contains("lists 3 values for 2 instances"), "{err}");
+    let line = scene.lines().position(|l| l.starts_with("color")).unwrap() + 1;
+    assert!(err.contains(&format!("scene.toml:{line}:")), "{err}");
+
+    // Many instances of a shader that cannot tell them apart.
+    let marble = crate::profile::marble_scene("", "").replace(
+        "rotation_degrees_per_frame",
+        "instances = 4\nrotation_degrees_per_frame",
+    );
+    let (_dir, path) = temp_file("scene.toml", marble.as_bytes());
+    let output = shadecache([
+        "profile".as_ref(),
+        "corpus/noise_marble.wgsl".as_ref(),
+        "--scene".as_ref(),
+        path.as_os_str(),
+        "--quiet".as_ref(),
+    ] as [&std::ffi::OsStr; 5]);
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{err}");
+    assert!(err.contains("instance_index"), "{err}");
+}
