@@ -853,6 +853,25 @@ fn silhouette(texel: Vec2) -> (f32, f32) {
     }
 }
 
+/// Lookups of points of the silhouette cache's scene, each at a texel
+/// coordinate on a surface: material 0 the sloped foreground, 1 the
+/// background, anything else a surface at depth 0.6 that was not there.
+fn silhouette_cases(cache: &Cache, points: impl Iterator<Item = (Vec2, f32)>) -> Vec<Case> {
+    points
+        .map(|(texel, material)| {
+            let (depth, slope) = match material {
+                0.0 => (0.3 + 0.004 * texel.x, 0.004),
+                1.0 => (0.9, 0.0),
+                _ => (0.6, 0.0),
+            };
+            Case {
+                clip: cache.clip_at(texel, depth, 1.0),
+                slope: Vec2::new(slope, 0.0),
+            }
+        })
+        .collect()
+}
+
 /// A bilinear footprint straddling a depth step (0.3 against 0.9) misses:
 /// nothing blends across it; nearest hits where its own texel agrees.
 #[test]
@@ -889,23 +908,7 @@ fn depth_discontinuity() {
         // A point at neither depth misses everywhere.
         (Vec2::new(3.5, 4.5), 0.5, 2, 2),
     ];
-    let surface = |texel: Vec2, material: f32| -> (f32, f32) {
-        match material {
-            0.0 => (0.3 + 0.004 * texel.x, 0.004),
-            1.0 => (0.9, 0.0),
-            _ => (0.6, 0.0),
-        }
-    };
-    let cases: Vec<Case> = expected
-        .iter()
-        .map(|&(texel, material, _, _)| {
-            let (depth, slope) = surface(texel, material);
-            Case {
-                clip: cache.clip_at(texel, depth, 1.0),
-                slope: Vec2::new(slope, 0.0),
-            }
-        })
-        .collect();
+    let cases = silhouette_cases(&cache, expected.iter().map(|e| (e.0, e.1)));
     let outcomes = lookups(&gpu, &cache, &cases);
     for ((&(texel, material, footprint, nearest), case), outcome) in
         expected.iter().zip(&cases).zip(&outcomes)
@@ -1034,23 +1037,7 @@ fn packed_lookups_behind_offscreen_and_at_silhouettes() {
         (Vec2::new(7.3, 4.0), 1.0, 2),
         (Vec2::new(3.5, 4.5), 0.5, 2),
     ];
-    let surface = |texel: Vec2, material: f32| -> (f32, f32) {
-        match material {
-            0.0 => (0.3 + 0.004 * texel.x, 0.004),
-            1.0 => (0.9, 0.0),
-            _ => (0.6, 0.0),
-        }
-    };
-    let cases: Vec<Case> = expected
-        .iter()
-        .map(|&(texel, material, _)| {
-            let (depth, slope) = surface(texel, material);
-            Case {
-                clip: cache.clip_at(texel, depth, 1.0),
-                slope: Vec2::new(slope, 0.0),
-            }
-        })
-        .collect();
+    let cases = silhouette_cases(&cache, expected.iter().map(|e| (e.0, e.1)));
     let separate = lookups(&gpu, &cache, &cases);
     let packed = packed_lookups(&gpu, &cache, &cases);
     for (((&(texel, material, status), case), separate), packed) in

@@ -5,7 +5,7 @@ use shadecache::profile::{Nodes, Options};
 use shadecache::rewrite::{CacheFormat, Variant};
 
 use crate::profile::run_shader;
-use crate::util::{root, shadecache, stderr, temp_file};
+use crate::util::root;
 
 fn instanced_shader() -> String {
     std::fs::read_to_string(root().join("corpus/instanced_storage.wgsl")).unwrap()
@@ -171,17 +171,7 @@ fn moving_instances_reproject_with_last_frames_storage() {
 }
 
 fn profile_error(scene: &str) -> String {
-    let (_dir, path) = temp_file("scene.toml", scene.as_bytes());
-    let output = shadecache([
-        "profile".as_ref(),
-        "corpus/instanced_storage.wgsl".as_ref(),
-        "--scene".as_ref(),
-        path.as_os_str(),
-        "--quiet".as_ref(),
-    ] as [&std::ffi::OsStr; 5]);
-    let err = stderr(&output);
-    assert_eq!(output.status.code(), Some(1), "{err}");
-    err
+    crate::util::profile_error("corpus/instanced_storage.wgsl", scene)
 }
 
 /// A storage member the scene does not set is an error naming it, not
@@ -210,15 +200,6 @@ fn a_list_that_disagrees_with_the_instance_count_is_an_error() {
         "rotation_degrees_per_frame",
         "instances = 4\nrotation_degrees_per_frame",
     );
-    let (_dir, path) = temp_file("scene.toml", marble.as_bytes());
-    let output = shadecache([
-        "profile".as_ref(),
-        "corpus/noise_marble.wgsl".as_ref(),
-        "--scene".as_ref(),
-        path.as_os_str(),
-        "--quiet".as_ref(),
-    ] as [&std::ffi::OsStr; 5]);
-    let err = stderr(&output);
-    assert_eq!(output.status.code(), Some(1), "{err}");
+    let err = crate::util::profile_error("corpus/noise_marble.wgsl", &marble);
     assert!(err.contains("instance_index"), "{err}");
 }

@@ -227,31 +227,17 @@ light_color = [1.0, 1.0, 1.0]
 #[test]
 fn a_missing_uniform_is_an_error_naming_it() {
     let scene = marble_scene("", "").replace("marble_frequency = 4.0\n", "");
-    let (_dir, path) = temp_file("scene.toml", scene.as_bytes());
-    let output = shadecache([
-        "profile".as_ref(),
-        "corpus/noise_marble.wgsl".as_ref(),
-        "--scene".as_ref(),
-        path.as_os_str(),
-        "--quiet".as_ref(),
-    ] as [&std::ffi::OsStr; 5]);
-    let err = stderr(&output);
-    assert_eq!(output.status.code(), Some(1), "{err}");
+    let err = crate::util::profile_error("corpus/noise_marble.wgsl", &scene);
     assert!(err.contains("`frame.marble_frequency`"), "{err}");
     assert!(err.contains("[uniforms]"), "{err}");
 }
 
 #[test]
 fn a_bad_scene_file_points_at_the_error() {
-    let (_dir, path) = temp_file("scene.toml", b"size = [128, 128]\nframes = \"many\"\n");
-    let output = shadecache([
-        "profile".as_ref(),
-        "corpus/noise_marble.wgsl".as_ref(),
-        "--scene".as_ref(),
-        path.as_os_str(),
-    ] as [&std::ffi::OsStr; 4]);
-    let err = stderr(&output);
-    assert_eq!(output.status.code(), Some(1), "{err}");
+    let err = crate::util::profile_error(
+        "corpus/noise_marble.wgsl",
+        "size = [128, 128]\nframes = \"many\"\n",
+    );
     assert!(err.contains("scene.toml:2:"), "{err}");
 }
 

@@ -70,6 +70,15 @@ fn snapshots_of_emitted_wgsl() {
 /// Every corpus shader × every candidate × every variant: written as WGSL,
 /// each pass re-parses and validates with naga from its text; refusals
 /// carry a reason and are never internal errors.
+/// Writes a variant's WGSL passes under `out`; returns their paths.
+fn write_wgsl(out: &Path, rewritten: &Rewritten) -> Vec<PathBuf> {
+    back::write_variant(out, rewritten, Language::Wgsl)
+        .unwrap()
+        .into_iter()
+        .filter(|f| f.extension().is_some_and(|e| e == "wgsl"))
+        .collect()
+}
+
 fn emit_everything(dir: &Path) -> (Vec<PathBuf>, BTreeMap<String, usize>) {
     let mut files = Vec::new();
     let mut refusals = BTreeMap::new();
@@ -85,12 +94,7 @@ fn emit_everything(dir: &Path) -> (Vec<PathBuf>, BTreeMap<String, usize>) {
                             .join(&stem)
                             .join(&candidate.node.id)
                             .join(variant.as_str());
-                        files.extend(
-                            back::write_variant(&out, &rewritten, Language::Wgsl)
-                                .unwrap()
-                                .into_iter()
-                                .filter(|f| f.extension().is_some_and(|e| e == "wgsl")),
-                        );
+                        files.extend(write_wgsl(&out, &rewritten));
                     }
                     Err(refusal) => {
                         assert!(
@@ -528,12 +532,7 @@ fn every_reconstruction_validates_and_builds() {
                         .join(cache_format.as_str())
                         .join(&candidate.node.id)
                         .join(variant.as_str());
-                    files.extend(
-                        back::write_variant(&out, &rewritten, Language::Wgsl)
-                            .unwrap()
-                            .into_iter()
-                            .filter(|f| f.extension().is_some_and(|e| e == "wgsl")),
-                    );
+                    files.extend(write_wgsl(&out, &rewritten));
                     if let Some(gpu) = &gpu {
                         let sources = crate::gpu::wgsl_sources(&rewritten);
                         shadecache::runtime::pipelines(

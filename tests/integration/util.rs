@@ -216,3 +216,19 @@ pub fn candidate<'a>(
         .find(|c| c.node.text == text)
         .unwrap_or_else(|| panic!("no candidate `{text}`"))
 }
+
+/// Runs `shadecache profile SHADER --scene <scene_text> --quiet`, which
+/// must fail with exit status 1; returns its stderr.
+pub fn profile_error(shader: &str, scene_text: &str) -> String {
+    let (_dir, path) = temp_file("scene.toml", scene_text.as_bytes());
+    let output = shadecache([
+        "profile".as_ref(),
+        shader.as_ref(),
+        "--scene".as_ref(),
+        path.as_os_str(),
+        "--quiet".as_ref(),
+    ] as [&std::ffi::OsStr; 5]);
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{err}");
+    err
+}
