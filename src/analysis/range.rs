@@ -150,10 +150,6 @@ impl UniformBounds {
             .copied()
             .unwrap_or(Interval::ALL)
     }
-
-    pub fn is_empty(&self) -> bool {
-        self.0.is_empty()
-    }
 }
 
 /// Intervals of the values of a fragment entry point, computed on demand
