@@ -46,6 +46,13 @@ pub fn html(report: &Report, dir: &Path) -> String {
         escape(&report.timing),
         escape(&report.command),
     );
+    if !report.steady_state {
+        let _ = write!(
+            page,
+            "<p class=\"answer\">The {} warm-up frames are fewer than the longest refresh period measured: the errors below are those of a cache younger than in its steady state, and lower than they will be. Leave <code>--warmup</code> out to measure them in the steady state.</p>",
+            report.warmup
+        );
+    }
 
     // The answer.
     page.push_str("<h2>Which value to cache</h2>");

@@ -29,6 +29,12 @@ pub struct Report {
     /// Frames measured (after the warm-up).
     pub frames: u32,
     pub warmup: u32,
+    /// Whether the warm-up covers the longest refresh period measured, so
+    /// that the errors are those of the cache in its steady state (every
+    /// pixel recomputed at least once, reused values 0 to Δn − 1 frames
+    /// old). When not, they are a younger cache's, and optimistic.
+    #[serde(default)]
+    pub steady_state: bool,
     pub device: Device,
     /// `gpu-timestamps` (timestamp queries around each pass) or
     /// `cpu-wall-clock` (submit to completion, where the adapter has no
@@ -428,6 +434,7 @@ mod tests {
             size: [8, 8],
             frames: 1,
             warmup: 0,
+            steady_state: true,
             device: Device {
                 name: String::new(),
                 backend: String::new(),

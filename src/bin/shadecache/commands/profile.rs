@@ -75,7 +75,9 @@ pub struct Args {
     #[arg(long, value_name = "N")]
     pub frames: Option<u32>,
 
-    /// Warm-up frames, not measured (default: the scene's).
+    /// Warm-up frames, not measured (default: the scene's, and at least
+    /// the longest refresh period, so that errors are measured in the
+    /// cache's steady state).
     #[arg(long, value_name = "N")]
     pub warmup: Option<u32>,
 
@@ -233,12 +235,13 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         .map_err(|e| io("trace.json", e.to_string()))?;
 
     let mut summary = format!(
-        "{} on {} ({}×{}, {} frames, {}): reference {:.3} ms\n",
+        "{} on {} ({}×{}, {} frames after {} warm-up, {}): reference {:.3} ms\n",
         report.shader,
         report.scene,
         report.size[0],
         report.size[1],
         report.frames,
+        report.warmup,
         report.device.name,
         report.reference.time_ms
     );
@@ -256,6 +259,12 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
             row.refresh_rate * 100.0,
             row.psnr,
             row.ssim
+        ));
+    }
+    if !report.steady_state {
+        summary.push_str(&format!(
+            "  note: {} warm-up frames are fewer than the longest refresh period: the errors are those of a younger cache than in its steady state (leave --warmup out to measure that)\n",
+            report.warmup
         ));
     }
     for cause in &report.miss_causes {
