@@ -4,8 +4,8 @@
 //! A plain profile measures the full product of the lists it is given
 //! (Δn × k × reconstruction × cache format × ε for every node and variant).
 //! A **sweep** (`profile --sweep`) covers the whole accuracy-against-time
-//! grid of [`Axes::sweep`] — 5 periods × 4 block sizes × 2 formats × 2
-//! reconstructions × 3 depth tolerances = 240 settings per node and
+//! grid of [`Axes::sweep`] — 5 periods × 4 block sizes × 2 formats × 4
+//! reconstructions × 3 depth tolerances = 480 settings per node and
 //! variant — which is too many to render interleaved, so it prunes, and
 //! the report lists what it pruned and why:
 //!
@@ -42,14 +42,15 @@ pub struct Axes {
 
 impl Axes {
     /// The sweep's grid: Δn ∈ {4, 8, 16, 32, 64}, k ∈ {1, 2, 4, 8}, both
-    /// formats, both reconstructions, and ε at a quarter of, at, and four
-    /// times the default.
+    /// formats, every reconstruction (the packed ones are refused for
+    /// four-component payloads), and ε at a quarter of, at, and four times
+    /// the default.
     pub fn sweep() -> Self {
         let epsilon = RewriteOptions::default().depth_epsilon;
         Axes {
             refresh_periods: vec![4, 8, 16, 32, 64],
             refresh_quads: vec![1, 2, 4, 8],
-            reconstructions: vec![Reconstruction::Bilinear, Reconstruction::Nearest],
+            reconstructions: Reconstruction::ALL.to_vec(),
             cache_formats: vec![CacheFormat::Rgba16float, CacheFormat::Rgba32float],
             depth_epsilons: vec![epsilon / 4.0, epsilon, epsilon * 4.0],
         }
@@ -266,16 +267,16 @@ mod tests {
     fn the_full_design_measures_the_product() {
         let axes = Axes::sweep();
         let grid = Grid::new(axes.clone(), Design::Full, &[("a".into(), 0.01)], 3);
-        assert_eq!(grid.settings[0].len(), 240);
-        assert_eq!(grid.len(3), 720);
+        assert_eq!(grid.settings[0].len(), 480);
+        assert_eq!(grid.len(3), 1440);
         assert!(grid.pruned.is_empty());
     }
 
     #[test]
     fn planes_keep_the_two_planes_through_the_base() {
         let grid = Grid::new(Axes::sweep(), Design::Planes, &[("a".into(), 0.9)], 1);
-        // 20 refresh settings + 12 read-back settings, sharing the base.
-        assert_eq!(grid.settings[0].len(), 20 + 12 - 1);
+        // 20 refresh settings + 24 read-back settings, sharing the base.
+        assert_eq!(grid.settings[0].len(), 20 + 24 - 1);
         let base = grid.axes.base().unwrap();
         assert_eq!(base.refresh_period, 32);
         assert_eq!(base.refresh_quad, 4);

@@ -418,8 +418,13 @@ pub fn profile(
                     setting.cache_format = CacheFormat::Rgba32float;
                 }
                 if seen.contains(&(node, variant, setting)) {
-                    let note = rewritten.plan.cache.format_note.as_deref().unwrap_or("");
-                    progress.refused(&what, &format!("measured already: {note}"));
+                    // Whichever of the pair came second: the widened
+                    // rgba16float one carries the note, the rgba32float one
+                    // asked for does not.
+                    let why = rewritten.plan.cache.format_note.as_deref().unwrap_or(
+                        "the rgba16float setting of this node ran in rgba32float, so this is the same configuration",
+                    );
+                    progress.refused(&what, &format!("measured already: {why}"));
                     continue;
                 }
                 seen.push((node, variant, setting));

@@ -669,15 +669,15 @@ fn sweep_marks_the_pareto_front_and_writes_the_choice() {
     let report: shadecache::report::Report =
         serde_json::from_slice(&std::fs::read(out.path().join("report.json")).unwrap()).unwrap();
 
-    // 2 Δn × 2 k × 2 reconstructions × 2 formats × 3 ε = 48 settings; the
+    // 2 Δn × 2 k × 4 reconstructions × 2 formats × 3 ε = 96 settings; the
     // planes through the base (Δn 32, k 4, bilinear, rgba16float, the
-    // default ε) keep 4 + 12 − 1 = 15.
+    // default ε) keep 4 + 24 − 1 = 27.
     let grid = report.grid.as_ref().expect("a sweep reports its grid");
-    assert_eq!(grid.full, 48);
-    assert_eq!(grid.measured, 15);
-    assert_eq!(report.results.len(), 15);
+    assert_eq!(grid.full, 96);
+    assert_eq!(grid.measured, 27);
+    assert_eq!(report.results.len(), 27);
     let pruned: usize = grid.pruned.iter().map(|p| p.configurations).sum();
-    assert_eq!(pruned, 48 - 15);
+    assert_eq!(pruned, 96 - 27);
     assert!(grid.pruned.iter().all(|p| !p.reason.is_empty()));
     for format in ["rgba16float", "rgba32float"] {
         assert!(report

@@ -54,8 +54,8 @@ pub struct Args {
 
     /// Reconstructions to measure, separated by commas: bilinear, nearest,
     /// bilinear-packed, nearest-packed (the packed ones keep the depth in
-    /// the payload's fourth channel) [default: bilinear; with --sweep
-    /// bilinear,nearest].
+    /// the payload's fourth channel) [default: bilinear; with --sweep all
+    /// four].
     #[arg(long, value_name = "R,...", value_enum, value_delimiter = ',')]
     pub reconstruction: Option<Vec<ReconstructionArg>>,
 
