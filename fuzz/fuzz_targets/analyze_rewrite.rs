@@ -9,7 +9,7 @@
 use libfuzzer_sys::fuzz_target;
 use shadecache::back::{self, Language};
 use shadecache::diagnostic::SourceFile;
-use shadecache::rewrite::{self, Options, Variant};
+use shadecache::rewrite::{self, Options, Reconstruction, Variant};
 use shadecache::{analysis, front};
 
 /// Candidates rewritten per input, to keep each run short.
@@ -25,10 +25,15 @@ fuzz_target!(|data: &[u8]| {
     let Ok(analysis) = analysis::analyze(&shader, &analysis::Options::default()) else {
         return;
     };
+    // One reconstruction per input, chosen by its length, so that every
+    // lookup (separate and packed) is exercised without running four times.
+    let options = Options {
+        reconstruction: Reconstruction::ALL[data.len() % Reconstruction::ALL.len()],
+        ..Options::default()
+    };
     for candidate in analysis.candidates.iter().take(MAX_CANDIDATES) {
         for variant in Variant::ALL {
-            let Ok(rewritten) =
-                rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
+            let Ok(rewritten) = rewrite::rewrite(&shader, &analysis, candidate, variant, &options)
             else {
                 continue;
             };
