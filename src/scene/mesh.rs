@@ -255,7 +255,7 @@ fn face_normals(mesh: &mut Mesh, first: usize) {
     for n in &mut mesh.normals[first..] {
         *n = Vec3::ZERO;
     }
-    for tri in mesh.indices.chunks(3) {
+    for tri in mesh.indices.chunks_exact(3) {
         let [a, b, c] = [tri[0], tri[1], tri[2]].map(|i| i as usize);
         if a < first {
             continue;
@@ -332,7 +332,19 @@ fn gltf(path: &Path) -> Result<Mesh, String> {
                 continue;
             }
             let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+            // The reader gives nothing for an accessor whose data does not
+            // fit its buffer: that is an error, not a missing attribute.
+            let unreadable = |what: &str| {
+                fail(format!(
+                    "the {what} of a primitive of mesh {} do not fit in its buffer",
+                    node_mesh.index()
+                ))
+            };
+            let declared = |semantic: gltf::Semantic| primitive.get(&semantic).is_some();
             let Some(positions) = reader.read_positions() else {
+                if declared(gltf::Semantic::Positions) {
+                    return Err(unreadable("positions"));
+                }
                 continue;
             };
             let first = mesh.positions.len();
@@ -346,6 +358,7 @@ fn gltf(path: &Path) -> Result<Mesh, String> {
                     );
                     true
                 }
+                None if declared(gltf::Semantic::Normals) => return Err(unreadable("normals")),
                 None => {
                     mesh.normals.resize(first + count, Vec3::ZERO);
                     false
@@ -353,6 +366,9 @@ fn gltf(path: &Path) -> Result<Mesh, String> {
             };
             match reader.read_tex_coords(0) {
                 Some(uvs) => mesh.uvs.extend(uvs.into_f32().map(Vec2::from_array)),
+                None if declared(gltf::Semantic::TexCoords(0)) => {
+                    return Err(unreadable("texture coordinates"))
+                }
                 None => mesh.uvs.resize(first + count, Vec2::ZERO),
             }
             if mesh.normals.len() != first + count || mesh.uvs.len() != first + count {
@@ -363,6 +379,7 @@ fn gltf(path: &Path) -> Result<Mesh, String> {
             }
             let indices: Vec<u32> = match reader.read_indices() {
                 Some(indices) => indices.into_u32().collect(),
+                None if primitive.indices().is_some() => return Err(unreadable("indices")),
                 None => (0..count as u32).collect(),
             };
             if let Some(bad) = indices.iter().find(|&&i| i as usize >= count) {
@@ -593,6 +610,31 @@ mod tests {
         write_with_side_buffer(dir.path(), "bad", &json, &data);
         let err = load(dir.path(), "bad.gltf").unwrap_err();
         assert!(err.contains("indexes vertex 1000"), "{err}");
+        // Accessors reaching past their buffer views: an error naming
+        // what does not fit, not a mesh without it.
+        let (json, data) = to_gltf(&super::cube(1.0), true, Vec3::ZERO, 1.0);
+        // The cube's accessors in order: positions, normals, uvs (24 each).
+        for (nth, what) in [(0, "positions"), (1, "normals"), (2, "texture coordinates")] {
+            let pieces: Vec<&str> = json.split("\"count\":24,").collect();
+            assert_eq!(pieces.len(), 4);
+            let mut long = String::new();
+            for (i, piece) in pieces.iter().enumerate() {
+                long.push_str(piece);
+                if i + 1 < pieces.len() {
+                    long.push_str(if i == nth {
+                        "\"count\":100000,"
+                    } else {
+                        "\"count\":24,"
+                    });
+                }
+            }
+            write_with_side_buffer(dir.path(), "long", &long, &data);
+            let err = load(dir.path(), "long.gltf").unwrap_err();
+            assert!(
+                err.contains(what) && err.contains("do not fit"),
+                "{what}: {err}"
+            );
+        }
         // A buffer file shorter than declared.
         std::fs::write(dir.path().join("bad.bin"), &data[..10]).unwrap();
         let err = load(dir.path(), "bad.gltf").unwrap_err();
