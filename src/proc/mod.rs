@@ -18,6 +18,24 @@ pub use placement::{
     Store,
 };
 
+/// Whether a value with `binding` and type `ty` — an entry point's argument
+/// or result — carries a binding that `wanted` accepts, on itself or on one
+/// of its struct members.
+pub fn has_binding(
+    module: &naga::Module,
+    binding: &Option<naga::Binding>,
+    ty: naga::Handle<naga::Type>,
+    wanted: impl Fn(&naga::Binding) -> bool,
+) -> bool {
+    binding.as_ref().is_some_and(&wanted)
+        || match module.types[ty].inner {
+            naga::TypeInner::Struct { ref members, .. } => members
+                .iter()
+                .any(|m| m.binding.as_ref().is_some_and(&wanted)),
+            _ => false,
+        }
+}
+
 /// The number of scalar components of a type: 1 for scalars, n for vectors,
 /// columns × rows for matrices, 1 for everything else.
 pub fn components(inner: &naga::TypeInner) -> u32 {

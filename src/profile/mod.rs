@@ -744,19 +744,9 @@ fn check_instancing(shader: &Shader, scene: &Scene) -> Result<(), Error> {
         .filter(|ep| ep.stage == naga::ShaderStage::Vertex)
         .flat_map(|ep| &ep.function.arguments)
         .any(|argument| {
-            let builtin = |binding: &Option<naga::Binding>| {
-                matches!(
-                    binding,
-                    Some(naga::Binding::BuiltIn(naga::BuiltIn::InstanceIndex))
-                )
-            };
-            builtin(&argument.binding)
-                || match module.types[argument.ty].inner {
-                    naga::TypeInner::Struct { ref members, .. } => {
-                        members.iter().any(|m| builtin(&m.binding))
-                    }
-                    _ => false,
-                }
+            crate::proc::has_binding(module, &argument.binding, argument.ty, |b| {
+                matches!(b, naga::Binding::BuiltIn(naga::BuiltIn::InstanceIndex))
+            })
         });
     if reads_instance_index {
         return Ok(());

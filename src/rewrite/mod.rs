@@ -631,13 +631,11 @@ pub fn rewrite(
     })
 }
 
-/// `[lo, hi]` for people, with unbounded ends as infinities.
+/// Whether the fragment result writes `@builtin(frag_depth)`.
 fn writes_frag_depth(module: &naga::Module, result: &naga::FunctionResult) -> bool {
-    let is_depth = |b: &Option<naga::Binding>| {
-        matches!(b, Some(naga::Binding::BuiltIn(naga::BuiltIn::FragDepth)))
-    };
-    is_depth(&result.binding)
-        || matches!(module.types[result.ty].inner, naga::TypeInner::Struct { ref members, .. } if members.iter().any(|m| is_depth(&m.binding)))
+    crate::proc::has_binding(module, &result.binding, result.ty, |b| {
+        matches!(b, naga::Binding::BuiltIn(naga::BuiltIn::FragDepth))
+    })
 }
 
 /// Whether a `return` can run before `node` is emitted.
