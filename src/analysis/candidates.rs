@@ -58,9 +58,13 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
     // One node per source span: where the front end made several
     // expressions for one piece of source (a load and its pointer, a splat
     // and its scalar), the last one, which consumes the others, stands for it.
+    // Loads of local variables have no span of their own; they are
+    // spanned by the variable's name where it is read.
+    let load_spans = super::spans::local_loads(function, source);
     let mut by_span: BTreeMap<(usize, usize), Handle<Expression>> = BTreeMap::new();
     for (handle, _) in function.expressions.iter() {
-        let Some(range) = function.expressions.get_span(handle).to_range() else {
+        let span = function.expressions.get_span(handle).to_range();
+        let Some(range) = span.or_else(|| load_spans.get(&handle).cloned()) else {
             continue;
         };
         if range.is_empty()

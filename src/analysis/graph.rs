@@ -16,7 +16,8 @@ pub type ExprSet = FixedBitSet;
 /// Node `i` is the expression with arena index `i`. An edge `a → b` means
 /// computing `a` needs `b`: `b` is an operand of `a`; or `a` loads a local
 /// (or private) variable and `b` is a value stored into it, an index of the
-/// pointer stored through, or a condition under which the store runs; or
+/// pointer stored through, or a condition under which the store runs (for
+/// a local, only the stores that reach the load: [`proc::reaching_definitions`]); or
 /// `a` is a call result and `b` one of the call's arguments.
 #[derive(Debug)]
 pub struct ExprGraph {
@@ -32,16 +33,28 @@ impl ExprGraph {
         }
         let node = |h: Handle<Expression>| NodeIndex::new(h.index());
 
-        // Values written into each variable, by the variable they write.
+        // What one definition of a variable needs: the value stored, the
+        // pointer stored through (its indices) and the conditions under
+        // which the store runs.
+        let store_needs = |store: &proc::Store, needed: &mut Vec<Handle<Expression>>| {
+            needed.push(store.value);
+            needed.push(store.pointer);
+            needed.extend(store.placement.controls.iter().copied());
+        };
+        let call_needs = |call: &proc::CallSite, needed: &mut Vec<Handle<Expression>>| {
+            needed.extend(call.arguments.iter().copied());
+            needed.extend(call.placement.controls.iter().copied());
+        };
+        // Every value written into a variable, wherever it is written: for
+        // private globals, and for a local load the reaching-definitions
+        // walk did not see (it sees every emitted one).
         let writes_to = |root: PointerRoot| -> Vec<Handle<Expression>> {
             let mut needed = Vec::new();
             if let PointerRoot::Local(local) = root {
                 needed.extend(function.local_variables[local].init);
             }
             for store in layout.stores.iter().filter(|s| s.target == Some(root)) {
-                needed.push(store.value);
-                needed.push(store.pointer);
-                needed.extend(store.placement.controls.iter().copied());
+                store_needs(store, &mut needed);
             }
             // A call given a pointer into the variable may write through it.
             for call in &layout.calls {
@@ -50,11 +63,29 @@ impl ExprGraph {
                     .iter()
                     .any(|&arg| proc::pointer_root(function, arg) == Some(root))
                 {
-                    needed.extend(call.arguments.iter().copied());
-                    needed.extend(call.placement.controls.iter().copied());
+                    call_needs(call, &mut needed);
                 }
             }
             needed
+        };
+        // What a load of a local needs: only the definitions that reach it.
+        let reaching = |load: Handle<Expression>,
+                        local: Handle<naga::LocalVariable>|
+         -> Option<Vec<Handle<Expression>>> {
+            let definitions = layout.reaching.get(&load)?;
+            let mut needed = Vec::new();
+            for definition in definitions {
+                match *definition {
+                    proc::Definition::Init => {
+                        needed.extend(function.local_variables[local].init);
+                    }
+                    proc::Definition::Store(index) => {
+                        store_needs(&layout.stores[index], &mut needed)
+                    }
+                    proc::Definition::Call(index) => call_needs(&layout.calls[index], &mut needed),
+                }
+            }
+            Some(needed)
         };
 
         for (handle, expr) in function.expressions.iter() {
@@ -62,18 +93,15 @@ impl ExprGraph {
                 graph.add_edge(node(handle), node(operand), ());
             }
             if let Expression::Load { pointer } = *expr {
-                match proc::pointer_root(function, pointer) {
-                    Some(root @ PointerRoot::Local(_)) => {
-                        for needed in writes_to(root) {
-                            graph.add_edge(node(handle), node(needed), ());
-                        }
+                let needed = match proc::pointer_root(function, pointer) {
+                    Some(root @ PointerRoot::Local(local)) => {
+                        reaching(handle, local).unwrap_or_else(|| writes_to(root))
                     }
-                    Some(root @ PointerRoot::Global(_)) => {
-                        for needed in writes_to(root) {
-                            graph.add_edge(node(handle), node(needed), ());
-                        }
-                    }
-                    _ => {}
+                    Some(root @ PointerRoot::Global(_)) => writes_to(root),
+                    _ => Vec::new(),
+                };
+                for needed in needed {
+                    graph.add_edge(node(handle), node(needed), ());
                 }
             }
         }

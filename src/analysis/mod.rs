@@ -30,6 +30,7 @@ mod entry;
 pub mod graph;
 mod id;
 pub mod range;
+mod spans;
 pub mod text;
 
 use std::ops::Range;

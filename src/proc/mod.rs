@@ -11,12 +11,14 @@
 
 mod operands;
 mod placement;
+mod reaching;
 
 pub use operands::{operands, pointer_root, PointerRoot};
 pub use placement::{
     each_statement, has_effects, layout, CallSite, FunctionLayout, KillSite, LoopBound, Placement,
     Store,
 };
+pub use reaching::{reaching_definitions, Definition};
 
 /// Whether a value with `binding` and type `ty` — an entry point's argument
 /// or result — carries a binding that `wanted` accepts, on itself or on one

@@ -1,5 +1,8 @@
+use std::collections::HashMap;
+
 use naga::{Block, Expression, Handle, Statement};
 
+use super::reaching::Definition;
 use super::{const_int, pointer_root, PointerRoot};
 
 /// Where an expression is evaluated.
@@ -72,6 +75,9 @@ pub struct FunctionLayout {
     pub discards: bool,
     /// Every `discard`, in statement order.
     pub kills: Vec<KillSite>,
+    /// For every load of a local variable, the definitions that may reach
+    /// it ([`super::reaching`]).
+    pub reaching: HashMap<Handle<Expression>, Vec<Definition>>,
 }
 
 /// A `discard` statement and where it runs.
@@ -121,7 +127,9 @@ pub fn layout(
         },
     };
     walker.block(&function.body, &Placement::top());
-    walker.out
+    let mut out = walker.out;
+    out.reaching = super::reaching::reaching_definitions(function);
+    out
 }
 
 struct Walker<'a> {

@@ -1,0 +1,239 @@
+//! Where the loads of local variables are in the source.
+//!
+//! naga's WGSL front end gives no span to the load it makes when a local
+//! `var` is read by name (`color` in `return color;`), nor to the variable's
+//! pointer. Such a load is the value of the variable at that point, and its
+//! reaching definitions make it a node worth caching (the result of a loop,
+//! of a branch, of a chain of `color *= ...`). To show and name it, the
+//! load is given the span of the variable's name where it is read: the
+//! name's occurrence inside the smallest spanned expression or statement
+//! that reads the load. The source is only read here, never rewritten.
+
+use std::collections::HashMap;
+use std::ops::Range;
+
+use naga::{Block, Expression, Handle, Statement};
+
+use crate::proc::{self, PointerRoot};
+
+/// The span of every load of a named local variable that has none.
+pub fn local_loads(
+    function: &naga::Function,
+    source: &str,
+) -> HashMap<Handle<Expression>, Range<usize>> {
+    let span_of = |h: Handle<Expression>| function.expressions.get_span(h).to_range();
+    // Loads without a span, and the variable each reads.
+    let mut name_of = HashMap::new();
+    for (handle, expr) in function.expressions.iter() {
+        let Expression::Load { pointer } = *expr else {
+            continue;
+        };
+        if span_of(handle).is_some() {
+            continue;
+        }
+        if let Some(range) = span_of(pointer) {
+            // `v.member` and `v[i]` are spanned through their pointer.
+            name_of.insert(handle, Err(range));
+            continue;
+        }
+        if let Some(PointerRoot::Local(local)) = proc::pointer_root(function, pointer) {
+            if let Some(name) = &function.local_variables[local].name {
+                name_of.insert(handle, Ok(name.as_str()));
+            }
+        }
+    }
+    if name_of.is_empty() {
+        return HashMap::new();
+    }
+
+    // The first reader of each load with a span: an expression, else a
+    // statement.
+    let mut reader: HashMap<Handle<Expression>, Range<usize>> = HashMap::new();
+    for (handle, expr) in function.expressions.iter() {
+        let Some(range) = span_of(handle) else {
+            continue;
+        };
+        for operand in proc::operands(expr) {
+            if name_of.contains_key(&operand) {
+                reader.entry(operand).or_insert_with(|| range.clone());
+            }
+        }
+    }
+    statement_readers(&function.body, &name_of, &mut reader);
+
+    // Several loads of one variable read by one reader (`c * c`) take its
+    // occurrences in turn, in arena order.
+    let mut taken: HashMap<(usize, &str), usize> = HashMap::new();
+    let mut out = HashMap::new();
+    let mut loads: Vec<_> = name_of.into_iter().collect();
+    loads.sort_by_key(|(h, _)| h.index());
+    for (load, name) in loads {
+        let name = match name {
+            Err(range) => {
+                out.insert(load, range);
+                continue;
+            }
+            Ok(name) => name,
+        };
+        if let Some(within) = reader.get(&load) {
+            let nth = taken.entry((within.start, name)).or_insert(0);
+            if let Some(found) = identifier_occurrences(source, within.clone(), name).nth(*nth) {
+                out.insert(load, found);
+                *nth += 1;
+                continue;
+            }
+        }
+        // Bound to a `let` and read by that name (`let _e157 = color;
+        // return _e157;`, as naga_oil's flattened modules read): the
+        // variable's name in the `let`'s initializer.
+        if let Some(found) = function
+            .named_expressions
+            .get(&load)
+            .and_then(|binding| let_initializer(source, function.name.as_deref(), binding))
+            .and_then(|init| identifier_occurrences(source, init, name).next())
+        {
+            out.insert(load, found);
+        }
+    }
+    out
+}
+
+fn statement_readers(
+    block: &Block,
+    loads: &HashMap<Handle<Expression>, Result<&str, Range<usize>>>,
+    reader: &mut HashMap<Handle<Expression>, Range<usize>>,
+) {
+    for (statement, span) in block.span_iter() {
+        let read: Vec<Handle<Expression>> = match *statement {
+            Statement::Return { value } => value.into_iter().collect(),
+            Statement::Store { value, .. } => vec![value],
+            Statement::Call { ref arguments, .. } => arguments.clone(),
+            Statement::If { condition, .. } => vec![condition],
+            Statement::Switch { selector, .. } => vec![selector],
+            _ => Vec::new(),
+        };
+        if let Some(range) = span.to_range() {
+            for expr in read {
+                if loads.contains_key(&expr) {
+                    reader.entry(expr).or_insert_with(|| range.clone());
+                }
+            }
+        }
+        match *statement {
+            Statement::Block(ref inner) => statement_readers(inner, loads, reader),
+            Statement::If {
+                ref accept,
+                ref reject,
+                ..
+            } => {
+                statement_readers(accept, loads, reader);
+                statement_readers(reject, loads, reader);
+            }
+            Statement::Switch { ref cases, .. } => {
+                for case in cases {
+                    statement_readers(&case.body, loads, reader);
+                }
+            }
+            Statement::Loop {
+                ref body,
+                ref continuing,
+                ..
+            } => {
+                statement_readers(body, loads, reader);
+                statement_readers(continuing, loads, reader);
+            }
+            _ => {}
+        }
+    }
+}
+
+/// The initializer of the first `let binding` after `fn function` in
+/// `source` (names such as `_e157` repeat across functions): the range
+/// from its `=` to its `;`.
+fn let_initializer(source: &str, function: Option<&str>, binding: &str) -> Option<Range<usize>> {
+    let function = function?;
+    let start = identifier_occurrences(source, 0..source.len(), function)
+        .find(|at| source[..at.start].trim_end().ends_with("fn"))?
+        .end;
+    let at = identifier_occurrences(source, start..source.len(), binding)
+        .find(|at| source[..at.start].trim_end().ends_with("let"))?;
+    let equals = at.end + source[at.end..].find('=')?;
+    let end = equals + source[equals..].find(';')?;
+    Some(equals + 1..end)
+}
+
+/// The byte ranges where `name` occurs as a whole identifier within
+/// `within`, skipping comments and member names (`x.name`).
+fn identifier_occurrences<'a>(
+    source: &'a str,
+    within: Range<usize>,
+    name: &'a str,
+) -> impl Iterator<Item = Range<usize>> + 'a {
+    let end = within.end.min(source.len());
+    let text = source.get(within.start..end).unwrap_or_default();
+    let is_ident = |c: char| c.is_alphanumeric() || c == '_';
+    let mut out = Vec::new();
+    let mut chars = text.char_indices().peekable();
+    let mut previous: Option<char> = None;
+    while let Some((i, c)) = chars.next() {
+        if c == '/' && text[i..].starts_with("//") {
+            let skip = text[i..].find('\n').unwrap_or(text.len() - i);
+            while chars.peek().is_some_and(|&(j, _)| j < i + skip) {
+                chars.next();
+            }
+            previous = None;
+            continue;
+        }
+        if is_ident(c) && !previous.is_some_and(is_ident) {
+            let word_end = text[i..]
+                .find(|c: char| !is_ident(c))
+                .map_or(text.len(), |n| i + n);
+            let before = text[..i].trim_end().chars().next_back();
+            if &text[i..word_end] == name && before != Some('.') {
+                out.push(within.start + i..within.start + word_end);
+            }
+        }
+        previous = Some(c);
+    }
+    out.into_iter()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn identifiers_are_whole_words_outside_comments_and_members() {
+        let source = "c + cc * in.c // c\n + c";
+        let found: Vec<_> = identifier_occurrences(source, 0..source.len(), "c").collect();
+        assert_eq!(found, vec![0..1, 22..23]);
+    }
+
+    #[test]
+    fn a_load_after_a_branch_is_spanned_by_its_name() {
+        let source = "@fragment\nfn fs(@location(0) x: f32) -> @location(0) vec4<f32> {\n    var color = vec4<f32>(0.0);\n    if (x > 0.5) { color = vec4<f32>(sin(x)); }\n    return color * color;\n}\n";
+        let module = naga::front::wgsl::parse_str(source).unwrap();
+        let function = &module.entry_points[0].function;
+        let spans = local_loads(function, source);
+        let mut texts: Vec<_> = spans
+            .values()
+            .map(|r| (r.start, &source[r.clone()]))
+            .collect();
+        texts.sort();
+        let at = source.find("return color").unwrap() + "return ".len();
+        assert_eq!(texts, vec![(at, "color"), (at + 8, "color")]);
+    }
+
+    #[test]
+    fn a_load_bound_to_a_let_is_spanned_in_its_initializer() {
+        let source = "@fragment\nfn fs(@location(0) x: f32) -> @location(0) vec4<f32> {\n    var color: vec4<f32>;\n    if (x > 0.5) { color = vec4<f32>(sin(x)); }\n    let _e9: vec4<f32> = color;\n    return _e9;\n}\n";
+        let module = naga::front::wgsl::parse_str(source).unwrap();
+        let function = &module.entry_points[0].function;
+        let spans = local_loads(function, source);
+        let at = source.find("= color").unwrap() + 2;
+        assert_eq!(
+            spans.values().cloned().collect::<Vec<_>>(),
+            vec![at..at + 5]
+        );
+    }
+}
