@@ -343,6 +343,22 @@ fn cache_current(frag_coord: vec4<f32>) -> vec4<f32> {
     return textureLoad(cache_current_payload, vec2<i32>(frag_coord.xy), 0);
 }
 
+// The payload of a pixel where the cached node is not computed: the node
+// sits under a branch this pixel does not take (or a uniform branch the
+// draw does not take). It is NaN, so that next frame's lookup there misses
+// (`cache_checked`) instead of reusing a value that never existed; the
+// shading never reads it, since it reads the node only where the original
+// computes it. Made at run time, like `cache_encode`'s NaN.
+fn cache_absent() -> vec4<f32> {
+    return vec4<f32>(bitcast<f32>(0x7fc00000u | (cache_params.frame & 0u)));
+}
+
+// The class colour of a pixel where the node is not computed (grey): not
+// counted as a hit, a miss or a refresh.
+fn cache_classify_absent(present: bool, classes: vec4<f32>) -> vec4<f32> {
+    return select(vec4<f32>(0.5, 0.5, 0.5, 1.0), classes, present);
+}
+
 // What the cache does at this pixel, as a colour for the profiler's maps,
 // from the status of the variant's own lookup: reused (green), refreshed
 // (blue), missed because the point was off-screen last frame (orange),

@@ -38,6 +38,7 @@ pub use crate::analysis::Nodes;
 struct ShaderJob {
     path: PathBuf,
     entry: Option<String>,
+    vertex_entry: Option<String>,
     nodes: Nodes,
     variants: Vec<Variant>,
 }
@@ -47,6 +48,7 @@ impl ShaderJob {
         ShaderJob {
             path,
             entry: None,
+            vertex_entry: None,
             nodes: Nodes::Top(1),
             variants: Variant::ALL.to_vec(),
         }
@@ -135,6 +137,14 @@ impl Build {
         if !job.variants.contains(&variant) {
             job.variants.push(variant);
         }
+        self
+    }
+
+    /// The vertex entry point that draws with the last shader's fragment
+    /// entry point, when the module has several vertex entry points and
+    /// which one cannot be inferred from what they output.
+    pub fn vertex_entry(mut self, name: impl Into<String>) -> Self {
+        self.last().vertex_entry = Some(name.into());
         self
     }
 
@@ -240,7 +250,11 @@ impl Build {
         let explicit = matches!(job.nodes, Nodes::Ids(_));
         for candidate in analysis.select(&shader.file, &job.nodes)? {
             for &variant in &job.variants {
-                match rewrite::rewrite(&shader, &analysis, candidate, variant, &self.options) {
+                let options = Options {
+                    vertex_entry: job.vertex_entry.clone(),
+                    ..self.options.clone()
+                };
+                match rewrite::rewrite(&shader, &analysis, candidate, variant, &options) {
                     Ok(rewritten) => {
                         let dir = out_dir
                             .join(&stem)

@@ -48,6 +48,14 @@ pub struct PlanNode {
     #[serde(rename = "type")]
     pub ty: String,
     pub components: u32,
+    /// Absent for a node every pixel computes. `uniform-branch`: under
+    /// branches whose conditions depend only on uniforms, overrides and
+    /// constants (material flags), so a draw computes it everywhere or
+    /// nowhere; `per-pixel-branch`: under a branch some pixels take. Where
+    /// the node is not computed, the cache holds NaN ("no value") and the
+    /// classify pass marks the pixel absent (docs/rewrite.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<String>,
 }
 
 /// One render pass.
@@ -326,6 +334,7 @@ pub fn build(inputs: Inputs) -> Plan {
             text: candidate.node.text.clone(),
             ty: candidate.node.ty.clone(),
             components: candidate.components,
+            path: None,
         },
         variant,
         passes: plan_passes,
@@ -535,7 +544,12 @@ fn vertex_format(inner: &TypeInner) -> String {
 pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Result<Plan, String> {
     let module = &shader.module;
     let entry = &module.entry_points[analysis.entry_index];
-    let vertex_index = rewrite::vertex::vertex_entry(module).map_err(|r| r.reason)?;
+    let vertex_index = rewrite::vertex::vertex_entry(
+        module,
+        analysis.entry_index,
+        options.vertex_entry.as_deref(),
+    )
+    .map_err(|r| r.reason)?;
     let vertex_entry = &module.entry_points[vertex_index];
     let Some(result) = entry.function.result.as_ref() else {
         return Err("the fragment entry point returns nothing".into());
@@ -550,6 +564,7 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
             text: String::new(),
             ty: String::new(),
             components: 0,
+            path: None,
         },
         variant: Variant::Reference,
         passes: vec![Pass {

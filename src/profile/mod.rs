@@ -74,6 +74,10 @@ pub struct Options {
     pub error_threshold: f64,
     /// The command line, recorded in the report.
     pub command: String,
+    /// The fragment entry point, when the shader has several.
+    pub entry: Option<String>,
+    /// The vertex entry point that draws with it; `None` infers it.
+    pub vertex_entry: Option<String>,
 }
 
 impl Options {
@@ -120,6 +124,8 @@ impl Default for Options {
             size: None,
             error_threshold: 0.05,
             command: String::new(),
+            entry: None,
+            vertex_entry: None,
         }
     }
 }
@@ -197,7 +203,13 @@ pub fn profile(
     // gives bound the candidates' values (whether a payload fits f16 here).
     let uniforms = scene::uniforms::buffers(&shader.module);
     scene::uniforms::check(&uniforms, scene).map_err(fail)?;
-    let mut analysis = analysis::analyze(shader, &analysis::Options::default())?;
+    let mut analysis = analysis::analyze(
+        shader,
+        &analysis::Options {
+            entry: options.entry.clone(),
+            ..analysis::Options::default()
+        },
+    )?;
     let aspect = size[0] as f32 / size[1] as f32;
     analysis.bound_uniforms(
         shader,
@@ -218,6 +230,7 @@ pub fn profile(
         .ok_or_else(|| fail("every knob needs at least one value to measure".into()))?;
     let defaults = RewriteOptions {
         depth: scene.camera.depth,
+        vertex_entry: options.vertex_entry.clone(),
         ..RewriteOptions::default()
     };
     let base = base_setting.rewrite_options(&defaults);

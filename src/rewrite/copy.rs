@@ -33,9 +33,14 @@ pub struct FunctionCopy<'a> {
     substitutes: HashMap<Handle<Expression>, Expression>,
     /// Copied expressions that still need an `Emit`.
     pending: Vec<Handle<Expression>>,
-    /// Stop after this expression is emitted, returning it.
+    /// Stop after this expression is emitted, returning it (or
+    /// `stop_value`).
     stop_at: Option<Handle<Expression>>,
+    stop_value: Option<Expression>,
     stopped: bool,
+    /// How deep in nested blocks the copy is, and was when it stopped.
+    depth: usize,
+    stop_depth: Option<usize>,
     /// Globals and functions to use in place of others.
     globals: HashMap<Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>>,
     functions: HashMap<Handle<Function>, Handle<Function>>,
@@ -72,7 +77,10 @@ impl<'a> FunctionCopy<'a> {
             substitutes: HashMap::new(),
             pending: Vec::new(),
             stop_at: None,
+            stop_value: None,
             stopped: false,
+            depth: 0,
+            stop_depth: None,
             globals: HashMap::new(),
             functions: HashMap::new(),
             return_member: None,
@@ -144,6 +152,30 @@ impl<'a> FunctionCopy<'a> {
         self.stop_at = Some(expr);
     }
 
+    /// Copies statements up to where `expr` is evaluated, then returns
+    /// `value` (an expression of the new function, such as a literal)
+    /// instead of computing `expr`.
+    pub fn return_value_at(&mut self, expr: Handle<Expression>, value: Expression) {
+        self.stop_at = Some(expr);
+        self.stop_value = Some(value);
+    }
+
+    /// Whether the copy returned at the node in the function's own body,
+    /// so that every path through it returns. When the node is computed
+    /// under a branch (or never), the paths that do not reach it still
+    /// need a `return` after the copied body.
+    pub fn returns_on_every_path(&self) -> bool {
+        self.stop_depth == Some(0)
+    }
+
+    /// The value returned at the node.
+    fn stop_value(&mut self, expr: Handle<Expression>) -> Handle<Expression> {
+        match self.stop_value.clone() {
+            Some(value) => self.add(value),
+            None => self.expression(expr),
+        }
+    }
+
     /// Copies the live part of the source body into the target's body.
     pub fn run(mut self) -> Function {
         let body = self.copy_body();
@@ -203,25 +235,41 @@ impl<'a> FunctionCopy<'a> {
         out
     }
 
+    /// A nested block: the copy stops inside it only on the paths that
+    /// reach the node, so the statements after it are still copied.
+    fn nested(&mut self, block: &Block) -> Block {
+        self.depth += 1;
+        let out = self.block(block);
+        self.depth -= 1;
+        if self.stop_depth.is_some_and(|d| d > self.depth) {
+            // Stopped in there: the rest of the enclosing block runs on the
+            // other paths, but the node's value is the last thing anything
+            // copied with `return_at` needs, so nothing more is copied.
+            self.stopped = true;
+        }
+        out
+    }
+
     fn statement(&mut self, statement: &Statement, span: Span, out: &mut Block) {
         match *statement {
             Statement::Emit(ref range) => {
                 for expr in range.clone() {
-                    if self.is_live(expr) || Some(expr) == self.stop_at {
-                        self.expression(expr);
-                    }
                     if Some(expr) == self.stop_at {
-                        let value = self.expression(expr);
+                        let value = self.stop_value(expr);
                         self.flush(out);
                         out.push(Statement::Return { value: Some(value) }, span);
                         self.stopped = true;
+                        self.stop_depth = Some(self.depth);
                         return;
+                    }
+                    if self.is_live(expr) {
+                        self.expression(expr);
                     }
                 }
                 self.flush(out);
             }
             Statement::Block(ref inner) => {
-                let inner = self.block(inner);
+                let inner = self.nested(inner);
                 if !inner.is_empty() {
                     out.push(Statement::Block(inner), span);
                 }
@@ -236,8 +284,8 @@ impl<'a> FunctionCopy<'a> {
                 }
                 let condition = self.expression(condition);
                 self.flush(out);
-                let accept = self.block(accept);
-                let reject = self.block(reject);
+                let accept = self.nested(accept);
+                let reject = self.nested(reject);
                 out.push(
                     Statement::If {
                         condition,
@@ -260,7 +308,7 @@ impl<'a> FunctionCopy<'a> {
                     .iter()
                     .map(|case| naga::SwitchCase {
                         value: case.value,
-                        body: self.block(&case.body),
+                        body: self.nested(&case.body),
                         fall_through: case.fall_through,
                     })
                     .collect();
@@ -274,8 +322,8 @@ impl<'a> FunctionCopy<'a> {
                 if !self.loop_is_live(body, continuing, break_if) {
                     return;
                 }
-                let body = self.block(body);
-                let mut continuing = self.block(continuing);
+                let body = self.nested(body);
+                let mut continuing = self.nested(continuing);
                 let break_if = break_if.map(|h| self.expression(h));
                 self.flush(&mut continuing);
                 out.push(
@@ -314,13 +362,17 @@ impl<'a> FunctionCopy<'a> {
                 result: Some(result),
                 ..
             } if Some(result) == self.stop_at => {
-                if let Some(copied) = remap::simple_statement(statement, self) {
-                    self.flush(out);
-                    out.push(copied, span);
+                if self.stop_value.is_none() {
+                    if let Some(copied) = remap::simple_statement(statement, self) {
+                        self.flush(out);
+                        out.push(copied, span);
+                    }
                 }
-                let value = self.expression(result);
+                let value = self.stop_value(result);
+                self.flush(out);
                 out.push(Statement::Return { value: Some(value) }, span);
                 self.stopped = true;
+                self.stop_depth = Some(self.depth);
             }
             Statement::Store { pointer, .. } if !self.is_live(pointer) => {}
             Statement::Call {

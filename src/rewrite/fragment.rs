@@ -41,6 +41,10 @@ pub struct Pieces {
     pub refresh: Handle<Function>,
     pub current: Handle<Function>,
     pub classify: Handle<Function>,
+    /// For a node under branches ([`super::path`]): whether the original
+    /// computes it at this pixel, and the helper that marks the pixels
+    /// where it does not (`cache_classify_absent`).
+    pub presence: Option<(Handle<Function>, Handle<Function>)>,
     /// Applied to every payload written to the cache (`cache_encode`).
     pub encode: Handle<Function>,
     /// With a packed reconstruction, puts the fragment's depth into the
@@ -195,7 +199,11 @@ pub fn entry_point(
     if stage == Stage::Classify {
         let lookup = b.call(pieces.lookup, vec![previous]);
         let status = b.member(lookup, 2);
-        let classes = b.call(pieces.classify, vec![status, frag_coord]);
+        let mut classes = b.call(pieces.classify, vec![status, frag_coord]);
+        if let Some((presence, absent)) = pieces.presence {
+            let present = b.call(presence, originals.clone());
+            classes = b.call(absent, vec![present, classes]);
+        }
         b.push(Statement::Return {
             value: Some(classes),
         });

@@ -65,6 +65,8 @@ pub fn hoist(
     arguments: &[naga::FunctionArgument],
     result: Handle<naga::Type>,
     name: &str,
+    absent: Handle<Function>,
+    payload_components: u32,
 ) -> Result<Hoisted, Refusal> {
     let exprs: Vec<(Handle<Expression>, &Expression)> = function.expressions.iter().collect();
     let mut sites = Vec::new();
@@ -283,7 +285,7 @@ pub fn hoist(
             ),
         }
     }
-    let payload_fn = payload.run();
+    let payload_fn = super::path::finish_payload(payload, absent, payload_components);
     Ok(Hoisted {
         gradients: module.functions.append(gradients_fn, naga::Span::UNDEFINED),
         payload: module.functions.append(payload_fn, naga::Span::UNDEFINED),

@@ -24,6 +24,7 @@ pub mod copy;
 pub mod fragment;
 pub mod gradients;
 pub mod import;
+pub mod path;
 pub mod remap;
 pub mod uniformity;
 pub mod vertex;
@@ -219,6 +220,9 @@ pub struct Options {
     pub reconstruction: Reconstruction,
     /// Format of the colour targets, written into the plan.
     pub color_format: String,
+    /// The vertex entry point that draws with the fragment one; `None`
+    /// infers it ([`vertex::vertex_entry`]).
+    pub vertex_entry: Option<String>,
 }
 
 impl Default for Options {
@@ -231,6 +235,7 @@ impl Default for Options {
             depth: DepthConvention::Standard,
             reconstruction: Reconstruction::Bilinear,
             color_format: "rgba8unorm".into(),
+            vertex_entry: None,
         }
     }
 }
@@ -372,11 +377,6 @@ pub fn rewrite(
     let at = layout
         .placement(node)
         .ok_or_else(|| Refusal::new("the node is not evaluated by the entry point"))?;
-    if !at.controls.is_empty() {
-        return Err(Refusal::new(
-            "the node is computed under a branch, so it has no value at every pixel to cache",
-        ));
-    }
     let node_order = layout.order_of(node).unwrap_or(usize::MAX);
     if returns_before(&function.body, node) {
         return Err(Refusal::new(
@@ -442,14 +442,24 @@ pub fn rewrite(
         helper("cache_current")?,
         helper("cache_classify")?,
     );
+    let absent = helper("cache_absent")?;
 
-    let vertex_index = vertex::vertex_entry(&module)?;
+    let vertex_index = vertex::vertex_entry(
+        &module,
+        analysis.entry_index,
+        options.vertex_entry.as_deref(),
+    )?;
     let vertex = vertex::instrument(&mut module, vertex_index, group, FIRST_TWIN_BINDING)?;
     mark_positions_invariant(&mut module);
 
     // Split the fragment entry point at the node.
     let graph = ExprGraph::new(function, &layout);
     let mut payload_live = graph.slice(node);
+    // Under branches, the payload evaluates the path to the node too.
+    let node_path = path::Path::of(function, &graph, at);
+    if let Some(node_path) = &node_path {
+        payload_live.union_with(&node_path.live);
+    }
     for kill in layout.kills.iter().filter(|k| k.after <= node_order) {
         for &condition in &kill.placement.controls {
             payload_live.union_with(&graph.slice(condition));
@@ -497,6 +507,8 @@ pub fn rewrite(
             &stripped,
             payload_ty,
             &entry.name,
+            absent,
+            candidate.components,
         )?;
         (hoisted.payload, Some(hoisted.gradients))
     } else {
@@ -515,7 +527,7 @@ pub fn rewrite(
             },
         );
         payload_copy.return_at(node);
-        let payload_fn = payload_copy.run();
+        let payload_fn = path::finish_payload(payload_copy, absent, candidate.components);
         (
             module.functions.append(payload_fn, naga::Span::UNDEFINED),
             None,
@@ -555,6 +567,21 @@ pub fn rewrite(
         },
         naga::Span::UNDEFINED,
     );
+    let presence = match &node_path {
+        Some(node_path) => Some((
+            path::presence(
+                &mut module,
+                original,
+                function,
+                node_path,
+                node,
+                without_bindings(&function.arguments),
+                format!("{}_computes_node", entry.name),
+            ),
+            helper("cache_classify_absent")?,
+        )),
+        None => None,
+    };
     let pieces = Pieces {
         arguments: function.arguments.clone(),
         result,
@@ -569,6 +596,7 @@ pub fn rewrite(
         refresh,
         current,
         classify,
+        presence,
         encode: helper("cache_encode")?,
         pack,
         vec4,
@@ -622,6 +650,7 @@ pub fn rewrite(
     });
     let mut plan = plan;
     plan.cache.format_note = format_note;
+    plan.node.path = node_path.as_ref().map(|p| p.describe().to_string());
     Ok(Rewritten {
         variant,
         node: candidate.node.id.clone(),

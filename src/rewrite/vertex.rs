@@ -32,8 +32,16 @@ pub struct VertexStage {
     pub twins: Vec<(Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>)>,
 }
 
-/// Finds the module's vertex entry point.
-pub fn vertex_entry(module: &Module) -> Result<usize, Refusal> {
+/// The vertex entry point that draws with the fragment entry point at
+/// `fragment`: the one named `wanted`; else the module's only one; else,
+/// among several (a shadow pass and a main pass, as wgpu's `shadow`
+/// example has), the only one whose outputs are what the fragment stage
+/// takes — its input struct, or a value at every location it reads.
+pub fn vertex_entry(
+    module: &Module,
+    fragment: usize,
+    wanted: Option<&str>,
+) -> Result<usize, Refusal> {
     let vertices: Vec<usize> = module
         .entry_points
         .iter()
@@ -41,14 +49,121 @@ pub fn vertex_entry(module: &Module) -> Result<usize, Refusal> {
         .filter(|(_, ep)| ep.stage == naga::ShaderStage::Vertex)
         .map(|(i, _)| i)
         .collect();
+    let names = |indices: &[usize]| -> String {
+        indices
+            .iter()
+            .map(|&i| format!("`{}`", module.entry_points[i].name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    if let Some(name) = wanted {
+        return match module.entry_points.iter().position(|ep| ep.name == name) {
+            Some(index) if module.entry_points[index].stage == naga::ShaderStage::Vertex => {
+                let fragment = &module.entry_points[fragment];
+                if feeds(
+                    module,
+                    &module.entry_points[index].function,
+                    &fragment.function,
+                ) {
+                    Ok(index)
+                } else {
+                    Err(Refusal::new(format!(
+                        "`{name}` does not output what `{}` takes (its input struct, or a value at each location it reads)",
+                        fragment.name
+                    )))
+                }
+            }
+            Some(_) => Err(Refusal::new(format!(
+                "`{name}` is not a vertex entry point; the vertex entry points are {}",
+                if vertices.is_empty() {
+                    "none".into()
+                } else {
+                    names(&vertices)
+                }
+            ))),
+            None => Err(Refusal::new(format!(
+                "the shader has no entry point named `{name}`; its vertex entry points are {}",
+                if vertices.is_empty() {
+                    "none".into()
+                } else {
+                    names(&vertices)
+                }
+            ))),
+        };
+    }
     match vertices.as_slice() {
+        [only] => return Ok(*only),
+        [] => {
+            return Err(Refusal::new(
+                "the shader has no vertex entry point to compute the previous position with",
+            ))
+        }
+        _ => {}
+    }
+    let feeding: Vec<usize> = vertices
+        .iter()
+        .copied()
+        .filter(|&v| {
+            feeds(
+                module,
+                &module.entry_points[v].function,
+                &module.entry_points[fragment].function,
+            )
+        })
+        .collect();
+    match feeding.as_slice() {
         [only] => Ok(*only),
-        [] => Err(Refusal::new(
-            "the shader has no vertex entry point to compute the previous position with",
-        )),
-        _ => Err(Refusal::new(
-            "the shader has several vertex entry points; which one draws with this fragment stage is ambiguous",
-        )),
+        [] => Err(Refusal::new(format!(
+            "none of the vertex entry points ({}) outputs what `{}` takes; name the one that draws with it with --vertex-entry",
+            names(&vertices),
+            module.entry_points[fragment].name
+        ))),
+        several => Err(Refusal::new(format!(
+            "several vertex entry points ({}) output what `{}` takes; name the one that draws with it with --vertex-entry",
+            names(several),
+            module.entry_points[fragment].name
+        ))),
+    }
+}
+
+/// Whether `vertex`'s outputs are what `fragment` takes: the same struct
+/// type, or a value of the same type at every location the fragment stage
+/// reads.
+fn feeds(module: &Module, vertex: &Function, fragment: &Function) -> bool {
+    let Some(result) = &vertex.result else {
+        return false;
+    };
+    if fragment.arguments.iter().any(|a| a.ty == result.ty) {
+        return true;
+    }
+    let outputs = located(module, &result.binding, result.ty);
+    fragment
+        .arguments
+        .iter()
+        .flat_map(|a| located(module, &a.binding, a.ty))
+        .all(|input| outputs.contains(&input))
+}
+
+/// The `(location, type)` pairs a value with `binding` and type `ty`
+/// carries, on itself or on its struct's members.
+fn located(
+    module: &Module,
+    binding: &Option<Binding>,
+    ty: Handle<naga::Type>,
+) -> Vec<(u32, naga::TypeInner)> {
+    let location = |binding: &Option<Binding>| match *binding {
+        Some(Binding::Location { location, .. }) => Some(location),
+        _ => None,
+    };
+    match module.types[ty].inner {
+        TypeInner::Struct { ref members, .. } => members
+            .iter()
+            .filter_map(|m| location(&m.binding).map(|l| (l, module.types[m.ty].inner.clone())))
+            .collect(),
+        ref inner => location(binding)
+            .map(|l| (l, inner.clone()))
+            .into_iter()
+            .collect(),
     }
 }
 

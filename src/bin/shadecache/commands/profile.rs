@@ -92,6 +92,15 @@ pub struct Args {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+
+    /// The fragment entry point, when the shader has several.
+    #[arg(long, value_name = "NAME")]
+    pub entry: Option<String>,
+
+    /// The vertex entry point that draws with it, when the shader has
+    /// several and it cannot be inferred.
+    #[arg(long, value_name = "NAME")]
+    pub vertex_entry: Option<String>,
 }
 
 fn parse_size(text: &str) -> Result<[u32; 2], String> {
@@ -182,6 +191,8 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         Options::default()
     };
     let options = Options {
+        entry: args.entry.clone(),
+        vertex_entry: args.vertex_entry.clone(),
         nodes: parse_nodes(&args.nodes)?,
         variants: match args.variant {
             VariantArg::OnePass => vec![Variant::OnePass],
@@ -292,9 +303,16 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         match choice.result.map(|i| &report.results[i]) {
             Some(row) => {
                 let dir = args.out.join("choice");
-                let analysis = analysis::analyze(&shader, &analysis::Options::default())?;
+                let analysis = analysis::analyze(
+                    &shader,
+                    &analysis::Options {
+                        entry: args.entry.clone(),
+                        ..analysis::Options::default()
+                    },
+                )?;
                 let defaults = shadecache::rewrite::Options {
                     depth: scene.camera.depth,
+                    vertex_entry: args.vertex_entry.clone(),
                     ..shadecache::rewrite::Options::default()
                 };
                 let rewritten = profile::rewrite_of(&shader, &analysis, row, &defaults)?;

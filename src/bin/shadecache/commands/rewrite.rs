@@ -67,6 +67,11 @@ pub struct Args {
     #[arg(long, value_name = "NAME")]
     pub entry: Option<String>,
 
+    /// The vertex entry point that draws with it, when the shader has
+    /// several and it cannot be inferred from what they output.
+    #[arg(long, value_name = "NAME")]
+    pub vertex_entry: Option<String>,
+
     /// Where to write the shaders and plan.json.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
@@ -159,6 +164,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
             DepthArg::Reversed => DepthConvention::Reversed,
         },
         reconstruction: args.reconstruction.into(),
+        vertex_entry: args.vertex_entry.clone(),
         ..Options::default()
     };
     let language = match args.emit {
