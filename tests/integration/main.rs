@@ -12,5 +12,6 @@ mod hard_cases;
 mod hard_runs;
 mod instanced;
 mod profile;
+mod real_shaders;
 mod rewrite;
 mod util;

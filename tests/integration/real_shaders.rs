@@ -1,0 +1,279 @@
+//! Shaders as engines write them: results carried in local variables,
+//! costly work under material-flag branches and per-pixel branches, loop
+//! results, several entry points in one module.
+
+use shadecache::analysis::{Analysis, Candidate};
+use shadecache::front::Shader;
+use shadecache::profile::{Nodes, Options as ProfileOptions};
+use shadecache::rewrite::{self, CacheFormat, Options, Reconstruction, Variant};
+
+use crate::profile::run_shader;
+use crate::util::{analyzed, candidate, root};
+
+fn corpus_shader(name: &str) -> (Shader, Analysis) {
+    let path = root().join("corpus").join(name);
+    let text = std::fs::read_to_string(&path).unwrap();
+    analyzed(name, &text)
+}
+
+/// The candidates whose text is `text`, in source order.
+fn all_named<'a>(analysis: &'a Analysis, text: &str) -> Vec<&'a Candidate> {
+    let mut found: Vec<&Candidate> = analysis
+        .candidates
+        .iter()
+        .filter(|c| c.node.text == text)
+        .collect();
+    found.sort_by_key(|c| c.node.range.start);
+    found
+}
+
+fn wgsl_of(rewritten: &rewrite::Rewritten, pass: &str) -> String {
+    let pass = if pass == "classify" {
+        &rewritten.classify
+    } else {
+        rewritten.passes.iter().find(|p| p.name == pass).unwrap()
+    };
+    naga::back::wgsl::write_string(
+        &pass.module,
+        &pass.info,
+        naga::back::wgsl::WriterFlags::empty(),
+    )
+    .unwrap()
+}
+
+/// A load of a local sees only the stores that reach it: `output_color`
+/// read into the PBR input is the base colour times the texture, not the
+/// lit colour stored into the same variable further down.
+#[test]
+fn values_through_locals_follow_reaching_definitions() {
+    let (_, analysis) = corpus_shader("pbr_material_flags.wgsl");
+    let loads = all_named(&analysis, "output_color");
+    assert_eq!(loads.len(), 2, "{loads:#?}");
+    let (early, returned) = (loads[0], loads[1]);
+    assert!(early.ratio < 0.05, "early load P/T {}", early.ratio);
+    assert!(
+        returned.ratio > 0.95,
+        "returned load P/T {}",
+        returned.ratio
+    );
+
+    // A variable assigned in both arms of a branch: its value after the
+    // branch needs both arms.
+    let (_, terrain) = corpus_shader("terrain_slope_branch.wgsl");
+    let albedo = candidate(&terrain, "albedo");
+    let grass = candidate(&terrain, "fbm(in.world_position * 24.0)");
+    assert!(
+        albedo.cost > 1.8 * grass.cost,
+        "{} {}",
+        albedo.cost,
+        grass.cost
+    );
+}
+
+/// The value a loop leaves in a variable is a candidate; values inside the
+/// loop stay rejected.
+#[test]
+fn a_loop_result_is_a_candidate() {
+    let source = "@group(0) @binding(0) var<uniform> clip_from_world: mat4x4<f32>;\nstruct V { @builtin(position) position: vec4<f32>, @location(0) p: vec3<f32> }\n@vertex\nfn vs(@location(0) p: vec3<f32>) -> V {\n    return V(clip_from_world * vec4<f32>(p, 1.0), p);\n}\n@fragment\nfn fs(in: V) -> @location(0) vec4<f32> {\n    var sum = 0.0;\n    for (var i = 0; i < 8; i++) {\n        sum += sin(in.p.x * f32(i) + cos(in.p.y * f32(i)));\n    }\n    let shaded = sum * 0.125;\n    return vec4<f32>(shaded);\n}\n";
+    let (shader, analysis) = analyzed("loop.wgsl", source);
+    let sum = candidate(&analysis, "sum");
+    assert!(sum.ratio > 0.9, "P/T {}", sum.ratio);
+    assert!(analysis
+        .rejected
+        .iter()
+        .any(|r| r.node.text.starts_with("sin(") && r.reason.as_str() == "in-loop"));
+    for variant in Variant::ALL {
+        rewrite::rewrite(&shader, &analysis, sum, variant, &Options::default())
+            .unwrap_or_else(|r| panic!("{variant}: {r}"));
+    }
+}
+
+/// The lit path under `if ((material.flags & UNLIT_BIT) == 0u)`: its
+/// condition is uniform, so the node is cached like an unconditional one,
+/// with "no value" where a draw does not take the branch. One-pass is
+/// refused with the reason: the textures are sampled under flag branches,
+/// and its miss branch is not uniform control flow.
+#[test]
+fn a_node_under_a_uniform_branch_is_cached() {
+    let (shader, analysis) = corpus_shader("pbr_material_flags.wgsl");
+    let lit = candidate(&analysis, "tone_mapping(apply_pbr_lighting(pbr_input))");
+    for variant in [Variant::TwoPass, Variant::ThreePass] {
+        let rewritten = rewrite::rewrite(&shader, &analysis, lit, variant, &Options::default())
+            .unwrap_or_else(|r| panic!("{variant}: {r}"));
+        assert_eq!(rewritten.plan.node.path.as_deref(), Some("uniform-branch"));
+        // Pass 2 computes the payload in both variants.
+        let text = wgsl_of(&rewritten, "pass2");
+        assert!(text.contains("cache_absent()"), "{text}");
+        assert!(text.contains("& UNLIT_BIT"), "{text}");
+    }
+    let refused = rewrite::rewrite(
+        &shader,
+        &analysis,
+        lit,
+        Variant::OnePass,
+        &Options::default(),
+    )
+    .unwrap_err();
+    assert!(
+        refused
+            .reason
+            .contains("implicit derivatives (textureSample)"),
+        "{refused}"
+    );
+}
+
+/// Grass or rock by the slope of each pixel: the grass detail exists only
+/// where the branch is taken. Every variant is built, the payload returns
+/// "no value" elsewhere, and the classify pass asks where the node exists.
+#[test]
+fn a_node_under_a_per_pixel_branch_is_cached_where_it_exists() {
+    let (shader, analysis) = corpus_shader("terrain_slope_branch.wgsl");
+    let grass = candidate(&analysis, "fbm(in.world_position * 24.0)");
+    for variant in Variant::ALL {
+        let rewritten = rewrite::rewrite(&shader, &analysis, grass, variant, &Options::default())
+            .unwrap_or_else(|r| panic!("{variant}: {r}"));
+        assert_eq!(
+            rewritten.plan.node.path.as_deref(),
+            Some("per-pixel-branch")
+        );
+        let classify = wgsl_of(&rewritten, "classify");
+        assert!(classify.contains("fs_main_computes_node("), "{classify}");
+        assert!(classify.contains("cache_classify_absent("), "{classify}");
+    }
+}
+
+/// A module with a shadow pass and a main pass, as wgpu's `shadow` example
+/// has: two vertex and two fragment entry points. The vertex entry point
+/// is the one whose output struct the chosen fragment stage takes.
+#[test]
+fn vertex_entry_is_inferred_from_what_the_fragment_takes() {
+    let source = "struct Globals { view_proj: mat4x4<f32>, num_lights: vec4<u32> }\n@group(0) @binding(0) var<uniform> u_globals: Globals;\nstruct Entity { world: mat4x4<f32>, color: vec4<f32> }\n@group(1) @binding(0) var<uniform> u_entity: Entity;\n@vertex\nfn vs_bake(@location(0) position: vec4<i32>) -> @builtin(position) vec4<f32> {\n    return u_globals.view_proj * u_entity.world * vec4<f32>(position);\n}\nstruct VertexOutput { @builtin(position) proj_position: vec4<f32>, @location(0) world_normal: vec3<f32>, @location(1) world_position: vec4<f32> }\n@vertex\nfn vs_main(@location(0) position: vec4<i32>, @location(1) normal: vec4<i32>) -> VertexOutput {\n    let w = u_entity.world;\n    let world_pos = u_entity.world * vec4<f32>(position);\n    var result: VertexOutput;\n    result.world_normal = mat3x3<f32>(w[0].xyz, w[1].xyz, w[2].xyz) * vec3<f32>(normal.xyz);\n    result.world_position = world_pos;\n    result.proj_position = u_globals.view_proj * world_pos;\n    return result;\n}\n@fragment\nfn fs_main(vertex: VertexOutput) -> @location(0) vec4<f32> {\n    let normal = normalize(vertex.world_normal);\n    var color = vec3<f32>(0.05);\n    for (var i = 0u; i < min(u_globals.num_lights.x, 10u); i += 1u) {\n        let light_dir = normalize(vec3<f32>(f32(i), 4.0, 2.0) - vertex.world_position.xyz);\n        color += max(0.0, dot(normal, light_dir)) * vec3<f32>(0.5);\n    }\n    return vec4<f32>(color, 1.0) * u_entity.color;\n}\n@fragment\nfn fs_main_without_storage(vertex: VertexOutput) -> @location(0) vec4<f32> {\n    return vec4<f32>(normalize(vertex.world_normal), 1.0);\n}\n";
+    let shader = shadecache::front::parse(shadecache::diagnostic::SourceFile::new(
+        "shadow.wgsl",
+        source,
+    ))
+    .unwrap();
+    let analysis = shadecache::analysis::analyze(
+        &shader,
+        &shadecache::analysis::Options {
+            entry: Some("fs_main".into()),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    // The light loop's result.
+    let color = candidate(&analysis, "color");
+    for variant in Variant::ALL {
+        let rewritten = rewrite::rewrite(&shader, &analysis, color, variant, &Options::default())
+            .unwrap_or_else(|r| panic!("{variant}: {r}"));
+        assert!(rewritten
+            .plan
+            .passes
+            .iter()
+            .all(|pass| pass.vertex_entry == "vs_main"));
+    }
+    // Named explicitly, the shadow pass's vertex stage does not feed it.
+    let named = Options {
+        vertex_entry: Some("vs_bake".into()),
+        ..Options::default()
+    };
+    let refused =
+        rewrite::rewrite(&shader, &analysis, color, Variant::TwoPass, &named).unwrap_err();
+    assert!(
+        refused
+            .reason
+            .contains("`vs_bake` does not output what `fs_main` takes"),
+        "{refused}"
+    );
+}
+
+/// Δn = 1 recomputes every pixel every frame: on the engine-style corpus
+/// shaders, nodes through locals and under uniform and per-pixel branches
+/// give the reference's image (differential test).
+#[test]
+fn engine_style_shaders_at_refresh_period_one_equal_the_reference() {
+    let cases = [
+        (
+            "pbr_material_flags.wgsl",
+            "pbr_flags_sphere.toml",
+            vec![
+                "tone_mapping(apply_pbr_lighting(pbr_input))",
+                "output_color",
+            ],
+        ),
+        (
+            "terrain_slope_branch.wgsl",
+            "slope_terrain.toml",
+            vec!["fbm(in.world_position * 24.0)", "albedo"],
+        ),
+    ];
+    for (shader_name, scene_name, texts) in cases {
+        let (_, analysis) = corpus_shader(shader_name);
+        let ids: Vec<String> = texts
+            .iter()
+            .map(|text| all_named(&analysis, text).last().unwrap().node.id.clone())
+            .collect();
+        let shader_text = std::fs::read_to_string(root().join("corpus").join(shader_name)).unwrap();
+        let scene = std::fs::read_to_string(root().join("corpus/scenes").join(scene_name))
+            .unwrap()
+            .replace("size = [256, 256]", "size = [64, 64]");
+        let options = ProfileOptions {
+            nodes: Nodes::Ids(ids),
+            refresh_periods: vec![1],
+            refresh_quads: vec![1],
+            cache_formats: vec![CacheFormat::Rgba32float],
+            reconstructions: vec![Reconstruction::Bilinear, Reconstruction::NearestPacked],
+            frames: Some(3),
+            warmup: Some(1),
+            ..ProfileOptions::default()
+        };
+        let Some((_, report, _)) = run_shader(&shader_text, &scene, options) else {
+            return;
+        };
+        assert!(!report.results.is_empty(), "{shader_name}");
+        for row in &report.results {
+            assert!(
+                row.max_abs_error <= 1.0 / 255.0 + 1e-9,
+                "{shader_name} {} {} {}: {}",
+                row.node,
+                row.variant,
+                row.reconstruction.as_str(),
+                row.max_abs_error
+            );
+        }
+    }
+}
+
+/// Pixels where a per-pixel branch does not compute the node are neither
+/// hits nor misses: on a still scene without refresh, the grass detail is
+/// reused wherever there is grass, although most of the terrain is rock.
+#[test]
+fn absent_pixels_are_not_counted_as_misses() {
+    let (_, analysis) = corpus_shader("terrain_slope_branch.wgsl");
+    let grass = candidate(&analysis, "fbm(in.world_position * 24.0)");
+    let shader_text =
+        std::fs::read_to_string(root().join("corpus/terrain_slope_branch.wgsl")).unwrap();
+    let scene = std::fs::read_to_string(root().join("corpus/scenes/slope_terrain.toml"))
+        .unwrap()
+        .replace("size = [256, 256]", "size = [64, 64]")
+        .replace("effects = [\"camera-motion\"]", "effects = []");
+    let options = ProfileOptions {
+        nodes: Nodes::Ids(vec![grass.node.id.clone()]),
+        variants: vec![Variant::TwoPass],
+        refresh_periods: vec![0],
+        reconstructions: vec![Reconstruction::Nearest],
+        frames: Some(2),
+        warmup: Some(2),
+        ..ProfileOptions::default()
+    };
+    let Some((_, report, _)) = run_shader(&shader_text, &scene, options) else {
+        return;
+    };
+    let row = &report.results[0];
+    assert!(
+        row.hit_rate > 0.95,
+        "hit {} miss {}",
+        row.hit_rate,
+        row.miss_rate
+    );
+}
