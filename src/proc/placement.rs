@@ -75,6 +75,9 @@ pub struct FunctionLayout {
     pub discards: bool,
     /// Every `discard`, in statement order.
     pub kills: Vec<KillSite>,
+    /// Every `return`, in statement order (as [`KillSite`]s: where each
+    /// runs).
+    pub returns: Vec<KillSite>,
     /// For every load of a local variable, the definitions that may reach
     /// it ([`super::reaching`]).
     pub reaching: HashMap<Handle<Expression>, Vec<Definition>>,
@@ -203,7 +206,13 @@ impl Walker<'_> {
                 self.block(body, &inner);
                 self.block(continuing, &inner);
             }
-            Statement::Return { value } => self.out.roots.extend(value),
+            Statement::Return { value } => {
+                self.out.roots.extend(value);
+                self.out.returns.push(KillSite {
+                    after: self.out.order.len(),
+                    placement: at.clone(),
+                });
+            }
             Statement::Kill => {
                 self.out.discards = true;
                 self.out.kills.push(KillSite {

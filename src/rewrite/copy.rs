@@ -20,6 +20,11 @@ use crate::proc;
 /// copy operands and append new expressions through the copy.
 pub type Hook<'a> = Box<dyn FnMut(&mut FunctionCopy<'a>) -> Expression + 'a>;
 
+/// Builds the value a `return` of the source returns instead, pushing any
+/// statement it needs (a call) into the block.
+pub type ReturnHook<'a> =
+    Box<dyn FnMut(&mut FunctionCopy<'a>, &mut Block) -> Handle<Expression> + 'a>;
+
 /// Builds a new function from parts of `source`.
 pub struct FunctionCopy<'a> {
     module: &'a naga::Module,
@@ -50,6 +55,8 @@ pub struct FunctionCopy<'a> {
     drop_returns: bool,
     /// Expressions rebuilt by a hook instead of copied.
     hooks: HashMap<Handle<Expression>, Hook<'a>>,
+    /// What the source's own `return`s return instead.
+    return_hook: Option<ReturnHook<'a>>,
 }
 
 impl std::fmt::Debug for FunctionCopy<'_> {
@@ -86,7 +93,14 @@ impl<'a> FunctionCopy<'a> {
             return_member: None,
             drop_returns: false,
             hooks: HashMap::new(),
+            return_hook: None,
         }
+    }
+
+    /// Returns what `hook` builds wherever the source returns (a function
+    /// copied up to a node returns another type than the source).
+    pub fn replace_returns(&mut self, hook: ReturnHook<'a>) {
+        self.return_hook = Some(hook);
     }
 
     /// Rebuilds `expr` with `hook` instead of copying it.
@@ -199,6 +213,11 @@ impl<'a> FunctionCopy<'a> {
             self.pending.push(handle);
         }
         handle
+    }
+
+    /// Emits what was copied since the last statement into `block`.
+    pub fn flush_into(&mut self, block: &mut Block) {
+        self.flush(block);
     }
 
     /// Emits what was copied since the last statement, as few ranges as
@@ -336,6 +355,14 @@ impl<'a> FunctionCopy<'a> {
                 );
             }
             Statement::Return { .. } if self.drop_returns => {}
+            Statement::Return { .. } if self.return_hook.is_some() => {
+                if let Some(mut hook) = self.return_hook.take() {
+                    let value = hook(self, out);
+                    self.return_hook = Some(hook);
+                    self.flush(out);
+                    out.push(Statement::Return { value: Some(value) }, span);
+                }
+            }
             Statement::Return { value: Some(value) } if self.return_member.is_some() => {
                 let base = self.expression(value);
                 let member = self.append(

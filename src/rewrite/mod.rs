@@ -378,11 +378,6 @@ pub fn rewrite(
         .placement(node)
         .ok_or_else(|| Refusal::new("the node is not evaluated by the entry point"))?;
     let node_order = layout.order_of(node).unwrap_or(usize::MAX);
-    if returns_before(&function.body, node) {
-        return Err(Refusal::new(
-            "the entry point may return before the node is computed",
-        ));
-    }
     let discards_after = layout.kills.iter().any(|kill| kill.after > node_order);
     if discards_after && variant != Variant::OnePass {
         return Err(Refusal::new(
@@ -456,7 +451,13 @@ pub fn rewrite(
     let graph = ExprGraph::new(function, &layout);
     let mut payload_live = graph.slice(node);
     // Under branches, the payload evaluates the path to the node too.
-    let node_path = path::Path::of(function, &graph, at);
+    // A pixel that returns before the node does not compute it either.
+    let early_returns = layout
+        .returns
+        .iter()
+        .filter(|r| r.after <= node_order)
+        .map(|r| &r.placement);
+    let node_path = path::Path::of(function, &graph, at, early_returns);
     if let Some(node_path) = &node_path {
         payload_live.union_with(&node_path.live);
     }
@@ -665,22 +666,6 @@ fn writes_frag_depth(module: &naga::Module, result: &naga::FunctionResult) -> bo
     crate::proc::has_binding(module, &result.binding, result.ty, |b| {
         matches!(b, naga::Binding::BuiltIn(naga::BuiltIn::FragDepth))
     })
-}
-
-/// Whether a `return` can run before `node` is emitted.
-fn returns_before(block: &naga::Block, node: naga::Handle<naga::Expression>) -> bool {
-    let mut seen_node = false;
-    let mut returned = false;
-    crate::proc::each_statement(block, &mut |statement| match *statement {
-        naga::Statement::Emit(ref range) if range.clone().any(|h| h == node) => seen_node = true,
-        naga::Statement::Call {
-            result: Some(result),
-            ..
-        } if result == node => seen_node = true,
-        naga::Statement::Return { .. } if !seen_node => returned = true,
-        _ => {}
-    });
-    returned
 }
 
 /// Marks every `@builtin(position)` of every struct invariant, so the

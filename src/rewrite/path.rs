@@ -24,7 +24,7 @@
 //! the pixels without the node as absent, so hits, misses and refreshes
 //! are counted only where the node exists.
 
-use naga::{Expression, Function, Handle, Module, Span, Statement};
+use naga::{Block, Expression, Function, Handle, Module, Span, Statement};
 
 use super::copy::FunctionCopy;
 use crate::analysis::graph::{ExprGraph, ExprSet};
@@ -33,7 +33,8 @@ use crate::proc::Placement;
 /// The branches a node is computed under.
 #[derive(Clone, Debug)]
 pub struct Path {
-    /// Conditions and selectors, outermost first.
+    /// Conditions and selectors around the node, outermost first, then
+    /// those around the `return`s before it.
     pub conditions: Vec<Handle<Expression>>,
     /// Everything evaluating them needs.
     pub live: ExprSet,
@@ -43,14 +44,26 @@ pub struct Path {
 }
 
 impl Path {
-    /// The path to a node placed at `at`; `None` when it is computed
-    /// unconditionally.
-    pub fn of(function: &Function, graph: &ExprGraph, at: &Placement) -> Option<Path> {
-        if at.controls.is_empty() {
+    /// The path to a node placed at `at`, where `returns` are the places of
+    /// the `return`s evaluated before it (a pixel that returns early does
+    /// not compute the node either); `None` when every pixel computes it.
+    pub fn of<'p>(
+        function: &Function,
+        graph: &ExprGraph,
+        at: &Placement,
+        returns: impl IntoIterator<Item = &'p Placement>,
+    ) -> Option<Path> {
+        let mut conditions = at.controls.clone();
+        let mut early_return = false;
+        for placement in returns {
+            early_return = true;
+            conditions.extend(placement.controls.iter().copied());
+        }
+        if conditions.is_empty() && !early_return {
             return None;
         }
-        let mut live = graph.slice(at.controls[0]);
-        for &condition in &at.controls[1..] {
+        let mut live = ExprSet::with_capacity(function.expressions.len());
+        for &condition in &conditions {
             live.union_with(&graph.slice(condition));
         }
         let exprs: Vec<&Expression> = function.expressions.iter().map(|(_, e)| e).collect();
@@ -58,7 +71,7 @@ impl Path {
             .ones()
             .any(|i| matches!(exprs[i], Expression::FunctionArgument(_)));
         Some(Path {
-            conditions: at.controls.clone(),
+            conditions,
             live,
             uniform,
         })
@@ -82,16 +95,34 @@ pub fn finish_payload(
     absent: Handle<Function>,
     components: u32,
 ) -> Function {
+    // The source's own returns (a pixel that ends before the node) return
+    // "no value" too.
+    copy.replace_returns(Box::new(move |copy, block| {
+        absent_value(copy, block, absent, components)
+    }));
     let mut body = copy.copy_body();
     if copy.returns_on_every_path() {
         copy.target.body = body;
         return copy.target;
     }
+    let value = absent_value(&mut copy, &mut body, absent, components);
+    copy.finish(body, Statement::Return { value: Some(value) })
+}
+
+/// `cache_absent()` narrowed to the payload's components, its call pushed
+/// into `block`.
+fn absent_value(
+    copy: &mut FunctionCopy<'_>,
+    block: &mut Block,
+    absent: Handle<Function>,
+    components: u32,
+) -> Handle<Expression> {
+    copy.flush_into(block);
     let none = copy
         .target
         .expressions
         .append(Expression::CallResult(absent), Span::UNDEFINED);
-    body.push(
+    block.push(
         Statement::Call {
             function: absent,
             arguments: Vec::new(),
@@ -99,7 +130,7 @@ pub fn finish_payload(
         },
         Span::UNDEFINED,
     );
-    let value = match components {
+    match components {
         4 => none,
         1 => copy.add(Expression::AccessIndex {
             base: none,
@@ -118,8 +149,7 @@ pub fn finish_payload(
                 naga::SwizzleComponent::W,
             ],
         }),
-    };
-    copy.finish(body, Statement::Return { value: Some(value) })
+    }
 }
 
 /// A function of the fragment's inputs (`arguments`, without bindings)
@@ -157,6 +187,9 @@ pub fn presence(
         },
     );
     copy.return_value_at(node, Expression::Literal(naga::Literal::Bool(true)));
+    copy.replace_returns(Box::new(|copy, _| {
+        copy.add(Expression::Literal(naga::Literal::Bool(false)))
+    }));
     let body = copy.copy_body();
     let presence = if copy.returns_on_every_path() {
         copy.target.body = body;

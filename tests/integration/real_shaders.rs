@@ -277,3 +277,31 @@ fn absent_pixels_are_not_counted_as_misses() {
         row.miss_rate
     );
 }
+
+/// Text and UI shaders return from a `switch` on the content type: a node
+/// in one case is absent where another case returned, and every variant is
+/// built (the payload returns "no value" in the other cases).
+#[test]
+fn a_node_after_returns_in_other_cases_is_absent_there() {
+    let source = "@group(0) @binding(0) var<uniform> clip_from_world: mat4x4<f32>;\n@group(0) @binding(1) var atlas: texture_2d<f32>;\n@group(0) @binding(2) var atlas_sampler: sampler;\nstruct V { @builtin(position) position: vec4<f32>, @location(0) uv: vec2<f32>, @location(1) @interpolate(flat) content_type: u32 }\n@vertex\nfn vs(@location(0) p: vec3<f32>, @location(2) uv: vec2<f32>) -> V {\n    return V(clip_from_world * vec4<f32>(p, 1.0), uv, 1u);\n}\n@fragment\nfn fs(in: V) -> @location(0) vec4<f32> {\n    switch in.content_type {\n        case 0u: {\n            return textureSampleLevel(atlas, atlas_sampler, in.uv, 0.0);\n        }\n        case 1u: {\n            let coverage = textureSampleLevel(atlas, atlas_sampler, in.uv, 0.0).x * sin(in.uv.x * 40.0);\n            return vec4<f32>(coverage);\n        }\n        default: {}\n    }\n    return vec4<f32>(0.0);\n}\n";
+    let (shader, analysis) = analyzed("text.wgsl", source);
+    let coverage = candidate(
+        &analysis,
+        "textureSampleLevel(atlas, atlas_sampler, in.uv, 0.0).x * sin(in.uv.x * 40.0)",
+    );
+    for variant in Variant::ALL {
+        let rewritten =
+            rewrite::rewrite(&shader, &analysis, coverage, variant, &Options::default())
+                .unwrap_or_else(|r| panic!("{variant}: {r}"));
+        assert_eq!(
+            rewritten.plan.node.path.as_deref(),
+            Some("per-pixel-branch")
+        );
+        let classify = wgsl_of(&rewritten, "classify");
+        let presence = classify
+            .split("fn fs_computes_node(")
+            .nth(1)
+            .expect("a presence function");
+        assert!(presence.contains("return false;"), "{classify}");
+    }
+}
