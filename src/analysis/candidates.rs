@@ -250,7 +250,7 @@ fn classify(
             "only reads or rearranges existing values: there is no computation to save".into(),
         ));
     }
-    if !nodes().any(|e| matches!(e, Expression::FunctionArgument(_))) {
+    if !super::graph::reads_arguments(exprs, slice) {
         return Err((
             RejectReason::UniformOnly,
             "depends only on uniforms, constants and overrides: it is the same for every pixel"

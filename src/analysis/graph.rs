@@ -11,6 +11,16 @@ use crate::proc::{self, FunctionLayout, PointerRoot};
 /// A set of expressions of one function.
 pub type ExprSet = FixedBitSet;
 
+/// Whether any expression of `set` reads an argument of the function (for
+/// a fragment entry point: a per-fragment input). A set that reads none
+/// depends only on uniforms, constants and overrides, and has the same
+/// value at every pixel of a draw. `exprs` is the function's arena in
+/// order.
+pub fn reads_arguments(exprs: &[&Expression], set: &ExprSet) -> bool {
+    set.ones()
+        .any(|i| matches!(exprs[i], Expression::FunctionArgument(_)))
+}
+
 /// The dependence graph of a function's expressions.
 ///
 /// Node `i` is the expression with arena index `i`. An edge `a → b` means
@@ -69,10 +79,11 @@ impl ExprGraph {
             needed
         };
         // What a load of a local needs: only the definitions that reach it.
+        let reaching_definitions = proc::reaching_definitions(function);
         let reaching = |load: Handle<Expression>,
                         local: Handle<naga::LocalVariable>|
          -> Option<Vec<Handle<Expression>>> {
-            let definitions = layout.reaching.get(&load)?;
+            let definitions = reaching_definitions.get(&load)?;
             let mut needed = Vec::new();
             for definition in definitions {
                 match *definition {

@@ -12,7 +12,7 @@
 use std::collections::HashMap;
 use std::ops::Range;
 
-use naga::{Block, Expression, Handle, Statement};
+use naga::{Expression, Handle, Statement};
 
 use crate::proc::{self, PointerRoot};
 
@@ -59,11 +59,32 @@ pub fn local_loads(
             }
         }
     }
-    statement_readers(&function.body, &name_of, &mut reader);
+    proc::each_spanned_statement(&function.body, &mut |statement, span| {
+        let read: Vec<Handle<Expression>> = match *statement {
+            Statement::Return { value } => value.into_iter().collect(),
+            Statement::Store { value, .. } => vec![value],
+            Statement::Call { ref arguments, .. } => arguments.clone(),
+            Statement::If { condition, .. } => vec![condition],
+            Statement::Switch { selector, .. } => vec![selector],
+            _ => Vec::new(),
+        };
+        let Some(range) = span.to_range() else {
+            return;
+        };
+        for expr in read.into_iter().filter(|e| name_of.contains_key(e)) {
+            reader.entry(expr).or_insert_with(|| range.clone());
+        }
+    });
 
     // Several loads of one variable read by one reader (`c * c`) take its
     // occurrences in turn, in arena order.
     let mut taken: HashMap<(usize, &str), usize> = HashMap::new();
+    // Where the function's own source starts, for loads bound to a `let`.
+    let body_start = function.name.as_deref().and_then(|name| {
+        identifier_occurrences(source, 0..source.len(), name)
+            .find(|at| source[..at.start].trim_end().ends_with("fn"))
+            .map(|at| at.end)
+    });
     let mut out = HashMap::new();
     let mut loads: Vec<_> = name_of.into_iter().collect();
     loads.sort_by_key(|(h, _)| h.index());
@@ -89,7 +110,8 @@ pub fn local_loads(
         if let Some(found) = function
             .named_expressions
             .get(&load)
-            .and_then(|binding| let_initializer(source, function.name.as_deref(), binding))
+            .zip(body_start)
+            .and_then(|(binding, start)| let_initializer(source, start, binding))
             .and_then(|init| identifier_occurrences(source, init, name).next())
         {
             out.insert(load, found);
@@ -98,63 +120,10 @@ pub fn local_loads(
     out
 }
 
-fn statement_readers(
-    block: &Block,
-    loads: &HashMap<Handle<Expression>, Result<&str, Range<usize>>>,
-    reader: &mut HashMap<Handle<Expression>, Range<usize>>,
-) {
-    for (statement, span) in block.span_iter() {
-        let read: Vec<Handle<Expression>> = match *statement {
-            Statement::Return { value } => value.into_iter().collect(),
-            Statement::Store { value, .. } => vec![value],
-            Statement::Call { ref arguments, .. } => arguments.clone(),
-            Statement::If { condition, .. } => vec![condition],
-            Statement::Switch { selector, .. } => vec![selector],
-            _ => Vec::new(),
-        };
-        if let Some(range) = span.to_range() {
-            for expr in read {
-                if loads.contains_key(&expr) {
-                    reader.entry(expr).or_insert_with(|| range.clone());
-                }
-            }
-        }
-        match *statement {
-            Statement::Block(ref inner) => statement_readers(inner, loads, reader),
-            Statement::If {
-                ref accept,
-                ref reject,
-                ..
-            } => {
-                statement_readers(accept, loads, reader);
-                statement_readers(reject, loads, reader);
-            }
-            Statement::Switch { ref cases, .. } => {
-                for case in cases {
-                    statement_readers(&case.body, loads, reader);
-                }
-            }
-            Statement::Loop {
-                ref body,
-                ref continuing,
-                ..
-            } => {
-                statement_readers(body, loads, reader);
-                statement_readers(continuing, loads, reader);
-            }
-            _ => {}
-        }
-    }
-}
-
-/// The initializer of the first `let binding` after `fn function` in
-/// `source` (names such as `_e157` repeat across functions): the range
-/// from its `=` to its `;`.
-fn let_initializer(source: &str, function: Option<&str>, binding: &str) -> Option<Range<usize>> {
-    let function = function?;
-    let start = identifier_occurrences(source, 0..source.len(), function)
-        .find(|at| source[..at.start].trim_end().ends_with("fn"))?
-        .end;
+/// The initializer of the first `let binding` in `source` from `start`
+/// (the function's own source: names such as `_e157` repeat across
+/// functions): the range from its `=` to its `;`.
+fn let_initializer(source: &str, start: usize, binding: &str) -> Option<Range<usize>> {
     let at = identifier_occurrences(source, start..source.len(), binding)
         .find(|at| source[..at.start].trim_end().ends_with("let"))?;
     let equals = at.end + source[at.end..].find('=')?;

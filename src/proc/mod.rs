@@ -15,8 +15,8 @@ mod reaching;
 
 pub use operands::{operands, pointer_root, PointerRoot};
 pub use placement::{
-    each_statement, has_effects, layout, CallSite, FunctionLayout, KillSite, LoopBound, Placement,
-    Store,
+    each_spanned_statement, each_statement, has_effects, layout, CallSite, ExitSite,
+    FunctionLayout, LoopBound, Placement, Store,
 };
 pub use reaching::{reaching_definitions, Definition};
 

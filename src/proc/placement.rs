@@ -1,8 +1,5 @@
-use std::collections::HashMap;
-
 use naga::{Block, Expression, Handle, Statement};
 
-use super::reaching::Definition;
 use super::{const_int, pointer_root, PointerRoot};
 
 /// Where an expression is evaluated.
@@ -74,18 +71,14 @@ pub struct FunctionLayout {
     /// Whether the function contains a `discard`.
     pub discards: bool,
     /// Every `discard`, in statement order.
-    pub kills: Vec<KillSite>,
-    /// Every `return`, in statement order (as [`KillSite`]s: where each
-    /// runs).
-    pub returns: Vec<KillSite>,
-    /// For every load of a local variable, the definitions that may reach
-    /// it ([`super::reaching`]).
-    pub reaching: HashMap<Handle<Expression>, Vec<Definition>>,
+    pub kills: Vec<ExitSite>,
+    /// Every `return`, in statement order.
+    pub returns: Vec<ExitSite>,
 }
 
-/// A `discard` statement and where it runs.
+/// A `discard` or `return` statement and where it runs.
 #[derive(Clone, Debug)]
-pub struct KillSite {
+pub struct ExitSite {
     /// How many expressions are evaluated before it (an index into the
     /// evaluation order, comparable with [`FunctionLayout::order_of`]).
     pub after: usize,
@@ -130,9 +123,7 @@ pub fn layout(
         },
     };
     walker.block(&function.body, &Placement::top());
-    let mut out = walker.out;
-    out.reaching = super::reaching::reaching_definitions(function);
-    out
+    walker.out
 }
 
 struct Walker<'a> {
@@ -208,14 +199,14 @@ impl Walker<'_> {
             }
             Statement::Return { value } => {
                 self.out.roots.extend(value);
-                self.out.returns.push(KillSite {
+                self.out.returns.push(ExitSite {
                     after: self.out.order.len(),
                     placement: at.clone(),
                 });
             }
             Statement::Kill => {
                 self.out.discards = true;
-                self.out.kills.push(KillSite {
+                self.out.kills.push(ExitSite {
                     after: self.out.order.len(),
                     placement: at.clone(),
                 });
@@ -368,21 +359,27 @@ pub fn has_effects(module: &naga::Module, function: Handle<naga::Function>) -> b
 /// Calls `visit` on every statement of `block`, nested ones included, in
 /// order.
 pub fn each_statement(block: &Block, visit: &mut impl FnMut(&Statement)) {
-    for statement in block.iter() {
-        visit(statement);
+    each_spanned_statement(block, &mut |statement, _| visit(statement));
+}
+
+/// Calls `visit` on every statement of `block` and its span, nested ones
+/// included, in order.
+pub fn each_spanned_statement(block: &Block, visit: &mut impl FnMut(&Statement, naga::Span)) {
+    for (statement, &span) in block.span_iter() {
+        visit(statement, span);
         match *statement {
-            Statement::Block(ref inner) => each_statement(inner, visit),
+            Statement::Block(ref inner) => each_spanned_statement(inner, visit),
             Statement::If {
                 ref accept,
                 ref reject,
                 ..
             } => {
-                each_statement(accept, visit);
-                each_statement(reject, visit);
+                each_spanned_statement(accept, visit);
+                each_spanned_statement(reject, visit);
             }
             Statement::Switch { ref cases, .. } => {
                 for case in cases {
-                    each_statement(&case.body, visit);
+                    each_spanned_statement(&case.body, visit);
                 }
             }
             Statement::Loop {
@@ -390,8 +387,8 @@ pub fn each_statement(block: &Block, visit: &mut impl FnMut(&Statement)) {
                 ref continuing,
                 ..
             } => {
-                each_statement(body, visit);
-                each_statement(continuing, visit);
+                each_spanned_statement(body, visit);
+                each_spanned_statement(continuing, visit);
             }
             _ => {}
         }

@@ -34,8 +34,8 @@ pub enum Definition {
     Call(usize),
 }
 
-/// What may reach a point: per variable, its definitions. A variable that
-/// is absent has only [`Definition::Init`].
+/// What may reach a point: per variable, its definitions. Every variable
+/// starts with [`Definition::Init`].
 type State = BTreeMap<Handle<LocalVariable>, BTreeSet<Definition>>;
 
 /// For every load of a local variable (through the whole variable or a
@@ -50,7 +50,12 @@ pub fn reaching_definitions(
         loads: HashMap::new(),
         exits: Vec::new(),
     };
-    walker.block(&function.body, Some(State::new()));
+    let start: State = function
+        .local_variables
+        .iter()
+        .map(|(local, _)| (local, BTreeSet::from([Definition::Init])))
+        .collect();
+    walker.block(&function.body, Some(start));
     walker
         .loads
         .into_iter()
@@ -82,17 +87,8 @@ fn join(into: &mut Option<State>, from: Option<State>) {
     match into {
         None => *into = Some(from),
         Some(into) => {
-            // A variable missing on one side still has its initial value
-            // there.
-            let keys: BTreeSet<_> = into.keys().chain(from.keys()).copied().collect();
-            for key in keys {
-                let theirs = from
-                    .get(&key)
-                    .cloned()
-                    .unwrap_or_else(|| BTreeSet::from([Definition::Init]));
-                into.entry(key)
-                    .or_insert_with(|| BTreeSet::from([Definition::Init]))
-                    .extend(theirs);
+            for (local, definitions) in from {
+                into.entry(local).or_default().extend(definitions);
             }
         }
     }
@@ -122,11 +118,7 @@ impl Walker<'_> {
                 if let Some(state) = &state {
                     for expr in range.clone() {
                         if let Expression::Load { pointer } = self.function.expressions[expr] {
-                            if let Some(local) = self.local_of(pointer) {
-                                let defs = state
-                                    .get(&local)
-                                    .cloned()
-                                    .unwrap_or_else(|| BTreeSet::from([Definition::Init]));
+                            if let Some(defs) = self.local_of(pointer).and_then(|l| state.get(&l)) {
                                 self.loads.entry(expr).or_default().extend(defs);
                             }
                         }
@@ -188,14 +180,11 @@ impl Walker<'_> {
                 let index = self.stores;
                 self.stores += 1;
                 let mut state = state?;
-                if let Some(local) = self.local_of(pointer) {
+                if let Some(defs) = self.local_of(pointer).and_then(|l| state.get_mut(&l)) {
                     let whole = matches!(
                         self.function.expressions[pointer],
                         Expression::LocalVariable(_)
                     );
-                    let defs = state
-                        .entry(local)
-                        .or_insert_with(|| BTreeSet::from([Definition::Init]));
                     if whole {
                         defs.clear();
                     }
@@ -208,11 +197,8 @@ impl Walker<'_> {
                 self.calls += 1;
                 let mut state = state?;
                 for &argument in arguments {
-                    if let Some(local) = self.local_of(argument) {
-                        state
-                            .entry(local)
-                            .or_insert_with(|| BTreeSet::from([Definition::Init]))
-                            .insert(Definition::Call(index));
+                    if let Some(defs) = self.local_of(argument).and_then(|l| state.get_mut(&l)) {
+                        defs.insert(Definition::Call(index));
                     }
                 }
                 Some(state)
@@ -276,6 +262,49 @@ mod tests {
         reaching_definitions(function)
             .remove(load)
             .expect("the load is recorded")
+    }
+
+    /// The indices are those of the layout: every definition reaching a
+    /// load writes the variable the load reads, in every function of the
+    /// engine-style corpus shaders (loops, nested flag branches, partial
+    /// stores into a struct).
+    #[test]
+    fn definitions_index_the_layouts_stores_and_calls() {
+        for source in [
+            include_str!("../../corpus/pbr_material_flags.wgsl"),
+            include_str!("../../corpus/terrain_slope_branch.wgsl"),
+        ] {
+            let module = naga::front::wgsl::parse_str(source).expect("valid WGSL");
+            let functions = module
+                .functions
+                .iter()
+                .map(|(_, f)| f)
+                .chain(module.entry_points.iter().map(|ep| &ep.function));
+            let mut checked = 0;
+            for function in functions {
+                let layout = super::super::layout(&module, function, 8.0);
+                for (load, definitions) in reaching_definitions(function) {
+                    let pointer = match function.expressions[load] {
+                        Expression::Load { pointer } => Some(pointer),
+                        _ => None,
+                    };
+                    let root = pointer.and_then(|p| pointer_root(function, p));
+                    assert!(root.is_some(), "a load of a local");
+                    for definition in definitions {
+                        match definition {
+                            Definition::Init => {}
+                            Definition::Store(i) => assert_eq!(layout.stores[i].target, root),
+                            Definition::Call(i) => assert!(layout.calls[i]
+                                .arguments
+                                .iter()
+                                .any(|&a| pointer_root(function, a) == root)),
+                        }
+                        checked += 1;
+                    }
+                }
+            }
+            assert!(checked > 20, "{checked} definitions checked");
+        }
     }
 
     const HEAD: &str = "@fragment\nfn fs(@location(0) x: f32) -> @location(0) vec4<f32> {\n";

@@ -42,8 +42,9 @@ pub struct FunctionCopy<'a> {
     /// `stop_value`).
     stop_at: Option<Handle<Expression>>,
     stop_value: Option<Expression>,
-    stopped: bool,
-    /// How deep in nested blocks the copy is, and was when it stopped.
+    /// How deep in nested blocks the copy is, and was when it stopped at
+    /// `stop_at`. Once stopped nothing more is copied: the node's value is
+    /// the last thing a copy that returns it needs.
     depth: usize,
     stop_depth: Option<usize>,
     /// Globals and functions to use in place of others.
@@ -55,7 +56,8 @@ pub struct FunctionCopy<'a> {
     drop_returns: bool,
     /// Expressions rebuilt by a hook instead of copied.
     hooks: HashMap<Handle<Expression>, Hook<'a>>,
-    /// What the source's own `return`s return instead.
+    /// What the source's own `return`s return instead
+    /// ([`FunctionCopy::run_or_return`]).
     return_hook: Option<ReturnHook<'a>>,
 }
 
@@ -85,7 +87,6 @@ impl<'a> FunctionCopy<'a> {
             pending: Vec::new(),
             stop_at: None,
             stop_value: None,
-            stopped: false,
             depth: 0,
             stop_depth: None,
             globals: HashMap::new(),
@@ -95,12 +96,6 @@ impl<'a> FunctionCopy<'a> {
             hooks: HashMap::new(),
             return_hook: None,
         }
-    }
-
-    /// Returns what `hook` builds wherever the source returns (a function
-    /// copied up to a node returns another type than the source).
-    pub fn replace_returns(&mut self, hook: ReturnHook<'a>) {
-        self.return_hook = Some(hook);
     }
 
     /// Rebuilds `expr` with `hook` instead of copying it.
@@ -174,12 +169,25 @@ impl<'a> FunctionCopy<'a> {
         self.stop_value = Some(value);
     }
 
-    /// Whether the copy returned at the node in the function's own body,
-    /// so that every path through it returns. When the node is computed
-    /// under a branch (or never), the paths that do not reach it still
-    /// need a `return` after the copied body.
-    pub fn returns_on_every_path(&self) -> bool {
-        self.stop_depth == Some(0)
+    /// Copies the live part of the source body up to the node (see
+    /// [`FunctionCopy::return_at`]) and returns the function, which returns
+    /// what `elsewhere` builds on every path that does not reach the node:
+    /// where the source returns before it, and after the body when the node
+    /// is computed under a branch (or never). `elsewhere` may push a
+    /// statement, such as a call, into the block it is given.
+    pub fn run_or_return(mut self, elsewhere: ReturnHook<'a>) -> Function {
+        self.return_hook = Some(elsewhere);
+        let mut body = self.copy_body();
+        match self.return_hook.take() {
+            Some(mut elsewhere) if self.stop_depth != Some(0) => {
+                let value = elsewhere(&mut self, &mut body);
+                self.finish(body, Statement::Return { value: Some(value) })
+            }
+            _ => {
+                self.target.body = body;
+                self.target
+            }
+        }
     }
 
     /// The value returned at the node.
@@ -246,7 +254,7 @@ impl<'a> FunctionCopy<'a> {
     fn block(&mut self, block: &Block) -> Block {
         let mut out = Block::new();
         for (statement, &span) in block.span_iter() {
-            if self.stopped {
+            if self.stop_depth.is_some() {
                 break;
             }
             self.statement(statement, span, &mut out);
@@ -254,18 +262,11 @@ impl<'a> FunctionCopy<'a> {
         out
     }
 
-    /// A nested block: the copy stops inside it only on the paths that
-    /// reach the node, so the statements after it are still copied.
+    /// A block nested in a statement, one level deeper.
     fn nested(&mut self, block: &Block) -> Block {
         self.depth += 1;
         let out = self.block(block);
         self.depth -= 1;
-        if self.stop_depth.is_some_and(|d| d > self.depth) {
-            // Stopped in there: the rest of the enclosing block runs on the
-            // other paths, but the node's value is the last thing anything
-            // copied with `return_at` needs, so nothing more is copied.
-            self.stopped = true;
-        }
         out
     }
 
@@ -277,7 +278,6 @@ impl<'a> FunctionCopy<'a> {
                         let value = self.stop_value(expr);
                         self.flush(out);
                         out.push(Statement::Return { value: Some(value) }, span);
-                        self.stopped = true;
                         self.stop_depth = Some(self.depth);
                         return;
                     }
@@ -398,7 +398,6 @@ impl<'a> FunctionCopy<'a> {
                 let value = self.stop_value(result);
                 self.flush(out);
                 out.push(Statement::Return { value: Some(value) }, span);
-                self.stopped = true;
                 self.stop_depth = Some(self.depth);
             }
             Statement::Store { pointer, .. } if !self.is_live(pointer) => {}

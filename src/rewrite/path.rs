@@ -27,16 +27,14 @@
 use naga::{Block, Expression, Function, Handle, Module, Span, Statement};
 
 use super::copy::FunctionCopy;
-use crate::analysis::graph::{ExprGraph, ExprSet};
+use crate::analysis::graph::{self, ExprGraph, ExprSet};
 use crate::proc::Placement;
 
 /// The branches a node is computed under.
 #[derive(Clone, Debug)]
 pub struct Path {
-    /// Conditions and selectors around the node, outermost first, then
-    /// those around the `return`s before it.
-    pub conditions: Vec<Handle<Expression>>,
-    /// Everything evaluating them needs.
+    /// Everything evaluating the conditions and selectors around the node,
+    /// and those around the `return`s before it, needs.
     pub live: ExprSet,
     /// Whether each condition depends only on uniforms, overrides and
     /// constants (not on any fragment input).
@@ -67,14 +65,8 @@ impl Path {
             live.union_with(&graph.slice(condition));
         }
         let exprs: Vec<&Expression> = function.expressions.iter().map(|(_, e)| e).collect();
-        let uniform = !live
-            .ones()
-            .any(|i| matches!(exprs[i], Expression::FunctionArgument(_)));
-        Some(Path {
-            conditions,
-            live,
-            uniform,
-        })
+        let uniform = !graph::reads_arguments(&exprs, &live);
+        Some(Path { live, uniform })
     }
 
     /// How the plan describes it.
@@ -87,26 +79,19 @@ impl Path {
     }
 }
 
-/// Ends a copy made with [`FunctionCopy::return_at`] the node: on the paths
+/// Runs a copy made with [`FunctionCopy::return_at`] the node: on the paths
 /// that do not reach the node, it returns `cache_absent()` (`absent`),
 /// narrowed to the payload's `components`.
 pub fn finish_payload(
-    mut copy: FunctionCopy<'_>,
+    copy: FunctionCopy<'_>,
     absent: Handle<Function>,
     components: u32,
 ) -> Function {
-    // The source's own returns (a pixel that ends before the node) return
-    // "no value" too.
-    copy.replace_returns(Box::new(move |copy, block| {
+    // Also where the source returns before the node: that pixel does not
+    // compute it either.
+    copy.run_or_return(Box::new(move |copy, block| {
         absent_value(copy, block, absent, components)
-    }));
-    let mut body = copy.copy_body();
-    if copy.returns_on_every_path() {
-        copy.target.body = body;
-        return copy.target;
-    }
-    let value = absent_value(&mut copy, &mut body, absent, components);
-    copy.finish(body, Statement::Return { value: Some(value) })
+    }))
 }
 
 /// `cache_absent()` narrowed to the payload's components, its call pushed
@@ -187,16 +172,8 @@ pub fn presence(
         },
     );
     copy.return_value_at(node, Expression::Literal(naga::Literal::Bool(true)));
-    copy.replace_returns(Box::new(|copy, _| {
+    let presence = copy.run_or_return(Box::new(|copy, _| {
         copy.add(Expression::Literal(naga::Literal::Bool(false)))
     }));
-    let body = copy.copy_body();
-    let presence = if copy.returns_on_every_path() {
-        copy.target.body = body;
-        copy.target
-    } else {
-        let no = copy.add(Expression::Literal(naga::Literal::Bool(false)));
-        copy.finish(body, Statement::Return { value: Some(no) })
-    };
     module.functions.append(presence, Span::UNDEFINED)
 }

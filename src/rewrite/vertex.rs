@@ -50,78 +50,59 @@ pub fn vertex_entry(
         .map(|(i, _)| i)
         .collect();
     let names = |indices: &[usize]| -> String {
+        if indices.is_empty() {
+            return "none".into();
+        }
         indices
             .iter()
             .map(|&i| format!("`{}`", module.entry_points[i].name))
             .collect::<Vec<_>>()
             .join(", ")
     };
+    let fragment = &module.entry_points[fragment];
+    let feeds_fragment =
+        |v: usize| feeds(module, &module.entry_points[v].function, &fragment.function);
     if let Some(name) = wanted {
         return match module.entry_points.iter().position(|ep| ep.name == name) {
-            Some(index) if module.entry_points[index].stage == naga::ShaderStage::Vertex => {
-                let fragment = &module.entry_points[fragment];
-                if feeds(
-                    module,
-                    &module.entry_points[index].function,
-                    &fragment.function,
-                ) {
-                    Ok(index)
-                } else {
-                    Err(Refusal::new(format!(
-                        "`{name}` does not output what `{}` takes (its input struct, or a value at each location it reads)",
-                        fragment.name
-                    )))
-                }
-            }
-            Some(_) => Err(Refusal::new(format!(
+            Some(index) if !vertices.contains(&index) => Err(Refusal::new(format!(
                 "`{name}` is not a vertex entry point; the vertex entry points are {}",
-                if vertices.is_empty() {
-                    "none".into()
-                } else {
-                    names(&vertices)
-                }
+                names(&vertices)
+            ))),
+            Some(index) if feeds_fragment(index) => Ok(index),
+            Some(_) => Err(Refusal::new(format!(
+                "`{name}` does not output what `{}` takes (its input struct, or a value at each location it reads)",
+                fragment.name
             ))),
             None => Err(Refusal::new(format!(
                 "the shader has no entry point named `{name}`; its vertex entry points are {}",
-                if vertices.is_empty() {
-                    "none".into()
-                } else {
-                    names(&vertices)
-                }
+                names(&vertices)
             ))),
         };
     }
-    match vertices.as_slice() {
-        [only] => return Ok(*only),
-        [] => {
-            return Err(Refusal::new(
-                "the shader has no vertex entry point to compute the previous position with",
-            ))
-        }
-        _ => {}
+    if let [only] = vertices[..] {
+        return Ok(only);
+    }
+    if vertices.is_empty() {
+        return Err(Refusal::new(
+            "the shader has no vertex entry point to compute the previous position with",
+        ));
     }
     let feeding: Vec<usize> = vertices
         .iter()
         .copied()
-        .filter(|&v| {
-            feeds(
-                module,
-                &module.entry_points[v].function,
-                &module.entry_points[fragment].function,
-            )
-        })
+        .filter(|&v| feeds_fragment(v))
         .collect();
-    match feeding.as_slice() {
-        [only] => Ok(*only),
+    match feeding[..] {
+        [only] => Ok(only),
         [] => Err(Refusal::new(format!(
             "none of the vertex entry points ({}) outputs what `{}` takes; name the one that draws with it with --vertex-entry",
             names(&vertices),
-            module.entry_points[fragment].name
+            fragment.name
         ))),
-        several => Err(Refusal::new(format!(
+        _ => Err(Refusal::new(format!(
             "several vertex entry points ({}) output what `{}` takes; name the one that draws with it with --vertex-entry",
-            names(several),
-            module.entry_points[fragment].name
+            names(&feeding),
+            fragment.name
         ))),
     }
 }
