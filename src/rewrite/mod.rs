@@ -471,6 +471,19 @@ pub fn rewrite(
         function.expressions.iter().map(|(h, _)| h).collect();
     let mut hoist_derivatives = false;
     if variant == Variant::OnePass {
+        // Gradients are hoisted from the entry point's own expressions; a
+        // helper that takes them (egui's `sample_texture`) would be called
+        // in the miss branch as it is.
+        if let Some(call) = layout.calls.iter().find(|call| {
+            call.result
+                .is_some_and(|r| payload_live.contains(r.index()))
+                && uniformity::needs_derivatives(original, call.function)
+        }) {
+            return Err(Refusal::new(format!(
+                "one-pass computes the payload only on a miss, in non-uniform control flow, and the payload calls `{}`, which takes implicit derivatives inside the helper, where they cannot be computed before the miss branch; two-pass and three-pass compute the payload in uniform control flow",
+                original.functions[call.function].name.as_deref().unwrap_or("a helper")
+            )));
+        }
         for i in payload_live.ones() {
             let Some(what) = uniformity::implicit_derivative(exprs[i]) else {
                 continue;

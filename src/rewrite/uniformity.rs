@@ -151,7 +151,7 @@ pub fn implicit_derivative(expr: &Expression) -> Option<String> {
 
 /// Whether calling `function` takes implicit derivatives, directly or
 /// through its callees.
-fn needs_derivatives(module: &Module, function: Handle<Function>) -> bool {
+pub fn needs_derivatives(module: &Module, function: Handle<Function>) -> bool {
     let f = &module.functions[function];
     if f.expressions
         .iter()

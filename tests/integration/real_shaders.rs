@@ -385,3 +385,32 @@ size = 64
         assert!(row.hit_rate > 0.95, "{}: hit {}", row.variant, row.hit_rate);
     }
 }
+
+/// egui samples its texture in a helper (`sample_texture`): one-pass, which
+/// computes the payload in its miss branch and hoists only the entry
+/// point's own derivatives, refuses with the helper's name instead of
+/// failing its own uniformity check; two- and three-pass are built.
+#[test]
+fn one_pass_refuses_a_payload_whose_helper_takes_derivatives() {
+    let source = "@group(0) @binding(0) var<uniform> clip_from_world: mat4x4<f32>;\n@group(0) @binding(1) var r_tex_color: texture_2d<f32>;\n@group(0) @binding(2) var r_tex_sampler: sampler;\nstruct VertexOutput { @builtin(position) position: vec4<f32>, @location(0) tex_coord: vec2<f32>, @location(1) color: vec4<f32> }\n@vertex\nfn vs(@location(0) p: vec3<f32>, @location(2) uv: vec2<f32>) -> VertexOutput {\n    return VertexOutput(clip_from_world * vec4<f32>(p, 1.0), uv, vec4<f32>(1.0));\n}\nfn sample_texture(in: VertexOutput) -> vec4<f32> {\n    return textureSample(r_tex_color, r_tex_sampler, in.tex_coord);\n}\n@fragment\nfn fs(in: VertexOutput) -> @location(0) vec4<f32> {\n    let tex_gamma = sample_texture(in);\n    let out_color = in.color * tex_gamma;\n    return vec4<f32>(pow(out_color.rgb, vec3<f32>(2.2)), out_color.a);\n}\n";
+    let (shader, analysis) = analyzed("egui.wgsl", source);
+    let node = candidate(&analysis, "in.color * tex_gamma");
+    let refused = rewrite::rewrite(
+        &shader,
+        &analysis,
+        node,
+        Variant::OnePass,
+        &Options::default(),
+    )
+    .unwrap_err();
+    assert!(
+        refused
+            .reason
+            .contains("calls `sample_texture`, which takes implicit derivatives"),
+        "{refused}"
+    );
+    for variant in [Variant::TwoPass, Variant::ThreePass] {
+        rewrite::rewrite(&shader, &analysis, node, variant, &Options::default())
+            .unwrap_or_else(|r| panic!("{variant}: {r}"));
+    }
+}
