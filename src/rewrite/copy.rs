@@ -400,7 +400,13 @@ impl<'a> FunctionCopy<'a> {
                 out.push(Statement::Return { value: Some(value) }, span);
                 self.stop_depth = Some(self.depth);
             }
-            Statement::Store { pointer, .. } if !self.is_live(pointer) => {}
+            // A store no live load reads (its value is not live: the live
+            // sets follow reaching definitions) is dead here, even into a
+            // variable that is live: the shade pass's `lit += f(..)` before
+            // the cached `lit += ..` is overwritten by the cached value,
+            // and its call is not copied.
+            Statement::Store { pointer, value }
+                if !self.is_live(pointer) || !self.is_live(value) => {}
             Statement::Call {
                 function, result, ..
             } if !result.is_some_and(|r| self.is_live(r))
