@@ -202,6 +202,8 @@ pub fn profile(
     // The scene must provide every uniform the shader reads; the values it
     // gives bound the candidates' values (whether a payload fits f16 here).
     let uniforms = scene::uniforms::buffers(&shader.module);
+    let storage = scene::storage::buffers(&shader.module);
+    scene::roles::check(&uniforms, &storage, scene)?;
     scene::uniforms::check(&uniforms, scene).map_err(fail)?;
     let mut analysis = analysis::analyze(
         shader,
@@ -244,7 +246,6 @@ pub fn profile(
     let reference_plan = plan::reference(shader, &analysis, &base).map_err(fail)?;
 
     // The scene must provide everything else the shader binds.
-    let storage = scene::storage::buffers(&shader.module);
     scene::storage::check(&storage, scene)?;
     check_instancing(shader, scene)?;
     let dir = scene_path.parent().unwrap_or(Path::new("."));
@@ -284,6 +285,20 @@ pub fn profile(
                 )))
             }
             _ => {}
+        }
+    }
+    // What the scene defaulted, and the vertex inputs the mesh feeds a
+    // constant.
+    let mut defaulted = scene.defaulted.clone();
+    for attribute in &reference_plan.vertex_layout {
+        let constant = scene::mesh::VertexSource::of(attribute)
+            .ok()
+            .and_then(|source| source.constant(attribute));
+        if let Some(value) = constant {
+            defaulted.push(format!(
+                "vertex input @location({}) `{}` = {value}",
+                attribute.location, attribute.name
+            ));
         }
     }
     let scene_meshes: Vec<scene::Mesh> = scene
@@ -688,6 +703,7 @@ pub fn profile(
         entry: analysis.entry.clone(),
         scene: scene_path.display().to_string(),
         scene_description: scene.description.clone(),
+        defaulted,
         effects: scene.effects.clone(),
         size,
         frames,

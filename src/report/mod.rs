@@ -24,6 +24,10 @@ pub struct Report {
     pub entry: String,
     pub scene: String,
     pub scene_description: String,
+    /// What the scene set to a neutral value because nothing said what it
+    /// is (the default scene's bindings, vertex inputs fed a constant).
+    #[serde(default)]
+    pub defaulted: Vec<String>,
     pub effects: Vec<Effect>,
     pub size: [u32; 2],
     /// Frames measured (after the warm-up).
@@ -430,6 +434,7 @@ mod tests {
             entry: String::new(),
             scene: String::new(),
             scene_description: String::new(),
+            defaulted: Vec::new(),
             effects: Vec::new(),
             size: [8, 8],
             frames: 1,

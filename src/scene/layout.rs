@@ -8,8 +8,8 @@ use naga::{Handle, Module, Type, TypeInner};
 
 use super::FrameState;
 
-/// Members the simulation fills; every other member comes from the
-/// scene.
+/// Members the simulation fills, by name; every other member comes from
+/// the scene, or takes one of [`ROLES`] through the scene's `[roles]`.
 pub const SIMULATED: &[&str] = &[
     "clip_from_world",
     "world_from_local",
@@ -18,6 +18,54 @@ pub const SIMULATED: &[&str] = &[
     "light_clip_from_world",
     "time",
 ];
+
+/// What the simulation can fill: each role with the shapes of member it
+/// fits and what it is.
+pub const ROLES: &[(&str, &str)] = &[
+    (
+        "clip_from_world",
+        "the camera's view-projection matrix (mat4x4<f32>)",
+    ),
+    (
+        "clip_from_view",
+        "the camera's projection matrix (mat4x4<f32>)",
+    ),
+    ("view_from_world", "the camera's view matrix (mat4x4<f32>)"),
+    (
+        "view_from_clip",
+        "the inverse of the camera's projection (mat4x4<f32>)",
+    ),
+    (
+        "world_from_local",
+        "the object's (or instance's) model matrix (mat4x4<f32>)",
+    ),
+    (
+        "clip_from_local",
+        "view-projection times model (mat4x4<f32>)",
+    ),
+    (
+        "light_clip_from_world",
+        "the light's view-projection matrix (mat4x4<f32>)",
+    ),
+    (
+        "camera_position",
+        "the camera's world position (vec3<f32> or vec4<f32>, w = 1)",
+    ),
+    (
+        "light_position",
+        "the light's world position (vec3<f32> or vec4<f32>, w = 1)",
+    ),
+    ("time", "seconds since the first frame (f32)"),
+];
+
+/// Whether a member of `shape` can take `role`.
+pub fn fits_role(role: &str, shape: Shape) -> bool {
+    match role {
+        "camera_position" | "light_position" => matches!(shape, Shape::F32(3 | 4)),
+        "time" => shape == Shape::F32(1),
+        _ => shape == Shape::Matrix(4, 4),
+    }
+}
 
 /// One member of a struct and where it lives in it.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -104,10 +152,17 @@ fn scalar_shape(scalar: naga::Scalar, n: u32) -> Shape {
 pub fn simulated(name: &str, state: &FrameState, world_from_local: Mat4) -> Option<Vec<f32>> {
     Some(match name {
         "clip_from_world" => state.clip_from_world.to_cols_array().to_vec(),
+        "clip_from_view" => state.clip_from_view.to_cols_array().to_vec(),
+        "view_from_world" => state.view_from_world.to_cols_array().to_vec(),
+        "view_from_clip" => state.clip_from_view.inverse().to_cols_array().to_vec(),
         "world_from_local" => world_from_local.to_cols_array().to_vec(),
+        "clip_from_local" => (state.clip_from_world * world_from_local)
+            .to_cols_array()
+            .to_vec(),
         "light_clip_from_world" => state.light_clip_from_world.to_cols_array().to_vec(),
-        "camera_position" => state.camera_position.to_array().to_vec(),
-        "light_position" => state.light_position.to_array().to_vec(),
+        // A vec4 member takes a point: w = 1 (a vec3 drops it).
+        "camera_position" => state.camera_position.extend(1.0).to_array().to_vec(),
+        "light_position" => state.light_position.extend(1.0).to_array().to_vec(),
         "time" => vec![state.time],
         _ => return None,
     })

@@ -407,25 +407,128 @@ fn gltf(path: &Path) -> Result<Mesh, String> {
     Ok(mesh)
 }
 
+/// What feeds one vertex input of the shader.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VertexSource {
+    Position,
+    Normal,
+    /// Perpendicular to the normal, around the sphere's axis (w = 1).
+    Tangent,
+    Uv,
+    /// A constant white: meshes carry no colours.
+    Colour,
+    /// A constant for an integer input (a packed colour all ones, anything
+    /// else 0): a mesh has nothing to say about them.
+    Integer,
+}
+
+impl VertexSource {
+    /// What feeds `attribute`: by its name (`position`, `normal`,
+    /// `tangent`, `uv`/`tex_coord`, `color`), else by the corpus's
+    /// locations (0 position, 1 normal, 2 uv). Only float inputs can be
+    /// fed; a wider input than the source is padded (w = 1 for points).
+    pub fn of(attribute: &crate::plan::VertexAttribute) -> Result<VertexSource, String> {
+        let name = attribute.name.to_ascii_lowercase();
+        let has = |words: &[&str]| words.iter().any(|w| name.contains(w));
+        let by_name = if has(&["pos"]) {
+            Some(VertexSource::Position)
+        } else if has(&["norm"]) {
+            Some(VertexSource::Normal)
+        } else if has(&["tang"]) {
+            Some(VertexSource::Tangent)
+        } else if has(&["uv", "tex", "coord"]) {
+            Some(VertexSource::Uv)
+        } else if has(&["col"]) {
+            Some(VertexSource::Colour)
+        } else {
+            None
+        };
+        let source = by_name.or(match attribute.location {
+            0 => Some(VertexSource::Position),
+            1 => Some(VertexSource::Normal),
+            2 => Some(VertexSource::Uv),
+            _ => None,
+        });
+        let float = attribute.format.starts_with("float32");
+        let integer =
+            attribute.format.starts_with("uint32") || attribute.format.starts_with("sint32");
+        match source {
+            Some(source) if float => Ok(source),
+            _ if integer => Ok(VertexSource::Integer),
+            _ => Err(format!(
+                "the scene's mesh cannot feed vertex input @location({}) `{}` ({}): it gives float inputs named like position, normal, tangent, uv (tex_coord) or color, or at locations 0 (position), 1 (normal) and 2 (uv)",
+                attribute.location, attribute.name, attribute.format
+            )),
+        }
+    }
+
+    /// Whether the source is a constant rather than the mesh's, to list
+    /// as defaulted.
+    pub fn is_constant(self) -> bool {
+        matches!(self, VertexSource::Colour | VertexSource::Integer)
+    }
+
+    /// The constant's value, for the list of what was defaulted.
+    pub fn constant(self, attribute: &crate::plan::VertexAttribute) -> Option<&'static str> {
+        match self {
+            VertexSource::Colour => Some("1.0 in every component"),
+            VertexSource::Integer if packed_colour(attribute) => Some("0xffffffff (white)"),
+            VertexSource::Integer => Some("0"),
+            _ => None,
+        }
+    }
+}
+
+/// Whether an integer input is a packed colour (egui's `a_color: u32`).
+fn packed_colour(attribute: &crate::plan::VertexAttribute) -> bool {
+    attribute.name.to_ascii_lowercase().contains("col") && attribute.format == "uint32"
+}
+
 impl Mesh {
-    /// Vertex bytes for attributes at `locations` with `formats`: location 0
-    /// is the position, 1 the normal, 2 the texture coordinate.
+    /// Vertex bytes for the shader's attributes, packed in `layout`'s
+    /// order, each fed by its [`VertexSource`].
     pub fn vertex_bytes(&self, layout: &[crate::plan::VertexAttribute]) -> Result<Vec<u8>, String> {
+        let sources: Vec<(VertexSource, usize, u32)> = layout
+            .iter()
+            .map(|attribute| {
+                let width = match attribute.format.rsplit_once('x') {
+                    Some((_, n)) => n.parse().unwrap_or(1),
+                    None => 1,
+                };
+                let word = if packed_colour(attribute) {
+                    u32::MAX
+                } else {
+                    0
+                };
+                Ok((VertexSource::of(attribute)?, width, word))
+            })
+            .collect::<Result<_, String>>()?;
         let mut bytes = Vec::new();
         for i in 0..self.positions.len() {
-            for attribute in layout {
-                let values: &[f32] = match (attribute.location, attribute.format.as_str()) {
-                    (0, "float32x3") => &self.positions[i].to_array(),
-                    (1, "float32x3") => &self.normals[i].to_array(),
-                    (2, "float32x2") => &self.uvs[i].to_array(),
-                    (location, format) => {
-                        return Err(format!(
-                            "a scene mesh provides @location(0) position: float32x3, @location(1) normal: float32x3 and @location(2) uv: float32x2; the shader reads @location({location}) `{}` as {format}",
-                            attribute.name
-                        ))
+            for &(source, width, word) in &sources {
+                let values: [f32; 4] = match source {
+                    VertexSource::Integer => {
+                        for _ in 0..width.min(4) {
+                            bytes.extend(word.to_le_bytes());
+                        }
+                        continue;
                     }
+                    VertexSource::Position => self.positions[i].extend(1.0).to_array(),
+                    VertexSource::Normal => self.normals[i].extend(0.0).to_array(),
+                    VertexSource::Tangent => {
+                        let n = self.normals[i];
+                        let t = Vec3::Y.cross(n);
+                        let t = if t.length_squared() > 1e-8 {
+                            t.normalize()
+                        } else {
+                            Vec3::X
+                        };
+                        t.extend(1.0).to_array()
+                    }
+                    VertexSource::Uv => [self.uvs[i].x, self.uvs[i].y, 0.0, 1.0],
+                    VertexSource::Colour => [1.0; 4],
                 };
-                for v in values {
+                for v in &values[..width.min(4)] {
                     bytes.extend(v.to_le_bytes());
                 }
             }

@@ -22,9 +22,11 @@
 //! transform and the scene's `[storage.<binding>]` tables. [`layout`]
 //! writes values at naga's offsets for both kinds of buffer.
 
+pub mod init;
 pub mod instances;
 pub mod layout;
 pub mod mesh;
+pub mod roles;
 pub mod storage;
 pub mod textures;
 pub mod uniforms;
@@ -85,6 +87,13 @@ pub struct Scene {
     pub light: Light,
     #[serde(default)]
     pub objects: Vec<Object>,
+    /// The shader's own names for what the simulation animates:
+    /// `"buffer.member"` (or a plain uniform's name) to a role of
+    /// [`layout::ROLES`], e.g. `"camera.view_proj" = "clip_from_world"`.
+    /// Members named like a role (`clip_from_world`, ...) take it without
+    /// one.
+    #[serde(default)]
+    pub roles: BTreeMap<String, toml::Spanned<String>>,
     /// Values of uniform members by name.
     #[serde(default)]
     pub uniforms: BTreeMap<String, toml::Value>,
@@ -107,6 +116,10 @@ pub struct Scene {
     /// checked against the shader).
     #[serde(skip)]
     pub file: Option<Arc<SourceFile>>,
+    /// What the scene sets to a neutral value because the shader binds it
+    /// and nothing says what it is (the default scene's, [`init`]).
+    #[serde(skip)]
+    pub defaulted: Vec<String>,
 }
 
 fn default_true() -> bool {
@@ -329,6 +342,10 @@ fn default_scale() -> f32 {
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrameState {
     pub clip_from_world: Mat4,
+    /// The camera's projection and view, whose product is
+    /// `clip_from_world`, for shaders that take them apart.
+    pub clip_from_view: Mat4,
+    pub view_from_world: Mat4,
     pub camera_position: Vec3,
     pub light_position: Vec3,
     pub light_clip_from_world: Mat4,
@@ -345,6 +362,23 @@ impl Scene {
     pub fn load(path: &Path) -> Result<Scene, Error> {
         let file = Arc::new(crate::front::read_source(path)?);
         Scene::parse(file)
+    }
+
+    /// The default scene for `shader` ([`init`]), drawn with the vertex
+    /// entry point that pairs with fragment entry point `entry`.
+    pub fn default_for(
+        shader: &crate::front::Shader,
+        entry: Option<&str>,
+        vertex_entry: Option<&str>,
+    ) -> Result<Scene, Error> {
+        let init = init::for_shader(shader, entry, vertex_entry)?;
+        let file = Arc::new(SourceFile::new(
+            format!("default scene for {}", shader.file.path),
+            init.text,
+        ));
+        let mut scene = Scene::parse(file)?;
+        scene.defaulted = init.defaulted;
+        Ok(scene)
     }
 
     pub fn parse(file: Arc<SourceFile>) -> Result<Scene, Error> {
@@ -396,6 +430,21 @@ impl Scene {
         }
     }
 
+    /// The role the simulation fills member `member` of binding `binding`
+    /// with: the one `[roles]` gives it, else its own name when that is a
+    /// role's; `None` when the scene gives its value.
+    pub fn role(&self, binding: &str, member: &str) -> Option<&str> {
+        let key = if binding == member {
+            binding.to_string()
+        } else {
+            format!("{binding}.{member}")
+        };
+        match self.roles.get(&key) {
+            Some(role) => Some(role.get_ref().as_str()),
+            None => layout::SIMULATED.iter().copied().find(|s| *s == member),
+        }
+    }
+
     pub fn has(&self, effect: Effect) -> bool {
         self.effects.contains(&effect)
     }
@@ -430,7 +479,8 @@ impl Scene {
             target += pan;
         }
         let clip_from_view = camera.projection(aspect);
-        let clip_from_world = clip_from_view * Mat4::look_at_rh(eye, target, Vec3::Y);
+        let view_from_world = Mat4::look_at_rh(eye, target, Vec3::Y);
+        let clip_from_world = clip_from_view * view_from_world;
 
         let mut light = Vec3::from(self.light.position);
         if self.has(Effect::LightMotion) {
@@ -476,6 +526,8 @@ impl Scene {
             .collect();
         FrameState {
             clip_from_world,
+            clip_from_view,
+            view_from_world,
             camera_position: eye,
             light_position: light,
             light_clip_from_world,

@@ -19,7 +19,7 @@ use std::ops::Range;
 use naga::{Module, TypeInner};
 
 use super::instances::per_instance;
-use super::layout::{self, is_padding, Member, Shape, SIMULATED};
+use super::layout::{self, is_padding, Member, Shape};
 use super::{FrameState, Scene};
 use crate::diagnostic::Error;
 
@@ -185,7 +185,7 @@ pub fn check(buffers: &[StorageBuffer], scene: &Scene) -> Result<(), Error> {
                         ),
                     );
                 };
-                if SIMULATED.contains(&member.name.as_str()) {
+                if scene.role(name, &member.name).is_some() {
                     return at(
                         value.span(),
                         format!(
@@ -212,7 +212,7 @@ pub fn check(buffers: &[StorageBuffer], scene: &Scene) -> Result<(), Error> {
                 }
             }
             for member in &buffer.members {
-                if is_padding(&member.name) || SIMULATED.contains(&member.name.as_str()) {
+                if is_padding(&member.name) || scene.role(name, &member.name).is_some() {
                     continue;
                 }
                 let element = buffer.element(&member.name);
@@ -323,7 +323,8 @@ pub fn fill(
             } else {
                 state.objects[object] * instance
             };
-            if let Some(floats) = layout::simulated(&member.name, state, world_from_local) {
+            let role = scene.role(&buffer.name, &member.name);
+            if let Some(floats) = role.and_then(|r| layout::simulated(r, state, world_from_local)) {
                 layout::write_floats(&mut bytes, base, member, &floats)?;
             } else if let Some(values) = &given {
                 layout::write_numbers(&mut bytes, base, member, &values[element as usize])?;

@@ -53,7 +53,7 @@ pub fn check(buffers: &[UniformBuffer], scene: &Scene) -> Result<(), String> {
     let mut missing = Vec::new();
     for buffer in buffers {
         for member in &buffer.members {
-            if is_padding(&member.name) || SIMULATED.contains(&member.name.as_str()) {
+            if is_padding(&member.name) || scene.role(&buffer.name, &member.name).is_some() {
                 continue;
             }
             if !scene.uniforms.contains_key(&member.name) {
@@ -91,7 +91,9 @@ pub fn fill(
         if is_padding(&member.name) {
             continue;
         }
-        if let Some(floats) = layout::simulated(&member.name, state, state.objects[object]) {
+        let role = scene.role(&buffer.name, &member.name);
+        if let Some(floats) = role.and_then(|r| layout::simulated(r, state, state.objects[object]))
+        {
             layout::write_floats(&mut bytes, 0, member, &floats)?;
             continue;
         }

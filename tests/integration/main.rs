@@ -6,6 +6,7 @@ mod analyze;
 mod build_api;
 mod corpus;
 mod cost;
+mod default_scene;
 mod errors;
 mod gpu;
 mod hard_cases;

@@ -414,3 +414,35 @@ fn one_pass_refuses_a_payload_whose_helper_takes_derivatives() {
             .unwrap_or_else(|r| panic!("{variant}: {r}"));
     }
 }
+
+/// `lit += f(..)` and then `lit += g(..)`, caching the second sum: in the
+/// shade pass the first store is overwritten by the cached value, so it
+/// and the call it stores are dropped together (keeping the store without
+/// its call left a call result no statement computes: invalid IR).
+#[test]
+fn a_store_overwritten_by_the_cached_value_is_dropped_with_its_call() {
+    let source = "@group(0) @binding(0) var<uniform> clip_from_world: mat4x4<f32>;\nstruct V { @builtin(position) position: vec4<f32>, @location(0) p: vec3<f32> }\n@vertex\nfn vs(@location(0) p: vec3<f32>) -> V {\n    return V(clip_from_world * vec4<f32>(p, 1.0), p);\n}\nfn shine(p: vec3<f32>) -> vec3<f32> {\n    return vec3<f32>(pow(max(sin(p.x * 9.0), 0.0), 12.0));\n}\n@fragment\nfn fs(in: V) -> @location(0) vec4<f32> {\n    var lit = vec3<f32>(0.1);\n    lit += shine(in.p);\n    let rim = pow(1.0 - abs(in.p.z), 4.0);\n    lit += vec3<f32>(rim * 0.25);\n    return vec4<f32>(lit * 0.5, 1.0);\n}\n";
+    let (shader, analysis) = analyzed("overwritten.wgsl", source);
+    let second = analysis
+        .candidates
+        .iter()
+        .find(|c| c.node.text == "lit += vec3<f32>(rim * 0.25)")
+        .unwrap_or_else(|| panic!("{:#?}", analysis.candidates));
+    for variant in Variant::ALL {
+        let rewritten =
+            rewrite::rewrite(&shader, &analysis, second, variant, &Options::default())
+                .unwrap_or_else(|r| panic!("{variant}: {r}"));
+        // The shade keeps no call to `shine`: its value is in the cache.
+        let shades: Vec<String> = wgsl_sources(&rewritten)
+            .into_values()
+            .filter_map(|text| {
+                let body = text.split("fn fs_shade(").nth(1)?;
+                Some(body.split("\nfn ").next().unwrap_or(body).to_string())
+            })
+            .collect();
+        assert!(!shades.is_empty(), "{variant}: no shade function");
+        for shade in shades {
+            assert!(!shade.contains("shine("), "{variant}: {shade}");
+        }
+    }
+}

@@ -3,6 +3,7 @@
 pub mod analyze;
 pub mod profile;
 pub mod rewrite;
+pub mod scene;
 
 use shadecache::diagnostic::Color;
 use shadecache::diagnostic::Error;
@@ -15,6 +16,8 @@ pub enum Command {
     Rewrite(rewrite::Args),
     /// Run the variants on a scene, measure time and error against the original, and write a report.
     Profile(profile::Args),
+    /// Scenes for `profile`: `scene init SHADER > scene.toml` writes the default scene to edit.
+    Scene(scene::Args),
 }
 
 pub fn exec(command: Command, color: Color) -> Result<(), Error> {
@@ -22,6 +25,7 @@ pub fn exec(command: Command, color: Color) -> Result<(), Error> {
         Command::Analyze(args) => analyze::exec(args, color),
         Command::Rewrite(args) => rewrite::exec(args, color),
         Command::Profile(args) => profile::exec(args, color),
+        Command::Scene(args) => scene::exec(args, color),
     }
 }
 

@@ -19,9 +19,12 @@ pub struct Args {
     /// The WGSL shader to profile.
     pub shader: PathBuf,
 
-    /// The scene to render (TOML; see docs/scene-toml.md).
+    /// The scene to render (TOML; see docs/scene-toml.md). Without one, a
+    /// default scene: a lit, rotating sphere under an orbiting camera, the
+    /// shader's matrices found from its vertex stage and every other
+    /// binding a neutral value, listed (`shadecache scene init` writes it).
     #[arg(long, value_name = "SCENE.toml")]
-    pub scene: PathBuf,
+    pub scene: Option<PathBuf>,
 
     /// Nodes to profile: `all`, `top:N` (highest estimated P/T) or ids separated by commas.
     #[arg(long, value_name = "all|top:N|ID,...", default_value = "top:3")]
@@ -184,7 +187,13 @@ impl Progress for Bar {
 
 pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     let shader = front::load(&args.shader)?;
-    let scene = Scene::load(&args.scene)?;
+    let (scene, scene_path) = match &args.scene {
+        Some(path) => (Scene::load(path)?, path.clone()),
+        None => (
+            Scene::default_for(&shader, args.entry.as_deref(), args.vertex_entry.as_deref())?,
+            PathBuf::from("default scene"),
+        ),
+    };
     let defaults = if args.sweep {
         Options::default().sweep()
     } else {
@@ -225,7 +234,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         bar: None,
         quiet: args.quiet,
     };
-    let (report, pictures) = profile::profile(&shader, &scene, &args.scene, &options, &mut bar)?;
+    let (report, pictures) = profile::profile(&shader, &scene, &scene_path, &options, &mut bar)?;
 
     let io = |what: &str, err: String| {
         Error::plain(Diagnostic::error(format!("cannot write {what}: {err}")))
@@ -270,6 +279,14 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
             row.refresh_rate * 100.0,
             row.psnr,
             row.ssim
+        ));
+    }
+    if !report.defaulted.is_empty() {
+        summary.push_str(&format!(
+            "  defaulted (nothing said what they are; `shadecache scene init` writes them out to edit):
+    {}
+",
+            report.defaulted.join("\n    ")
         ));
     }
     if !report.steady_state {

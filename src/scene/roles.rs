@@ -1,0 +1,531 @@
+//! Roles: which of the shader's own members the simulation animates.
+//!
+//! A shader names its matrices as it likes (`camera.view_proj`,
+//! `model.world`, `u_mvp`); the simulation knows a fixed set of quantities
+//! ([`ROLES`]: the camera's view-projection, the model matrix, the camera
+//! and light positions, time). A scene's `[roles]` table maps one onto the
+//! other, `"camera.view_proj" = "clip_from_world"`. [`check`] holds that
+//! table against the shader, and [`infer`] guesses it from the IR for
+//! `scene init` and the default scene:
+//!
+//! - the matrices applied on the way from the vertex position to
+//!   `@builtin(position)` are, last to first, the view-projection and the
+//!   model matrix (three: projection, view and model; one: their product);
+//! - positions and time cannot be told apart by their use (a light and a
+//!   camera are both subtracted from the world position), so they are
+//!   inferred from their names (`camera`/`eye`/`view` with `pos`, `light`
+//!   with `pos` or `dir`, `time`), and the comment `scene init` writes says
+//!   so.
+
+use std::collections::HashMap;
+
+use naga::{Expression, Handle, Module, Statement, TypeInner};
+
+use super::layout::{fits_role, Shape, ROLES, SIMULATED};
+use super::storage::StorageBuffer;
+use super::uniforms::UniformBuffer;
+use super::Scene;
+use crate::diagnostic::Error;
+
+/// A role `scene init` inferred, with how.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Inferred {
+    /// `buffer.member` (or a plain uniform's name).
+    pub key: String,
+    pub role: &'static str,
+    pub how: String,
+}
+
+/// The `[roles]` key of member `member` of binding `binding`.
+pub fn key(binding: &str, member: &str) -> String {
+    if binding == member {
+        binding.to_string()
+    } else {
+        format!("{binding}.{member}")
+    }
+}
+
+/// Checks the scene's `[roles]` against the shader's buffers: every key
+/// names a member, every role is known and fits the member's type, and no
+/// member has both a role and a value. Errors point at the role in the
+/// scene file.
+pub fn check(
+    uniforms: &[UniformBuffer],
+    storage: &[StorageBuffer],
+    scene: &Scene,
+) -> Result<(), Error> {
+    let members = || {
+        let uniform = uniforms.iter().flat_map(|b| {
+            b.members
+                .iter()
+                .map(move |m| (key(&b.name, &m.name), m.shape, Some(&b.name)))
+        });
+        let storage = storage.iter().flat_map(|b| {
+            b.members
+                .iter()
+                .map(move |m| (key(&b.name, &m.name), m.shape, None))
+        });
+        uniform.chain(storage)
+    };
+    for (key, role) in &scene.roles {
+        let at = |message: String| Err(scene.error(message, Some(role.span())));
+        let role_name = role.get_ref().as_str();
+        if !ROLES.iter().any(|(name, _)| *name == role_name) {
+            let known: Vec<&str> = ROLES.iter().map(|(name, _)| *name).collect();
+            return at(format!(
+                "unknown role `{role_name}` for `{key}`: the roles are {}",
+                known.join(", ")
+            ));
+        }
+        let Some((_, shape, uniform)) = members().find(|(k, ..)| k == key) else {
+            let mut names: Vec<String> = members().map(|(k, ..)| format!("`{k}`")).collect();
+            names.sort();
+            let listing = if names.is_empty() {
+                "it binds no uniform or storage buffer".to_string()
+            } else {
+                format!("its members are {}", names.join(", "))
+            };
+            return at(format!(
+                "[roles] names `{key}`, which the shader does not have: {listing}"
+            ));
+        };
+        if !fits_role(role_name, shape) {
+            let described = ROLES
+                .iter()
+                .find(|(name, _)| *name == role_name)
+                .map_or("", |(_, d)| d);
+            return at(format!(
+                "`{key}` is {} and cannot take role `{role_name}`: {described}",
+                shape_name(shape)
+            ));
+        }
+        let member = key.rsplit('.').next().unwrap_or(key);
+        if uniform.is_some() && scene.uniforms.contains_key(member) {
+            return at(format!(
+                "`{key}` is given twice: a role here and a value under [uniforms] `{member}`; keep one"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The WGSL type of a member of `shape`, for messages.
+pub fn shape_name(shape: Shape) -> String {
+    let vector = |scalar: &str, n: u32| {
+        if n == 1 {
+            scalar.to_string()
+        } else {
+            format!("vec{n}<{scalar}>")
+        }
+    };
+    match shape {
+        Shape::F32(n) => vector("f32", n),
+        Shape::U32(n) => vector("u32", n),
+        Shape::I32(n) => vector("i32", n),
+        Shape::Matrix(c, r) => format!("mat{c}x{r}<f32>"),
+        Shape::Other => "a type a scene cannot write".into(),
+    }
+}
+
+/// Infers the roles of the shader's members: the matrices on the way to
+/// `@builtin(position)` of the vertex entry point `vertex`, the positions
+/// and time by name. Members already named like a role are left out (they
+/// take it without `[roles]`).
+pub fn infer(
+    module: &Module,
+    vertex: Option<usize>,
+    uniforms: &[UniformBuffer],
+    storage: &[StorageBuffer],
+) -> Vec<Inferred> {
+    let mut out: Vec<Inferred> = Vec::new();
+    let named_role = |key: &str| {
+        let member = key.rsplit('.').next().unwrap_or(key);
+        SIMULATED.contains(&member)
+    };
+    if let Some(vertex) = vertex {
+        let function = &module.entry_points[vertex].function;
+        let chain = position_matrices(module, function);
+        let roles: &[&'static str] = match chain.len() {
+            1 => &["clip_from_local"],
+            2 => &["clip_from_world", "world_from_local"],
+            3 => &["clip_from_view", "view_from_world", "world_from_local"],
+            _ => &[],
+        };
+        let order = ["applied last", "applied next", "applied first"];
+        for (i, (key, role)) in chain.iter().zip(roles).enumerate() {
+            if named_role(key) {
+                continue;
+            }
+            let place = if chain.len() == 1 {
+                "the only matrix".to_string()
+            } else if i + 1 == chain.len() {
+                order[2].to_string()
+            } else {
+                order[i].to_string()
+            };
+            out.push(Inferred {
+                key: key.clone(),
+                role,
+                how: format!(
+                    "{place} on the way from the vertex position to @builtin(position) in `{}`",
+                    module.entry_points[vertex].name
+                ),
+            });
+        }
+    }
+    let members = uniforms
+        .iter()
+        .flat_map(|b| b.members.iter().map(move |m| (&b.name, m)))
+        .chain(
+            storage
+                .iter()
+                .flat_map(|b| b.members.iter().map(move |m| (&b.name, m))),
+        );
+    for (binding, member) in members {
+        let key = key(binding, &member.name);
+        if named_role(&key) || out.iter().any(|i| i.key == key) {
+            continue;
+        }
+        if let Some(role) = role_by_name(&key, member.shape) {
+            // One member per role by name: a second would be a guess.
+            if out.iter().any(|i| i.role == role) {
+                continue;
+            }
+            out.push(Inferred {
+                key,
+                role,
+                how: format!("by its name (a {})", shape_name(member.shape)),
+            });
+        }
+    }
+    out
+}
+
+/// The role a member's name suggests, if its type fits it: for matrices
+/// the position chain did not reach (a sky drawn from the inverse
+/// projection), for positions and for time.
+fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
+    // A matrix by its own name (`camera.view_proj`: not the camera's
+    // position); a position by the binding's as well (`light.position`).
+    let member = key.rsplit('.').next().unwrap_or(key).to_ascii_lowercase();
+    let whole = key.to_ascii_lowercase();
+    let name = if shape == Shape::Matrix(4, 4) {
+        member
+    } else {
+        whole
+    };
+    let has = |words: &[&str]| words.iter().any(|w| name.contains(w));
+    let role = if shape == Shape::Matrix(4, 4) {
+        if has(&["light"]) {
+            "light_clip_from_world"
+        } else if has(&["mvp"]) {
+            "clip_from_local"
+        } else if has(&["proj"]) && has(&["inv"]) {
+            "view_from_clip"
+        } else if has(&["viewproj", "view_proj", "vp", "clip"]) {
+            "clip_from_world"
+        } else if has(&["proj"]) {
+            "clip_from_view"
+        } else if has(&["view"]) && !has(&["inv"]) {
+            "view_from_world"
+        } else if has(&["model", "world", "transform"]) {
+            "world_from_local"
+        } else {
+            return None;
+        }
+    } else if has(&["light"]) && has(&["pos", "dir"]) {
+        "light_position"
+    } else if has(&["camera", "cam", "eye", "view"]) && has(&["pos", "origin", "world"]) {
+        "camera_position"
+    } else if has(&["time", "elapsed"]) {
+        "time"
+    } else {
+        return None;
+    };
+    fits_role(role, shape).then_some(role)
+}
+
+/// The uniform or storage members (as `[roles]` keys) that are applied as
+/// matrices to the vertex position on its way to `@builtin(position)`,
+/// last applied first. Empty when the position is not a chain of such
+/// products (computed in a helper, a matrix built from vertex inputs).
+fn position_matrices(module: &Module, function: &naga::Function) -> Vec<String> {
+    let Some(position) = position_output(module, function) else {
+        return Vec::new();
+    };
+    let stores = single_stores(function);
+    let mut chain = Vec::new();
+    walk_product(module, function, &stores, position, &mut chain, 0);
+    chain
+}
+
+/// The expression the vertex entry point returns as `@builtin(position)`:
+/// the returned value itself, a component of the struct it composes, or
+/// what is stored into that member of the local it returns.
+fn position_output(module: &Module, function: &naga::Function) -> Option<Handle<Expression>> {
+    let result = function.result.as_ref()?;
+    let is_position = |binding: &Option<naga::Binding>| {
+        matches!(
+            binding,
+            Some(naga::Binding::BuiltIn(naga::BuiltIn::Position { .. }))
+        )
+    };
+    let member = if is_position(&result.binding) {
+        None
+    } else {
+        let TypeInner::Struct { ref members, .. } = module.types[result.ty].inner else {
+            return None;
+        };
+        Some(members.iter().position(|m| is_position(&m.binding))? as u32)
+    };
+    let mut found = None;
+    crate::proc::each_statement(&function.body, &mut |statement| match *statement {
+        Statement::Return { value: Some(value) } if found.is_none() => {
+            found = match (member, &function.expressions[value]) {
+                (None, _) => Some(value),
+                (Some(index), Expression::Compose { components, .. }) => {
+                    components.get(index as usize).copied()
+                }
+                _ => None,
+            };
+        }
+        Statement::Store { pointer, value } if found.is_none() => {
+            if let (Some(index), Expression::AccessIndex { base, index: i }) =
+                (member, &function.expressions[pointer])
+            {
+                if *i == index
+                    && matches!(function.expressions[*base], Expression::LocalVariable(_))
+                {
+                    found = Some(value);
+                }
+            }
+        }
+        _ => {}
+    });
+    found
+}
+
+/// Each local variable stored exactly once (or only initialised): the value
+/// a load of it gives.
+fn single_stores(
+    function: &naga::Function,
+) -> HashMap<Handle<naga::LocalVariable>, Handle<Expression>> {
+    let mut count: HashMap<Handle<naga::LocalVariable>, (usize, Option<Handle<Expression>>)> =
+        HashMap::new();
+    for (handle, local) in function.local_variables.iter() {
+        if let Some(init) = local.init {
+            count.insert(handle, (1, Some(init)));
+        }
+    }
+    crate::proc::each_statement(&function.body, &mut |statement| {
+        if let Statement::Store { pointer, value } = *statement {
+            if let Expression::LocalVariable(local) = function.expressions[pointer] {
+                let entry = count.entry(local).or_insert((0, None));
+                entry.0 += 1;
+                entry.1 = Some(value);
+            }
+        }
+    });
+    count
+        .into_iter()
+        .filter_map(|(local, (n, value))| (n == 1).then_some(value?).map(|v| (local, v)))
+        .collect()
+}
+
+/// Follows `expr` down the chain of matrix products to the vertex
+/// position, pushing each uniform or storage matrix it applies.
+fn walk_product(
+    module: &Module,
+    function: &naga::Function,
+    stores: &HashMap<Handle<naga::LocalVariable>, Handle<Expression>>,
+    expr: Handle<Expression>,
+    chain: &mut Vec<String>,
+    depth: usize,
+) {
+    // Deep enough for any real chain; guards against odd IR.
+    if depth > 64 {
+        return;
+    }
+    let recurse =
+        |e, chain: &mut Vec<String>| walk_product(module, function, stores, e, chain, depth + 1);
+    let is_matrix = |e: Handle<Expression>| is_matrix(module, function, e, 0);
+    match function.expressions[expr] {
+        Expression::Binary {
+            op: naga::BinaryOperator::Multiply,
+            left,
+            right,
+        } => {
+            // Column vectors (M * v) or row vectors (v * M).
+            let (matrix, vector) = if is_matrix(left) && !is_matrix(right) {
+                (left, right)
+            } else if is_matrix(right) && !is_matrix(left) {
+                (right, left)
+            } else {
+                return;
+            };
+            matrix_factors(module, function, stores, matrix, chain, depth + 1);
+            recurse(vector, chain);
+        }
+        Expression::Compose { ref components, .. } => {
+            if let Some(&first) = components.first() {
+                recurse(first, chain);
+            }
+        }
+        Expression::Swizzle { vector, .. } => recurse(vector, chain),
+        Expression::AccessIndex { base, .. } if !is_matrix(base) => recurse(base, chain),
+        Expression::As { expr: inner, .. } => recurse(inner, chain),
+        Expression::Load { pointer } => {
+            if let Expression::LocalVariable(local) = function.expressions[pointer] {
+                if let Some(&value) = stores.get(&local) {
+                    recurse(value, chain);
+                }
+            }
+        }
+        _ => {}
+    }
+}
+
+/// Whether `expr` is a matrix, for the expressions a position chain is
+/// made of (naga gives types only through validation, and these few
+/// cases are all the chain needs).
+fn is_matrix(
+    module: &Module,
+    function: &naga::Function,
+    expr: Handle<Expression>,
+    depth: usize,
+) -> bool {
+    let ty = match function.expressions[expr] {
+        Expression::Load { pointer } => pointee(module, function, pointer, depth + 1),
+        Expression::Binary {
+            op: naga::BinaryOperator::Multiply,
+            left,
+            right,
+        } if depth < 64 => {
+            return is_matrix(module, function, left, depth + 1)
+                && is_matrix(module, function, right, depth + 1)
+        }
+        Expression::FunctionArgument(i) => function.arguments.get(i as usize).map(|a| a.ty),
+        Expression::Compose { ty, .. } => Some(ty),
+        Expression::CallResult(f) => module.functions[f].result.as_ref().map(|r| r.ty),
+        _ => None,
+    };
+    ty.is_some_and(|ty| matches!(module.types[ty].inner, TypeInner::Matrix { .. }))
+}
+
+/// The type a pointer expression points to.
+fn pointee(
+    module: &Module,
+    function: &naga::Function,
+    pointer: Handle<Expression>,
+    depth: usize,
+) -> Option<Handle<naga::Type>> {
+    if depth > 64 {
+        return None;
+    }
+    match function.expressions[pointer] {
+        Expression::LocalVariable(l) => Some(function.local_variables[l].ty),
+        Expression::GlobalVariable(g) => Some(module.global_variables[g].ty),
+        Expression::AccessIndex { base, index } => {
+            let base = pointee(module, function, base, depth + 1)?;
+            match module.types[base].inner {
+                TypeInner::Struct { ref members, .. } => members.get(index as usize).map(|m| m.ty),
+                TypeInner::Array { base, .. } => Some(base),
+                _ => None,
+            }
+        }
+        Expression::Access { base, .. } => {
+            let base = pointee(module, function, base, depth + 1)?;
+            match module.types[base].inner {
+                TypeInner::Array { base, .. } => Some(base),
+                _ => None,
+            }
+        }
+        _ => None,
+    }
+}
+
+/// The uniform or storage matrices a matrix expression multiplies
+/// together, in order (`proj * view` gives both).
+fn matrix_factors(
+    module: &Module,
+    function: &naga::Function,
+    stores: &HashMap<Handle<naga::LocalVariable>, Handle<Expression>>,
+    matrix: Handle<Expression>,
+    chain: &mut Vec<String>,
+    depth: usize,
+) {
+    if depth > 64 {
+        return;
+    }
+    match function.expressions[matrix] {
+        Expression::Binary {
+            op: naga::BinaryOperator::Multiply,
+            left,
+            right,
+        } => {
+            matrix_factors(module, function, stores, left, chain, depth + 1);
+            matrix_factors(module, function, stores, right, chain, depth + 1);
+        }
+        Expression::Load { pointer } => {
+            if let Expression::LocalVariable(local) = function.expressions[pointer] {
+                if let Some(&value) = stores.get(&local) {
+                    matrix_factors(module, function, stores, value, chain, depth + 1);
+                }
+                return;
+            }
+            if let Some(key) = member_key(module, function, pointer) {
+                chain.push(key);
+            }
+        }
+        _ => {}
+    }
+}
+
+/// The `[roles]` key of a pointer into a uniform or storage buffer:
+/// `buffer.member`, `buffer` for a plain one, through an array index
+/// (`instances[i].world`).
+fn member_key(
+    module: &Module,
+    function: &naga::Function,
+    pointer: Handle<Expression>,
+) -> Option<String> {
+    // The buffer: the global at the root of the pointer, through array
+    // indexing only.
+    let buffer = |mut e: Handle<Expression>| -> Option<String> {
+        loop {
+            match function.expressions[e] {
+                Expression::GlobalVariable(g) => {
+                    let global = &module.global_variables[g];
+                    let buffer = matches!(
+                        global.space,
+                        naga::AddressSpace::Uniform | naga::AddressSpace::Storage { .. }
+                    );
+                    return buffer.then(|| global.name.clone().unwrap_or_default());
+                }
+                Expression::Access { base, .. } => e = base,
+                Expression::AccessIndex { base, .. }
+                    if matches!(
+                        pointee(module, function, base, 0).map(|t| &module.types[t].inner),
+                        Some(TypeInner::Array { .. })
+                    ) =>
+                {
+                    e = base
+                }
+                _ => return None,
+            }
+        }
+    };
+    match function.expressions[pointer] {
+        Expression::GlobalVariable(_) => buffer(pointer),
+        Expression::AccessIndex { base, index } => {
+            let binding = buffer(base)?;
+            let ty = pointee(module, function, base, 0)?;
+            let TypeInner::Struct { ref members, .. } = module.types[ty].inner else {
+                return None;
+            };
+            let member = members.get(index as usize)?.name.clone()?;
+            Some(key(&binding, &member))
+        }
+        _ => None,
+    }
+}

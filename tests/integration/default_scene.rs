@@ -1,0 +1,186 @@
+//! Profiling without a scene: the default scene, its roles inferred from
+//! the shader's own names, every other binding defaulted and listed, and
+//! `scene init` writing the same scene out.
+
+use std::ffi::OsStr;
+use std::path::Path;
+
+use serde_json::Value;
+
+use crate::util::{profile_error, shadecache, stderr, stdout, temp_file};
+
+const TUTORIAL: &str = "corpus/tutorial_own_names.wgsl";
+
+/// `shadecache profile TUTORIAL` at 32×32 for two frames, with `--scene`
+/// when given; the report.
+fn profile(scene: Option<&Path>, out: &Path) -> (Value, String) {
+    let mut args: Vec<&OsStr> = vec![
+        "profile".as_ref(),
+        TUTORIAL.as_ref(),
+        "--nodes".as_ref(),
+        "top:1".as_ref(),
+        "--variant".as_ref(),
+        "two-pass".as_ref(),
+        "--frames".as_ref(),
+        "2".as_ref(),
+        "--size".as_ref(),
+        "32x32".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--quiet".as_ref(),
+    ];
+    if let Some(scene) = scene {
+        args.extend(["--scene".as_ref(), scene.as_os_str()]);
+    }
+    let output = shadecache(args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let report = serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    (report, stdout(&output))
+}
+
+/// The default scene finds the tutorial's `camera.view_proj` and
+/// `object.model` from its vertex stage: camera motion moves what is drawn
+/// (misses; with identity matrices it would move nothing), and every
+/// value it had to invent is listed.
+#[test]
+fn profile_without_a_scene_infers_roles_and_lists_defaults() {
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let out = tempfile::tempdir().unwrap();
+    let (report, summary) = profile(None, out.path());
+    let defaulted: Vec<&str> = report["defaulted"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert!(
+        defaulted.contains(&"uniform `light.intensity` = 0.75")
+            && defaulted.contains(&"texture `t_normal` = generated \"flat-normal\""),
+        "{defaulted:?}"
+    );
+    // Roles are not defaults.
+    assert!(
+        !defaulted
+            .iter()
+            .any(|d| d.contains("view_proj") || d.contains("light.position")),
+        "{defaulted:?}"
+    );
+    assert!(summary.contains("defaulted"), "{summary}");
+    let camera = report["miss_causes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["effect"] == "camera-motion")
+        .expect("a camera-motion miss cause");
+    assert!(camera["miss_rate"].as_f64().unwrap() > 0.001, "{camera}");
+}
+
+/// The file `scene init` writes is the default scene: profiled, it gives
+/// the same images (same hits, same error) as no scene.
+#[test]
+fn a_scene_init_file_profiles_as_no_scene() {
+    let output = shadecache(["scene", "init", TUTORIAL]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    assert!(
+        text.contains("\"camera.view_proj\" = \"clip_from_world\""),
+        "{text}"
+    );
+    assert!(text.contains("# inferred: applied last"), "{text}");
+    assert!(text.contains("# defaulted:"), "{text}");
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let (_dir, path) = temp_file("scene.toml", text.as_bytes());
+    let (a, b) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let (with_file, _) = profile(Some(&path), a.path());
+    let (without, _) = profile(None, b.path());
+    let row = |report: &Value| {
+        let r = &report["results"][0];
+        (
+            r["node"].clone(),
+            r["psnr"].clone(),
+            r["hit_rate"].clone(),
+            r["miss_rate"].clone(),
+        )
+    };
+    assert_eq!(row(&with_file), row(&without));
+}
+
+/// A scene for the tutorial shader with `roles` under [roles]; the line of
+/// the first role.
+fn with_roles(roles: &str) -> (String, usize) {
+    let text = format!(
+        "[[objects]]\nmesh = {{ kind = \"sphere\" }}\n[roles]\n{roles}\n[uniforms]\nintensity = 1.0\ncolor = [1.0, 1.0, 1.0]\nshininess = 0.5\ntint = [1.0, 1.0, 1.0, 1.0]\n[textures.t_diffuse]\ngenerate = \"checker\"\n[textures.t_normal]\ngenerate = \"flat-normal\"\n"
+    );
+    (text, 4)
+}
+
+#[test]
+fn an_unknown_role_is_an_error_at_its_line() {
+    let (scene, line) = with_roles("\"camera.view_proj\" = \"view_projection\"");
+    let err = profile_error(TUTORIAL, &scene);
+    assert!(err.contains("unknown role `view_projection`"), "{err}");
+    assert!(err.contains("clip_from_world"), "{err}");
+    assert!(err.contains(&format!("scene.toml:{line}:")), "{err}");
+}
+
+#[test]
+fn a_role_naming_a_missing_member_is_an_error() {
+    let (scene, line) = with_roles("\"camera.viewproj\" = \"clip_from_world\"");
+    let err = profile_error(TUTORIAL, &scene);
+    assert!(
+        err.contains("`camera.viewproj`, which the shader does not have"),
+        "{err}"
+    );
+    assert!(err.contains("`camera.view_proj`"), "{err}");
+    assert!(err.contains(&format!("scene.toml:{line}:")), "{err}");
+}
+
+#[test]
+fn a_role_on_a_member_of_the_wrong_type_is_an_error() {
+    let (scene, line) = with_roles("\"camera.view_pos\" = \"clip_from_world\"");
+    let err = profile_error(TUTORIAL, &scene);
+    assert!(
+        err.contains("`camera.view_pos` is vec4<f32> and cannot take role `clip_from_world`"),
+        "{err}"
+    );
+    assert!(err.contains(&format!("scene.toml:{line}:")), "{err}");
+}
+
+#[test]
+fn a_member_given_a_role_and_a_value_is_an_error() {
+    let (scene, line) = with_roles("\"light.intensity\" = \"time\"");
+    let err = profile_error(TUTORIAL, &scene);
+    assert!(err.contains("`light.intensity` is given twice"), "{err}");
+    assert!(err.contains(&format!("scene.toml:{line}:")), "{err}");
+}
+
+/// A float vertex input whose name and location say nothing the mesh
+/// has: named, exit 1 (a constant would draw something else than the
+/// shader's author meant).
+#[test]
+fn a_vertex_input_the_mesh_cannot_feed_is_an_error() {
+    let shader = "@group(0) @binding(0) var<uniform> clip_from_world: mat4x4<f32>;
+struct V { @builtin(position) position: vec4<f32>, @location(0) weight: f32 }
+@vertex
+fn vs(@location(0) position: vec3<f32>, @location(5) bone_weight: f32) -> V {
+    return V(clip_from_world * vec4<f32>(position, 1.0), bone_weight);
+}
+@fragment
+fn fs(in: V) -> @location(0) vec4<f32> {
+    return vec4<f32>(sin(in.weight * 40.0));
+}
+";
+    let (_dir, path) = temp_file("skinned.wgsl", shader.as_bytes());
+    let output =
+        shadecache(["profile".as_ref(), path.as_os_str(), "--quiet".as_ref()] as [&OsStr; 3]);
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("cannot feed vertex input @location(5) `bone_weight` (float32)"),
+        "{err}"
+    );
+}
