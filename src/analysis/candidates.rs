@@ -54,6 +54,9 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
     let total_cost = model.body(function, info, &layout);
     // (fold from +0.0: an empty float `sum()` is -0.0)
     let cost_of = |set: &ExprSet| -> f64 { set.ones().fold(0.0, |sum, i| sum + weighted[i]) };
+    // What only each expression needs, for every candidate's overlap at once.
+    let private = graph.private();
+    let dominated = private.dominated_sums(&weighted);
 
     // One node per source span: where the front end made several
     // expressions for one piece of source (a load and its pointer, a splat
@@ -84,21 +87,24 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
     let mut ranges = super::range::EntryRanges::new(module, &shader.info, entry_index);
 
     // Ids: the occurrence number counts equal texts in source order.
-    let mut seen: HashMap<String, usize> = HashMap::new();
+    let mut seen: HashMap<u64, usize> = HashMap::new();
+    let lines = LineIndex::new(source);
+    let mut hasher = id::PrefixHasher::new(source, &entry.name);
     let mut candidates = Vec::new();
     let mut rejected = Vec::new();
     for (&(start, end), &expr) in &by_span {
-        let text = source[start..end].to_string();
-        let normalized = id::normalize(&text);
-        let occurrence = seen.entry(normalized).or_insert(0);
+        let text = &source[start..end];
+        // Spans come in order of start, then end: nested prefixes hash on.
+        let (key, state) = hasher.node(start, end);
+        let occurrence = seen.entry(key).or_insert(0);
         let node = Node {
-            id: id::node_id(&entry.name, &text, *occurrence),
+            id: id::PrefixHasher::id(state, *occurrence),
             span: SourceSpan {
-                start: shader.file.line_col(start).into(),
-                end: shader.file.line_col(end).into(),
+                start: lines.line_col(start).into(),
+                end: lines.line_col(end).into(),
             },
             ty: type_name(&module.types, info[expr].ty.inner_with(&module.types)),
-            text,
+            text: id::shown_text(text),
             expression: expr,
             range: start..end,
         };
@@ -113,9 +119,17 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
             }),
             Ok(components) => {
                 let cost = cost_of(&slice);
-                let mut shared = graph.remainder(expr);
-                shared.intersect_with(&slice);
-                shared.set(expr.index(), false);
+                // The overlap: the slice less the node and what only it
+                // needs (what it dominates). A node nothing needs has no
+                // dominator; its remainder is walked.
+                let overlap = if private.is_needed(expr) {
+                    (cost - weighted[expr.index()] - dominated[expr.index()]).max(0.0)
+                } else {
+                    let mut shared = graph.remainder(expr);
+                    shared.intersect_with(&slice);
+                    shared.set(expr.index(), false);
+                    cost_of(&shared)
+                };
                 let derivatives = slice.ones().any(|i| takes_derivatives(exprs[i]));
                 let range = ranges.of(expr);
                 candidates.push(Candidate {
@@ -127,7 +141,7 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
                     } else {
                         0.0
                     },
-                    overlap: cost_of(&shared),
+                    overlap,
                     derivatives,
                     range: range.ends(),
                     fits_f16: range.fits_f16(),
@@ -148,6 +162,46 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
         candidates,
         rejected,
         entry_index,
+    }
+}
+
+/// Line and column of byte offsets, as [`crate::diagnostic::SourceFile::line_col`]
+/// gives them, from one index of the lines: asking the file for every node
+/// scans it from the start each time.
+struct LineIndex<'a> {
+    text: &'a str,
+    /// Byte offset of each line's start, and whether the line is ASCII
+    /// (its columns are then byte counts).
+    lines: Vec<(usize, bool)>,
+}
+
+impl<'a> LineIndex<'a> {
+    fn new(text: &'a str) -> Self {
+        let mut lines = Vec::new();
+        let mut start = 0;
+        for line in text.split_inclusive('\n') {
+            lines.push((start, line.is_ascii()));
+            start += line.len();
+        }
+        if lines.is_empty() || text.ends_with('\n') {
+            lines.push((start, true));
+        }
+        LineIndex { text, lines }
+    }
+
+    fn line_col(&self, offset: usize) -> (usize, usize) {
+        let mut offset = offset.min(self.text.len());
+        while !self.text.is_char_boundary(offset) {
+            offset -= 1;
+        }
+        let line = self.lines.partition_point(|&(start, _)| start <= offset);
+        let (start, ascii) = self.lines[line.saturating_sub(1)];
+        let col = if ascii {
+            offset - start
+        } else {
+            self.text[start..offset].chars().count()
+        };
+        (line.max(1), col + 1)
     }
 }
 
@@ -342,5 +396,35 @@ pub(crate) fn type_name(types: &naga::UniqueArena<naga::Type>, ty: &TypeInner) -
                 .to_string()
         }
         _ => "other".into(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::LineIndex;
+    use crate::diagnostic::SourceFile;
+
+    #[test]
+    fn the_line_index_agrees_with_the_file() {
+        let text = "fn a() {}\n\n  let é = 1.0;\r\nlast";
+        let file = SourceFile::new("t.wgsl", text);
+        let index = LineIndex::new(text);
+        for offset in 0..=text.len() + 2 {
+            assert_eq!(
+                index.line_col(offset),
+                file.line_col(offset),
+                "offset {offset}"
+            );
+        }
+        let ends_with_newline = "a\nb\n";
+        let file = SourceFile::new("t.wgsl", ends_with_newline);
+        let index = LineIndex::new(ends_with_newline);
+        for offset in 0..=ends_with_newline.len() {
+            assert_eq!(
+                index.line_col(offset),
+                file.line_col(offset),
+                "offset {offset}"
+            );
+        }
     }
 }

@@ -142,6 +142,44 @@ impl ExprGraph {
         set
     }
 
+    /// For every expression, what only it needs: the expressions every path
+    /// from the function's effects to them passes through it ([`Private`]).
+    /// One dominator tree for the whole function, where asking
+    /// [`Self::remainder`] of every candidate walks the graph once per
+    /// candidate (quadratic in a long expression).
+    pub fn private(&self) -> Private {
+        // A virtual root above the effects: dominators need one entry.
+        let n = self.graph.node_count();
+        let Some(&any) = self.graph.node_weights().next() else {
+            return Private {
+                idom: Vec::new(),
+                reachable: FixedBitSet::new(),
+            };
+        };
+        let mut graph = self.graph.clone();
+        // Its weight is never read.
+        let root = graph.add_node(any);
+        for &r in &self.roots {
+            graph.add_edge(root, r, ());
+        }
+        let dominators = petgraph::algo::dominators::simple_fast(&graph, root);
+        let idom: Vec<Option<usize>> = (0..n)
+            .map(|i| {
+                dominators
+                    .immediate_dominator(NodeIndex::new(i))
+                    .map(|d| d.index())
+                    .filter(|&d| d < n)
+            })
+            .collect();
+        let mut reachable = FixedBitSet::with_capacity(n);
+        for i in 0..n {
+            if dominators.immediate_dominator(NodeIndex::new(i)).is_some() {
+                reachable.insert(i);
+            }
+        }
+        Private { idom, reachable }
+    }
+
     /// What the rest of the function needs once `expr` is read from a cache
     /// instead of computed: the slice of the function's effects with the
     /// edges out of `expr` cut. `expr` itself is in the set when it is used.
@@ -158,5 +196,64 @@ impl ExprGraph {
             }
         }
         set
+    }
+}
+
+/// The dominator tree of a function's expression graph, rooted at its
+/// effects: `a` dominates `b` when every chain of needs from an effect to
+/// `b` goes through `a`. What `a` strictly dominates is exactly the part
+/// of its slice that nothing else needs: the slice minus
+/// [`ExprGraph::remainder`].
+#[derive(Debug)]
+pub struct Private {
+    /// Immediate dominator of each expression; `None` for the effects
+    /// themselves and for what no effect needs.
+    idom: Vec<Option<usize>>,
+    /// The expressions some effect needs.
+    reachable: FixedBitSet,
+}
+
+impl Private {
+    /// Whether some effect of the function needs `expr`.
+    pub fn is_needed(&self, expr: Handle<Expression>) -> bool {
+        self.reachable.contains(expr.index())
+    }
+
+    /// For each expression, the sum of `weight` over what it strictly
+    /// dominates: in one pass up the tree, deepest first.
+    pub fn dominated_sums(&self, weight: &[f64]) -> Vec<f64> {
+        let n = self.idom.len();
+        // Depths, iteratively: a long chain is a deep tree.
+        let mut depth: Vec<Option<usize>> = vec![None; n];
+        for start in 0..n {
+            let mut path = Vec::new();
+            let mut at = start;
+            let base = loop {
+                if let Some(d) = depth[at] {
+                    break d;
+                }
+                path.push(at);
+                match self.idom[at] {
+                    Some(up) => at = up,
+                    None => break 0,
+                }
+            };
+            let first = base + usize::from(depth[at].is_some());
+            for (d, &node) in (first..).zip(path.iter().rev()) {
+                depth[node] = Some(d);
+            }
+        }
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by_key(|&i| std::cmp::Reverse(depth[i]));
+        let mut subtree: Vec<f64> = weight.to_vec();
+        subtree.resize(n, 0.0);
+        for &node in &order {
+            if let Some(up) = self.idom[node] {
+                subtree[up] += subtree[node];
+            }
+        }
+        (0..n)
+            .map(|i| subtree[i] - weight.get(i).copied().unwrap_or(0.0))
+            .collect()
     }
 }
