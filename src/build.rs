@@ -39,6 +39,8 @@ struct ShaderJob {
     path: PathBuf,
     entry: Option<String>,
     vertex_entry: Option<String>,
+    vertex: Option<PathBuf>,
+    composition: front::compose::Composition,
     nodes: Nodes,
     variants: Vec<Variant>,
 }
@@ -49,10 +51,19 @@ impl ShaderJob {
             path,
             entry: None,
             vertex_entry: None,
+            vertex: None,
+            composition: front::compose::Composition::default(),
             nodes: Nodes::Top(1),
             variants: Variant::ALL.to_vec(),
         }
     }
+}
+
+/// Where one job's shader comes from, resolved against the manifest.
+struct Sources<'a> {
+    path: &'a Path,
+    vertex: Option<&'a Path>,
+    composition: &'a front::compose::Composition,
 }
 
 /// A set of shaders to rewrite at build time.
@@ -148,6 +159,33 @@ impl Build {
         self
     }
 
+    /// The module with the vertex stage of the last shader, when that one
+    /// is fragment-only (as engines split them); resources both bind at
+    /// one (group, binding) are one. Without it, a fragment-only shader's
+    /// passes take the previous clip position as an input (plan.json's
+    /// `host_vertex`).
+    pub fn vertex_shader(mut self, path: impl AsRef<Path>) -> Self {
+        self.last().vertex = Some(path.as_ref().to_path_buf());
+        self
+    }
+
+    /// A folder the last shader's `#import`s are searched in (naga_oil
+    /// modules, each with `#define_import_path`); call again for more.
+    /// Relative to the manifest's folder.
+    pub fn import_path(mut self, dir: impl AsRef<Path>) -> Self {
+        self.last()
+            .composition
+            .import_paths
+            .push(dir.as_ref().to_path_buf());
+        self
+    }
+
+    /// A shader def for the last shader's `#ifdef`s.
+    pub fn def(mut self, name: impl Into<String>, value: front::compose::ShaderDef) -> Self {
+        self.last().composition.defs.push((name.into(), value));
+        self
+    }
+
     /// The fragment entry point of the last shader added.
     pub fn entry(mut self, name: impl Into<String>) -> Self {
         self.last().entry = Some(name.into());
@@ -189,16 +227,38 @@ impl Build {
         let manifest = std::env::var_os("CARGO_MANIFEST_DIR").map(PathBuf::from);
         let mut outputs = Outputs::default();
         let mut errors = Vec::new();
+        let resolve = |path: &Path| match &manifest {
+            Some(root) if path.is_relative() => root.join(path),
+            _ => path.to_path_buf(),
+        };
         for job in &self.jobs {
-            let path = match &manifest {
-                Some(root) if job.path.is_relative() => root.join(&job.path),
-                _ => job.path.clone(),
+            let path = resolve(&job.path);
+            let vertex = job.vertex.as_deref().map(resolve);
+            let composition = front::compose::Composition {
+                import_paths: job
+                    .composition
+                    .import_paths
+                    .iter()
+                    .map(|p| resolve(p))
+                    .collect(),
+                defs: job.composition.defs.clone(),
             };
             if !self.quiet {
-                // Printed first, so a failing shader is watched too.
-                println!("cargo::rerun-if-changed={}", path.display());
+                // Printed first, so a failing shader is watched too (a
+                // folder is watched whole).
+                let watched = std::iter::once(&path)
+                    .chain(&vertex)
+                    .chain(&composition.import_paths);
+                for watched in watched {
+                    println!("cargo::rerun-if-changed={}", watched.display());
+                }
             }
-            if let Err(err) = self.job(job, &path, &out_dir, &mut outputs) {
+            let sources = Sources {
+                path: &path,
+                vertex: vertex.as_deref(),
+                composition: &composition,
+            };
+            if let Err(err) = self.job(job, &sources, &out_dir, &mut outputs) {
                 errors.push(err);
             }
         }
@@ -226,7 +286,7 @@ impl Build {
     fn job(
         &self,
         job: &ShaderJob,
-        path: &Path,
+        sources: &Sources,
         out_dir: &Path,
         outputs: &mut Outputs,
     ) -> Result<(), Error> {
@@ -235,7 +295,13 @@ impl Build {
                 "node, variant or entry set before any shader: call .shader(path) first",
             )));
         }
-        let shader = front::load(path)?;
+        let path = sources.path;
+        let shader = front::load_with(
+            path,
+            sources.composition,
+            sources.vertex,
+            job.vertex_entry.as_deref(),
+        )?;
         let analysis = analysis::analyze(
             &shader,
             &analysis::Options {

@@ -38,6 +38,12 @@ impl Language {
 
 /// Writes `module` in `language`. GLSL has one entry point per file, so it
 /// gives one output per entry point.
+/// A module as WGSL text.
+pub fn wgsl_text(module: &naga::Module, info: &ModuleInfo) -> Result<String, String> {
+    naga::back::wgsl::write_string(module, info, naga::back::wgsl::WriterFlags::empty())
+        .map_err(|err| err.to_string())
+}
+
 pub fn write(
     module: &naga::Module,
     info: &ModuleInfo,
@@ -45,12 +51,7 @@ pub fn write(
 ) -> Result<Vec<Output>, String> {
     match language {
         Language::Wgsl => {
-            let text = naga::back::wgsl::write_string(
-                module,
-                info,
-                naga::back::wgsl::WriterFlags::empty(),
-            )
-            .map_err(|err| err.to_string())?;
+            let text = wgsl_text(module, info)?;
             Ok(vec![Output {
                 suffix: ".wgsl".into(),
                 bytes: text.into_bytes(),

@@ -11,6 +11,8 @@
 //! directory, bytes that are not UTF-8 (pointing at the first bad byte), a
 //! parse error or a validation error (pointing at naga's spans).
 
+pub mod compose;
+
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 use std::sync::Arc;
@@ -25,6 +27,9 @@ pub struct Shader {
     pub file: Arc<SourceFile>,
     pub module: naga::Module,
     pub info: ModuleInfo,
+    /// The separate module the vertex stage came from
+    /// ([`with_vertex_module`]); `None` when `file` has the whole module.
+    pub vertex_file: Option<Arc<SourceFile>>,
 }
 
 /// Reads, parses and validates the shader at `path`.
@@ -86,7 +91,12 @@ pub fn parse(file: SourceFile) -> Result<Shader, Error> {
             })
     }));
     match outcome {
-        Ok(Ok((module, info))) => Ok(Shader { file, module, info }),
+        Ok(Ok((module, info))) => Ok(Shader {
+            file,
+            module,
+            info,
+            vertex_file: None,
+        }),
         Ok(Err(diagnostic)) => Err(Error::in_file(file, diagnostic)),
         Err(_) => Err(Error::in_file(
             file,
@@ -153,4 +163,145 @@ pub fn validate(
     Validator::new(ValidationFlags::all(), Capabilities::all())
         .validate(module)
         .map_err(Box::new)
+}
+
+/// Gives a fragment-only `shader` the vertex stage of another module: its
+/// vertex entry point `entry` (or its only one), with everything it reads,
+/// imported on IR ([`crate::proc::import::import_vertex_stage`]). Engines
+/// keep the two stages in separate files (Bevy's `mesh.wgsl` and
+/// `pbr.wgsl`). The resources both modules bind at one (group, binding) are
+/// one resource. Errors name the vertex file.
+pub fn with_vertex_module(
+    shader: Shader,
+    vertex: &Shader,
+    entry: Option<&str>,
+) -> Result<Shader, Error> {
+    let fail = |diagnostic: Diagnostic| Err(Error::in_file(vertex.file.clone(), diagnostic));
+    let vertices: Vec<usize> = vertex
+        .module
+        .entry_points
+        .iter()
+        .enumerate()
+        .filter(|(_, ep)| ep.stage == naga::ShaderStage::Vertex)
+        .map(|(i, _)| i)
+        .collect();
+    let names = || {
+        vertices
+            .iter()
+            .map(|&i| format!("`{}`", vertex.module.entry_points[i].name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let index = match (entry, vertices.as_slice()) {
+        (_, []) => {
+            return fail(
+                Diagnostic::error(format!(
+                    "`{}` has no vertex entry point: --vertex takes the module with the vertex stage that draws `{}`",
+                    vertex.file.path, shader.file.path
+                ))
+                .with_label(0..0, "in this module"),
+            )
+        }
+        (Some(name), _) => match vertices
+            .iter()
+            .find(|&&i| vertex.module.entry_points[i].name == name)
+        {
+            Some(&i) => i,
+            None => {
+                return fail(
+                    Diagnostic::error(format!(
+                        "`{}` has no vertex entry point named `{name}`; it has {}",
+                        vertex.file.path,
+                        names()
+                    ))
+                    .with_label(0..0, "in this module"),
+                )
+            }
+        },
+        (None, [only]) => *only,
+        (None, _) => {
+            return fail(
+                Diagnostic::error(format!(
+                    "`{}` has several vertex entry points ({}): name one with --vertex-entry",
+                    vertex.file.path,
+                    names()
+                ))
+                .with_label(0..0, "in this module"),
+            )
+        }
+    };
+    if shader
+        .module
+        .entry_points
+        .iter()
+        .any(|ep| ep.stage == naga::ShaderStage::Vertex)
+    {
+        return Err(Error::in_file(
+            shader.file.clone(),
+            Diagnostic::error(format!(
+                "`{}` has its own vertex stage; --vertex is for a fragment-only module (name the vertex entry point with --vertex-entry)",
+                shader.file.path
+            ))
+            .with_label(0..0, "in this module"),
+        ));
+    }
+    let Shader {
+        file, mut module, ..
+    } = shader;
+    crate::proc::import::import_vertex_stage(&mut module, &vertex.module, index).map_err(
+        |reason| {
+            Error::in_file(
+                vertex.file.clone(),
+                Diagnostic::error(format!(
+                    "cannot use `{}` as the vertex stage of `{}`: {reason}",
+                    vertex.file.path, file.path
+                ))
+                .with_label(0..0, "in this module"),
+            )
+        },
+    )?;
+    let info = validate(&module).map_err(|err| {
+        Error::in_file(
+            vertex.file.clone(),
+            Diagnostic::error(format!(
+                "the vertex stage of `{}` does not fit `{}`: {}",
+                vertex.file.path,
+                file.path,
+                Diagnostic::from_spanned_error(&err).message
+            ))
+            .with_label(0..0, "in this module"),
+        )
+    })?;
+    Ok(Shader {
+        file,
+        module,
+        info,
+        vertex_file: Some(vertex.file.clone()),
+    })
+}
+
+/// Loads the shader at `path`, composing it with naga_oil when it uses
+/// `#import`/`#ifdef` or `composition` says where its imports are
+/// ([`compose`]), and, when `vertex` names a separate vertex module (also
+/// composed), gives it that module's vertex stage ([`with_vertex_module`];
+/// `vertex_entry` names the entry point there when it has several).
+pub fn load_with(
+    path: &Path,
+    composition: &compose::Composition,
+    vertex: Option<&Path>,
+    vertex_entry: Option<&str>,
+) -> Result<Shader, Error> {
+    let load_one = |path: &Path| -> Result<Shader, Error> {
+        let file = read_source(path)?;
+        if composition.is_empty() && !compose::uses_directives(&file.text) {
+            parse(file)
+        } else {
+            compose::load_composed(path, composition)
+        }
+    };
+    let shader = load_one(path)?;
+    match vertex {
+        None => Ok(shader),
+        Some(vertex) => with_vertex_module(shader, &load_one(vertex)?, vertex_entry),
+    }
 }

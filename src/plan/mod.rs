@@ -35,10 +35,27 @@ pub struct Plan {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub classify: Option<Pass>,
     pub vertex_layout: Vec<VertexAttribute>,
+    /// For a fragment-only module: what the host's own vertex stage must
+    /// output for these passes (absent when the module has its vertex
+    /// stage and the passes carry it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub host_vertex: Option<HostVertex>,
     pub bindings: Bindings,
     pub cache: Cache,
     pub refresh: Refresh,
     pub clear: Clear,
+}
+
+/// What the vertex stage of a host drawing a fragment-only module's
+/// passes must output, beside what the fragment entry point already reads.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HostVertex {
+    /// The location of `previous_clip_position: vec4<f32>`: last frame's
+    /// clip position of the same vertex (the view-projection and model of
+    /// frame t − 1 applied to it), perspective-interpolated.
+    pub previous_clip_position_location: u32,
+    /// The same, in words, with the position's `@invariant`.
+    pub requirement: String,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -216,7 +233,10 @@ pub fn build(inputs: Inputs) -> Plan {
     } = inputs;
     let module = &shader.module;
     let entry = &module.entry_points[analysis.entry_index];
-    let vertex_entry = &module.entry_points[vertex.entry_index];
+    // A fragment-only module's passes have no vertex entry point: the
+    // host draws them with its own (`host_vertex`).
+    let vertex_entry = vertex.entry_index.map(|i| &module.entry_points[i]);
+    let vertex_name = vertex_entry.map_or(String::new(), |v| v.name.clone());
     let color_locations = fragment::output_locations(module, result);
     let cache_location = fragment::cache_location(module, result);
 
@@ -253,7 +273,7 @@ pub fn build(inputs: Inputs) -> Plan {
             name: pass.name.clone(),
             role: role(*stage).into(),
             shader: format!("{}.wgsl", pass.name),
-            vertex_entry: vertex_entry.name.clone(),
+            vertex_entry: vertex_name.clone(),
             fragment_entry: entry.name.clone(),
             color_targets,
             depth: Depth {
@@ -342,7 +362,7 @@ pub fn build(inputs: Inputs) -> Plan {
             name: classify.name.clone(),
             role: role(Stage::Classify).into(),
             shader: format!("{}.wgsl", classify.name),
-            vertex_entry: vertex_entry.name.clone(),
+            vertex_entry: vertex_name.clone(),
             fragment_entry: entry.name.clone(),
             color_targets: vec![ColorTarget {
                 location: 0,
@@ -359,7 +379,17 @@ pub fn build(inputs: Inputs) -> Plan {
             discards: false,
             bindings: used_bindings(&classify.module),
         }),
-        vertex_layout: vertex_layout(module, &vertex_entry.function),
+        vertex_layout: vertex_entry.map_or(Vec::new(), |v| vertex_layout(module, &v.function)),
+        host_vertex: vertex_entry.is_none().then(|| HostVertex {
+            previous_clip_position_location: vertex.previous_location,
+            requirement: format!(
+                "the module has no vertex stage: the host's must output, beside what `{}` reads, \
+                 `@location({}) previous_clip_position: vec4<f32>` (last frame's clip position \
+                 of the same vertex: last frame's view-projection and model applied to it, \
+                 perspective-interpolated) and mark its `@builtin(position)` `@invariant`",
+                entry.name, vertex.previous_location
+            ),
+        }),
         bindings: Bindings {
             original,
             previous,
@@ -593,6 +623,7 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
         }],
         classify: None,
         vertex_layout: vertex_layout(module, &vertex_entry.function),
+        host_vertex: None,
         bindings: Bindings {
             original: module
                 .global_variables

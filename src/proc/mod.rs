@@ -8,10 +8,17 @@
 //! expression runs, the analysis needs whether it runs inside a loop and
 //! which branch conditions govern it, the expression graph needs every value
 //! a statement consumes — so they are computed here once per function.
+//!
+//! It also copies IR between modules: [`remap`] maps the handles of one
+//! expression or statement, [`import`] copies a whole module into another
+//! (the cache helpers into a rewrite, a separate vertex module into the
+//! fragment one's).
 
+pub mod import;
 mod operands;
 mod placement;
 mod reaching;
+pub mod remap;
 
 pub use operands::{operands, pointer_root, PointerRoot};
 pub use placement::{

@@ -189,6 +189,17 @@ pub fn profile(
     progress: &mut dyn Progress,
 ) -> Result<(Report, Pictures), Error> {
     let fail = |message: String| Error::plain(Diagnostic::error(message));
+    if crate::rewrite::vertex::is_fragment_only(&shader.module) {
+        return Err(Error::in_file(
+            shader.file.clone(),
+            Diagnostic::error(format!(
+                "`{}` has no vertex stage, and drawing it needs one: give the module that has it with --vertex FILE",
+                shader.file.path
+            ))
+            .with_label(0..0, "a fragment-only module")
+            .with_note("`rewrite` emits its fragment passes without one; plan.json's `host_vertex` says what the host's vertex stage must output"),
+        ));
+    }
     let size = options.size.unwrap_or(scene.size);
     let longest_period = options.axes().refresh_periods.iter().copied().max();
     let (frames, warmup) = (
@@ -369,8 +380,13 @@ pub fn profile(
         classify: false,
         pipelines: pipeline_options,
     };
-    let reference_sources =
-        HashMap::from([("reference.wgsl".to_string(), shader.file.text.clone())]);
+    // The user's source, as written; a module given its vertex stage from
+    // another file has no one source, and is written back by naga.
+    let reference_text = match shader.vertex_file {
+        None => shader.file.text.clone(),
+        Some(_) => crate::back::wgsl_text(&shader.module, &shader.info).map_err(fail)?,
+    };
+    let reference_sources = HashMap::from([("reference.wgsl".to_string(), reference_text)]);
     let mut reference = Runner::new(
         &gpu,
         &reference_plan,

@@ -12,9 +12,9 @@ use std::collections::HashMap;
 
 use naga::{Block, Expression, Function, Handle, LocalVariable, Span, Statement};
 
-use super::remap::{self, Mapper};
 use crate::analysis::graph::ExprSet;
 use crate::proc;
+use crate::proc::remap::{self, Mapper};
 
 /// Builds the replacement of an expression in the new function; it may
 /// copy operands and append new expressions through the copy.

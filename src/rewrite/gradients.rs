@@ -20,9 +20,9 @@
 use naga::{Expression, Function, Handle, Module, Statement, TypeInner};
 
 use super::copy::FunctionCopy;
-use super::remap::{self, Mapper};
 use super::Refusal;
 use crate::analysis::graph::{ExprGraph, ExprSet};
+use crate::proc::remap::{self, Mapper};
 
 /// An implicit-derivative operation of the payload and where its hoisted
 /// values are in the gradients struct.

@@ -6,7 +6,7 @@
 //!
 //! 1. the toolchain's cache helpers (`shaders/cache.wgsl`: reprojection,
 //!    bilinear lookup with depth test, refresh indicator) are
-//!    [imported](import) into the first free bind group;
+//!    [imported](crate::proc::import) into the first free bind group;
 //! 2. the [vertex stage](vertex) gains the previous clip position, computed
 //!    by the same code as the position but with previous-frame twins of the
 //!    uniforms and read-only storage it reads; the position is `@invariant`;
@@ -23,9 +23,7 @@ pub mod builder;
 pub mod copy;
 pub mod fragment;
 pub mod gradients;
-pub mod import;
 pub mod path;
-pub mod remap;
 pub mod uniformity;
 pub mod vertex;
 
@@ -399,7 +397,7 @@ pub fn rewrite(
     }
 
     let mut module = original.clone();
-    let imported = import::import(&mut module, cache_helpers()?, group);
+    let imported = crate::proc::import::import(&mut module, cache_helpers()?, group);
     let helper = |name: &str| {
         imported.functions.get(name).copied().ok_or_else(|| {
             Refusal::new(format!(
@@ -439,12 +437,19 @@ pub fn rewrite(
     );
     let absent = helper("cache_absent")?;
 
-    let vertex_index = vertex::vertex_entry(
-        &module,
-        analysis.entry_index,
-        options.vertex_entry.as_deref(),
-    )?;
-    let vertex = vertex::instrument(&mut module, vertex_index, group, FIRST_TWIN_BINDING)?;
+    // A fragment-only module (its vertex stage composed elsewhere) gets
+    // fragment passes that take the previous clip position as an input;
+    // the plan says what the host's vertex stage must output.
+    let vertex = if vertex::is_fragment_only(&module) && options.vertex_entry.is_none() {
+        vertex::fragment_only(&module, analysis.entry_index)
+    } else {
+        let vertex_index = vertex::vertex_entry(
+            &module,
+            analysis.entry_index,
+            options.vertex_entry.as_deref(),
+        )?;
+        vertex::instrument(&mut module, vertex_index, group, FIRST_TWIN_BINDING)?
+    };
     mark_positions_invariant(&mut module);
 
     // Split the fragment entry point at the node.
@@ -619,14 +624,14 @@ pub fn rewrite(
     let build_pass = |stage: Stage, name: String| -> Result<PassModule, Refusal> {
         let mut pass = module.clone();
         let fragment = fragment::entry_point(&mut pass, &pieces, stage)?;
-        let vertex_entry = pass.entry_points[vertex.entry_index].clone();
-        pass.entry_points = vec![
-            vertex_entry,
-            naga::EntryPoint {
+        let vertex_entry = vertex.entry_index.map(|i| pass.entry_points[i].clone());
+        pass.entry_points = vertex_entry
+            .into_iter()
+            .chain([naga::EntryPoint {
                 function: fragment,
                 ..entry.clone()
-            },
-        ];
+            }])
+            .collect();
         naga::compact::compact(&mut pass, naga::compact::KeepUnused::No);
         let info = crate::front::validate(&pass).map_err(|err| {
             let diagnostic = crate::diagnostic::Diagnostic::from_spanned_error(&err);

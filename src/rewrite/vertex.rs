@@ -24,8 +24,10 @@ use crate::analysis::graph::ExprSet;
 /// What instrumenting the vertex stage produced.
 #[derive(Debug)]
 pub struct VertexStage {
-    /// Index of the vertex entry point in the module.
-    pub entry_index: usize,
+    /// Index of the vertex entry point in the module; `None` for a
+    /// fragment-only module, whose host's vertex stage must output the
+    /// previous clip position ([`fragment_only`]).
+    pub entry_index: Option<usize>,
     /// Location of the interpolated previous clip position.
     pub previous_location: u32,
     /// (original, twin) global variables.
@@ -401,10 +403,47 @@ pub fn instrument(
     module.entry_points[entry_index].function = b.finish();
 
     Ok(VertexStage {
-        entry_index,
+        entry_index: Some(entry_index),
         previous_location,
         twins,
     })
+}
+
+/// The vertex side of a fragment-only module (engines compose the vertex
+/// stage elsewhere): no vertex entry point to instrument, so the host's
+/// must output the previous clip position, at the first location after
+/// every one the fragment entry point `fragment` reads.
+pub fn fragment_only(module: &Module, fragment: usize) -> VertexStage {
+    let function = &module.entry_points[fragment].function;
+    let mut locations = Vec::new();
+    for argument in &function.arguments {
+        match module.types[argument.ty].inner {
+            TypeInner::Struct { ref members, .. } => {
+                locations.extend(members.iter().filter_map(|m| location_of(&m.binding)))
+            }
+            _ => locations.extend(location_of(&argument.binding)),
+        }
+    }
+    VertexStage {
+        entry_index: None,
+        previous_location: locations.iter().map(|l| l + 1).max().unwrap_or(0),
+        twins: Vec::new(),
+    }
+}
+
+fn location_of(binding: &Option<Binding>) -> Option<u32> {
+    match *binding {
+        Some(Binding::Location { location, .. }) => Some(location),
+        _ => None,
+    }
+}
+
+/// Whether `module` has no vertex entry point at all.
+pub fn is_fragment_only(module: &Module) -> bool {
+    !module
+        .entry_points
+        .iter()
+        .any(|ep| ep.stage == naga::ShaderStage::Vertex)
 }
 
 /// Every expression of `function`: copying with this set keeps it whole.

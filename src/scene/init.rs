@@ -323,9 +323,10 @@ struct Model { world: mat4x4<f32>, tint: vec4<f32>, light_count: u32 }
 struct Out { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32> }
 @vertex fn vs(@location(0) pos: vec3<f32>) -> Out {
     var out: Out;
-    let world = model.world * vec4<f32>(pos, 1.0);
-    out.clip = camera.view_proj * world;
+    var world: vec4<f32>;
+    world = model.world * vec4<f32>(pos, 1.0);
     out.world = world.xyz;
+    out.clip = camera.view_proj * world;
     return out;
 }
 @fragment fn fs(in: Out) -> @location(0) vec4<f32> {
@@ -381,6 +382,36 @@ struct Out { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32> }
             Some("clip_from_world")
         );
         assert_eq!(scene.uniforms["light_count"].as_integer(), Some(1));
+    }
+
+    /// Bevy's shape: the world position stored into a member of the
+    /// output, the clip position computed from that member.
+    #[test]
+    fn the_chain_is_followed_through_members_of_the_output() {
+        let source = "struct Cam { vp: mat4x4<f32> }
+             struct Obj { xform: mat4x4<f32> }
+             @group(0) @binding(0) var<uniform> cam: Cam;
+             @group(0) @binding(1) var<uniform> obj: Obj;
+             struct Out { @builtin(position) position: vec4<f32>, @location(0) world_position: vec4<f32> }
+             @vertex fn vs(@location(0) p: vec3<f32>) -> Out {
+                 var out: Out;
+                 out.world_position = obj.xform * vec4<f32>(p, 1.0);
+                 out.position = cam.vp * out.world_position;
+                 return out;
+             }";
+        let init = default_scene(&module(source), "bevy.wgsl", Some(0));
+        let roles: Vec<(&str, &str, bool)> = init
+            .roles
+            .iter()
+            .map(|r| (r.key.as_str(), r.role, r.how.starts_with("applied")))
+            .collect();
+        assert_eq!(
+            roles,
+            [
+                ("cam.vp", "clip_from_world", true),
+                ("obj.xform", "world_from_local", true)
+            ]
+        );
     }
 
     #[test]

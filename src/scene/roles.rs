@@ -305,31 +305,45 @@ fn position_output(module: &Module, function: &naga::Function) -> Option<Handle<
     found
 }
 
-/// Each local variable stored exactly once (or only initialised): the value
-/// a load of it gives.
-fn single_stores(
-    function: &naga::Function,
-) -> HashMap<Handle<naga::LocalVariable>, Handle<Expression>> {
-    let mut count: HashMap<Handle<naga::LocalVariable>, (usize, Option<Handle<Expression>>)> =
-        HashMap::new();
+/// What a local variable (or one member of it, `out.world_position`) is
+/// stored exactly once: the value a load of it gives. Stored more than
+/// once, it is left out.
+type Place = (Handle<naga::LocalVariable>, Option<u32>);
+type Stores = HashMap<Place, Handle<Expression>>;
+
+fn single_stores(function: &naga::Function) -> Stores {
+    let mut count: HashMap<Place, (usize, Handle<Expression>)> = HashMap::new();
     for (handle, local) in function.local_variables.iter() {
         if let Some(init) = local.init {
-            count.insert(handle, (1, Some(init)));
+            count.insert((handle, None), (1, init));
         }
     }
     crate::proc::each_statement(&function.body, &mut |statement| {
         if let Statement::Store { pointer, value } = *statement {
-            if let Expression::LocalVariable(local) = function.expressions[pointer] {
-                let entry = count.entry(local).or_insert((0, None));
+            if let Some(key) = local_place(function, pointer) {
+                let entry = count.entry(key).or_insert((0, value));
                 entry.0 += 1;
-                entry.1 = Some(value);
+                entry.1 = value;
             }
         }
     });
     count
         .into_iter()
-        .filter_map(|(local, (n, value))| (n == 1).then_some(value?).map(|v| (local, v)))
+        .filter(|(_, (n, _))| *n == 1)
+        .map(|(key, (_, value))| (key, value))
         .collect()
+}
+
+/// A pointer to a local variable or to one member of it.
+fn local_place(function: &naga::Function, pointer: Handle<Expression>) -> Option<Place> {
+    match function.expressions[pointer] {
+        Expression::LocalVariable(local) => Some((local, None)),
+        Expression::AccessIndex { base, index } => match function.expressions[base] {
+            Expression::LocalVariable(local) => Some((local, Some(index))),
+            _ => None,
+        },
+        _ => None,
+    }
 }
 
 /// Follows `expr` down the chain of matrix products to the vertex
@@ -337,7 +351,7 @@ fn single_stores(
 fn walk_product(
     module: &Module,
     function: &naga::Function,
-    stores: &HashMap<Handle<naga::LocalVariable>, Handle<Expression>>,
+    stores: &Stores,
     expr: Handle<Expression>,
     chain: &mut Vec<String>,
     depth: usize,
@@ -375,10 +389,8 @@ fn walk_product(
         Expression::AccessIndex { base, .. } if !is_matrix(base) => recurse(base, chain),
         Expression::As { expr: inner, .. } => recurse(inner, chain),
         Expression::Load { pointer } => {
-            if let Expression::LocalVariable(local) = function.expressions[pointer] {
-                if let Some(&value) = stores.get(&local) {
-                    recurse(value, chain);
-                }
+            if let Some(&value) = local_place(function, pointer).and_then(|key| stores.get(&key)) {
+                recurse(value, chain);
             }
         }
         _ => {}
@@ -449,7 +461,7 @@ fn pointee(
 fn matrix_factors(
     module: &Module,
     function: &naga::Function,
-    stores: &HashMap<Handle<naga::LocalVariable>, Handle<Expression>>,
+    stores: &Stores,
     matrix: Handle<Expression>,
     chain: &mut Vec<String>,
     depth: usize,
@@ -467,8 +479,8 @@ fn matrix_factors(
             matrix_factors(module, function, stores, right, chain, depth + 1);
         }
         Expression::Load { pointer } => {
-            if let Expression::LocalVariable(local) = function.expressions[pointer] {
-                if let Some(&value) = stores.get(&local) {
+            if let Some(key) = local_place(function, pointer) {
+                if let Some(&value) = stores.get(&key) {
                     matrix_factors(module, function, stores, value, chain, depth + 1);
                 }
                 return;

@@ -4,6 +4,7 @@
 
 mod analyze;
 mod build_api;
+mod composed;
 mod corpus;
 mod cost;
 mod default_scene;

@@ -429,9 +429,8 @@ fn a_store_overwritten_by_the_cached_value_is_dropped_with_its_call() {
         .find(|c| c.node.text == "lit += vec3<f32>(rim * 0.25)")
         .unwrap_or_else(|| panic!("{:#?}", analysis.candidates));
     for variant in Variant::ALL {
-        let rewritten =
-            rewrite::rewrite(&shader, &analysis, second, variant, &Options::default())
-                .unwrap_or_else(|r| panic!("{variant}: {r}"));
+        let rewritten = rewrite::rewrite(&shader, &analysis, second, variant, &Options::default())
+            .unwrap_or_else(|r| panic!("{variant}: {r}"));
         // The shade keeps no call to `shine`: its value is in the cache.
         let shades: Vec<String> = wgsl_sources(&rewritten)
             .into_values()

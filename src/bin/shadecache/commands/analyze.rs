@@ -20,6 +20,9 @@ pub struct Args {
     #[arg(long, value_name = "NAME")]
     pub entry: Option<String>,
 
+    #[command(flatten)]
+    pub compose: super::ComposeArgs,
+
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     pub format: Format,
@@ -44,7 +47,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         Some(path) => read_weights(path)?,
         None => Weights::default(),
     };
-    let shader = front::load(&args.shader)?;
+    let shader = super::load_shader(&args.shader, &args.compose, None, None)?;
     let options = Options {
         entry: args.entry,
         weights,

@@ -5,8 +5,12 @@ pub mod profile;
 pub mod rewrite;
 pub mod scene;
 
+use std::path::{Path, PathBuf};
+
 use shadecache::diagnostic::Color;
 use shadecache::diagnostic::Error;
+use shadecache::front::compose::{Composition, ShaderDef};
+use shadecache::front::{self, Shader};
 
 #[derive(Debug, clap::Subcommand)]
 pub enum Command {
@@ -57,4 +61,39 @@ pub fn write_stdout(text: &str) -> Result<(), Error> {
         )),
         _ => Ok(()),
     }
+}
+
+/// How to put a shader together from modules: naga_oil's `#import`s and
+/// shader defs.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ComposeArgs {
+    /// A folder searched (recursively) for the modules the shader's
+    /// `#import`s name (each with `#define_import_path`); repeatable.
+    #[arg(long = "import-path", value_name = "DIR")]
+    pub import_paths: Vec<PathBuf>,
+
+    /// A shader def for `#ifdef`: NAME, or NAME=VALUE (true, false, an i32,
+    /// or a u32 as `3u`); repeatable.
+    #[arg(long = "def", value_name = "NAME[=VALUE]", value_parser = ShaderDef::parse)]
+    pub defs: Vec<(String, ShaderDef)>,
+}
+
+impl ComposeArgs {
+    pub fn composition(&self) -> Composition {
+        Composition {
+            import_paths: self.import_paths.clone(),
+            defs: self.defs.clone(),
+        }
+    }
+}
+
+/// Loads the shader a command names: composed from modules where it
+/// imports them, given the vertex stage of `vertex` where it has none.
+pub fn load_shader(
+    path: &Path,
+    compose: &ComposeArgs,
+    vertex: Option<&Path>,
+    vertex_entry: Option<&str>,
+) -> Result<Shader, Error> {
+    front::load_with(path, &compose.composition(), vertex, vertex_entry)
 }

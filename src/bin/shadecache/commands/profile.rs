@@ -6,7 +6,6 @@ use std::path::PathBuf;
 use shadecache::analysis;
 use shadecache::back::{self, Language};
 use shadecache::diagnostic::{Color, Diagnostic, Error};
-use shadecache::front;
 use shadecache::profile::{self, Budget, Nodes, Options, Progress};
 use shadecache::report;
 use shadecache::rewrite::Variant;
@@ -104,6 +103,15 @@ pub struct Args {
     /// several and it cannot be inferred.
     #[arg(long, value_name = "NAME")]
     pub vertex_entry: Option<String>,
+
+    /// The module with the vertex stage, for a fragment-only shader
+    /// (engines keep the stages in separate files); resources both bind at
+    /// one (group, binding) are one.
+    #[arg(long, value_name = "FILE.wgsl")]
+    pub vertex: Option<PathBuf>,
+
+    #[command(flatten)]
+    pub compose: super::ComposeArgs,
 }
 
 fn parse_size(text: &str) -> Result<[u32; 2], String> {
@@ -186,7 +194,12 @@ impl Progress for Bar {
 }
 
 pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
-    let shader = front::load(&args.shader)?;
+    let shader = super::load_shader(
+        &args.shader,
+        &args.compose,
+        args.vertex.as_deref(),
+        args.vertex_entry.as_deref(),
+    )?;
     let (scene, scene_path) = match &args.scene {
         Some(path) => (Scene::load(path)?, path.clone()),
         None => (

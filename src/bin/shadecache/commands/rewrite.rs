@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use shadecache::analysis::{self, Options as AnalysisOptions};
 use shadecache::back::{self, Language};
 use shadecache::diagnostic::{self, Color, Diagnostic, Error, Severity};
-use shadecache::front;
 use shadecache::rewrite::{self, CacheFormat, DepthConvention, Options, Reconstruction, Variant};
 
 #[derive(Debug, clap::Args)]
@@ -71,6 +70,15 @@ pub struct Args {
     /// several and it cannot be inferred from what they output.
     #[arg(long, value_name = "NAME")]
     pub vertex_entry: Option<String>,
+
+    /// The module with the vertex stage, for a fragment-only shader
+    /// (engines keep the stages in separate files); resources both bind at
+    /// one (group, binding) are one.
+    #[arg(long, value_name = "FILE.wgsl")]
+    pub vertex: Option<PathBuf>,
+
+    #[command(flatten)]
+    pub compose: super::ComposeArgs,
 
     /// Where to write the shaders and plan.json.
     #[arg(long, value_name = "DIR")]
@@ -146,7 +154,12 @@ pub enum EmitArg {
 }
 
 pub fn exec(args: Args, color: Color) -> Result<(), Error> {
-    let shader = front::load(&args.shader)?;
+    let shader = super::load_shader(
+        &args.shader,
+        &args.compose,
+        args.vertex.as_deref(),
+        args.vertex_entry.as_deref(),
+    )?;
     let analysis = analysis::analyze(
         &shader,
         &AnalysisOptions {

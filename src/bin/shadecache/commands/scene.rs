@@ -4,7 +4,6 @@
 use std::path::PathBuf;
 
 use shadecache::diagnostic::{Color, Error};
-use shadecache::front;
 use shadecache::scene::init;
 
 #[derive(Debug, clap::Args)]
@@ -32,12 +31,26 @@ pub struct InitArgs {
     /// several and the pairing cannot be inferred.
     #[arg(long, value_name = "NAME")]
     pub vertex_entry: Option<String>,
+
+    /// The module with the vertex stage, for a fragment-only shader
+    /// (engines keep the stages in separate files); resources both bind at
+    /// one (group, binding) are one.
+    #[arg(long, value_name = "FILE.wgsl")]
+    pub vertex: Option<PathBuf>,
+
+    #[command(flatten)]
+    pub compose: super::ComposeArgs,
 }
 
 pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     match args.command {
         SceneCommand::Init(args) => {
-            let shader = front::load(&args.shader)?;
+            let shader = super::load_shader(
+                &args.shader,
+                &args.compose,
+                args.vertex.as_deref(),
+                args.vertex_entry.as_deref(),
+            )?;
             let init =
                 init::for_shader(&shader, args.entry.as_deref(), args.vertex_entry.as_deref())?;
             super::write_stdout(&init.text)

@@ -1,13 +1,17 @@
-//! Importing the toolchain's own WGSL (`shaders/`) into a user's module at
-//! IR level: types, constants, global variables and functions are copied
-//! with their handles remapped, and the imported resources are moved to the
-//! bind group the rewrite chose.
+//! Importing one module into another at IR level: types, constants, global
+//! variables and functions are copied with their handles remapped.
+//!
+//! - [`import`]: the toolchain's own WGSL (`shaders/`) into a user's module,
+//!   its resources moved to the bind group the rewrite chose;
+//! - [`import_vertex_stage`]: a separate vertex module (`--vertex FILE`)
+//!   into a fragment-only one, its resources the same as the fragment
+//!   module's where they share a binding.
 
 use std::collections::HashMap;
 
 use naga::{Block, Expression, Handle, Module, Statement};
 
-use super::remap::{self, Mapper};
+use crate::proc::remap::{self, Mapper};
 
 /// What an import added to the target module, by name.
 #[derive(Debug, Default)]
@@ -20,7 +24,59 @@ pub struct Imported {
 /// Copies everything of `source` except its entry points into `target`,
 /// putting its resource bindings in `group`.
 pub fn import(target: &mut Module, source: &Module, group: u32) -> Imported {
+    let mut maps = ModuleMaps {
+        keep_spans: true,
+        ..ModuleMaps::default()
+    };
+    copy_module(target, source, &mut maps, Placing::Group(group))
+        .expect("moving every binding to one group always succeeds")
+}
+
+/// Copies the vertex entry point `entry` of `source`, with everything it
+/// needs, into `target` (a fragment-only module), and returns its index
+/// among `target`'s entry points. A resource at a (group, binding) `target`
+/// also declares is the same resource and must have the same type and
+/// address space. Spans are dropped: they point into the other file.
+pub fn import_vertex_stage(
+    target: &mut Module,
+    source: &Module,
+    entry: usize,
+) -> Result<usize, String> {
+    if !source.overrides.is_empty() {
+        return Err("the vertex module declares pipeline overrides, which cannot be merged into the fragment module yet".into());
+    }
+    let entry = &source.entry_points[entry];
+    if target.entry_points.iter().any(|ep| ep.name == entry.name) {
+        return Err(format!(
+            "both modules have an entry point named `{}`",
+            entry.name
+        ));
+    }
     let mut maps = ModuleMaps::default();
+    copy_module(target, source, &mut maps, Placing::Merge)?;
+    let function = copy_function(&entry.function, &mut maps, &mut target.constants, source);
+    target.entry_points.push(naga::EntryPoint {
+        function,
+        ..entry.clone()
+    });
+    Ok(target.entry_points.len() - 1)
+}
+
+/// Where the copied resources go.
+enum Placing {
+    /// Every binding into this group, at its own binding number.
+    Group(u32),
+    /// At their own group and binding, shared with the target's resource
+    /// there.
+    Merge,
+}
+
+fn copy_module(
+    target: &mut Module,
+    source: &Module,
+    maps: &mut ModuleMaps,
+    placing: Placing,
+) -> Result<Imported, String> {
     let mut imported = Imported::default();
 
     // Types come in dependency order in a UniqueArena.
@@ -31,7 +87,7 @@ pub fn import(target: &mut Module, source: &Module, group: u32) -> Imported {
                 name: ty.name.clone(),
                 inner,
             },
-            source.types.get_span(handle),
+            maps.span(source.types.get_span(handle)),
         );
         maps.types.insert(handle, mapped);
         if let Some(name) = &ty.name {
@@ -43,24 +99,46 @@ pub fn import(target: &mut Module, source: &Module, group: u32) -> Imported {
     // constant's initializer only refers to earlier expressions.
     for (handle, expr) in source.global_expressions.iter() {
         let mut mapper = GlobalMapper {
-            maps: &mut maps,
+            maps: &mut *maps,
             target_constants: &mut target.constants,
             source,
         };
         let copied = remap::expression(expr, &mut mapper);
-        let mapped = target
-            .global_expressions
-            .append(copied, source.global_expressions.get_span(handle));
+        let span = mapper.maps.span(source.global_expressions.get_span(handle));
+        let mapped = target.global_expressions.append(copied, span);
         maps.global_expressions.insert(handle, mapped);
     }
 
     for (handle, global) in source.global_variables.iter() {
         let ty = maps.types[&global.ty];
         let init = global.init.map(|h| maps.global_expressions[&h]);
-        let binding = global.binding.as_ref().map(|b| naga::ResourceBinding {
-            group,
-            binding: b.binding,
-        });
+        let binding = match (&placing, &global.binding) {
+            (Placing::Group(group), Some(b)) => Some(naga::ResourceBinding {
+                group: *group,
+                binding: b.binding,
+            }),
+            (Placing::Merge, Some(b)) => {
+                let shared = target
+                    .global_variables
+                    .iter()
+                    .find(|(_, g)| g.binding.as_ref() == Some(b));
+                if let Some((existing, g)) = shared {
+                    if g.ty != ty || g.space != global.space {
+                        return Err(format!(
+                            "group {} binding {} is `{}` in the vertex module and `{}` in the fragment module, of different types",
+                            b.group,
+                            b.binding,
+                            global.name.as_deref().unwrap_or("?"),
+                            g.name.as_deref().unwrap_or("?")
+                        ));
+                    }
+                    maps.globals.insert(handle, existing);
+                    continue;
+                }
+                Some(*b)
+            }
+            (_, None) => None,
+        };
         let mapped = target.global_variables.append(
             naga::GlobalVariable {
                 name: global.name.clone(),
@@ -70,7 +148,7 @@ pub fn import(target: &mut Module, source: &Module, group: u32) -> Imported {
                 init,
                 memory_decorations: global.memory_decorations,
             },
-            source.global_variables.get_span(handle),
+            maps.span(source.global_variables.get_span(handle)),
         );
         maps.globals.insert(handle, mapped);
         if let Some(name) = &global.name {
@@ -80,25 +158,37 @@ pub fn import(target: &mut Module, source: &Module, group: u32) -> Imported {
 
     // Functions in arena order: a function only calls earlier ones.
     for (handle, function) in source.functions.iter() {
-        let copied = copy_function(function, &mut maps, &mut target.constants, source);
-        let mapped = target
-            .functions
-            .append(copied, source.functions.get_span(handle));
+        let copied = copy_function(function, maps, &mut target.constants, source);
+        let span = maps.span(source.functions.get_span(handle));
+        let mapped = target.functions.append(copied, span);
         maps.functions.insert(handle, mapped);
         if let Some(name) = &function.name {
             imported.functions.insert(name.clone(), mapped);
         }
     }
-    imported
+    Ok(imported)
 }
 
 #[derive(Default)]
 struct ModuleMaps {
+    /// Whether the copies keep the source's spans (they point into the
+    /// source's file).
+    keep_spans: bool,
     types: HashMap<Handle<naga::Type>, Handle<naga::Type>>,
     constants: HashMap<Handle<naga::Constant>, Handle<naga::Constant>>,
     global_expressions: HashMap<Handle<Expression>, Handle<Expression>>,
     globals: HashMap<Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>>,
     functions: HashMap<Handle<naga::Function>, Handle<naga::Function>>,
+}
+
+impl ModuleMaps {
+    fn span(&self, span: naga::Span) -> naga::Span {
+        if self.keep_spans {
+            span
+        } else {
+            naga::Span::UNDEFINED
+        }
+    }
 }
 
 /// Maps types only (type definitions refer to nothing else but overrides,
@@ -155,7 +245,7 @@ impl Mapper for GlobalMapper<'_> {
                 ty: self.maps.types[&constant.ty],
                 init: self.maps.global_expressions[&constant.init],
             },
-            self.source.constants.get_span(h),
+            self.maps.span(self.source.constants.get_span(h)),
         );
         self.maps.constants.insert(h, mapped);
         mapped
@@ -229,6 +319,8 @@ fn copy_function(
         }),
         ..naga::Function::default()
     };
+    let keep = maps.keep_spans;
+    let span = |s: naga::Span| if keep { s } else { naga::Span::UNDEFINED };
     let mut mapper = FunctionMapper {
         global: GlobalMapper {
             maps,
@@ -247,7 +339,7 @@ fn copy_function(
                 ty: mapper.ty(local.ty),
                 init: None,
             },
-            function.local_variables.get_span(handle),
+            span(function.local_variables.get_span(handle)),
         );
         mapper.locals.push(mapped);
     }
@@ -256,7 +348,7 @@ fn copy_function(
         let copied = remap::expression(expr, &mut mapper);
         let mapped = out
             .expressions
-            .append(copied, function.expressions.get_span(handle));
+            .append(copied, span(function.expressions.get_span(handle)));
         mapper.exprs.push(mapped);
     }
     for (handle, local) in function.local_variables.iter() {
@@ -322,6 +414,11 @@ fn copy_block(block: &Block, m: &mut FunctionMapper) -> Block {
                 Some(copied) => copied,
                 None => continue,
             },
+        };
+        let span = if m.global.maps.keep_spans {
+            span
+        } else {
+            naga::Span::UNDEFINED
         };
         out.push(copied, span);
     }

@@ -1,0 +1,436 @@
+//! Shaders composed from modules, as Bevy composes its own: `#import`,
+//! `#define_import_path`, `#ifdef`/`#else`/`#endif` and shader defs,
+//! through the `naga_oil` crate.
+//!
+//! The modules an entry shader imports are found under `--import-path`
+//! folders (every `.wgsl` there that has a `#define_import_path`), added to
+//! a `naga_oil` composer callees first, and the entry shader is made into
+//! one naga module. That module is written back as WGSL and parsed again:
+//! the analysis names nodes by their source text, and the composed module
+//! has one text only once it is written. naga_oil's decorated names
+//! (`ViewX_naga_oil_mod_X...X`) become `module__item` first, so node texts
+//! read like the flattened shaders Bevy's tooling prints.
+//!
+//! Composition errors (an `#import` that resolves to nothing, a parse or
+//! validation error in an imported module) are diagnostics pointing into
+//! the file they are in.
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use naga_oil::compose::{
+    ComposableModuleDescriptor, Composer, ComposerError, ComposerErrorInner, NagaModuleDescriptor,
+    ShaderDefValue, ShaderLanguage, ShaderType,
+};
+
+use super::{parse, read_source, Shader};
+use crate::diagnostic::{Diagnostic, Error, SourceFile};
+
+/// Where a composed shader's imports come from, and its shader defs.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Composition {
+    /// Folders searched (recursively) for the modules `#import` names.
+    pub import_paths: Vec<PathBuf>,
+    /// `#ifdef` defines: `NAME` (true) or `NAME=VALUE` (a bool, an i32 or,
+    /// with a `u` suffix, a u32).
+    pub defs: Vec<(String, ShaderDef)>,
+}
+
+/// A shader def's value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShaderDef {
+    Bool(bool),
+    Int(i32),
+    UInt(u32),
+}
+
+impl ShaderDef {
+    /// Parses `NAME` or `NAME=VALUE` as `--def` takes it.
+    pub fn parse(text: &str) -> Result<(String, ShaderDef), String> {
+        let (name, value) = match text.split_once('=') {
+            None => return Ok((text.to_string(), ShaderDef::Bool(true))),
+            Some(pair) => pair,
+        };
+        let value = match value {
+            "true" => ShaderDef::Bool(true),
+            "false" => ShaderDef::Bool(false),
+            _ => match value.strip_suffix('u') {
+                Some(digits) => digits.parse().map(ShaderDef::UInt).map_err(|_| ()),
+                None => value.parse().map(ShaderDef::Int).map_err(|_| ()),
+            }
+            .map_err(|()| {
+                format!("`{text}`: a def's value is true, false, an i32 or a u32 with a `u` suffix (`3u`)")
+            })?,
+        };
+        if name.is_empty() {
+            return Err(format!("`{text}`: the def has no name"));
+        }
+        Ok((name.to_string(), value))
+    }
+
+    fn value(self) -> ShaderDefValue {
+        match self {
+            ShaderDef::Bool(b) => ShaderDefValue::Bool(b),
+            ShaderDef::Int(i) => ShaderDefValue::Int(i),
+            ShaderDef::UInt(u) => ShaderDefValue::UInt(u),
+        }
+    }
+}
+
+impl Composition {
+    pub fn is_empty(&self) -> bool {
+        self.import_paths.is_empty() && self.defs.is_empty()
+    }
+
+    fn shader_defs(&self) -> HashMap<String, ShaderDefValue> {
+        self.defs
+            .iter()
+            .map(|(name, value)| (name.clone(), value.value()))
+            .collect()
+    }
+}
+
+/// Whether WGSL text uses naga_oil's directives.
+pub fn uses_directives(text: &str) -> bool {
+    text.lines().any(|line| {
+        let line = line.trim_start();
+        [
+            "#import",
+            "#define_import_path",
+            "#ifdef",
+            "#ifndef",
+            "#if ",
+            "#else",
+            "#endif",
+        ]
+        .iter()
+        .any(|d| line.starts_with(d))
+    })
+}
+
+/// One importable module found under an import path.
+struct Found {
+    file: Arc<SourceFile>,
+    imports: Vec<String>,
+}
+
+/// Reads and composes the shader at `path` with `composition`.
+pub fn load_composed(path: &Path, composition: &Composition) -> Result<Shader, Error> {
+    let top = Arc::new(read_source(path)?);
+    let mut found: BTreeMap<String, Found> = BTreeMap::new();
+    for dir in &composition.import_paths {
+        collect(dir, &mut found)?;
+    }
+    let defs = composition.shader_defs();
+    let mut composer = Composer::default();
+    // Callees first: naga_oil needs a module's imports added before it.
+    let (_, top_imports, _) = naga_oil::compose::get_preprocessor_data(&top.text);
+    let mut added = Vec::new();
+    for import in &top_imports {
+        add(
+            &mut composer,
+            &found,
+            &import.import,
+            &defs,
+            &mut added,
+            &mut Vec::new(),
+        )
+        .map_err(|err| err.unwrap_or_else(|| not_found(&top, &import.import, composition)))?;
+    }
+    let module = composer
+        .make_naga_module(NagaModuleDescriptor {
+            source: &top.text,
+            file_path: &top.path,
+            shader_type: ShaderType::Wgsl,
+            shader_defs: defs,
+            additional_imports: &[],
+        })
+        .map_err(|err| composer_error(&composer, &err))?;
+    let mut module = module;
+    undecorate(&mut module);
+    let info = super::validate(&module).map_err(|err| {
+        Error::in_file(
+            top.clone(),
+            Diagnostic::error(format!(
+                "the composed module does not validate: {}",
+                Diagnostic::from_spanned_error(&err).message
+            ))
+            .with_label(0..0, "composed from this shader"),
+        )
+    })?;
+    let text = crate::back::wgsl_text(&module, &info).map_err(|err| {
+        Error::in_file(
+            top.clone(),
+            Diagnostic::error(format!("cannot write the composed module: {err}"))
+                .with_label(0..0, "composed from this shader"),
+        )
+    })?;
+    parse(SourceFile::new(format!("{} (composed)", top.path), text))
+}
+
+/// Every `.wgsl` under `dir` that defines an import path.
+fn collect(dir: &Path, found: &mut BTreeMap<String, Found>) -> Result<(), Error> {
+    let entries = std::fs::read_dir(dir).map_err(|err| {
+        Error::plain(Diagnostic::error(format!(
+            "cannot read import path `{}`: {err}",
+            dir.display()
+        )))
+    })?;
+    let mut paths: Vec<PathBuf> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    paths.sort();
+    for path in paths {
+        if path.is_dir() {
+            collect(&path, found)?;
+        } else if path.extension().is_some_and(|e| e == "wgsl") {
+            let file = Arc::new(read_source(&path)?);
+            let (name, imports, _) = naga_oil::compose::get_preprocessor_data(&file.text);
+            if let Some(name) = name {
+                found.insert(
+                    name,
+                    Found {
+                        imports: imports.into_iter().map(|i| i.import).collect(),
+                        file,
+                    },
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Adds module `name` and, first, what it imports. `Err(None)`: `name`
+/// is not under any import path (the caller knows where it was named).
+fn add(
+    composer: &mut Composer,
+    found: &BTreeMap<String, Found>,
+    name: &str,
+    defs: &HashMap<String, ShaderDefValue>,
+    added: &mut Vec<String>,
+    stack: &mut Vec<String>,
+) -> Result<(), Option<Error>> {
+    if added.iter().any(|a| a == name) || composer.contains_module(name) {
+        return Ok(());
+    }
+    // `#import a::b::c` may name an item of module `a::b`.
+    let (module_name, module) = match found.get(name) {
+        Some(module) => (name.to_string(), module),
+        None => match name
+            .rsplit_once("::")
+            .and_then(|(m, _)| found.get_key_value(m))
+        {
+            Some((m, module)) => (m.clone(), module),
+            None => return Err(None),
+        },
+    };
+    if added.contains(&module_name) {
+        return Ok(());
+    }
+    if stack.contains(&module_name) {
+        return Err(Some(Error::in_file(
+            module.file.clone(),
+            Diagnostic::error(format!(
+                "`{module_name}` imports itself through {}",
+                stack.join(" → ")
+            ))
+            .with_label(0..0, "in this module"),
+        )));
+    }
+    stack.push(module_name.clone());
+    for import in &module.imports {
+        add(composer, found, import, defs, added, stack).map_err(|err| {
+            Some(err.unwrap_or_else(|| {
+                let at = module.file.text.find(import.as_str()).unwrap_or(0);
+                Error::in_file(
+                    module.file.clone(),
+                    Diagnostic::error(format!(
+                        "`#import {import}` does not resolve: no module under the import paths defines it"
+                    ))
+                    .with_label(at..at + import.len(), "imported here"),
+                )
+            }))
+        })?;
+    }
+    stack.pop();
+    let outcome = composer
+        .add_composable_module(ComposableModuleDescriptor {
+            source: &module.file.text,
+            file_path: &module.file.path,
+            language: ShaderLanguage::Wgsl,
+            as_name: None,
+            additional_imports: &[],
+            shader_defs: defs.clone(),
+        })
+        .map(|_| ());
+    if let Err(err) = outcome {
+        return Err(Some(composer_error(composer, &err)));
+    }
+    added.push(module_name);
+    Ok(())
+}
+
+/// An `#import` of the entry shader that nothing under the import paths
+/// defines.
+fn not_found(top: &Arc<SourceFile>, import: &str, composition: &Composition) -> Error {
+    let at = top.text.find(import).unwrap_or(0);
+    let searched = if composition.import_paths.is_empty() {
+        "no --import-path was given".to_string()
+    } else {
+        format!(
+            "searched {}",
+            composition
+                .import_paths
+                .iter()
+                .map(|p| format!("`{}`", p.display()))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
+    Error::in_file(
+        top.clone(),
+        Diagnostic::error(format!(
+            "`#import {import}` does not resolve: no module defines it ({searched})"
+        ))
+        .with_label(at..at + import.len(), "imported here")
+        .with_note("a module is a .wgsl file under an --import-path folder with `#define_import_path NAME`"),
+    )
+}
+
+/// A composer error as a diagnostic in the file it is in.
+fn composer_error(composer: &Composer, err: &ComposerError) -> Error {
+    // naga_oil's offsets are into its preprocessed text of the module
+    // (directives blanked, lines kept), shown under the module's path.
+    let path = err.source.path(composer).clone();
+    let file = Arc::new(SourceFile::new(
+        path,
+        err.source.source(composer).to_string(),
+    ));
+    let offset = err.source.offset();
+    // naga_oil keeps the module's index in a span's high bits.
+    let local = |at: usize| {
+        (at & ((1 << 20) - 1))
+            .saturating_sub(offset)
+            .min(file.text.len())
+    };
+    let (message, range) = match &err.inner {
+        ComposerErrorInner::ImportNotFound(name, at) => (
+            format!(
+                "`#import {name}` does not resolve: no module under the import paths defines it"
+            ),
+            *at..*at,
+        ),
+        ComposerErrorInner::WgslParseError(e) => (
+            e.message().to_string(),
+            e.labels()
+                .next()
+                .and_then(|(span, _)| span.to_range())
+                .map_or(0..0, |r| local(r.start)..local(r.end)),
+        ),
+        ComposerErrorInner::ShaderValidationError(v)
+        | ComposerErrorInner::HeaderValidationError(v) => (
+            format!("{}", v.as_inner()),
+            v.spans()
+                .next()
+                .and_then(|(span, _)| span.to_range())
+                .map_or(0..0, |r| local(r.start)..local(r.end)),
+        ),
+        other => (other.to_string(), 0..0),
+    };
+    let range = range.start.min(file.text.len())
+        ..range
+            .end
+            .min(file.text.len())
+            .max(range.start.min(file.text.len()));
+    Error::in_file(
+        file,
+        Diagnostic::error(format!("cannot compose the shader: {message}"))
+            .with_label(range, "here"),
+    )
+}
+
+/// Renames naga_oil's decorated names (`itemX_naga_oil_mod_X<base32>X`) to
+/// `module__item`, `module` the last segment of the module's path.
+fn undecorate(module: &mut naga::Module) {
+    let rename = |name: &mut Option<String>| {
+        if let Some(n) = name.as_mut() {
+            if let Some(readable) = readable(n) {
+                *n = readable;
+            }
+        }
+    };
+    for (_, f) in module.functions.iter_mut() {
+        rename(&mut f.name);
+    }
+    for (_, g) in module.global_variables.iter_mut() {
+        rename(&mut g.name);
+    }
+    for (_, c) in module.constants.iter_mut() {
+        rename(&mut c.name);
+    }
+    let handles: Vec<_> = module.types.iter().map(|(h, _)| h).collect();
+    for handle in handles {
+        let ty = &module.types[handle];
+        if let Some(name) = ty.name.as_deref().and_then(readable) {
+            let renamed = naga::Type {
+                name: Some(name),
+                inner: ty.inner.clone(),
+            };
+            module.types.replace(handle, renamed);
+        }
+    }
+}
+
+const DECORATION: &str = "X_naga_oil_mod_X";
+
+/// `module__item` for a decorated name; `None` for a plain one.
+fn readable(name: &str) -> Option<String> {
+    let at = name.find(DECORATION)?;
+    let encoded = name[at + DECORATION.len()..].strip_suffix('X')?;
+    let decoded = data_encoding::BASE32_NOPAD
+        .decode(encoded.as_bytes())
+        .ok()?;
+    let path = String::from_utf8(decoded).ok()?;
+    let last = path.rsplit("::").next().unwrap_or(&path);
+    Some(format!(
+        "{}__{}",
+        last.replace(|c: char| !c.is_alphanumeric(), "_"),
+        &name[..at]
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defs_parse_as_naga_oil_takes_them() {
+        assert_eq!(
+            ShaderDef::parse("SHADOWS"),
+            Ok(("SHADOWS".into(), ShaderDef::Bool(true)))
+        );
+        assert_eq!(
+            ShaderDef::parse("MAX_LIGHTS=4u"),
+            Ok(("MAX_LIGHTS".into(), ShaderDef::UInt(4)))
+        );
+        assert_eq!(
+            ShaderDef::parse("BIAS=-2"),
+            Ok(("BIAS".into(), ShaderDef::Int(-2)))
+        );
+        assert_eq!(
+            ShaderDef::parse("FOG=false"),
+            Ok(("FOG".into(), ShaderDef::Bool(false)))
+        );
+        assert!(ShaderDef::parse("X=1.5").is_err());
+        assert!(ShaderDef::parse("=1").is_err());
+    }
+
+    #[test]
+    fn decorated_names_read_as_module_and_item() {
+        let encoded = data_encoding::BASE32_NOPAD.encode(b"my_engine::lighting");
+        assert_eq!(
+            readable(&format!("shadeX_naga_oil_mod_X{encoded}X")).as_deref(),
+            Some("lighting__shade")
+        );
+        assert_eq!(readable("plain"), None);
+    }
+}
