@@ -208,7 +208,7 @@ pub struct Inputs<'a> {
     pub candidate: &'a Candidate,
     pub variant: Variant,
     pub options: &'a Options,
-    pub group: u32,
+    pub slot: rewrite::CacheSlot,
     pub vertex: &'a VertexStage,
     pub passes: &'a [(Stage, PassModule)],
     pub classify: &'a PassModule,
@@ -225,7 +225,7 @@ pub fn build(inputs: Inputs) -> Plan {
         candidate,
         variant,
         options,
-        group,
+        slot,
         vertex,
         passes,
         classify,
@@ -233,6 +233,7 @@ pub fn build(inputs: Inputs) -> Plan {
     } = inputs;
     let module = &shader.module;
     let entry = &module.entry_points[analysis.entry_index];
+    let group = slot.group;
     // A fragment-only module's passes have no vertex entry point: the
     // host draws them with its own (`host_vertex`).
     let vertex_entry = vertex.entry_index.map(|i| &module.entry_points[i]);
@@ -299,7 +300,7 @@ pub fn build(inputs: Inputs) -> Plan {
             let shadows = resource(module, &module.global_variables[from], None)?;
             Some(Twin {
                 group,
-                binding: shadows_binding(vertex, to),
+                binding: shadows_binding(vertex, slot, to),
                 name: format!("previous_{}", shadows.name),
                 shadows,
             })
@@ -307,7 +308,7 @@ pub fn build(inputs: Inputs) -> Plan {
         .collect();
     let cache_resource = |binding: u32, name: &str, kind: &str, source: &str| Resource {
         group,
-        binding,
+        binding: slot.first_binding + binding,
         name: name.into(),
         kind: kind.into(),
         source: Some(source.into()),
@@ -446,12 +447,18 @@ fn role(stage: Stage) -> &'static str {
     }
 }
 
-fn shadows_binding(vertex: &VertexStage, twin: naga::Handle<naga::GlobalVariable>) -> u32 {
+fn shadows_binding(
+    vertex: &VertexStage,
+    slot: rewrite::CacheSlot,
+    twin: naga::Handle<naga::GlobalVariable>,
+) -> u32 {
     vertex
         .twins
         .iter()
         .position(|&(_, t)| t == twin)
-        .map_or(0, |i| rewrite::FIRST_TWIN_BINDING + i as u32)
+        .map_or(0, |i| {
+            slot.first_binding + rewrite::FIRST_TWIN_BINDING + i as u32
+        })
 }
 
 fn pass_discards(module: &Module) -> bool {

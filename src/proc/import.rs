@@ -22,14 +22,20 @@ pub struct Imported {
 }
 
 /// Copies everything of `source` except its entry points into `target`,
-/// putting its resource bindings in `group`.
-pub fn import(target: &mut Module, source: &Module, group: u32) -> Imported {
+/// putting its resource bindings in `group`, `first_binding` after their
+/// own numbers.
+pub fn import(target: &mut Module, source: &Module, group: u32, first_binding: u32) -> Imported {
     let mut maps = ModuleMaps {
         keep_spans: true,
         ..ModuleMaps::default()
     };
-    copy_module(target, source, &mut maps, Placing::Group(group))
-        .expect("moving every binding to one group always succeeds")
+    copy_module(
+        target,
+        source,
+        &mut maps,
+        Placing::Group(group, first_binding),
+    )
+    .expect("moving every binding to one group always succeeds")
 }
 
 /// Copies the vertex entry point `entry` of `source`, with everything it
@@ -64,8 +70,9 @@ pub fn import_vertex_stage(
 
 /// Where the copied resources go.
 enum Placing {
-    /// Every binding into this group, at its own binding number.
-    Group(u32),
+    /// Every binding into this group, at its own binding number plus the
+    /// second.
+    Group(u32, u32),
     /// At their own group and binding, shared with the target's resource
     /// there.
     Merge,
@@ -113,9 +120,9 @@ fn copy_module(
         let ty = maps.types[&global.ty];
         let init = global.init.map(|h| maps.global_expressions[&h]);
         let binding = match (&placing, &global.binding) {
-            (Placing::Group(group), Some(b)) => Some(naga::ResourceBinding {
+            (Placing::Group(group, first), Some(b)) => Some(naga::ResourceBinding {
                 group: *group,
-                binding: b.binding,
+                binding: first + b.binding,
             }),
             (Placing::Merge, Some(b)) => {
                 let shared = target

@@ -290,6 +290,46 @@ pub const FIRST_TWIN_BINDING: u32 = 5;
 /// WebGPU's default limit on bind groups.
 const MAX_BIND_GROUPS: u32 = 4;
 
+/// Where the cache's own resources and the previous-frame twins are bound:
+/// the cache's at `first_binding +` [`CACHE_PARAMS_BINDING`] and on, the
+/// twins from `first_binding +` [`FIRST_TWIN_BINDING`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CacheSlot {
+    pub group: u32,
+    pub first_binding: u32,
+}
+
+impl CacheSlot {
+    /// The first bind group `module` leaves free, from binding 0; when it
+    /// uses all of WebGPU's four (engines bind view, material, mesh and
+    /// more), its last group after the last binding there.
+    pub fn for_module(module: &naga::Module) -> CacheSlot {
+        let bindings: Vec<naga::ResourceBinding> = module
+            .global_variables
+            .iter()
+            .filter_map(|(_, g)| g.binding)
+            .collect();
+        let free = bindings.iter().map(|b| b.group + 1).max().unwrap_or(0);
+        if free < MAX_BIND_GROUPS {
+            return CacheSlot {
+                group: free,
+                first_binding: 0,
+            };
+        }
+        let group = MAX_BIND_GROUPS - 1;
+        let last = bindings
+            .iter()
+            .filter(|b| b.group == group)
+            .map(|b| b.binding + 1)
+            .max()
+            .unwrap_or(0);
+        CacheSlot {
+            group,
+            first_binding: last,
+        }
+    }
+}
+
 /// `shaders/cache.wgsl` parsed and validated, once per process.
 fn cache_helpers() -> Result<&'static naga::Module, Refusal> {
     static HELPERS: std::sync::OnceLock<Result<naga::Module, String>> = std::sync::OnceLock::new();
@@ -382,22 +422,19 @@ pub fn rewrite(
             "the shader may discard after the node is computed, so the payload pass cannot know which pixels are cut out",
         ));
     }
-    // The first bind group the user's shader leaves free.
-    let group = original
-        .global_variables
-        .iter()
-        .filter_map(|(_, g)| g.binding.as_ref().map(|b| b.group + 1))
-        .max()
-        .unwrap_or(0);
-    if group >= MAX_BIND_GROUPS {
-        return Err(Refusal::new(format!(
-            "the shader uses bind group {}; the cache needs one more and WebGPU allows {MAX_BIND_GROUPS}",
-            group - 1
-        )));
-    }
+    // Where the cache's resources go: the first bind group the user's
+    // shader leaves free; when it uses all four WebGPU allows, after its
+    // last binding in the last one.
+    let slot = CacheSlot::for_module(original);
 
     let mut module = original.clone();
-    let imported = crate::proc::import::import(&mut module, cache_helpers()?, group);
+    let imported = crate::proc::import::import(
+        &mut module,
+        cache_helpers()?,
+        slot.group,
+        slot.first_binding,
+    );
+    let group = slot.group;
     let helper = |name: &str| {
         imported.functions.get(name).copied().ok_or_else(|| {
             Refusal::new(format!(
@@ -448,7 +485,12 @@ pub fn rewrite(
             analysis.entry_index,
             options.vertex_entry.as_deref(),
         )?;
-        vertex::instrument(&mut module, vertex_index, group, FIRST_TWIN_BINDING)?
+        vertex::instrument(
+            &mut module,
+            vertex_index,
+            group,
+            slot.first_binding + FIRST_TWIN_BINDING,
+        )?
     };
     mark_positions_invariant(&mut module);
 
@@ -661,7 +703,7 @@ pub fn rewrite(
         candidate,
         variant,
         options,
-        group,
+        slot,
         vertex: &vertex,
         passes: &passes,
         classify: &classify,

@@ -445,3 +445,74 @@ fn a_store_overwritten_by_the_cached_value_is_dropped_with_its_call() {
         }
     }
 }
+
+/// A shader that binds all four of WebGPU's bind groups (view, light,
+/// material, model) leaves none for the cache: its resources go after the
+/// shader's last binding in the last group, every pass builds a pipeline,
+/// and Δn = 1 still gives the reference's image.
+#[test]
+fn a_shader_using_all_four_bind_groups_gets_the_cache_after_its_last_binding() {
+    let text = std::fs::read_to_string(root().join("corpus/tutorial_own_names.wgsl"))
+        .unwrap()
+        .replace(
+            "@group(2) @binding(1)\nvar<uniform> object",
+            "@group(3) @binding(0)\nvar<uniform> object",
+        );
+    assert!(text.contains("@group(3)"));
+    let (shader, analysis) = analyzed("four_groups.wgsl", &text);
+    let node = &analysis.candidates[0];
+    for variant in Variant::ALL {
+        let rewritten = rewrite::rewrite(&shader, &analysis, node, variant, &Options::default())
+            .unwrap_or_else(|r| panic!("{variant}: {r}"));
+        let bindings = &rewritten.plan.bindings;
+        for resource in &bindings.cache {
+            assert_eq!(resource.group, 3, "{resource:?}");
+            assert!(resource.binding >= 1, "{resource:?}");
+        }
+        for twin in &bindings.previous {
+            assert_eq!(twin.group, 3);
+            assert!(bindings.cache.iter().all(|c| c.binding != twin.binding));
+        }
+        let Some(gpu) = crate::gpu::gpu() else {
+            continue;
+        };
+        let sources = wgsl_sources(&rewritten);
+        shadecache::runtime::pipelines(
+            &gpu,
+            &rewritten.plan,
+            |name| sources.get(name).cloned(),
+            shadecache::runtime::PipelineOptions::default(),
+        )
+        .unwrap_or_else(|err| panic!("{variant}: {err}"));
+    }
+    let Some(_) = crate::gpu::gpu() else { return };
+    let scene = shadecache::scene::Scene::default_for(&shader, None, None).unwrap();
+    let options = ProfileOptions {
+        nodes: Nodes::Ids(vec![node.node.id.clone()]),
+        refresh_periods: vec![1],
+        refresh_quads: vec![1],
+        cache_formats: vec![CacheFormat::Rgba32float],
+        reconstructions: vec![Reconstruction::Bilinear],
+        frames: Some(2),
+        warmup: Some(1),
+        size: Some([48, 48]),
+        ..ProfileOptions::default()
+    };
+    let (report, _) = shadecache::profile::profile(
+        &shader,
+        &scene,
+        std::path::Path::new("default scene"),
+        &options,
+        &mut shadecache::profile::Quiet,
+    )
+    .unwrap_or_else(|e| panic!("{}", e.render()));
+    assert_eq!(report.results.len(), 3);
+    for row in &report.results {
+        assert!(
+            row.max_abs_error <= 1.0 / 255.0 + 1e-9,
+            "{}: {}",
+            row.variant,
+            row.max_abs_error
+        );
+    }
+}
