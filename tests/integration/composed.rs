@@ -8,10 +8,9 @@ use std::ffi::OsStr;
 use shadecache::analysis::{self, Analysis};
 use shadecache::front::compose::{Composition, ShaderDef};
 use shadecache::front::{self, Shader};
-use shadecache::profile::{Nodes, Options as ProfileOptions};
-use shadecache::rewrite::{self, CacheFormat, Options, Reconstruction, Variant};
+use shadecache::rewrite::{self, Options, Variant};
 
-use crate::gpu::{gpu, wgsl_sources};
+use crate::gpu::wgsl_sources;
 use crate::util::{root, shadecache, stderr, temp_file, tint_validate};
 
 const FRAGMENT: &str = "corpus/split/toon_material.wgsl";
@@ -137,15 +136,7 @@ fn a_separate_vertex_module_is_merged_on_ir() {
             "{:?}",
             rewritten.plan.bindings.previous
         );
-        let Some(gpu) = gpu() else { continue };
-        let sources = wgsl_sources(&rewritten);
-        shadecache::runtime::pipelines(
-            &gpu,
-            &rewritten.plan,
-            |name| sources.get(name).cloned(),
-            shadecache::runtime::PipelineOptions::default(),
-        )
-        .unwrap_or_else(|err| panic!("{variant}: {err}"));
+        crate::gpu::build_pipelines(&rewritten, &variant.to_string());
     }
 }
 
@@ -153,9 +144,6 @@ fn a_separate_vertex_module_is_merged_on_ir() {
 /// reference's image (differential test, on the default scene).
 #[test]
 fn a_composed_module_at_refresh_period_one_equals_the_reference() {
-    if gpu().is_none() {
-        return;
-    }
     let shader = front::load_with(
         &root().join(FRAGMENT),
         &Composition::default(),
@@ -170,35 +158,8 @@ fn a_composed_module_at_refresh_period_one_equals_the_reference() {
         .take(2)
         .map(|c| c.node.id.clone())
         .collect();
-    let scene = shadecache::scene::Scene::default_for(&shader, None, None).unwrap();
-    let options = ProfileOptions {
-        nodes: Nodes::Ids(ids),
-        refresh_periods: vec![1],
-        refresh_quads: vec![1],
-        cache_formats: vec![CacheFormat::Rgba32float],
-        reconstructions: vec![Reconstruction::Bilinear],
-        frames: Some(3),
-        warmup: Some(1),
-        size: Some([64, 64]),
-        ..ProfileOptions::default()
-    };
-    let (report, _) = shadecache::profile::profile(
-        &shader,
-        &scene,
-        std::path::Path::new("default scene"),
-        &options,
-        &mut shadecache::profile::Quiet,
-    )
-    .unwrap_or_else(|e| panic!("{}", e.render()));
-    assert_eq!(report.results.len(), 2 * 3);
-    for row in &report.results {
-        assert!(
-            row.max_abs_error <= 1.0 / 255.0 + 1e-9,
-            "{} {}: {}",
-            row.node,
-            row.variant,
-            row.max_abs_error
-        );
+    if let Some(report) = crate::profile::assert_refresh_one_equals_reference(&shader, ids, 64) {
+        assert_eq!(report.results.len(), 2 * 3);
     }
 }
 

@@ -34,6 +34,21 @@ pub(crate) fn wgsl_sources(rewritten: &rewrite::Rewritten) -> HashMap<String, St
         .collect()
 }
 
+/// Builds a wgpu render pipeline from every pass of `rewritten` (None
+/// without a GPU); panics naming `what` when one does not build.
+pub fn build_pipelines(rewritten: &rewrite::Rewritten, what: &str) -> Option<usize> {
+    let gpu = gpu()?;
+    let sources = wgsl_sources(rewritten);
+    let pipelines = runtime::pipelines(
+        &gpu,
+        &rewritten.plan,
+        |name| sources.get(name).cloned(),
+        runtime::PipelineOptions::default(),
+    )
+    .unwrap_or_else(|err| panic!("{what}: {err}"));
+    Some(pipelines.len())
+}
+
 #[test]
 fn every_pass_of_every_variant_builds_a_wgpu_pipeline() {
     let Some(gpu) = gpu() else { return };

@@ -56,6 +56,49 @@ pub(crate) fn run_shader(
     Some((pictures, report, scene))
 }
 
+/// Δn = 1 on the default scene for `shader`'s nodes `ids` (rgba32float,
+/// bilinear, two frames after one warm-up at `size`²): every row's largest
+/// difference from the reference, which must be within one 8-bit step.
+/// `None` without a GPU.
+pub(crate) fn assert_refresh_one_equals_reference(
+    shader: &shadecache::front::Shader,
+    ids: Vec<String>,
+    size: u32,
+) -> Option<shadecache::report::Report> {
+    crate::gpu::gpu()?;
+    let scene = Scene::default_for(shader, None, None).unwrap_or_else(|e| panic!("{}", e.render()));
+    let options = Options {
+        nodes: Nodes::Ids(ids),
+        refresh_periods: vec![1],
+        refresh_quads: vec![1],
+        cache_formats: vec![shadecache::rewrite::CacheFormat::Rgba32float],
+        reconstructions: vec![Reconstruction::Bilinear],
+        frames: Some(2),
+        warmup: Some(1),
+        size: Some([size, size]),
+        ..Options::default()
+    };
+    let (report, _) = profile::profile(
+        shader,
+        &scene,
+        std::path::Path::new("default scene"),
+        &options,
+        &mut Quiet,
+    )
+    .unwrap_or_else(|e| panic!("{}", e.render()));
+    assert!(!report.results.is_empty());
+    for row in &report.results {
+        assert!(
+            row.max_abs_error <= 1.0 / 255.0 + 1e-9,
+            "{} {}: {}",
+            row.node,
+            row.variant,
+            row.max_abs_error
+        );
+    }
+    Some(report)
+}
+
 pub(crate) fn options(periods: &[u32], quads: &[u32]) -> Options {
     Options {
         nodes: Nodes::Ids(vec!["nb0c12cc4".into()]),

@@ -473,46 +473,11 @@ fn a_shader_using_all_four_bind_groups_gets_the_cache_after_its_last_binding() {
             assert_eq!(twin.group, 3);
             assert!(bindings.cache.iter().all(|c| c.binding != twin.binding));
         }
-        let Some(gpu) = crate::gpu::gpu() else {
-            continue;
-        };
-        let sources = wgsl_sources(&rewritten);
-        shadecache::runtime::pipelines(
-            &gpu,
-            &rewritten.plan,
-            |name| sources.get(name).cloned(),
-            shadecache::runtime::PipelineOptions::default(),
-        )
-        .unwrap_or_else(|err| panic!("{variant}: {err}"));
+        crate::gpu::build_pipelines(&rewritten, &variant.to_string());
     }
-    let Some(_) = crate::gpu::gpu() else { return };
-    let scene = shadecache::scene::Scene::default_for(&shader, None, None).unwrap();
-    let options = ProfileOptions {
-        nodes: Nodes::Ids(vec![node.node.id.clone()]),
-        refresh_periods: vec![1],
-        refresh_quads: vec![1],
-        cache_formats: vec![CacheFormat::Rgba32float],
-        reconstructions: vec![Reconstruction::Bilinear],
-        frames: Some(2),
-        warmup: Some(1),
-        size: Some([48, 48]),
-        ..ProfileOptions::default()
-    };
-    let (report, _) = shadecache::profile::profile(
-        &shader,
-        &scene,
-        std::path::Path::new("default scene"),
-        &options,
-        &mut shadecache::profile::Quiet,
-    )
-    .unwrap_or_else(|e| panic!("{}", e.render()));
-    assert_eq!(report.results.len(), 3);
-    for row in &report.results {
-        assert!(
-            row.max_abs_error <= 1.0 / 255.0 + 1e-9,
-            "{}: {}",
-            row.variant,
-            row.max_abs_error
-        );
+    if let Some(report) =
+        crate::profile::assert_refresh_one_equals_reference(&shader, vec![node.node.id.clone()], 48)
+    {
+        assert_eq!(report.results.len(), 3);
     }
 }

@@ -47,7 +47,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         Some(path) => read_weights(path)?,
         None => Weights::default(),
     };
-    let shader = super::load_shader(&args.shader, &args.compose, None, None)?;
+    let shader = front::load_with(&args.shader, &args.compose.composition(), None, None)?;
     let options = Options {
         entry: args.entry,
         weights,

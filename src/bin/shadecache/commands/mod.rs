@@ -87,13 +87,39 @@ impl ComposeArgs {
     }
 }
 
-/// Loads the shader a command names: composed from modules where it
-/// imports them, given the vertex stage of `vertex` where it has none.
-pub fn load_shader(
-    path: &Path,
-    compose: &ComposeArgs,
-    vertex: Option<&Path>,
-    vertex_entry: Option<&str>,
-) -> Result<Shader, Error> {
-    front::load_with(path, &compose.composition(), vertex, vertex_entry)
+/// Which entry points of the shader to take, and where its other parts
+/// come from: a separate vertex module, naga_oil modules.
+#[derive(Debug, Clone, clap::Args)]
+pub struct StageArgs {
+    /// The fragment entry point, when the shader has several.
+    #[arg(long, value_name = "NAME")]
+    pub entry: Option<String>,
+
+    /// The vertex entry point that draws with it, when the module has
+    /// several and which cannot be inferred from what they output (with
+    /// --vertex, the one in that module).
+    #[arg(long, value_name = "NAME")]
+    pub vertex_entry: Option<String>,
+
+    /// The module with the vertex stage, for a fragment-only shader
+    /// (engines keep the stages in separate files); resources both bind at
+    /// one (group, binding) are one.
+    #[arg(long, value_name = "FILE.wgsl")]
+    pub vertex: Option<PathBuf>,
+
+    #[command(flatten)]
+    pub compose: ComposeArgs,
+}
+
+impl StageArgs {
+    /// Loads `shader`: composed from modules where it imports them, given
+    /// the vertex stage of `--vertex` where it has none.
+    pub fn load(&self, shader: &Path) -> Result<Shader, Error> {
+        front::load_with(
+            shader,
+            &self.compose.composition(),
+            self.vertex.as_deref(),
+            self.vertex_entry.as_deref(),
+        )
+    }
 }

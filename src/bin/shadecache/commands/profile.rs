@@ -95,23 +95,8 @@ pub struct Args {
     #[arg(long)]
     pub quiet: bool,
 
-    /// The fragment entry point, when the shader has several.
-    #[arg(long, value_name = "NAME")]
-    pub entry: Option<String>,
-
-    /// The vertex entry point that draws with it, when the shader has
-    /// several and it cannot be inferred.
-    #[arg(long, value_name = "NAME")]
-    pub vertex_entry: Option<String>,
-
-    /// The module with the vertex stage, for a fragment-only shader
-    /// (engines keep the stages in separate files); resources both bind at
-    /// one (group, binding) are one.
-    #[arg(long, value_name = "FILE.wgsl")]
-    pub vertex: Option<PathBuf>,
-
     #[command(flatten)]
-    pub compose: super::ComposeArgs,
+    pub stages: super::StageArgs,
 }
 
 fn parse_size(text: &str) -> Result<[u32; 2], String> {
@@ -194,16 +179,15 @@ impl Progress for Bar {
 }
 
 pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
-    let shader = super::load_shader(
-        &args.shader,
-        &args.compose,
-        args.vertex.as_deref(),
-        args.vertex_entry.as_deref(),
-    )?;
+    let shader = args.stages.load(&args.shader)?;
     let (scene, scene_path) = match &args.scene {
         Some(path) => (Scene::load(path)?, path.clone()),
         None => (
-            Scene::default_for(&shader, args.entry.as_deref(), args.vertex_entry.as_deref())?,
+            Scene::default_for(
+                &shader,
+                args.stages.entry.as_deref(),
+                args.stages.vertex_entry.as_deref(),
+            )?,
             PathBuf::from("default scene"),
         ),
     };
@@ -213,8 +197,8 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         Options::default()
     };
     let options = Options {
-        entry: args.entry.clone(),
-        vertex_entry: args.vertex_entry.clone(),
+        entry: args.stages.entry.clone(),
+        vertex_entry: args.stages.vertex_entry.clone(),
         nodes: parse_nodes(&args.nodes)?,
         variants: match args.variant {
             VariantArg::OnePass => vec![Variant::OnePass],
@@ -336,13 +320,13 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
                 let analysis = analysis::analyze(
                     &shader,
                     &analysis::Options {
-                        entry: args.entry.clone(),
+                        entry: args.stages.entry.clone(),
                         ..analysis::Options::default()
                     },
                 )?;
                 let defaults = shadecache::rewrite::Options {
                     depth: scene.camera.depth,
-                    vertex_entry: args.vertex_entry.clone(),
+                    vertex_entry: args.stages.vertex_entry.clone(),
                     ..shadecache::rewrite::Options::default()
                 };
                 let rewritten = profile::rewrite_of(&shader, &analysis, row, &defaults)?;

@@ -62,23 +62,8 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = EmitArg::Wgsl)]
     pub emit: EmitArg,
 
-    /// The fragment entry point, when the shader has several.
-    #[arg(long, value_name = "NAME")]
-    pub entry: Option<String>,
-
-    /// The vertex entry point that draws with it, when the shader has
-    /// several and it cannot be inferred from what they output.
-    #[arg(long, value_name = "NAME")]
-    pub vertex_entry: Option<String>,
-
-    /// The module with the vertex stage, for a fragment-only shader
-    /// (engines keep the stages in separate files); resources both bind at
-    /// one (group, binding) are one.
-    #[arg(long, value_name = "FILE.wgsl")]
-    pub vertex: Option<PathBuf>,
-
     #[command(flatten)]
-    pub compose: super::ComposeArgs,
+    pub stages: super::StageArgs,
 
     /// Where to write the shaders and plan.json.
     #[arg(long, value_name = "DIR")]
@@ -154,16 +139,11 @@ pub enum EmitArg {
 }
 
 pub fn exec(args: Args, color: Color) -> Result<(), Error> {
-    let shader = super::load_shader(
-        &args.shader,
-        &args.compose,
-        args.vertex.as_deref(),
-        args.vertex_entry.as_deref(),
-    )?;
+    let shader = args.stages.load(&args.shader)?;
     let analysis = analysis::analyze(
         &shader,
         &AnalysisOptions {
-            entry: args.entry.clone(),
+            entry: args.stages.entry.clone(),
             ..AnalysisOptions::default()
         },
     )?;
@@ -177,7 +157,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
             DepthArg::Reversed => DepthConvention::Reversed,
         },
         reconstruction: args.reconstruction.into(),
-        vertex_entry: args.vertex_entry.clone(),
+        vertex_entry: args.stages.vertex_entry.clone(),
         ..Options::default()
     };
     let language = match args.emit {

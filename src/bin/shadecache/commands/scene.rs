@@ -23,36 +23,19 @@ pub struct InitArgs {
     /// The WGSL shader the scene is for.
     pub shader: PathBuf,
 
-    /// The fragment entry point, when the shader has several.
-    #[arg(long, value_name = "NAME")]
-    pub entry: Option<String>,
-
-    /// The vertex entry point that draws with it, when the shader has
-    /// several and the pairing cannot be inferred.
-    #[arg(long, value_name = "NAME")]
-    pub vertex_entry: Option<String>,
-
-    /// The module with the vertex stage, for a fragment-only shader
-    /// (engines keep the stages in separate files); resources both bind at
-    /// one (group, binding) are one.
-    #[arg(long, value_name = "FILE.wgsl")]
-    pub vertex: Option<PathBuf>,
-
     #[command(flatten)]
-    pub compose: super::ComposeArgs,
+    pub stages: super::StageArgs,
 }
 
 pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     match args.command {
         SceneCommand::Init(args) => {
-            let shader = super::load_shader(
-                &args.shader,
-                &args.compose,
-                args.vertex.as_deref(),
-                args.vertex_entry.as_deref(),
+            let shader = args.stages.load(&args.shader)?;
+            let init = init::for_shader(
+                &shader,
+                args.stages.entry.as_deref(),
+                args.stages.vertex_entry.as_deref(),
             )?;
-            let init =
-                init::for_shader(&shader, args.entry.as_deref(), args.vertex_entry.as_deref())?;
             super::write_stdout(&init.text)
         }
     }
