@@ -211,6 +211,7 @@ pub fn entry_point(
     }
 
     // The payload to shade with.
+    let mut deferred_kill = None;
     let payload = match stage {
         Stage::OnePass => {
             let (lookup, reuse) = reuse_condition(&mut b, pieces, previous, frag_coord);
@@ -247,12 +248,22 @@ pub fn entry_point(
         }
         Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard => {
             let (lookup, reuse) = reuse_condition(&mut b, pieces, previous, frag_coord);
-            let kill = b.nested(|b| b.push(Statement::Kill));
-            b.push(Statement::If {
-                condition: reuse,
-                accept: naga::Block::new(),
-                reject: kill,
-            });
+            // naga writes `discard` as OpKill, which ends the invocation:
+            // a derivative after it is undefined in every quad a missed
+            // lane leaves. When the shade takes derivatives, every lane
+            // shades first and the misses are discarded at the end.
+            let shade_derives = stage.writes() != Writes::Cache
+                && super::uniformity::needs_derivatives(module, pieces.shade);
+            if shade_derives {
+                deferred_kill = Some(reuse);
+            } else {
+                let kill = b.nested(|b| b.push(Statement::Kill));
+                b.push(Statement::If {
+                    condition: reuse,
+                    accept: naga::Block::new(),
+                    reject: kill,
+                });
+            }
             let cached = b.member(lookup, 0);
             from_vec4(&mut b, cached, pieces.components)
         }
@@ -294,6 +305,14 @@ pub fn entry_point(
             })
         }
     };
+    if let Some(reuse) = deferred_kill {
+        let kill = b.nested(|b| b.push(Statement::Kill));
+        b.push(Statement::If {
+            condition: reuse,
+            accept: naga::Block::new(),
+            reject: kill,
+        });
+    }
     b.push(Statement::Return { value: Some(value) });
     Ok(b.finish())
 }

@@ -685,6 +685,8 @@ pub fn rewrite(
         })?;
         uniformity::check(&pass, &info)
             .map_err(|err| Refusal::new(format!("internal error: the rewrite left {err}")))?;
+        uniformity::check_kills(&pass)
+            .map_err(|err| Refusal::new(format!("internal error: the rewrite left {err}")))?;
         Ok(PassModule {
             name,
             module: pass,

@@ -8,6 +8,12 @@
 //! branch would pass naga and fail in browsers. This check runs on every
 //! pass before it is written: a violation is a bug in the rewrite, caught
 //! here rather than by an external validator.
+//!
+//! [`check_kills`] is the other half: naga writes WGSL's `discard` as
+//! SPIR-V `OpKill`, which ends the invocation instead of demoting it to a
+//! helper, so a derivative taken after a kill is undefined in every quad
+//! a killed lane leaves. Every validator and lavapipe pass it; this check
+//! walks the IR.
 
 use std::fmt;
 
@@ -50,6 +56,133 @@ pub fn check(module: &Module, info: &ModuleInfo) -> Result<(), Violation> {
         }
     }
     Ok(())
+}
+
+/// A derivative (or implicit-LOD sample) that can run after a `discard`
+/// the rewrite put in a pass's entry point.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AfterKill {
+    pub entry_point: String,
+    pub what: String,
+}
+
+impl fmt::Display for AfterKill {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} after a `discard` in entry point `{}` (naga writes it as OpKill: the derivative is undefined in quads it leaves)",
+            self.what, self.entry_point
+        )
+    }
+}
+
+/// Checks that no derivative can run after a `discard` of a fragment entry
+/// point's own body, there or in what it calls later. The shader's own
+/// `discard`s, inside the helpers copied from it, are the shader's: its
+/// derivatives after them are as defined as in the original.
+pub fn check_kills(module: &Module) -> Result<(), AfterKill> {
+    for entry in &module.entry_points {
+        if entry.stage != naga::ShaderStage::Fragment {
+            continue;
+        }
+        let walk = KillWalk {
+            module,
+            function: &entry.function,
+        };
+        if let (Some(what), _) = walk.block(&entry.function.body, false) {
+            return Err(AfterKill {
+                entry_point: entry.name.clone(),
+                what,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Walks an entry point's body in execution order, knowing whether a lane
+/// of the quad may have been killed before each statement.
+struct KillWalk<'a> {
+    module: &'a Module,
+    function: &'a Function,
+}
+
+impl KillWalk<'_> {
+    /// The first derivative after a kill in `block` (entered after one
+    /// when `killed`), and whether one may have run by its end.
+    fn block(&self, block: &Block, mut killed: bool) -> (Option<String>, bool) {
+        for statement in block.iter() {
+            let found = match *statement {
+                Statement::Kill => {
+                    killed = true;
+                    None
+                }
+                Statement::Emit(ref range) if killed => range
+                    .clone()
+                    .find_map(|h| implicit_derivative(&self.function.expressions[h])),
+                Statement::Call { function, .. }
+                    if killed && needs_derivatives(self.module, function) =>
+                {
+                    Some(format!(
+                        "a call of `{}`, which takes implicit derivatives,",
+                        self.module.functions[function]
+                            .name
+                            .as_deref()
+                            .unwrap_or("?")
+                    ))
+                }
+                Statement::Block(ref inner) => {
+                    let (found, k) = self.block(inner, killed);
+                    killed = k;
+                    found
+                }
+                Statement::If {
+                    ref accept,
+                    ref reject,
+                    ..
+                } => {
+                    // The other lanes of the quad may have taken the arm
+                    // that killed: after the `if`, every lane is suspect.
+                    let (a, ka) = self.block(accept, killed);
+                    let (r, kr) = self.block(reject, killed);
+                    killed = ka || kr;
+                    a.or(r)
+                }
+                Statement::Switch { ref cases, .. } => {
+                    let mut found = None;
+                    let mut any = killed;
+                    for case in cases {
+                        let (f, k) = self.block(&case.body, killed);
+                        found = found.or(f);
+                        any |= k;
+                    }
+                    killed = any;
+                    found
+                }
+                Statement::Loop {
+                    ref body,
+                    ref continuing,
+                    ..
+                } => {
+                    let (f, k) = self.block(body, killed);
+                    let (g, k) = self.block(continuing, k);
+                    // A kill in one iteration comes before the next one's
+                    // start.
+                    let again = if k && !killed {
+                        self.block(body, true).0
+                    } else {
+                        None
+                    };
+                    killed = k;
+                    f.or(g).or(again)
+                }
+                _ => None,
+            };
+            if found.is_some() {
+                return (found, killed);
+            }
+        }
+        (None, killed)
+    }
 }
 
 struct Checker<'a> {
@@ -166,4 +299,44 @@ pub fn needs_derivatives(module: &Module, function: Handle<Function>) -> bool {
         }
     });
     found
+}
+
+#[cfg(test)]
+mod kill_tests {
+    use super::check_kills;
+
+    fn module(body: &str) -> naga::Module {
+        naga::front::wgsl::parse_str(&format!(
+            "@fragment fn fs(@location(0) x: f32) -> @location(0) vec4<f32> {{ {body} }}"
+        ))
+        .unwrap()
+    }
+
+    #[test]
+    fn a_derivative_after_a_discard_is_found() {
+        let found = check_kills(&module(
+            "if x > 0.5 { discard; } let d = dpdx(x); return vec4<f32>(d);",
+        ));
+        assert!(found.unwrap_err().what.contains("dpdx"));
+    }
+
+    #[test]
+    fn a_derivative_before_or_beside_a_discard_is_not() {
+        assert!(check_kills(&module(
+            "let d = dpdx(x); if x > 0.5 { discard; } return vec4<f32>(d);"
+        ))
+        .is_ok());
+        assert!(check_kills(&module(
+            "var d = 0.0; if x > 0.5 { discard; } else { d = fwidth(x); } return vec4<f32>(d);"
+        ))
+        .is_ok());
+    }
+
+    #[test]
+    fn a_discard_in_a_loop_comes_before_the_next_iteration() {
+        let found = check_kills(&module(
+            "var s = 0.0; for (var i = 0; i < 4; i++) { s += dpdy(x * f32(i)); if s > 1.0 { discard; } } return vec4<f32>(s);",
+        ));
+        assert!(found.unwrap_err().what.contains("dpdy"));
+    }
 }
