@@ -288,11 +288,10 @@ pub fn build(inputs: Inputs) -> Plan {
         });
     }
 
-    let original: Vec<Resource> = module
-        .global_variables
-        .iter()
-        .filter_map(|(_, g)| resource(module, g, None))
+    let entries: Vec<usize> = std::iter::once(analysis.entry_index)
+        .chain(vertex.entry_index)
         .collect();
+    let original = entry_resources(module, &entries);
     let previous = vertex
         .twins
         .iter()
@@ -487,6 +486,36 @@ fn used_bindings(module: &Module) -> Vec<[u32; 2]> {
     out
 }
 
+/// The resources the entry points at `entries` use, in the module's
+/// order: what a draw with them binds (a module may declare more, two at
+/// one slot when no entry point uses both).
+fn entry_resources(module: &Module, entries: &[usize]) -> Vec<Resource> {
+    let used = crate::proc::globals_used_by(module, entries);
+    module
+        .global_variables
+        .iter()
+        .filter(|(h, _)| used.contains(h))
+        .filter_map(|(_, g)| resource(module, g, None))
+        .collect()
+}
+
+/// The (group, binding) of every resource the entry points at `entries`
+/// use: what a draw with them binds (the reference pass runs the original
+/// module, which may declare more).
+fn entry_bindings(module: &Module, entries: &[usize]) -> Vec<[u32; 2]> {
+    let mut out: Vec<[u32; 2]> = crate::proc::globals_used_by(module, entries)
+        .into_iter()
+        .filter_map(|g| {
+            module.global_variables[g]
+                .binding
+                .map(|b| [b.group, b.binding])
+        })
+        .collect();
+    out.sort();
+    out.dedup();
+    out
+}
+
 fn resource(
     module: &Module,
     global: &naga::GlobalVariable,
@@ -501,18 +530,28 @@ fn resource(
         naga::AddressSpace::Storage { .. } => "storage",
         _ => match module.types[global.ty].inner {
             TypeInner::Image {
-                class: naga::ImageClass::Depth { .. },
-                ..
-            } => "depth-texture",
-            TypeInner::Image {
                 class: naga::ImageClass::Storage { .. },
                 ..
             } => "storage-texture",
             TypeInner::Image {
-                dim: naga::ImageDimension::Cube,
-                ..
-            } => "cube-texture",
-            TypeInner::Image { .. } => "texture",
+                dim,
+                arrayed,
+                class,
+            } => {
+                let depth = matches!(class, naga::ImageClass::Depth { .. });
+                match (dim, arrayed, depth) {
+                    (naga::ImageDimension::D2, false, false) => "texture",
+                    (naga::ImageDimension::D2, true, false) => "texture-array",
+                    (naga::ImageDimension::Cube, false, false) => "cube-texture",
+                    (naga::ImageDimension::Cube, true, false) => "cube-texture-array",
+                    (naga::ImageDimension::D2, false, true) => "depth-texture",
+                    (naga::ImageDimension::D2, true, true) => "depth-texture-array",
+                    (naga::ImageDimension::Cube, false, true) => "depth-cube-texture",
+                    (naga::ImageDimension::Cube, true, true) => "depth-cube-texture-array",
+                    (naga::ImageDimension::D1, ..) => "texture-1d",
+                    (naga::ImageDimension::D3, ..) => "texture-3d",
+                }
+            }
             TypeInner::Sampler { comparison: true } => "comparison-sampler",
             TypeInner::Sampler { .. } => "sampler",
             _ => "other",
@@ -626,17 +665,13 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
                 load: "clear".into(),
             },
             discards: layout.discards,
-            bindings: used_bindings(module),
+            bindings: entry_bindings(module, &[analysis.entry_index, vertex_index]),
         }],
         classify: None,
         vertex_layout: vertex_layout(module, &vertex_entry.function),
         host_vertex: None,
         bindings: Bindings {
-            original: module
-                .global_variables
-                .iter()
-                .filter_map(|(_, g)| resource(module, g, None))
-                .collect(),
+            original: entry_resources(module, &[analysis.entry_index, vertex_index]),
             previous: Vec::new(),
             cache: Vec::new(),
         },

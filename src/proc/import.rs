@@ -68,6 +68,52 @@ pub fn import_vertex_stage(
     Ok(target.entry_points.len() - 1)
 }
 
+/// Whether two types of one arena lay out alike, whatever their names: a
+/// vertex module and a fragment module declare the same uniform struct,
+/// composed modules under decorated names.
+fn same_layout(
+    types: &naga::UniqueArena<naga::Type>,
+    a: Handle<naga::Type>,
+    b: Handle<naga::Type>,
+) -> bool {
+    use naga::TypeInner as T;
+    if a == b {
+        return true;
+    }
+    match (&types[a].inner, &types[b].inner) {
+        (
+            T::Struct {
+                members: ma,
+                span: sa,
+            },
+            T::Struct {
+                members: mb,
+                span: sb,
+            },
+        ) => {
+            sa == sb
+                && ma.len() == mb.len()
+                && ma
+                    .iter()
+                    .zip(mb)
+                    .all(|(x, y)| x.offset == y.offset && same_layout(types, x.ty, y.ty))
+        }
+        (
+            T::Array {
+                base: ba,
+                size: za,
+                stride: ta,
+            },
+            T::Array {
+                base: bb,
+                size: zb,
+                stride: tb,
+            },
+        ) => za == zb && ta == tb && same_layout(types, *ba, *bb),
+        (x, y) => x == y,
+    }
+}
+
 /// Where the copied resources go.
 enum Placing {
     /// Every binding into this group, at its own binding number plus the
@@ -130,7 +176,7 @@ fn copy_module(
                     .iter()
                     .find(|(_, g)| g.binding.as_ref() == Some(b));
                 if let Some((existing, g)) = shared {
-                    if g.ty != ty || g.space != global.space {
+                    if !same_layout(&target.types, g.ty, ty) || g.space != global.space {
                         return Err(format!(
                             "group {} binding {} is `{}` in the vertex module and `{}` in the fragment module, of different types",
                             b.group,

@@ -85,3 +85,41 @@ fn literal_int(literal: naga::Literal) -> Option<i64> {
         _ => None,
     }
 }
+
+/// The global variables the entry points at `entries` use, directly or
+/// through the functions they call: what a draw with them binds. A module
+/// may declare more (wgpu's `shadow` example binds its lights as storage
+/// for one fragment entry point and as a uniform array for the other, at
+/// the same slot).
+pub fn globals_used_by(
+    module: &naga::Module,
+    entries: &[usize],
+) -> std::collections::HashSet<naga::Handle<naga::GlobalVariable>> {
+    fn visit(
+        module: &naga::Module,
+        function: &naga::Function,
+        used: &mut std::collections::HashSet<naga::Handle<naga::GlobalVariable>>,
+        seen: &mut std::collections::HashSet<naga::Handle<naga::Function>>,
+    ) {
+        for (_, expr) in function.expressions.iter() {
+            if let naga::Expression::GlobalVariable(g) = *expr {
+                used.insert(g);
+            }
+        }
+        each_statement(&function.body, &mut |statement| {
+            if let naga::Statement::Call { function, .. } = *statement {
+                if seen.insert(function) {
+                    visit(module, &module.functions[function], used, seen);
+                }
+            }
+        });
+    }
+    let mut used = std::collections::HashSet::new();
+    let mut seen = std::collections::HashSet::new();
+    for &entry in entries {
+        if let Some(ep) = module.entry_points.get(entry) {
+            visit(module, &ep.function, &mut used, &mut seen);
+        }
+    }
+    used
+}

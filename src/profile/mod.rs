@@ -212,8 +212,13 @@ pub fn profile(
     let steady_state = longest_period.is_none_or(|period| warmup >= period);
     // The scene must provide every uniform the shader reads; the values it
     // gives bound the candidates' values (whether a payload fits f16 here).
-    let uniforms = scene::uniforms::buffers(&shader.module);
-    let storage = scene::storage::buffers(&shader.module);
+    // What the draw binds: the resources of the fragment entry point and
+    // of the vertex entry point drawing with it (a module may declare more).
+    let used = used_bindings(shader, options)?;
+    let mut uniforms = scene::uniforms::buffers(&shader.module);
+    uniforms.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
+    let mut storage = scene::storage::buffers(&shader.module);
+    storage.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
     scene::roles::check(&uniforms, &storage, scene)?;
     scene::uniforms::check(&uniforms, scene).map_err(fail)?;
     let mut analysis = analysis::analyze(
@@ -262,8 +267,13 @@ pub fn profile(
     let dir = scene_path.parent().unwrap_or(Path::new("."));
     let mut textures = HashMap::new();
     for resource in &reference_plan.bindings.original {
+        if !used.contains(&(resource.name.clone(), [resource.group, resource.binding])) {
+            continue;
+        }
         match resource.kind.as_str() {
-            "texture" | "cube-texture" | "depth-texture" => {
+            "texture" | "texture-array" | "cube-texture" | "cube-texture-array"
+            | "depth-texture" | "depth-texture-array" | "depth-cube-texture"
+            | "depth-cube-texture-array" => {
                 let source = scene.textures.get(&resource.name).ok_or_else(|| {
                     fail(format!(
                         "the shader binds texture `{}` (group {}, binding {}) and the scene does not provide it: add [textures.{}]",
@@ -272,7 +282,7 @@ pub fn profile(
                 })?;
                 // A depth texture (a shadow map) is made by the runtime,
                 // every texel at the far plane; RGBA texels cannot fill it.
-                if resource.kind == "depth-texture" && !source.is_far() {
+                if resource.kind.starts_with("depth-") && !source.is_far() {
                     return Err(fail(format!(
                         "texture `{}` is a depth texture: the scene can only give it as `generate = \"far\"`",
                         resource.name
@@ -768,6 +778,32 @@ pub fn profile(
             trace,
         },
     ))
+}
+
+/// The name and (group, binding) of every resource the fragment entry
+/// point chosen by `options` and its vertex entry point use (two resources
+/// may share a slot when no entry point uses both).
+fn used_bindings(
+    shader: &Shader,
+    options: &Options,
+) -> Result<std::collections::HashSet<(String, [u32; 2])>, Error> {
+    let module = &shader.module;
+    let fragment = analysis::fragment_entry(shader, options.entry.as_deref())?;
+    let vertex =
+        crate::rewrite::vertex::vertex_entry(module, fragment, options.vertex_entry.as_deref())
+            .ok();
+    let entries: Vec<usize> = std::iter::once(fragment).chain(vertex).collect();
+    Ok(crate::proc::globals_used_by(module, &entries)
+        .into_iter()
+        .filter_map(|g| {
+            let global = &module.global_variables[g];
+            let b = global.binding?;
+            Some((
+                global.name.clone().unwrap_or_default(),
+                [b.group, b.binding],
+            ))
+        })
+        .collect())
 }
 
 /// An object drawn as several instances needs a shader that tells them

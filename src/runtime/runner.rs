@@ -201,19 +201,16 @@ impl Runner {
         for resource in &plan.bindings.original {
             let key = [resource.group, resource.binding];
             match resource.kind.as_str() {
-                "texture" | "cube-texture" => {
+                kind if sampled_shape(kind).is_some_and(|(depth, _)| !depth) => {
                     let texels = textures
                         .get(&key)
                         .ok_or_else(|| format!("no texels for texture `{}`", resource.name))?;
-                    views.insert(key, upload(gpu, texels, resource.kind == "cube-texture"));
+                    let (_, shape) = sampled_shape(kind).unwrap_or_default();
+                    views.insert(key, upload(gpu, texels, shape));
                 }
-                "depth-texture" => {
-                    let texture = target(device, &resource.name, (64, 64), depth_format);
-                    clear_depth(gpu, &texture, 1.0);
-                    views.insert(
-                        key,
-                        texture.create_view(&wgpu::TextureViewDescriptor::default()),
-                    );
+                kind if sampled_shape(kind).is_some() => {
+                    let (_, shape) = sampled_shape(kind).unwrap_or_default();
+                    views.insert(key, far_depth(gpu, &resource.name, depth_format, shape));
                 }
                 "sampler" | "comparison-sampler" => {
                     let compare = resource.kind == "comparison-sampler";
@@ -430,14 +427,18 @@ impl Runner {
                         )?;
                         entries.push(wgpu::BindGroupEntry { binding, resource });
                     }
-                    bind_groups.push((
-                        group,
-                        device.create_bind_group(&wgpu::BindGroupDescriptor {
-                            label: Some(&pass.name),
-                            layout: &layout,
-                            entries: &entries,
-                        }),
-                    ));
+                    // A plan that binds what the pipeline does not declare
+                    // is an error of the plan, reported, not a panic.
+                    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+                    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some(&pass.name),
+                        layout: &layout,
+                        entries: &entries,
+                    });
+                    if let Some(err) = pollster::block_on(scope.pop()) {
+                        return Err(format!("{}: group {group}: {err}", pass.name));
+                    }
+                    bind_groups.push((group, bind_group));
                 }
                 per_object.push(bind_groups);
             }
@@ -640,21 +641,92 @@ fn clear_depth_in(encoder: &mut wgpu::CommandEncoder, view: &wgpu::TextureView, 
     });
 }
 
-fn clear_depth(gpu: &Gpu, texture: &wgpu::Texture, depth: f32) {
+/// How a texture the shader samples is made: its view's dimension and how
+/// many layers it has.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct SampledShape {
+    dimension: wgpu::TextureViewDimension,
+    layers: u32,
+}
+
+impl Default for SampledShape {
+    fn default() -> Self {
+        SampledShape {
+            dimension: wgpu::TextureViewDimension::D2,
+            layers: 1,
+        }
+    }
+}
+
+/// Layers of the arrays the runtime makes (a shadow map array indexed by
+/// light, say): the same texels, or the far plane, in each.
+const ARRAY_LAYERS: u32 = 8;
+/// Cubes of the cube arrays it makes.
+const CUBE_ARRAY_CUBES: u32 = 2;
+
+/// Whether a plan's texture kind is a depth texture, and its shape; `None`
+/// for what is not a sampled texture.
+fn sampled_shape(kind: &str) -> Option<(bool, SampledShape)> {
+    use wgpu::TextureViewDimension as D;
+    let (depth, rest) = match kind.strip_prefix("depth-") {
+        Some(rest) => (true, rest),
+        None => (false, kind),
+    };
+    let (dimension, layers) = match rest {
+        "texture" => (D::D2, 1),
+        "texture-array" => (D::D2Array, ARRAY_LAYERS),
+        "cube-texture" => (D::Cube, 6),
+        "cube-texture-array" => (D::CubeArray, 6 * CUBE_ARRAY_CUBES),
+        _ => return None,
+    };
+    Some((depth, SampledShape { dimension, layers }))
+}
+
+/// A depth texture of `shape` with every texel at the far plane (a shadow
+/// map that shadows nothing).
+fn far_depth(
+    gpu: &Gpu,
+    label: &str,
+    format: wgpu::TextureFormat,
+    shape: SampledShape,
+) -> wgpu::TextureView {
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: 64,
+            height: 64,
+            depth_or_array_layers: shape.layers,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
     let mut encoder = gpu
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-    clear_depth_in(
-        &mut encoder,
-        &texture.create_view(&wgpu::TextureViewDescriptor::default()),
-        depth,
-    );
+    for layer in 0..shape.layers {
+        let view = texture.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2),
+            base_array_layer: layer,
+            array_layer_count: Some(1),
+            ..wgpu::TextureViewDescriptor::default()
+        });
+        clear_depth_in(&mut encoder, &view, 1.0);
+    }
     gpu.queue.submit([encoder.finish()]);
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(shape.dimension),
+        ..wgpu::TextureViewDescriptor::default()
+    })
 }
 
-/// Uploads RGBA8 texels as a 2D texture, or as the six faces of a cube.
-fn upload(gpu: &Gpu, texels: &Texels, cube: bool) -> wgpu::TextureView {
-    let layers = if cube { 6 } else { 1 };
+/// Uploads RGBA8 texels into every layer of a texture of `shape` (a 2D
+/// texture, the six faces of a cube, an array of either).
+fn upload(gpu: &Gpu, texels: &Texels, shape: SampledShape) -> wgpu::TextureView {
+    let layers = shape.layers;
     let size = wgpu::Extent3d {
         width: texels.width,
         height: texels.height,
@@ -695,11 +767,7 @@ fn upload(gpu: &Gpu, texels: &Texels, cube: bool) -> wgpu::TextureView {
         );
     }
     texture.create_view(&wgpu::TextureViewDescriptor {
-        dimension: Some(if cube {
-            wgpu::TextureViewDimension::Cube
-        } else {
-            wgpu::TextureViewDimension::D2
-        }),
+        dimension: Some(shape.dimension),
         ..wgpu::TextureViewDescriptor::default()
     })
 }

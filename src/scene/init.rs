@@ -22,7 +22,7 @@ use std::fmt::Write as _;
 
 use naga::{ImageClass, ImageDimension, Module, TypeInner};
 
-use super::layout::{is_padding, Member, Shape, SIMULATED};
+use super::layout::{implicit_role, is_padding, Member, Shape};
 use super::roles::{self, Inferred};
 use super::{storage, uniforms};
 
@@ -70,9 +70,28 @@ rotation_degrees_per_frame = [0.0, 0.4, 0.0]
 /// Writes the default scene for `module`, drawn with its vertex entry
 /// point `vertex` (`None` when the module has none: then no matrix role is
 /// inferred).
-pub fn default_scene(module: &Module, shader_name: &str, vertex: Option<usize>) -> SceneInit {
-    let uniform_buffers = uniforms::buffers(module);
-    let storage_buffers = storage::buffers(module);
+pub fn default_scene(
+    module: &Module,
+    shader_name: &str,
+    fragment: usize,
+    vertex: Option<usize>,
+) -> SceneInit {
+    // Only what the draw binds: a module may declare more than its two
+    // entry points use.
+    let entries: Vec<usize> = std::iter::once(fragment).chain(vertex).collect();
+    let used = crate::proc::globals_used_by(module, &entries);
+    // Two resources may share a slot when no entry point uses both.
+    let binds = |name: &str, group: u32, binding: u32| {
+        module.global_variables.iter().any(|(h, g)| {
+            used.contains(&h)
+                && g.name.as_deref().unwrap_or_default() == name
+                && g.binding == Some(naga::ResourceBinding { group, binding })
+        })
+    };
+    let mut uniform_buffers = uniforms::buffers(module);
+    uniform_buffers.retain(|b| binds(&b.name, b.group, b.binding));
+    let mut storage_buffers = storage::buffers(module);
+    storage_buffers.retain(|b| binds(&b.name, b.group, b.binding));
     let inferred = roles::infer(module, vertex, &uniform_buffers, &storage_buffers);
     let mut defaulted = Vec::new();
     let mut text = format!(
@@ -85,7 +104,7 @@ pub fn default_scene(module: &Module, shader_name: &str, vertex: Option<usize>) 
             .iter()
             .find(|i| i.key == key)
             .map(|i| i.role)
-            .or_else(|| SIMULATED.iter().copied().find(|s| *s == member))
+            .or_else(|| implicit_role(member))
     };
 
     if !inferred.is_empty() {
@@ -147,11 +166,14 @@ pub fn default_scene(module: &Module, shader_name: &str, vertex: Option<usize>) 
         }
     }
 
-    for (_, global) in module.global_variables.iter() {
+    for (handle, global) in module.global_variables.iter() {
         let TypeInner::Image { dim, class, .. } = module.types[global.ty].inner else {
             continue;
         };
-        if global.binding.is_none() || matches!(class, ImageClass::Storage { .. }) {
+        if global.binding.is_none()
+            || !used.contains(&handle)
+            || matches!(class, ImageClass::Storage { .. })
+        {
             continue;
         }
         let name = global.name.clone().unwrap_or_default();
@@ -183,7 +205,12 @@ pub fn for_shader(
 ) -> Result<SceneInit, crate::diagnostic::Error> {
     let fragment = crate::analysis::fragment_entry(shader, entry)?;
     let vertex = crate::rewrite::vertex::vertex_entry(&shader.module, fragment, vertex_entry).ok();
-    Ok(default_scene(&shader.module, &shader.file.path, vertex))
+    Ok(default_scene(
+        &shader.module,
+        &shader.file.path,
+        fragment,
+        vertex,
+    ))
 }
 
 /// A TOML key, quoted when it is not a bare key.
@@ -235,7 +262,9 @@ fn neutral(member: &Member) -> Option<String> {
         Shape::F32(4) => "[0.8, 0.8, 0.8, 1.0]".into(),
         Shape::F32(n) => list(vec!["0.8".into(); n as usize]),
         Shape::U32(1) | Shape::I32(1) => (if count { "1" } else { "0" }).into(),
-        Shape::U32(n) | Shape::I32(n) => list(vec!["0".into(); n as usize]),
+        Shape::U32(n) | Shape::I32(n) => {
+            list(vec![(if count { "1" } else { "0" }).into(); n as usize])
+        }
         Shape::Matrix(columns, rows) => list(
             (0..columns)
                 .map(|c| {
@@ -339,7 +368,7 @@ struct Out { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32> }
     #[test]
     fn own_matrix_names_are_inferred_from_the_position_chain() {
         let module = module(OWN_NAMES);
-        let init = default_scene(&module, "own.wgsl", Some(0));
+        let init = default_scene(&module, "own.wgsl", 1, Some(0));
         let roles: Vec<(&str, &str)> = init
             .roles
             .iter()
@@ -363,7 +392,7 @@ struct Out { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32> }
     #[test]
     fn every_other_binding_is_defaulted_and_listed() {
         let module = module(OWN_NAMES);
-        let init = default_scene(&module, "own.wgsl", Some(0));
+        let init = default_scene(&module, "own.wgsl", 1, Some(0));
         assert_eq!(
             init.defaulted,
             [
@@ -399,7 +428,7 @@ struct Out { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32> }
                  out.position = cam.vp * out.world_position;
                  return out;
              }";
-        let init = default_scene(&module(source), "bevy.wgsl", Some(0));
+        let init = default_scene(&module(source), "bevy.wgsl", 0, Some(0));
         let roles: Vec<(&str, &str, bool)> = init
             .roles
             .iter()
@@ -422,7 +451,7 @@ struct Out { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32> }
                  return u_mvp * vec4<f32>(p, 1.0);
              }",
         );
-        let init = default_scene(&one, "one.wgsl", Some(0));
+        let init = default_scene(&one, "one.wgsl", 0, Some(0));
         assert_eq!(init.roles[0].key, "u_mvp");
         assert_eq!(init.roles[0].role, "clip_from_local");
         let three = module(
@@ -432,7 +461,7 @@ struct Out { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32> }
                  return m.proj * m.view * m.model * vec4<f32>(p, 1.0);
              }",
         );
-        let roles: Vec<&str> = default_scene(&three, "three.wgsl", Some(0))
+        let roles: Vec<&str> = default_scene(&three, "three.wgsl", 0, Some(0))
             .roles
             .iter()
             .map(|r| r.role)

@@ -58,6 +58,13 @@ pub const ROLES: &[(&str, &str)] = &[
     ("time", "seconds since the first frame (f32)"),
 ];
 
+/// The role a member takes by its own name (the last part of a flattened
+/// one: `lights[0].light_position` takes `light_position`).
+pub fn implicit_role(member: &str) -> Option<&'static str> {
+    let last = member.rsplit('.').next().unwrap_or(member);
+    SIMULATED.iter().copied().find(|s| *s == last)
+}
+
 /// Whether a member of `shape` can take `role`.
 pub fn fits_role(role: &str, shape: Shape) -> bool {
     match role {
@@ -99,28 +106,52 @@ impl Shape {
 }
 
 /// The members of type `ty` and its size in bytes. A type that is not a
-/// struct is one member at offset 0, named `name`.
+/// struct is one member at offset 0, named `name`. Nested structs and
+/// fixed-size arrays are flattened into the members a scene can write,
+/// named as WGSL reaches them: `material.base_color`, `lights[2].color`
+/// (an array's elements at its stride).
 pub fn members(module: &Module, ty: Handle<Type>, name: &str) -> (u32, Vec<Member>) {
+    let size = module.types[ty].inner.size(module.to_ctx());
+    let mut out = Vec::new();
     match module.types[ty].inner {
-        TypeInner::Struct { ref members, span } => (
-            span,
-            members
-                .iter()
-                .map(|m| Member {
-                    name: m.name.clone().unwrap_or_default(),
-                    offset: m.offset,
-                    shape: shape(&module.types[m.ty].inner),
-                })
-                .collect(),
-        ),
-        ref other => (
-            other.size(module.to_ctx()),
-            vec![Member {
-                name: name.to_string(),
-                offset: 0,
-                shape: shape(other),
-            }],
-        ),
+        TypeInner::Struct { ref members, .. } => {
+            for m in members {
+                let member = m.name.as_deref().unwrap_or_default();
+                flatten(module, m.ty, member, m.offset, &mut out);
+            }
+        }
+        _ => flatten(module, ty, name, 0, &mut out),
+    }
+    (size, out)
+}
+
+/// Arrays longer than this stay one member a scene cannot write.
+const MAX_FLATTENED_ELEMENTS: u32 = 64;
+
+fn flatten(module: &Module, ty: Handle<Type>, name: &str, offset: u32, out: &mut Vec<Member>) {
+    match module.types[ty].inner {
+        TypeInner::Struct { ref members, .. } => {
+            for m in members {
+                let member = m.name.as_deref().unwrap_or_default();
+                let nested = format!("{name}.{member}");
+                flatten(module, m.ty, &nested, offset + m.offset, out);
+            }
+        }
+        TypeInner::Array {
+            base,
+            size: naga::ArraySize::Constant(n),
+            stride,
+        } if n.get() <= MAX_FLATTENED_ELEMENTS => {
+            for i in 0..n.get() {
+                let element = format!("{name}[{i}]");
+                flatten(module, base, &element, offset + i * stride, out);
+            }
+        }
+        ref inner => out.push(Member {
+            name: name.to_string(),
+            offset,
+            shape: shape(inner),
+        }),
     }
 }
 
@@ -345,4 +376,53 @@ pub fn write_value(
     value: &toml::Value,
 ) -> Result<(), String> {
     write_numbers(bytes, base, member, &numbers(value)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nested_structs_and_arrays_are_members_named_as_wgsl_reaches_them() {
+        let module = naga::front::wgsl::parse_str(
+            "struct Light { view_proj: mat4x4<f32>, color: vec4<f32> }
+             struct Lights { count: u32, items: array<Light, 2>, weights: array<vec4<f32>, 2> }
+             @group(0) @binding(0) var<uniform> lights: Lights;
+             @group(0) @binding(1) var<uniform> plain: array<Light, 2>;",
+        )
+        .unwrap();
+        let ty = |name: &str| {
+            module
+                .global_variables
+                .iter()
+                .find(|(_, g)| g.name.as_deref() == Some(name))
+                .unwrap()
+                .1
+                .ty
+        };
+        let (size, flattened) = members(&module, ty("lights"), "lights");
+        let named: Vec<(&str, u32, Shape)> = flattened
+            .iter()
+            .map(|m| (m.name.as_str(), m.offset, m.shape))
+            .collect();
+        assert_eq!(
+            named,
+            [
+                ("count", 0, Shape::U32(1)),
+                ("items[0].view_proj", 16, Shape::Matrix(4, 4)),
+                ("items[0].color", 80, Shape::F32(4)),
+                ("items[1].view_proj", 96, Shape::Matrix(4, 4)),
+                ("items[1].color", 160, Shape::F32(4)),
+                ("weights[0]", 176, Shape::F32(4)),
+                ("weights[1]", 192, Shape::F32(4)),
+            ]
+        );
+        assert_eq!(size, 208);
+        let (_, plain) = members(&module, ty("plain"), "plain");
+        assert_eq!(plain[2].name, "plain[1].view_proj");
+        assert_eq!(
+            implicit_role("items[0].clip_from_world"),
+            Some("clip_from_world")
+        );
+    }
 }

@@ -420,6 +420,12 @@ pub enum VertexSource {
     /// A constant for an integer input (a packed colour all ones, anything
     /// else 0): a mesh has nothing to say about them.
     Integer,
+    /// An integer position (wgpu's examples pack theirs as `vec4<i32>`):
+    /// the mesh's, rounded (w = 1).
+    IntegerPosition,
+    /// An integer normal: the mesh's × 127, rounded, as a snorm8 packing
+    /// gives it.
+    IntegerNormal,
 }
 
 impl VertexSource {
@@ -454,6 +460,8 @@ impl VertexSource {
             attribute.format.starts_with("uint32") || attribute.format.starts_with("sint32");
         match source {
             Some(source) if float => Ok(source),
+            Some(VertexSource::Position) if integer => Ok(VertexSource::IntegerPosition),
+            Some(VertexSource::Normal) if integer => Ok(VertexSource::IntegerNormal),
             _ if integer => Ok(VertexSource::Integer),
             _ => Err(format!(
                 "the scene's mesh cannot feed vertex input @location({}) `{}` ({}): it gives float inputs named like position, normal, tangent, uv (tex_coord) or color, or at locations 0 (position), 1 (normal) and 2 (uv)",
@@ -465,16 +473,26 @@ impl VertexSource {
     /// Whether the source is a constant rather than the mesh's, to list
     /// as defaulted.
     pub fn is_constant(self) -> bool {
-        matches!(self, VertexSource::Colour | VertexSource::Integer)
+        self.constant_note().is_some() || self == VertexSource::Integer
+    }
+
+    fn constant_note(self) -> Option<&'static str> {
+        match self {
+            VertexSource::Colour => Some("1.0 in every component"),
+            VertexSource::IntegerPosition => {
+                Some("the mesh's positions rounded to integers (w = 1)")
+            }
+            VertexSource::IntegerNormal => Some("the mesh's normals × 127, rounded"),
+            _ => None,
+        }
     }
 
     /// The constant's value, for the list of what was defaulted.
     pub fn constant(self, attribute: &crate::plan::VertexAttribute) -> Option<&'static str> {
         match self {
-            VertexSource::Colour => Some("1.0 in every component"),
             VertexSource::Integer if packed_colour(attribute) => Some("0xffffffff (white)"),
             VertexSource::Integer => Some("0"),
-            _ => None,
+            _ => self.constant_note(),
         }
     }
 }
@@ -510,6 +528,16 @@ impl Mesh {
                     VertexSource::Integer => {
                         for _ in 0..width.min(4) {
                             bytes.extend(word.to_le_bytes());
+                        }
+                        continue;
+                    }
+                    VertexSource::IntegerPosition | VertexSource::IntegerNormal => {
+                        let (v, w, scale) = match source {
+                            VertexSource::IntegerPosition => (self.positions[i], 1.0, 1.0),
+                            _ => (self.normals[i], 0.0, 127.0),
+                        };
+                        for c in &(v * scale).extend(w).to_array()[..width.min(4)] {
+                            bytes.extend((c.round() as i32).to_le_bytes());
                         }
                         continue;
                     }

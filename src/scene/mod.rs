@@ -434,14 +434,9 @@ impl Scene {
     /// with: the one `[roles]` gives it, else its own name when that is a
     /// role's; `None` when the scene gives its value.
     pub fn role(&self, binding: &str, member: &str) -> Option<&str> {
-        let key = if binding == member {
-            binding.to_string()
-        } else {
-            format!("{binding}.{member}")
-        };
-        match self.roles.get(&key) {
+        match self.roles.get(&roles::key(binding, member)) {
             Some(role) => Some(role.get_ref().as_str()),
-            None => layout::SIMULATED.iter().copied().find(|s| *s == member),
+            None => layout::implicit_role(member),
         }
     }
 

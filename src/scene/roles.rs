@@ -38,8 +38,14 @@ pub struct Inferred {
 
 /// The `[roles]` key of member `member` of binding `binding`.
 pub fn key(binding: &str, member: &str) -> String {
-    if binding == member {
-        binding.to_string()
+    // A plain uniform's members are named from it (`lights[2].color` of
+    // `var<uniform> lights: array<Light, 4>`).
+    let own = member == binding
+        || member
+            .strip_prefix(binding)
+            .is_some_and(|rest| rest.starts_with('[') || rest.starts_with('.'));
+    if own {
+        member.to_string()
     } else {
         format!("{binding}.{member}")
     }
@@ -212,11 +218,12 @@ fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
     let name = if shape == Shape::Matrix(4, 4) {
         member
     } else {
-        whole
+        whole.clone()
     };
     let has = |words: &[&str]| words.iter().any(|w| name.contains(w));
     let role = if shape == Shape::Matrix(4, 4) {
-        if has(&["light"]) {
+        // A matrix of a light (`s_lights[i].proj`) is the light's.
+        if whole.contains("light") {
             "light_clip_from_world"
         } else if has(&["mvp"]) {
             "clip_from_local"

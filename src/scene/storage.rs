@@ -85,7 +85,25 @@ pub fn buffers(module: &Module) -> Vec<StorageBuffer> {
             continue;
         }
         let name = global.name.clone().unwrap_or_default();
-        let (elements, element, stride) = match module.types[global.ty].inner {
+        // `struct Lights { data: array<Light> }`, as Bevy wraps its
+        // storage arrays, is its array.
+        let ty = match module.types[global.ty].inner {
+            TypeInner::Struct { ref members, .. }
+                if members.len() == 1
+                    && members[0].offset == 0
+                    && matches!(
+                        module.types[members[0].ty].inner,
+                        TypeInner::Array {
+                            size: naga::ArraySize::Dynamic,
+                            ..
+                        }
+                    ) =>
+            {
+                members[0].ty
+            }
+            _ => global.ty,
+        };
+        let (elements, element, stride) = match module.types[ty].inner {
             TypeInner::Array { base, size, stride } => {
                 let elements = match size {
                     naga::ArraySize::Dynamic => Elements::Runtime,
@@ -304,6 +322,17 @@ pub fn fill(
     let instances = scene.objects.get(object).map_or(1, |o| o.instance_count());
     let len = buffer.len(instances);
     let mut bytes = vec![0u8; len as usize * buffer.stride as usize];
+    // An element's model matrix is relative to the object's when a uniform
+    // carries the object's: by its name, or by a role in `[roles]`.
+    let own = |key: &str| {
+        key.strip_prefix(buffer.name.as_str())
+            .is_some_and(|rest| rest.starts_with('.') || rest.starts_with('['))
+    };
+    let relative = buffer.relative
+        || scene
+            .roles
+            .iter()
+            .any(|(key, role)| role.get_ref() == "world_from_local" && !own(key));
     for member in &buffer.members {
         if is_padding(&member.name) {
             continue;
@@ -318,7 +347,7 @@ pub fn fill(
                 .get(element as usize)
                 .copied()
                 .unwrap_or(glam::Mat4::IDENTITY);
-            let world_from_local = if buffer.relative {
+            let world_from_local = if relative {
                 instance
             } else {
                 state.objects[object] * instance

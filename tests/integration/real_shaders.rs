@@ -481,3 +481,105 @@ fn a_shader_using_all_four_bind_groups_gets_the_cache_after_its_last_binding() {
         assert_eq!(report.results.len(), 3);
     }
 }
+
+/// A forward pass and its shadow pass in one module, in the shape of
+/// wgpu's `shadow` example (`corpus/multi/shadowed_lights.wgsl`): each
+/// fragment stage pairs with the vertex stage that returns its struct,
+/// the lights bound at one slot as storage for one and as a uniform array
+/// of structs for the other, a depth texture array, integer positions.
+/// Both profile on the default scene, and Δn = 1 gives the reference.
+#[test]
+fn a_shadow_and_forward_module_profiles_each_fragment_stage_without_a_scene() {
+    let path = root().join("corpus/multi/shadowed_lights.wgsl");
+    let shader = shadecache::front::load(&path).unwrap();
+    for entry in ["fs_main", "fs_main_uniform_lights"] {
+        let analysis = shadecache::analysis::analyze(
+            &shader,
+            &shadecache::analysis::Options {
+                entry: Some(entry.into()),
+                ..shadecache::analysis::Options::default()
+            },
+        )
+        .unwrap();
+        let node = &analysis.candidates[0];
+        for variant in Variant::ALL {
+            let rewritten =
+                rewrite::rewrite(&shader, &analysis, node, variant, &Options::default())
+                    .unwrap_or_else(|r| panic!("{entry} {variant}: {r}"));
+            assert!(rewritten
+                .plan
+                .passes
+                .iter()
+                .all(|p| p.vertex_entry == "vs_main"));
+            // One resource at the lights' slot: the one this stage reads.
+            let at_slot: Vec<&str> = rewritten
+                .plan
+                .bindings
+                .original
+                .iter()
+                .filter(|r| [r.group, r.binding] == [0, 1])
+                .map(|r| r.kind.as_str())
+                .collect();
+            let expected = if entry == "fs_main" {
+                "storage"
+            } else {
+                "uniform"
+            };
+            assert_eq!(at_slot, [expected], "{entry}");
+            assert!(rewritten
+                .plan
+                .bindings
+                .original
+                .iter()
+                .any(|r| r.kind == "depth-texture-array"));
+        }
+        let Some(_) = crate::gpu::gpu() else { continue };
+        let scene = shadecache::scene::Scene::default_for(&shader, Some(entry), None).unwrap();
+        // Integer positions are fed the mesh's, rounded; the uniform
+        // array's elements are written member by member.
+        assert!(scene.defaulted.iter().all(|d| !d.contains("cannot")));
+        let options = ProfileOptions {
+            entry: Some(entry.into()),
+            nodes: Nodes::Ids(vec![node.node.id.clone()]),
+            refresh_periods: vec![1],
+            refresh_quads: vec![1],
+            cache_formats: vec![CacheFormat::Rgba32float],
+            reconstructions: vec![Reconstruction::Bilinear],
+            frames: Some(2),
+            warmup: Some(1),
+            size: Some([48, 48]),
+            ..ProfileOptions::default()
+        };
+        let (report, _) = shadecache::profile::profile(
+            &shader,
+            &scene,
+            std::path::Path::new("default scene"),
+            &options,
+            &mut shadecache::profile::Quiet,
+        )
+        .unwrap_or_else(|e| panic!("{entry}: {}", e.render()));
+        assert!(
+            report
+                .defaulted
+                .iter()
+                .any(|d| d.contains("`position` = the mesh's positions rounded")),
+            "{:?}",
+            report.defaulted
+        );
+        for row in &report.results {
+            // Δn = 1 refreshes every drawn pixel.
+            assert!(
+                row.refresh_rate > 0.5,
+                "{entry} {}: nothing drawn ({})",
+                row.variant,
+                row.refresh_rate
+            );
+            assert!(
+                row.max_abs_error <= 1.0 / 255.0 + 1e-9,
+                "{entry} {}: {}",
+                row.variant,
+                row.max_abs_error
+            );
+        }
+    }
+}
