@@ -214,6 +214,9 @@ impl Color {
 pub struct Error {
     pub file: Option<Arc<SourceFile>>,
     pub diagnostic: Diagnostic,
+    /// A bug in shadecache rather than a fault of the input (the CLI exits
+    /// 2 for it, 1 otherwise).
+    pub internal: bool,
 }
 
 impl Error {
@@ -222,6 +225,16 @@ impl Error {
         Error {
             file: None,
             diagnostic,
+            internal: false,
+        }
+    }
+
+    /// A bug in shadecache: what went wrong, to report with the input.
+    pub fn internal(diagnostic: Diagnostic) -> Self {
+        Error {
+            file: None,
+            diagnostic,
+            internal: true,
         }
     }
 
@@ -230,6 +243,7 @@ impl Error {
         Error {
             file: Some(file),
             diagnostic,
+            internal: false,
         }
     }
 

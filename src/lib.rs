@@ -6,13 +6,25 @@
 //! "An Improved Shading Cache for Modern GPUs", 2008), and estimates what
 //! each would save.
 //!
-//! The modules follow the pipeline, WGSL → IR → candidates:
+//! The modules follow the pipeline, WGSL → IR → candidates → variants →
+//! plans → runs → reports:
 //!
-//! * [`front`]: read, parse and validate a shader (naga's WGSL front end);
-//! * [`proc`]: facts about the IR that several stages share;
+//! * [`front`]: read, parse and validate a shader (naga's WGSL front end),
+//!   compose it from naga_oil modules, give a fragment-only module its
+//!   vertex stage;
+//! * [`proc`]: facts about the IR that several stages share (operands,
+//!   placement, reaching definitions), and copying IR between modules;
 //! * [`cost`]: the static cost model;
 //! * [`analysis`]: the expression graph, the candidates and why the others
 //!   are rejected;
+//! * [`rewrite`]: one candidate and one variant into cache passes, on IR;
+//! * [`plan`]: `plan.json`, how a host runs a variant's passes;
+//! * [`back`]: writing the passes with naga's back ends;
+//! * [`build`]: the same from a build script;
+//! * [`scene`]: what a profile renders, the default scene, roles;
+//! * [`runtime`]: wgpu pipelines from a plan, and running it frame by frame;
+//! * [`profile`]: measuring variants against the unmodified shader;
+//! * [`report`]: the report's JSON, HTML and pictures;
 //! * [`diagnostic`]: the error type and its codespan rendering;
 //! * [`reprojection`]: the cache shader's reprojection arithmetic on the CPU,
 //!   for tests and reasoning (kept in step with `shaders/cache.wgsl`).

@@ -3,7 +3,7 @@
 //!
 //! Everything downstream works on a [`Shader`]: the source text (kept for
 //! spans, ids and diagnostics), the naga [`Module`](naga::Module) and the
-//! [`ModuleInfo`](naga::valid::ModuleInfo) validation produced (expression
+//! [`ModuleInfo`] validation produced (expression
 //! types, uniformity, reference counts). A shader that reaches the later
 //! stages is known to be valid WGSL as far as naga can tell.
 //!

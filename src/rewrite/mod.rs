@@ -250,6 +250,13 @@ impl Refusal {
             reason: reason.into(),
         }
     }
+
+    /// Whether the refusal is a bug of the rewrite (what it built did not
+    /// validate, or broke a rule it checks) rather than a limit of what it
+    /// supports.
+    pub fn is_internal(&self) -> bool {
+        self.reason.starts_with("internal error")
+    }
 }
 
 impl fmt::Display for Refusal {

@@ -631,3 +631,24 @@ fn fs(in: VertexOutput) -> @location(0) vec4<f32> {
         assert_eq!(kept.cache.format_note, None);
     }
 }
+
+/// `--variant` takes a list as every other knob does: two of the three
+/// variants are written, each in its own folder, the third not.
+#[test]
+fn variant_takes_a_list() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = shadecache([
+        "rewrite".as_ref(),
+        "corpus/noise_marble.wgsl".as_ref(),
+        "--node".as_ref(),
+        "nb0c12cc4".as_ref(),
+        "--variant".as_ref(),
+        "two-pass,three-pass".as_ref(),
+        "--out".as_ref(),
+        dir.path().as_os_str(),
+    ] as [&std::ffi::OsStr; 8]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(dir.path().join("two-pass/plan.json").is_file());
+    assert!(dir.path().join("three-pass/plan.json").is_file());
+    assert!(!dir.path().join("one-pass").exists());
+}

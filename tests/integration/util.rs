@@ -91,16 +91,49 @@ pub struct TintMessage {
     pub message: String,
 }
 
-/// Validates WGSL files with Tint (Chrome's compiler) through
-/// `tests/tint/validate.mjs`. Panics with setup instructions when the
-/// harness is not installed: a missing validator must fail the test, not
-/// skip it.
-pub fn tint_validate(files: &[PathBuf]) -> Vec<TintResult> {
+/// The Tint harness (`tests/tint`), installed on first use: `npm ci`
+/// installs the pinned `webgpu` package into `tests/tint/node_modules`
+/// (ignored by git), once per test run however many tests ask at the same
+/// time. Panics naming what is missing when node or npm are absent: a
+/// missing validator must fail the test, not skip it.
+fn tint_harness() -> PathBuf {
+    static INSTALLED: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
     let harness = root().join("tests/tint");
-    assert!(
-        harness.join("node_modules/webgpu").is_dir(),
-        "the Tint harness is not installed: run `npm ci --prefix tests/tint` (needs node and npm)"
-    );
+    let installed = || harness.join("node_modules/webgpu").is_dir();
+    let outcome = INSTALLED.get_or_init(|| {
+        if installed() {
+            return Ok(());
+        }
+        for tool in ["node", "npm"] {
+            if Command::new(tool).arg("--version").output().is_err() {
+                return Err(format!(
+                    "the Tint harness needs Node.js and npm, and `{tool}` is not on PATH: install them (Debian: apt-get install nodejs npm)"
+                ));
+            }
+        }
+        let output = Command::new("npm")
+            .args(["ci", "--prefix", "tests/tint", "--no-audit", "--no-fund"])
+            .current_dir(root())
+            .output()
+            .map_err(|err| format!("cannot run npm: {err}"))?;
+        if !output.status.success() || !installed() {
+            return Err(format!(
+                "`npm ci --prefix tests/tint` failed (it needs the npm registry once):\n{}",
+                stderr(&output)
+            ));
+        }
+        Ok(())
+    });
+    if let Err(message) = outcome {
+        panic!("{message}");
+    }
+    harness
+}
+
+/// Validates WGSL files with Tint (Chrome's compiler) through
+/// `tests/tint/validate.mjs`, installing the harness on first use.
+pub fn tint_validate(files: &[PathBuf]) -> Vec<TintResult> {
+    let harness = tint_harness();
     let mut child = Command::new("node")
         .arg(harness.join("validate.mjs"))
         .arg("-")

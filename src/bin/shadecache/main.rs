@@ -62,7 +62,7 @@ fn main() -> ExitCode {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(err)) => {
             err.emit_to_stderr(color);
-            ExitCode::from(1)
+            ExitCode::from(if err.internal { 2 } else { 1 })
         }
         Err(message) => {
             shadecache::diagnostic::emit_to_stderr(

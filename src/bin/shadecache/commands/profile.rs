@@ -8,7 +8,6 @@ use shadecache::back::{self, Language};
 use shadecache::diagnostic::{Color, Diagnostic, Error};
 use shadecache::profile::{self, Budget, Nodes, Options, Progress};
 use shadecache::report;
-use shadecache::rewrite::Variant;
 use shadecache::scene::Scene;
 
 use super::rewrite::{CacheFormatArg, ReconstructionArg, VariantArg};
@@ -29,9 +28,9 @@ pub struct Args {
     #[arg(long, value_name = "all|top:N|ID,...", default_value = "top:3")]
     pub nodes: String,
 
-    /// Which variants to run.
-    #[arg(long, value_enum, default_value_t = VariantArg::All)]
-    pub variant: VariantArg,
+    /// Which variants to run, separated by commas.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "all")]
+    pub variant: Vec<VariantArg>,
 
     /// Refresh periods Δn to measure, separated by commas (0 turns refresh
     /// off; at most 65535) [default: 32; with --sweep 4,8,16,32,64].
@@ -200,12 +199,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         entry: args.stages.entry.clone(),
         vertex_entry: args.stages.vertex_entry.clone(),
         nodes: parse_nodes(&args.nodes)?,
-        variants: match args.variant {
-            VariantArg::OnePass => vec![Variant::OnePass],
-            VariantArg::TwoPass => vec![Variant::TwoPass],
-            VariantArg::ThreePass => vec![Variant::ThreePass],
-            VariantArg::All => Variant::ALL.to_vec(),
-        },
+        variants: VariantArg::variants(&args.variant),
         refresh_periods: args.refresh_period.unwrap_or(defaults.refresh_periods),
         refresh_quads: args
             .refresh_quad

@@ -25,9 +25,9 @@ pub struct Args {
     #[arg(long)]
     pub all_nodes: bool,
 
-    /// Which variant to write.
-    #[arg(long, value_enum, default_value_t = VariantArg::All)]
-    pub variant: VariantArg,
+    /// Which variants to write, separated by commas.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "all")]
+    pub variant: Vec<VariantArg>,
 
     /// Δn: every pixel is recomputed at least once every N frames.
     #[arg(long, value_name = "N", default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=shadecache::rewrite::MAX_REFRESH_PERIOD as i64))]
@@ -76,6 +76,27 @@ pub enum VariantArg {
     TwoPass,
     ThreePass,
     All,
+}
+
+impl VariantArg {
+    /// The variants a `--variant` list names, each once, in its order.
+    pub fn variants(list: &[VariantArg]) -> Vec<Variant> {
+        let mut out: Vec<Variant> = Vec::new();
+        for arg in list {
+            let named: &[Variant] = match arg {
+                VariantArg::OnePass => &[Variant::OnePass],
+                VariantArg::TwoPass => &[Variant::TwoPass],
+                VariantArg::ThreePass => &[Variant::ThreePass],
+                VariantArg::All => &Variant::ALL,
+            };
+            for &variant in named {
+                if !out.contains(&variant) {
+                    out.push(variant);
+                }
+            }
+        }
+        out
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -167,12 +188,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         EmitArg::Msl => Language::Msl,
         EmitArg::Hlsl => Language::Hlsl,
     };
-    let variants: Vec<Variant> = match args.variant {
-        VariantArg::OnePass => vec![Variant::OnePass],
-        VariantArg::TwoPass => vec![Variant::TwoPass],
-        VariantArg::ThreePass => vec![Variant::ThreePass],
-        VariantArg::All => Variant::ALL.to_vec(),
-    };
+    let variants = VariantArg::variants(&args.variant);
 
     let nodes = analysis.select(
         &shader.file,
@@ -182,6 +198,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         },
     )?;
     let mut refused = 0;
+    let mut internal = 0;
     let mut written = 0;
     for candidate in &nodes {
         for &variant in &variants {
@@ -197,6 +214,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
                 }
                 Err(refusal) => {
                     refused += 1;
+                    internal += usize::from(refusal.is_internal());
                     diagnostic::emit_to_stderr(
                         None,
                         &Diagnostic::new(
@@ -217,6 +235,12 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         if written == 1 { "" } else { "s" },
         args.out.display()
     ))?;
+    if internal > 0 {
+        return Err(Error::internal(Diagnostic::error(format!(
+            "{internal} variant{} failed inside the rewrite (see the warnings above): this is a bug in shadecache, please report it with the shader",
+            if internal == 1 { "" } else { "s" }
+        ))));
+    }
     if refused > 0 && args.node.is_some() {
         return Err(Error::plain(Diagnostic::error(format!(
             "{refused} variant{} of node {} refused",
