@@ -175,7 +175,24 @@ pub fn write_variant(
     };
     // Render everything before touching the file system.
     let mut files = render_variant(rewritten, language)?;
-    let mut plan = serde_json::to_string_pretty(&rewritten.plan)
+    // The plan names the files written: `pass1.spv`, or for GLSL one per
+    // stage.
+    let mut named = rewritten.plan.clone();
+    for pass in named.passes.iter_mut().chain(named.classify.as_mut()) {
+        let own: Vec<String> = files
+            .iter()
+            .map(|(name, _)| name.clone())
+            .filter(|name| {
+                name.strip_prefix(pass.name.as_str())
+                    .is_some_and(|rest| rest.starts_with('.'))
+            })
+            .collect();
+        if let Some(first) = own.first() {
+            pass.shader = first.clone();
+        }
+        pass.stage_shaders = if own.len() > 1 { own } else { Vec::new() };
+    }
+    let mut plan = serde_json::to_string_pretty(&named)
         .map_err(|err| Error::plain(Diagnostic::error(format!("cannot write the plan: {err}"))))?;
     plan.push('\n');
     files.push(("plan.json".into(), plan.into_bytes()));

@@ -82,8 +82,13 @@ pub struct Pass {
     pub name: String,
     /// What the pass does, in words.
     pub role: String,
-    /// The WGSL file (relative to the plan).
+    /// The shader file (relative to the plan): WGSL unless `rewrite --emit`
+    /// chose another language; for GLSL, the vertex stage's file.
     pub shader: String,
+    /// For a language with one file per stage (GLSL): every file of the
+    /// pass, vertex stage first. Empty otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stage_shaders: Vec<String>,
     pub vertex_entry: String,
     pub fragment_entry: String,
     pub color_targets: Vec<ColorTarget>,
@@ -274,6 +279,7 @@ pub fn build(inputs: Inputs) -> Plan {
             name: pass.name.clone(),
             role: role(*stage).into(),
             shader: format!("{}.wgsl", pass.name),
+            stage_shaders: Vec::new(),
             vertex_entry: vertex_name.clone(),
             fragment_entry: entry.name.clone(),
             color_targets,
@@ -362,6 +368,7 @@ pub fn build(inputs: Inputs) -> Plan {
             name: classify.name.clone(),
             role: role(Stage::Classify).into(),
             shader: format!("{}.wgsl", classify.name),
+            stage_shaders: Vec::new(),
             vertex_entry: vertex_name.clone(),
             fragment_entry: entry.name.clone(),
             color_targets: vec![ColorTarget {
@@ -647,6 +654,7 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
             name: "reference".into(),
             role: "the unmodified shader".into(),
             shader: "reference.wgsl".into(),
+            stage_shaders: Vec::new(),
             vertex_entry: vertex_entry.name.clone(),
             fragment_entry: entry.name.clone(),
             color_targets: fragment::output_locations(module, result)

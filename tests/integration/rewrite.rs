@@ -289,6 +289,7 @@ fn other_languages_go_through_naga_back_ends() {
         ("spv", "pass1.spv"),
         ("msl", "pass1.metal"),
         ("hlsl", "pass1.hlsl"),
+        ("glsl", "pass1.frag.glsl"),
     ] {
         let dir = tempfile::tempdir().unwrap();
         let output = shadecache([
@@ -311,7 +312,27 @@ fn other_languages_go_through_naga_back_ends() {
                 .unwrap_or(false),
             "{emit}: no {suffix}"
         );
-        assert!(dir.path().join("plan.json").is_file());
+        // The plan names the files written.
+        let plan: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join("plan.json")).unwrap()).unwrap();
+        for pass in plan["passes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .chain([&plan["classify"]])
+        {
+            let shader = pass["shader"].as_str().unwrap();
+            assert!(
+                dir.path().join(shader).is_file(),
+                "{emit}: plan names {shader}"
+            );
+            for file in pass["stage_shaders"].as_array().into_iter().flatten() {
+                assert!(
+                    dir.path().join(file.as_str().unwrap()).is_file(),
+                    "{emit}: {file}"
+                );
+            }
+        }
     }
 }
 
