@@ -116,19 +116,8 @@ impl KillWalk<'_> {
                     killed = true;
                     None
                 }
-                Statement::Emit(ref range) if killed => range
-                    .clone()
-                    .find_map(|h| implicit_derivative(&self.function.expressions[h])),
-                Statement::Call { function, .. }
-                    if killed && needs_derivatives(self.module, function) =>
-                {
-                    Some(format!(
-                        "a call of `{}`, which takes implicit derivatives,",
-                        self.module.functions[function]
-                            .name
-                            .as_deref()
-                            .unwrap_or("?")
-                    ))
+                Statement::Emit(_) | Statement::Call { .. } if killed => {
+                    derivative_in(self.module, self.function, statement)
                 }
                 Statement::Block(ref inner) => {
                     let (found, k) = self.block(inner, killed);
@@ -201,19 +190,8 @@ impl Checker<'_> {
     fn block(&self, block: &Block, divergent: bool) -> Option<String> {
         for statement in block.iter() {
             let found = match *statement {
-                Statement::Emit(ref range) if divergent => range
-                    .clone()
-                    .find_map(|h| implicit_derivative(&self.function.expressions[h])),
-                Statement::Call { function, .. }
-                    if divergent && needs_derivatives(self.module, function) =>
-                {
-                    Some(format!(
-                        "a call of `{}`, which takes implicit derivatives,",
-                        self.module.functions[function]
-                            .name
-                            .as_deref()
-                            .unwrap_or("?")
-                    ))
+                Statement::Emit(_) | Statement::Call { .. } if divergent => {
+                    derivative_in(self.module, self.function, statement)
                 }
                 Statement::Block(ref inner) => self.block(inner, divergent),
                 Statement::If {
@@ -256,6 +234,21 @@ impl Checker<'_> {
             }
         }
         None
+    }
+}
+
+/// Describes what `statement` itself runs that takes implicit derivatives:
+/// an expression it emits, or a call of a function that takes them.
+fn derivative_in(module: &Module, function: &Function, statement: &Statement) -> Option<String> {
+    match *statement {
+        Statement::Emit(ref range) => range
+            .clone()
+            .find_map(|h| implicit_derivative(&function.expressions[h])),
+        Statement::Call { function: f, .. } if needs_derivatives(module, f) => Some(format!(
+            "a call of `{}`, which takes implicit derivatives,",
+            module.functions[f].name.as_deref().unwrap_or("?")
+        )),
+        _ => None,
     }
 }
 
