@@ -95,8 +95,8 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
     for (&(start, end), &expr) in &by_span {
         let text = &source[start..end];
         // Spans come in order of start, then end: nested prefixes hash on.
-        let (key, state) = hasher.node(start, end);
-        let occurrence = seen.entry(key).or_insert(0);
+        let state = hasher.node(start, end);
+        let occurrence = seen.entry(state).or_insert(0);
         let node = Node {
             id: id::PrefixHasher::id(state, *occurrence),
             span: SourceSpan {

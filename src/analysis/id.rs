@@ -8,79 +8,32 @@
 
 use std::hash::Hasher;
 
-/// Collapses every run of whitespace to one space, so reflowing an
-/// expression over lines does not change its id (what
-/// [`write_normalized`] streams).
-#[cfg(test)]
-fn normalize(text: &str) -> String {
-    text.split_whitespace().collect::<Vec<_>>().join(" ")
-}
-
-/// Feeds `hasher` the bytes of [`normalize`]`(text)` without building it:
-/// the nodes of a long expression are prefixes of each other, and a copy
-/// of each would make naming them quadratic in memory.
-fn write_normalized(hasher: &mut impl Hasher, text: &str) {
-    let mut started = false;
-    let mut space = false;
-    let mut word_start = None;
-    for (i, c) in text.char_indices() {
-        if c.is_whitespace() {
-            if let Some(start) = word_start.take() {
-                hasher.write(&text.as_bytes()[start..i]);
-            }
-            space = started;
-        } else if word_start.is_none() {
-            if space {
-                hasher.write(b" ");
-                space = false;
-            }
-            started = true;
-            word_start = Some(i);
-        }
-    }
-    if let Some(start) = word_start {
-        hasher.write(&text.as_bytes()[start..]);
-    }
-}
-
-/// A key equal for texts equal up to whitespace (what [`node_id`] counts
-/// occurrences of), without keeping the text.
-#[cfg(test)]
-fn text_key(text: &str) -> u64 {
-    let mut hasher = fnv::FnvHasher::default();
-    write_normalized(&mut hasher, text);
-    hasher.finish()
-}
-
 /// The id of the `occurrence`-th (0-based, in source order) node with text
 /// `text` in entry point `entry`: `n` and eight hex digits.
 pub fn node_id(entry: &str, text: &str, occurrence: usize) -> String {
-    // FNV-1a is fixed by its specification, unlike std's SipHash keys or
-    // `Hash` impls, so the same input hashes the same everywhere. It
-    // hashes byte by byte, so feeding the normalized text in pieces hashes
-    // it as a whole.
-    let mut hasher = fnv::FnvHasher::default();
-    hasher.write(entry.as_bytes());
-    hasher.write(&[0]);
-    write_normalized(&mut hasher, text);
-    hasher.write(&[0]);
-    hasher.write(&(occurrence as u64).to_le_bytes());
-    let hash = hasher.finish();
-    format!("n{:08x}", (hash ^ (hash >> 32)) as u32)
+    let state = PrefixHasher::new(text, entry).node(0, text.len());
+    PrefixHasher::id(state, occurrence)
 }
 
-/// Ids and keys of nodes that start at the same byte, longest last,
-/// hashed in one pass: the partial sums of `a + b + c + ...` are prefixes
-/// of each other, and hashing each from its start is quadratic in the
-/// length of the sum. FNV-1a hashes byte by byte, so hashing on from where
-/// the previous node ended gives the same value as hashing anew.
+/// Hashes node texts for their ids: FNV-1a (fixed by its specification,
+/// unlike std's SipHash keys or `Hash` impls, so the same input hashes
+/// the same everywhere) of the entry point's name, a zero byte, the text
+/// with every run of whitespace collapsed to one space (reflowing an
+/// expression over lines keeps its id), a zero byte and the occurrence.
+///
+/// Nodes that start at the same byte are hashed in one pass, longest last:
+/// the partial sums of `a + b + c + ...` are prefixes of each other, and
+/// hashing each from its start is quadratic in the length of the sum.
+/// FNV-1a hashes byte by byte, so hashing on from where the previous node
+/// ended gives the same value as hashing anew.
 pub struct PrefixHasher<'a> {
     text: &'a str,
     entry: &'a str,
     start: usize,
     at: usize,
-    id: fnv::FnvHasher,
-    key: fnv::FnvHasher,
+    hasher: fnv::FnvHasher,
+    /// Whether a non-space has been hashed, and whether a space is owed
+    /// before the next one (trailing spaces are not part of the text).
     started: bool,
     space: bool,
 }
@@ -90,10 +43,9 @@ impl<'a> PrefixHasher<'a> {
         let mut hasher = PrefixHasher {
             text,
             entry,
-            start: usize::MAX,
-            at: usize::MAX,
-            id: fnv::FnvHasher::default(),
-            key: fnv::FnvHasher::default(),
+            start: 0,
+            at: 0,
+            hasher: fnv::FnvHasher::default(),
             started: false,
             space: false,
         };
@@ -104,18 +56,18 @@ impl<'a> PrefixHasher<'a> {
     fn restart(&mut self, start: usize) {
         self.start = start;
         self.at = start;
-        self.id = fnv::FnvHasher::default();
-        self.id.write(self.entry.as_bytes());
-        self.id.write(&[0]);
-        self.key = fnv::FnvHasher::default();
+        self.hasher = fnv::FnvHasher::default();
+        self.hasher.write(self.entry.as_bytes());
+        self.hasher.write(&[0]);
         self.started = false;
         self.space = false;
     }
 
-    /// The [`text_key`] of `text[start..end]` and the state of the id's hash, which [`Self::id`]
-    /// finishes, hashing on from the last node when it started at `start`
-    /// and ended before `end`.
-    pub fn node(&mut self, start: usize, end: usize) -> (u64, u64) {
+    /// The hash so far of `text[start..end]`, which [`Self::id`] finishes;
+    /// equal for texts equal up to whitespace (what occurrences count).
+    /// Hashes on from the last node when it started at `start` and ended
+    /// before `end`.
+    pub fn node(&mut self, start: usize, end: usize) -> u64 {
         if start != self.start || end < self.at {
             self.restart(start);
         }
@@ -123,30 +75,25 @@ impl<'a> PrefixHasher<'a> {
             if c.is_whitespace() {
                 self.space = self.started;
             } else {
-                let mut bytes = [0; 4];
-                let bytes = c.encode_utf8(&mut bytes).as_bytes();
                 if self.space {
-                    self.id.write(b" ");
-                    self.key.write(b" ");
+                    self.hasher.write(b" ");
                     self.space = false;
                 }
-                self.id.write(bytes);
-                self.key.write(bytes);
+                self.hasher.write(c.encode_utf8(&mut [0; 4]).as_bytes());
                 self.started = true;
             }
         }
         self.at = end;
-        (self.key.finish(), self.id.finish())
+        self.hasher.finish()
     }
 
-    /// The id of a node whose text hashed to `state`, at `occurrence`: what
-    /// [`node_id`] gives.
+    /// The id of a node whose text hashed to `state`, at `occurrence`.
     pub fn id(state: u64, occurrence: usize) -> String {
         // FNV's state is its hash so far: hashing on from it.
-        let mut state = fnv::FnvHasher::with_key(state);
-        state.write(&[0]);
-        state.write(&(occurrence as u64).to_le_bytes());
-        let hash = state.finish();
+        let mut hasher = fnv::FnvHasher::with_key(state);
+        hasher.write(&[0]);
+        hasher.write(&(occurrence as u64).to_le_bytes());
+        let hash = hasher.finish();
         format!("n{:08x}", (hash ^ (hash >> 32)) as u32)
     }
 }
@@ -188,14 +135,29 @@ mod tests {
         assert_eq!(node_id("fs_main", "a + b", 0), "n8425b9ad");
     }
 
+    /// The id as its definition states it, hashing the collapsed text in
+    /// one piece.
+    fn reference_id(entry: &str, text: &str, occurrence: usize) -> String {
+        let normalized = text.split_whitespace().collect::<Vec<_>>().join(" ");
+        let mut hasher = fnv::FnvHasher::default();
+        hasher.write(entry.as_bytes());
+        hasher.write(&[0]);
+        hasher.write(normalized.as_bytes());
+        hasher.write(&[0]);
+        hasher.write(&(occurrence as u64).to_le_bytes());
+        let hash = hasher.finish();
+        format!("n{:08x}", (hash ^ (hash >> 32)) as u32)
+    }
+
     #[test]
     fn streamed_normalization_hashes_as_the_normalized_text() {
         for text in ["a + b", "  a  +\n\t b ", "x", "", " \n ", "f(a,\u{a0}b)  "] {
-            let mut whole = fnv::FnvHasher::default();
-            whole.write(normalize(text).as_bytes());
-            assert_eq!(text_key(text), whole.finish(), "{text:?}");
+            assert_eq!(
+                node_id("fs", text, 2),
+                reference_id("fs", text, 2),
+                "{text:?}"
+            );
         }
-        assert_eq!(text_key("a  + b"), text_key("a +\nb"));
     }
 
     #[test]
@@ -209,15 +171,17 @@ mod tests {
             .collect();
         // In order, out of order (a restart), and from another start.
         for &end in ends.iter().chain(&[ends[0], ends[2]]) {
-            let (key, state) = hasher.node(start, end);
-            assert_eq!(key, text_key(&text[start..end]));
+            let state = hasher.node(start, end);
             assert_eq!(
                 PrefixHasher::id(state, 1),
-                node_id("fs_main", &text[start..end], 1)
+                reference_id("fs_main", &text[start..end], 1)
             );
         }
-        let (key, _) = hasher.node(start + 4, ends[2]);
-        assert_eq!(key, text_key(&text[start + 4..ends[2]]));
+        let state = hasher.node(start + 4, ends[2]);
+        assert_eq!(
+            PrefixHasher::id(state, 0),
+            reference_id("fs_main", &text[start + 4..ends[2]], 0)
+        );
     }
 
     #[test]

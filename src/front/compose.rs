@@ -115,9 +115,9 @@ struct Found {
     imports: Vec<String>,
 }
 
-/// Reads and composes the shader at `path` with `composition`.
-pub fn load_composed(path: &Path, composition: &Composition) -> Result<Shader, Error> {
-    let top = Arc::new(read_source(path)?);
+/// Composes the shader read into `top` with `composition`.
+pub fn compose(top: SourceFile, composition: &Composition) -> Result<Shader, Error> {
+    let top = Arc::new(top);
     let mut found: BTreeMap<String, Found> = BTreeMap::new();
     for dir in &composition.import_paths {
         collect(dir, &mut found)?;
@@ -138,7 +138,7 @@ pub fn load_composed(path: &Path, composition: &Composition) -> Result<Shader, E
         )
         .map_err(|err| err.unwrap_or_else(|| not_found(&top, &import.import, composition)))?;
     }
-    let module = composer
+    let mut module = composer
         .make_naga_module(NagaModuleDescriptor {
             source: &top.text,
             file_path: &top.path,
@@ -147,7 +147,6 @@ pub fn load_composed(path: &Path, composition: &Composition) -> Result<Shader, E
             additional_imports: &[],
         })
         .map_err(|err| composer_error(&composer, &err))?;
-    let mut module = module;
     undecorate(&mut module);
     let info = super::validate(&module).map_err(|err| {
         Error::in_file(
@@ -159,13 +158,15 @@ pub fn load_composed(path: &Path, composition: &Composition) -> Result<Shader, E
             .with_label(0..0, "composed from this shader"),
         )
     })?;
-    let text = crate::back::wgsl_text(&module, &info).map_err(|err| {
-        Error::in_file(
-            top.clone(),
-            Diagnostic::error(format!("cannot write the composed module: {err}"))
-                .with_label(0..0, "composed from this shader"),
-        )
-    })?;
+    let text =
+        naga::back::wgsl::write_string(&module, &info, naga::back::wgsl::WriterFlags::empty())
+            .map_err(|err| {
+                Error::in_file(
+                    top.clone(),
+                    Diagnostic::error(format!("cannot write the composed module: {err}"))
+                        .with_label(0..0, "composed from this shader"),
+                )
+            })?;
     parse(SourceFile::new(format!("{} (composed)", top.path), text))
 }
 
@@ -300,15 +301,20 @@ fn not_found(top: &Arc<SourceFile>, import: &str, composition: &Composition) -> 
 fn composer_error(composer: &Composer, err: &ComposerError) -> Error {
     // naga_oil's offsets are into its preprocessed text of the module
     // (directives blanked, lines kept), shown under the module's path.
+    // (`path` and `source` look the module up in the composer: errors
+    // naming a module come only from modules it holds; the others carry
+    // their text.)
     let path = err.source.path(composer).clone();
     let file = Arc::new(SourceFile::new(
         path,
         err.source.source(composer).to_string(),
     ));
     let offset = err.source.offset();
-    // naga_oil keeps the module's index in a span's high bits.
+    // naga_oil keeps the module's index in a span's bits from
+    // `SPAN_SHIFT` (21, private to it) up.
+    const SPAN_SHIFT: usize = 21;
     let local = |at: usize| {
-        (at & ((1 << 20) - 1))
+        (at & ((1 << SPAN_SHIFT) - 1))
             .saturating_sub(offset)
             .min(file.text.len())
     };

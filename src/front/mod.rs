@@ -177,21 +177,8 @@ pub fn with_vertex_module(
     entry: Option<&str>,
 ) -> Result<Shader, Error> {
     let fail = |diagnostic: Diagnostic| Err(Error::in_file(vertex.file.clone(), diagnostic));
-    let vertices: Vec<usize> = vertex
-        .module
-        .entry_points
-        .iter()
-        .enumerate()
-        .filter(|(_, ep)| ep.stage == naga::ShaderStage::Vertex)
-        .map(|(i, _)| i)
-        .collect();
-    let names = || {
-        vertices
-            .iter()
-            .map(|&i| format!("`{}`", vertex.module.entry_points[i].name))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
+    let vertices = crate::proc::entry_points_of(&vertex.module, naga::ShaderStage::Vertex);
+    let names = || crate::proc::entry_point_names(&vertex.module, &vertices);
     let index = match (entry, vertices.as_slice()) {
         (_, []) => {
             return fail(
@@ -230,12 +217,7 @@ pub fn with_vertex_module(
             )
         }
     };
-    if shader
-        .module
-        .entry_points
-        .iter()
-        .any(|ep| ep.stage == naga::ShaderStage::Vertex)
-    {
+    if !crate::proc::entry_points_of(&shader.module, naga::ShaderStage::Vertex).is_empty() {
         return Err(Error::in_file(
             shader.file.clone(),
             Diagnostic::error(format!(
@@ -296,7 +278,7 @@ pub fn load_with(
         if composition.is_empty() && !compose::uses_directives(&file.text) {
             parse(file)
         } else {
-            compose::load_composed(path, composition)
+            compose::compose(file, composition)
         }
     };
     let shader = load_one(path)?;

@@ -506,23 +506,6 @@ fn entry_resources(module: &Module, entries: &[usize]) -> Vec<Resource> {
         .collect()
 }
 
-/// The (group, binding) of every resource the entry points at `entries`
-/// use: what a draw with them binds (the reference pass runs the original
-/// module, which may declare more).
-fn entry_bindings(module: &Module, entries: &[usize]) -> Vec<[u32; 2]> {
-    let mut out: Vec<[u32; 2]> = crate::proc::globals_used_by(module, entries)
-        .into_iter()
-        .filter_map(|g| {
-            module.global_variables[g]
-                .binding
-                .map(|b| [b.group, b.binding])
-        })
-        .collect();
-    out.sort();
-    out.dedup();
-    out
-}
-
 fn resource(
     module: &Module,
     global: &naga::GlobalVariable,
@@ -637,6 +620,11 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
     let Some(result) = entry.function.result.as_ref() else {
         return Err("the fragment entry point returns nothing".into());
     };
+    // What the draw binds: the original module may declare more.
+    let original = entry_resources(module, &[analysis.entry_index, vertex_index]);
+    let mut bindings: Vec<[u32; 2]> = original.iter().map(|r| [r.group, r.binding]).collect();
+    bindings.sort();
+    bindings.dedup();
     let layout = crate::proc::layout(module, &entry.function, 8.0);
     Ok(Plan {
         format: 1,
@@ -673,13 +661,13 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
                 load: "clear".into(),
             },
             discards: layout.discards,
-            bindings: entry_bindings(module, &[analysis.entry_index, vertex_index]),
+            bindings,
         }],
         classify: None,
         vertex_layout: vertex_layout(module, &vertex_entry.function),
         host_vertex: None,
         bindings: Bindings {
-            original: entry_resources(module, &[analysis.entry_index, vertex_index]),
+            original,
             previous: Vec::new(),
             cache: Vec::new(),
         },

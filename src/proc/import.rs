@@ -24,7 +24,12 @@ pub struct Imported {
 /// Copies everything of `source` except its entry points into `target`,
 /// putting its resource bindings in `group`, `first_binding` after their
 /// own numbers.
-pub fn import(target: &mut Module, source: &Module, group: u32, first_binding: u32) -> Imported {
+pub fn import(
+    target: &mut Module,
+    source: &Module,
+    group: u32,
+    first_binding: u32,
+) -> Result<Imported, String> {
     let mut maps = ModuleMaps {
         keep_spans: true,
         ..ModuleMaps::default()
@@ -35,7 +40,6 @@ pub fn import(target: &mut Module, source: &Module, group: u32, first_binding: u
         &mut maps,
         Placing::Group(group, first_binding),
     )
-    .expect("moving every binding to one group always succeeds")
 }
 
 /// Copies the vertex entry point `entry` of `source`, with everything it

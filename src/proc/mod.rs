@@ -123,3 +123,47 @@ pub fn globals_used_by(
     }
     used
 }
+
+/// The name and (group, binding) of every resource the entry points at
+/// `entries` use (two resources may share a slot when no entry point uses
+/// both, so the slot alone does not say which).
+pub fn resources_used_by(
+    module: &naga::Module,
+    entries: &[usize],
+) -> std::collections::HashSet<(String, [u32; 2])> {
+    globals_used_by(module, entries)
+        .into_iter()
+        .filter_map(|g| {
+            let global = &module.global_variables[g];
+            let b = global.binding?;
+            Some((
+                global.name.clone().unwrap_or_default(),
+                [b.group, b.binding],
+            ))
+        })
+        .collect()
+}
+
+/// The indices of `module`'s entry points of `stage`.
+pub fn entry_points_of(module: &naga::Module, stage: naga::ShaderStage) -> Vec<usize> {
+    module
+        .entry_points
+        .iter()
+        .enumerate()
+        .filter(|(_, ep)| ep.stage == stage)
+        .map(|(i, _)| i)
+        .collect()
+}
+
+/// The names of the entry points at `indices`, for messages: `` `vs`, `vs_shadow` ``,
+/// or `none`.
+pub fn entry_point_names(module: &naga::Module, indices: &[usize]) -> String {
+    if indices.is_empty() {
+        return "none".into();
+    }
+    indices
+        .iter()
+        .map(|&i| format!("`{}`", module.entry_points[i].name))
+        .collect::<Vec<_>>()
+        .join(", ")
+}

@@ -271,9 +271,7 @@ pub fn profile(
             continue;
         }
         match resource.kind.as_str() {
-            "texture" | "texture-array" | "cube-texture" | "cube-texture-array"
-            | "depth-texture" | "depth-texture-array" | "depth-cube-texture"
-            | "depth-cube-texture-array" => {
+            kind if runtime::is_sampled_texture(kind) => {
                 let source = scene.textures.get(&resource.name).ok_or_else(|| {
                     fail(format!(
                         "the shader binds texture `{}` (group {}, binding {}) and the scene does not provide it: add [textures.{}]",
@@ -309,13 +307,18 @@ pub fn profile(
         }
     }
     // What the scene defaulted, and the vertex inputs the mesh feeds a
-    // constant.
+    // constant. An input it cannot feed is an error at the input.
     let mut defaulted = scene.defaulted.clone();
     for attribute in &reference_plan.vertex_layout {
-        let constant = scene::mesh::VertexSource::of(attribute)
-            .ok()
-            .and_then(|source| source.constant(attribute));
-        if let Some(value) = constant {
+        let source = scene::mesh::VertexSource::of(attribute).map_err(|message| {
+            let text = &shader.file.text;
+            let at = attribute_span(text, attribute.location, &attribute.name).unwrap_or(0..0);
+            Error::in_file(
+                shader.file.clone(),
+                Diagnostic::error(message).with_label(at, "this vertex input"),
+            )
+        })?;
+        if let Some(value) = source.defaulted(attribute) {
             defaulted.push(format!(
                 "vertex input @location({}) `{}` = {value}",
                 attribute.location, attribute.name
@@ -780,9 +783,24 @@ pub fn profile(
     ))
 }
 
+/// Where vertex input `name` at `location` is declared: the first
+/// `@location(N)` followed by the name. naga keeps no span for entry point
+/// arguments and struct members; this only reads the text, to place a
+/// label.
+fn attribute_span(text: &str, location: u32, name: &str) -> Option<std::ops::Range<usize>> {
+    let marker = format!("@location({location})");
+    text.match_indices(&marker).find_map(|(at, _)| {
+        let after = at + marker.len();
+        let rest = &text[after..];
+        let found = rest.find(name)?;
+        // The name must come before the declaration ends.
+        (!rest[..found].contains([',', ';', '{', '}']))
+            .then(|| after + found..after + found + name.len())
+    })
+}
+
 /// The name and (group, binding) of every resource the fragment entry
-/// point chosen by `options` and its vertex entry point use (two resources
-/// may share a slot when no entry point uses both).
+/// point chosen by `options` and its vertex entry point use.
 fn used_bindings(
     shader: &Shader,
     options: &Options,
@@ -793,17 +811,7 @@ fn used_bindings(
         crate::rewrite::vertex::vertex_entry(module, fragment, options.vertex_entry.as_deref())
             .ok();
     let entries: Vec<usize> = std::iter::once(fragment).chain(vertex).collect();
-    Ok(crate::proc::globals_used_by(module, &entries)
-        .into_iter()
-        .filter_map(|g| {
-            let global = &module.global_variables[g];
-            let b = global.binding?;
-            Some((
-                global.name.clone().unwrap_or_default(),
-                [b.group, b.binding],
-            ))
-        })
-        .collect())
+    Ok(crate::proc::resources_used_by(module, &entries))
 }
 
 /// An object drawn as several instances needs a shader that tells them

@@ -440,7 +440,12 @@ pub fn rewrite(
         cache_helpers()?,
         slot.group,
         slot.first_binding,
-    );
+    )
+    .map_err(|err| {
+        Refusal::new(format!(
+            "internal error: importing the cache helpers: {err}"
+        ))
+    })?;
     let group = slot.group;
     let helper = |name: &str| {
         imported.functions.get(name).copied().ok_or_else(|| {

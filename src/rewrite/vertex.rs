@@ -44,23 +44,8 @@ pub fn vertex_entry(
     fragment: usize,
     wanted: Option<&str>,
 ) -> Result<usize, Refusal> {
-    let vertices: Vec<usize> = module
-        .entry_points
-        .iter()
-        .enumerate()
-        .filter(|(_, ep)| ep.stage == naga::ShaderStage::Vertex)
-        .map(|(i, _)| i)
-        .collect();
-    let names = |indices: &[usize]| -> String {
-        if indices.is_empty() {
-            return "none".into();
-        }
-        indices
-            .iter()
-            .map(|&i| format!("`{}`", module.entry_points[i].name))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
+    let vertices = crate::proc::entry_points_of(module, naga::ShaderStage::Vertex);
+    let names = |indices: &[usize]| crate::proc::entry_point_names(module, indices);
     let fragment = &module.entry_points[fragment];
     let feeds_fragment =
         |v: usize| feeds(module, &module.entry_points[v].function, &fragment.function);
@@ -193,18 +178,11 @@ pub fn instrument(
 
     // Resources the position computation may read: uniforms and read-only
     // storage, in the entry point or any helper it calls.
-    let mut read = BTreeSet::new();
-    let mut note_globals = |f: &Function| {
-        for (_, expr) in f.expressions.iter() {
-            if let Expression::GlobalVariable(g) = *expr {
-                read.insert(g);
-            }
-        }
-    };
-    note_globals(function);
-    for &f in &reachable {
-        note_globals(&module.functions[f]);
-    }
+    // (In handle order, so twins get the same bindings on every run.)
+    let mut read: Vec<_> = crate::proc::globals_used_by(module, &[entry_index])
+        .into_iter()
+        .collect();
+    read.sort();
     let mut twins = Vec::new();
     let mut binding = first_binding;
     for g in read {
@@ -440,10 +418,7 @@ fn location_of(binding: &Option<Binding>) -> Option<u32> {
 
 /// Whether `module` has no vertex entry point at all.
 pub fn is_fragment_only(module: &Module) -> bool {
-    !module
-        .entry_points
-        .iter()
-        .any(|ep| ep.stage == naga::ShaderStage::Vertex)
+    crate::proc::entry_points_of(module, naga::ShaderStage::Vertex).is_empty()
 }
 
 /// Every expression of `function`: copying with this set keeps it whole.

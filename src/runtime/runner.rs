@@ -200,18 +200,19 @@ impl Runner {
         let mut samplers = HashMap::new();
         for resource in &plan.bindings.original {
             let key = [resource.group, resource.binding];
-            match resource.kind.as_str() {
-                kind if sampled_shape(kind).is_some_and(|(depth, _)| !depth) => {
+            if let Some((depth, shape)) = sampled_shape(&resource.kind) {
+                let view = if depth {
+                    far_depth(gpu, &resource.name, depth_format, shape)
+                } else {
                     let texels = textures
                         .get(&key)
                         .ok_or_else(|| format!("no texels for texture `{}`", resource.name))?;
-                    let (_, shape) = sampled_shape(kind).unwrap_or_default();
-                    views.insert(key, upload(gpu, texels, shape));
-                }
-                kind if sampled_shape(kind).is_some() => {
-                    let (_, shape) = sampled_shape(kind).unwrap_or_default();
-                    views.insert(key, far_depth(gpu, &resource.name, depth_format, shape));
-                }
+                    upload(gpu, texels, shape)
+                };
+                views.insert(key, view);
+                continue;
+            }
+            match resource.kind.as_str() {
                 "sampler" | "comparison-sampler" => {
                     let compare = resource.kind == "comparison-sampler";
                     samplers.insert(
@@ -428,14 +429,17 @@ impl Runner {
                         entries.push(wgpu::BindGroupEntry { binding, resource });
                     }
                     // A plan that binds what the pipeline does not declare
-                    // is an error of the plan, reported, not a panic.
-                    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+                    // is an error of the plan, reported, not a panic. The
+                    // first frame finds it: every later one binds the same
+                    // kinds of resource to the same layouts.
+                    let scope = (!self.rendered)
+                        .then(|| device.push_error_scope(wgpu::ErrorFilter::Validation));
                     let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                         label: Some(&pass.name),
                         layout: &layout,
                         entries: &entries,
                     });
-                    if let Some(err) = pollster::block_on(scope.pop()) {
+                    if let Some(err) = scope.and_then(|scope| pollster::block_on(scope.pop())) {
                         return Err(format!("{}: group {group}: {err}", pass.name));
                     }
                     bind_groups.push((group, bind_group));
@@ -649,20 +653,17 @@ struct SampledShape {
     layers: u32,
 }
 
-impl Default for SampledShape {
-    fn default() -> Self {
-        SampledShape {
-            dimension: wgpu::TextureViewDimension::D2,
-            layers: 1,
-        }
-    }
-}
-
 /// Layers of the arrays the runtime makes (a shadow map array indexed by
 /// light, say): the same texels, or the far plane, in each.
 const ARRAY_LAYERS: u32 = 8;
 /// Cubes of the cube arrays it makes.
 const CUBE_ARRAY_CUBES: u32 = 2;
+
+/// Whether a plan's resource kind is a texture the shader samples (which
+/// the runtime makes: a scene's texels, or the far plane for depth).
+pub fn is_sampled_texture(kind: &str) -> bool {
+    sampled_shape(kind).is_some()
+}
 
 /// Whether a plan's texture kind is a depth texture, and its shape; `None`
 /// for what is not a sampled texture.

@@ -79,15 +79,9 @@ pub fn default_scene(
     // Only what the draw binds: a module may declare more than its two
     // entry points use.
     let entries: Vec<usize> = std::iter::once(fragment).chain(vertex).collect();
-    let used = crate::proc::globals_used_by(module, &entries);
-    // Two resources may share a slot when no entry point uses both.
-    let binds = |name: &str, group: u32, binding: u32| {
-        module.global_variables.iter().any(|(h, g)| {
-            used.contains(&h)
-                && g.name.as_deref().unwrap_or_default() == name
-                && g.binding == Some(naga::ResourceBinding { group, binding })
-        })
-    };
+    let used = crate::proc::resources_used_by(module, &entries);
+    let binds =
+        |name: &str, group: u32, binding: u32| used.contains(&(name.to_string(), [group, binding]));
     let mut uniform_buffers = uniforms::buffers(module);
     uniform_buffers.retain(|b| binds(&b.name, b.group, b.binding));
     let mut storage_buffers = storage::buffers(module);
@@ -115,25 +109,37 @@ pub fn default_scene(
         }
     }
 
+    // A member no role fills gets a neutral value, written into `section`
+    // and listed (whether it was is the result); `kind` and `note` say
+    // where it goes.
+    let mut default =
+        |binding: &str, member: &Member, kind: &str, note: &str, section: &mut String| {
+            if is_padding(&member.name) || role_of(binding, &member.name).is_some() {
+                return false;
+            }
+            let Some(value) = neutral(member) else {
+                return false;
+            };
+            let _ = writeln!(section, "# defaulted: {}{note}", what(member));
+            let _ = writeln!(section, "{} = {value}", quoted(&member.name));
+            defaulted.push(format!(
+                "{kind} `{}` = {value}",
+                roles::key(binding, &member.name)
+            ));
+            true
+        };
+
     // `[uniforms]` is keyed by member name alone: a name two buffers
     // share takes one value.
     let mut section = String::new();
     let mut written = std::collections::BTreeSet::new();
     for buffer in &uniform_buffers {
         for member in &buffer.members {
-            if is_padding(&member.name) || role_of(&buffer.name, &member.name).is_some() {
-                continue;
+            if !written.contains(&member.name)
+                && default(&buffer.name, member, "uniform", "", &mut section)
+            {
+                written.insert(member.name.clone());
             }
-            if !written.insert(member.name.clone()) {
-                continue;
-            }
-            let Some(value) = neutral(member) else {
-                continue;
-            };
-            let key = roles::key(&buffer.name, &member.name);
-            let _ = writeln!(section, "# defaulted: {}", what(member));
-            let _ = writeln!(section, "{} = {value}", quoted(&member.name));
-            defaulted.push(format!("uniform `{key}` = {value}"));
         }
     }
     if !section.is_empty() {
@@ -144,39 +150,25 @@ pub fn default_scene(
     for buffer in &storage_buffers {
         let mut section = String::new();
         for member in &buffer.members {
-            if is_padding(&member.name) || role_of(&buffer.name, &member.name).is_some() {
-                continue;
-            }
-            let Some(value) = neutral(member) else {
-                continue;
-            };
-            let _ = writeln!(
-                section,
-                "# defaulted: {}, the same for every instance",
-                what(member)
-            );
-            let _ = writeln!(section, "{} = {value}", quoted(&member.name));
-            defaulted.push(format!(
-                "storage `{}` = {value}",
-                roles::key(&buffer.name, &member.name)
-            ));
+            let note = ", the same for every instance";
+            default(&buffer.name, member, "storage", note, &mut section);
         }
         if !section.is_empty() {
             let _ = write!(text, "\n[storage.{}]\n{section}", quoted(&buffer.name));
         }
     }
 
-    for (handle, global) in module.global_variables.iter() {
+    for (_, global) in module.global_variables.iter() {
         let TypeInner::Image { dim, class, .. } = module.types[global.ty].inner else {
             continue;
         };
-        if global.binding.is_none()
-            || !used.contains(&handle)
-            || matches!(class, ImageClass::Storage { .. })
-        {
+        let name = global.name.clone().unwrap_or_default();
+        let drawn = global
+            .binding
+            .is_some_and(|b| binds(&name, b.group, b.binding));
+        if !drawn || matches!(class, ImageClass::Storage { .. }) {
             continue;
         }
-        let name = global.name.clone().unwrap_or_default();
         let (pattern, why) = texture_pattern(&name, dim, class);
         let _ = write!(
             text,

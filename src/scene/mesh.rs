@@ -470,29 +470,19 @@ impl VertexSource {
         }
     }
 
-    /// Whether the source is a constant rather than the mesh's, to list
-    /// as defaulted.
-    pub fn is_constant(self) -> bool {
-        self.constant_note().is_some() || self == VertexSource::Integer
-    }
-
-    fn constant_note(self) -> Option<&'static str> {
+    /// What feeds `attribute` when it is not the mesh's own values (a
+    /// constant, or integers made from them), for the list of what was
+    /// defaulted; `None` for the mesh's values as they are.
+    pub fn defaulted(self, attribute: &crate::plan::VertexAttribute) -> Option<&'static str> {
         match self {
             VertexSource::Colour => Some("1.0 in every component"),
             VertexSource::IntegerPosition => {
                 Some("the mesh's positions rounded to integers (w = 1)")
             }
             VertexSource::IntegerNormal => Some("the mesh's normals × 127, rounded"),
-            _ => None,
-        }
-    }
-
-    /// The constant's value, for the list of what was defaulted.
-    pub fn constant(self, attribute: &crate::plan::VertexAttribute) -> Option<&'static str> {
-        match self {
             VertexSource::Integer if packed_colour(attribute) => Some("0xffffffff (white)"),
             VertexSource::Integer => Some("0"),
-            _ => self.constant_note(),
+            _ => None,
         }
     }
 }

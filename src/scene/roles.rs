@@ -21,7 +21,7 @@ use std::collections::HashMap;
 
 use naga::{Expression, Handle, Module, Statement, TypeInner};
 
-use super::layout::{fits_role, Shape, ROLES, SIMULATED};
+use super::layout::{fits_role, implicit_role, Shape, ROLES};
 use super::storage::StorageBuffer;
 use super::uniforms::UniformBuffer;
 use super::Scene;
@@ -60,11 +60,13 @@ pub fn check(
     storage: &[StorageBuffer],
     scene: &Scene,
 ) -> Result<(), Error> {
+    // Every member as (its key, its shape, its `[uniforms]` name for a
+    // uniform's).
     let members = || {
         let uniform = uniforms.iter().flat_map(|b| {
             b.members
                 .iter()
-                .map(move |m| (key(&b.name, &m.name), m.shape, Some(&b.name)))
+                .map(move |m| (key(&b.name, &m.name), m.shape, Some(m.name.as_str())))
         });
         let storage = storage.iter().flat_map(|b| {
             b.members
@@ -105,8 +107,7 @@ pub fn check(
                 shape_name(shape)
             ));
         }
-        let member = key.rsplit('.').next().unwrap_or(key);
-        if uniform.is_some() && scene.uniforms.contains_key(member) {
+        if let Some(member) = uniform.filter(|m| scene.uniforms.contains_key(*m)) {
             return at(format!(
                 "`{key}` is given twice: a role here and a value under [uniforms] `{member}`; keep one"
             ));
@@ -144,10 +145,7 @@ pub fn infer(
     storage: &[StorageBuffer],
 ) -> Vec<Inferred> {
     let mut out: Vec<Inferred> = Vec::new();
-    let named_role = |key: &str| {
-        let member = key.rsplit('.').next().unwrap_or(key);
-        SIMULATED.contains(&member)
-    };
+    let named_role = |key: &str| implicit_role(key).is_some();
     if let Some(vertex) = vertex {
         let function = &module.entry_points[vertex].function;
         let chain = position_matrices(module, function);

@@ -183,4 +183,7 @@ fn fs(in: V) -> @location(0) vec4<f32> {
         err.contains("cannot feed vertex input @location(5) `bone_weight` (float32)"),
         "{err}"
     );
+    // At the input's declaration.
+    let column = shader.lines().nth(3).unwrap().find("bone_weight").unwrap() + 1;
+    assert!(err.contains(&format!("skinned.wgsl:4:{column}")), "{err}");
 }
