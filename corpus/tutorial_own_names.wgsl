@@ -66,7 +66,11 @@ fn vs_main(model: VertexInput) -> VertexOutput {
 }
 
 fn blinn_phong(normal: vec3<f32>, to_light: vec3<f32>, to_view: vec3<f32>) -> vec3<f32> {
-    let diffuse = max(dot(normal, to_light), 0.0);
+    let diffuse = dot(normal, to_light);
+    // Facing away from the light: neither diffuse light nor a highlight.
+    if (diffuse <= 0.0) {
+        return vec3<f32>(0.0);
+    }
     let half_dir = normalize(to_view + to_light);
     let specular = pow(max(dot(normal, half_dir), 0.0), 8.0 + 56.0 * light.shininess);
     return light.color * light.intensity * (diffuse + specular);

@@ -34,11 +34,19 @@ impl RejectReason {
     }
 }
 
-pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> Analysis {
-    let module = &shader.module;
+pub(super) fn find(
+    shader: &Shader,
+    analysed: Option<std::sync::Arc<super::calls::Analysed>>,
+    entry_index: usize,
+    model: &CostModel,
+) -> Analysis {
+    let (module, module_info) = match &analysed {
+        Some(a) => (&a.module, &a.info),
+        None => (&shader.module, &shader.info),
+    };
     let entry = &module.entry_points[entry_index];
     let function = &entry.function;
-    let info = shader.info.get_entry_point(entry_index);
+    let info = module_info.get_entry_point(entry_index);
     let layout = model.layout(function);
     let graph = ExprGraph::new(function, &layout);
     let source = &shader.file.text;
@@ -58,14 +66,46 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
     let private = graph.private();
     let dominated = private.dominated_sums(&weighted);
 
-    // One node per source span: where the front end made several
-    // expressions for one piece of source (a load and its pointer, a splat
-    // and its scalar), the last one, which consumes the others, stands for it.
-    // Loads of local variables have no span of their own; they are
-    // spanned by the variable's name where it is read.
-    let load_spans = super::spans::local_loads(function, source);
-    let mut by_span: BTreeMap<(usize, usize), Handle<Expression>> = BTreeMap::new();
+    // Where each expression came from: the entry point's own, or a
+    // helper's at one call site.
+    let lines = LineIndex::new(source);
+    let inlined = analysed.as_ref().map(|a| &a.inlined);
+    let paths = inlined.map(|inlined| {
+        super::calls::Paths::new(&shader.module, inlined, source, &|offset| {
+            lines.line_col(offset)
+        })
+    });
+    let origin_of = |handle: Handle<Expression>| match inlined {
+        Some(inlined) => inlined.origins[handle.index()],
+        None => proc::inline::Origin {
+            call: None,
+            expression: Some(handle),
+            result_of: None,
+        },
+    };
+
+    // One node per source span and call path: where the front end made
+    // several expressions for one piece of source (a load and its pointer,
+    // a splat and its scalar), the last one, which consumes the others,
+    // stands for it. Loads of local variables have no span of their own;
+    // they are spanned by the variable's name where it is read.
+    let function_of = |call: Option<usize>| match (call, inlined) {
+        (Some(call), Some(inlined)) => shader.module.functions[inlined.calls[call].function]
+            .name
+            .as_deref(),
+        _ => entry.name.as_str().into(),
+    };
+    let load_spans = super::spans::local_loads(function, source, &|load| {
+        let call = origin_of(load).call;
+        (call.map_or(0, |c| c + 1), function_of(call))
+    });
+    let mut by_span: BTreeMap<(usize, usize, usize), Handle<Expression>> = BTreeMap::new();
     for (handle, _) in function.expressions.iter() {
+        let origin = origin_of(handle);
+        if origin.expression.is_none() {
+            // Made by the inliner: no source of its own.
+            continue;
+        }
         let span = function.expressions.get_span(handle).to_range();
         let Some(range) = span.or_else(|| load_spans.get(&handle).cloned()) else {
             continue;
@@ -81,22 +121,44 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
         if !is_value(info[handle].ty.inner_with(&module.types)) {
             continue;
         }
-        by_span.insert((range.start, range.end), handle);
+        let group = origin.call.map_or(0, |c| c + 1);
+        by_span.insert((group, range.start, range.end), handle);
     }
 
-    let mut ranges = super::range::EntryRanges::new(module, &shader.info, entry_index);
+    let no_bounds = super::range::UniformBounds::default();
+    let mut ranges = super::NodeRanges::new(shader, analysed.as_deref(), entry_index, &no_bounds);
 
-    // Ids: the occurrence number counts equal texts in source order.
+    // Ids: the occurrence number counts equal texts in source order, per
+    // call path; a helper's nodes hash their call path with the entry
+    // point's name, so the entry point's own ids are as they were.
+    let keys: Vec<String> = std::iter::once(entry.name.clone())
+        .chain(
+            paths
+                .iter()
+                .flat_map(|p| p.keys.iter())
+                .map(|key| format!("{}\0{key}", entry.name)),
+        )
+        .collect();
     let mut seen: HashMap<u64, usize> = HashMap::new();
-    let lines = LineIndex::new(source);
-    let mut hasher = id::PrefixHasher::new(source, &entry.name);
+    let mut hasher_group = usize::MAX;
+    let mut hasher = id::PrefixHasher::new(source, &keys[0]);
     let mut candidates = Vec::new();
     let mut rejected = Vec::new();
-    for (&(start, end), &expr) in &by_span {
+    for (&(group, start, end), &expr) in &by_span {
+        if group != hasher_group {
+            hasher = id::PrefixHasher::new(source, &keys[group]);
+            hasher_group = group;
+        }
         let text = &source[start..end];
         // Spans come in order of start, then end: nested prefixes hash on.
         let state = hasher.node(start, end);
         let occurrence = seen.entry(state).or_insert(0);
+        let origin = origin_of(expr);
+        let function_name = function_of(origin.call).unwrap_or_default().to_string();
+        let call_path = match (origin.call, &paths) {
+            (Some(call), Some(paths)) => paths.steps[call].clone(),
+            _ => Vec::new(),
+        };
         let node = Node {
             id: id::PrefixHasher::id(state, *occurrence),
             span: SourceSpan {
@@ -105,7 +167,10 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
             },
             ty: type_name(&module.types, info[expr].ty.inner_with(&module.types)),
             text: id::shown_text(text),
-            expression: expr,
+            function: function_name,
+            call_path,
+            expression: origin.expression.unwrap_or(expr),
+            analysed: expr,
             range: start..end,
         };
         *occurrence += 1;
@@ -131,7 +196,7 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
                     cost_of(&shared)
                 };
                 let derivatives = slice.ones().any(|i| takes_derivatives(exprs[i]));
-                let range = ranges.of(expr);
+                let range = ranges.of(&node);
                 candidates.push(Candidate {
                     node,
                     components,
@@ -162,6 +227,7 @@ pub(super) fn find(shader: &Shader, entry_index: usize, model: &CostModel) -> An
         candidates,
         rejected,
         entry_index,
+        analysed,
     }
 }
 
@@ -210,7 +276,7 @@ impl<'a> LineIndex<'a> {
 /// When `range` covers just an identifier followed by `(` (after optional
 /// template arguments), this extends it to the matching `)`. The source is
 /// only read here, to show and name the node; nothing is rewritten as text.
-fn call_extent(source: &str, range: Range<usize>) -> Range<usize> {
+pub(super) fn call_extent(source: &str, range: Range<usize>) -> Range<usize> {
     let name = &source[range.clone()];
     if !name.chars().all(|c| c.is_alphanumeric() || c == '_') {
         return range;

@@ -15,8 +15,10 @@
 //!   constants and overrides — so it is the same for every pixel.
 //!
 //! Pointers and resource handles (textures, samplers) are not values and are
-//! not listed at all. Expressions inside helper functions are out of scope:
-//! a call of a helper from the entry point is a node, its body is not.
+//! not listed at all. Expressions inside helper functions are nodes per call
+//! site ([`calls`]): the entry point is analysed with its helpers inlined,
+//! and each node says which function's source it is in and the calls that
+//! lead there. A call of a helper is a node too: the value it returns there.
 //!
 //! For each candidate the [`graph`] gives its backward slice (what the payload
 //! needs) and the remainder (what the rest of the entry point still needs
@@ -25,6 +27,7 @@
 //! the *overlap*: the cost of the part of the slice the remainder also needs,
 //! which a multi-pass variant pays twice (seed 002, fig. 7).
 
+pub mod calls;
 mod candidates;
 mod entry;
 pub mod graph;
@@ -38,6 +41,7 @@ use std::ops::Range;
 use naga::{Expression, Handle};
 use serde::Serialize;
 
+pub use calls::CallStep;
 pub use candidates::RejectReason;
 pub use entry::{fragment_entry, stage_name};
 pub use id::node_id;
@@ -71,6 +75,10 @@ pub struct Analysis {
     /// Index of the entry point in the module.
     #[serde(skip)]
     pub entry_index: usize,
+    /// The entry point as analysed, with its helpers inlined; `None` when
+    /// it calls none (it is then the shader's own).
+    #[serde(skip)]
+    pub analysed: Option<std::sync::Arc<calls::Analysed>>,
 }
 
 /// Where a node is in the source: 1-based `[line, column]` of its first
@@ -92,9 +100,19 @@ pub struct Node {
     /// Its WGSL type, e.g. `vec3<f32>`.
     #[serde(rename = "type")]
     pub ty: String,
-    /// The expression in the entry point's arena.
+    /// The function whose source the span is in: the entry point's own
+    /// name for its expressions, a helper's for the helper's.
+    pub function: String,
+    /// The calls from the entry point down to `function`, outermost
+    /// first; empty for the entry point's own expressions.
+    pub call_path: Vec<CallStep>,
+    /// The expression in `function`'s arena.
     #[serde(skip)]
     pub expression: Handle<Expression>,
+    /// The expression in the analysed entry point's arena
+    /// ([`Analysis::analysed`], or the shader's own entry point).
+    #[serde(skip)]
+    pub analysed: Handle<Expression>,
     /// Byte range of `text` in the source.
     #[serde(skip)]
     pub range: Range<usize>,
@@ -139,8 +157,55 @@ pub struct Rejected {
 /// Analyses the fragment entry point of a parsed and validated shader.
 pub fn analyze(shader: &Shader, options: &Options) -> Result<Analysis, Error> {
     let entry_index = fragment_entry(shader, options.entry.as_deref())?;
-    let model = CostModel::new(&shader.module, &shader.info, options.weights.clone());
-    Ok(candidates::find(shader, entry_index, &model))
+    let analysed = calls::inline_all(shader, entry_index)?;
+    let (module, info) = match &analysed {
+        Some(a) => (&a.module, &a.info),
+        None => (&shader.module, &shader.info),
+    };
+    let model = CostModel::new(module, info, options.weights.clone());
+    Ok(candidates::find(
+        shader,
+        analysed.clone(),
+        entry_index,
+        &model,
+    ))
+}
+
+/// Bounds of nodes' values. The entry point's own nodes are bounded on
+/// the shader as written, where the range analysis follows each call into
+/// its helper and narrows the result by splitting an argument's range; a
+/// helper's nodes on the entry point with its helpers inlined.
+pub(crate) struct NodeRanges<'a> {
+    own: range::EntryRanges<'a>,
+    inlined: Option<range::EntryRanges<'a>>,
+}
+
+impl<'a> NodeRanges<'a> {
+    pub(crate) fn new(
+        shader: &'a Shader,
+        analysed: Option<&'a calls::Analysed>,
+        entry_index: usize,
+        uniforms: &'a range::UniformBounds,
+    ) -> Self {
+        NodeRanges {
+            own: range::EntryRanges::with_uniforms(
+                &shader.module,
+                &shader.info,
+                entry_index,
+                uniforms,
+            ),
+            inlined: analysed.map(|a| {
+                range::EntryRanges::with_uniforms(&a.module, &a.info, entry_index, uniforms)
+            }),
+        }
+    }
+
+    pub(crate) fn of(&mut self, node: &Node) -> range::Interval {
+        match (&mut self.inlined, node.call_path.is_empty()) {
+            (Some(inlined), false) => inlined.of(node.analysed),
+            _ => self.own.of(node.expression),
+        }
+    }
 }
 
 /// Which nodes a command works on.
@@ -160,14 +225,10 @@ impl Analysis {
     /// that reads a uniform is unbounded to the shader alone, and may fit
     /// f16 for the values a scene gives it.
     pub fn bound_uniforms(&mut self, shader: &Shader, uniforms: &range::UniformBounds) {
-        let mut ranges = range::EntryRanges::with_uniforms(
-            &shader.module,
-            &shader.info,
-            self.entry_index,
-            uniforms,
-        );
+        let mut ranges =
+            NodeRanges::new(shader, self.analysed.as_deref(), self.entry_index, uniforms);
         for candidate in &mut self.candidates {
-            let range = ranges.of(candidate.node.expression);
+            let range = ranges.of(&candidate.node);
             candidate.range = range.ends();
             candidate.fits_f16 = range.fits_f16();
         }

@@ -17,9 +17,14 @@ use naga::{Expression, Handle, Statement};
 use crate::proc::{self, PointerRoot};
 
 /// The span of every load of a named local variable that has none.
-pub fn local_loads(
-    function: &naga::Function,
+/// `copy_of` says which copy of which function's source a load is from
+/// (a helper is inlined once per call site, and each copy's loads take
+/// the occurrences of the names in the same source): an index of the
+/// copy, and the function's name.
+pub fn local_loads<'f>(
+    function: &'f naga::Function,
     source: &str,
+    copy_of: &dyn Fn(Handle<Expression>) -> (usize, Option<&'f str>),
 ) -> HashMap<Handle<Expression>, Range<usize>> {
     let span_of = |h: Handle<Expression>| function.expressions.get_span(h).to_range();
     // Loads without a span, and the variable each reads.
@@ -78,13 +83,13 @@ pub fn local_loads(
 
     // Several loads of one variable read by one reader (`c * c`) take its
     // occurrences in turn, in arena order.
-    let mut taken: HashMap<(usize, &str), usize> = HashMap::new();
-    // Where the function's own source starts, for loads bound to a `let`.
-    let body_start = function.name.as_deref().and_then(|name| {
+    let mut taken: HashMap<(usize, usize, &str), usize> = HashMap::new();
+    // Where a function's own source starts, for loads bound to a `let`.
+    let body_start = |name: &str| {
         identifier_occurrences(source, 0..source.len(), name)
             .find(|at| source[..at.start].trim_end().ends_with("fn"))
             .map(|at| at.end)
-    });
+    };
     let mut out = HashMap::new();
     let mut loads: Vec<_> = name_of.into_iter().collect();
     loads.sort_by_key(|(h, _)| h.index());
@@ -96,8 +101,9 @@ pub fn local_loads(
             }
             Ok(name) => name,
         };
+        let (copy, function_name) = copy_of(load);
         if let Some(within) = reader.get(&load) {
-            let nth = taken.entry((within.start, name)).or_insert(0);
+            let nth = taken.entry((copy, within.start, name)).or_insert(0);
             if let Some(found) = identifier_occurrences(source, within.clone(), name).nth(*nth) {
                 out.insert(load, found);
                 *nth += 1;
@@ -110,7 +116,7 @@ pub fn local_loads(
         if let Some(found) = function
             .named_expressions
             .get(&load)
-            .zip(body_start)
+            .zip(function_name.and_then(body_start))
             .and_then(|(binding, start)| let_initializer(source, start, binding))
             .and_then(|init| identifier_occurrences(source, init, name).next())
         {
@@ -183,7 +189,7 @@ mod tests {
         let source = "@fragment\nfn fs(@location(0) x: f32) -> @location(0) vec4<f32> {\n    var color = vec4<f32>(0.0);\n    if (x > 0.5) { color = vec4<f32>(sin(x)); }\n    return color * color;\n}\n";
         let module = naga::front::wgsl::parse_str(source).unwrap();
         let function = &module.entry_points[0].function;
-        let spans = local_loads(function, source);
+        let spans = local_loads(function, source, &|_| (0, function.name.as_deref()));
         let mut texts: Vec<_> = spans
             .values()
             .map(|r| (r.start, &source[r.clone()]))
@@ -198,7 +204,7 @@ mod tests {
         let source = "@fragment\nfn fs(@location(0) x: f32) -> @location(0) vec4<f32> {\n    var color: vec4<f32>;\n    if (x > 0.5) { color = vec4<f32>(sin(x)); }\n    let _e9: vec4<f32> = color;\n    return _e9;\n}\n";
         let module = naga::front::wgsl::parse_str(source).unwrap();
         let function = &module.entry_points[0].function;
-        let spans = local_loads(function, source);
+        let spans = local_loads(function, source, &|_| (0, function.name.as_deref()));
         let at = source.find("= color").unwrap() + 2;
         assert_eq!(
             spans.values().cloned().collect::<Vec<_>>(),

@@ -1,7 +1,7 @@
 //! The analysis as a person reads it: each candidate shown in the source
 //! like a compiler note, highest P/T first.
 
-use super::Analysis;
+use super::{Analysis, Node};
 use crate::diagnostic::{Diagnostic, Severity};
 
 /// One note per candidate (and, with `all`, per rejected node), in the
@@ -27,6 +27,7 @@ pub fn notes(analysis: &Analysis, all: bool) -> Vec<Diagnostic> {
                 candidate.cost, analysis.total_cost, candidate.overlap
             ),
         );
+        note = with_call_path(note, node);
         if candidate.derivatives {
             note = note.with_note(
                 "its slice takes implicit derivatives: a rewrite must keep them in uniform control flow",
@@ -42,21 +43,44 @@ pub fn notes(analysis: &Analysis, all: bool) -> Vec<Diagnostic> {
     if all {
         for rejected in &analysis.rejected {
             let node = &rejected.node;
-            out.push(
-                Diagnostic::new(
-                    Severity::Note,
-                    format!(
-                        "rejected {}: {} ({})",
-                        node.id,
-                        node.ty,
-                        rejected.reason.as_str()
-                    ),
-                )
-                .with_label(node.range.clone(), rejected.detail.clone()),
-            );
+            let note = Diagnostic::new(
+                Severity::Note,
+                format!(
+                    "rejected {}: {} ({})",
+                    node.id,
+                    node.ty,
+                    rejected.reason.as_str()
+                ),
+            )
+            .with_label(node.range.clone(), rejected.detail.clone());
+            out.push(with_call_path(note, node));
         }
     }
     out
+}
+
+/// For a node inside a helper: a label at each call on the way there, and
+/// the path in a note.
+fn with_call_path(mut note: Diagnostic, node: &Node) -> Diagnostic {
+    if node.call_path.is_empty() {
+        return note;
+    }
+    let mut path = Vec::new();
+    for step in &node.call_path {
+        note = note.with_label(
+            step.range.clone(),
+            format!("`{}` called here", step.function),
+        );
+        path.push(format!(
+            "{} ({}:{})",
+            step.text, step.span.start[0], step.span.start[1]
+        ));
+    }
+    note.with_note(format!(
+        "in `{}`, called along {}",
+        node.function,
+        path.join(" → ")
+    ))
 }
 
 /// The closing line of the text output.

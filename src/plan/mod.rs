@@ -73,6 +73,23 @@ pub struct PlanNode {
     /// classify pass marks the pixel absent (docs/rewrite.md).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub path: Option<String>,
+    /// For a node inside a helper: the helper, and the calls from the
+    /// entry point down to it, which the passes inline (docs/rewrite.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub function: Option<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub call_path: Vec<PlanCall>,
+}
+
+/// One call on a node's call path.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PlanCall {
+    /// The helper called.
+    pub function: String,
+    /// The call's source text.
+    pub text: String,
+    /// 1-based line and column of the call in the shader.
+    pub at: [usize; 2],
 }
 
 /// One render pass.
@@ -361,6 +378,18 @@ pub fn build(inputs: Inputs) -> Plan {
             ty: candidate.node.ty.clone(),
             components: candidate.components,
             path: None,
+            function: (!candidate.node.call_path.is_empty())
+                .then(|| candidate.node.function.clone()),
+            call_path: candidate
+                .node
+                .call_path
+                .iter()
+                .map(|step| PlanCall {
+                    function: step.function.clone(),
+                    text: step.text.clone(),
+                    at: step.span.start,
+                })
+                .collect(),
         },
         variant,
         passes: plan_passes,
@@ -636,6 +665,8 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
             ty: String::new(),
             components: 0,
             path: None,
+            function: None,
+            call_path: Vec::new(),
         },
         variant: Variant::Reference,
         passes: vec![Pass {

@@ -15,6 +15,7 @@
 //! fragment one's).
 
 pub mod import;
+pub mod inline;
 mod operands;
 mod placement;
 mod reaching;

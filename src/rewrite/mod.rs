@@ -358,10 +358,50 @@ fn cache_helpers() -> Result<&'static naga::Module, Refusal> {
 }
 
 /// Rewrites `shader` to cache `candidate` with `variant`.
+///
+/// A node inside a helper is cached where its call path puts it: the calls
+/// on that path are inlined into the entry point first (on naga IR,
+/// [`crate::proc::inline`]), the other calls stay calls.
 pub fn rewrite(
     shader: &Shader,
     analysis: &Analysis,
     candidate: &Candidate,
+    variant: Variant,
+    options: &Options,
+) -> Result<Rewritten, Refusal> {
+    if candidate.node.call_path.is_empty() {
+        return rewrite_at(
+            shader,
+            analysis,
+            candidate,
+            candidate.node.expression,
+            variant,
+            options,
+        );
+    }
+    let path: Vec<usize> = candidate.node.call_path.iter().map(|s| s.ordinal).collect();
+    let (specialised, node) = crate::analysis::calls::specialise(
+        shader,
+        analysis.entry_index,
+        &path,
+        candidate.node.expression,
+    )
+    .map_err(|err| {
+        Refusal::new(format!(
+            "internal error: inlining the calls down to `{}`: {err}",
+            candidate.node.function
+        ))
+    })?;
+    rewrite_at(&specialised, analysis, candidate, node, variant, options)
+}
+
+/// Rewrites `shader` to cache the value of `node`, an expression of its
+/// fragment entry point, as `candidate` describes it.
+fn rewrite_at(
+    shader: &Shader,
+    analysis: &Analysis,
+    candidate: &Candidate,
+    node: naga::Handle<naga::Expression>,
     variant: Variant,
     options: &Options,
 ) -> Result<Rewritten, Refusal> {
@@ -403,7 +443,6 @@ pub fn rewrite(
     let original = &shader.module;
     let entry = &original.entry_points[analysis.entry_index];
     let function = &entry.function;
-    let node = candidate.node.expression;
     let Some(result) = function.result.clone() else {
         return Err(Refusal::new("the fragment entry point returns nothing"));
     };

@@ -583,3 +583,151 @@ fn a_shadow_and_forward_module_profiles_each_fragment_stage_without_a_scene() {
         }
     }
 }
+
+/// The candidates inside helper `function`, with text `text`.
+fn in_helper<'a>(analysis: &'a Analysis, function: &str, text: &str) -> Vec<&'a Candidate> {
+    analysis
+        .candidates
+        .iter()
+        .filter(|c| c.node.function == function && c.node.text == text)
+        .collect()
+}
+
+/// `fbm` is called four times from `fs_main`: its result expression is a
+/// candidate once per call, each spanned in `fbm`'s source, named by its
+/// call path, costed as that call (the inlined copy), and the call itself
+/// is still a node of the entry point.
+#[test]
+fn helper_expressions_are_candidates_per_call_site() {
+    let (_, analysis) = corpus_shader("helpers_nested.wgsl");
+    let copies = in_helper(&analysis, "fbm", "total / 0.9375");
+    assert_eq!(copies.len(), 4, "{copies:#?}");
+    let mut calls: Vec<&str> = copies
+        .iter()
+        .map(|c| {
+            assert_eq!(c.node.call_path.len(), 1);
+            assert_eq!(c.node.call_path[0].function, "fbm");
+            assert_eq!(c.node.span.start[0], 85, "the span is in `fbm`");
+            c.node.call_path[0].text.as_str()
+        })
+        .collect();
+    calls.sort();
+    assert_eq!(
+        calls,
+        [
+            "fbm(p * 0.5 + vec2<f32>(17.0, -3.0))",
+            "fbm(p + vec2<f32>(5.2, 1.3))",
+            "fbm(p)",
+            "fbm(warped * 6.0)"
+        ]
+    );
+    let ids: std::collections::BTreeSet<_> = copies.iter().map(|c| &c.node.id).collect();
+    assert_eq!(ids.len(), 4);
+    // Each copy costs what its call costs, less the argument.
+    for copy in &copies {
+        let call = &copy.node.call_path[0];
+        let at_call = analysis
+            .candidates
+            .iter()
+            .find(|c| c.node.call_path.is_empty() && c.node.range == call.range)
+            .expect("the call is a node of the entry point");
+        assert!(copy.cost > 0.9 * at_call.cost && copy.cost <= at_call.cost);
+    }
+    // Three levels down: `hash` inside `value_noise` inside `fbm`'s loop
+    // is there, rejected as in-loop, with its whole path.
+    let hash = analysis
+        .rejected
+        .iter()
+        .find(|r| r.node.function == "hash")
+        .unwrap();
+    assert_eq!(hash.reason, shadecache::analysis::RejectReason::InLoop);
+    let path: Vec<&str> = hash
+        .node
+        .call_path
+        .iter()
+        .map(|s| s.function.as_str())
+        .collect();
+    assert_eq!(path, ["fbm", "value_noise", "hash"]);
+}
+
+/// Caching a node inside a helper inlines the calls on its path only: the
+/// payload of `fbm(warped * 6.0)`'s result has that call inlined and
+/// still calls `fbm` for the other three, and the plan names the path.
+#[test]
+fn a_helper_node_is_rewritten_with_only_its_call_path_inlined() {
+    let (shader, analysis) = corpus_shader("helpers_nested.wgsl");
+    let node = in_helper(&analysis, "fbm", "total / 0.9375")
+        .into_iter()
+        .find(|c| c.node.call_path[0].text == "fbm(warped * 6.0)")
+        .unwrap();
+    let rewritten = rewrite::rewrite(
+        &shader,
+        &analysis,
+        node,
+        Variant::ThreePass,
+        &Options::default(),
+    )
+    .unwrap();
+    let payload_pass = &rewritten.passes[1].module;
+    let payload = payload_pass
+        .functions
+        .iter()
+        .find(|(_, f)| f.name.as_deref() == Some("fs_main_payload"))
+        .unwrap()
+        .1;
+    let mut fbm_calls = 0;
+    let mut loops = 0;
+    shadecache::proc::each_statement(&payload.body, &mut |s| match *s {
+        naga::Statement::Call { function, .. } => {
+            fbm_calls +=
+                usize::from(payload_pass.functions[function].name.as_deref() == Some("fbm"))
+        }
+        naga::Statement::Loop { .. } => loops += 1,
+        _ => {}
+    });
+    // The payload needs `warped`, which calls `fbm` twice; the third call
+    // is the inlined one (its octave loop), the fourth is not needed.
+    assert_eq!(fbm_calls, 2);
+    assert_eq!(loops, 1);
+    assert_eq!(rewritten.plan.node.function.as_deref(), Some("fbm"));
+    assert_eq!(rewritten.plan.node.call_path.len(), 1);
+    assert_eq!(rewritten.plan.node.call_path[0].text, "fbm(warped * 6.0)");
+}
+
+/// Δn = 1 recomputes every pixel every frame: nodes inside helpers,
+/// inlined along their call paths — `fbm`'s sum after its loop, the PBR
+/// lighting's result and its tone map, and `blinn_phong`'s highlight after
+/// the helper's early return — give the reference's image (differential
+/// test on the default scene).
+#[test]
+fn helper_nodes_at_refresh_period_one_equal_the_reference() {
+    let cases = [
+        ("helpers_nested.wgsl", "fbm", "total / 0.9375"),
+        (
+            "pbr_material_flags.wgsl",
+            "apply_pbr_lighting",
+            "light_accum + ambient + material.emissive.rgb",
+        ),
+        (
+            "pbr_material_flags.wgsl",
+            "tone_mapping",
+            "exposed / (vec3<f32>(1.0) + exposed)",
+        ),
+        (
+            "tutorial_own_names.wgsl",
+            "blinn_phong",
+            "light.color * light.intensity * (diffuse + specular)",
+        ),
+    ];
+    for (name, function, text) in cases {
+        let (shader, analysis) = corpus_shader(name);
+        let ids: Vec<String> = in_helper(&analysis, function, text)
+            .iter()
+            .map(|c| c.node.id.clone())
+            .collect();
+        assert!(!ids.is_empty(), "{name}: no `{text}` in `{function}`");
+        if crate::profile::assert_refresh_one_equals_reference(&shader, ids, 48).is_none() {
+            return;
+        }
+    }
+}
