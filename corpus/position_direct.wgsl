@@ -1,9 +1,11 @@
 // Screen-space plasma on a mesh whose vertex stage returns the clip
 // position directly (no vertex output struct, no varyings).
 //
-// The fragment stage works only from @builtin(position) (the pixel's
-// framebuffer coordinate) and the uniform: a sum of animated sine waves
-// mapped through a cosine palette.
+// The fragment stage works only from @builtin(position) and the uniform:
+// a sum of animated sine waves over the pixel's framebuffer coordinate,
+// mapped through a cosine palette (screen-space: not cacheable), under
+// distance fog from the fragment's depth (a property of the surface point:
+// cacheable).
 
 struct Frame {
     clip_from_world: mat4x4<f32>,
@@ -48,6 +50,12 @@ fn fs_main(@builtin(position) frag_coord: vec4<f32>) -> @location(0) vec4<f32> {
 
     // Vignette towards the screen corners.
     let vignette = 1.0 - (0.6 * dot(uv, uv));
-    let color = palette * frame.light_color * vignette;
+
+    // Exponential-squared distance fog: 1 / w of the fragment position is
+    // its depth in view space.
+    let view_depth = 1.0 / frag_coord.w;
+    let fog = 1.0 - exp(-0.08 * view_depth * view_depth);
+    let fog_color = vec3<f32>(0.05, 0.06, 0.09);
+    let color = mix(palette * frame.light_color * vignette, fog_color, fog);
     return vec4<f32>(color, 1.0);
 }

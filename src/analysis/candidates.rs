@@ -21,6 +21,7 @@ pub enum RejectReason {
     NotStorable,
     Trivial,
     UniformOnly,
+    ScreenSpace,
 }
 
 impl RejectReason {
@@ -30,6 +31,7 @@ impl RejectReason {
             RejectReason::NotStorable => "not-storable",
             RejectReason::Trivial => "trivial",
             RejectReason::UniformOnly => "uniform-only",
+            RejectReason::ScreenSpace => "screen-space",
         }
     }
 }
@@ -176,7 +178,7 @@ pub(super) fn find(
         *occurrence += 1;
 
         let slice = graph.slice(expr);
-        match classify(module, &exprs, info, &layout, &slice, expr) {
+        match classify(module, function, &exprs, info, &layout, &slice, expr) {
             Err((reason, detail)) => rejected.push(Rejected {
                 node,
                 reason,
@@ -196,6 +198,7 @@ pub(super) fn find(
                     cost_of(&shared)
                 };
                 let derivatives = slice.ones().any(|i| takes_derivatives(exprs[i]));
+                let depends_on = per_frame_inputs(module, &exprs, &slice);
                 let range = ranges.of(&node);
                 candidates.push(Candidate {
                     node,
@@ -208,6 +211,7 @@ pub(super) fn find(
                     },
                     overlap,
                     derivatives,
+                    depends_on,
                     range: range.ends(),
                     fits_f16: range.fits_f16(),
                 });
@@ -215,9 +219,20 @@ pub(super) fn find(
         }
     }
 
+    // Highest P/T first; a node that goes stale as the camera, the light
+    // or time moves comes after object-space nodes within
+    // `PER_FRAME_PENALTY` of its P/T.
+    let rank = |c: &Candidate| {
+        c.ratio
+            - if c.depends_on.is_empty() {
+                0.0
+            } else {
+                PER_FRAME_PENALTY
+            }
+    };
     candidates.sort_by(|a, b| {
-        b.ratio
-            .total_cmp(&a.ratio)
+        rank(b)
+            .total_cmp(&rank(a))
             .then(a.node.range.start.cmp(&b.node.range.start))
     });
     Analysis {
@@ -326,6 +341,7 @@ pub(super) fn call_extent(source: &str, range: Range<usize>) -> Range<usize> {
 /// Why `expr` cannot be cached, or its number of components if it can.
 fn classify(
     module: &naga::Module,
+    function: &naga::Function,
     exprs: &[&Expression],
     info: &naga::valid::FunctionInfo,
     layout: &proc::FunctionLayout,
@@ -377,7 +393,143 @@ fn classify(
                 .into(),
         ));
     }
+    if let Some(what) = screen_space_read(module, function, exprs, slice) {
+        return Err((
+            RejectReason::ScreenSpace,
+            format!(
+                "reads the pixel's own place on the screen ({what}): reprojected, a cached value would land on other pixels and carry this one's; what belongs to the surface point (its depth, `front_facing`) stays cacheable"
+            ),
+        ));
+    }
     Ok(components)
+}
+
+/// How much P/T a node that depends on per-frame inputs gives up in the
+/// ranking: it goes stale under exactly the motion scenes declare.
+const PER_FRAME_PENALTY: f64 = 0.02;
+
+/// The per-frame inputs `slice` reads, by the names of the uniform and
+/// storage members it loads: `time` (time, elapsed), `camera` (camera,
+/// cam, eye, view: positions and matrices), `light` (light, sun). A
+/// cached value of such a node is stale as soon as its input changes.
+fn per_frame_inputs(module: &naga::Module, exprs: &[&Expression], slice: &ExprSet) -> Vec<String> {
+    let mut found: Vec<String> = Vec::new();
+    let mut note = |name: String| {
+        let name = name.to_ascii_lowercase();
+        let has = |words: &[&str]| words.iter().any(|w| name.contains(w));
+        for (input, words) in [
+            ("time", &["time", "elapsed"][..]),
+            ("camera", &["camera", "cam", "eye", "view"][..]),
+            ("light", &["light", "sun"][..]),
+        ] {
+            if has(words) && !found.iter().any(|f| f == input) {
+                found.push(input.to_string());
+            }
+        }
+    };
+    let global_name = |expr: &Expression| match *expr {
+        Expression::GlobalVariable(g) => {
+            let variable = &module.global_variables[g];
+            matches!(
+                variable.space,
+                naga::AddressSpace::Uniform | naga::AddressSpace::Storage { .. }
+            )
+            .then(|| (variable.name.clone().unwrap_or_default(), variable.ty))
+        }
+        _ => None,
+    };
+    for i in slice.ones() {
+        match *exprs[i] {
+            Expression::AccessIndex { base, index } => {
+                let Some((name, ty)) = global_name(exprs[base.index()]) else {
+                    continue;
+                };
+                let member = match module.types[ty].inner {
+                    TypeInner::Struct { ref members, .. } => members
+                        .get(index as usize)
+                        .and_then(|m| m.name.clone())
+                        .unwrap_or_default(),
+                    _ => String::new(),
+                };
+                note(format!("{name}.{member}"));
+            }
+            Expression::Load { pointer } => {
+                if let Some((name, _)) = global_name(exprs[pointer.index()]) {
+                    note(name);
+                }
+            }
+            _ => {}
+        }
+    }
+    found
+}
+
+/// What in `slice` reads where the pixel is on the screen rather than what
+/// surface point it shows: `@builtin(position)`'s x or y (its z and w, the
+/// depth, belong to the point), `sample_index`, `sample_mask`.
+fn screen_space_read(
+    module: &naga::Module,
+    function: &naga::Function,
+    exprs: &[&Expression],
+    slice: &ExprSet,
+) -> Option<&'static str> {
+    use naga::{Binding, BuiltIn};
+    let builtin = |binding: &Option<Binding>| match binding {
+        Some(Binding::BuiltIn(builtin)) => Some(*builtin),
+        _ => None,
+    };
+    // The builtin each argument (or struct member of one) carries.
+    let carried = |expr: &Expression| -> Option<BuiltIn> {
+        match *expr {
+            Expression::FunctionArgument(i) => {
+                builtin(&function.arguments.get(i as usize)?.binding)
+            }
+            Expression::AccessIndex { base, index } => {
+                let Expression::FunctionArgument(i) = *exprs[base.index()] else {
+                    return None;
+                };
+                let argument = function.arguments.get(i as usize)?;
+                match module.types[argument.ty].inner {
+                    TypeInner::Struct { ref members, .. } => {
+                        builtin(&members.get(index as usize)?.binding)
+                    }
+                    _ => None,
+                }
+            }
+            _ => None,
+        }
+    };
+    let mut positions = Vec::new();
+    for i in slice.ones() {
+        match carried(exprs[i]) {
+            Some(BuiltIn::SampleIndex) => return Some("`@builtin(sample_index)`"),
+            Some(BuiltIn::SampleMask) => return Some("`@builtin(sample_mask)`"),
+            Some(BuiltIn::Position { .. }) => positions.push(i),
+            _ => {}
+        }
+    }
+    if positions.is_empty() {
+        return None;
+    }
+    // Every use of the position must take its z or w alone.
+    let depth_only = |expr: &Expression| match *expr {
+        Expression::AccessIndex { index, .. } => index >= 2,
+        Expression::Swizzle {
+            size, ref pattern, ..
+        } => pattern[..size as usize]
+            .iter()
+            .all(|c| matches!(c, naga::SwizzleComponent::Z | naga::SwizzleComponent::W)),
+        _ => false,
+    };
+    for i in slice.ones() {
+        let reads_position = proc::operands(exprs[i])
+            .iter()
+            .any(|o| positions.contains(&o.index()));
+        if reads_position && !depth_only(exprs[i]) {
+            return Some("`@builtin(position).xy`");
+        }
+    }
+    None
 }
 
 /// Whether an expression only moves data: no arithmetic, no texture access.

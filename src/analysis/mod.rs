@@ -12,7 +12,12 @@
 //! * `trivial`: only moves data (a literal, an argument, a bare load, a
 //!   swizzle or a constructor of such), so there is nothing to save;
 //! * `uniform-only`: depends on no per-fragment input — only uniforms,
-//!   constants and overrides — so it is the same for every pixel.
+//!   constants and overrides — so it is the same for every pixel;
+//! * `screen-space`: reads where the pixel is on the screen
+//!   (`@builtin(position).xy`, `sample_index`, `sample_mask`: dithers,
+//!   screen-space patterns), so reprojected onto another pixel it would be
+//!   wrong; the position's depth and `front_facing` belong to the surface
+//!   point and stay cacheable.
 //!
 //! Pointers and resource handles (textures, samplers) are not values and are
 //! not listed at all. Expressions inside helper functions are nodes per call
@@ -135,6 +140,11 @@ pub struct Candidate {
     /// Whether the slice takes implicit derivatives (`textureSample`,
     /// `dpdx`...), which a rewrite must keep in uniform control flow.
     pub derivatives: bool,
+    /// The per-frame inputs the slice reads, by the names of the uniform
+    /// and storage members it loads (`time`, `camera`, `light`): a cached
+    /// value goes stale as they change, so such nodes rank after
+    /// object-space ones of similar P/T.
+    pub depends_on: Vec<String>,
     /// Bounds of the node's value from interval arithmetic ([`range`]);
     /// `null` ends are unbounded.
     pub range: [Option<f64>; 2],

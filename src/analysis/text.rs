@@ -33,6 +33,12 @@ pub fn notes(analysis: &Analysis, all: bool) -> Vec<Diagnostic> {
                 "its slice takes implicit derivatives: a rewrite must keep them in uniform control flow",
             );
         }
+        if !candidate.depends_on.is_empty() {
+            note = note.with_note(format!(
+                "it reads per-frame inputs ({}): a cached value goes stale as they change, so it ranks after object-space nodes of similar P/T",
+                candidate.depends_on.join(", ")
+            ));
+        }
         if !candidate.fits_f16 {
             note = note.with_note(
                 "its value may not fit an rgba16float cache (the analysis cannot bound it below 65504): three-pass keeps it in rgba32float",

@@ -66,12 +66,16 @@ fn json_has_the_documented_shape() {
         let components = c["components"].as_u64().unwrap() as usize;
         assert_eq!(types[components - 1], ty);
     }
-    // Candidates come highest P/T first.
+    // Candidates come highest P/T first; those that read per-frame inputs
+    // as if 0.02 lower.
     let ratios: Vec<f64> = analysis["candidates"]
         .as_array()
         .unwrap()
         .iter()
-        .map(|c| c["ratio"].as_f64().unwrap())
+        .map(|c| {
+            let flagged = !c["depends_on"].as_array().unwrap().is_empty();
+            c["ratio"].as_f64().unwrap() - if flagged { 0.02 } else { 0.0 }
+        })
         .collect();
     assert!(ratios.windows(2).all(|w| w[0] >= w[1]));
     let rejected = analysis["rejected"].as_array().unwrap();
@@ -180,4 +184,113 @@ fn entry_selects_among_several_fragment_entry_points() {
         .collect();
     assert!(texts.contains(&"cos(x)"), "{texts:?}");
     assert!(!texts.contains(&"sin(x)"), "{texts:?}");
+}
+
+/// Per-pixel values of a surface, a dither over the pixel's own screen
+/// position, and values that read time and the camera.
+const PAYLOAD_DEPENDENCES: &str = r#"
+struct Frame {
+    time: f32,
+    camera_position: vec3<f32>,
+}
+@group(0) @binding(0) var<uniform> frame: Frame;
+
+@fragment
+fn fs(@builtin(position) pixel: vec4<f32>, @location(0) world: vec3<f32>) -> @location(0) vec4<f32> {
+    let dither = fract(sin(dot(pixel.xy, vec2<f32>(12.9898, 78.233))) * 43758.5453);
+    let depth_fog = exp(-pixel.z * 4.0);
+    let pattern = sin(world.x * 10.0) * cos(world.y * 7.0);
+    let pulse = sin(world.x * 10.0 + frame.time) * cos(world.y * 7.0);
+    let view_distance = length(frame.camera_position - world);
+    var detail = 0.0;
+    for (var i = 0; i < 16; i++) {
+        detail += sin(world.z * f32(i));
+    }
+    return vec4<f32>(vec3<f32>(pattern * depth_fog + dither * 0.01 + pulse + view_distance + detail), 1.0);
+}
+"#;
+
+/// A value of the pixel's place on the screen (a dither) would land on
+/// other pixels when reprojected: rejected as screen-space. The position's
+/// depth belongs to the surface point and stays cacheable.
+#[test]
+fn screen_space_payload_is_rejected() {
+    let (_, analysis) = crate::util::analyzed("dependences.wgsl", PAYLOAD_DEPENDENCES);
+    let dither = analysis
+        .rejected
+        .iter()
+        .find(|r| {
+            r.node.text == "fract(sin(dot(pixel.xy, vec2<f32>(12.9898, 78.233))) * 43758.5453)"
+        })
+        .expect("the dither is rejected");
+    assert_eq!(
+        dither.reason,
+        shadecache::analysis::RejectReason::ScreenSpace
+    );
+    assert!(
+        dither.detail.contains("@builtin(position).xy"),
+        "{}",
+        dither.detail
+    );
+    // Everything that sums the dither in is screen-space too.
+    assert!(analysis.rejected.iter().any(|r| r
+        .node
+        .text
+        .starts_with("pattern * depth_fog + dither")
+        && r.reason == shadecache::analysis::RejectReason::ScreenSpace));
+    let fog = crate::util::candidate(&analysis, "exp(-pixel.z * 4.0)");
+    assert!(fog.depends_on.is_empty());
+    // The corpus's screen-space plasma: its palette is rejected, its fog
+    // from the fragment's depth is cached.
+    let shader =
+        shadecache::front::load(&crate::util::root().join("corpus/position_direct.wgsl")).unwrap();
+    let plasma = shadecache::analysis::analyze(&shader, &Default::default()).unwrap();
+    assert!(plasma.rejected.iter().any(|r| r
+        .node
+        .text
+        .starts_with("vec3<f32>(0.5) + (vec3<f32>(0.5) * cos(")
+        && r.reason == shadecache::analysis::RejectReason::ScreenSpace));
+    crate::util::candidate(&plasma, "1.0 - exp(-0.08 * view_depth * view_depth)");
+}
+
+/// Values that read time or the camera go stale as they move: flagged in
+/// `depends_on` (JSON and text) and ranked after object-space nodes of
+/// similar P/T.
+#[test]
+fn time_dependent_payload_is_flagged() {
+    let (_, analysis) = crate::util::analyzed("dependences.wgsl", PAYLOAD_DEPENDENCES);
+    let pulse = crate::util::candidate(
+        &analysis,
+        "sin(world.x * 10.0 + frame.time) * cos(world.y * 7.0)",
+    );
+    assert_eq!(pulse.depends_on, ["time"]);
+    let view = crate::util::candidate(&analysis, "length(frame.camera_position - world)");
+    assert_eq!(view.depends_on, ["camera"]);
+    let pattern = crate::util::candidate(&analysis, "sin(world.x * 10.0) * cos(world.y * 7.0)");
+    assert!(pattern.depends_on.is_empty());
+    // `pulse` costs a little more than `pattern` (one addition), yet
+    // ranks after it.
+    let rank = |text: &str| {
+        analysis
+            .candidates
+            .iter()
+            .position(|c| c.node.text == text)
+            .unwrap()
+    };
+    assert!(pulse.ratio > pattern.ratio && pulse.ratio - pattern.ratio < 0.02);
+    assert!(
+        rank("sin(world.x * 10.0) * cos(world.y * 7.0)")
+            < rank("sin(world.x * 10.0 + frame.time) * cos(world.y * 7.0)")
+    );
+    let (_dir, path) = temp_file("dependences.wgsl", PAYLOAD_DEPENDENCES.as_bytes());
+    let json = analyze_json(&path);
+    let flagged = json["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["text"] == "sin(world.x * 10.0 + frame.time) * cos(world.y * 7.0)")
+        .unwrap();
+    assert_eq!(flagged["depends_on"], serde_json::json!(["time"]));
+    let text = stdout(&shadecache(["analyze".as_ref(), path.as_os_str()]));
+    assert!(text.contains("it reads per-frame inputs (time)"), "{text}");
 }
