@@ -28,8 +28,8 @@ use crate::diagnostic::{Diagnostic, Error};
 use crate::front::Shader;
 use crate::plan::{self, Plan};
 use crate::report::{
-    self, Device, FrameStats, GridReport, MissCause, NodeReport, PassTime, Reference, Report,
-    ResultRow,
+    self, Confirmation, Device, FrameStats, GridReport, MissCause, NodeReport, PassTime, Reference,
+    Report, ResultRow,
 };
 use crate::rewrite::{self, CacheFormat, Options as RewriteOptions, Reconstruction, Variant};
 use crate::runtime::{self, FrameInputs, Gpu, ObjectInputs, RunOptions, Runner};
@@ -154,13 +154,16 @@ impl Progress for Quiet {
 
 /// What the report shows besides its numbers: the last measured frames,
 /// and the GPU timer scopes of the last frame.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct Pictures {
     pub reference: Vec<u8>,
     /// Colour and classes of each result, in `Report::results` order.
     pub results: Vec<Picture>,
     /// Every pass of every run in the last frame, for a Chrome trace.
     pub trace: Vec<wgpu_profiler::GpuTimerQueryResult>,
+    /// The recommended configuration's rewrite, as it was measured (the
+    /// analysis bounded by the scene's uniform values), to write out.
+    pub chosen: Option<rewrite::Rewritten>,
 }
 
 /// A result's last measured colour and classes (RGBA8).
@@ -631,6 +634,7 @@ pub fn profile(
                 time_ms,
                 passes,
                 speedup,
+                speedup_ci: metrics::speedup_interval(&reference_times, &config.times),
                 psnr: metrics::mean(&config.errors.iter().map(|e| e.psnr).collect::<Vec<_>>()),
                 ssim: metrics::mean(&config.errors.iter().map(|e| e.ssim).collect::<Vec<_>>()),
                 max_abs_error: config
@@ -643,6 +647,13 @@ pub fn profile(
                         .errors
                         .iter()
                         .map(|e| e.above_threshold)
+                        .collect::<Vec<_>>(),
+                ),
+                coverage: metrics::mean(
+                    &config
+                        .decisions
+                        .iter()
+                        .map(|d| d.covered as f64 / (size[0] * size[1]).max(1) as f64)
                         .collect::<Vec<_>>(),
                 ),
                 hit_rate,
@@ -726,6 +737,7 @@ pub fn profile(
         }
     }
 
+    let warnings = view_warnings(scene, aspect, warmup, &results);
     let report = Report {
         format: 1,
         shader: shader.file.path.clone(),
@@ -754,6 +766,10 @@ pub fn profile(
         command: options.command.clone(),
         reference: Reference {
             time_ms: reference_ms,
+            spread_ms: [
+                metrics::quantile(&reference_times, 0.1),
+                metrics::quantile(&reference_times, 0.9),
+            ],
             frame_ms: reference_times,
         },
         nodes: node_reports,
@@ -766,11 +782,48 @@ pub fn profile(
             pruned: grid.pruned.clone(),
         }),
         results,
+        warnings,
         miss_causes,
         choice: None,
     };
+    // The answer, and its winner measured again before it is given.
+    let budget = options.max_error.unwrap_or(Budget::DEFAULT);
+    let mut choice = report.choose(budget, options.max_error.is_some());
+    let mut chosen = None;
+    if let Some(winner) = choice.result {
+        let rewritten = rewrite_of(shader, &analysis, &report.results[winner], &defaults)?;
+        let mut runner = Runner::new(
+            &gpu,
+            &rewritten.plan,
+            source_of(&sources_of(&rewritten)?),
+            &meshes,
+            &textures,
+            (size[0], size[1]),
+            plain,
+        )
+        .map_err(fail)?;
+        let mut clock = Clock {
+            gpu: &gpu,
+            profiler: &mut profiler,
+            timestamps,
+        };
+        progress.start(u64::from(warmup + frames) * 2);
+        let confirmation = confirm(
+            &mut clock,
+            [&mut reference, &mut runner],
+            &|frame| inputs_of(scene, frame),
+            warmup,
+            frames,
+            progress,
+        )?;
+        progress.finish();
+        choice.confirm(confirmation);
+        if choice.result.is_some() {
+            chosen = Some(rewritten);
+        }
+    }
     let report = Report {
-        choice: options.max_error.map(|budget| report.choose(budget)),
+        choice: Some(choice),
         ..report
     };
     Ok((
@@ -779,8 +832,119 @@ pub fn profile(
             reference: reference_pixels,
             results: pictures,
             trace,
+            chosen,
         },
     ))
+}
+
+/// Less than this share of the image covered, the figures say little.
+const FEW_PIXELS: f64 = 0.01;
+
+/// Warnings about what the measured frames show: few or no covered pixels
+/// (`results` measured over them), or a scene the warm-up moved far from
+/// its first frame (an object's centre by more than a quarter of the
+/// screen, or out of the view).
+fn view_warnings(scene: &Scene, aspect: f32, warmup: u32, results: &[ResultRow]) -> Vec<String> {
+    let mut warnings = Vec::new();
+    let coverage = results.iter().map(|r| r.coverage).fold(0.0, f64::max);
+    if !results.is_empty() && coverage == 0.0 {
+        warnings.push(
+            "the measured frames cover no pixels: the scene shows nothing of the shader there, so its speed-ups and errors say nothing about it (check the camera, the objects and --warmup)".into(),
+        );
+    } else if !results.is_empty() && coverage < FEW_PIXELS {
+        warnings.push(format!(
+            "the measured frames cover {:.2}% of the image: its speed-ups and errors rest on a few pixels",
+            coverage * 100.0
+        ));
+    }
+    if warmup > 0 {
+        let (first, measured) = (scene.frame(0, aspect), scene.frame(warmup, aspect));
+        for object in 0..first.objects.len().min(measured.objects.len()) {
+            let at = |state: &scene::FrameState| {
+                state.clip_from_world * state.objects[object] * glam::Vec4::W
+            };
+            let (a, b) = (at(&first), at(&measured));
+            let ndc = |c: glam::Vec4| (c.w > 0.0).then(|| c.truncate().truncate() / c.w);
+            let inside = |p: Option<glam::Vec2>| p.is_some_and(|p| p.abs().max_element() <= 1.0);
+            let moved = match (ndc(a), ndc(b)) {
+                (Some(p), Some(q)) => (q - p).length() > 0.5,
+                _ => true,
+            };
+            if moved || (inside(ndc(a)) && !inside(ndc(b))) {
+                warnings.push(format!(
+                    "the {warmup} warm-up frames moved object {object} far from where frame 0 shows it ({}): the measured frames show another view than the scene starts with (--warmup sets the warm-up)",
+                    match (ndc(a), ndc(b)) {
+                        (Some(p), Some(q)) => format!(
+                            "its centre from ({:.2}, {:.2}) to ({:.2}, {:.2}) in normalised device coordinates",
+                            p.x, p.y, q.x, q.y
+                        ),
+                        _ => "its centre went behind the camera".into(),
+                    }
+                ));
+            }
+        }
+    }
+    warnings
+}
+
+/// What times a frame.
+struct Clock<'a> {
+    gpu: &'a Gpu,
+    profiler: &'a mut wgpu_profiler::GpuProfiler,
+    timestamps: bool,
+}
+
+/// The original (`runners[0]`) and the run's winner (`runners[1]`) again,
+/// in a run of their own: frame by frame, alternating which renders first,
+/// so that neither always follows the other's work.
+fn confirm(
+    clock: &mut Clock,
+    runners: [&mut Runner; 2],
+    inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
+    warmup: u32,
+    frames: u32,
+    progress: &mut dyn Progress,
+) -> Result<Confirmation, Error> {
+    let fail = |message: String| Error::plain(Diagnostic::error(message));
+    let [reference, chosen] = runners;
+    let mut times = [Vec::new(), Vec::new()];
+    for frame in 0..warmup + frames {
+        let inputs = inputs_of(frame)?;
+        let order = if frame % 2 == 0 { [0, 1] } else { [1, 0] };
+        for which in order {
+            let runner = if which == 0 {
+                &mut *reference
+            } else {
+                &mut *chosen
+            };
+            let label = ["reference again", "chosen again"][which];
+            let (time, _, _) = timed(
+                clock.gpu,
+                clock.profiler,
+                clock.timestamps,
+                runner,
+                &inputs,
+                label,
+            )
+            .map_err(fail)?;
+            progress.step(label);
+            if frame >= warmup {
+                times[which].push(time);
+            }
+        }
+    }
+    let (reference_ms, time_ms) = (metrics::median(&times[0]), metrics::median(&times[1]));
+    Ok(Confirmation {
+        frames,
+        reference_ms,
+        time_ms,
+        speedup: if time_ms > 0.0 {
+            reference_ms / time_ms
+        } else {
+            0.0
+        },
+        speedup_ci: metrics::speedup_interval(&times[0], &times[1]),
+    })
 }
 
 /// Where vertex input `name` at `location` is declared: the first
@@ -980,5 +1144,7 @@ fn node_report(
         payload_ms,
         range: candidate.range,
         fits_f16: candidate.fits_f16,
+        function: node.function.clone(),
+        depends_on: candidate.depends_on.clone(),
     }
 }

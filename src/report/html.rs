@@ -54,21 +54,64 @@ pub fn html(report: &Report, dir: &Path) -> String {
         );
     }
 
-    // The answer.
+    for warning in &report.warnings {
+        let _ = write!(
+            page,
+            "<p class=\"answer\"><b>Warning:</b> {}.</p>",
+            escape(warning)
+        );
+    }
+
+    // The answer: the choice (the same sentence stdout gives), then the
+    // fastest configuration measured, whatever its error.
     page.push_str("<h2>Which value to cache</h2>");
+    if let Some(choice) = &report.choice {
+        let budget = if choice.budget_given {
+            format!("within {}", choice.budget)
+        } else {
+            format!(
+                "within {} (the default; <code>--max-error</code> sets it)",
+                choice.budget
+            )
+        };
+        let what = match choice.result.map(|i| &report.results[i]) {
+            Some(row) => format!(
+                "Cache <code>{}</code> (node <code>{}</code>) with the <b>{}</b> variant, {}. ",
+                escape(&row.node_text),
+                escape(&row.node),
+                row.variant,
+                escape(&row.setting())
+            ),
+            None => "<b>Keep the original shader.</b> ".into(),
+        };
+        let _ = write!(
+            page,
+            "<p class=\"answer\">{what}Answer {budget}: {}{}</p>",
+            escape(&choice.reason),
+            if choice.result.is_some() {
+                " Its shaders and plan are in <code>choice/</code>."
+            } else {
+                ""
+            }
+        );
+    }
     match report.results.first() {
         Some(best) => {
             let _ = write!(
                 page,
-                "<p class=\"answer\">Cache <code>{}</code> (node <code>{}</code>) with the <b>{}</b> variant (Δn = {}, k = {}): <b>{:.2}×</b> faster than the original ({:.3} ms against {:.3} ms), {:.0}% of the ideal {:.2}× for P/T = {:.2} and {:.0}% reuse; PSNR {:.1} dB, SSIM {:.4}, largest error {:.3}.</p>",
+                "<p>Fastest measured, whatever its error: <code>{}</code> (node <code>{}</code>), {}, Δn = {}, k = {}: {:.2}× [{:.2}, {:.2}] against the original ({:.3} ms against {:.3} ms, whose frames spread {:.3}–{:.3} ms), {:.0}% of the ideal {:.2}× for P/T = {:.2} and {:.0}% reuse; PSNR {:.1} dB, SSIM {:.4}, largest error {:.3}.</p>",
                 escape(&best.node_text),
                 escape(&best.node),
                 best.variant,
                 best.refresh_period,
                 best.refresh_quad,
                 best.speedup,
+                best.speedup_ci[0],
+                best.speedup_ci[1],
                 best.time_ms,
                 report.reference.time_ms,
+                report.reference.spread_ms[0],
+                report.reference.spread_ms[1],
                 best.share_of_ideal * 100.0,
                 best.ideal_speedup,
                 best.p_over_t,
@@ -80,36 +123,15 @@ pub fn html(report: &Report, dir: &Path) -> String {
         }
         None => page.push_str("<p>No configuration could be measured.</p>"),
     }
-    if let Some(choice) = &report.choice {
-        match choice.result.map(|i| &report.results[i]) {
-            Some(row) => {
-                let _ = write!(
-                    page,
-                    "<p class=\"answer\">Within the budget {}: node <code>{}</code>, <b>{}</b>, {} — {}. Its shaders and plan are in <code>choice/</code>.</p>",
-                    escape(&choice.budget.to_string()),
-                    escape(&row.node),
-                    row.variant,
-                    row.setting(),
-                    escape(&choice.reason)
-                );
-            }
-            None => {
-                let _ = write!(
-                    page,
-                    "<p class=\"answer\">Within the budget {}: {}.</p>",
-                    escape(&choice.budget.to_string()),
-                    escape(&choice.reason)
-                );
-            }
-        }
-    }
 
     // All results.
-    page.push_str("<h2>Results</h2><table><tr><th>#</th><th>node</th><th>variant</th><th>Δn</th><th>k</th><th>recon.</th><th>format</th><th>ε</th><th>time ms</th><th>passes ms</th><th>speed-up</th><th>ideal</th><th>share</th><th>P/T</th><th>hit</th><th>miss (off-screen / disoccluded)</th><th>refresh</th><th>PSNR dB</th><th>SSIM</th><th>max err</th><th>map</th></tr>");
+    page.push_str("<h2>Results</h2><table><tr><th>#</th><th>node</th><th>variant</th><th>Δn</th><th>k</th><th>recon.</th><th>format</th><th>ε</th><th>time ms</th><th>passes ms</th><th>speed-up [95% interval]</th><th>ideal</th><th>share</th><th>P/T</th><th>hit</th><th>miss (off-screen / disoccluded)</th><th>refresh</th><th>PSNR dB</th><th>SSIM</th><th>max err</th><th>map</th></tr>");
     let _ = write!(
         page,
-        "<tr class=\"reference\"><td></td><td colspan=\"7\">reference (unmodified shader)</td><td>{:.3}</td><td colspan=\"12\"></td></tr>",
-        report.reference.time_ms
+        "<tr class=\"reference\"><td></td><td colspan=\"7\">reference (unmodified shader)</td><td>{:.3} (frames {:.3}–{:.3})</td><td colspan=\"12\"></td></tr>",
+        report.reference.time_ms,
+        report.reference.spread_ms[0],
+        report.reference.spread_ms[1]
     );
     for (rank, row) in report.results.iter().enumerate() {
         let passes: Vec<String> = row
@@ -119,12 +141,14 @@ pub fn html(report: &Report, dir: &Path) -> String {
             .collect();
         let _ = write!(
             page,
-            "<tr><td>{}</td>{}<td>{:.3}</td><td>{}</td><td>{:.2}×</td><td>{:.2}×</td><td>{:.0}%</td><td>{:.2}</td><td>{:.1}%</td><td>{:.1}% ({:.1} / {:.1})</td><td>{:.1}%</td><td>{:.1}</td><td>{:.4}</td><td>{:.3}</td><td><a href=\"maps/{}\">png</a></td></tr>",
+            "<tr><td>{}</td>{}<td>{:.3}</td><td>{}</td><td>{:.2}× [{:.2}, {:.2}]</td><td>{:.2}×</td><td>{:.0}%</td><td>{:.2}</td><td>{:.1}%</td><td>{:.1}% ({:.1} / {:.1})</td><td>{:.1}%</td><td>{:.1}</td><td>{:.4}</td><td>{:.3}</td><td><a href=\"maps/{}\">png</a></td></tr>",
             rank + 1,
             configuration_cells(row),
             row.time_ms,
             escape(&passes.join(", ")),
             row.speedup,
+            row.speedup_ci[0],
+            row.speedup_ci[1],
             row.ideal_speedup,
             row.share_of_ideal * 100.0,
             row.p_over_t,

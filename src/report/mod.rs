@@ -57,6 +57,11 @@ pub struct Report {
     /// the refresh pattern alone (Δn, k) and are not listed.
     #[serde(default)]
     pub miss_causes: Vec<MissCause>,
+    /// What makes the figures say little about the shader: measured frames
+    /// that cover few or no pixels, a warm-up that moved the scene far
+    /// from where it starts.
+    #[serde(default)]
+    pub warnings: Vec<String>,
     /// The grid of knobs measured, and what was pruned from it.
     #[serde(default)]
     pub grid: Option<GridReport>,
@@ -79,15 +84,43 @@ pub struct GridReport {
     pub pruned: Vec<Pruned>,
 }
 
-/// The fastest configuration within an error budget.
+/// The answer: the configuration to use, or to keep the original.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Choice {
+    /// The error a recommendation must stay within: `--max-error`, else
+    /// [`Budget::DEFAULT`].
     pub budget: Budget,
-    /// Index into `results`; none when no configuration is both within the
-    /// budget and faster than the original shader.
+    /// Whether the budget was given (`--max-error`).
+    #[serde(default)]
+    pub budget_given: bool,
+    /// Index into `results` of the configuration recommended: the fastest
+    /// within the budget whose speed-up interval lies above 1×, in the run
+    /// and again in a confirmatory run. `None`: keep the original shader.
     pub result: Option<usize>,
+    /// No configuration measured reached the budget.
+    #[serde(default)]
+    pub none_within_budget: bool,
+    /// When none is recommended, what came closest (index into `results`).
+    #[serde(default)]
+    pub closest: Option<usize>,
+    /// The configuration that won the run, measured again against the
+    /// original.
+    #[serde(default)]
+    pub confirmation: Option<Confirmation>,
     /// Why this one, or why none.
     pub reason: String,
+}
+
+/// A configuration measured again against the original shader, in a run
+/// of its own (the two interleaved frame by frame, alternating which goes
+/// first).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Confirmation {
+    pub frames: u32,
+    pub reference_ms: f64,
+    pub time_ms: f64,
+    pub speedup: f64,
+    pub speedup_ci: [f64; 2],
 }
 
 /// The misses of the best configuration when only `effect` is simulated.
@@ -110,6 +143,9 @@ pub struct Device {
 pub struct Reference {
     /// Median frame time of the unmodified shader, ms.
     pub time_ms: f64,
+    /// Its 10th and 90th percentiles, ms: how much one run's frames spread.
+    #[serde(default)]
+    pub spread_ms: [f64; 2],
     pub frame_ms: Vec<f64>,
 }
 
@@ -140,6 +176,13 @@ pub struct NodeReport {
     /// three-pass cache runs in rgba32float.
     #[serde(default)]
     pub fits_f16: bool,
+    /// The function whose source the node is in (a helper's, for a node
+    /// inside one).
+    #[serde(default)]
+    pub function: String,
+    /// The per-frame inputs its value reads (`time`, `camera`, `light`).
+    #[serde(default)]
+    pub depends_on: Vec<String>,
 }
 
 /// One configuration's measurements.
@@ -159,12 +202,20 @@ pub struct ResultRow {
     pub passes: Vec<PassTime>,
     /// Reference time over this variant's time, from the same run.
     pub speedup: f64,
+    /// A 95% interval for `speedup` (a bootstrap over the measured frames
+    /// of both, `profile::metrics::speedup_interval`).
+    #[serde(default)]
+    pub speedup_ci: [f64; 2],
     /// Means over the measured frames.
     pub psnr: f64,
     pub ssim: f64,
     /// Largest over the measured frames.
     pub max_abs_error: f64,
     pub above_threshold: f64,
+    /// The share of the image the node covers (where it is computed),
+    /// mean over the measured frames.
+    #[serde(default)]
+    pub coverage: f64,
     /// Shares of the covered pixels, means over the measured frames.
     pub hit_rate: f64,
     pub miss_rate: f64,
@@ -219,6 +270,18 @@ pub enum Budget {
 }
 
 impl Budget {
+    /// The budget when none is given: a picture a viewer would take for
+    /// the original at a glance.
+    pub const DEFAULT: Budget = Budget::Ssim(0.95);
+
+    /// `row`'s error in this budget's metric (higher is better).
+    fn metric(&self, row: &ResultRow) -> f64 {
+        match self {
+            Budget::Psnr(_) => row.psnr,
+            Budget::Ssim(_) => row.ssim,
+        }
+    }
+
     /// Whether `row` is within the budget.
     pub fn admits(&self, row: &ResultRow) -> bool {
         match *self {
@@ -314,54 +377,110 @@ impl Report {
         out
     }
 
-    /// The fastest result within `budget` that is faster than the
-    /// original shader.
-    pub fn choose(&self, budget: Budget) -> Choice {
-        let within: Vec<usize> = (0..self.results.len())
-            .filter(|&i| budget.admits(&self.results[i]))
-            .collect();
-        let fastest = within
-            .iter()
-            .copied()
-            .min_by(|&a, &b| self.results[a].time_ms.total_cmp(&self.results[b].time_ms));
-        let (result, reason) = match fastest {
-            Some(i) if self.results[i].speedup > 1.0 => {
-                let row = &self.results[i];
-                (
-                    Some(i),
-                    format!(
-                        "the fastest of {} configurations within {budget}: {:.3} ms against {:.3} ms for the original ({:.2}×), PSNR {:.1} dB, SSIM {:.4}",
-                        within.len(),
-                        row.time_ms,
-                        self.reference.time_ms,
-                        row.speedup,
-                        row.psnr,
-                        row.ssim
-                    ),
-                )
-            }
-            Some(i) => (
-                None,
-                format!(
-                    "{} configurations are within {budget}, but the fastest of them ({:.3} ms) is not faster than the original ({:.3} ms): keep the original shader",
-                    within.len(),
-                    self.results[i].time_ms,
-                    self.reference.time_ms
-                ),
-            ),
-            None => (
-                None,
-                format!(
-                    "none of the {} configurations is within {budget}: keep the original shader",
-                    self.results.len()
-                ),
-            ),
+    /// The answer from this run: the fastest configuration within
+    /// `budget` whose speed-up interval lies above 1×, or none, with what
+    /// came closest. The caller measures the winner again and settles the
+    /// answer with [`Choice::confirm`].
+    pub fn choose(&self, budget: Budget, budget_given: bool) -> Choice {
+        let rows = &self.results;
+        let faster = |i: &usize| rows[*i].speedup_ci[0] > 1.0;
+        let fastest = |among: &mut dyn Iterator<Item = usize>| {
+            among.min_by(|&a, &b| rows[a].time_ms.total_cmp(&rows[b].time_ms))
         };
-        Choice {
+        let within: Vec<usize> = (0..rows.len())
+            .filter(|&i| budget.admits(&rows[i]))
+            .collect();
+        let winner = fastest(&mut within.iter().copied().filter(faster));
+        let mut choice = Choice {
             budget,
-            result,
-            reason,
+            budget_given,
+            result: winner,
+            none_within_budget: within.is_empty(),
+            closest: None,
+            confirmation: None,
+            reason: String::new(),
+        };
+        if let Some(i) = winner {
+            choice.reason = format!(
+                "the fastest of the {} configurations within {budget} whose speed-up interval lies above 1×: {}",
+                within.len(),
+                self.measured(&rows[i])
+            );
+            return choice;
         }
+        // What came closest: within the budget, the fastest; else, of those
+        // reliably faster, the least error; else the fastest of all.
+        choice.closest = if within.is_empty() {
+            (0..rows.len())
+                .filter(faster)
+                .max_by(|&a, &b| budget.metric(&rows[a]).total_cmp(&budget.metric(&rows[b])))
+                .or_else(|| fastest(&mut (0..rows.len())))
+        } else {
+            fastest(&mut within.iter().copied())
+        };
+        let closest = choice
+            .closest
+            .map(|i| format!(" Closest: {}.", self.measured(&rows[i])))
+            .unwrap_or_default();
+        choice.reason = if rows.is_empty() {
+            "no configuration could be measured: keep the original shader".into()
+        } else if within.is_empty() {
+            format!(
+                "none of the {} configurations is within {budget}: keep the original shader.{closest}",
+                rows.len()
+            )
+        } else {
+            format!(
+                "{} configurations are within {budget}, but none is faster than the original beyond this run's noise (a speed-up interval above 1×): keep the original shader.{closest}",
+                within.len()
+            )
+        };
+        choice
+    }
+
+    /// A row in words: node, variant, knobs, speed-up with its interval,
+    /// error.
+    pub fn measured(&self, row: &ResultRow) -> String {
+        format!(
+            "node {} `{}`, {}, {}: {:.3} ms against {:.3} ms for the original, {:.2}× [{:.2}, {:.2}], PSNR {:.1} dB, SSIM {:.4}",
+            row.node,
+            row.node_text,
+            row.variant,
+            row.setting(),
+            row.time_ms,
+            self.reference.time_ms,
+            row.speedup,
+            row.speedup_ci[0],
+            row.speedup_ci[1],
+            row.psnr,
+            row.ssim
+        )
+    }
+}
+
+impl Choice {
+    /// Settles the answer with the winner measured again: it stands only
+    /// when that run's interval lies above 1× as well.
+    pub fn confirm(&mut self, confirmation: Confirmation) {
+        let again = format!(
+            "measured again over {} frames, {:.3} ms against {:.3} ms, {:.2}× [{:.2}, {:.2}]",
+            confirmation.frames,
+            confirmation.time_ms,
+            confirmation.reference_ms,
+            confirmation.speedup,
+            confirmation.speedup_ci[0],
+            confirmation.speedup_ci[1]
+        );
+        if confirmation.speedup_ci[0] > 1.0 {
+            self.reason = format!("{}; {again}", self.reason);
+        } else {
+            self.closest = self.result.take();
+            self.reason = format!(
+                "the run's winner ({}) is not faster than the original when {again}: keep the original shader",
+                self.reason
+            );
+        }
+        self.confirmation = Some(confirmation);
     }
 }
 
@@ -382,10 +501,12 @@ mod tests {
             time_ms,
             passes: Vec::new(),
             speedup: 10.0 / time_ms,
+            speedup_ci: [9.0 / time_ms, 11.0 / time_ms],
             psnr,
             ssim,
             max_abs_error: 0.0,
             above_threshold: 0.0,
+            coverage: 1.0,
             hit_rate: 0.0,
             miss_rate: 0.0,
             offscreen_rate: 0.0,
@@ -449,41 +570,88 @@ mod tests {
             command: String::new(),
             reference: Reference {
                 time_ms: 10.0,
+                spread_ms: [10.0, 10.0],
                 frame_ms: vec![10.0],
             },
             nodes: Vec::new(),
             results,
             miss_causes: Vec::new(),
+            warnings: Vec::new(),
             grid: None,
             choice: None,
         }
     }
 
     #[test]
-    fn the_choice_is_the_fastest_within_the_budget() {
+    fn answer_respects_its_budget() {
         let r = report(vec![
             row(5.0, 28.0, 0.90),
             row(7.0, 35.0, 0.93),
             row(6.0, 31.0, 0.99),
         ]);
-        assert_eq!(r.choose(Budget::Psnr(30.0)).result, Some(2));
-        assert_eq!(r.choose(Budget::Psnr(33.0)).result, Some(1));
-        assert_eq!(r.choose(Budget::Ssim(0.95)).result, Some(2));
-        assert_eq!(r.choose(Budget::Psnr(20.0)).result, Some(0));
-        let none = r.choose(Budget::Psnr(50.0));
+        let pick = |budget| r.choose(budget, true).result;
+        assert_eq!(pick(Budget::Psnr(30.0)), Some(2));
+        assert_eq!(pick(Budget::Psnr(33.0)), Some(1));
+        assert_eq!(pick(Budget::Ssim(0.95)), Some(2));
+        assert_eq!(pick(Budget::Psnr(20.0)), Some(0));
+        // The default budget is SSIM ≥ 0.95.
+        assert_eq!(r.choose(Budget::DEFAULT, false).result, Some(2));
+        let none = r.choose(Budget::Psnr(50.0), true);
         assert_eq!(none.result, None);
+        assert!(none.none_within_budget);
         assert!(none.reason.contains("none of the 3"), "{}", none.reason);
+        // Closest without the budget: the least error of those faster.
+        assert_eq!(none.closest, Some(1));
     }
 
     #[test]
-    fn a_choice_slower_than_the_original_is_no_choice() {
+    fn answer_never_recommends_a_slowdown() {
+        // Slower than the original: no answer, though within the budget.
         let r = report(vec![row(12.0, 35.0, 0.99)]);
-        let choice = r.choose(Budget::Psnr(30.0));
+        let choice = r.choose(Budget::Psnr(30.0), true);
         assert_eq!(choice.result, None);
+        assert!(!choice.none_within_budget);
+        assert_eq!(choice.closest, Some(0));
         assert!(
             choice.reason.contains("keep the original"),
             "{}",
             choice.reason
+        );
+        // Faster by its median, but its interval reaches below 1×: noise.
+        let mut noisy = row(9.0, 35.0, 0.99);
+        noisy.speedup_ci = [0.93, 1.25];
+        let choice = report(vec![noisy]).choose(Budget::Psnr(30.0), true);
+        assert_eq!(choice.result, None);
+        assert!(
+            choice.reason.contains("beyond this run's noise"),
+            "{}",
+            choice.reason
+        );
+    }
+
+    #[test]
+    fn a_winner_the_confirmatory_run_does_not_repeat_is_not_recommended() {
+        let r = report(vec![row(5.0, 35.0, 0.99)]);
+        let confirmation = |lo: f64| Confirmation {
+            frames: 8,
+            reference_ms: 10.0,
+            time_ms: 9.0,
+            speedup: 1.1,
+            speedup_ci: [lo, 1.3],
+        };
+        let mut kept = r.choose(Budget::Psnr(30.0), true);
+        kept.confirm(confirmation(1.02));
+        assert_eq!(kept.result, Some(0));
+        assert!(kept.reason.contains("measured again"), "{}", kept.reason);
+        let mut dropped = r.choose(Budget::Psnr(30.0), true);
+        dropped.confirm(confirmation(0.95));
+        assert_eq!(dropped.result, None);
+        assert_eq!(dropped.closest, Some(0));
+        assert!(dropped.confirmation.is_some());
+        assert!(
+            dropped.reason.contains("keep the original"),
+            "{}",
+            dropped.reason
         );
     }
 

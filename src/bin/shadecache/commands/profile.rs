@@ -3,7 +3,6 @@
 
 use std::path::PathBuf;
 
-use shadecache::analysis;
 use shadecache::back::{self, Language};
 use shadecache::diagnostic::{Color, Diagnostic, Error};
 use shadecache::profile::{self, Budget, Nodes, Options, Progress};
@@ -246,7 +245,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         .map_err(|e| io("trace.json", e.to_string()))?;
 
     let mut summary = format!(
-        "{} on {} ({}×{}, {} frames after {} warm-up, {}): reference {:.3} ms\n",
+        "{} on {} ({}×{}, {} frames after {} warm-up, {}): reference {:.3} ms (frames {:.3}–{:.3})\n",
         report.shader,
         report.scene,
         report.size[0],
@@ -254,15 +253,22 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         report.frames,
         report.warmup,
         report.device.name,
-        report.reference.time_ms
+        report.reference.time_ms,
+        report.reference.spread_ms[0],
+        report.reference.spread_ms[1]
     );
+    for warning in &report.warnings {
+        summary.push_str(&format!("  warning: {warning}\n"));
+    }
     for row in report.best_per_variant() {
         summary.push_str(&format!(
-            "  {:<10} {} `{}`: {:.2}× (ideal {:.2}×, P/T {:.2}, hit {:.0}% miss {:.0}% refresh {:.0}%), PSNR {:.1} dB, SSIM {:.4}\n",
+            "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] (ideal {:.2}×, P/T {:.2}, hit {:.0}% miss {:.0}% refresh {:.0}%), PSNR {:.1} dB, SSIM {:.4}\n",
             row.variant.as_str(),
             row.node,
             row.node_text,
             row.speedup,
+            row.speedup_ci[0],
+            row.speedup_ci[1],
             row.ideal_speedup,
             row.p_over_t,
             row.hit_rate * 100.0,
@@ -308,34 +314,25 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         }
     }
     if let Some(choice) = &report.choice {
-        match choice.result.map(|i| &report.results[i]) {
-            Some(row) => {
+        let budget = if choice.budget_given {
+            format!("within {}", choice.budget)
+        } else {
+            format!(
+                "within {} (the default; --max-error sets it)",
+                choice.budget
+            )
+        };
+        match (choice.result, &pictures.chosen) {
+            (Some(_), Some(rewritten)) => {
                 let dir = args.out.join("choice");
-                let analysis = analysis::analyze(
-                    &shader,
-                    &analysis::Options {
-                        entry: args.stages.entry.clone(),
-                        ..analysis::Options::default()
-                    },
-                )?;
-                let defaults = shadecache::rewrite::Options {
-                    depth: scene.camera.depth,
-                    vertex_entry: args.stages.vertex_entry.clone(),
-                    ..shadecache::rewrite::Options::default()
-                };
-                let rewritten = profile::rewrite_of(&shader, &analysis, row, &defaults)?;
-                back::write_variant(&dir, &rewritten, Language::Wgsl)?;
+                back::write_variant(&dir, rewritten, Language::Wgsl)?;
                 summary.push_str(&format!(
-                    "  within {}: {} {}, {}: {}\n  wrote its shaders and plan to {}\n",
-                    choice.budget,
-                    row.node,
-                    row.variant,
-                    row.setting(),
+                    "  answer {budget}: {}\n  wrote its shaders and plan to {}\n",
                     choice.reason,
                     dir.display()
                 ));
             }
-            None => summary.push_str(&format!("  {}: {}\n", choice.budget, choice.reason)),
+            _ => summary.push_str(&format!("  answer {budget}: {}\n", choice.reason)),
         }
     }
     summary.push_str(&format!(
