@@ -9,7 +9,7 @@
 
 use std::collections::HashMap;
 
-use naga::{Block, Expression, Handle, Module, Statement};
+use naga::{Block, Expression, Handle, Module};
 
 use crate::proc::remap::{self, Mapper};
 
@@ -424,60 +424,6 @@ fn copy_function(
 }
 
 fn copy_block(block: &Block, m: &mut FunctionMapper) -> Block {
-    let mut out = Block::new();
-    for (statement, &span) in block.span_iter() {
-        let copied = match *statement {
-            Statement::Emit(ref range) => match range.first_and_last() {
-                Some((first, last)) => Statement::Emit(naga::Range::new_from_bounds(
-                    m.expression(first),
-                    m.expression(last),
-                )),
-                None => continue,
-            },
-            Statement::Block(ref inner) => Statement::Block(copy_block(inner, m)),
-            Statement::If {
-                condition,
-                ref accept,
-                ref reject,
-            } => Statement::If {
-                condition: m.expression(condition),
-                accept: copy_block(accept, m),
-                reject: copy_block(reject, m),
-            },
-            Statement::Switch {
-                selector,
-                ref cases,
-            } => Statement::Switch {
-                selector: m.expression(selector),
-                cases: cases
-                    .iter()
-                    .map(|case| naga::SwitchCase {
-                        value: case.value,
-                        body: copy_block(&case.body, m),
-                        fall_through: case.fall_through,
-                    })
-                    .collect(),
-            },
-            Statement::Loop {
-                ref body,
-                ref continuing,
-                break_if,
-            } => Statement::Loop {
-                body: copy_block(body, m),
-                continuing: copy_block(continuing, m),
-                break_if: break_if.map(|h| m.expression(h)),
-            },
-            ref other => match remap::simple_statement(other, m) {
-                Some(copied) => copied,
-                None => continue,
-            },
-        };
-        let span = if m.global.maps.keep_spans {
-            span
-        } else {
-            naga::Span::UNDEFINED
-        };
-        out.push(copied, span);
-    }
-    out
+    let keep_spans = m.global.maps.keep_spans;
+    remap::block(block, m, keep_spans, &mut |_, _, _| false)
 }

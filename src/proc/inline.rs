@@ -801,116 +801,38 @@ impl<'a> Splice<'a> {
             exprs: Exprs::Dense(map),
             locals: None,
         };
-        copy_block(&source.body, &mut table, &mut |statement, span, out| {
-            if !matches!(statement, Statement::Call { .. }) {
-                return false;
-            }
-            *ordinal += 1;
-            let Some(spliced) = spliced[*ordinal - 1].take() else {
-                return false;
-            };
-            let callee = &prepared[*ordinal - 1].as_ref().expect("spliced").function;
-            let mut table = MapTable {
-                exprs: Exprs::Dense(&spliced.exprs),
-                locals: Some(&spliced.locals),
-            };
-            out.append(&mut copy_block(&callee.body, &mut table, &mut |_, _, _| {
-                false
-            }));
-            if let Some(load) = spliced.result {
-                out.push(
-                    Statement::Emit(naga::Range::new_from_bounds(load, load)),
-                    span,
-                );
-            }
-            true
-        })
-    }
-}
-
-/// `block` with every handle mapped by `table`, statements in order
-/// (nested blocks in turn, as [`super::each_statement`] visits them).
-/// `replace` may put something else in place of a statement: it returns
-/// whether it did.
-fn copy_block(
-    block: &Block,
-    table: &mut MapTable,
-    replace: &mut dyn FnMut(&Statement, Span, &mut Block) -> bool,
-) -> Block {
-    let mut out = Block::new();
-    for (statement, &span) in block.span_iter() {
-        if replace(statement, span, &mut out) {
-            continue;
-        }
-        let copied = match *statement {
-            Statement::Emit(ref range) => {
-                push_emits(range, table, span, &mut out);
-                continue;
-            }
-            Statement::Block(ref inner) => Statement::Block(copy_block(inner, table, replace)),
-            Statement::If {
-                condition,
-                ref accept,
-                ref reject,
-            } => Statement::If {
-                condition: table.expression(condition),
-                accept: copy_block(accept, table, replace),
-                reject: copy_block(reject, table, replace),
+        remap::block(
+            &source.body,
+            &mut table,
+            true,
+            &mut |statement, span, out| {
+                if !matches!(statement, Statement::Call { .. }) {
+                    return false;
+                }
+                *ordinal += 1;
+                let Some(spliced) = spliced[*ordinal - 1].take() else {
+                    return false;
+                };
+                let callee = &prepared[*ordinal - 1].as_ref().expect("spliced").function;
+                let mut table = MapTable {
+                    exprs: Exprs::Dense(&spliced.exprs),
+                    locals: Some(&spliced.locals),
+                };
+                out.append(&mut remap::block(
+                    &callee.body,
+                    &mut table,
+                    true,
+                    &mut |_, _, _| false,
+                ));
+                if let Some(load) = spliced.result {
+                    out.push(
+                        Statement::Emit(naga::Range::new_from_bounds(load, load)),
+                        span,
+                    );
+                }
+                true
             },
-            Statement::Switch {
-                selector,
-                ref cases,
-            } => Statement::Switch {
-                selector: table.expression(selector),
-                cases: cases
-                    .iter()
-                    .map(|case| naga::SwitchCase {
-                        value: case.value,
-                        body: copy_block(&case.body, table, replace),
-                        fall_through: case.fall_through,
-                    })
-                    .collect(),
-            },
-            Statement::Loop {
-                ref body,
-                ref continuing,
-                break_if,
-            } => Statement::Loop {
-                body: copy_block(body, table, replace),
-                continuing: copy_block(continuing, table, replace),
-                break_if: break_if.map(|b| table.expression(b)),
-            },
-            ref simple => {
-                remap::simple_statement(simple, table).expect("every other statement is simple")
-            }
-        };
-        out.push(copied, span);
-    }
-    out
-}
-
-/// `range` mapped, as the fewest ranges of consecutive handles.
-fn push_emits(range: &naga::Range<Expression>, table: &mut MapTable, span: Span, out: &mut Block) {
-    let mut run: Option<(Handle<Expression>, Handle<Expression>)> = None;
-    for handle in range.clone() {
-        let new = table.expression(handle);
-        run = match run {
-            Some((first, last)) if new.index() == last.index() + 1 => Some((first, new)),
-            Some((first, last)) => {
-                out.push(
-                    Statement::Emit(naga::Range::new_from_bounds(first, last)),
-                    span,
-                );
-                Some((new, new))
-            }
-            None => Some((new, new)),
-        };
-    }
-    if let Some((first, last)) = run {
-        out.push(
-            Statement::Emit(naga::Range::new_from_bounds(first, last)),
-            span,
-        );
+        )
     }
 }
 

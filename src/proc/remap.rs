@@ -404,3 +404,109 @@ fn array_size(size: naga::ArraySize, m: &mut impl Mapper) -> naga::ArraySize {
         other => other,
     }
 }
+
+/// `block` with every handle mapped, statements in order (nested blocks in
+/// turn, a loop's body before its continuing block, as
+/// [`super::each_statement`] visits them). `replace` may put something
+/// else in place of a statement: it returns whether it did. An `Emit` of
+/// handles that no longer follow each other becomes one per run. Spans are
+/// kept when `keep_spans`.
+pub fn block(
+    block: &naga::Block,
+    m: &mut impl Mapper,
+    keep_spans: bool,
+    replace: &mut dyn FnMut(&Statement, naga::Span, &mut naga::Block) -> bool,
+) -> naga::Block {
+    let mut out = naga::Block::new();
+    for (statement, &span) in block.span_iter() {
+        if replace(statement, span, &mut out) {
+            continue;
+        }
+        let span = if keep_spans {
+            span
+        } else {
+            naga::Span::UNDEFINED
+        };
+        let copied = match *statement {
+            Statement::Emit(ref range) => {
+                emits(range, m, span, &mut out);
+                continue;
+            }
+            Statement::Block(ref inner) => {
+                Statement::Block(self::block(inner, m, keep_spans, replace))
+            }
+            Statement::If {
+                condition,
+                ref accept,
+                ref reject,
+            } => Statement::If {
+                condition: m.expression(condition),
+                accept: self::block(accept, m, keep_spans, replace),
+                reject: self::block(reject, m, keep_spans, replace),
+            },
+            Statement::Switch {
+                selector,
+                ref cases,
+            } => {
+                let selector = m.expression(selector);
+                let mut copied = Vec::with_capacity(cases.len());
+                for case in cases {
+                    copied.push(naga::SwitchCase {
+                        value: case.value,
+                        body: self::block(&case.body, m, keep_spans, replace),
+                        fall_through: case.fall_through,
+                    });
+                }
+                Statement::Switch {
+                    selector,
+                    cases: copied,
+                }
+            }
+            Statement::Loop {
+                ref body,
+                ref continuing,
+                break_if,
+            } => Statement::Loop {
+                body: self::block(body, m, keep_spans, replace),
+                continuing: self::block(continuing, m, keep_spans, replace),
+                break_if: break_if.map(|b| m.expression(b)),
+            },
+            ref simple => match simple_statement(simple, m) {
+                Some(copied) => copied,
+                None => continue,
+            },
+        };
+        out.push(copied, span);
+    }
+    out
+}
+
+/// `range` mapped, as the fewest ranges of consecutive handles.
+fn emits(
+    range: &naga::Range<Expression>,
+    m: &mut impl Mapper,
+    span: naga::Span,
+    out: &mut naga::Block,
+) {
+    let mut run: Option<(Handle<Expression>, Handle<Expression>)> = None;
+    for handle in range.clone() {
+        let new = m.expression(handle);
+        run = match run {
+            Some((first, last)) if new.index() == last.index() + 1 => Some((first, new)),
+            Some((first, last)) => {
+                out.push(
+                    Statement::Emit(naga::Range::new_from_bounds(first, last)),
+                    span,
+                );
+                Some((new, new))
+            }
+            None => Some((new, new)),
+        };
+    }
+    if let Some((first, last)) = run {
+        out.push(
+            Statement::Emit(naga::Range::new_from_bounds(first, last)),
+            span,
+        );
+    }
+}

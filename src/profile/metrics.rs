@@ -10,53 +10,115 @@ pub const PSNR_CAP: f64 = 100.0;
 /// How far a frame is from the reference frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct FrameError {
-    /// Peak signal-to-noise ratio over RGB, in dB (capped at 100).
+    /// Peak signal-to-noise ratio over RGB of the covered pixels, in dB
+    /// (capped at 100; 100 when none is covered).
     pub psnr: f64,
-    /// Mean SSIM of the luminance over 8×8 windows.
+    /// The same over the whole frame, background included.
+    pub psnr_frame: f64,
+    /// Mean SSIM of the luminance over 8×8 windows, whole frame.
     pub ssim: f64,
     /// Largest difference of any channel, in [0, 1].
     pub max_abs_error: f64,
-    /// Share of pixels whose largest channel difference exceeds the
-    /// threshold.
+    /// Share of the covered pixels whose largest channel difference
+    /// exceeds the threshold.
     pub above_threshold: f64,
 }
 
-/// Compares two RGBA8 frames of `width × height` (alpha ignored).
+/// Whether a pixel of a classification image is covered: the classify
+/// pass writes every pixel the mesh covers, opaque; the rest stays clear.
+fn covered(classes: &[u8], pixel: usize) -> bool {
+    classes.get(pixel * 4 + 3).is_some_and(|&a| a > 0)
+}
+
+fn psnr_of(squared: f64, samples: usize) -> f64 {
+    if samples == 0 {
+        return PSNR_CAP;
+    }
+    let mse = squared / samples as f64 / (255.0 * 255.0);
+    if mse == 0.0 {
+        PSNR_CAP
+    } else {
+        (10.0 * (1.0 / mse).log10()).min(PSNR_CAP)
+    }
+}
+
+/// Compares two RGBA8 frames of `width × height` (alpha ignored), over
+/// the pixels `classes` marks covered and over the whole frame: the
+/// background matches exactly in every variant and would only dilute the
+/// error of the pixels the shader draws.
 pub fn compare(
     reference: &[u8],
     frame: &[u8],
+    classes: &[u8],
     width: u32,
     height: u32,
     threshold: f64,
 ) -> FrameError {
     let pixels = (width * height) as usize;
-    let mut squared = 0.0f64;
+    let (mut squared, mut squared_covered, mut count) = (0.0f64, 0.0f64, 0usize);
     let mut max = 0u8;
     let mut above = 0usize;
     let limit = (threshold * 255.0).round() as u8;
     for p in 0..pixels {
         let mut worst = 0u8;
+        let mut sum = 0.0;
         for c in 0..3 {
             let d = reference[p * 4 + c].abs_diff(frame[p * 4 + c]);
-            squared += f64::from(d) * f64::from(d);
+            sum += f64::from(d) * f64::from(d);
             worst = worst.max(d);
         }
+        squared += sum;
         max = max.max(worst);
-        if worst > limit {
-            above += 1;
+        if covered(classes, p) {
+            squared_covered += sum;
+            count += 1;
+            if worst > limit {
+                above += 1;
+            }
         }
     }
-    let mse = squared / (pixels * 3) as f64 / (255.0 * 255.0);
-    let psnr = if mse == 0.0 {
-        PSNR_CAP
-    } else {
-        (10.0 * (1.0 / mse).log10()).min(PSNR_CAP)
-    };
     FrameError {
-        psnr,
+        psnr: psnr_of(squared_covered, count * 3),
+        psnr_frame: psnr_of(squared, pixels * 3),
         ssim: ssim(reference, frame, width, height),
         max_abs_error: f64::from(max) / 255.0,
-        above_threshold: above as f64 / pixels as f64,
+        above_threshold: if count == 0 {
+            0.0
+        } else {
+            above as f64 / count as f64
+        },
+    }
+}
+
+/// Flicker: how much a frame's change from the frame before differs from
+/// the reference's own change, mean over the covered pixels' channels, in
+/// [0, 1]. A cache that pops blocks in and out, or refreshes visibly, has
+/// changes the reference does not; a stale but steady one has none.
+pub fn flicker(
+    reference_before: &[u8],
+    reference: &[u8],
+    before: &[u8],
+    frame: &[u8],
+    classes: &[u8],
+) -> f64 {
+    let pixels = reference.len() / 4;
+    let (mut sum, mut count) = (0.0, 0usize);
+    for p in 0..pixels {
+        if !covered(classes, p) {
+            continue;
+        }
+        for c in 0..3 {
+            let i = p * 4 + c;
+            let own = f64::from(frame[i]) - f64::from(before[i]);
+            let expected = f64::from(reference[i]) - f64::from(reference_before[i]);
+            sum += (own - expected).abs();
+            count += 1;
+        }
+    }
+    if count == 0 {
+        0.0
+    } else {
+        sum / count as f64 / 255.0
     }
 }
 
@@ -246,7 +308,8 @@ mod tests {
     #[test]
     fn identical_frames_have_capped_psnr_and_full_ssim() {
         let frame: Vec<u8> = (0..16 * 16 * 4).map(|i| (i * 7 % 256) as u8).collect();
-        let error = compare(&frame, &frame, 16, 16, 0.05);
+        let all = vec![255u8; 16 * 16 * 4];
+        let error = compare(&frame, &frame, &all, 16, 16, 0.05);
         assert_eq!(error.psnr, PSNR_CAP);
         assert!((error.ssim - 1.0).abs() < 1e-9);
         assert_eq!(error.max_abs_error, 0.0);
@@ -258,11 +321,48 @@ mod tests {
         let a = vec![100u8; 8 * 8 * 4];
         let b = vec![110u8; 8 * 8 * 4];
         // MSE = (10/255)², PSNR = 20 log10(255/10) ≈ 28.13 dB.
-        let error = compare(&a, &b, 8, 8, 0.05);
+        let all = vec![255u8; 8 * 8 * 4];
+        let error = compare(&a, &b, &all, 8, 8, 0.05);
         assert!((error.psnr - 28.1308).abs() < 1e-3, "{}", error.psnr);
+        assert_eq!(error.psnr, error.psnr_frame);
         assert!((error.max_abs_error - 10.0 / 255.0).abs() < 1e-12);
         assert_eq!(error.above_threshold, 0.0);
-        assert_eq!(compare(&a, &b, 8, 8, 0.03).above_threshold, 1.0);
+        assert_eq!(compare(&a, &b, &all, 8, 8, 0.03).above_threshold, 1.0);
+    }
+
+    #[test]
+    fn error_over_covered_pixels() {
+        // Half the frame covered and off by 10; the background exact.
+        let reference = vec![100u8; 8 * 8 * 4];
+        let mut frame = reference.clone();
+        let mut classes = vec![0u8; 8 * 8 * 4];
+        for p in 0..32 {
+            for c in 0..3 {
+                frame[p * 4 + c] = 110;
+            }
+            classes[p * 4 + 3] = 255;
+        }
+        let error = compare(&reference, &frame, &classes, 8, 8, 0.05);
+        assert!((error.psnr - 28.1308).abs() < 1e-3, "{}", error.psnr);
+        // Over the whole frame the exact background hides 3 dB of it.
+        assert!((error.psnr_frame - (28.1308 + 10.0 * 2f64.log10())).abs() < 1e-3);
+        assert_eq!(
+            compare(&reference, &frame, &classes, 8, 8, 0.03).above_threshold,
+            1.0
+        );
+    }
+
+    #[test]
+    fn flicker_is_change_the_reference_does_not_make() {
+        let classes = vec![255u8; 4 * 4 * 4];
+        let still = vec![50u8; 4 * 4 * 4];
+        // A steady error is no flicker; a change the reference lacks is.
+        let off = vec![60u8; 4 * 4 * 4];
+        assert_eq!(flicker(&still, &still, &off, &off, &classes), 0.0);
+        let f = flicker(&still, &still, &still, &off, &classes);
+        assert!((f - 10.0 / 255.0).abs() < 1e-12, "{f}");
+        // The reference's own change, followed, is none either.
+        assert_eq!(flicker(&still, &off, &still, &off, &classes), 0.0);
     }
 
     #[test]

@@ -169,6 +169,66 @@ pub struct Pictures {
 /// A result's last measured colour and classes (RGBA8).
 type Picture = (Vec<u8>, Vec<u8>);
 
+/// What a [`Probe`] measures the fixed cost of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ProbeOf {
+    /// The original shader.
+    Reference,
+    /// A node's payload pass.
+    Payload(usize),
+    /// A node's variant, at the base setting.
+    Variant(usize, Variant),
+}
+
+/// A run made free of the shader's work (payload, shade, or the whole
+/// fragment stage returning zero), timed like the others: what is left is
+/// fixed cost — rasterisation, the vertex stages, lookups, cache writes.
+struct Probe {
+    of: ProbeOf,
+    runner: Runner,
+    times: Vec<f64>,
+    passes: HashMap<String, Vec<f64>>,
+}
+
+impl Probe {
+    fn new(of: ProbeOf, runner: Runner) -> Self {
+        Probe {
+            of,
+            runner,
+            times: Vec::new(),
+            passes: HashMap::new(),
+        }
+    }
+}
+
+/// The median time of the probe of `of`, and its passes'.
+fn probed(probes: &[Probe], of: ProbeOf) -> Option<(f64, Vec<PassTime>)> {
+    let probe = probes.iter().find(|p| p.of == of)?;
+    Some((metrics::median(&probe.times), pass_medians(&probe.passes)))
+}
+
+/// Each pass's median time, by name.
+fn pass_medians(passes: &HashMap<String, Vec<f64>>) -> Vec<PassTime> {
+    let mut out: Vec<PassTime> = passes
+        .iter()
+        .map(|(name, times)| PassTime {
+            name: name.clone(),
+            time_ms: metrics::median(times),
+        })
+        .collect();
+    out.sort_by(|a, b| a.name.cmp(&b.name));
+    out
+}
+
+/// How many times faster `time_ms` is than `reference_ms`; 0 for no time.
+fn speedup(reference_ms: f64, time_ms: f64) -> f64 {
+    if time_ms > 0.0 {
+        reference_ms / time_ms
+    } else {
+        0.0
+    }
+}
+
 struct Config {
     node: usize,
     variant: Variant,
@@ -178,6 +238,8 @@ struct Config {
     times: Vec<f64>,
     passes: HashMap<String, Vec<f64>>,
     errors: Vec<FrameError>,
+    /// Flicker of each measured frame after the first ([`metrics::flicker`]).
+    flicker: Vec<f64>,
     decisions: Vec<Decisions>,
     last: Picture,
 }
@@ -414,10 +476,16 @@ pub fn profile(
     )
     .map_err(|err| fail(format!("the reference does not run: {err}")))?;
 
-    // Per node: a payload pass over every pixel, for P/T.
-    let mut payloads = Vec::new();
-    for (candidate, _) in &nodes {
-        let rewritten = rewrite::rewrite(shader, &analysis, candidate, Variant::ThreePass, &base)
+    // Per node: a payload pass over every pixel, for P/T, and the same
+    // pass with the payload made free, for its fixed cost.
+    let free = RewriteOptions {
+        free_payload: true,
+        ..base.clone()
+    };
+    let payload_runner = |candidate: &Candidate,
+                          options: &RewriteOptions|
+     -> Result<Runner, Error> {
+        let rewritten = rewrite::rewrite(shader, &analysis, candidate, Variant::ThreePass, options)
             .map_err(|r| fail(format!("node {}: {}", candidate.node.id, r.reason)))?;
         let mut pass = rewritten.plan.passes[1].clone();
         pass.depth.load = "clear".into();
@@ -429,7 +497,7 @@ pub fn profile(
             classify: None,
             ..rewritten.plan.clone()
         };
-        let runner = Runner::new(
+        Runner::new(
             &gpu,
             &plan,
             source_of(&sources_of(&rewritten)?),
@@ -438,9 +506,66 @@ pub fn profile(
             (size[0], size[1]),
             plain,
         )
-        .map_err(fail)?;
-        payloads.push((runner, Vec::new()));
+        .map_err(fail)
+    };
+    let mut payloads = Vec::new();
+    let mut probes = Vec::new();
+    for (node, (candidate, _)) in nodes.iter().enumerate() {
+        payloads.push((payload_runner(candidate, &base)?, Vec::new()));
+        probes.push(Probe::new(
+            ProbeOf::Payload(node),
+            payload_runner(candidate, &free)?,
+        ));
+        // Each variant with its payload and shade free: its fixed cost.
+        for &variant in &options.variants {
+            let Ok(rewritten) = rewrite::rewrite(shader, &analysis, candidate, variant, &free)
+            else {
+                continue;
+            };
+            let runner = Runner::new(
+                &gpu,
+                &rewritten.plan,
+                source_of(&sources_of(&rewritten)?),
+                &meshes,
+                &textures,
+                (size[0], size[1]),
+                plain,
+            )
+            .map_err(fail)?;
+            probes.push(Probe::new(ProbeOf::Variant(node, variant), runner));
+        }
     }
+    // The original with its fragment stage free: the reference's own
+    // fixed cost, which every variant pays too.
+    // It binds only what its vertex stage still reads: its plan is its own.
+    let (free_reference, free_reference_plan) = {
+        let mut module = shader.module.clone();
+        rewrite::free_function(&mut module.entry_points[analysis.entry_index].function);
+        let info = crate::front::validate(&module)
+            .map_err(|err| fail(format!("internal error: the free reference: {err}")))?;
+        let text = back::wgsl_text(&module, &info).map_err(fail)?;
+        let free = Shader {
+            file: shader.file.clone(),
+            module,
+            info,
+            vertex_file: shader.vertex_file.clone(),
+        };
+        let plan = plan::reference(&free, &analysis, &base).map_err(fail)?;
+        (HashMap::from([("reference.wgsl".to_string(), text)]), plan)
+    };
+    probes.push(Probe::new(
+        ProbeOf::Reference,
+        Runner::new(
+            &gpu,
+            &free_reference_plan,
+            source_of(&free_reference),
+            &meshes,
+            &textures,
+            (size[0], size[1]),
+            plain,
+        )
+        .map_err(fail)?,
+    ));
 
     let mut configs = Vec::new();
     // Configurations set up, to measure each once.
@@ -507,6 +632,7 @@ pub fn profile(
                     times: Vec::new(),
                     passes: HashMap::new(),
                     errors: Vec::new(),
+                    flicker: Vec::new(),
                     decisions: Vec::new(),
                     last: (Vec::new(), Vec::new()),
                 });
@@ -514,10 +640,11 @@ pub fn profile(
         }
     }
 
-    let per_frame = 1 + payloads.len() + configs.len();
+    let per_frame = 1 + payloads.len() + probes.len() + configs.len();
     progress.start(u64::from(warmup + frames) * per_frame as u64);
     let mut reference_times = Vec::new();
     let mut reference_pixels = Vec::new();
+    let mut reference_before: Vec<u8> = Vec::new();
     let mut trace = Vec::new();
     for frame in 0..warmup + frames {
         let measured = frame >= warmup;
@@ -539,7 +666,10 @@ pub fn profile(
         progress.step("reference");
         if measured {
             reference_times.push(time);
-            reference_pixels = runtime::read_texture(&gpu, reference.color(), 4).map_err(fail)?;
+            reference_before = std::mem::replace(
+                &mut reference_pixels,
+                runtime::read_texture(&gpu, reference.color(), 4).map_err(fail)?,
+            );
         }
         for (runner, times) in &mut payloads {
             let (time, _, raw) =
@@ -550,6 +680,24 @@ pub fn profile(
             progress.step("payload");
             if measured {
                 times.push(time);
+            }
+        }
+        for probe in &mut probes {
+            let (time, passes, _) = timed(
+                &gpu,
+                &mut profiler,
+                timestamps,
+                &mut probe.runner,
+                &inputs,
+                "fixed cost",
+            )
+            .map_err(fail)?;
+            progress.step("fixed cost");
+            if measured {
+                probe.times.push(time);
+                for (name, ms) in passes {
+                    probe.passes.entry(name).or_default().push(ms);
+                }
             }
         }
         for config in &mut configs {
@@ -578,10 +726,20 @@ pub fn profile(
             config.errors.push(metrics::compare(
                 &reference_pixels,
                 &color,
+                &classes,
                 size[0],
                 size[1],
                 options.error_threshold,
             ));
+            if config.errors.len() > 1 {
+                config.flicker.push(metrics::flicker(
+                    &reference_before,
+                    &reference_pixels,
+                    &config.last.0,
+                    &color,
+                    &classes,
+                ));
+            }
             config.decisions.push(metrics::decisions(&classes));
             config.last = (color, classes);
         }
@@ -592,9 +750,11 @@ pub fn profile(
     let node_reports: Vec<NodeReport> = nodes
         .iter()
         .zip(&payloads)
-        .map(|((candidate, _), (_, times))| {
+        .enumerate()
+        .map(|(node, ((candidate, _), (_, times)))| {
             let payload_ms = metrics::median(times);
-            node_report(shader, candidate, payload_ms, reference_ms)
+            let fixed_ms = probed(&probes, ProbeOf::Payload(node)).map_or(0.0, |(ms, _)| ms);
+            node_report(shader, candidate, payload_ms, fixed_ms, reference_ms)
         })
         .collect();
     let mut rows: Vec<(ResultRow, Picture)> = configs
@@ -606,22 +766,15 @@ pub fn profile(
                 metrics::mean(&config.decisions.iter().map(f).collect::<Vec<_>>())
             };
             let hit_rate = column(|d| d.hit);
-            let f = node.p_over_t.clamp(0.0, 1.0);
+            let f = node.p_over_t;
             let ideal = 1.0 / (1.0 - hit_rate * f).max(1e-6);
-            let speedup = if time_ms > 0.0 {
-                reference_ms / time_ms
-            } else {
-                0.0
-            };
-            let mut passes: Vec<PassTime> = config
-                .passes
-                .iter()
-                .map(|(name, times)| PassTime {
-                    name: name.clone(),
-                    time_ms: metrics::median(times),
-                })
-                .collect();
-            passes.sort_by(|a, b| a.name.cmp(&b.name));
+            // The most the variant could reach were its payload and shade
+            // free: its passes' fixed cost alone.
+            let (fixed_ms, fixed_passes) =
+                probed(&probes, ProbeOf::Variant(config.node, config.variant))
+                    .unwrap_or((0.0, Vec::new()));
+            let bound = speedup(reference_ms, fixed_ms);
+            let passes = pass_medians(&config.passes);
             let row = ResultRow {
                 node: node.id.clone(),
                 node_text: node.text.clone(),
@@ -633,9 +786,22 @@ pub fn profile(
                 depth_epsilon: config.setting.depth_epsilon,
                 time_ms,
                 passes,
-                speedup,
+                speedup: speedup(reference_ms, time_ms),
                 speedup_ci: metrics::speedup_interval(&reference_times, &config.times),
                 psnr: metrics::mean(&config.errors.iter().map(|e| e.psnr).collect::<Vec<_>>()),
+                psnr_frame: metrics::mean(
+                    &config
+                        .errors
+                        .iter()
+                        .map(|e| e.psnr_frame)
+                        .collect::<Vec<_>>(),
+                ),
+                worst_psnr: config
+                    .errors
+                    .iter()
+                    .map(|e| e.psnr)
+                    .fold(metrics::PSNR_CAP, f64::min),
+                flicker: metrics::mean(&config.flicker),
                 ssim: metrics::mean(&config.errors.iter().map(|e| e.ssim).collect::<Vec<_>>()),
                 max_abs_error: config
                     .errors
@@ -664,7 +830,9 @@ pub fn profile(
                 refresh_rate: column(|d| d.refresh),
                 p_over_t: node.p_over_t,
                 ideal_speedup: ideal,
-                share_of_ideal: if ideal > 0.0 { speedup / ideal } else { 0.0 },
+                fixed_cost_ms: fixed_passes,
+                bound_with_fixed_costs: bound,
+                share_of_ideal: speedup(reference_ms, time_ms) / ideal,
                 pareto_psnr: false,
                 pareto_ssim: false,
                 frame_stats: config
@@ -672,9 +840,15 @@ pub fn profile(
                     .iter()
                     .zip(&config.errors)
                     .zip(&config.decisions)
-                    .map(|((&time_ms, e), d)| FrameStats {
+                    .enumerate()
+                    .map(|(frame, ((&time_ms, e), d))| FrameStats {
                         time_ms,
                         psnr: e.psnr,
+                        psnr_frame: e.psnr_frame,
+                        flicker: frame
+                            .checked_sub(1)
+                            .and_then(|i| config.flicker.get(i).copied())
+                            .unwrap_or(0.0),
                         ssim: e.ssim,
                         max_abs_error: e.max_abs_error,
                         hit_rate: d.hit,
@@ -770,6 +944,7 @@ pub fn profile(
                 metrics::quantile(&reference_times, 0.1),
                 metrics::quantile(&reference_times, 0.9),
             ],
+            fixed_ms: probed(&probes, ProbeOf::Reference).map_or(0.0, |(ms, _)| ms),
             frame_ms: reference_times,
         },
         nodes: node_reports,
@@ -938,11 +1113,7 @@ fn confirm(
         frames,
         reference_ms,
         time_ms,
-        speedup: if time_ms > 0.0 {
-            reference_ms / time_ms
-        } else {
-            0.0
-        },
+        speedup: speedup(reference_ms, time_ms),
         speedup_ci: metrics::speedup_interval(&times[0], &times[1]),
     })
 }
@@ -1120,6 +1291,7 @@ fn node_report(
     shader: &Shader,
     candidate: &Candidate,
     payload_ms: f64,
+    payload_fixed_ms: f64,
     reference_ms: f64,
 ) -> NodeReport {
     let node = &candidate.node;
@@ -1137,11 +1309,12 @@ fn node_report(
         source,
         estimated_p_over_t: candidate.ratio,
         p_over_t: if reference_ms > 0.0 {
-            payload_ms / reference_ms
+            (payload_ms - payload_fixed_ms).max(0.0) / reference_ms
         } else {
             0.0
         },
         payload_ms,
+        payload_fixed_ms,
         range: candidate.range,
         fits_f16: candidate.fits_f16,
         function: node.function.clone(),

@@ -125,10 +125,10 @@ pub fn html(report: &Report, dir: &Path) -> String {
     }
 
     // All results.
-    page.push_str("<h2>Results</h2><table><tr><th>#</th><th>node</th><th>variant</th><th>Δn</th><th>k</th><th>recon.</th><th>format</th><th>ε</th><th>time ms</th><th>passes ms</th><th>speed-up [95% interval]</th><th>ideal</th><th>share</th><th>P/T</th><th>hit</th><th>miss (off-screen / disoccluded)</th><th>refresh</th><th>PSNR dB</th><th>SSIM</th><th>max err</th><th>map</th></tr>");
+    page.push_str("<h2>Results</h2><table><tr><th>#</th><th>node</th><th>variant</th><th>Δn</th><th>k</th><th>recon.</th><th>format</th><th>ε</th><th>time ms</th><th>passes ms</th><th>speed-up [95% interval]</th><th>ideal</th><th>bound with fixed costs (fixed ms per pass)</th><th>share</th><th>P/T</th><th>hit</th><th>miss (off-screen / disoccluded)</th><th>refresh</th><th>PSNR dB, covered pixels (worst frame, whole frame)</th><th>SSIM</th><th>flicker</th><th>max err</th><th>map</th></tr>");
     let _ = write!(
         page,
-        "<tr class=\"reference\"><td></td><td colspan=\"7\">reference (unmodified shader)</td><td>{:.3} (frames {:.3}–{:.3})</td><td colspan=\"12\"></td></tr>",
+        "<tr class=\"reference\"><td></td><td colspan=\"7\">reference (unmodified shader)</td><td>{:.3} (frames {:.3}–{:.3})</td><td colspan=\"13\"></td></tr>",
         report.reference.time_ms,
         report.reference.spread_ms[0],
         report.reference.spread_ms[1]
@@ -141,7 +141,7 @@ pub fn html(report: &Report, dir: &Path) -> String {
             .collect();
         let _ = write!(
             page,
-            "<tr><td>{}</td>{}<td>{:.3}</td><td>{}</td><td>{:.2}× [{:.2}, {:.2}]</td><td>{:.2}×</td><td>{:.0}%</td><td>{:.2}</td><td>{:.1}%</td><td>{:.1}% ({:.1} / {:.1})</td><td>{:.1}%</td><td>{:.1}</td><td>{:.4}</td><td>{:.3}</td><td><a href=\"maps/{}\">png</a></td></tr>",
+            "<tr><td>{}</td>{}<td>{:.3}</td><td>{}</td><td>{:.2}× [{:.2}, {:.2}]</td><td>{:.2}×</td><td>{:.2}× ({})</td><td>{:.0}%</td><td>{:.2}</td><td>{:.1}%</td><td>{:.1}% ({:.1} / {:.1})</td><td>{:.1}%</td><td>{:.1} ({:.1}, {:.1})</td><td>{:.4}</td><td>{:.4}</td><td>{:.3}</td><td><a href=\"maps/{}\">png</a></td></tr>",
             rank + 1,
             configuration_cells(row),
             row.time_ms,
@@ -150,6 +150,14 @@ pub fn html(report: &Report, dir: &Path) -> String {
             row.speedup_ci[0],
             row.speedup_ci[1],
             row.ideal_speedup,
+            row.bound_with_fixed_costs,
+            escape(
+                &row.fixed_cost_ms
+                    .iter()
+                    .map(|p| format!("{} {:.3}", p.name, p.time_ms))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
             row.share_of_ideal * 100.0,
             row.p_over_t,
             row.hit_rate * 100.0,
@@ -158,7 +166,10 @@ pub fn html(report: &Report, dir: &Path) -> String {
             row.disocclusion_rate * 100.0,
             row.refresh_rate * 100.0,
             row.psnr,
+            row.worst_psnr,
+            row.psnr_frame,
             row.ssim,
+            row.flicker,
             row.max_abs_error,
             images::map_name(rank, row),
         );

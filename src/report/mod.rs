@@ -146,6 +146,10 @@ pub struct Reference {
     /// Its 10th and 90th percentiles, ms: how much one run's frames spread.
     #[serde(default)]
     pub spread_ms: [f64; 2],
+    /// Median time of the original with its fragment stage made free
+    /// (returning zero): what drawing the scene costs before shading.
+    #[serde(default)]
+    pub fixed_ms: f64,
     pub frame_ms: Vec<f64>,
 }
 
@@ -162,11 +166,16 @@ pub struct NodeReport {
     pub source: String,
     /// P/T from the cost model.
     pub estimated_p_over_t: f64,
-    /// P/T measured: the payload pass (the node's slice alone, every pixel)
-    /// over the reference.
+    /// P/T measured: the payload pass (the node's slice alone, every
+    /// pixel) less the same pass with the payload made free (its fixed
+    /// cost: rasterisation, the twin vertex stage, the cache write), over
+    /// the reference. Not clamped: at most 1 but for the run's noise.
     pub p_over_t: f64,
     /// Median time of that payload pass, ms.
     pub payload_ms: f64,
+    /// Median time of the same pass with the payload made free, ms.
+    #[serde(default)]
+    pub payload_fixed_ms: f64,
     /// Bounds of the node's value over the scene's frames, by interval
     /// arithmetic with the uniform values the scene gives; `null` ends are
     /// unbounded.
@@ -206,9 +215,22 @@ pub struct ResultRow {
     /// of both, `profile::metrics::speedup_interval`).
     #[serde(default)]
     pub speedup_ci: [f64; 2],
-    /// Means over the measured frames.
+    /// Means over the measured frames: PSNR over the covered pixels (those
+    /// the shader draws), SSIM over the whole frame.
     pub psnr: f64,
     pub ssim: f64,
+    /// PSNR over the whole frame, background included, mean.
+    #[serde(default)]
+    pub psnr_frame: f64,
+    /// The lowest covered PSNR of any measured frame.
+    #[serde(default)]
+    pub worst_psnr: f64,
+    /// How much each frame's change from the one before differs from the
+    /// reference's own change (block popping, visible refreshes), mean
+    /// over the covered pixels' channels and the measured frames, in
+    /// [0, 1] (`profile::metrics::flicker`).
+    #[serde(default)]
+    pub flicker: f64,
     /// Largest over the measured frames.
     pub max_abs_error: f64,
     pub above_threshold: f64,
@@ -230,6 +252,16 @@ pub struct ResultRow {
     pub p_over_t: f64,
     /// 1 / (1 − ρ·f) with ρ the hit rate (reuse fraction) and f = P/T.
     pub ideal_speedup: f64,
+    /// Each pass's median time with the payload and the shade made free
+    /// (this node and variant at the base setting), ms: its fixed cost.
+    #[serde(default)]
+    pub fixed_cost_ms: Vec<PassTime>,
+    /// The speed-up the variant could reach were its payload and shade
+    /// free: the reference's time over the sum of `fixed_cost_ms`. Beside
+    /// `ideal_speedup` (which counts the payload only), it says how much of
+    /// the gap is the passes' fixed cost.
+    #[serde(default)]
+    pub bound_with_fixed_costs: f64,
     /// speedup / ideal_speedup.
     pub share_of_ideal: f64,
     /// On the Pareto front of time against PSNR, and against SSIM (see
@@ -250,7 +282,14 @@ pub struct PassTime {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct FrameStats {
     pub time_ms: f64,
+    /// Over the covered pixels.
     pub psnr: f64,
+    /// Over the whole frame.
+    #[serde(default)]
+    pub psnr_frame: f64,
+    /// Against the frame before ([`ResultRow::flicker`]); 0 for the first.
+    #[serde(default)]
+    pub flicker: f64,
     pub ssim: f64,
     /// Largest channel difference from the reference frame, in [0, 1].
     #[serde(default)]
@@ -504,6 +543,9 @@ mod tests {
             speedup_ci: [9.0 / time_ms, 11.0 / time_ms],
             psnr,
             ssim,
+            psnr_frame: psnr,
+            worst_psnr: psnr,
+            flicker: 0.0,
             max_abs_error: 0.0,
             above_threshold: 0.0,
             coverage: 1.0,
@@ -515,6 +557,8 @@ mod tests {
             refresh_rate: 0.0,
             p_over_t: 0.0,
             ideal_speedup: 1.0,
+            fixed_cost_ms: Vec::new(),
+            bound_with_fixed_costs: 1.0,
             share_of_ideal: 1.0,
             pareto_psnr: false,
             pareto_ssim: false,
@@ -571,6 +615,7 @@ mod tests {
             reference: Reference {
                 time_ms: 10.0,
                 spread_ms: [10.0, 10.0],
+                fixed_ms: 0.0,
                 frame_ms: vec![10.0],
             },
             nodes: Vec::new(),

@@ -221,6 +221,12 @@ pub struct Options {
     /// The vertex entry point that draws with the fragment one; `None`
     /// infers it ([`vertex::vertex_entry`]).
     pub vertex_entry: Option<String>,
+    /// Make the payload and the shade free (each returns zero at once):
+    /// the passes then cost what the variant costs with nothing to
+    /// compute — rasterisation, the twin vertex stage, the lookup, the
+    /// cache writes — which the profiler measures as its fixed cost. Not a
+    /// shader to use.
+    pub free_payload: bool,
 }
 
 impl Default for Options {
@@ -234,6 +240,7 @@ impl Default for Options {
             reconstruction: Reconstruction::Bilinear,
             color_format: "rgba8unorm".into(),
             vertex_entry: None,
+            free_payload: false,
         }
     }
 }
@@ -669,6 +676,10 @@ fn rewrite_at(
     shade_copy.substitute(node, naga::Expression::FunctionArgument(cached_index));
     let shade_fn = shade_copy.run();
     let shade = module.functions.append(shade_fn, naga::Span::UNDEFINED);
+    if options.free_payload {
+        free_function(module.functions.get_mut(payload));
+        free_function(module.functions.get_mut(shade));
+    }
     let vec4 = module.types.insert(
         naga::Type {
             name: None,
@@ -772,6 +783,21 @@ fn rewrite_at(
         classify,
         plan,
     })
+}
+
+/// Makes `function` return zero (of its result type) at once: a payload,
+/// a shade or a fragment stage made free, to measure what the rest costs.
+pub fn free_function(function: &mut naga::Function) {
+    function.expressions = naga::Arena::new();
+    function.local_variables = naga::Arena::new();
+    function.named_expressions = Default::default();
+    let value = function.result.as_ref().map(|result| {
+        function.expressions.append(
+            naga::Expression::ZeroValue(result.ty),
+            naga::Span::UNDEFINED,
+        )
+    });
+    function.body = naga::Block::from_vec(vec![naga::Statement::Return { value }]);
 }
 
 /// Whether the fragment result writes `@builtin(frag_depth)`.

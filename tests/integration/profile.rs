@@ -909,3 +909,135 @@ fn a_warmup_that_moves_the_scene_away_is_reported() {
     assert!(still.warnings.is_empty(), "{:?}", still.warnings);
     assert!(still.results.iter().all(|r| r.coverage > 0.1));
 }
+
+/// A cheap node under a costly shade: whatever the cache saves, the shade
+/// still runs, so the variant's time is far above its fixed cost.
+const COSTLY_SHADE: &str = r#"
+struct Camera {
+    clip_from_world: mat4x4<f32>,
+}
+@group(0) @binding(0) var<uniform> camera: Camera;
+
+struct VertexOutput {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) local_position: vec3<f32>,
+}
+
+@vertex
+fn vs_main(@location(0) position: vec3<f32>) -> VertexOutput {
+    var out: VertexOutput;
+    out.clip_position = camera.clip_from_world * vec4<f32>(position, 1.0);
+    out.local_position = position;
+    return out;
+}
+
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
+    let base = sin(in.local_position.x * 3.0) + cos(in.local_position.y * 2.0);
+    var shade = 0.0;
+    for (var i = 0; i < 300; i++) {
+        shade += sin(base * (1.0 + f32(i) * 0.01)) / 300.0;
+    }
+    return vec4<f32>(vec3<f32>(0.5 + 0.5 * shade), 1.0);
+}
+"#;
+
+/// The fixed cost of each pass is measured with the payload and the shade
+/// made free; no variant can beat the speed-up that cost alone allows.
+#[test]
+fn fixed_cost_bound_is_at_least_the_measured_speedup() {
+    let shader = shadecache::front::parse(shadecache::diagnostic::SourceFile::new(
+        "costly_shade.wgsl",
+        COSTLY_SHADE,
+    ))
+    .unwrap();
+    let base = shadecache::analysis::analyze(&shader, &Default::default())
+        .unwrap()
+        .candidates
+        .iter()
+        .find(|c| c.node.text == "sin(in.local_position.x * 3.0) + cos(in.local_position.y * 2.0)")
+        .unwrap()
+        .node
+        .id
+        .clone();
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let scene = Scene::default_for(&shader, None, None).unwrap();
+    let options = Options {
+        nodes: Nodes::Ids(vec![base]),
+        frames: Some(4),
+        warmup: Some(4),
+        size: Some([64, 64]),
+        ..Options::default()
+    };
+    let (report, _) = profile::profile(
+        &shader,
+        &scene,
+        std::path::Path::new("default scene"),
+        &options,
+        &mut Quiet,
+    )
+    .unwrap();
+    assert_eq!(report.results.len(), 3);
+    assert!(report.reference.fixed_ms > 0.0);
+    for row in &report.results {
+        let fixed: f64 = row.fixed_cost_ms.iter().map(|p| p.time_ms).sum();
+        assert_eq!(row.fixed_cost_ms.len(), row.passes.len(), "{}", row.variant);
+        assert!(fixed > 0.0);
+        assert!(
+            row.bound_with_fixed_costs >= row.speedup,
+            "{}: bound {} below the measured {}",
+            row.variant,
+            row.bound_with_fixed_costs,
+            row.speedup
+        );
+    }
+}
+
+/// P/T measured net of the payload pass's fixed cost is at most 1, even
+/// for a node that is the whole colour (whose payload pass does all the
+/// shader's work and pays rasterisation, the twin vertex stage and the
+/// cache write besides); nothing clamps it.
+#[test]
+fn measured_p_over_t_at_most_one() {
+    let mut opts = options(&[8], &[2]);
+    opts.nodes = Nodes::Top(1);
+    opts.variants = vec![Variant::OnePass];
+    let Some((_, report, _)) = run(&marble_scene("\"object-motion\"", ""), opts) else {
+        return;
+    };
+    let node = &report.nodes[0];
+    assert!(node.payload_fixed_ms > 0.0 && node.payload_fixed_ms < node.payload_ms);
+    assert!(node.p_over_t <= 1.0, "{node:?}");
+    let row = &report.results[0];
+    let expected = 1.0 / (1.0 - row.hit_rate * node.p_over_t);
+    assert!((row.ideal_speedup - expected).abs() < 1e-9);
+}
+
+/// The error is taken over the pixels the shader draws, with the whole
+/// frame's figure beside it; the worst frame and the flicker are there
+/// too. A still scene without refresh never flickers.
+#[test]
+fn error_over_covered_pixels() {
+    let Some((_, report, _)) = run(
+        &marble_scene("\"object-motion\", \"camera-motion\"", ""),
+        options(&[4], &[2]),
+    ) else {
+        return;
+    };
+    for row in &report.results {
+        assert!(row.psnr < 100.0, "{}: {}", row.variant, row.psnr);
+        // The exact background only raises the whole-frame figure.
+        assert!(row.psnr <= row.psnr_frame + 1e-9, "{row:?}");
+        assert!(row.psnr_frame - row.psnr > 0.5, "{row:?}");
+        assert!(row.worst_psnr <= row.psnr + 1e-9);
+        assert!(row.flicker > 0.0 && row.flicker < 1.0);
+    }
+    let Some((_, still, _)) = run(&marble_scene("", ""), options(&[0], &[2])) else {
+        return;
+    };
+    for row in &still.results {
+        assert!(row.flicker < 1e-3, "{}: {}", row.variant, row.flicker);
+    }
+}

@@ -262,7 +262,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     }
     for row in report.best_per_variant() {
         summary.push_str(&format!(
-            "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] (ideal {:.2}×, P/T {:.2}, hit {:.0}% miss {:.0}% refresh {:.0}%), PSNR {:.1} dB, SSIM {:.4}\n",
+            "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] (ideal {:.2}×, {:.2}× with its fixed costs, P/T {:.2}, hit {:.0}% miss {:.0}% refresh {:.0}%), PSNR {:.1} dB over the covered pixels (worst frame {:.1}), SSIM {:.4}, flicker {:.4}\n",
             row.variant.as_str(),
             row.node,
             row.node_text,
@@ -270,12 +270,15 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
             row.speedup_ci[0],
             row.speedup_ci[1],
             row.ideal_speedup,
+            row.bound_with_fixed_costs,
             row.p_over_t,
             row.hit_rate * 100.0,
             row.miss_rate * 100.0,
             row.refresh_rate * 100.0,
             row.psnr,
-            row.ssim
+            row.worst_psnr,
+            row.ssim,
+            row.flicker
         ));
     }
     if !report.defaulted.is_empty() {
