@@ -458,6 +458,18 @@ pub fn profile(
         classify: false,
         pipelines: pipeline_options,
     };
+    // Every run draws the same meshes and textures at the same size.
+    let new_runner = |plan: &Plan, sources: &HashMap<String, String>, options: RunOptions| {
+        Runner::new(
+            &gpu,
+            plan,
+            source_of(sources),
+            &meshes,
+            &textures,
+            (size[0], size[1]),
+            options,
+        )
+    };
     // The user's source, as written; a module given its vertex stage from
     // another file has no one source, and is written back by naga.
     let reference_text = match shader.vertex_file {
@@ -465,16 +477,8 @@ pub fn profile(
         Some(_) => crate::back::wgsl_text(&shader.module, &shader.info).map_err(fail)?,
     };
     let reference_sources = HashMap::from([("reference.wgsl".to_string(), reference_text)]);
-    let mut reference = Runner::new(
-        &gpu,
-        &reference_plan,
-        source_of(&reference_sources),
-        &meshes,
-        &textures,
-        (size[0], size[1]),
-        plain,
-    )
-    .map_err(|err| fail(format!("the reference does not run: {err}")))?;
+    let mut reference = new_runner(&reference_plan, &reference_sources, plain)
+        .map_err(|err| fail(format!("the reference does not run: {err}")))?;
 
     // Per node: a payload pass over every pixel, for P/T, and the same
     // pass with the payload made free, for its fixed cost.
@@ -497,16 +501,7 @@ pub fn profile(
             classify: None,
             ..rewritten.plan.clone()
         };
-        Runner::new(
-            &gpu,
-            &plan,
-            source_of(&sources_of(&rewritten)?),
-            &meshes,
-            &textures,
-            (size[0], size[1]),
-            plain,
-        )
-        .map_err(fail)
+        new_runner(&plan, &sources_of(&rewritten)?, plain).map_err(fail)
     };
     let mut payloads = Vec::new();
     let mut probes = Vec::new();
@@ -522,16 +517,8 @@ pub fn profile(
             else {
                 continue;
             };
-            let runner = Runner::new(
-                &gpu,
-                &rewritten.plan,
-                source_of(&sources_of(&rewritten)?),
-                &meshes,
-                &textures,
-                (size[0], size[1]),
-                plain,
-            )
-            .map_err(fail)?;
+            let runner =
+                new_runner(&rewritten.plan, &sources_of(&rewritten)?, plain).map_err(fail)?;
             probes.push(Probe::new(ProbeOf::Variant(node, variant), runner));
         }
     }
@@ -555,16 +542,7 @@ pub fn profile(
     };
     probes.push(Probe::new(
         ProbeOf::Reference,
-        Runner::new(
-            &gpu,
-            &free_reference_plan,
-            source_of(&free_reference),
-            &meshes,
-            &textures,
-            (size[0], size[1]),
-            plain,
-        )
-        .map_err(fail)?,
+        new_runner(&free_reference_plan, &free_reference, plain).map_err(fail)?,
     ));
 
     let mut configs = Vec::new();
@@ -613,16 +591,8 @@ pub fn profile(
                     continue;
                 }
                 seen.push((node, variant, setting));
-                let runner = Runner::new(
-                    &gpu,
-                    &rewritten.plan,
-                    source_of(&sources_of(&rewritten)?),
-                    &meshes,
-                    &textures,
-                    (size[0], size[1]),
-                    run_options,
-                )
-                .map_err(|err| fail(format!("{what}: {err}")))?;
+                let runner = new_runner(&rewritten.plan, &sources_of(&rewritten)?, run_options)
+                    .map_err(|err| fail(format!("{what}: {err}")))?;
                 configs.push(Config {
                     node,
                     variant,
@@ -879,16 +849,7 @@ pub fn profile(
                 effects: vec![effect],
                 ..scene.clone()
             };
-            let mut runner = Runner::new(
-                &gpu,
-                &rewritten.plan,
-                source_of(&sources),
-                &meshes,
-                &textures,
-                (size[0], size[1]),
-                run_options,
-            )
-            .map_err(fail)?;
+            let mut runner = new_runner(&rewritten.plan, &sources, run_options).map_err(fail)?;
             let mut decisions = Vec::new();
             for frame in 0..warmup + frames {
                 runner
@@ -967,16 +928,8 @@ pub fn profile(
     let mut chosen = None;
     if let Some(winner) = choice.result {
         let rewritten = rewrite_of(shader, &analysis, &report.results[winner], &defaults)?;
-        let mut runner = Runner::new(
-            &gpu,
-            &rewritten.plan,
-            source_of(&sources_of(&rewritten)?),
-            &meshes,
-            &textures,
-            (size[0], size[1]),
-            plain,
-        )
-        .map_err(fail)?;
+        let mut runner =
+            new_runner(&rewritten.plan, &sources_of(&rewritten)?, plain).map_err(fail)?;
         let mut clock = Clock {
             gpu: &gpu,
             profiler: &mut profiler,
