@@ -37,6 +37,8 @@ pub use crate::analysis::Nodes;
 #[derive(Clone, Debug)]
 struct ShaderJob {
     path: PathBuf,
+    /// The folder its files go in: the file stem unless `.name()` says.
+    name: Option<String>,
     entry: Option<String>,
     vertex_entry: Option<String>,
     vertex: Option<PathBuf>,
@@ -49,6 +51,7 @@ impl ShaderJob {
     fn new(path: PathBuf) -> Self {
         ShaderJob {
             path,
+            name: None,
             entry: None,
             vertex_entry: None,
             vertex: None,
@@ -186,6 +189,14 @@ impl Build {
         self
     }
 
+    /// The folder the last shader's files go in (`OUT_DIR/shadecache/<name>/`),
+    /// and the first argument of [`include_variant!`](crate::include_variant);
+    /// default its file stem. Two shaders with one stem need it.
+    pub fn name(mut self, name: impl Into<String>) -> Self {
+        self.last().name = Some(name.into());
+        self
+    }
+
     /// The fragment entry point of the last shader added.
     pub fn entry(mut self, name: impl Into<String>) -> Self {
         self.last().entry = Some(name.into());
@@ -198,13 +209,16 @@ impl Build {
         self
     }
 
-    /// Where to write; default `$OUT_DIR/shadecache`.
+    /// Where to write; default `$OUT_DIR/shadecache`. [`include_variant!`](crate::include_variant)
+    /// reads the default only (a macro sees no run-time setting): include
+    /// files written elsewhere with `include_str!`.
     pub fn out_dir(mut self, dir: impl Into<PathBuf>) -> Self {
         self.out_dir = Some(dir.into());
         self
     }
 
-    /// Do not print `cargo::` lines (for use outside a build script).
+    /// Print nothing: no `cargo::` lines, no diagnostics on stderr (they
+    /// are in the returned [`BuildError`]); for use outside a build script.
     pub fn quiet(mut self) -> Self {
         self.quiet = true;
         self
@@ -214,6 +228,36 @@ impl Build {
     /// for by node id fails the build; with `Top`/`All`, refusals are
     /// reported as warnings.
     pub fn run(self) -> Result<Outputs, BuildError> {
+        // naga's parser and lowering recurse over the expression tree; a
+        // long chain is deeper than a build script's main thread allows in
+        // an unoptimised build. The CLI runs its work the same way.
+        const STACK: usize = 256 * 1024 * 1024;
+        let quiet = self.quiet;
+        let worker = std::thread::Builder::new()
+            .name("shadecache-build".into())
+            .stack_size(STACK)
+            .spawn(move || self.run_here());
+        match worker.map(|w| w.join()) {
+            Ok(Ok(result)) => result,
+            Ok(Err(_)) => Err(Build::failure(
+                quiet,
+                vec![Error::internal(Diagnostic::error(
+                    "shadecache panicked; this is a bug, please report it with the input",
+                ))],
+            )),
+            Err(err) => Err(Build::failure(
+                quiet,
+                vec![Error::plain(Diagnostic::error(format!(
+                    "cannot start a worker thread: {err}"
+                )))],
+            )),
+        }
+    }
+
+    fn run_here(self) -> Result<Outputs, BuildError> {
+        if let Some(err) = self.check_jobs() {
+            return Err(self.fail(vec![err]));
+        }
         let out_dir = match self.out_dir.clone().or_else(|| {
             std::env::var_os("OUT_DIR").map(|dir| PathBuf::from(dir).join("shadecache"))
         }) {
@@ -269,15 +313,57 @@ impl Build {
         }
     }
 
+    /// What no shader needs to be read to see: the reference asked for as
+    /// a variant, two shaders writing to one folder.
+    fn check_jobs(&self) -> Option<Error> {
+        if let Some(job) = self
+            .jobs
+            .iter()
+            .find(|job| job.variants.contains(&Variant::Reference))
+        {
+            return Some(Error::plain(Diagnostic::error(format!(
+                "`{}`: Variant::Reference is the unmodified shader, which there is nothing to write for; ask for one-pass, two-pass or three-pass",
+                job.path.display()
+            ))));
+        }
+        let mut seen: Vec<(&str, &Path)> = Vec::new();
+        for job in &self.jobs {
+            let name = job_name(job);
+            if let Some((_, other)) = seen.iter().find(|(n, _)| *n == name) {
+                return Some(Error::plain(
+                    Diagnostic::error(format!(
+                        "`{}` and `{}` would both be written to `{name}/`",
+                        other.display(),
+                        job.path.display()
+                    ))
+                    .with_note("give one of them its own folder with .name(\"...\")"),
+                ));
+            }
+            seen.push((name, &job.path));
+        }
+        None
+    }
+
     fn fail(&self, errors: Vec<Error>) -> BuildError {
-        for err in &errors {
-            err.emit_to_stderr(Color::Auto);
+        Build::failure(self.quiet, errors)
+    }
+
+    fn failure(quiet: bool, errors: Vec<Error>) -> BuildError {
+        if !quiet {
+            for err in &errors {
+                err.emit_to_stderr(Color::Auto);
+            }
         }
         BuildError {
             message: format!(
-                "shadecache: {} error{} rewriting shaders (see the diagnostics above)",
+                "shadecache: {} error{} rewriting shaders ({})",
                 errors.len(),
-                if errors.len() == 1 { "" } else { "s" }
+                if errors.len() == 1 { "" } else { "s" },
+                if quiet {
+                    "quiet: their diagnostics are in BuildError::errors"
+                } else {
+                    "see the diagnostics above"
+                }
             ),
             errors,
         }
@@ -309,10 +395,7 @@ impl Build {
                 ..analysis::Options::default()
             },
         )?;
-        let stem = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "shader".into());
+        let stem = job_name(job);
         let explicit = matches!(job.nodes, Nodes::Ids(_));
         for candidate in analysis.select(&shader.file, &job.nodes)? {
             for &variant in &job.variants {
@@ -363,6 +446,16 @@ impl Build {
         }
         Ok(())
     }
+}
+
+/// The folder a job's files go in: its `.name()`, else its file stem.
+fn job_name(job: &ShaderJob) -> &str {
+    job.name.as_deref().unwrap_or_else(|| {
+        job.path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("shader")
+    })
 }
 
 /// Includes a file the build script wrote: `include_variant!("marble",

@@ -46,7 +46,7 @@ fn build_fails_short_on_a_bad_node() {
         .unwrap_err();
     assert_eq!(
         err.to_string(),
-        "shadecache: 1 error rewriting shaders (see the diagnostics above)"
+        "shadecache: 1 error rewriting shaders (quiet: their diagnostics are in BuildError::errors)"
     );
     assert!(err.errors[0]
         .render()
@@ -72,6 +72,97 @@ fn build_fails_on_a_missing_shader_and_on_settings_without_a_shader() {
         .run()
         .unwrap_err();
     assert!(err.errors[0].render().contains("before any shader"));
+}
+
+/// Two shaders with one file stem would write one folder: an error, unless
+/// one is given its own name; the reference is not a variant to write.
+#[test]
+fn build_refuses_colliding_stems_and_the_reference_variant() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_a, first) = crate::util::temp_file(
+        "marble.wgsl",
+        &std::fs::read(root().join("corpus/noise_marble.wgsl")).unwrap(),
+    );
+    let twice = || {
+        Build::new()
+            .shader(root().join("corpus/noise_marble.wgsl"))
+            .node("nb0c12cc4")
+            .variant(Variant::OnePass)
+            .out_dir(dir.path())
+            .quiet()
+    };
+    let renamed = first.with_file_name("noise_marble.wgsl");
+    std::fs::copy(&first, &renamed).unwrap();
+    let err = twice()
+        .shader(&renamed)
+        .node("nb0c12cc4")
+        .variant(Variant::OnePass)
+        .run()
+        .unwrap_err();
+    assert!(
+        err.errors[0]
+            .render()
+            .contains("would both be written to `noise_marble/`"),
+        "{}",
+        err.errors[0].render()
+    );
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    twice()
+        .shader(&renamed)
+        .name("marble_copy")
+        .node("nb0c12cc4")
+        .variant(Variant::OnePass)
+        .run()
+        .unwrap();
+    assert!(dir
+        .path()
+        .join("marble_copy/nb0c12cc4/one-pass/pass1.wgsl")
+        .is_file());
+    assert!(dir
+        .path()
+        .join("noise_marble/nb0c12cc4/one-pass/pass1.wgsl")
+        .is_file());
+
+    let err = Build::new()
+        .shader(root().join("corpus/noise_marble.wgsl"))
+        .variant(Variant::Reference)
+        .out_dir(dir.path())
+        .quiet()
+        .run()
+        .unwrap_err();
+    assert!(err.errors[0].render().contains("Variant::Reference"));
+}
+
+/// A sum deep enough to overflow a build script's main thread in a debug
+/// build is rewritten: the build runs on a thread with a large stack.
+#[test]
+fn build_handles_deep_expressions() {
+    let terms: Vec<String> = (0..3000)
+        .map(|i| format!("sin(p.x * {i}.0 + p.y)"))
+        .collect();
+    let source = format!(
+        "@fragment\nfn fs(@location(0) p: vec2<f32>) -> @location(0) vec4<f32> {{\n    let s = {};\n    return vec4<f32>(s);\n}}\n",
+        terms.join(" + ")
+    );
+    let (_dir, path) = crate::util::temp_file("deep.wgsl", source.as_bytes());
+    let out = tempfile::tempdir().unwrap();
+    // Run from a thread with a small stack, as a build script's would be.
+    let outputs = std::thread::Builder::new()
+        .stack_size(2 * 1024 * 1024)
+        .spawn(move || {
+            Build::new()
+                .shader(&path)
+                .variant(Variant::OnePass)
+                .out_dir(out.path())
+                .quiet()
+                .run()
+                .map(|o| o.files.len())
+        })
+        .unwrap()
+        .join()
+        .unwrap()
+        .unwrap();
+    assert!(outputs > 0);
 }
 
 /// `examples/build-script` builds from the checkout and runs: its
