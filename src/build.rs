@@ -406,7 +406,7 @@ impl Build {
                 match rewrite::rewrite(&shader, &analysis, candidate, variant, &options) {
                     Ok(rewritten) => {
                         let dir = out_dir
-                            .join(&stem)
+                            .join(stem)
                             .join(&candidate.node.id)
                             .join(variant.as_str());
                         outputs.files.extend(back::write_variant(
