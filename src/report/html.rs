@@ -7,7 +7,7 @@ use std::path::Path;
 
 use base64::Engine;
 
-use super::plots::{chart, escape, Series};
+use super::plots::{chart, escape, informative, Series};
 use super::{images, Report, ResultRow};
 use crate::rewrite::Variant;
 
@@ -215,21 +215,21 @@ pub fn html(report: &Report, dir: &Path) -> String {
     }
 
     // Charts.
+    // Only those with something to show: a knob measured at one value, a
+    // single node or a single configuration draws nothing.
     page.push_str("<h2>Charts</h2>");
-    page.push_str(&time_per_node(report));
-    page.push_str(&speedup_per_period(report));
-    page.push_str(&error_against_time(
-        report,
-        "PSNR (dB)",
-        |r| r.psnr,
-        |r| r.pareto_psnr,
-    ));
-    page.push_str(&error_against_time(
-        report,
-        "SSIM",
-        |r| r.ssim,
-        |r| r.pareto_ssim,
-    ));
+    let charts = [
+        time_per_node(report),
+        speedup_per_period(report),
+        error_against_time(report, "PSNR (dB)", |r| r.psnr, |r| r.pareto_psnr),
+        error_against_time(report, "SSIM", |r| r.ssim, |r| r.pareto_ssim),
+    ];
+    if charts.iter().all(String::is_empty) {
+        page.push_str("<p>Nothing to chart: the run measured one node at one value of each knob (<code>--sweep</code> or lists of values measure more).</p>");
+    }
+    for chart in charts {
+        page.push_str(&chart);
+    }
     page.push_str(&pareto_table(report));
     page.push_str(&grid_section(report));
 
@@ -313,6 +313,7 @@ fn time_per_node(report: &Report) -> String {
             .map(|i| (i as f64, report.reference.time_ms))
             .collect(),
         line: true,
+        ..Series::default()
     }];
     for variant in Variant::ALL {
         let points: Vec<(f64, f64)> = nodes
@@ -333,8 +334,12 @@ fn time_per_node(report: &Report) -> String {
                 name: variant.to_string(),
                 points,
                 line: true,
+                ..Series::default()
             });
         }
+    }
+    if nodes.len() < 2 {
+        return String::new();
     }
     chart(
         "Render time per node (nodes by measured P/T)",
@@ -357,7 +362,7 @@ fn speedup_per_period(report: &Report) -> String {
     let series: Vec<Series> = quads
         .iter()
         .map(|&k| {
-            let mut points: Vec<(f64, f64)> = report
+            let mut rows: Vec<&ResultRow> = report
                 .results
                 .iter()
                 .filter(|r| {
@@ -366,16 +371,24 @@ fn speedup_per_period(report: &Report) -> String {
                         && r.reconstruction == best.reconstruction
                         && r.refresh_quad == k
                 })
-                .map(|r| (f64::from(r.refresh_period), r.speedup))
                 .collect();
-            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            rows.sort_by_key(|r| r.refresh_period);
             Series {
                 name: format!("k = {k}"),
-                points,
+                points: rows
+                    .iter()
+                    .map(|r| (f64::from(r.refresh_period), r.speedup))
+                    .collect(),
                 line: true,
+                titles: rows.iter().map(|r| point_title(report, r, "")).collect(),
+                marks: Vec::new(),
             }
         })
         .collect();
+    // A knob measured at one value would draw an empty axis.
+    if !informative(&series) {
+        return String::new();
+    }
     chart(
         &format!(
             "Speed-up against Δn ({} {}, {})",
@@ -401,31 +414,48 @@ fn error_against_time(
 ) -> String {
     let mut series: Vec<Series> = Variant::ALL
         .iter()
-        .map(|&variant| Series {
-            name: variant.to_string(),
-            points: report
+        .map(|&variant| {
+            let rows: Vec<&ResultRow> = report
                 .results
                 .iter()
                 .filter(|r| r.variant == variant)
-                .map(|r| (r.time_ms, value(r)))
-                .collect(),
-            line: false,
+                .collect();
+            Series {
+                name: variant.to_string(),
+                points: rows.iter().map(|r| (r.time_ms, value(r))).collect(),
+                line: false,
+                titles: rows
+                    .iter()
+                    .map(|r| point_title(report, r, metric))
+                    .collect(),
+                marks: Vec::new(),
+            }
         })
         .filter(|s| !s.points.is_empty())
         .collect();
-    let mut front: Vec<(f64, f64)> = report
+    // The front's points are labelled with their rank in the results
+    // table.
+    let mut front: Vec<(usize, &ResultRow)> = report
         .results
         .iter()
-        .filter(|r| on_front(r))
-        .map(|r| (r.time_ms, value(r)))
+        .enumerate()
+        .filter(|(_, r)| on_front(r))
         .collect();
-    front.sort_by(|a, b| a.0.total_cmp(&b.0));
+    front.sort_by(|a, b| a.1.time_ms.total_cmp(&b.1.time_ms));
     if !front.is_empty() {
         series.push(Series {
             name: "Pareto front".into(),
-            points: front,
+            points: front.iter().map(|(_, r)| (r.time_ms, value(r))).collect(),
             line: true,
+            titles: front
+                .iter()
+                .map(|(_, r)| point_title(report, r, metric))
+                .collect(),
+            marks: front.iter().map(|(i, _)| format!("#{}", i + 1)).collect(),
         });
+    }
+    if report.results.len() < 2 {
+        return String::new();
     }
     chart(
         &format!("{metric} against time"),
@@ -433,6 +463,33 @@ fn error_against_time(
         metric,
         &series,
         None,
+    )
+}
+
+/// What hovering a result's point says: its rank, node, variant, knobs,
+/// time and error.
+fn point_title(report: &Report, row: &ResultRow, metric: &str) -> String {
+    let rank = report
+        .results
+        .iter()
+        .position(|r| std::ptr::eq(r, row))
+        .map_or(String::new(), |i| format!("#{} ", i + 1));
+    format!(
+        "{rank}{} {}, {}: {:.3} ms, {:.2}× [{:.2}, {:.2}], PSNR {:.1} dB, SSIM {:.4}{}",
+        row.node,
+        row.variant,
+        row.setting(),
+        row.time_ms,
+        row.speedup,
+        row.speedup_ci[0],
+        row.speedup_ci[1],
+        row.psnr,
+        row.ssim,
+        if metric.is_empty() {
+            String::new()
+        } else {
+            format!(" ({metric} plotted)")
+        }
     )
 }
 

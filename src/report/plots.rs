@@ -9,12 +9,33 @@
 use std::fmt::Write;
 
 /// A named series of (x, y) points.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64)>,
     /// Draw a line through the points (else only markers).
     pub line: bool,
+    /// What hovering each point says (its SVG `<title>`), by point; a
+    /// point without one says its series and coordinates.
+    pub titles: Vec<String>,
+    /// A short label drawn beside each point (empty: none).
+    pub marks: Vec<String>,
+}
+
+/// Whether a chart of `series` carries information: some series has
+/// points at two or more x positions.
+pub fn informative(series: &[Series]) -> bool {
+    series.iter().any(|s| {
+        let mut xs: Vec<f64> = s
+            .points
+            .iter()
+            .map(|p| p.0)
+            .filter(|x| x.is_finite())
+            .collect();
+        xs.sort_by(f64::total_cmp);
+        xs.dedup();
+        xs.len() >= 2
+    })
 }
 
 const COLORS: [&str; 6] = [
@@ -30,10 +51,12 @@ pub fn chart(
     series: &[Series],
     x_labels: Option<&[String]>,
 ) -> String {
-    let (width, height) = (640.0, 360.0);
+    // The legend has a margin of its own, right of the plot, so that it
+    // never covers a point.
+    let (width, height) = (800.0, 360.0);
     let (left, right, top, bottom) = (
         64.0,
-        16.0,
+        176.0,
         32.0,
         if x_labels.is_some() { 96.0 } else { 48.0 },
     );
@@ -151,24 +174,39 @@ pub fn chart(
                 path.join(" ")
             );
         }
-        for &(x, y) in &finite {
+        for (j, &(x, y)) in s.points.iter().enumerate() {
+            if !(x.is_finite() && y.is_finite()) {
+                continue;
+            }
+            let title = s
+                .titles
+                .get(j)
+                .cloned()
+                .unwrap_or_else(|| format!("{}: {}, {}", s.name, number(x), number(y)));
             let _ = write!(
                 svg,
-                r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{color}"><title>{}: {} , {}</title></circle>"#,
+                r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{color}"><title>{}</title></circle>"#,
                 sx(x),
                 sy(y),
-                escape(&s.name),
-                number(x),
-                number(y)
+                escape(&title)
             );
+            if let Some(mark) = s.marks.get(j).filter(|m| !m.is_empty()) {
+                let _ = write!(
+                    svg,
+                    r#"<text x="{:.1}" y="{:.1}" font-size="9" fill="{color}">{}</text>"#,
+                    sx(x) + 5.0,
+                    sy(y) - 5.0,
+                    escape(mark)
+                );
+            }
         }
         let ly = top + 4.0 + 14.0 * i as f64;
         let _ = write!(
             svg,
             r#"<rect x="{}" y="{}" width="10" height="10" fill="{color}"/><text x="{}" y="{}">{}</text>"#,
-            width - right - 150.0,
+            width - right + 12.0,
             ly,
-            width - right - 136.0,
+            width - right + 26.0,
             ly + 9.0,
             escape(&s.name)
         );
@@ -192,4 +230,54 @@ pub fn escape(text: &str) -> String {
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_knob_at_one_value_is_not_informative() {
+        let one = Series {
+            name: "k = 4".into(),
+            points: vec![(32.0, 1.1), (32.0, 1.2)],
+            ..Series::default()
+        };
+        assert!(!informative(std::slice::from_ref(&one)));
+        let two = Series {
+            points: vec![(16.0, 1.0), (32.0, 1.2)],
+            ..one
+        };
+        assert!(informative(&[two]));
+    }
+
+    #[test]
+    fn points_say_what_they_are_and_the_legend_keeps_off_the_data() {
+        let series = Series {
+            name: "two-pass".into(),
+            points: vec![(1.0, 30.0), (2.0, 35.0)],
+            titles: vec![
+                "#1 n1 two-pass, Δn = 32".into(),
+                "#2 n1 two-pass, Δn = 8".into(),
+            ],
+            marks: vec!["#1".into(), String::new()],
+            ..Series::default()
+        };
+        let svg = chart("PSNR against time", "ms", "dB", &[series], None);
+        assert!(
+            svg.contains("<title>#1 n1 two-pass, Δn = 32</title>"),
+            "{svg}"
+        );
+        assert!(svg.contains(">#1</text>"));
+        // The legend's swatch lies right of the plot area's right edge.
+        let swatch = svg.find("<rect x=\"").unwrap() + "<rect x=\"".len();
+        let x: f64 = svg[swatch..].split('"').next().unwrap().parse().unwrap();
+        let plot_right = 800.0 - 176.0;
+        assert!(x > plot_right, "{x}");
+        // No point is drawn right of the plot area.
+        for cx in svg.split("<circle cx=\"").skip(1) {
+            let cx: f64 = cx.split('"').next().unwrap().parse().unwrap();
+            assert!(cx <= plot_right + 1e-6);
+        }
+    }
 }
