@@ -74,14 +74,10 @@ pub fn inline_all(shader: &Shader, entry_index: usize) -> Result<Option<Arc<Anal
     })))
 }
 
+/// naga's validation error in full: its `Display` names only the entry
+/// point, its `Debug` the statement and the handles at fault.
 fn validation_error(err: &naga::WithSpan<naga::valid::ValidationError>) -> String {
-    let mut text = format!("{:?}", err.as_inner());
-    let mut source = std::error::Error::source(err.as_inner());
-    while let Some(cause) = source {
-        text.push_str(&format!(": {cause}"));
-        source = cause.source();
-    }
-    text
+    format!("{:?}", err.as_inner())
 }
 
 fn internal(shader: &Shader, entry_index: usize, err: &str) -> Error {

@@ -82,7 +82,6 @@ pub(super) fn find(
         None => proc::inline::Origin {
             call: None,
             expression: Some(handle),
-            result_of: None,
         },
     };
 

@@ -55,8 +55,6 @@ pub struct Origin {
     /// The load that stands for an inlined call's result has the call's
     /// `CallResult` handle in the calling function.
     pub expression: Option<Handle<Expression>>,
-    /// For that load: the inlined call whose result it is.
-    pub result_of: Option<usize>,
 }
 
 /// One inlined call.
@@ -73,8 +71,6 @@ pub struct InlinedCall {
     /// The call's span in the calling function: its statement's, else its
     /// result's.
     pub span: Span,
-    /// The load of its result in the inlined function.
-    pub result: Option<Handle<Expression>>,
 }
 
 impl Inlined {
@@ -130,16 +126,10 @@ pub fn inline(
         path: Vec::new(),
     };
     let (function, origins) = context.specialise(root, None)?;
-    let mut calls = context.calls;
-    for ((handle, _), origin) in function.expressions.iter().zip(&origins) {
-        if let Some(call) = origin.result_of {
-            calls[call].result = Some(handle);
-        }
-    }
     Ok(Inlined {
         function,
         origins,
-        calls,
+        calls: context.calls,
     })
 }
 
@@ -154,8 +144,6 @@ struct Site {
 /// A callee made ready to splice: specialised itself, its returns lowered
 /// to stores, its locals without initialisers.
 struct Prepared {
-    /// Its index in [`Context::calls`].
-    call: usize,
     function: Function,
     origins: Vec<Origin>,
     /// The pointer to its result local.
@@ -210,7 +198,6 @@ impl Context<'_, '_> {
                     ordinal,
                     function: site.function,
                     span: site.span,
-                    result: None,
                 });
                 let module = self.module;
                 let (inner, origins) =
@@ -222,19 +209,16 @@ impl Context<'_, '_> {
             self.path.pop();
             prepared.push(callee);
         }
-        let own_origins = || {
-            function
+        if prepared.iter().all(Option::is_none) {
+            let origins = function
                 .expressions
                 .iter()
                 .map(|(handle, _)| Origin {
                     call: own,
                     expression: Some(handle),
-                    result_of: None,
                 })
-                .collect()
-        };
-        if prepared.iter().all(Option::is_none) {
-            return Ok((function.clone(), own_origins()));
+                .collect();
+            return Ok((function.clone(), origins));
         }
         Splice::new(function, own, &sites, prepared).run()
     }
@@ -254,7 +238,6 @@ fn lower_returns(
         origins.push(Origin {
             call: own,
             expression: None,
-            result_of: None,
         });
         function.expressions.append(expr, span)
     };
@@ -345,7 +328,6 @@ fn lower_returns(
     start.append(&mut lowered);
     function.body = start;
     Prepared {
-        call,
         function,
         origins,
         result,
@@ -364,12 +346,30 @@ fn has_early_return(body: &Block) -> bool {
     returns > usize::from(last_returns)
 }
 
+/// Whether `statement` is or holds a `return`.
 fn contains_return(statement: &Statement) -> bool {
+    let blocks: Vec<&Block> = match *statement {
+        Statement::Return { .. } => return true,
+        Statement::Block(ref block) => vec![block],
+        Statement::If {
+            ref accept,
+            ref reject,
+            ..
+        } => vec![accept, reject],
+        Statement::Switch { ref cases, .. } => cases.iter().map(|c| &c.body).collect(),
+        Statement::Loop {
+            ref body,
+            ref continuing,
+            ..
+        } => vec![body, continuing],
+        _ => return false,
+    };
     let mut found = false;
-    let block = Block::from_vec(vec![statement.clone()]);
-    super::each_statement(&block, &mut |s| {
-        found |= matches!(s, Statement::Return { .. });
-    });
+    for block in blocks {
+        super::each_statement(block, &mut |s| {
+            found |= matches!(s, Statement::Return { .. });
+        });
+    }
     found
 }
 
@@ -452,15 +452,13 @@ impl<M: FnMut(&mut Function, Expression, Span) -> Handle<Expression>> Lowering<'
             }
             // Inside a loop, a block that returns has broken out already
             // (or checked the flag after the statement that returned).
-            let returns = self.flag.is_some()
-                && contains_return(&statement)
+            let returns = contains_return(&statement)
                 && !(breakable && matches!(statement, Statement::Block(_)));
             let statement = self.nested(statement, breakable);
             out.push(statement, span);
-            if !returns {
+            let Some((pointer, _)) = self.flag.filter(|_| returns) else {
                 continue;
-            }
-            let (pointer, _) = self.flag.expect("checked above");
+            };
             let returned =
                 (self.made)(self.function, Expression::Load { pointer }, Span::UNDEFINED);
             if breakable {
@@ -575,28 +573,15 @@ impl Mapper for MapTable<'_> {
             Exprs::Dense(map) => map[handle.index()].unwrap_or(handle),
         }
     }
-    fn ty(&mut self, handle: Handle<naga::Type>) -> Handle<naga::Type> {
-        handle
-    }
-    fn constant(&mut self, handle: Handle<naga::Constant>) -> Handle<naga::Constant> {
-        handle
-    }
-    fn override_(&mut self, handle: Handle<naga::Override>) -> Handle<naga::Override> {
-        handle
-    }
-    fn global(&mut self, handle: Handle<naga::GlobalVariable>) -> Handle<naga::GlobalVariable> {
-        handle
-    }
     fn local(&mut self, handle: Handle<LocalVariable>) -> Handle<LocalVariable> {
         self.locals.map_or(handle, |locals| locals[handle.index()])
     }
-    fn function(&mut self, handle: Handle<Function>) -> Handle<Function> {
-        handle
-    }
 }
 
-/// The expressions and locals of one prepared callee, once spliced.
+/// One prepared callee, once its expressions and locals are in the
+/// target: its body, to put in place of the call, and how to map it.
 struct Spliced {
+    body: Block,
     exprs: Vec<Option<Handle<Expression>>>,
     locals: Vec<Handle<LocalVariable>>,
     result: Option<Handle<Expression>>,
@@ -613,8 +598,6 @@ struct Splice<'a> {
     /// The source's expressions in the target.
     map: Vec<Option<Handle<Expression>>>,
     spliced: Vec<Option<Spliced>>,
-    /// The next `Call` statement's ordinal, as the body is walked.
-    ordinal: usize,
 }
 
 impl<'a> Splice<'a> {
@@ -641,7 +624,6 @@ impl<'a> Splice<'a> {
             origins: Vec::new(),
             map: vec![None; source.expressions.len()],
             spliced,
-            ordinal: 0,
         }
     }
 
@@ -692,7 +674,6 @@ impl<'a> Splice<'a> {
             self.origins.push(Origin {
                 call: self.own,
                 expression: Some(handle),
-                result_of: None,
             });
         }
         // The function's own locals keep their handles; their initialisers
@@ -717,9 +698,9 @@ impl<'a> Splice<'a> {
     /// Copies one prepared callee's locals and expressions into the target.
     fn splice_expressions(&mut self, ordinal: usize) -> Result<(), String> {
         let site = &self.sites[ordinal];
-        let prepared = self.prepared[ordinal]
-            .as_ref()
-            .expect("only prepared ones are placed");
+        let Some(mut prepared) = self.prepared[ordinal].take() else {
+            return Ok(());
+        };
         let callee = &prepared.function;
         let locals: Vec<Handle<LocalVariable>> = callee
             .local_variables
@@ -762,7 +743,8 @@ impl<'a> Splice<'a> {
         }
         let result = match (site.result, prepared.result) {
             (Some(call_result), Some(pointer)) => {
-                let pointer = exprs[pointer.index()].expect("made above");
+                let pointer = exprs[pointer.index()]
+                    .ok_or("internal error: the result local of an inlined call was not copied")?;
                 let span = self.source.expressions.get_span(call_result);
                 let load = self
                     .target
@@ -771,7 +753,6 @@ impl<'a> Splice<'a> {
                 self.origins.push(Origin {
                     call: self.own,
                     expression: Some(call_result),
-                    result_of: Some(prepared.call),
                 });
                 self.map[call_result.index()] = Some(load);
                 Some(load)
@@ -779,6 +760,7 @@ impl<'a> Splice<'a> {
             _ => None,
         };
         self.spliced[ordinal] = Some(Spliced {
+            body: std::mem::take(&mut prepared.function.body),
             exprs,
             locals,
             result,
@@ -791,12 +773,12 @@ impl<'a> Splice<'a> {
     fn body(&mut self) -> Block {
         let Splice {
             source,
-            prepared,
             map,
             spliced,
-            ordinal,
             ..
         } = self;
+        // The next `Call` statement's ordinal, as the body is walked.
+        let mut ordinal = 0;
         let mut table = MapTable {
             exprs: Exprs::Dense(map),
             locals: None,
@@ -809,17 +791,16 @@ impl<'a> Splice<'a> {
                 if !matches!(statement, Statement::Call { .. }) {
                     return false;
                 }
-                *ordinal += 1;
-                let Some(spliced) = spliced[*ordinal - 1].take() else {
+                ordinal += 1;
+                let Some(spliced) = spliced[ordinal - 1].take() else {
                     return false;
                 };
-                let callee = &prepared[*ordinal - 1].as_ref().expect("spliced").function;
                 let mut table = MapTable {
                     exprs: Exprs::Dense(&spliced.exprs),
                     locals: Some(&spliced.locals),
                 };
                 out.append(&mut remap::block(
-                    &callee.body,
+                    &spliced.body,
                     &mut table,
                     true,
                     &mut |_, _, _| false,
@@ -955,7 +936,20 @@ fn fs(@location(0) v: vec4<f32>) -> @location(0) vec4<f32> {
             }
         }
         assert!(stored_in_loop);
-        assert!(inlined.calls[accumulate].result.is_some());
+        // The call's result is a load, standing for the caller's
+        // `CallResult`.
+        let original = naga::front::wgsl::parse_str(HELPERS).unwrap();
+        let root = &original.entry_points[0].function;
+        let (call_result, _) = root
+            .expressions
+            .iter()
+            .find(|(_, e)| matches!(e, Expression::CallResult(f) if *f == inlined.calls[accumulate].function))
+            .unwrap();
+        let load = inlined.find(None, call_result).unwrap();
+        assert!(matches!(
+            function.expressions[load],
+            Expression::Load { .. }
+        ));
     }
 
     #[test]

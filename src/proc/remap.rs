@@ -10,15 +10,30 @@
 use naga::{Expression, Handle, Statement};
 
 /// Where each kind of handle goes. Implementors decide what a handle maps
-/// to; copying code calls these for every handle it meets.
+/// to; copying code calls these for every handle it meets. Expressions
+/// always move (they live in a function's arena); the rest keep their
+/// handle unless the implementor says otherwise, as a copy within one
+/// module does.
 pub trait Mapper {
     fn expression(&mut self, handle: Handle<Expression>) -> Handle<Expression>;
-    fn ty(&mut self, handle: Handle<naga::Type>) -> Handle<naga::Type>;
-    fn constant(&mut self, handle: Handle<naga::Constant>) -> Handle<naga::Constant>;
-    fn override_(&mut self, handle: Handle<naga::Override>) -> Handle<naga::Override>;
-    fn global(&mut self, handle: Handle<naga::GlobalVariable>) -> Handle<naga::GlobalVariable>;
-    fn local(&mut self, handle: Handle<naga::LocalVariable>) -> Handle<naga::LocalVariable>;
-    fn function(&mut self, handle: Handle<naga::Function>) -> Handle<naga::Function>;
+    fn ty(&mut self, handle: Handle<naga::Type>) -> Handle<naga::Type> {
+        handle
+    }
+    fn constant(&mut self, handle: Handle<naga::Constant>) -> Handle<naga::Constant> {
+        handle
+    }
+    fn override_(&mut self, handle: Handle<naga::Override>) -> Handle<naga::Override> {
+        handle
+    }
+    fn global(&mut self, handle: Handle<naga::GlobalVariable>) -> Handle<naga::GlobalVariable> {
+        handle
+    }
+    fn local(&mut self, handle: Handle<naga::LocalVariable>) -> Handle<naga::LocalVariable> {
+        handle
+    }
+    fn function(&mut self, handle: Handle<naga::Function>) -> Handle<naga::Function> {
+        handle
+    }
 }
 
 /// `expr` with every handle mapped.

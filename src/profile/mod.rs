@@ -610,8 +610,14 @@ pub fn profile(
         }
     }
 
-    let per_frame = 1 + payloads.len() + probes.len() + configs.len();
-    progress.start(u64::from(warmup + frames) * per_frame as u64);
+    // Probes have no cache to warm: they run from the last warm-up frame
+    // on (one frame before they are measured), not through the warm-up.
+    let probes_from = warmup.saturating_sub(1);
+    let per_frame = 1 + payloads.len() + configs.len();
+    progress.start(
+        u64::from(warmup + frames) * per_frame as u64
+            + u64::from(warmup + frames - probes_from) * probes.len() as u64,
+    );
     let mut reference_times = Vec::new();
     let mut reference_pixels = Vec::new();
     let mut reference_before: Vec<u8> = Vec::new();
@@ -652,7 +658,7 @@ pub fn profile(
                 times.push(time);
             }
         }
-        for probe in &mut probes {
+        for probe in probes.iter_mut().filter(|_| frame >= probes_from) {
             let (time, passes, _) = timed(
                 &gpu,
                 &mut profiler,
@@ -735,15 +741,24 @@ pub fn profile(
             let column = |f: fn(&Decisions) -> f64| {
                 metrics::mean(&config.decisions.iter().map(f).collect::<Vec<_>>())
             };
+            let error = |f: fn(&FrameError) -> f64| {
+                metrics::mean(&config.errors.iter().map(f).collect::<Vec<_>>())
+            };
             let hit_rate = column(|d| d.hit);
             let f = node.p_over_t;
             let ideal = 1.0 / (1.0 - hit_rate * f).max(1e-6);
             // The most the variant could reach were its payload and shade
-            // free: its passes' fixed cost alone.
-            let (fixed_ms, fixed_passes) =
-                probed(&probes, ProbeOf::Variant(config.node, config.variant))
-                    .unwrap_or((0.0, Vec::new()));
+            // free: its passes' fixed costs alone.
+            // (Without GPU timestamps there are no pass times: the frame's.)
+            let (fixed_frame_ms, fixed_passes) =
+                probed(&probes, ProbeOf::Variant(config.node, config.variant)).unwrap_or_default();
+            let fixed_ms = if fixed_passes.is_empty() {
+                fixed_frame_ms
+            } else {
+                fixed_passes.iter().map(|p| p.time_ms).sum()
+            };
             let bound = speedup(reference_ms, fixed_ms);
+            let measured_speedup = speedup(reference_ms, time_ms);
             let passes = pass_medians(&config.passes);
             let row = ResultRow {
                 node: node.id.clone(),
@@ -756,35 +771,23 @@ pub fn profile(
                 depth_epsilon: config.setting.depth_epsilon,
                 time_ms,
                 passes,
-                speedup: speedup(reference_ms, time_ms),
+                speedup: measured_speedup,
                 speedup_ci: metrics::speedup_interval(&reference_times, &config.times),
-                psnr: metrics::mean(&config.errors.iter().map(|e| e.psnr).collect::<Vec<_>>()),
-                psnr_frame: metrics::mean(
-                    &config
-                        .errors
-                        .iter()
-                        .map(|e| e.psnr_frame)
-                        .collect::<Vec<_>>(),
-                ),
+                psnr: error(|e| e.psnr),
+                psnr_frame: error(|e| e.psnr_frame),
                 worst_psnr: config
                     .errors
                     .iter()
                     .map(|e| e.psnr)
                     .fold(metrics::PSNR_CAP, f64::min),
                 flicker: metrics::mean(&config.flicker),
-                ssim: metrics::mean(&config.errors.iter().map(|e| e.ssim).collect::<Vec<_>>()),
+                ssim: error(|e| e.ssim),
                 max_abs_error: config
                     .errors
                     .iter()
                     .map(|e| e.max_abs_error)
                     .fold(0.0, f64::max),
-                above_threshold: metrics::mean(
-                    &config
-                        .errors
-                        .iter()
-                        .map(|e| e.above_threshold)
-                        .collect::<Vec<_>>(),
-                ),
+                above_threshold: error(|e| e.above_threshold),
                 coverage: metrics::mean(
                     &config
                         .decisions
@@ -802,7 +805,7 @@ pub fn profile(
                 ideal_speedup: ideal,
                 fixed_cost_ms: fixed_passes,
                 bound_with_fixed_costs: bound,
-                share_of_ideal: speedup(reference_ms, time_ms) / ideal,
+                share_of_ideal: measured_speedup / ideal,
                 pareto_psnr: false,
                 pareto_ssim: false,
                 frame_stats: config

@@ -362,25 +362,26 @@ fn speedup_per_period(report: &Report) -> String {
     let series: Vec<Series> = quads
         .iter()
         .map(|&k| {
-            let mut rows: Vec<&ResultRow> = report
+            let mut rows: Vec<(usize, &ResultRow)> = report
                 .results
                 .iter()
-                .filter(|r| {
+                .enumerate()
+                .filter(|(_, r)| {
                     r.node == best.node
                         && r.variant == best.variant
                         && r.reconstruction == best.reconstruction
                         && r.refresh_quad == k
                 })
                 .collect();
-            rows.sort_by_key(|r| r.refresh_period);
+            rows.sort_by_key(|(_, r)| r.refresh_period);
             Series {
                 name: format!("k = {k}"),
                 points: rows
                     .iter()
-                    .map(|r| (f64::from(r.refresh_period), r.speedup))
+                    .map(|(_, r)| (f64::from(r.refresh_period), r.speedup))
                     .collect(),
                 line: true,
-                titles: rows.iter().map(|r| point_title(report, r, "")).collect(),
+                titles: rows.iter().map(|&(i, r)| point_title(i, r, "")).collect(),
                 marks: Vec::new(),
             }
         })
@@ -412,21 +413,25 @@ fn error_against_time(
     value: fn(&ResultRow) -> f64,
     on_front: fn(&ResultRow) -> bool,
 ) -> String {
+    if report.results.len() < 2 {
+        return String::new();
+    }
     let mut series: Vec<Series> = Variant::ALL
         .iter()
         .map(|&variant| {
-            let rows: Vec<&ResultRow> = report
+            let rows: Vec<(usize, &ResultRow)> = report
                 .results
                 .iter()
-                .filter(|r| r.variant == variant)
+                .enumerate()
+                .filter(|(_, r)| r.variant == variant)
                 .collect();
             Series {
                 name: variant.to_string(),
-                points: rows.iter().map(|r| (r.time_ms, value(r))).collect(),
+                points: rows.iter().map(|(_, r)| (r.time_ms, value(r))).collect(),
                 line: false,
                 titles: rows
                     .iter()
-                    .map(|r| point_title(report, r, metric))
+                    .map(|&(i, r)| point_title(i, r, metric))
                     .collect(),
                 marks: Vec::new(),
             }
@@ -449,13 +454,10 @@ fn error_against_time(
             line: true,
             titles: front
                 .iter()
-                .map(|(_, r)| point_title(report, r, metric))
+                .map(|&(i, r)| point_title(i, r, metric))
                 .collect(),
             marks: front.iter().map(|(i, _)| format!("#{}", i + 1)).collect(),
         });
-    }
-    if report.results.len() < 2 {
-        return String::new();
     }
     chart(
         &format!("{metric} against time"),
@@ -466,14 +468,10 @@ fn error_against_time(
     )
 }
 
-/// What hovering a result's point says: its rank, node, variant, knobs,
-/// time and error.
-fn point_title(report: &Report, row: &ResultRow, metric: &str) -> String {
-    let rank = report
-        .results
-        .iter()
-        .position(|r| std::ptr::eq(r, row))
-        .map_or(String::new(), |i| format!("#{} ", i + 1));
+/// What hovering a result's point says: its rank (`index` in the results
+/// table), node, variant, knobs, time and error.
+fn point_title(index: usize, row: &ResultRow, metric: &str) -> String {
+    let rank = format!("#{} ", index + 1);
     format!(
         "{rank}{} {}, {}: {:.3} ms, {:.2}× [{:.2}, {:.2}], PSNR {:.1} dB, SSIM {:.4}{}",
         row.node,

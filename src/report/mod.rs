@@ -257,7 +257,9 @@ pub struct ResultRow {
     #[serde(default)]
     pub fixed_cost_ms: Vec<PassTime>,
     /// The speed-up the variant could reach were its payload and shade
-    /// free: the reference's time over the sum of `fixed_cost_ms`. Beside
+    /// free: the reference's time over the sum of `fixed_cost_ms` (over
+    /// the free run's median frame time when there are no GPU timestamps,
+    /// hence no pass times). Beside
     /// `ideal_speedup` (which counts the payload only), it says how much of
     /// the gap is the passes' fixed cost.
     #[serde(default)]

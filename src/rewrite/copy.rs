@@ -474,18 +474,6 @@ impl Mapper for FunctionCopy<'_> {
         mapped
     }
 
-    fn ty(&mut self, handle: Handle<naga::Type>) -> Handle<naga::Type> {
-        handle
-    }
-
-    fn constant(&mut self, handle: Handle<naga::Constant>) -> Handle<naga::Constant> {
-        handle
-    }
-
-    fn override_(&mut self, handle: Handle<naga::Override>) -> Handle<naga::Override> {
-        handle
-    }
-
     fn global(&mut self, handle: Handle<naga::GlobalVariable>) -> Handle<naga::GlobalVariable> {
         self.globals.get(&handle).copied().unwrap_or(handle)
     }

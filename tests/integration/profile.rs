@@ -767,10 +767,12 @@ fn sweep_marks_the_pareto_front_and_writes_the_choice() {
     }
 }
 
-/// A fragment stage whose cost is nearly all in one smooth value (400
-/// waves summed in a loop): cached, it is reliably faster, even on a CPU
-/// rasteriser, so the answer has a winner to measure again.
-const COSTLY_SMOOTH: &str = r#"
+/// A module whose vertex stage draws the mesh with one camera matrix and
+/// passes the local position on, with `$fragment` after it.
+macro_rules! with_camera_vertex {
+    ($fragment:literal) => {
+        concat!(
+            r#"
 struct Camera {
     clip_from_world: mat4x4<f32>,
 }
@@ -788,7 +790,17 @@ fn vs_main(@location(0) position: vec3<f32>) -> VertexOutput {
     out.local_position = position;
     return out;
 }
+"#,
+            $fragment
+        )
+    };
+}
 
+/// A fragment stage whose cost is nearly all in one smooth value (400
+/// waves summed in a loop): cached, it is reliably faster, even on a CPU
+/// rasteriser, so the answer has a winner to measure again.
+const COSTLY_SMOOTH: &str = with_camera_vertex!(
+    r#"
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
     var pattern = 0.0;
@@ -799,7 +811,8 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
     let shade = 0.5 + 0.5 * sin(pattern * 0.005);
     return vec4<f32>(vec3<f32>(shade), 1.0);
 }
-"#;
+"#
+);
 
 /// The run's winner is measured again, against the original, before it is
 /// recommended; what `choice/` holds is the configuration measured.
@@ -912,25 +925,8 @@ fn a_warmup_that_moves_the_scene_away_is_reported() {
 
 /// A cheap node under a costly shade: whatever the cache saves, the shade
 /// still runs, so the variant's time is far above its fixed cost.
-const COSTLY_SHADE: &str = r#"
-struct Camera {
-    clip_from_world: mat4x4<f32>,
-}
-@group(0) @binding(0) var<uniform> camera: Camera;
-
-struct VertexOutput {
-    @builtin(position) clip_position: vec4<f32>,
-    @location(0) local_position: vec3<f32>,
-}
-
-@vertex
-fn vs_main(@location(0) position: vec3<f32>) -> VertexOutput {
-    var out: VertexOutput;
-    out.clip_position = camera.clip_from_world * vec4<f32>(position, 1.0);
-    out.local_position = position;
-    return out;
-}
-
+const COSTLY_SHADE: &str = with_camera_vertex!(
+    r#"
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
     let base = sin(in.local_position.x * 3.0) + cos(in.local_position.y * 2.0);
@@ -940,7 +936,8 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
     }
     return vec4<f32>(vec3<f32>(0.5 + 0.5 * shade), 1.0);
 }
-"#;
+"#
+);
 
 /// The fixed cost of each pass is measured with the payload and the shade
 /// made free; no variant can beat the speed-up that cost alone allows.
@@ -985,6 +982,8 @@ fn fixed_cost_bound_is_at_least_the_measured_speedup() {
         let fixed: f64 = row.fixed_cost_ms.iter().map(|p| p.time_ms).sum();
         assert_eq!(row.fixed_cost_ms.len(), row.passes.len(), "{}", row.variant);
         assert!(fixed > 0.0);
+        // The bound is the reference's time over the passes' fixed cost.
+        assert!((row.bound_with_fixed_costs - report.reference.time_ms / fixed).abs() < 1e-9);
         assert!(
             row.bound_with_fixed_costs >= row.speedup,
             "{}: bound {} below the measured {}",
@@ -1010,6 +1009,11 @@ fn measured_p_over_t_at_most_one() {
     let node = &report.nodes[0];
     assert!(node.payload_fixed_ms > 0.0 && node.payload_fixed_ms < node.payload_ms);
     assert!(node.p_over_t <= 1.0, "{node:?}");
+    // Net of the fixed cost, over the reference: the whole colour's
+    // payload is most of the reference's work, not nothing.
+    let net = (node.payload_ms - node.payload_fixed_ms) / report.reference.time_ms;
+    assert!((node.p_over_t - net).abs() < 1e-9);
+    assert!(node.p_over_t > 0.2, "{node:?}");
     let row = &report.results[0];
     let expected = 1.0 / (1.0 - row.hit_rate * node.p_over_t);
     assert!((row.ideal_speedup - expected).abs() < 1e-9);
