@@ -113,16 +113,45 @@ fn cache_refresh(frag_coord: vec4<f32>) -> bool {
     return (period != 0u) & (b == 0u);
 }
 
+// The depth slope of the previous frame, per texel of last frame's cache:
+// how the point's previous depth changes as its previous position moves
+// one texel along x or y. Derivatives give the slope per pixel of *this*
+// frame (`dpdx`, `dpdy` of the depth) and how the previous position moves
+// per pixel of this frame (`dpdx`, `dpdy` of the texel position, the 2×2
+// Jacobian J of the mapping from this frame's pixels to last frame's
+// texels); the slope per previous texel is the first through J⁻¹. The tap
+// offsets of a footprint are in previous texels, so only this slope is in
+// the right space: under a zoom, a roll or a grazing view the mapping is
+// far from the identity, and the per-pixel slope would extrapolate the
+// taps' depths along the wrong axes by the wrong amount. Where J is
+// singular or not finite (a surface seen edge-on last frame), the slope
+// per pixel stands in. Derivatives are taken here, so this runs at the top
+// of every pass, in uniform control flow.
+fn cache_previous_slope(depth: f32, texel: vec2<f32>) -> vec2<f32> {
+    let per_pixel = vec2<f32>(dpdx(depth), dpdy(depth));
+    let along_x = dpdx(texel);
+    let along_y = dpdy(texel);
+    let det = (along_x.x * along_y.y) - (along_y.x * along_x.y);
+    // per_pixel = per_texel · J, so per_texel = per_pixel · J⁻¹.
+    let per_texel = vec2<f32>(
+        (per_pixel.x * along_y.y) - (per_pixel.y * along_x.y),
+        (per_pixel.y * along_x.x) - (per_pixel.x * along_y.x),
+    ) / det;
+    // Comparisons with NaN are false: a NaN slope falls back too.
+    let usable = (abs(det) > 1e-6) & all(abs(per_texel) < vec2<f32>(1e30));
+    return select(per_pixel, per_texel, usable);
+}
+
 // The depth a cached texel should hold if it shows the same surface as
 // the point: the point's previous depth, carried along the surface's depth
-// slope (dpdx, dpdy) by the texel's offset from the point in pixels. On a
-// sloped surface the texels of the footprint legitimately differ from the
-// point's own depth by up to a pixel's worth of slope; extrapolating along
-// the surface's plane accounts for that, while a texel across a silhouette
-// lies far off the plane and still misses. Derivatives are taken here, so
-// this runs at the top of every pass, in uniform control flow.
-fn cache_expected_depth(depth: f32, offset_x: vec4<f32>, offset_y: vec4<f32>) -> vec4<f32> {
-    return vec4<f32>(depth) + (offset_x * dpdx(depth)) + (offset_y * dpdy(depth));
+// slope per previous texel (`cache_previous_slope`) by the texel's offset
+// from the point, in texels. On a sloped surface the texels of the
+// footprint legitimately differ from the point's own depth by up to a
+// texel's worth of slope; extrapolating along the surface's plane accounts
+// for that, while a texel across a silhouette lies far off the plane and
+// still misses.
+fn cache_expected_depth(depth: f32, slope: vec2<f32>, offset_x: vec4<f32>, offset_y: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(depth) + (offset_x * slope.x) + (offset_y * slope.y);
 }
 
 // Whether cached depths agree with the expected ones, tested relative to
@@ -192,6 +221,7 @@ fn cache_footprint(previous_clip: vec4<f32>) -> CacheFootprint {
     let depths = textureGather(cache_previous_depth, cache_sampler, (base + vec2<f32>(1.0)) / cache_params.viewport);
     let expected = cache_expected_depth(
         point.depth,
+        cache_previous_slope(point.depth, texel),
         vec4<f32>(-f.x, 1.0 - f.x, 1.0 - f.x, -f.x),
         vec4<f32>(1.0 - f.y, 1.0 - f.y, -f.y, -f.y),
     );
@@ -264,7 +294,8 @@ fn cache_nearest(previous_clip: vec4<f32>) -> CacheNearest {
     let inside = (previous_clip.w > 0.0) & all(position >= vec2<f32>(0.0)) & all(position < cache_params.viewport);
     let t = clamp(vec2<i32>(floor(position)), vec2<i32>(0), vec2<i32>(cache_params.viewport) - vec2<i32>(1));
     let offset = (vec2<f32>(t) + vec2<f32>(0.5)) - position;
-    let expected = cache_expected_depth(ndc.z, vec4<f32>(offset.x), vec4<f32>(offset.y));
+    let slope = cache_previous_slope(ndc.z, position);
+    let expected = cache_expected_depth(ndc.z, slope, vec4<f32>(offset.x), vec4<f32>(offset.y));
     return CacheNearest(t, inside, expected.x);
 }
 

@@ -117,9 +117,30 @@ pub fn nearest_inside(clip: Vec4, viewport: Vec2) -> bool {
     (clip.w > 0.0) && position.cmpge(Vec2::ZERO).all() && position.cmplt(viewport).all()
 }
 
+/// `cache_previous_slope`: the previous depth's slope per texel of last
+/// frame's cache, from its slope per pixel of this frame (`dpdx`, `dpdy` of
+/// the depth) and how the previous texel position moves per pixel of this
+/// frame (`along_x` = `dpdx`, `along_y` = `dpdy` of it: the columns of the
+/// mapping's Jacobian J). The per-pixel slope is the per-texel one times J,
+/// so this is the per-pixel slope times J⁻¹; where J is singular (|det J| ≤
+/// 10⁻⁶) or the result not finite, the per-pixel slope stands in.
+pub fn previous_slope(per_pixel: Vec2, along_x: Vec2, along_y: Vec2) -> Vec2 {
+    let det = (along_x.x * along_y.y) - (along_y.x * along_x.y);
+    let per_texel = Vec2::new(
+        (per_pixel.x * along_y.y) - (per_pixel.y * along_x.y),
+        (per_pixel.y * along_x.x) - (per_pixel.x * along_y.x),
+    ) / det;
+    let usable = det.abs() > 1e-6 && per_texel.abs().cmplt(Vec2::splat(1e30)).all();
+    if usable {
+        per_texel
+    } else {
+        per_pixel
+    }
+}
+
 /// `cache_expected_depth` for one tap: the point's previous depth carried
-/// along the surface's depth slope (`dpdx`, `dpdy` of the previous NDC depth
-/// in pixels of this frame) by the tap's offset from the point.
+/// along the surface's depth slope per previous texel ([`previous_slope`])
+/// by the tap's offset from the point, in texels.
 pub fn expected_depth(depth: f32, offset: Vec2, slope: Vec2) -> f32 {
     depth + (offset.x * slope.x) + (offset.y * slope.y)
 }
@@ -155,7 +176,8 @@ impl Footprint {
 /// `cache_footprint`: off-screen when the point was behind the previous
 /// camera or outside the texel centres; disoccluded when a tap weighing at
 /// least [`NEGLIGIBLE_WEIGHT`] disagrees with the expected depth by ε or
-/// more. `slope` is the shader's `(dpdx, dpdy)` of the previous NDC depth.
+/// more. `slope` is the previous NDC depth's slope per previous texel, as
+/// the shader's `cache_previous_slope` gives it.
 pub fn footprint(clip: Vec4, slope: Vec2, previous: &PreviousDepth) -> Footprint {
     let viewport = previous.viewport();
     let depth = ndc(clip).z;
@@ -606,6 +628,22 @@ mod tests {
             prop_assert_eq!(footprint(clip, Vec2::ZERO, &cache).status, Status::Offscreen);
             prop_assert_eq!(nearest(clip, Vec2::ZERO, &cache).0, Status::Offscreen);
         }
+    }
+
+    /// The slope per previous texel comes back through any zoom and roll
+    /// of the mapping; a singular mapping keeps the slope per pixel.
+    #[test]
+    fn previous_slope_undoes_the_mapping() {
+        let per_texel = Vec2::new(0.03, -0.01);
+        for (scale, angle) in [(1.0f32, 0.0f32), (0.5, 0.3), (2.0, -1.2), (1.3, 3.0)] {
+            let along_x = Vec2::new(angle.cos(), angle.sin()) * scale;
+            let along_y = along_x.perp();
+            let per_pixel = Vec2::new(per_texel.dot(along_x), per_texel.dot(along_y));
+            let back = previous_slope(per_pixel, along_x, along_y);
+            assert!((back - per_texel).abs().max_element() < 1e-6, "{back}");
+        }
+        let flat = previous_slope(Vec2::new(0.1, 0.2), Vec2::ZERO, Vec2::Y);
+        assert_eq!(flat, Vec2::new(0.1, 0.2));
     }
 
     /// The footprint of a point on a texel centre is that texel alone.

@@ -164,6 +164,15 @@ pub struct Camera {
     /// With `camera-motion`: translate the eye (and target) every frame.
     #[serde(default)]
     pub pan_per_frame: [f32; 3],
+    /// With `camera-motion`: roll about the line of sight, counter-clockwise
+    /// as seen by the camera.
+    #[serde(default)]
+    pub roll_degrees_per_frame: f32,
+    /// With `camera-motion`: magnify by this factor every frame (the tangent
+    /// of half the field of view divided by it); 1 keeps the field of view,
+    /// above 1 zooms in, below 1 out.
+    #[serde(default = "no_zoom")]
+    pub zoom_per_frame: f32,
 }
 
 impl Default for Camera {
@@ -177,8 +186,14 @@ impl Default for Camera {
             depth: DepthConvention::Standard,
             orbit_degrees_per_frame: 0.0,
             pan_per_frame: [0.0; 3],
+            roll_degrees_per_frame: 0.0,
+            zoom_per_frame: no_zoom(),
         }
     }
+}
+
+fn no_zoom() -> f32 {
+    1.0
 }
 
 fn default_eye() -> [f32; 3] {
@@ -234,7 +249,16 @@ impl Camera {
     /// The projection (right-handed, depth in [0, 1]) for the camera's
     /// near and far planes and depth convention.
     pub fn projection(&self, aspect: f32) -> Mat4 {
-        let fov = self.fov_degrees.to_radians();
+        self.projection_with_fov(self.fov_degrees.to_radians(), aspect)
+    }
+
+    /// The field of view (radians) after `frames` frames of zoom.
+    pub fn fov_after(&self, frames: f32) -> f32 {
+        let half = (self.fov_degrees.to_radians() * 0.5).tan() / self.zoom_per_frame.powf(frames);
+        2.0 * half.atan()
+    }
+
+    fn projection_with_fov(&self, fov: f32, aspect: f32) -> Mat4 {
         match (self.depth, self.far) {
             (DepthConvention::Standard, Far::Distance(far)) => {
                 Mat4::perspective_rh(fov, aspect, self.near, far)
@@ -413,6 +437,14 @@ impl Scene {
         if !(scene.camera.near > 0.0 && scene.camera.near.is_finite() && far_ok) {
             return fail("the camera needs 0 < near < far (far may be \"infinity\")".into());
         }
+        let camera = &scene.camera;
+        if !(camera.zoom_per_frame > 0.0 && camera.zoom_per_frame.is_finite())
+            || !camera.roll_degrees_per_frame.is_finite()
+        {
+            return fail(
+                "the camera's zoom_per_frame must be above 0 (1 keeps the field of view) and its roll_degrees_per_frame finite".into(),
+            );
+        }
         scene.file = Some(file);
         Ok(scene)
     }
@@ -473,8 +505,18 @@ impl Scene {
             eye += pan;
             target += pan;
         }
-        let clip_from_view = camera.projection(aspect);
-        let view_from_world = Mat4::look_at_rh(eye, target, Vec3::Y);
+        let (fov, roll) = if self.has(Effect::CameraMotion) {
+            (
+                camera.fov_after(t),
+                (camera.roll_degrees_per_frame * t).to_radians(),
+            )
+        } else {
+            (camera.fov_degrees.to_radians(), 0.0)
+        };
+        let clip_from_view = camera.projection_with_fov(fov, aspect);
+        // Rolling the camera counter-clockwise turns the view the other way.
+        let view_from_world =
+            Mat4::from_rotation_z(-roll) * Mat4::look_at_rh(eye, target, Vec3::Y);
         let clip_from_world = clip_from_view * view_from_world;
 
         let mut light = Vec3::from(self.light.position);

@@ -22,13 +22,18 @@ use wgpu::util::DeviceExt;
 
 /// The harness around the cache helpers. Case `i` is evaluated in the
 /// 2×2 pixel quad `i` (row-major, `columns` quads a row): the quad's other
-/// three pixels carry the case's depth slope, so that `dpdx` and `dpdy` of
-/// the depth at the top-left pixel, where the outcome is written, are the
-/// slope the test gives, as a rasteriser would make them on a surface.
+/// three pixels carry the case's motion, so that at the top-left pixel,
+/// where the outcome is written, `dpdx` and `dpdy` are what a rasteriser
+/// would make of a surface with that depth slope seen through that
+/// mapping: the previous texel position moves by J = s·R(θ) per pixel (a
+/// zoom by 1/s and a roll by −θ of the camera; the identity by default),
+/// and the previous depth by the slope per texel times J.
 const HARNESS: &str = r#"
 struct TestCase {
     clip: vec4<f32>,
-    // x, y: the previous depth's slope, NDC depth per pixel.
+    // x, y: the previous depth's slope, NDC depth per previous texel;
+    // z, w: s − 1 and θ of the mapping J = s·R(θ) from this frame's pixels
+    // to last frame's texels.
     slope: vec4<f32>,
 }
 
@@ -78,7 +83,14 @@ fn fs_main(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
         bitcast<vec4<f32>>(textureLoad(cases, at + vec2<i32>(1, 0), 0)),
     );
     var clip = test_case.clip;
-    clip.z = clip.z + (((test_case.slope.x * corner.x) + (test_case.slope.y * corner.y)) * clip.w);
+    let scale = 1.0 + test_case.slope.z;
+    let along_x = vec2<f32>(cos(test_case.slope.w), sin(test_case.slope.w)) * scale;
+    let along_y = vec2<f32>(-along_x.y, along_x.x);
+    let moved = (along_x * corner.x) + (along_y * corner.y);
+    let per_pixel = vec2<f32>(dot(test_case.slope.xy, along_x), dot(test_case.slope.xy, along_y));
+    clip.x = clip.x + (((moved.x * 2.0) / cache_params.viewport.x) * clip.w);
+    clip.y = clip.y - (((moved.y * 2.0) / cache_params.viewport.y) * clip.w);
+    clip.z = clip.z + (((per_pixel.x * corner.x) + (per_pixel.y * corner.y)) * clip.w);
     let bilinear = cache_lookup(clip);
     let loads = cache_lookup_loads(clip);
     let nearest = cache_lookup_nearest(clip);
@@ -161,11 +173,34 @@ impl Cache {
     }
 }
 
-/// One lookup: a previous clip position and the depth slope around it.
-#[derive(Clone, Copy, Debug)]
+/// One lookup: a previous clip position, the previous depth's slope per
+/// previous texel around it, and the mapping from this frame's pixels to
+/// last frame's texels, J = (1 + `zoom`)·R(`roll`): the identity when both
+/// are zero.
+#[derive(Clone, Copy, Debug, Default)]
 struct Case {
     clip: Vec4,
     slope: Vec2,
+    zoom: f32,
+    roll: f32,
+}
+
+impl Case {
+    /// The columns of J: how the previous texel position moves per pixel
+    /// along x and along y.
+    fn jacobian(&self) -> (Vec2, Vec2) {
+        let along_x = Vec2::new(self.roll.cos(), self.roll.sin()) * (1.0 + self.zoom);
+        (along_x, along_x.perp())
+    }
+
+    /// The slope as the CPU mirror finds it from what the shader's
+    /// derivatives give: the slope per pixel (per texel times J) taken
+    /// back through J.
+    fn mirrored_slope(&self) -> Vec2 {
+        let (along_x, along_y) = self.jacobian();
+        let per_pixel = Vec2::new(self.slope.dot(along_x), self.slope.dot(along_y));
+        reprojection::previous_slope(per_pixel, along_x, along_y)
+    }
 }
 
 /// What one lookup gave.
@@ -386,7 +421,7 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
     let case_bytes: Vec<u8> = cases
         .iter()
         .flat_map(|c| {
-            [c.clip.to_array(), [c.slope.x, c.slope.y, 0.0, 0.0]]
+            [c.clip.to_array(), [c.slope.x, c.slope.y, c.zoom, c.roll]]
                 .into_iter()
                 .flatten()
         })
@@ -581,8 +616,8 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
 fn cpu(cache: &Cache, case: &Case) -> (Status, Status) {
     let previous = cache.previous();
     (
-        reprojection::footprint(case.clip, case.slope, &previous).status,
-        reprojection::nearest(case.clip, case.slope, &previous).0,
+        reprojection::footprint(case.clip, case.mirrored_slope(), &previous).status,
+        reprojection::nearest(case.clip, case.mirrored_slope(), &previous).0,
     )
 }
 
@@ -593,7 +628,7 @@ fn assert_cpu_agrees(cache: &Cache, cases: &[Case], outcomes: &[Outcome]) {
     for (case, outcome) in cases.iter().zip(outcomes) {
         let (footprint, nearest) = cpu(cache, case);
         if footprint != Status::Offscreen {
-            let mirror = reprojection::footprint(case.clip, case.slope, &cache.previous());
+            let mirror = reprojection::footprint(case.clip, case.mirrored_slope(), &cache.previous());
             assert_eq!(outcome.base, mirror.base, "{case:?}: {outcome:?}");
             assert!(
                 (outcome.fraction - mirror.fraction).abs().max_element() < 1e-4,
@@ -636,10 +671,12 @@ fn behind_previous_camera() {
     let behind = |x: f32, y: f32, w: f32| Case {
         clip: cache.clip_at(Vec2::new(x, y), 0.5, w),
         slope: Vec2::ZERO,
+        ..Case::default()
     };
     let clip = |x: f32, y: f32, z: f32, w: f32| Case {
         clip: Vec4::new(x, y, z, w),
         slope: Vec2::ZERO,
+        ..Case::default()
     };
     let nan = f32::NAN;
     let cases = [
@@ -715,6 +752,47 @@ fn sloped_cache() -> Cache {
 
 fn sloped_depth(texel: Vec2) -> f32 {
     0.4 + 0.01 * texel.x + 0.005 * texel.y
+}
+
+/// The slope of a sloped surface under a zoom and a roll, in the harness:
+/// a point of the sloped cache's plane, seen through a mapping from this
+/// frame's pixels to last frame's texels that scales by 0.7–1.6 and turns
+/// by up to 60°, hits for every lookup, and the CPU mirror takes the slope
+/// back through the mapping to the same decisions. With the slope per
+/// pixel applied to the offsets in texels (`cache_previous_slope`
+/// returning its fallback), the steepest of these miss as disoccluded.
+#[test]
+fn sloped_surface_under_zoom_and_roll() {
+    let Some(gpu) = crate::gpu::gpu() else { return };
+    let mut cache = sloped_cache();
+    // A steeper plane, so that a wrongly turned slope shows.
+    cache.depth = (0..256)
+        .map(|i| {
+            let t = Vec2::new((i % 16) as f32, (i / 16) as f32);
+            0.3 + 0.03 * t.x + 0.01 * t.y
+        })
+        .collect();
+    let mut cases = Vec::new();
+    for (zoom, roll) in [(0.0, 0.0), (-0.3, 0.4), (0.6, -1.0), (0.3, 1.05), (-0.2, -0.6)] {
+        for texel in [Vec2::new(4.3, 5.6), Vec2::new(9.5, 7.25), Vec2::new(11.0, 10.0)] {
+            let depth = 0.3 + 0.03 * texel.x + 0.01 * texel.y;
+            cases.push(Case {
+                clip: cache.clip_at(texel, depth, 1.0),
+                slope: Vec2::new(0.03, 0.01),
+                zoom,
+                roll,
+            });
+        }
+    }
+    let outcomes = lookups(&gpu, &cache, &cases);
+    for (case, outcome) in cases.iter().zip(&outcomes) {
+        assert_eq!(
+            [outcome.bilinear.status, outcome.loads.status, outcome.nearest.status],
+            [0, 0, 0],
+            "{case:?}: {outcome:?}"
+        );
+    }
+    assert_cpu_agrees(&cache, &cases, &outcomes);
 }
 
 /// What a case must give: the footprint lookups' status, nearest's.
@@ -797,6 +875,7 @@ fn offscreen_reprojection() {
                 [1.0, 2.0].map(|w| Case {
                     clip: cache.clip_at(e.texel, depth(e.texel), w),
                     slope,
+                    ..Case::default()
                 })
             })
             .collect();
@@ -867,6 +946,7 @@ fn silhouette_cases(cache: &Cache, points: impl Iterator<Item = (Vec2, f32)>) ->
             Case {
                 clip: cache.clip_at(texel, depth, 1.0),
                 slope: Vec2::new(slope, 0.0),
+                ..Case::default()
             }
         })
         .collect()
@@ -947,6 +1027,7 @@ fn packed_lookups_behind_offscreen_and_at_silhouettes() {
         cases.push(Case {
             clip: flat.clip_at(Vec2::new(x, y), 0.5, w),
             slope: Vec2::ZERO,
+            ..Case::default()
         });
     }
     for clip in [
@@ -958,6 +1039,7 @@ fn packed_lookups_behind_offscreen_and_at_silhouettes() {
         cases.push(Case {
             clip,
             slope: Vec2::ZERO,
+            ..Case::default()
         });
     }
     for outcome in packed_lookups(&gpu, &flat, &cases) {
@@ -1000,6 +1082,7 @@ fn packed_lookups_behind_offscreen_and_at_silhouettes() {
         Case {
             clip: sloped.clip_at(texel, sloped_depth(texel), 1.0),
             slope: Vec2::new(0.01, 0.005),
+            ..Case::default()
         }
     })
     .collect();
@@ -1259,6 +1342,7 @@ fn depth_discontinuity_at_contact_points() {
             cases.push(Case {
                 clip: (scene.clip_from_world * previous.extend(1.0)).as_vec4(),
                 slope: Vec2::new(slope(DVec2::X), slope(DVec2::Y)),
+                ..Case::default()
             });
             truth.push((surface, previous, seen));
         }
@@ -1285,9 +1369,9 @@ fn depth_discontinuity_at_contact_points() {
             }
             stats.false_hits += 1;
             let taps: Vec<IVec2> = if nearest {
-                vec![reprojection::nearest(case.clip, case.slope, &cache.previous()).1]
+                vec![reprojection::nearest(case.clip, case.mirrored_slope(), &cache.previous()).1]
             } else {
-                reprojection::footprint(case.clip, case.slope, &cache.previous())
+                reprojection::footprint(case.clip, case.mirrored_slope(), &cache.previous())
                     .taps()
                     .iter()
                     .filter(|(_, weight)| *weight >= reprojection::NEGLIGIBLE_WEIGHT)
