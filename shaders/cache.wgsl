@@ -44,6 +44,9 @@ struct CacheParams {
 // Linear filtering, clamped to the edge: one bilinear sample of an
 // rgba16float payload, and one gather of the four depths around a point.
 @group(1) @binding(4) var cache_sampler: sampler;
+// Last frame's age of each cached value (r16float): how many frames ago
+// it was computed, 0 where it was computed that frame (see `cache_age`).
+@group(1) @binding(5) var cache_previous_age: texture_2d<f32>;
 
 struct CacheLookup {
     payload: vec4<f32>,
@@ -52,6 +55,9 @@ struct CacheLookup {
     // outside the viewport), 2 disoccluded (depth disagrees), 3 the cached
     // payload read back is not finite.
     status: u32,
+    // The age the payload read here has this frame if it is reused: one
+    // more than the oldest of the texels it was read from (`cache_age`).
+    age: f32,
 }
 
 // Whether every component is finite, by its exponent bits: WGSL lets
@@ -69,10 +75,53 @@ fn cache_finite(v: vec4<f32>) -> bool {
 // they miss and recompute too. Payloads beyond an rgba16float cache's range
 // were written as NaN (`cache_encode`), so they are recomputed rather than
 // reused wrong.
-fn cache_checked(payload: vec4<f32>, status: u32) -> CacheLookup {
+fn cache_checked(payload: vec4<f32>, status: u32, age: f32) -> CacheLookup {
     let valid = cache_finite(payload) & all(abs(payload) < vec4<f32>(cache_params.payload_limit));
     let checked = select(status, 3u, (status == 0u) & !valid);
-    return CacheLookup(payload, checked == 0u, checked);
+    return CacheLookup(payload, checked == 0u, checked, age);
+}
+
+// Bounded staleness. The refresh indicator below is decided per block of
+// the *screen*; a surface point that moves across blocks meets a new
+// phase at every crossing, so under motion a value could be reused for
+// far longer than Δn frames (simulated at 0.25–2 px a frame: 27–37% of
+// reused values Δn or more frames old, the 99th percentile 103–148 frames
+// at Δn = 32). So the cache keeps each value's age beside it, and a value
+// is refreshed when its age reaches Δn, whatever the phase says: no
+// surface point is ever shown from a value older than Δn − 1 frames. At
+// rest the two rules fire on the same frames (the age counts up from the
+// block's last phase refresh), so the random phase still spreads the
+// refreshes over the period.
+//
+// A reused value's age is one more than the oldest texel it was read from
+// (those with bilinear weight at least 0.001, as in the depth test): a
+// blend is as stale as its stalest part. Ages are whole numbers in an
+// r16float texture, exact up to 2048; refresh fires at min(Δn, 2048).
+const CACHE_AGE_LIMIT: f32 = 2048.0;
+
+// textureGather's weights of the four texels around a point at fraction f
+// from the top-left one: (0, 1), (1, 1), (1, 0), (0, 0).
+fn cache_bilinear_weights(f: vec2<f32>) -> vec4<f32> {
+    return vec4<f32>((1.0 - f.x) * f.y, f.x * f.y, f.x * (1.0 - f.y), (1.0 - f.x) * (1.0 - f.y));
+}
+
+// The age of a value blended from the 2×2 texels from `base` with
+// fractions `f`: one more than the oldest texel that weighs.
+fn cache_age(base: vec2<f32>, f: vec2<f32>) -> f32 {
+    let ages = textureGather(0, cache_previous_age, cache_sampler, (base + vec2<f32>(1.0)) / cache_params.viewport);
+    let counted = select(vec4<f32>(0.0), ages, cache_bilinear_weights(f) >= vec4<f32>(0.001));
+    return min(max(max(counted.x, counted.y), max(counted.z, counted.w)) + 1.0, CACHE_AGE_LIMIT);
+}
+
+// The age of the value read from one texel.
+fn cache_age_at(texel: vec2<i32>) -> f32 {
+    return min(textureLoad(cache_previous_age, texel, 0).x + 1.0, CACHE_AGE_LIMIT);
+}
+
+// What a pass writes to the age target beside the payload: the age the
+// lookup gave where the value was reused, 0 where it was computed.
+fn cache_age_written(lookup: CacheLookup, reused: bool) -> f32 {
+    return select(0.0, lookup.age, reused);
 }
 
 // PCG hash (O'Neill 2014, "pcg32" output permutation on one u32 of state).
@@ -101,7 +150,9 @@ fn cache_hash(v: u32) -> u32 {
 // branch-free code took the reprojection pass from 5.6 to 4.3 ms, and this
 // hash and reduction (instead of two hashes, an f32 division and two
 // corrections) from 4.5 to 4.2 ms, what it costs with refresh taken out.
-fn cache_refresh(frag_coord: vec4<f32>) -> bool {
+//
+// A value whose age (`CacheLookup.age`) has reached Δn is refreshed too.
+fn cache_refresh(frag_coord: vec4<f32>, age: f32) -> bool {
     // Δn = 0 turns refresh off.
     let period = cache_params.refresh_period;
     let k = f32(max(cache_params.refresh_quad, 1u));
@@ -110,7 +161,8 @@ fn cache_refresh(frag_coord: vec4<f32>) -> bool {
     let offset = (h * period) >> 16u;
     var b = offset + cache_params.refresh_phase;
     b = select(b, b - period, b >= period);
-    return (period != 0u) & (b == 0u);
+    let stale = age >= min(f32(period), CACHE_AGE_LIMIT);
+    return (period != 0u) & ((b == 0u) | stale);
 }
 
 // The depth slope of the previous frame, per texel of last frame's cache:
@@ -217,7 +269,7 @@ fn cache_footprint(previous_clip: vec4<f32>) -> CacheFootprint {
     let base = floor(texel);
     let f = texel - base;
     // textureGather's order: (0, 1), (1, 1), (1, 0), (0, 0) from `base`.
-    let weights = vec4<f32>((1.0 - f.x) * f.y, f.x * f.y, f.x * (1.0 - f.y), (1.0 - f.x) * (1.0 - f.y));
+    let weights = cache_bilinear_weights(f);
     let depths = textureGather(cache_previous_depth, cache_sampler, (base + vec2<f32>(1.0)) / cache_params.viewport);
     let expected = cache_expected_depth(
         point.depth,
@@ -237,14 +289,15 @@ fn cache_lookup(previous_clip: vec4<f32>) -> CacheLookup {
     let footprint = cache_footprint(previous_clip);
     let at = (footprint.base + vec2<f32>(0.5) + footprint.weights) / cache_params.viewport;
     let payload = textureSampleLevel(cache_previous_payload, cache_sampler, at, 0.0);
-    return cache_checked(payload, footprint.status);
+    return cache_checked(payload, footprint.status, cache_age(footprint.base, footprint.weights));
 }
 
 // The same with four loads, for the rgba32float cache, which cannot be
 // filtered.
 fn cache_lookup_loads(previous_clip: vec4<f32>) -> CacheLookup {
     let footprint = cache_footprint(previous_clip);
-    return cache_checked(cache_bilinear_loads(footprint.base, footprint.weights), footprint.status);
+    let payload = cache_bilinear_loads(footprint.base, footprint.weights);
+    return cache_checked(payload, footprint.status, cache_age(footprint.base, footprint.weights));
 }
 
 // Bilinear interpolation of last frame's payload between the texel `base`
@@ -275,7 +328,7 @@ fn cache_lookup_nearest(previous_clip: vec4<f32>) -> CacheLookup {
     let texel = cache_nearest(previous_clip);
     let agree = cache_depth_agrees(vec4<f32>(textureLoad(cache_previous_depth, texel.at, 0)), vec4<f32>(texel.expected)).x;
     let status = select(1u, select(2u, 0u, agree), texel.inside);
-    return cache_checked(textureLoad(cache_previous_payload, texel.at, 0), status);
+    return cache_checked(textureLoad(cache_previous_payload, texel.at, 0), status, cache_age_at(texel.at));
 }
 
 // The texel a point falls in, whether the point was on screen, and the
@@ -323,10 +376,10 @@ fn cache_pack(cache: vec4<f32>, frag_coord: vec4<f32>) -> vec4<f32> {
 }
 
 // The packed payload and depth agree with the point's depth, and are valid.
-fn cache_packed_checked(texel: vec4<f32>, expected: f32, inside: bool) -> CacheLookup {
+fn cache_packed_checked(texel: vec4<f32>, expected: f32, inside: bool, age: f32) -> CacheLookup {
     let agree = cache_depth_agrees(vec4<f32>(texel.w + cache_params.far_depth), vec4<f32>(expected)).x;
     let status = select(1u, select(2u, 0u, agree), inside);
-    return cache_checked(vec4<f32>(texel.xyz, 0.0), status);
+    return cache_checked(vec4<f32>(texel.xyz, 0.0), status, age);
 }
 
 // `bilinear-packed` with an rgba16float cache: one filtered sample.
@@ -334,7 +387,9 @@ fn cache_lookup_packed(previous_clip: vec4<f32>) -> CacheLookup {
     let point = cache_point(previous_clip);
     let at = (point.texel + vec2<f32>(0.5)) / cache_params.viewport;
     let texel = textureSampleLevel(cache_previous_payload, cache_sampler, at, 0.0);
-    return cache_packed_checked(texel, point.depth, point.inside);
+    let base = floor(point.texel);
+    let age = cache_age(base, point.texel - base);
+    return cache_packed_checked(texel, point.depth, point.inside, age);
 }
 
 // `bilinear-packed` with an rgba32float cache, which cannot be filtered:
@@ -343,14 +398,15 @@ fn cache_lookup_loads_packed(previous_clip: vec4<f32>) -> CacheLookup {
     let point = cache_point(previous_clip);
     let base = floor(point.texel);
     let texel = cache_bilinear_loads(base, point.texel - base);
-    return cache_packed_checked(texel, point.depth, point.inside);
+    let age = cache_age(base, point.texel - base);
+    return cache_packed_checked(texel, point.depth, point.inside, age);
 }
 
 // `nearest-packed`: one load.
 fn cache_lookup_nearest_packed(previous_clip: vec4<f32>) -> CacheLookup {
     let nearest = cache_nearest(previous_clip);
     let texel = textureLoad(cache_previous_payload, nearest.at, 0);
-    return cache_packed_checked(texel, nearest.expected, nearest.inside);
+    return cache_packed_checked(texel, nearest.expected, nearest.inside, cache_age_at(nearest.at));
 }
 
 // A payload on its way into the cache. Finite components at or beyond the
@@ -394,7 +450,7 @@ fn cache_classify_absent(present: bool, classes: vec4<f32>) -> vec4<f32> {
 // from the status of the variant's own lookup: reused (green), refreshed
 // (blue), missed because the point was off-screen last frame (orange),
 // disoccluded (red), or because the cached payload is not finite (magenta).
-fn cache_classify(status: u32, frag_coord: vec4<f32>) -> vec4<f32> {
+fn cache_classify(status: u32, frag_coord: vec4<f32>, age: f32) -> vec4<f32> {
     if (status == 3u) {
         return vec4<f32>(1.0, 0.0, 1.0, 1.0);
     }
@@ -404,7 +460,7 @@ fn cache_classify(status: u32, frag_coord: vec4<f32>) -> vec4<f32> {
     if (status == 2u) {
         return vec4<f32>(1.0, 0.0, 0.0, 1.0);
     }
-    if (cache_refresh(frag_coord)) {
+    if (cache_refresh(frag_coord, age)) {
         return vec4<f32>(0.0, 0.0, 1.0, 1.0);
     }
     return vec4<f32>(0.0, 1.0, 0.0, 1.0);

@@ -235,7 +235,8 @@ pub fn hash(v: u32) -> u32 {
     (word >> 22) ^ word
 }
 
-/// `cache_refresh`, seed 002's eq. 1: whether the pixel at framebuffer
+/// `cache_refresh`'s phase rule, seed 002's eq. 1 (see [`stale`] for the
+/// rest): whether the pixel at framebuffer
 /// position `pixel` is recomputed this frame, given the host's refresh
 /// phase (c mod Δn, below Δn), the period Δn (0: never, at most 65535) and
 /// the block size k.
@@ -248,6 +249,18 @@ pub fn refresh(pixel: Vec2, phase: u32, period: u32, quad: u32) -> bool {
         b -= period;
     }
     period != 0 && b == 0
+}
+
+/// The largest age the cache's r16float age target holds exactly
+/// (`CACHE_AGE_LIMIT`).
+pub const AGE_LIMIT: f32 = 2048.0;
+
+/// The rest of `cache_refresh`: a value whose age this frame (one more
+/// than the oldest texel it is read from, at most [`AGE_LIMIT`]) has
+/// reached Δn is refreshed whatever the phase says; so `cache_refresh` is
+/// `refresh(..) || stale(age, period)`, and both are off when Δn = 0.
+pub fn stale(age: f32, period: u32) -> bool {
+    period != 0 && age >= (period as f32).min(AGE_LIMIT)
 }
 
 /// The offset in [0, Δn) of the block at (`x`, `y`): 16 bits of one hash

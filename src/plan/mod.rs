@@ -118,7 +118,9 @@ pub struct Pass {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ColorTarget {
     pub location: u32,
-    /// `color` (the frame) or `cache` (this frame's payload texture).
+    /// `color` (the frame), `cache` (this frame's payload texture) or `age`
+    /// (this frame's age texture: frames since each cached value was
+    /// computed).
     pub target: String,
     pub format: String,
     /// `clear` (first pass to write the target this frame) or `load`.
@@ -240,6 +242,10 @@ pub struct Inputs<'a> {
 /// The depth buffer's format: it is also last frame's depth in the cache.
 pub const DEPTH_FORMAT: &str = "depth32float";
 
+/// The cache's age target: whole frames since each value was computed,
+/// exact up to 2048 (`shaders/cache.wgsl`, `CACHE_AGE_LIMIT`).
+pub const AGE_FORMAT: &str = "r16float";
+
 pub fn build(inputs: Inputs) -> Plan {
     let Inputs {
         shader,
@@ -279,12 +285,19 @@ pub fn build(inputs: Inputs) -> Plan {
             format: options.cache_format.as_str().into(),
             load: load(first),
         };
+        let age = |location: u32| ColorTarget {
+            location,
+            target: "age".into(),
+            format: AGE_FORMAT.into(),
+            load: load(first),
+        };
         let color_targets = match stage.writes() {
             Writes::Color => color_locations.iter().map(|&l| color(l)).collect(),
-            Writes::Cache | Writes::Classes => vec![cache(0)],
+            Writes::Cache | Writes::Classes => vec![cache(0), age(1)],
             Writes::ColorAndCache => {
                 let mut targets: Vec<_> = color_locations.iter().map(|&l| color(l)).collect();
                 targets.push(cache(cache_location));
+                targets.push(age(cache_location + 1));
                 targets
             }
         };
@@ -366,6 +379,12 @@ pub fn build(inputs: Inputs) -> Plan {
             "sampler",
             "linear filtering, clamp to edge",
         ),
+        cache_resource(
+            rewrite::PREVIOUS_AGE_BINDING,
+            "cache_previous_age",
+            "texture",
+            "last frame's age texture (r16float)",
+        ),
     ];
 
     Plan {
@@ -436,7 +455,7 @@ pub fn build(inputs: Inputs) -> Plan {
             format_note: None,
             reconstruction: options.reconstruction.as_str().into(),
             components: candidate.components,
-            swap: "two payload textures and two depth buffers alternate: at the end of a frame, this frame's payload texture and depth buffer become last frame's (bound as cache_previous_payload and cache_previous_depth) and last frame's are rendered into next; on the first frame, after a resize or a camera cut, the previous depth is cleared to the far-plane depth (clear.depth) so every pixel misses".into(),
+            swap: "two payload textures, two age textures and two depth buffers alternate: at the end of a frame, this frame's payload texture, age texture and depth buffer become last frame's (bound as cache_previous_payload, cache_previous_age and cache_previous_depth) and last frame's are rendered into next; on the first frame, after a resize or a camera cut, the previous depth is cleared to the far-plane depth (clear.depth) so every pixel misses".into(),
             params: vec![
                 field("viewport", "vec2<f32>", 0),
                 field("depth_epsilon", "f32", 8),
@@ -452,7 +471,7 @@ pub fn build(inputs: Inputs) -> Plan {
             period: options.refresh_period,
             quad: options.refresh_quad,
             depth_epsilon: options.depth_epsilon,
-            offsets: "16 bits of a PCG hash of the k×k block coordinates, times the period, over 2^16; refresh when (offset + refresh_phase) mod period == 0, with refresh_phase = frame mod period kept by the host".into(),
+            offsets: "16 bits of a PCG hash of the k×k block coordinates, times the period, over 2^16; refresh when (offset + refresh_phase) mod period == 0, with refresh_phase = frame mod period kept by the host, or when the value's age (the age target) reaches min(period, 2048)".into(),
         },
         clear: Clear {
             color: [0.0, 0.0, 0.0, 1.0],

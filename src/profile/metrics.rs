@@ -30,11 +30,54 @@ fn covered(classes: &[u8], pixel: usize) -> bool {
     classes.get(pixel * 4 + 3).is_some_and(|&a| a > 0)
 }
 
+/// A frame read back in linear float: RGBA, row-major, as the shader
+/// wrote it to an `rgba16float` target (values above 1 kept, none
+/// clamped or quantised to 8 bits).
+pub type LinearFrame = Vec<f32>;
+
+/// Decodes an `rgba16float` readback into a [`LinearFrame`].
+pub fn linear_from_f16(bytes: &[u8]) -> LinearFrame {
+    bytes
+        .chunks_exact(2)
+        .map(|b| half::f16::from_le_bytes([b[0], b[1]]).to_f32())
+        .collect()
+}
+
+/// A linear frame as an RGBA8 picture for the report's images: clamped to
+/// [0, 1] and quantised, with no transfer function (as an `rgba8unorm`
+/// target would store it).
+pub fn rgba8(frame: &[f32]) -> Vec<u8> {
+    frame
+        .iter()
+        .map(|&v| {
+            let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+            (v * 255.0).round() as u8
+        })
+        .collect()
+}
+
+/// The difference of two channel values, as a number: a NaN on either
+/// side is the largest difference there is (a cache must never show one
+/// the reference does not).
+fn channel_difference(a: f32, b: f32) -> f64 {
+    let d = f64::from((a - b).abs());
+    if d.is_nan() {
+        if a.is_nan() && b.is_nan() {
+            0.0
+        } else {
+            f64::MAX.sqrt()
+        }
+    } else {
+        d
+    }
+}
+
 fn psnr_of(squared: f64, samples: usize) -> f64 {
     if samples == 0 {
         return PSNR_CAP;
     }
-    let mse = squared / samples as f64 / (255.0 * 255.0);
+    // Peak 1: the display range; values above it add their whole error.
+    let mse = squared / samples as f64;
     if mse == 0.0 {
         PSNR_CAP
     } else {
@@ -42,13 +85,17 @@ fn psnr_of(squared: f64, samples: usize) -> f64 {
     }
 }
 
-/// Compares two RGBA8 frames of `width × height` (alpha ignored), over
-/// the pixels `classes` marks covered and over the whole frame: the
+/// Compares two linear float frames of `width × height` (alpha ignored),
+/// over the pixels `classes` marks covered and over the whole frame: the
 /// background matches exactly in every variant and would only dilute the
-/// error of the pixels the shader draws.
+/// error of the pixels the shader draws. PSNR, the largest error and the
+/// threshold are in linear float, peak 1, values above 1 counted as they
+/// are (an HDR target's highlights); SSIM, a perceptual measure of the
+/// displayed picture, is of the frames clamped to [0, 1] and quantised
+/// as a display would show them.
 pub fn compare(
-    reference: &[u8],
-    frame: &[u8],
+    reference: &[f32],
+    frame: &[f32],
     classes: &[u8],
     width: u32,
     height: u32,
@@ -56,15 +103,14 @@ pub fn compare(
 ) -> FrameError {
     let pixels = (width * height) as usize;
     let (mut squared, mut squared_covered, mut count) = (0.0f64, 0.0f64, 0usize);
-    let mut max = 0u8;
+    let mut max = 0.0f64;
     let mut above = 0usize;
-    let limit = (threshold * 255.0).round() as u8;
     for p in 0..pixels {
-        let mut worst = 0u8;
+        let mut worst = 0.0f64;
         let mut sum = 0.0;
         for c in 0..3 {
-            let d = reference[p * 4 + c].abs_diff(frame[p * 4 + c]);
-            sum += f64::from(d) * f64::from(d);
+            let d = channel_difference(reference[p * 4 + c], frame[p * 4 + c]);
+            sum += d * d;
             worst = worst.max(d);
         }
         squared += sum;
@@ -72,7 +118,7 @@ pub fn compare(
         if covered(classes, p) {
             squared_covered += sum;
             count += 1;
-            if worst > limit {
+            if worst > threshold {
                 above += 1;
             }
         }
@@ -80,8 +126,8 @@ pub fn compare(
     FrameError {
         psnr: psnr_of(squared_covered, count * 3),
         psnr_frame: psnr_of(squared, pixels * 3),
-        ssim: ssim(reference, frame, width, height),
-        max_abs_error: f64::from(max) / 255.0,
+        ssim: ssim(&rgba8(reference), &rgba8(frame), width, height),
+        max_abs_error: max,
         above_threshold: if count == 0 {
             0.0
         } else {
@@ -95,10 +141,10 @@ pub fn compare(
 /// [0, 1]. A cache that pops blocks in and out, or refreshes visibly, has
 /// changes the reference does not; a stale but steady one has none.
 pub fn flicker(
-    reference_before: &[u8],
-    reference: &[u8],
-    before: &[u8],
-    frame: &[u8],
+    reference_before: &[f32],
+    reference: &[f32],
+    before: &[f32],
+    frame: &[f32],
     classes: &[u8],
 ) -> f64 {
     let pixels = reference.len() / 4;
@@ -111,14 +157,16 @@ pub fn flicker(
             let i = p * 4 + c;
             let own = f64::from(frame[i]) - f64::from(before[i]);
             let expected = f64::from(reference[i]) - f64::from(reference_before[i]);
-            sum += (own - expected).abs();
+            let d = (own - expected).abs();
+            // A NaN in either counts as the largest change there is.
+            sum += if d.is_nan() { 1.0 } else { d };
             count += 1;
         }
     }
     if count == 0 {
         0.0
     } else {
-        sum / count as f64 / 255.0
+        sum / count as f64
     }
 }
 
@@ -174,6 +222,34 @@ pub const REFRESH: [u8; 3] = [0, 0, 255];
 pub const OFFSCREEN: [u8; 3] = [255, 128, 0];
 pub const DISOCCLUDED: [u8; 3] = [255, 0, 0];
 pub const INVALID: [u8; 3] = [255, 0, 255];
+
+/// Adds the age of the value at every pixel the cache covers this frame
+/// (reused, refreshed or missed: classified, not background or absent) to
+/// `histogram` (index: frames since the value was computed, 0 where it
+/// was computed this frame). `ages` is the frame's age texture, r16float.
+pub fn add_ages(classes: &[u8], ages: &[u8], histogram: &mut Vec<u64>) {
+    for (texel, age) in classes.chunks_exact(4).zip(ages.chunks_exact(2)) {
+        let class = [texel[0], texel[1], texel[2]];
+        let covered = matches!(
+            class,
+            HIT | REFRESH | DISOCCLUDED | INVALID | [255, 127 | 128, 0]
+        );
+        if !covered {
+            continue;
+        }
+        let age = half::f16::from_le_bytes([age[0], age[1]]).to_f32();
+        // Ages are whole numbers up to 2048; anything else is not one.
+        let age = if age.is_finite() && age >= 0.0 {
+            age.round() as usize
+        } else {
+            continue;
+        };
+        if histogram.len() <= age {
+            histogram.resize(age + 1, 0);
+        }
+        histogram[age] += 1;
+    }
+}
 
 /// Counts the classes of a classification image.
 pub fn decisions(classes: &[u8]) -> Decisions {
@@ -305,9 +381,16 @@ mod tests {
         assert_eq!(quantile(&[1.0, 2.0, 3.0, 4.0], 0.5), 2.5);
     }
 
+    /// `n` RGBA pixels of one value.
+    fn uniform(n: usize, value: f32) -> Vec<f32> {
+        vec![value; n * 4]
+    }
+
     #[test]
     fn identical_frames_have_capped_psnr_and_full_ssim() {
-        let frame: Vec<u8> = (0..16 * 16 * 4).map(|i| (i * 7 % 256) as u8).collect();
+        let frame: Vec<f32> = (0..16 * 16 * 4)
+            .map(|i| (i * 7 % 256) as f32 / 255.0)
+            .collect();
         let all = vec![255u8; 16 * 16 * 4];
         let error = compare(&frame, &frame, &all, 16, 16, 0.05);
         assert_eq!(error.psnr, PSNR_CAP);
@@ -318,51 +401,84 @@ mod tests {
 
     #[test]
     fn psnr_of_a_uniform_error() {
-        let a = vec![100u8; 8 * 8 * 4];
-        let b = vec![110u8; 8 * 8 * 4];
+        let a = uniform(64, 100.0 / 255.0);
+        let b = uniform(64, 110.0 / 255.0);
         // MSE = (10/255)², PSNR = 20 log10(255/10) ≈ 28.13 dB.
         let all = vec![255u8; 8 * 8 * 4];
         let error = compare(&a, &b, &all, 8, 8, 0.05);
         assert!((error.psnr - 28.1308).abs() < 1e-3, "{}", error.psnr);
         assert_eq!(error.psnr, error.psnr_frame);
-        assert!((error.max_abs_error - 10.0 / 255.0).abs() < 1e-12);
+        assert!((error.max_abs_error - 10.0 / 255.0).abs() < 1e-6);
         assert_eq!(error.above_threshold, 0.0);
         assert_eq!(compare(&a, &b, &all, 8, 8, 0.03).above_threshold, 1.0);
     }
 
+    /// Over the covered pixels, in linear float: an error between values
+    /// above 1, which an 8-bit target clamps to the same 255, counts in
+    /// full; the exact background only raises the whole frame's figure;
+    /// a NaN the reference lacks is the worst error there is.
     #[test]
-    fn error_over_covered_pixels() {
-        // Half the frame covered and off by 10; the background exact.
-        let reference = vec![100u8; 8 * 8 * 4];
+    fn error_over_covered_pixels_in_float() {
+        // Half the frame covered, at 2.0 against 2.1; the background exact.
+        let reference = uniform(64, 2.0);
         let mut frame = reference.clone();
         let mut classes = vec![0u8; 8 * 8 * 4];
         for p in 0..32 {
             for c in 0..3 {
-                frame[p * 4 + c] = 110;
+                frame[p * 4 + c] = 2.1;
             }
             classes[p * 4 + 3] = 255;
         }
         let error = compare(&reference, &frame, &classes, 8, 8, 0.05);
-        assert!((error.psnr - 28.1308).abs() < 1e-3, "{}", error.psnr);
-        // Over the whole frame the exact background hides 3 dB of it.
-        assert!((error.psnr_frame - (28.1308 + 10.0 * 2f64.log10())).abs() < 1e-3);
-        assert_eq!(
-            compare(&reference, &frame, &classes, 8, 8, 0.03).above_threshold,
-            1.0
-        );
+        // MSE = 0.1², PSNR = 20 dB.
+        assert!((error.psnr - 20.0).abs() < 1e-3, "{}", error.psnr);
+        assert!((error.psnr_frame - (20.0 + 10.0 * 2f64.log10())).abs() < 1e-3);
+        assert!((error.max_abs_error - 0.1).abs() < 1e-6);
+        assert_eq!(error.above_threshold, 1.0);
+        // Clamped to 8 bits, as the pictures are, the two are one.
+        assert_eq!(rgba8(&reference), rgba8(&frame));
+        frame[0] = f32::NAN;
+        let error = compare(&reference, &frame, &classes, 8, 8, 0.05);
+        assert!(error.psnr < 0.0 && error.max_abs_error > 1e100, "{error:?}");
+    }
+
+    #[test]
+    fn f16_readbacks_decode() {
+        let bytes: Vec<u8> = [0.5f32, 2.0, 65504.0, -1.0]
+            .iter()
+            .flat_map(|&v| half::f16::from_f32(v).to_le_bytes())
+            .collect();
+        assert_eq!(linear_from_f16(&bytes), vec![0.5, 2.0, 65504.0, -1.0]);
+        assert_eq!(rgba8(&[0.5, 2.0, -1.0, f32::NAN]), vec![128, 255, 0, 0]);
     }
 
     #[test]
     fn flicker_is_change_the_reference_does_not_make() {
         let classes = vec![255u8; 4 * 4 * 4];
-        let still = vec![50u8; 4 * 4 * 4];
+        let still = uniform(16, 50.0 / 255.0);
         // A steady error is no flicker; a change the reference lacks is.
-        let off = vec![60u8; 4 * 4 * 4];
+        let off = uniform(16, 60.0 / 255.0);
         assert_eq!(flicker(&still, &still, &off, &off, &classes), 0.0);
         let f = flicker(&still, &still, &still, &off, &classes);
-        assert!((f - 10.0 / 255.0).abs() < 1e-12, "{f}");
+        assert!((f - 10.0 / 255.0).abs() < 1e-6, "{f}");
         // The reference's own change, followed, is none either.
         assert_eq!(flicker(&still, &off, &still, &off, &classes), 0.0);
+    }
+
+    #[test]
+    fn ages_count_covered_pixels_only() {
+        let mut classes = Vec::new();
+        for class in [HIT, REFRESH, [0, 0, 0], [128, 128, 128], HIT] {
+            classes.extend(class);
+            classes.push(255);
+        }
+        let ages: Vec<u8> = [3.0f32, 0.0, 7.0, 9.0, 3.0]
+            .iter()
+            .flat_map(|&a| half::f16::from_f32(a).to_le_bytes())
+            .collect();
+        let mut histogram = vec![0; 1];
+        add_ages(&classes, &ages, &mut histogram);
+        assert_eq!(histogram, vec![1, 0, 0, 2]);
     }
 
     #[test]

@@ -241,7 +241,10 @@ struct Config {
     /// Flicker of each measured frame after the first ([`metrics::flicker`]).
     flicker: Vec<f64>,
     decisions: Vec<Decisions>,
-    last: Picture,
+    /// Covered pixels by the age of their value, over the measured frames.
+    ages: Vec<u64>,
+    /// The last measured frame, in linear float, and its classes.
+    last: (metrics::LinearFrame, Vec<u8>),
 }
 
 /// Profiles `shader` on `scene`. `scene_path` names the scene file (its
@@ -311,9 +314,12 @@ pub fn profile(
         .axes
         .base()
         .ok_or_else(|| fail("every knob needs at least one value to measure".into()))?;
+    // Frames are rendered to rgba16float and compared in linear float: an
+    // 8-bit target would clamp what is above 1 and quantise the rest.
     let defaults = RewriteOptions {
         depth: scene.camera.depth,
         vertex_entry: options.vertex_entry.clone(),
+        color_format: MEASURED_COLOR_FORMAT.into(),
         ..RewriteOptions::default()
     };
     let base = base_setting.rewrite_options(&defaults);
@@ -604,6 +610,7 @@ pub fn profile(
                     errors: Vec::new(),
                     flicker: Vec::new(),
                     decisions: Vec::new(),
+                    ages: Vec::new(),
                     last: (Vec::new(), Vec::new()),
                 });
             }
@@ -619,8 +626,8 @@ pub fn profile(
             + u64::from(warmup + frames - probes_from) * probes.len() as u64,
     );
     let mut reference_times = Vec::new();
-    let mut reference_pixels = Vec::new();
-    let mut reference_before: Vec<u8> = Vec::new();
+    let mut reference_pixels: metrics::LinearFrame = Vec::new();
+    let mut reference_before: metrics::LinearFrame = Vec::new();
     let mut trace = Vec::new();
     for frame in 0..warmup + frames {
         let measured = frame >= warmup;
@@ -644,7 +651,7 @@ pub fn profile(
             reference_times.push(time);
             reference_before = std::mem::replace(
                 &mut reference_pixels,
-                runtime::read_texture(&gpu, reference.color(), 4).map_err(fail)?,
+                read_linear(&gpu, reference.color()).map_err(fail)?,
             );
         }
         for (runner, times) in &mut payloads {
@@ -697,7 +704,7 @@ pub fn profile(
             for (name, ms) in passes {
                 config.passes.entry(name).or_default().push(ms);
             }
-            let color = runtime::read_texture(&gpu, config.runner.color(), 4).map_err(fail)?;
+            let color = read_linear(&gpu, config.runner.color()).map_err(fail)?;
             let classes = runtime::read_texture(&gpu, config.runner.classes(), 4).map_err(fail)?;
             config.errors.push(metrics::compare(
                 &reference_pixels,
@@ -717,6 +724,8 @@ pub fn profile(
                 ));
             }
             config.decisions.push(metrics::decisions(&classes));
+            let ages = runtime::read_texture(&gpu, config.runner.age(), 2).map_err(fail)?;
+            metrics::add_ages(&classes, &ages, &mut config.ages);
             config.last = (color, classes);
         }
     }
@@ -801,6 +810,8 @@ pub fn profile(
                 disocclusion_rate: column(|d| d.disoccluded),
                 invalid_rate: column(|d| d.invalid),
                 refresh_rate: column(|d| d.refresh),
+                max_age: config.ages.len().saturating_sub(1) as u32,
+                age_histogram: config.ages.clone(),
                 p_over_t: node.p_over_t,
                 ideal_speedup: ideal,
                 fixed_cost_ms: fixed_passes,
@@ -830,7 +841,8 @@ pub fn profile(
                     })
                     .collect(),
             };
-            (row, config.last)
+            let (color, classes) = config.last;
+            (row, (metrics::rgba8(&color), classes))
         })
         .collect();
     rows.sort_by(|a, b| b.0.speedup.total_cmp(&a.0.speedup));
@@ -960,12 +972,23 @@ pub fn profile(
     Ok((
         report,
         Pictures {
-            reference: reference_pixels,
+            reference: metrics::rgba8(&reference_pixels),
             results: pictures,
             trace,
             chosen,
         },
     ))
+}
+
+/// The colour target of every measured frame, reference and variants
+/// alike: linear float, values above 1 kept.
+pub const MEASURED_COLOR_FORMAT: &str = "rgba16float";
+
+/// A frame's colour target read back in linear float.
+fn read_linear(gpu: &Gpu, texture: &wgpu::Texture) -> Result<metrics::LinearFrame, String> {
+    Ok(metrics::linear_from_f16(&runtime::read_texture(
+        gpu, texture, 8,
+    )?))
 }
 
 /// Less than this share of the image covered, the figures say little.
@@ -1210,7 +1233,11 @@ fn timed(
     let results = profiler
         .process_finished_frame(gpu.queue.get_timestamp_period())
         .unwrap_or_default();
+    // The frame's time runs from the first pass's start timestamp to the
+    // last one's end: what runs between passes (barriers, layout changes,
+    // the hand-over from one pass to the next) is part of it.
     let mut passes = Vec::new();
+    let mut span: Option<(f64, f64)> = None;
     for result in &results {
         if let Some(range) = &result.time {
             let name = result
@@ -1222,10 +1249,14 @@ fn timed(
             // The classification is a diagnostic, not part of the frame.
             if name != "classify" {
                 passes.push((name, (range.end - range.start) * 1e3));
+                span = Some(match span {
+                    None => (range.start, range.end),
+                    Some((start, end)) => (start.min(range.start), end.max(range.end)),
+                });
             }
         }
     }
-    let total = passes.iter().map(|(_, ms)| ms).sum();
+    let total = span.map_or(0.0, |(start, end)| (end - start) * 1e3);
     Ok((total, passes, results))
 }
 

@@ -205,7 +205,8 @@ pub struct ResultRow {
     pub reconstruction: Reconstruction,
     pub cache_format: CacheFormat,
     pub depth_epsilon: f32,
-    /// Median frame time (sum of the passes), ms.
+    /// Median frame time, ms: from the first pass's start timestamp to the
+    /// last one's end, what runs between the passes included.
     pub time_ms: f64,
     /// Median time of each pass, ms.
     pub passes: Vec<PassTime>,
@@ -248,6 +249,16 @@ pub struct ResultRow {
     #[serde(default)]
     pub invalid_rate: f64,
     pub refresh_rate: f64,
+    /// The oldest value the cache showed in the measured frames, in
+    /// frames since it was computed: below the refresh period Δn whatever
+    /// the motion (a value is refreshed when its age reaches Δn).
+    #[serde(default)]
+    pub max_age: u32,
+    /// Covered pixels by the age of their value (index: frames since it
+    /// was computed, 0 for those computed that frame), summed over the
+    /// measured frames.
+    #[serde(default)]
+    pub age_histogram: Vec<u64>,
     /// Measured P/T of the node (see [`NodeReport::p_over_t`]).
     pub p_over_t: f64,
     /// 1 / (1 − ρ·f) with ρ the hit rate (reuse fraction) and f = P/T.
@@ -557,6 +568,8 @@ mod tests {
             disocclusion_rate: 0.0,
             invalid_rate: 0.0,
             refresh_rate: 0.0,
+            max_age: 0,
+            age_histogram: Vec::new(),
             p_over_t: 0.0,
             ideal_speedup: 1.0,
             fixed_cost_ms: Vec::new(),

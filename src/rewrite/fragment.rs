@@ -41,6 +41,8 @@ pub struct Pieces {
     pub refresh: Handle<Function>,
     pub current: Handle<Function>,
     pub classify: Handle<Function>,
+    /// The age written beside a payload (`cache_age_written`).
+    pub age_written: Handle<Function>,
     /// For a node under branches ([`super::path`]): whether the original
     /// computes it at this pixel, and the helper that marks the pixels
     /// where it does not (`cache_classify_absent`).
@@ -56,9 +58,10 @@ pub struct Pieces {
 /// What a pass's fragment stage writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Writes {
-    /// The original outputs plus the cache at the next free location.
+    /// The original outputs plus the cache and its age at the next two
+    /// free locations.
     ColorAndCache,
-    /// The cache alone, at location 0.
+    /// The cache alone, at location 0, and its age at location 1.
     Cache,
     /// The original outputs alone.
     Color,
@@ -118,7 +121,8 @@ pub fn output_locations(module: &Module, result: &naga::FunctionResult) -> Vec<u
     }
 }
 
-/// Where the cache goes: the location after the original outputs.
+/// Where the cache goes: the location after the original outputs. The
+/// cache's age goes at the one after it.
 pub fn cache_location(module: &Module, result: &naga::FunctionResult) -> u32 {
     output_locations(module, result)
         .into_iter()
@@ -175,10 +179,10 @@ pub fn entry_point(
         result: Some(naga::FunctionResult {
             ty: result_ty,
             binding: match stage.writes() {
-                Writes::Cache | Writes::Classes => Some(location(0)),
+                Writes::Classes => Some(location(0)),
                 Writes::Color => pieces.result.binding.clone(),
                 // A struct: its members carry the bindings.
-                Writes::ColorAndCache => None,
+                Writes::Cache | Writes::ColorAndCache => None,
             },
         }),
         ..Function::default()
@@ -199,7 +203,8 @@ pub fn entry_point(
     if stage == Stage::Classify {
         let lookup = b.call(pieces.lookup, vec![previous]);
         let status = b.member(lookup, 2);
-        let mut classes = b.call(pieces.classify, vec![status, frag_coord]);
+        let age = b.member(lookup, 3);
+        let mut classes = b.call(pieces.classify, vec![status, frag_coord, age]);
         if let Some((presence, absent)) = pieces.presence {
             let present = b.call(presence, originals.clone());
             classes = b.call(absent, vec![present, classes]);
@@ -210,11 +215,14 @@ pub fn entry_point(
         return Ok(b.finish());
     }
 
-    // The payload to shade with.
+    // The payload to shade with, and the age to write beside it: the
+    // lookup's where the cached value is reused, 0 where it is computed.
     let mut deferred_kill = None;
+    let mut age = None;
     let payload = match stage {
         Stage::OnePass => {
             let (lookup, reuse) = reuse_condition(&mut b, pieces, previous, frag_coord);
+            age = Some(b.call(pieces.age_written, vec![lookup, reuse]));
             let mut payload_arguments = originals.clone();
             if let Some(gradients) = pieces.gradients {
                 let value = b.call(gradients, originals.clone());
@@ -248,6 +256,7 @@ pub fn entry_point(
         }
         Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard => {
             let (lookup, reuse) = reuse_condition(&mut b, pieces, previous, frag_coord);
+            age = Some(b.call(pieces.age_written, vec![lookup, reuse]));
             // naga writes `discard` as OpKill, which ends the invocation:
             // a derivative after it is undefined in every quad a missed
             // lane leaves. When the shade takes derivatives, every lane
@@ -275,11 +284,20 @@ pub fn entry_point(
         Stage::Classify => return Err(Refusal::new("internal error: classify has no payload")),
     };
 
+    let age = match age {
+        Some(age) => age,
+        None => b.literal_f32(0.0),
+    };
     let value = match stage.writes() {
-        Writes::Cache | Writes::Classes => {
+        Writes::Cache => {
             let cache = cache_texel(&mut b, pieces, payload, frag_coord);
-            b.call(pieces.encode, vec![cache])
+            let cache = b.call(pieces.encode, vec![cache]);
+            b.expr(Expression::Compose {
+                ty: result_ty,
+                components: vec![cache, age],
+            })
         }
+        Writes::Classes => return Err(Refusal::new("internal error: classify writes no payload")),
         Writes::Color => {
             let mut arguments = originals.clone();
             arguments.push(payload);
@@ -299,6 +317,7 @@ pub fn entry_point(
                 _ => vec![color],
             };
             components.push(cache);
+            components.push(age);
             b.expr(Expression::Compose {
                 ty: result_ty,
                 components,
@@ -315,6 +334,16 @@ pub fn entry_point(
     }
     b.push(Statement::Return { value: Some(value) });
     Ok(b.finish())
+}
+
+fn f32_type(module: &mut Module) -> Handle<naga::Type> {
+    module.types.insert(
+        naga::Type {
+            name: None,
+            inner: TypeInner::Scalar(naga::Scalar::F32),
+        },
+        naga::Span::UNDEFINED,
+    )
 }
 
 fn is_struct(module: &Module, ty: Handle<naga::Type>) -> bool {
@@ -339,7 +368,34 @@ fn output_type(
     writes: Writes,
 ) -> (Handle<naga::Type>, Option<u32>) {
     match writes {
-        Writes::Cache | Writes::Classes => (pieces.vec4, None),
+        Writes::Classes => (pieces.vec4, None),
+        Writes::Cache => {
+            let f32_ty = f32_type(module);
+            let ty = module.types.insert(
+                naga::Type {
+                    name: Some("CacheOutput".into()),
+                    inner: TypeInner::Struct {
+                        members: vec![
+                            naga::StructMember {
+                                name: Some("cache".into()),
+                                ty: pieces.vec4,
+                                binding: Some(location(0)),
+                                offset: 0,
+                            },
+                            naga::StructMember {
+                                name: Some("age".into()),
+                                ty: f32_ty,
+                                binding: Some(location(1)),
+                                offset: 16,
+                            },
+                        ],
+                        span: 32,
+                    },
+                },
+                naga::Span::UNDEFINED,
+            );
+            (ty, None)
+        }
         Writes::Color => (pieces.result.ty, None),
         Writes::ColorAndCache => {
             let cache_at = cache_location(module, &pieces.result);
@@ -363,12 +419,19 @@ fn output_type(
                 binding: Some(location(cache_at)),
                 offset,
             });
+            let f32_ty = f32_type(module);
+            members.push(naga::StructMember {
+                name: Some("age".into()),
+                ty: f32_ty,
+                binding: Some(location(cache_at + 1)),
+                offset: offset + 16,
+            });
             let ty = module.types.insert(
                 naga::Type {
                     name: Some("CacheFragmentOutput".into()),
                     inner: TypeInner::Struct {
                         members,
-                        span: offset + 16,
+                        span: offset + 32,
                     },
                 },
                 naga::Span::UNDEFINED,
@@ -387,7 +450,8 @@ fn reuse_condition(
     frag_coord: Handle<Expression>,
 ) -> (Handle<Expression>, Handle<Expression>) {
     let lookup = b.call(pieces.lookup, vec![previous]);
-    let refresh = b.call(pieces.refresh, vec![frag_coord]);
+    let age = b.member(lookup, 3);
+    let refresh = b.call(pieces.refresh, vec![frag_coord, age]);
     let hit = b.member(lookup, 1);
     let fresh = b.expr(Expression::Unary {
         op: naga::UnaryOperator::LogicalNot,

@@ -299,8 +299,9 @@ pub const PREVIOUS_PAYLOAD_BINDING: u32 = 1;
 pub const PREVIOUS_DEPTH_BINDING: u32 = 2;
 pub const CURRENT_PAYLOAD_BINDING: u32 = 3;
 pub const SAMPLER_BINDING: u32 = 4;
+pub const PREVIOUS_AGE_BINDING: u32 = 5;
 /// Previous-frame twins come after the cache's own bindings.
-pub const FIRST_TWIN_BINDING: u32 = 5;
+pub const FIRST_TWIN_BINDING: u32 = 6;
 /// WebGPU's default limit on bind groups.
 const MAX_BIND_GROUPS: u32 = 4;
 
@@ -719,6 +720,7 @@ fn rewrite_at(
         refresh,
         current,
         classify,
+        age_written: helper("cache_age_written")?,
         presence,
         encode: helper("cache_encode")?,
         pack,

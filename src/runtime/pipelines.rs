@@ -207,6 +207,7 @@ pub(super) fn texture_format(name: &str) -> Result<wgpu::TextureFormat, String> 
         "rgba8unorm" => T::Rgba8Unorm,
         "rgba8unorm-srgb" => T::Rgba8UnormSrgb,
         "bgra8unorm" => T::Bgra8Unorm,
+        "r16float" => T::R16Float,
         "rgba16float" => T::Rgba16Float,
         "rgba32float" => T::Rgba32Float,
         "depth32float" => T::Depth32Float,

@@ -55,6 +55,9 @@ pub struct RunOptions {
     pub classify: bool,
 }
 
+/// The age targets' format (the plan's `cache` targets' companions).
+const AGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
+
 /// Bytes of the `CacheParams` uniform: the plan's fields (36 bytes) up to
 /// the struct's 8-byte alignment, rounded to 16.
 const PARAMS_SIZE: usize = 48;
@@ -75,6 +78,8 @@ pub struct Runner {
     color: wgpu::Texture,
     classes: wgpu::Texture,
     payload: [wgpu::Texture; 2],
+    /// Frames since each cached value was computed.
+    age: [wgpu::Texture; 2],
     depth: [wgpu::Texture; 2],
     params: wgpu::Buffer,
     meshes: Vec<GpuMesh>,
@@ -251,6 +256,10 @@ impl Runner {
                 target(device, "payload 0", size, cache_format),
                 target(device, "payload 1", size, cache_format),
             ],
+            age: [
+                target(device, "age 0", size, AGE_FORMAT),
+                target(device, "age 1", size, AGE_FORMAT),
+            ],
             depth: [
                 target(device, "depth 0", size, depth_format),
                 target(device, "depth 1", size, depth_format),
@@ -324,6 +333,12 @@ impl Runner {
         &self.payload[1 - self.current]
     }
 
+    /// The last frame's age texture (r16float): at each pixel whose cache
+    /// entry was written, how many frames ago its value was computed.
+    pub fn age(&self) -> &wgpu::Texture {
+        &self.age[1 - self.current]
+    }
+
     /// Renders one frame: every pass of the plan in order (each timed when
     /// a profiler is given, as `<label>/<pass>`), the classification when
     /// asked for, then swaps the cache.
@@ -384,6 +399,7 @@ impl Runner {
         let color_view = view(&self.color);
         let classes_view = view(&self.classes);
         let payload_views = [view(&self.payload[0]), view(&self.payload[1])];
+        let age_views = [view(&self.age[0]), view(&self.age[1])];
         let depth_views = [view(&self.depth[0]), view(&self.depth[1])];
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         if !self.rendered {
@@ -423,8 +439,7 @@ impl Runner {
                             object,
                             [g, binding],
                             current,
-                            &payload_views,
-                            &depth_views,
+                            [&payload_views, &age_views, &depth_views],
                         )?;
                         entries.push(wgpu::BindGroupEntry { binding, resource });
                     }
@@ -454,6 +469,7 @@ impl Runner {
                 }
                 let (view, clear) = match target.target.as_str() {
                     "cache" => (&payload_views[current], self.plan.clear.cache),
+                    "age" => (&age_views[current], [0.0; 4]),
                     "classes" => (&classes_view, [0.0, 0.0, 0.0, 0.0]),
                     _ => (&color_view, self.plan.clear.color),
                 };
@@ -592,8 +608,7 @@ impl Runner {
         object: usize,
         key: [u32; 2],
         current: usize,
-        payload_views: &'a [wgpu::TextureView; 2],
-        depth_views: &'a [wgpu::TextureView; 2],
+        [payload_views, age_views, depth_views]: [&'a [wgpu::TextureView; 2]; 3],
     ) -> Result<wgpu::BindingResource<'a>, String> {
         let [group, binding] = key;
         let cache = &self.plan.bindings.cache;
@@ -612,6 +627,7 @@ impl Runner {
                 "cache_current_payload" => {
                     wgpu::BindingResource::TextureView(&payload_views[current])
                 }
+                "cache_previous_age" => wgpu::BindingResource::TextureView(&age_views[1 - current]),
                 "cache_sampler" => wgpu::BindingResource::Sampler(&self.cache_sampler),
                 other => return Err(format!("unknown cache resource `{other}`")),
             });

@@ -438,9 +438,10 @@ impl Scene {
             return fail("the camera needs 0 < near < far (far may be \"infinity\")".into());
         }
         let camera = &scene.camera;
-        if !(camera.zoom_per_frame > 0.0 && camera.zoom_per_frame.is_finite())
-            || !camera.roll_degrees_per_frame.is_finite()
-        {
+        let motion_ok = camera.zoom_per_frame > 0.0
+            && camera.zoom_per_frame.is_finite()
+            && camera.roll_degrees_per_frame.is_finite();
+        if !motion_ok {
             return fail(
                 "the camera's zoom_per_frame must be above 0 (1 keeps the field of view) and its roll_degrees_per_frame finite".into(),
             );
@@ -515,8 +516,7 @@ impl Scene {
         };
         let clip_from_view = camera.projection_with_fov(fov, aspect);
         // Rolling the camera counter-clockwise turns the view the other way.
-        let view_from_world =
-            Mat4::from_rotation_z(-roll) * Mat4::look_at_rh(eye, target, Vec3::Y);
+        let view_from_world = Mat4::from_rotation_z(-roll) * Mat4::look_at_rh(eye, target, Vec3::Y);
         let clip_from_world = clip_from_view * view_from_world;
 
         let mut light = Vec3::from(self.light.position);

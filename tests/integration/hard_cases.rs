@@ -486,8 +486,16 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
         min_filter: wgpu::FilterMode::Linear,
         ..wgpu::SamplerDescriptor::default()
     });
+    // Every cached value fresh (age 0): refresh is off here, and ages are
+    // tested through whole runs (`age_never_exceeds_refresh_period_under_motion`).
+    let age = texture(
+        "previous age",
+        wgpu::TextureFormat::R16Float,
+        wgpu::TextureUsages::empty(),
+    );
     let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
     let (depth_view, payload_view, target_view) = (view(&depth), view(&payload), view(&target));
+    let age_view = view(&age);
     let harness_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("harness"),
         layout: &pipeline.get_bind_group_layout(0),
@@ -527,6 +535,10 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
             wgpu::BindGroupEntry {
                 binding: 4,
                 resource: wgpu::BindingResource::Sampler(&sampler),
+            },
+            wgpu::BindGroupEntry {
+                binding: 5,
+                resource: wgpu::BindingResource::TextureView(&age_view),
             },
         ],
     });
@@ -628,7 +640,8 @@ fn assert_cpu_agrees(cache: &Cache, cases: &[Case], outcomes: &[Outcome]) {
     for (case, outcome) in cases.iter().zip(outcomes) {
         let (footprint, nearest) = cpu(cache, case);
         if footprint != Status::Offscreen {
-            let mirror = reprojection::footprint(case.clip, case.mirrored_slope(), &cache.previous());
+            let mirror =
+                reprojection::footprint(case.clip, case.mirrored_slope(), &cache.previous());
             assert_eq!(outcome.base, mirror.base, "{case:?}: {outcome:?}");
             assert!(
                 (outcome.fraction - mirror.fraction).abs().max_element() < 1e-4,
@@ -773,8 +786,18 @@ fn sloped_surface_under_zoom_and_roll() {
         })
         .collect();
     let mut cases = Vec::new();
-    for (zoom, roll) in [(0.0, 0.0), (-0.3, 0.4), (0.6, -1.0), (0.3, 1.05), (-0.2, -0.6)] {
-        for texel in [Vec2::new(4.3, 5.6), Vec2::new(9.5, 7.25), Vec2::new(11.0, 10.0)] {
+    for (zoom, roll) in [
+        (0.0, 0.0),
+        (-0.3, 0.4),
+        (0.6, -1.0),
+        (0.3, 1.05),
+        (-0.2, -0.6),
+    ] {
+        for texel in [
+            Vec2::new(4.3, 5.6),
+            Vec2::new(9.5, 7.25),
+            Vec2::new(11.0, 10.0),
+        ] {
             let depth = 0.3 + 0.03 * texel.x + 0.01 * texel.y;
             cases.push(Case {
                 clip: cache.clip_at(texel, depth, 1.0),
@@ -787,7 +810,11 @@ fn sloped_surface_under_zoom_and_roll() {
     let outcomes = lookups(&gpu, &cache, &cases);
     for (case, outcome) in cases.iter().zip(&outcomes) {
         assert_eq!(
-            [outcome.bilinear.status, outcome.loads.status, outcome.nearest.status],
+            [
+                outcome.bilinear.status,
+                outcome.loads.status,
+                outcome.nearest.status
+            ],
             [0, 0, 0],
             "{case:?}: {outcome:?}"
         );

@@ -1045,3 +1045,41 @@ fn error_over_covered_pixels() {
         assert!(row.flicker < 1e-3, "{}: {}", row.variant, row.flicker);
     }
 }
+
+/// Frames are compared in linear float: a shader whose every covered value
+/// is above 1 (an HDR target's highlights) has its cache error measured,
+/// where 8-bit frames would clamp both the reference and the variant to
+/// 255 and report them equal (PSNR 100, no error: what this test measured
+/// before frames were read back as rgba16float).
+#[test]
+fn hdr_values_above_one_are_measured() {
+    let marble = std::fs::read_to_string(root().join("corpus/noise_marble.wgsl")).unwrap();
+    let bright = marble.replace(
+        "return vec4<f32>(color, 1.0);",
+        "return vec4<f32>((color * 4.0) + vec3<f32>(2.0), 1.0);",
+    );
+    assert_ne!(bright, marble);
+    let Some((pictures, report, _)) = run_shader(
+        &bright,
+        &marble_scene("\"object-motion\"", ""),
+        options(&[4], &[2]),
+    ) else {
+        return;
+    };
+    // The pictures are 8-bit: every covered pixel there is white.
+    let (_, classes) = &pictures.results[0];
+    for p in 0..pictures.reference.len() / 4 {
+        if classes[p * 4 + 3] > 0 {
+            assert_eq!(&pictures.reference[p * 4..p * 4 + 3], &[255, 255, 255]);
+        }
+    }
+    for row in &report.results {
+        assert!(row.psnr < 60.0, "{}: PSNR {}", row.variant, row.psnr);
+        assert!(
+            row.max_abs_error > 1.0 / 255.0,
+            "{}: {}",
+            row.variant,
+            row.max_abs_error
+        );
+    }
+}

@@ -225,7 +225,8 @@ fn plans_describe_the_passes() {
         .iter()
         .map(|t| t.target.as_str())
         .collect();
-    assert_eq!(targets, ["color", "cache"]);
+    assert_eq!(targets, ["color", "cache", "age"]);
+    assert_eq!(one.passes[0].color_targets[2].format, "r16float");
     assert_eq!(one.vertex_layout.len(), 2);
     assert_eq!(one.vertex_layout[0].format, "float32x3");
     assert_eq!(three.clear.depth, 1.0);
@@ -543,8 +544,13 @@ fn every_reconstruction_validates_and_builds() {
                     // Pass 1 of every variant reprojects.
                     let (_, text) = &wgsl(&rewritten)[0];
                     assert!(text.contains(&format!("fn {lookup}(")), "{text}");
+                    // Only bilinear gathers last frame's depths (every
+                    // bilinear footprint gathers its four ages).
                     if reconstruction != rewrite::Reconstruction::Bilinear {
-                        assert!(!text.contains("textureGather"), "{text}");
+                        assert!(
+                            !text.contains("textureGather(cache_previous_depth"),
+                            "{text}"
+                        );
                     }
                     if reconstruction.packs_depth() {
                         assert!(!text.contains("cache_previous_depth"), "{text}");

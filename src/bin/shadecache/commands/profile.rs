@@ -262,7 +262,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     }
     for row in report.best_per_variant() {
         summary.push_str(&format!(
-            "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] (ideal {:.2}×, {:.2}× with its fixed costs, P/T {:.2}, hit {:.0}% miss {:.0}% refresh {:.0}%), PSNR {:.1} dB over the covered pixels (worst frame {:.1}), SSIM {:.4}, flicker {:.4}\n",
+            "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] (ideal {:.2}×, {:.2}× with its fixed costs, P/T {:.2}, hit {:.0}% miss {:.0}% refresh {:.0}%, oldest value shown {} frames), PSNR {:.1} dB over the covered pixels (worst frame {:.1}), SSIM {:.4}, flicker {:.4}\n",
             row.variant.as_str(),
             row.node,
             row.node_text,
@@ -275,6 +275,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
             row.hit_rate * 100.0,
             row.miss_rate * 100.0,
             row.refresh_rate * 100.0,
+            row.max_age,
             row.psnr,
             row.worst_psnr,
             row.ssim,
