@@ -659,6 +659,15 @@ mod tests {
         assert_eq!(flat, Vec2::new(0.1, 0.2));
     }
 
+    /// A value is stale at Δn frames, at most at the age limit, never
+    /// with refresh off.
+    #[test]
+    fn staleness_reaches_at_the_period() {
+        assert!(!stale(7.0, 8) && stale(8.0, 8));
+        assert!(!stale(1e9, 0));
+        assert!(stale(AGE_LIMIT, 65535) && !stale(AGE_LIMIT - 1.0, 65535));
+    }
+
     /// The footprint of a point on a texel centre is that texel alone.
     #[test]
     fn a_texel_centre_is_its_own_footprint() {

@@ -223,18 +223,36 @@ pub const OFFSCREEN: [u8; 3] = [255, 128, 0];
 pub const DISOCCLUDED: [u8; 3] = [255, 0, 0];
 pub const INVALID: [u8; 3] = [255, 0, 255];
 
+/// The cache's decision a classification texel (RGBA8) shows; `None` for
+/// the background and for pixels where the node is not computed (grey).
+fn class_of(texel: &[u8]) -> Option<Class> {
+    Some(match [texel[0], texel[1], texel[2]] {
+        HIT => Class::Hit,
+        REFRESH => Class::Refresh,
+        DISOCCLUDED => Class::Disoccluded,
+        INVALID => Class::Invalid,
+        // rgba8unorm stores 0.5 as 127 or 128.
+        [255, 127 | 128, 0] => Class::Offscreen,
+        _ => return None,
+    })
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Class {
+    Hit,
+    Refresh,
+    Offscreen,
+    Disoccluded,
+    Invalid,
+}
+
 /// Adds the age of the value at every pixel the cache covers this frame
 /// (reused, refreshed or missed: classified, not background or absent) to
 /// `histogram` (index: frames since the value was computed, 0 where it
 /// was computed this frame). `ages` is the frame's age texture, r16float.
 pub fn add_ages(classes: &[u8], ages: &[u8], histogram: &mut Vec<u64>) {
     for (texel, age) in classes.chunks_exact(4).zip(ages.chunks_exact(2)) {
-        let class = [texel[0], texel[1], texel[2]];
-        let covered = matches!(
-            class,
-            HIT | REFRESH | DISOCCLUDED | INVALID | [255, 127 | 128, 0]
-        );
-        if !covered {
+        if class_of(texel).is_none() {
             continue;
         }
         let age = half::f16::from_le_bytes([age[0], age[1]]).to_f32();
@@ -256,14 +274,13 @@ pub fn decisions(classes: &[u8]) -> Decisions {
     let (mut hit, mut refresh, mut offscreen, mut disoccluded, mut invalid) =
         (0usize, 0usize, 0usize, 0usize, 0usize);
     for texel in classes.chunks_exact(4) {
-        match [texel[0], texel[1], texel[2]] {
-            HIT => hit += 1,
-            REFRESH => refresh += 1,
-            DISOCCLUDED => disoccluded += 1,
-            INVALID => invalid += 1,
-            // rgba8unorm stores 0.5 as 127 or 128.
-            [255, 127 | 128, 0] => offscreen += 1,
-            _ => {}
+        match class_of(texel) {
+            Some(Class::Hit) => hit += 1,
+            Some(Class::Refresh) => refresh += 1,
+            Some(Class::Disoccluded) => disoccluded += 1,
+            Some(Class::Invalid) => invalid += 1,
+            Some(Class::Offscreen) => offscreen += 1,
+            None => {}
         }
     }
     let covered = hit + refresh + offscreen + disoccluded + invalid;

@@ -55,9 +55,6 @@ pub struct RunOptions {
     pub classify: bool,
 }
 
-/// The age targets' format (the plan's `cache` targets' companions).
-const AGE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R16Float;
-
 /// Bytes of the `CacheParams` uniform: the plan's fields (36 bytes) up to
 /// the struct's 8-byte alignment, rounded to 16.
 const PARAMS_SIZE: usize = 48;
@@ -176,6 +173,7 @@ impl Runner {
             .transpose()?
             .unwrap_or(wgpu::TextureFormat::Rgba8Unorm);
         let cache_format = texture_format(&plan.cache.format)?;
+        let age_format = texture_format(crate::plan::AGE_FORMAT)?;
         let depth_format = wgpu::TextureFormat::Depth32Float;
         let buffer = |label: &str, bytes: &[u8], usage: wgpu::BufferUsages| {
             let buffer = device.create_buffer(&wgpu::BufferDescriptor {
@@ -257,8 +255,8 @@ impl Runner {
                 target(device, "payload 1", size, cache_format),
             ],
             age: [
-                target(device, "age 0", size, AGE_FORMAT),
-                target(device, "age 1", size, AGE_FORMAT),
+                target(device, "age 0", size, age_format),
+                target(device, "age 1", size, age_format),
             ],
             depth: [
                 target(device, "depth 0", size, depth_format),

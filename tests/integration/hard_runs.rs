@@ -686,6 +686,16 @@ light_color = [1.0, 1.0, 1.0]
                 row.hit_rate * 100.0
             );
             assert!(reused > 0, "nothing was reused");
+            // The ages are really counted: the oldest value shown is one
+            // the phase refreshes next frame, Δn − 1 frames old.
+            assert_eq!(
+                row.max_age,
+                period - 1,
+                "{speed} px/frame, {} {}: {:?}",
+                row.variant,
+                row.reconstruction.as_str(),
+                row.age_histogram
+            );
             assert!(
                 row.max_age < period,
                 "{speed} px/frame, {} {}: a value {} frames old was shown (Δn = {period}): {:?}",
