@@ -144,6 +144,30 @@ pub struct VertexAttribute {
     pub name: String,
     /// A WebGPU vertex format, e.g. `float32x3`.
     pub format: String,
+    /// Which buffer steps it: the per-vertex one (buffer slot 0) or the
+    /// per-instance one (slot 1). Each is packed in the layout's order.
+    #[serde(default, skip_serializing_if = "StepMode::is_vertex")]
+    pub step: StepMode,
+    /// For the previous-frame twin of a per-instance input: the location
+    /// of the input whose last-frame value the host puts here (this
+    /// frame's on the first frame), as it does for a buffer's twin.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub previous_of: Option<u32>,
+}
+
+/// How a vertex input advances: once per vertex or once per instance.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum StepMode {
+    #[default]
+    Vertex,
+    Instance,
+}
+
+impl StepMode {
+    fn is_vertex(&self) -> bool {
+        *self == StepMode::Vertex
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -434,7 +458,9 @@ pub fn build(inputs: Inputs) -> Plan {
             discards: false,
             bindings: used_bindings(&classify.module),
         }),
-        vertex_layout: vertex_entry.map_or(Vec::new(), |v| vertex_layout(module, &v.function)),
+        vertex_layout: vertex_entry.map_or(Vec::new(), |v| {
+            vertex_layout(module, &v.function, &vertex.instance_twins)
+        }),
         host_vertex: vertex_entry.is_none().then(|| HostVertex {
             previous_clip_position_location: vertex.previous_location,
             requirement: format!(
@@ -604,8 +630,16 @@ fn resource(
     })
 }
 
-/// The vertex buffer layout the original vertex entry point expects.
-fn vertex_layout(module: &Module, function: &naga::Function) -> Vec<VertexAttribute> {
+/// The vertex buffer layout the original vertex entry point expects,
+/// per-instance inputs ([`rewrite::vertex::instance_locations`]) stepped
+/// per instance, followed by the previous-frame twins `twins` gives as
+/// (input's location, twin's location).
+fn vertex_layout(
+    module: &Module,
+    function: &naga::Function,
+    twins: &[(u32, u32)],
+) -> Vec<VertexAttribute> {
+    let per_instance = rewrite::vertex::instance_locations(module, function);
     let mut out = Vec::new();
     let mut add =
         |name: Option<&String>, ty: naga::Handle<naga::Type>, binding: &Option<Binding>| {
@@ -614,6 +648,12 @@ fn vertex_layout(module: &Module, function: &naga::Function) -> Vec<VertexAttrib
                     location,
                     name: name.cloned().unwrap_or_default(),
                     format: vertex_format(&module.types[ty].inner),
+                    step: if per_instance.contains(&location) {
+                        StepMode::Instance
+                    } else {
+                        StepMode::Vertex
+                    },
+                    previous_of: None,
                 });
             }
         };
@@ -628,6 +668,19 @@ fn vertex_layout(module: &Module, function: &naga::Function) -> Vec<VertexAttrib
         }
     }
     out.sort_by_key(|a| a.location);
+    let twinned: Vec<VertexAttribute> = twins
+        .iter()
+        .filter_map(|&(of, location)| {
+            let input = out.iter().find(|a| a.location == of)?;
+            Some(VertexAttribute {
+                location,
+                name: format!("previous_{}", input.name),
+                previous_of: Some(of),
+                ..input.clone()
+            })
+        })
+        .collect();
+    out.extend(twinned);
     out
 }
 
@@ -714,7 +767,7 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
             bindings,
         }],
         classify: None,
-        vertex_layout: vertex_layout(module, &vertex_entry.function),
+        vertex_layout: vertex_layout(module, &vertex_entry.function, &[]),
         host_vertex: None,
         bindings: Bindings {
             original,

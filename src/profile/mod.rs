@@ -334,7 +334,7 @@ pub fn profile(
 
     // The scene must provide everything else the shader binds.
     scene::storage::check(&storage, scene)?;
-    check_instancing(shader, scene)?;
+    check_instancing(shader, scene, &reference_plan.vertex_layout)?;
     let dir = scene_path.parent().unwrap_or(Path::new("."));
     let mut textures = HashMap::new();
     for resource in &reference_plan.bindings.original {
@@ -381,15 +381,23 @@ pub fn profile(
     // constant. An input it cannot feed is an error at the input.
     let mut defaulted = scene.defaulted.clone();
     for attribute in &reference_plan.vertex_layout {
-        let source = scene::mesh::VertexSource::of(attribute).map_err(|message| {
+        let at_input = |message: String| {
             let text = &shader.file.text;
             let at = attribute_span(text, attribute.location, &attribute.name).unwrap_or(0..0);
             Error::in_file(
                 shader.file.clone(),
                 Diagnostic::error(message).with_label(at, "this vertex input"),
             )
-        })?;
-        if let Some(value) = source.defaulted(attribute) {
+        };
+        let constant = match attribute.step {
+            plan::StepMode::Vertex => scene::mesh::VertexSource::of(attribute)
+                .map_err(at_input)?
+                .defaulted(attribute),
+            plan::StepMode::Instance => scene::instance_inputs::InstanceSource::of(attribute)
+                .map_err(at_input)?
+                .defaulted(),
+        };
+        if let Some(value) = constant {
             defaulted.push(format!(
                 "vertex input @location({}) `{}` = {value}",
                 attribute.location, attribute.name
@@ -431,11 +439,18 @@ pub fn profile(
                 .map(|m| m.vertex_bytes(layout))
                 .transpose()
                 .map_err(fail)?;
+            let worlds: Vec<glam::Mat4> = state.instances[object]
+                .iter()
+                .map(|&instance| state.objects[object] * instance)
+                .collect();
+            let instance_inputs =
+                scene::instance_inputs::instance_inputs(layout, &worlds).map_err(fail)?;
             inputs.objects.push(ObjectInputs {
                 mesh: object,
                 buffers,
                 vertices,
                 instances: scene.objects[object].instance_count(),
+                instance_inputs,
             });
         }
         Ok(inputs)
@@ -1129,9 +1144,14 @@ fn used_bindings(
 }
 
 /// An object drawn as several instances needs a shader that tells them
-/// apart: one that reads `@builtin(instance_index)` in its vertex stage.
-/// Otherwise every instance would be drawn at the same place.
-fn check_instancing(shader: &Shader, scene: &Scene) -> Result<(), Error> {
+/// apart: one that reads `@builtin(instance_index)` in its vertex stage,
+/// or takes per-instance vertex inputs. Otherwise every instance would be
+/// drawn at the same place.
+fn check_instancing(
+    shader: &Shader,
+    scene: &Scene,
+    layout: &[plan::VertexAttribute],
+) -> Result<(), Error> {
     let Some((index, object)) = scene
         .objects
         .iter()
@@ -1151,12 +1171,12 @@ fn check_instancing(shader: &Shader, scene: &Scene) -> Result<(), Error> {
                 matches!(b, naga::Binding::BuiltIn(naga::BuiltIn::InstanceIndex))
             })
         });
-    if reads_instance_index {
+    if reads_instance_index || layout.iter().any(|a| a.step == plan::StepMode::Instance) {
         return Ok(());
     }
     Err(scene.error(
         format!(
-            "object {index} draws {} instances, and the shader's vertex stage does not read @builtin(instance_index): every instance would be drawn at the same place",
+            "object {index} draws {} instances, and the shader's vertex stage neither reads @builtin(instance_index) nor takes per-instance inputs: every instance would be drawn at the same place",
             object.instance_count()
         ),
         None,

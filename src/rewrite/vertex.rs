@@ -32,6 +32,200 @@ pub struct VertexStage {
     pub previous_location: u32,
     /// (original, twin) global variables.
     pub twins: Vec<(Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>)>,
+    /// (input's location, twin's location) of each per-instance vertex
+    /// input the position reads: the new entry point takes last frame's
+    /// value of it at the twin's location.
+    pub instance_twins: Vec<(u32, u32)>,
+}
+
+/// WebGPU's default `maxVertexAttributes`: inputs and their twins must fit
+/// in locations 0 to 15.
+const MAX_VERTEX_ATTRIBUTES: u32 = 16;
+
+/// The vertex inputs of `function` that step per instance.
+///
+/// A shader does not say how its inputs step: the host's pipeline does.
+/// The tutorials' and engines' naming says it instead: an input is per
+/// instance when its struct type or argument is named for instances
+/// (`InstanceInput`, `instance: ...`), or its own name is (`instance_*`,
+/// Bevy's `i_*` prefix).
+pub fn instance_locations(module: &Module, function: &Function) -> BTreeSet<u32> {
+    let named_instance = |name: Option<&String>| {
+        name.is_some_and(|n| {
+            let n = n.to_ascii_lowercase();
+            n.contains("instance") || n.starts_with("i_")
+        })
+    };
+    let mut out = BTreeSet::new();
+    for argument in &function.arguments {
+        let ty = &module.types[argument.ty];
+        match ty.inner {
+            TypeInner::Struct { ref members, .. } => {
+                let whole =
+                    named_instance(ty.name.as_ref()) || named_instance(argument.name.as_ref());
+                for member in members {
+                    if whole || named_instance(member.name.as_ref()) {
+                        out.extend(location_of(&member.binding));
+                    }
+                }
+            }
+            _ if named_instance(argument.name.as_ref()) => {
+                out.extend(location_of(&argument.binding))
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// A per-instance input the position reads: its argument, the member
+/// within it for a struct argument, its location and type.
+#[derive(Clone, Copy, Debug)]
+struct InstanceInput {
+    argument: u32,
+    member: Option<u32>,
+    location: u32,
+    ty: Handle<naga::Type>,
+}
+
+/// The per-instance inputs of the vertex entry point `function` that its
+/// position output (`position_member` of its result struct, or the result
+/// itself) depends on: only those need last frame's value. A struct
+/// argument the position uses whole counts with every member.
+fn instance_inputs_of_position(
+    module: &Module,
+    function: &Function,
+    position_member: Option<u32>,
+) -> Vec<InstanceInput> {
+    let per_instance = instance_locations(module, function);
+    if per_instance.is_empty() {
+        return Vec::new();
+    }
+    let layout = crate::proc::layout(module, function, 8.0);
+    let graph = crate::analysis::graph::ExprGraph::new(function, &layout);
+    let mut slice = ExprSet::with_capacity(function.expressions.len());
+    for value in position_values(function, &layout, position_member) {
+        slice.union_with(&graph.slice(value));
+    }
+    let (whole, struct_members) = arguments_read(module, function, &slice);
+    let mut out = Vec::new();
+    for (i, argument) in function.arguments.iter().enumerate() {
+        let i = i as u32;
+        let mut add = |member: Option<u32>, binding: &Option<Binding>, ty| {
+            if let Some(location) = location_of(binding).filter(|l| per_instance.contains(l)) {
+                out.push(InstanceInput {
+                    argument: i,
+                    member,
+                    location,
+                    ty,
+                });
+            }
+        };
+        match module.types[argument.ty].inner {
+            TypeInner::Struct { ref members, .. } => {
+                for (m, member) in members.iter().enumerate() {
+                    let m = m as u32;
+                    if whole.contains(&i) || struct_members.contains(&(i, m)) {
+                        add(Some(m), &member.binding, member.ty);
+                    }
+                }
+            }
+            _ if whole.contains(&i) => add(None, &argument.binding, argument.ty),
+            _ => {}
+        }
+    }
+    out
+}
+
+/// The values that become the position output: the returned value, its
+/// component for a composed struct, or for a returned local struct what
+/// is stored into its position member (and any store that may write it:
+/// the whole variable, a deeper pointer into it).
+fn position_values(
+    function: &Function,
+    layout: &crate::proc::FunctionLayout,
+    position_member: Option<u32>,
+) -> Vec<Handle<Expression>> {
+    let exprs = &function.expressions;
+    let mut returned = Vec::new();
+    crate::proc::each_statement(&function.body, &mut |statement| {
+        if let Statement::Return { value: Some(value) } = *statement {
+            returned.push(value);
+        }
+    });
+    let mut values = Vec::new();
+    for value in returned {
+        let local = match (position_member, &exprs[value]) {
+            (Some(m), Expression::Compose { components, .. }) => {
+                values.extend(components.get(m as usize).copied());
+                continue;
+            }
+            (Some(_), &Expression::Load { pointer }) => match exprs[pointer] {
+                Expression::LocalVariable(local) => local,
+                _ => {
+                    values.push(value);
+                    continue;
+                }
+            },
+            _ => {
+                values.push(value);
+                continue;
+            }
+        };
+        let m = position_member.unwrap_or(0);
+        values.extend(function.local_variables[local].init);
+        let is_local =
+            |e: Handle<Expression>| matches!(exprs[e], Expression::LocalVariable(l) if l == local);
+        for store in &layout.stores {
+            if store.target != Some(crate::proc::PointerRoot::Local(local)) {
+                continue;
+            }
+            let other_member = matches!(
+                exprs[store.pointer],
+                Expression::AccessIndex { base, index } if is_local(base) && index != m
+            );
+            if !other_member {
+                values.push(store.value);
+            }
+        }
+    }
+    values
+}
+
+/// Which arguments a set of expressions reads: whole (`.0`), or only some
+/// members of a struct argument (`.1`, as (argument, member)).
+fn arguments_read(
+    module: &Module,
+    function: &Function,
+    set: &ExprSet,
+) -> (BTreeSet<u32>, BTreeSet<(u32, u32)>) {
+    let exprs = &function.expressions;
+    let mut whole = BTreeSet::new();
+    let mut members = BTreeSet::new();
+    for (handle, expr) in exprs.iter() {
+        if !set.contains(handle.index()) {
+            continue;
+        }
+        for operand in crate::proc::operands(expr) {
+            if let Expression::FunctionArgument(argument) = exprs[operand] {
+                match *expr {
+                    Expression::AccessIndex { index, .. } => {
+                        members.insert((argument, index));
+                    }
+                    _ => {
+                        whole.insert(argument);
+                    }
+                }
+            }
+        }
+        if let Expression::FunctionArgument(argument) = *expr {
+            let ty = function.arguments[argument as usize].ty;
+            if !matches!(module.types[ty].inner, TypeInner::Struct { .. }) {
+                whole.insert(argument);
+            }
+        }
+    }
+    (whole, members)
 }
 
 /// The vertex entry point that draws with the fragment entry point at
@@ -171,6 +365,11 @@ pub fn instrument(
             ))
         }
     };
+
+    // Per-instance inputs the position reads, each with a twin input at a
+    // free location that carries last frame's value.
+    let instance_inputs = instance_inputs_of_position(module, function, position_member);
+    let instance_twins = twin_locations(module, function, &instance_inputs)?;
 
     // Helper functions reachable from the entry point, callees first.
     let mut reachable = Vec::new();
@@ -354,9 +553,16 @@ pub fn instrument(
 
     // The new entry point: call both, forward every member, add the
     // previous position.
+    let mut entry_arguments = function.arguments.clone();
+    entry_arguments.extend(twin_arguments(
+        module,
+        function,
+        &instance_inputs,
+        &instance_twins,
+    ));
     let mut b = Builder::new(Function {
         name: function.name.clone(),
-        arguments: function.arguments.clone(),
+        arguments: entry_arguments,
         result: Some(naga::FunctionResult {
             ty: output,
             binding: None,
@@ -367,7 +573,9 @@ pub fn instrument(
         .map(|i| b.argument(i))
         .collect();
     let now = b.call(current, arguments.clone());
-    let before = b.call(previous, arguments);
+    let previous_arguments =
+        last_frame_arguments(module, function, &mut b, arguments, &instance_inputs);
+    let before = b.call(previous, previous_arguments);
     let mut components: Vec<_> = match position_member {
         Some(_) => (0..member_count - 1).map(|i| b.member(now, i)).collect(),
         None => vec![now],
@@ -384,7 +592,111 @@ pub fn instrument(
         entry_index: Some(entry_index),
         previous_location,
         twins,
+        instance_twins,
     })
+}
+
+/// Free input locations for the twins of `inputs`, lowest first, as
+/// (input's location, twin's location); a refusal when the inputs and
+/// their twins do not fit in WebGPU's 16 vertex attributes.
+fn twin_locations(
+    module: &Module,
+    function: &Function,
+    inputs: &[InstanceInput],
+) -> Result<Vec<(u32, u32)>, Refusal> {
+    let used: BTreeSet<u32> = function
+        .arguments
+        .iter()
+        .flat_map(|a| located(module, &a.binding, a.ty))
+        .map(|(location, _)| location)
+        .collect();
+    let free: Vec<u32> = (0..MAX_VERTEX_ATTRIBUTES)
+        .filter(|l| !used.contains(l))
+        .take(inputs.len())
+        .collect();
+    if free.len() < inputs.len() {
+        return Err(Refusal::new(format!(
+            "the position reads {} per-instance vertex input(s), whose last-frame twins do not fit beside the shader's {} inputs in WebGPU's {MAX_VERTEX_ATTRIBUTES} vertex attributes",
+            inputs.len(),
+            used.len()
+        )));
+    }
+    Ok(inputs.iter().map(|i| i.location).zip(free).collect())
+}
+
+/// The new entry point's extra arguments: each twinned input's twin,
+/// `previous_<name>` at its twin location, in `inputs`' order.
+fn twin_arguments(
+    module: &Module,
+    function: &Function,
+    inputs: &[InstanceInput],
+    twins: &[(u32, u32)],
+) -> Vec<naga::FunctionArgument> {
+    inputs
+        .iter()
+        .zip(twins)
+        .map(|(input, &(_, location))| {
+            let argument = &function.arguments[input.argument as usize];
+            let name = match (input.member, &module.types[argument.ty].inner) {
+                (Some(m), TypeInner::Struct { members, .. }) => members[m as usize].name.clone(),
+                _ => argument.name.clone(),
+            };
+            naga::FunctionArgument {
+                name: Some(format!("previous_{}", name.unwrap_or_default())),
+                ty: input.ty,
+                binding: Some(Binding::Location {
+                    location,
+                    interpolation: None,
+                    sampling: None,
+                    blend_src: None,
+                    per_primitive: false,
+                }),
+            }
+        })
+        .collect()
+}
+
+/// The arguments of the previous-frame copy of the vertex function: the
+/// entry point's own `arguments`, with each per-instance input of `inputs`
+/// taken from its twin (the entry point's arguments after the original
+/// ones, in `inputs`' order). A struct argument with twinned members is
+/// composed again from its members and the twins.
+fn last_frame_arguments(
+    module: &Module,
+    function: &Function,
+    b: &mut Builder,
+    mut arguments: Vec<Handle<Expression>>,
+    inputs: &[InstanceInput],
+) -> Vec<Handle<Expression>> {
+    let first_twin = function.arguments.len() as u32;
+    for (i, argument) in function.arguments.iter().enumerate() {
+        let twins: Vec<(Option<u32>, u32)> = inputs
+            .iter()
+            .zip(first_twin..)
+            .filter(|(input, _)| input.argument as usize == i)
+            .map(|(input, twin)| (input.member, twin))
+            .collect();
+        let Some(&(_, first)) = twins.first() else {
+            continue;
+        };
+        let TypeInner::Struct { ref members, .. } = module.types[argument.ty].inner else {
+            arguments[i] = b.argument(first);
+            continue;
+        };
+        let components = (0..members.len() as u32)
+            .map(
+                |m| match twins.iter().find(|&&(member, _)| member == Some(m)) {
+                    Some(&(_, twin)) => b.argument(twin),
+                    None => b.member(arguments[i], m),
+                },
+            )
+            .collect();
+        arguments[i] = b.expr(Expression::Compose {
+            ty: argument.ty,
+            components,
+        });
+    }
+    arguments
 }
 
 /// The vertex side of a fragment-only module (engines compose the vertex
@@ -406,6 +718,7 @@ pub fn fragment_only(module: &Module, fragment: usize) -> VertexStage {
         entry_index: None,
         previous_location: locations.iter().map(|l| l + 1).max().unwrap_or(0),
         twins: Vec::new(),
+        instance_twins: Vec::new(),
     }
 }
 

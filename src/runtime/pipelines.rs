@@ -1,6 +1,6 @@
 use std::borrow::Cow;
 
-use crate::plan::{Pass, Plan, VertexAttribute};
+use crate::plan::{Pass, Plan, StepMode, VertexAttribute};
 
 /// A headless wgpu device.
 #[derive(Debug)]
@@ -60,17 +60,21 @@ pub fn pipelines(
     shader: impl Fn(&str) -> Option<String>,
     options: PipelineOptions,
 ) -> Result<Vec<wgpu::RenderPipeline>, String> {
-    let attributes = vertex_attributes(&plan.vertex_layout)?;
-    let stride = attributes
-        .iter()
-        .map(|a| a.offset + a.format.size())
-        .max()
-        .unwrap_or(0);
-    let buffers = [Some(wgpu::VertexBufferLayout {
-        array_stride: stride,
-        step_mode: wgpu::VertexStepMode::Vertex,
-        attributes: &attributes,
-    })];
+    // Slot 0 steps per vertex, slot 1 (when the shader has per-instance
+    // inputs) per instance; each packs its inputs in the layout's order.
+    let per_vertex = vertex_attributes(&plan.vertex_layout, StepMode::Vertex)?;
+    let per_instance = vertex_attributes(&plan.vertex_layout, StepMode::Instance)?;
+    let buffer = |attributes, step_mode| {
+        Some(wgpu::VertexBufferLayout {
+            array_stride: stride(attributes),
+            step_mode,
+            attributes,
+        })
+    };
+    let mut buffers = vec![buffer(&per_vertex, wgpu::VertexStepMode::Vertex)];
+    if !per_instance.is_empty() {
+        buffers.push(buffer(&per_instance, wgpu::VertexStepMode::Instance));
+    }
     plan.passes
         .iter()
         .map(|pass| {
@@ -165,10 +169,29 @@ fn pipeline(
 }
 
 /// The plan's attributes packed one after another in one buffer.
-fn vertex_attributes(layout: &[VertexAttribute]) -> Result<Vec<wgpu::VertexAttribute>, String> {
+/// Bytes of one element of a buffer holding `attributes`, packed.
+fn stride(attributes: &[wgpu::VertexAttribute]) -> u64 {
+    attributes
+        .iter()
+        .map(|a| a.offset + a.format.size())
+        .max()
+        .unwrap_or(0)
+}
+
+/// The byte size of one vertex input of the plan.
+pub fn attribute_size(attribute: &VertexAttribute) -> Result<u64, String> {
+    Ok(vertex_format(&attribute.format)?.size())
+}
+
+/// The attributes of `layout` that step as `step`, packed in order.
+fn vertex_attributes(
+    layout: &[VertexAttribute],
+    step: StepMode,
+) -> Result<Vec<wgpu::VertexAttribute>, String> {
     let mut offset = 0;
     layout
         .iter()
+        .filter(|attribute| attribute.step == step)
         .map(|attribute| {
             let format = vertex_format(&attribute.format)?;
             let out = wgpu::VertexAttribute {

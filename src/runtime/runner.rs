@@ -2,8 +2,8 @@
 
 use std::collections::HashMap;
 
-use super::pipelines::{pipelines, texture_format, Gpu, PipelineOptions};
-use crate::plan::{Pass, Plan};
+use super::pipelines::{attribute_size, pipelines, texture_format, Gpu, PipelineOptions};
+use crate::plan::{Pass, Plan, StepMode, VertexAttribute};
 use crate::scene::textures::Texels;
 
 /// An indexed triangle mesh whose vertices are laid out as the plan's
@@ -27,6 +27,12 @@ pub struct ObjectInputs {
     /// Instances drawn, in one instanced draw call (1 by default), by
     /// every pass alike: `@builtin(instance_index)` runs from 0 to this.
     pub instances: u32,
+    /// This frame's per-instance vertex inputs: one record per instance,
+    /// each the plan's per-instance inputs that are not twins, packed in
+    /// the layout's order. The runner fills the twins with last frame's
+    /// records (this frame's on the first frame). Empty when the shader
+    /// has no per-instance inputs.
+    pub instance_inputs: Vec<u8>,
 }
 
 impl Default for ObjectInputs {
@@ -36,6 +42,7 @@ impl Default for ObjectInputs {
             buffers: HashMap::new(),
             vertices: None,
             instances: 1,
+            instance_inputs: Vec::new(),
         }
     }
 }
@@ -84,6 +91,10 @@ pub struct Runner {
     buffers: HashMap<(usize, [u32; 2]), wgpu::Buffer>,
     /// Last frame's contents of each buffer a twin shadows, by object.
     previous: HashMap<(usize, [u32; 2]), Vec<u8>>,
+    /// Per-instance vertex buffers by object (slot 1), twins filled.
+    instance_buffers: HashMap<usize, wgpu::Buffer>,
+    /// Last frame's per-instance inputs by object, as given.
+    previous_instances: HashMap<usize, Vec<u8>>,
     views: HashMap<[u32; 2], wgpu::TextureView>,
     samplers: HashMap<[u32; 2], wgpu::Sampler>,
     cache_sampler: wgpu::Sampler,
@@ -270,6 +281,8 @@ impl Runner {
             meshes,
             buffers: HashMap::new(),
             previous: HashMap::new(),
+            instance_buffers: HashMap::new(),
+            previous_instances: HashMap::new(),
             views,
             samplers,
             cache_sampler: device.create_sampler(&wgpu::SamplerDescriptor {
@@ -357,6 +370,19 @@ impl Runner {
             }
             for (&key, bytes) in &draw.buffers {
                 self.write_buffer(gpu, (object, key), bytes);
+            }
+            if !draw.instance_inputs.is_empty() {
+                let previous = self
+                    .previous_instances
+                    .get(&object)
+                    .unwrap_or(&draw.instance_inputs);
+                let records = instance_records(
+                    &self.plan.vertex_layout,
+                    &draw.instance_inputs,
+                    previous,
+                    draw.instances,
+                )?;
+                self.write_instance_buffer(gpu, object, &records);
             }
             let twins = self.plan.bindings.previous.clone();
             for twin in &twins {
@@ -515,7 +541,9 @@ impl Runner {
                     ..wgpu::RenderPassDescriptor::default()
                 });
                 render.set_pipeline(pipeline);
-                for (draw, bind_groups) in inputs.objects.iter().zip(&per_object) {
+                for (object, (draw, bind_groups)) in
+                    inputs.objects.iter().zip(&per_object).enumerate()
+                {
                     let Some(mesh) = self.meshes.get(draw.mesh) else {
                         return Err(format!("no mesh {}", draw.mesh));
                     };
@@ -523,6 +551,9 @@ impl Runner {
                         render.set_bind_group(*group, bind_group, &[]);
                     }
                     render.set_vertex_buffer(0, mesh.vertices.slice(..));
+                    if let Some(instances) = self.instance_buffers.get(&object) {
+                        render.set_vertex_buffer(1, instances.slice(..));
+                    }
                     render.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
                     render.draw_indexed(0..mesh.count, 0, 0..draw.instances);
                 }
@@ -538,6 +569,10 @@ impl Runner {
 
         // This frame's contents are next frame's previous.
         for (object, draw) in inputs.objects.iter().enumerate() {
+            if !draw.instance_inputs.is_empty() {
+                self.previous_instances
+                    .insert(object, draw.instance_inputs.clone());
+            }
             for twin in &self.plan.bindings.previous {
                 let shadowed = [twin.shadows.group, twin.shadows.binding];
                 if let Some(bytes) = draw.buffers.get(&shadowed) {
@@ -599,6 +634,28 @@ impl Runner {
             })
         });
         gpu.queue.write_buffer(buffer, 0, bytes);
+    }
+
+    /// Writes an object's per-instance vertex records, creating (or
+    /// growing) its buffer as needed.
+    fn write_instance_buffer(&mut self, gpu: &Gpu, object: usize, records: &[u8]) {
+        let size = (records.len() as u64).max(16).div_ceil(4) * 4;
+        if self
+            .instance_buffers
+            .get(&object)
+            .is_some_and(|b| b.size() < size)
+        {
+            self.instance_buffers.remove(&object);
+        }
+        let buffer = self.instance_buffers.entry(object).or_insert_with(|| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("per-instance vertex inputs"),
+                size,
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        gpu.queue.write_buffer(buffer, 0, records);
     }
 
     fn resource<'a>(
@@ -675,6 +732,58 @@ const CUBE_ARRAY_CUBES: u32 = 2;
 
 /// Whether a plan's resource kind is a texture the shader samples (which
 /// the runtime makes: a scene's texels, or the far plane for depth).
+/// The per-instance vertex buffer's records for `count` instances: for
+/// each, the layout's per-instance inputs in order, an input's bytes from
+/// `current` and a twin's from `previous` (the bytes of the input it
+/// shadows), where `current` and `previous` hold the non-twin inputs
+/// packed per instance.
+fn instance_records(
+    layout: &[VertexAttribute],
+    current: &[u8],
+    previous: &[u8],
+    count: u32,
+) -> Result<Vec<u8>, String> {
+    // Each non-twin input's (location, offset, size) in a given record.
+    let mut given = Vec::new();
+    let mut offset = 0;
+    for attribute in layout
+        .iter()
+        .filter(|a| a.step == StepMode::Instance && a.previous_of.is_none())
+    {
+        let size = attribute_size(attribute)? as usize;
+        given.push((attribute.location, offset, size));
+        offset += size;
+    }
+    let stride = offset;
+    let count = count as usize;
+    for (bytes, what) in [(current, "this frame's"), (previous, "last frame's")] {
+        if bytes.len() != stride * count {
+            return Err(format!(
+                "{what} per-instance vertex inputs are {} bytes, not {count} records of {stride}",
+                bytes.len()
+            ));
+        }
+    }
+    let mut out = Vec::new();
+    for instance in 0..count {
+        for attribute in layout.iter().filter(|a| a.step == StepMode::Instance) {
+            let (bytes, of) = match attribute.previous_of {
+                Some(of) => (previous, of),
+                None => (current, attribute.location),
+            };
+            let Some(&(_, offset, size)) = given.iter().find(|g| g.0 == of) else {
+                return Err(format!(
+                    "vertex input @location({}) is the twin of @location({of}), which is not a per-instance input",
+                    attribute.location
+                ));
+            };
+            let at = instance * stride + offset;
+            out.extend_from_slice(&bytes[at..at + size]);
+        }
+    }
+    Ok(out)
+}
+
 pub fn is_sampled_texture(kind: &str) -> bool {
     sampled_shape(kind).is_some()
 }

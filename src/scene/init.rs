@@ -101,6 +101,13 @@ pub fn default_scene(
             .or_else(|| implicit_role(member))
     };
 
+    if let Some(vertex) = vertex {
+        text.push_str(&instance_inputs_note(
+            module,
+            &module.entry_points[vertex].function,
+        ));
+    }
+
     if !inferred.is_empty() {
         text.push_str("\n# What the simulation fills, by the shader's own names.\n[roles]\n");
         for role in &inferred {
@@ -185,6 +192,53 @@ pub fn default_scene(
         defaulted,
         roles: inferred,
     }
+}
+
+/// A comment listing the vertex entry point's per-instance inputs and
+/// what feeds each (nothing to write: they are fed by name); empty when
+/// it has none.
+fn instance_inputs_note(module: &Module, function: &naga::Function) -> String {
+    let per_instance = crate::rewrite::vertex::instance_locations(module, function);
+    let mut note = String::new();
+    for argument in &function.arguments {
+        let mut add = |name: Option<&String>, binding: &Option<naga::Binding>| {
+            let Some(naga::Binding::Location { location, .. }) = *binding else {
+                return;
+            };
+            if !per_instance.contains(&location) {
+                return;
+            }
+            let name = name.cloned().unwrap_or_default();
+            let attribute = crate::plan::VertexAttribute {
+                location,
+                name: name.clone(),
+                // Only the name and the width matter here.
+                format: "float32x4".into(),
+                step: crate::plan::StepMode::Instance,
+                previous_of: None,
+            };
+            let what = match super::instance_inputs::InstanceSource::of(&attribute) {
+                Ok(source) => source.describe(),
+                Err(err) => format!("cannot be fed: {err}"),
+            };
+            let _ = writeln!(note, "#   @location({location}) {name}: {what}");
+        };
+        match module.types[argument.ty].inner {
+            TypeInner::Struct { ref members, .. } => {
+                for member in members {
+                    add(member.name.as_ref(), &member.binding);
+                }
+            }
+            _ => add(argument.name.as_ref(), &argument.binding),
+        }
+    }
+    if note.is_empty() {
+        return note;
+    }
+    format!(
+        "\n# Per-instance vertex inputs, fed by their names from each instance's\n\
+         # world transform (the object's placement times the instance's):\n{note}"
+    )
 }
 
 /// The default scene for `shader`: its fragment entry point `entry` (or

@@ -493,11 +493,13 @@ fn packed_colour(attribute: &crate::plan::VertexAttribute) -> bool {
 }
 
 impl Mesh {
-    /// Vertex bytes for the shader's attributes, packed in `layout`'s
-    /// order, each fed by its [`VertexSource`].
+    /// Vertex bytes for the shader's per-vertex attributes, packed in
+    /// `layout`'s order, each fed by its [`VertexSource`] (per-instance
+    /// ones are [`super::instance_inputs`]'s).
     pub fn vertex_bytes(&self, layout: &[crate::plan::VertexAttribute]) -> Result<Vec<u8>, String> {
         let sources: Vec<(VertexSource, usize, u32)> = layout
             .iter()
+            .filter(|attribute| attribute.step == crate::plan::StepMode::Vertex)
             .map(|attribute| {
                 let width = match attribute.format.rsplit_once('x') {
                     Some((_, n)) => n.parse().unwrap_or(1),

@@ -23,6 +23,7 @@
 //! writes values at naga's offsets for both kinds of buffer.
 
 pub mod init;
+pub mod instance_inputs;
 pub mod instances;
 pub mod layout;
 pub mod mesh;

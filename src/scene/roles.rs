@@ -157,6 +157,11 @@ pub fn infer(
         };
         let order = ["applied last", "applied next", "applied first"];
         for (i, (key, role)) in chain.iter().zip(roles).enumerate() {
+            // A matrix made from vertex inputs (a model matrix passed per
+            // instance) takes its place in the chain but is no member.
+            let Some(key) = key else {
+                continue;
+            };
             if named_role(key) {
                 continue;
             }
@@ -250,11 +255,12 @@ fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
     fits_role(role, shape).then_some(role)
 }
 
-/// The uniform or storage members (as `[roles]` keys) that are applied as
-/// matrices to the vertex position on its way to `@builtin(position)`,
-/// last applied first. Empty when the position is not a chain of such
-/// products (computed in a helper, a matrix built from vertex inputs).
-fn position_matrices(module: &Module, function: &naga::Function) -> Vec<String> {
+/// The matrices applied to the vertex position on its way to
+/// `@builtin(position)`, last applied first: a uniform or storage member
+/// as its `[roles]` key, `None` for a matrix from elsewhere (built from
+/// per-instance vertex inputs, computed). Empty when the position is not
+/// a chain of products (computed in a helper).
+fn position_matrices(module: &Module, function: &naga::Function) -> Vec<Option<String>> {
     let Some(position) = position_output(module, function) else {
         return Vec::new();
     };
@@ -358,15 +364,16 @@ fn walk_product(
     function: &naga::Function,
     stores: &Stores,
     expr: Handle<Expression>,
-    chain: &mut Vec<String>,
+    chain: &mut Vec<Option<String>>,
     depth: usize,
 ) {
     // Deep enough for any real chain; guards against odd IR.
     if depth > 64 {
         return;
     }
-    let recurse =
-        |e, chain: &mut Vec<String>| walk_product(module, function, stores, e, chain, depth + 1);
+    let recurse = |e, chain: &mut Vec<Option<String>>| {
+        walk_product(module, function, stores, e, chain, depth + 1)
+    };
     let is_matrix = |e: Handle<Expression>| is_matrix(module, function, e, 0);
     match function.expressions[expr] {
         Expression::Binary {
@@ -461,14 +468,15 @@ fn pointee(
     }
 }
 
-/// The uniform or storage matrices a matrix expression multiplies
-/// together, in order (`proj * view` gives both).
+/// The matrices a matrix expression multiplies together, in order
+/// (`proj * view` gives both): uniform or storage members by key, others
+/// `None`.
 fn matrix_factors(
     module: &Module,
     function: &naga::Function,
     stores: &Stores,
     matrix: Handle<Expression>,
-    chain: &mut Vec<String>,
+    chain: &mut Vec<Option<String>>,
     depth: usize,
 ) {
     if depth > 64 {
@@ -485,16 +493,17 @@ fn matrix_factors(
         }
         Expression::Load { pointer } => {
             if let Some(key) = local_place(function, pointer) {
-                if let Some(&value) = stores.get(&key) {
-                    matrix_factors(module, function, stores, value, chain, depth + 1);
+                match stores.get(&key) {
+                    Some(&value) => {
+                        matrix_factors(module, function, stores, value, chain, depth + 1)
+                    }
+                    None => chain.push(None),
                 }
                 return;
             }
-            if let Some(key) = member_key(module, function, pointer) {
-                chain.push(key);
-            }
+            chain.push(member_key(module, function, pointer));
         }
-        _ => {}
+        _ => chain.push(None),
     }
 }
 

@@ -209,8 +209,7 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
             objects: vec![runtime::ObjectInputs {
                 mesh: 0,
                 buffers: HashMap::from([([0, 0], uniform)]),
-                vertices: None,
-                instances: 1,
+                ..runtime::ObjectInputs::default()
             }],
         };
         runner.frame(&gpu, &inputs, None).unwrap();

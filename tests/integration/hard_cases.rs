@@ -1523,8 +1523,7 @@ fn refresh_maps(gpu: &Gpu, period: u32, quad: u32, start: u64, frames: usize) ->
         objects: vec![runtime::ObjectInputs {
             mesh: 0,
             buffers: HashMap::from([([0, 0], identity)]),
-            vertices: None,
-            instances: 1,
+            ..runtime::ObjectInputs::default()
         }],
     };
     let mut maps = Vec::new();

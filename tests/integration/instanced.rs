@@ -11,6 +11,26 @@ fn instanced_shader() -> String {
     std::fs::read_to_string(root().join("corpus/instanced_storage.wgsl")).unwrap()
 }
 
+/// The wgpu tutorials' instancing: model and normal matrices as
+/// per-instance vertex inputs.
+fn tutorial_shader() -> String {
+    std::fs::read_to_string(root().join("corpus/tutorial_instances.wgsl")).unwrap()
+}
+
+/// The tutorial shader's resources under its own names.
+const TUTORIAL_TAIL: &str = r#"
+[roles]
+"camera.view_proj" = "clip_from_world"
+"camera.view_pos" = "camera_position"
+"light.position" = "light_position"
+[uniforms]
+color = [1.0, 1.0, 1.0]
+[textures.t_diffuse]
+generate = "checker"
+[textures.t_normal]
+generate = "flat-normal"
+"#;
+
 /// The `[uniforms]` of the instanced shader.
 const UNIFORMS: &str = r#"
 [uniforms]
@@ -25,8 +45,9 @@ specular = 0.5
 
 /// Seen from straight above: a plane, and two cubes in a ring that orbit
 /// the vertical axis 16° a frame (each about 9 pixels), given as instances
-/// of one object. `effects` and the storage table are the caller's.
-fn orbiting_cubes(effects: &str, storage: &str) -> String {
+/// of one object. `effects` and what the shader's resources get (`tail`:
+/// storage, uniforms, roles, textures) are the caller's.
+fn orbiting_cubes(effects: &str, tail: &str) -> String {
     format!(
         r#"
 size = [128, 128]
@@ -43,8 +64,7 @@ far = 20.0
 mesh = {{ kind = "cube", size = 1.0 }}
 position = [0.0, 0.5, 0.0]
 instances = {{ count = 2, layout = "ring", radius = 1.5, orbit_degrees_per_frame = 16.0, spin_degrees_per_frame = [0.0, 5.0, 0.0] }}
-{storage}
-{UNIFORMS}
+{tail}
 "#
     )
 }
@@ -52,6 +72,11 @@ instances = {{ count = 2, layout = "ring", radius = 1.5, orbit_degrees_per_frame
 const PLANE: &str = "[[objects]]\nmesh = { kind = \"plane\", size = 8.0, subdivisions = 4 }\n";
 
 const COLOURS: &str = "[storage.instances]\ncolor = { palette = \"rainbow\" }\n";
+
+/// The storage shader's resources: rainbow instances and its uniforms.
+fn storage_tail(storage: &str) -> String {
+    format!("{storage}{UNIFORMS}")
+}
 
 fn options(periods: &[u32]) -> Options {
     Options {
@@ -90,13 +115,90 @@ fn instanced_refresh_period_one_equals_the_reference() {
     }
 }
 
+/// Δn = 1 on the corpus's instanced crates, whose model matrices are
+/// per-instance vertex inputs with previous-frame twins: every variant of
+/// the wood grain and of the lit colour gives the reference's image.
+#[test]
+fn instance_inputs_at_refresh_period_one_equal_the_reference() {
+    let scene = std::fs::read_to_string(root().join("corpus/scenes/instanced_crates.toml"))
+        .unwrap()
+        .replace("size = [256, 256]", "size = [64, 64]");
+    let shader = tutorial_shader();
+    let analysis = crate::util::analyzed("tutorial_instances.wgsl", &shader).1;
+    let ids = [
+        "wood_grain(in.object_position)",
+        "vec4<f32>(result, object_color.a)",
+    ]
+    .iter()
+    .map(|text| crate::util::candidate(&analysis, text).node.id.clone())
+    .collect();
+    let mut opts = options(&[1]);
+    opts.nodes = Nodes::Ids(ids);
+    opts.cache_formats = vec![CacheFormat::Rgba32float];
+    opts.frames = Some(3);
+    opts.warmup = Some(1);
+    let Some((_, report, scene)) = run_shader(&shader, &scene, opts) else {
+        return;
+    };
+    assert_eq!(scene.objects[1].instance_count(), 9);
+    assert_eq!(report.results.len(), 6);
+    for row in &report.results {
+        assert!(
+            row.max_abs_error <= 1.0 / 255.0 + 1e-9,
+            "{} {} {}",
+            row.node,
+            row.variant,
+            row.max_abs_error
+        );
+    }
+}
+
+/// Only the per-instance inputs the position reads get previous-frame
+/// twins: the tutorial's model matrix, not its normal matrix (which would
+/// not fit in WebGPU's 16 vertex attributes beside the rest).
+#[test]
+fn only_instance_inputs_the_position_reads_get_twins() {
+    let shader = tutorial_shader();
+    let (shader, analysis) = crate::util::analyzed("tutorial_instances.wgsl", &shader);
+    let node = crate::util::candidate(&analysis, "wood_grain(in.object_position)");
+    let rewritten = shadecache::rewrite::rewrite(
+        &shader,
+        &analysis,
+        node,
+        Variant::TwoPass,
+        &shadecache::rewrite::Options::default(),
+    )
+    .unwrap();
+    let layout = &rewritten.plan.vertex_layout;
+    let twins: Vec<(u32, &str)> = layout
+        .iter()
+        .filter_map(|a| a.previous_of.map(|of| (of, a.name.as_str())))
+        .collect();
+    assert_eq!(
+        twins,
+        [
+            (5, "previous_model_matrix_0"),
+            (6, "previous_model_matrix_1"),
+            (7, "previous_model_matrix_2"),
+            (8, "previous_model_matrix_3")
+        ]
+    );
+    use shadecache::plan::StepMode;
+    let per_instance = layout
+        .iter()
+        .filter(|a| a.step == StepMode::Instance)
+        .count();
+    assert_eq!(per_instance, 7 + 4);
+    assert!(layout.iter().all(|a| a.location < 16));
+}
+
 /// Nothing declared moves: the instances' orbit and spin are ignored, and
 /// after the first frame every covered pixel of every variant is reused.
 /// Both instances are drawn, where the scene puts them.
 #[test]
 fn static_instances_hit_everywhere_after_the_first_frame() {
     // The cubes alone, so that the covered pixels are theirs.
-    let scene = orbiting_cubes("", COLOURS)
+    let scene = orbiting_cubes("", &storage_tail(COLOURS))
         .replace("frames = 1", "frames = 3")
         .replace(PLANE, "");
     let Some((pictures, report, scene)) = run_shader(&instanced_shader(), &scene, options(&[0]))
@@ -142,10 +244,25 @@ fn static_instances_hit_everywhere_after_the_first_frame() {
 /// frame's instance transforms.
 #[test]
 fn moving_instances_reproject_with_last_frames_storage() {
-    let scene = orbiting_cubes("\"object-motion\", \"disocclusion\"", COLOURS);
+    assert_moving_cubes_reproject(&instanced_shader(), &storage_tail(COLOURS));
+}
+
+/// The same orbiting cubes drawn by a shader that takes each instance's
+/// model matrix as four per-instance vertex inputs, as the wgpu tutorials
+/// do: the leading band hits only if the inputs' previous-frame twins
+/// hold last frame's matrices.
+#[test]
+fn moving_instance_inputs_reproject_with_last_frames_matrix() {
+    assert_moving_cubes_reproject(&tutorial_shader(), TUTORIAL_TAIL);
+}
+
+/// On the orbiting cubes, three-pass without refresh: the leading band of
+/// each cube hits and the band it uncovered misses.
+fn assert_moving_cubes_reproject(shader: &str, tail: &str) {
+    let scene = orbiting_cubes("\"object-motion\", \"disocclusion\"", tail);
     let mut opts = options(&[0]);
     opts.variants = vec![Variant::ThreePass];
-    let Some((pictures, _, scene)) = run_shader(&instanced_shader(), &scene, opts) else {
+    let Some((pictures, _, scene)) = run_shader(shader, &scene, opts) else {
         return;
     };
     let (w, h) = (128usize, 128usize);
@@ -178,7 +295,7 @@ fn profile_error(scene: &str) -> String {
 /// zeros.
 #[test]
 fn a_missing_storage_member_is_an_error_naming_it() {
-    let err = profile_error(&orbiting_cubes("", ""));
+    let err = profile_error(&orbiting_cubes("", &storage_tail("")));
     assert!(err.contains("`instances.color`"), "{err}");
     assert!(err.contains("[storage.instances]"), "{err}");
 }
@@ -188,7 +305,7 @@ fn a_missing_storage_member_is_an_error_naming_it() {
 #[test]
 fn a_list_that_disagrees_with_the_instance_count_is_an_error() {
     let storage = "[objects.storage.instances]\ncolor = [[1.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 1.0], [0.0, 0.0, 1.0, 1.0]]\n[storage.instances]\ncolor = [0.5, 0.5, 0.5, 1.0]\n";
-    let scene = orbiting_cubes("", storage);
+    let scene = orbiting_cubes("", &storage_tail(storage));
     let err = profile_error(&scene);
     assert!(err.contains("`instances.color`"), "{err}");
     assert!(err.contains("lists 3 values for 2 instances"), "{err}");
