@@ -7,7 +7,7 @@ use std::ops::Range;
 use naga::{Expression, Handle, TypeInner};
 use serde::Serialize;
 
-use super::graph::{ExprGraph, ExprSet};
+use super::graph::{ExprGraph, ExprSet, SliceFact};
 use super::{id, Analysis, Candidate, Node, Rejected, SourceSpan};
 use crate::cost::CostModel;
 use crate::front::Shader;
@@ -67,6 +67,25 @@ pub(super) fn find(
     // What only each expression needs, for every candidate's overlap at once.
     let private = graph.private();
     let dominated = private.dominated_sums(&weighted);
+    // Every slice's cost and facts at once; where the slices share too
+    // much for that, each candidate walks its own.
+    let own_facts: Vec<SliceFacts> = (0..exprs.len())
+        .map(|i| SliceFacts::of_expression(module, function, &exprs, i))
+        .collect();
+    let summaries = graph.summaries(&weighted, &own_facts);
+    let summary = |expr: Handle<Expression>| -> (f64, SliceFacts) {
+        match &summaries {
+            Some(s) => (s.cost[expr.index()], s.facts[expr.index()].clone()),
+            None => {
+                let slice = graph.slice(expr);
+                let facts = slice.ones().fold(SliceFacts::NONE, |mut facts, i| {
+                    facts.merge(&own_facts[i]);
+                    facts
+                });
+                (cost_of(&slice), facts)
+            }
+        }
+    };
 
     // Where each expression came from: the entry point's own, or a
     // helper's at one call site.
@@ -176,15 +195,14 @@ pub(super) fn find(
         };
         *occurrence += 1;
 
-        let slice = graph.slice(expr);
-        match classify(module, function, &exprs, info, &layout, &slice, expr) {
+        let (cost, facts) = summary(expr);
+        match classify(module, info, &layout, &facts, expr) {
             Err((reason, detail)) => rejected.push(Rejected {
                 node,
                 reason,
                 detail,
             }),
             Ok(components) => {
-                let cost = cost_of(&slice);
                 // The overlap: the slice less the node and what only it
                 // needs (what it dominates). A node nothing needs has no
                 // dominator; its remainder is walked.
@@ -192,12 +210,12 @@ pub(super) fn find(
                     (cost - weighted[expr.index()] - dominated[expr.index()]).max(0.0)
                 } else {
                     let mut shared = graph.remainder(expr);
-                    shared.intersect_with(&slice);
+                    shared.intersect_with(&graph.slice(expr));
                     shared.set(expr.index(), false);
                     cost_of(&shared)
                 };
-                let derivatives = slice.ones().any(|i| takes_derivatives(exprs[i]));
-                let depends_on = per_frame_inputs(module, &exprs, &slice);
+                let derivatives = facts.has(SliceFacts::DERIVATIVES);
+                let depends_on = facts.per_frame_inputs();
                 let range = ranges.of(&node);
                 candidates.push(Candidate {
                     node,
@@ -340,11 +358,9 @@ pub(super) fn call_extent(source: &str, range: Range<usize>) -> Range<usize> {
 /// Why `expr` cannot be cached, or its number of components if it can.
 fn classify(
     module: &naga::Module,
-    function: &naga::Function,
-    exprs: &[&Expression],
     info: &naga::valid::FunctionInfo,
     layout: &proc::FunctionLayout,
-    slice: &ExprSet,
+    facts: &SliceFacts,
     expr: Handle<Expression>,
 ) -> Result<u32, (RejectReason, String)> {
     if let Some(at) = layout.placement(expr) {
@@ -378,21 +394,20 @@ fn classify(
         }
     };
 
-    let nodes = || slice.ones().map(|i| &exprs[i]);
-    if nodes().all(|e| moves_data_only(e)) {
+    if !facts.has(SliceFacts::COMPUTES) {
         return Err((
             RejectReason::Trivial,
             "only reads or rearranges existing values: there is no computation to save".into(),
         ));
     }
-    if !super::graph::reads_arguments(exprs, slice) {
+    if !facts.has(SliceFacts::READS_ARGUMENT) {
         return Err((
             RejectReason::UniformOnly,
             "depends only on uniforms, constants and overrides: it is the same for every pixel"
                 .into(),
         ));
     }
-    if let Some(what) = screen_space_read(module, function, exprs, slice) {
+    if let Some(what) = facts.screen_space_read() {
         return Err((
             RejectReason::ScreenSpace,
             format!(
@@ -407,25 +422,146 @@ fn classify(
 /// ranking: it goes stale under exactly the motion scenes declare.
 const PER_FRAME_PENALTY: f64 = 0.02;
 
-/// The per-frame inputs `slice` reads, by the names of the uniform and
-/// storage members it loads: `time` (time, elapsed), `camera` (camera,
-/// cam, eye, view: positions and matrices), `light` (light, sun). A
-/// cached value of such a node is stale as soon as its input changes.
-fn per_frame_inputs(module: &naga::Module, exprs: &[&Expression], slice: &ExprSet) -> Vec<String> {
-    let mut found: Vec<String> = Vec::new();
-    let mut note = |name: String| {
-        let name = name.to_ascii_lowercase();
-        let has = |words: &[&str]| words.iter().any(|w| name.contains(w));
-        for (input, words) in [
-            ("time", &["time", "elapsed"][..]),
-            ("camera", &["camera", "cam", "eye", "view"][..]),
-            ("light", &["light", "sun"][..]),
-        ] {
-            if has(words) && !found.iter().any(|f| f == input) {
-                found.push(input.to_string());
+/// The per-frame inputs a cached value goes stale with, and the words in
+/// the names of the uniform and storage members it loads that say so:
+/// `time` (time, elapsed), `camera` (camera, cam, eye, view: positions and
+/// matrices), `light` (light, sun).
+const PER_FRAME_INPUTS: [(&str, &[&str]); 3] = [
+    ("time", &["time", "elapsed"]),
+    ("camera", &["camera", "cam", "eye", "view"]),
+    ("light", &["light", "sun"]),
+];
+
+/// What a candidate's classification and notes need to know of its
+/// slice. Each is true of the slice when it is of one of its expressions,
+/// so the facts of every slice are merged up the expression graph at once
+/// ([`super::graph::ExprGraph::summaries`]).
+#[derive(Clone, Debug)]
+struct SliceFacts {
+    flags: u8,
+    /// For each of [`PER_FRAME_INPUTS`], the lowest arena index of an
+    /// expression of the slice that reads it (`u32::MAX`: none), so the
+    /// inputs are listed in the order the function reads them.
+    first_read: [u32; 3],
+}
+
+impl SliceFacts {
+    /// Some expression computes: arithmetic, a texture access, a call.
+    const COMPUTES: u8 = 1;
+    /// Some expression reads an argument: a per-fragment input.
+    const READS_ARGUMENT: u8 = 2;
+    /// Some expression takes a derivative, explicit or implicit.
+    const DERIVATIVES: u8 = 4;
+    const SAMPLE_INDEX: u8 = 8;
+    const SAMPLE_MASK: u8 = 16;
+    /// Some expression reads `@builtin(position)`'s x or y.
+    const POSITION_XY: u8 = 32;
+
+    const NONE: SliceFacts = SliceFacts {
+        flags: 0,
+        first_read: [u32::MAX; 3],
+    };
+
+    fn has(&self, flag: u8) -> bool {
+        self.flags & flag != 0
+    }
+
+    /// The facts of expression `i` alone.
+    fn of_expression(
+        module: &naga::Module,
+        function: &naga::Function,
+        exprs: &[&Expression],
+        i: usize,
+    ) -> SliceFacts {
+        let expr = exprs[i];
+        let mut facts = SliceFacts::NONE;
+        let mut set = |flag: u8, when: bool| {
+            if when {
+                facts.flags |= flag;
+            }
+        };
+        set(SliceFacts::COMPUTES, !moves_data_only(expr));
+        set(
+            SliceFacts::READS_ARGUMENT,
+            matches!(expr, Expression::FunctionArgument(_)),
+        );
+        set(SliceFacts::DERIVATIVES, takes_derivatives(expr));
+        let carried = carried_builtin(module, function, exprs, expr);
+        set(
+            SliceFacts::SAMPLE_INDEX,
+            carried == Some(naga::BuiltIn::SampleIndex),
+        );
+        set(
+            SliceFacts::SAMPLE_MASK,
+            carried == Some(naga::BuiltIn::SampleMask),
+        );
+        // A read of the position that takes more than its z or w alone.
+        let reads_position = proc::operands(expr).iter().any(|&o| {
+            matches!(
+                carried_builtin(module, function, exprs, exprs[o.index()]),
+                Some(naga::BuiltIn::Position { .. })
+            )
+        });
+        set(SliceFacts::POSITION_XY, reads_position && !depth_only(expr));
+        if let Some(name) = loaded_buffer_member(module, exprs, expr) {
+            let name = name.to_ascii_lowercase();
+            for (slot, (_, words)) in PER_FRAME_INPUTS.iter().enumerate() {
+                if words.iter().any(|w| name.contains(w)) {
+                    facts.first_read[slot] = i as u32;
+                }
             }
         }
-    };
+        facts
+    }
+
+    /// The per-frame inputs the slice reads, in the order it first reads
+    /// them.
+    fn per_frame_inputs(&self) -> Vec<String> {
+        let mut read: Vec<(u32, &str)> = PER_FRAME_INPUTS
+            .iter()
+            .zip(self.first_read)
+            .filter(|&(_, first)| first != u32::MAX)
+            .map(|(&(input, _), first)| (first, input))
+            .collect();
+        read.sort();
+        read.into_iter()
+            .map(|(_, input)| input.to_string())
+            .collect()
+    }
+
+    /// What in the slice reads where the pixel is on the screen rather
+    /// than what surface point it shows: `@builtin(position)`'s x or y
+    /// (its z and w, the depth, belong to the point), `sample_index`,
+    /// `sample_mask`.
+    fn screen_space_read(&self) -> Option<&'static str> {
+        if self.has(SliceFacts::SAMPLE_INDEX) {
+            Some("`@builtin(sample_index)`")
+        } else if self.has(SliceFacts::SAMPLE_MASK) {
+            Some("`@builtin(sample_mask)`")
+        } else if self.has(SliceFacts::POSITION_XY) {
+            Some("`@builtin(position).xy`")
+        } else {
+            None
+        }
+    }
+}
+
+impl super::graph::SliceFact for SliceFacts {
+    fn merge(&mut self, other: &Self) {
+        self.flags |= other.flags;
+        for (mine, &theirs) in self.first_read.iter_mut().zip(&other.first_read) {
+            *mine = (*mine).min(theirs);
+        }
+    }
+}
+
+/// The `buffer.member` (or `buffer`) of a uniform or storage buffer that
+/// `expr` reads: a member access of one, or a load of a whole one.
+fn loaded_buffer_member(
+    module: &naga::Module,
+    exprs: &[&Expression],
+    expr: &Expression,
+) -> Option<String> {
     let global_name = |expr: &Expression| match *expr {
         Expression::GlobalVariable(g) => {
             let variable = &module.global_variables[g];
@@ -437,81 +573,57 @@ fn per_frame_inputs(module: &naga::Module, exprs: &[&Expression], slice: &ExprSe
         }
         _ => None,
     };
-    for i in slice.ones() {
-        match *exprs[i] {
-            Expression::AccessIndex { base, index } => {
-                let Some((name, ty)) = global_name(exprs[base.index()]) else {
-                    continue;
-                };
-                let member = match module.types[ty].inner {
-                    TypeInner::Struct { ref members, .. } => members
-                        .get(index as usize)
-                        .and_then(|m| m.name.clone())
-                        .unwrap_or_default(),
-                    _ => String::new(),
-                };
-                note(format!("{name}.{member}"));
-            }
-            Expression::Load { pointer } => {
-                if let Some((name, _)) = global_name(exprs[pointer.index()]) {
-                    note(name);
-                }
-            }
-            _ => {}
+    match *expr {
+        Expression::AccessIndex { base, index } => {
+            let (name, ty) = global_name(exprs[base.index()])?;
+            let member = match module.types[ty].inner {
+                TypeInner::Struct { ref members, .. } => members
+                    .get(index as usize)
+                    .and_then(|m| m.name.clone())
+                    .unwrap_or_default(),
+                _ => String::new(),
+            };
+            Some(format!("{name}.{member}"))
         }
+        Expression::Load { pointer } => global_name(exprs[pointer.index()]).map(|(name, _)| name),
+        _ => None,
     }
-    found
 }
 
-/// What in `slice` reads where the pixel is on the screen rather than what
-/// surface point it shows: `@builtin(position)`'s x or y (its z and w, the
-/// depth, belong to the point), `sample_index`, `sample_mask`.
-fn screen_space_read(
+/// The builtin an argument (or a struct member of one) carries, for the
+/// expression that reads it.
+fn carried_builtin(
     module: &naga::Module,
     function: &naga::Function,
     exprs: &[&Expression],
-    slice: &ExprSet,
-) -> Option<&'static str> {
-    use naga::{Binding, BuiltIn};
-    let builtin = |binding: &Option<Binding>| match binding {
-        Some(Binding::BuiltIn(builtin)) => Some(*builtin),
+    expr: &Expression,
+) -> Option<naga::BuiltIn> {
+    let builtin = |binding: &Option<naga::Binding>| match binding {
+        Some(naga::Binding::BuiltIn(builtin)) => Some(*builtin),
         _ => None,
     };
-    // The builtin each argument (or struct member of one) carries.
-    let carried = |expr: &Expression| -> Option<BuiltIn> {
-        match *expr {
-            Expression::FunctionArgument(i) => {
-                builtin(&function.arguments.get(i as usize)?.binding)
-            }
-            Expression::AccessIndex { base, index } => {
-                let Expression::FunctionArgument(i) = *exprs[base.index()] else {
-                    return None;
-                };
-                let argument = function.arguments.get(i as usize)?;
-                match module.types[argument.ty].inner {
-                    TypeInner::Struct { ref members, .. } => {
-                        builtin(&members.get(index as usize)?.binding)
-                    }
-                    _ => None,
+    match *expr {
+        Expression::FunctionArgument(i) => builtin(&function.arguments.get(i as usize)?.binding),
+        Expression::AccessIndex { base, index } => {
+            let Expression::FunctionArgument(i) = *exprs[base.index()] else {
+                return None;
+            };
+            let argument = function.arguments.get(i as usize)?;
+            match module.types[argument.ty].inner {
+                TypeInner::Struct { ref members, .. } => {
+                    builtin(&members.get(index as usize)?.binding)
                 }
+                _ => None,
             }
-            _ => None,
         }
-    };
-    let mut positions = Vec::new();
-    for i in slice.ones() {
-        match carried(exprs[i]) {
-            Some(BuiltIn::SampleIndex) => return Some("`@builtin(sample_index)`"),
-            Some(BuiltIn::SampleMask) => return Some("`@builtin(sample_mask)`"),
-            Some(BuiltIn::Position { .. }) => positions.push(i),
-            _ => {}
-        }
+        _ => None,
     }
-    if positions.is_empty() {
-        return None;
-    }
-    // Every use of the position must take its z or w alone.
-    let depth_only = |expr: &Expression| match *expr {
+}
+
+/// Whether `expr` takes only the z or w of the vector it reads (of the
+/// position: the depth, which belongs to the surface point).
+fn depth_only(expr: &Expression) -> bool {
+    match *expr {
         Expression::AccessIndex { index, .. } => index >= 2,
         Expression::Swizzle {
             size, ref pattern, ..
@@ -519,16 +631,7 @@ fn screen_space_read(
             .iter()
             .all(|c| matches!(c, naga::SwizzleComponent::Z | naga::SwizzleComponent::W)),
         _ => false,
-    };
-    for i in slice.ones() {
-        let reads_position = proc::operands(exprs[i])
-            .iter()
-            .any(|o| positions.contains(&o.index()));
-        if reads_position && !depth_only(exprs[i]) {
-            return Some("`@builtin(position).xy`");
-        }
     }
-    None
 }
 
 /// Whether an expression only moves data: no arithmetic, no texture access.

@@ -102,13 +102,27 @@ impl<'a> PrefixHasher<'a> {
 /// [`SHOWN`] characters, else its start and end around ` … `. Its span
 /// still gives its whole extent; its id is of the whole text.
 pub fn shown_text(text: &str) -> String {
-    let count = text.chars().count();
-    if count <= SHOWN {
+    // Only the ends are read: a long sum's nested partial sums are texts
+    // as long as the sum, and counting each one's characters would make
+    // naming the nodes quadratic.
+    let short = text.len() <= SHOWN || text.chars().nth(SHOWN).is_none();
+    if short {
         return text.to_string();
     }
-    let head: String = text.chars().take(SHOWN * 2 / 3).collect();
-    let tail: String = text.chars().skip(count - SHOWN / 3).collect();
-    format!("{} … {}", head.trim_end(), tail.trim_start())
+    let head_end = text
+        .char_indices()
+        .nth(SHOWN * 2 / 3)
+        .map_or(text.len(), |(at, _)| at);
+    let tail_start = text
+        .char_indices()
+        .rev()
+        .nth(SHOWN / 3 - 1)
+        .map_or(0, |(at, _)| at);
+    format!(
+        "{} … {}",
+        text[..head_end].trim_end(),
+        text[tail_start..].trim_start()
+    )
 }
 
 /// The most characters of a node's text shown whole.
@@ -117,6 +131,22 @@ pub const SHOWN: usize = 240;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn long_texts_keep_their_ends() {
+        let text: String = (0..100).map(|i| format!("é{i} + ")).collect::<String>() + "z";
+        let shown = shown_text(&text);
+        let chars: Vec<char> = text.chars().collect();
+        let head: String = chars[..SHOWN * 2 / 3].iter().collect();
+        let tail: String = chars[chars.len() - SHOWN / 3..].iter().collect();
+        assert_eq!(
+            shown,
+            format!("{} … {}", head.trim_end(), tail.trim_start())
+        );
+        assert_eq!(shown_text("a + b"), "a + b");
+        let exactly: String = "é".repeat(SHOWN);
+        assert_eq!(shown_text(&exactly), exactly);
+    }
 
     #[test]
     fn ids_are_fixed_values() {
