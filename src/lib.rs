@@ -17,8 +17,10 @@
 //! * [`cost`]: the static cost model;
 //! * [`analysis`]: the expression graph, the candidates and why the others
 //!   are rejected;
-//! * [`rewrite`]: one candidate and one variant into cache passes, on IR;
-//! * [`plan`]: `plan.json`, how a host runs a variant's passes;
+//! * [`rewrite`]: one candidate and one variant into cache passes, on IR,
+//!   and the plan that says how to run them;
+//! * [`plan`]: `plan.json`, how a host runs a variant's passes: the
+//!   `shadecache-plan` crate's definition (serde only), re-exported;
 //! * [`back`]: writing the passes with naga's back ends;
 //! * [`build`]: the same from a build script;
 //! * [`scene`]: what a profile renders, the default scene, roles;

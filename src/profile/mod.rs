@@ -330,7 +330,7 @@ pub fn profile(
         .filter(|(_, settings)| !settings.is_empty())
         .map(|(candidate, settings)| (*candidate, settings.as_slice()))
         .collect();
-    let reference_plan = plan::reference(shader, &analysis, &base).map_err(fail)?;
+    let reference_plan = rewrite::plan::reference(shader, &analysis, &base).map_err(fail)?;
 
     // The scene must provide everything else the shader binds.
     scene::storage::check(&storage, scene)?;
@@ -558,7 +558,7 @@ pub fn profile(
             info,
             vertex_file: shader.vertex_file.clone(),
         };
-        let plan = plan::reference(&free, &analysis, &base).map_err(fail)?;
+        let plan = rewrite::plan::reference(&free, &analysis, &base).map_err(fail)?;
         (HashMap::from([("reference.wgsl".to_string(), text)]), plan)
     };
     probes.push(Probe::new(

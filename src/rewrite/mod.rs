@@ -24,179 +24,43 @@ pub mod copy;
 pub mod fragment;
 pub mod gradients;
 pub mod path;
+pub mod plan;
 pub mod uniformity;
 pub mod vertex;
 
 use std::fmt;
 
 use naga::valid::ModuleInfo;
-use serde::{Deserialize, Serialize};
 
 use crate::analysis::graph::ExprGraph;
 use crate::analysis::{Analysis, Candidate};
 use crate::front::Shader;
-use crate::plan::{self, Plan};
+use crate::plan::Plan;
 use fragment::{Pieces, Stage};
 
 /// The toolchain's cache helpers, imported into every rewritten module.
 pub const CACHE_WGSL: &str = include_str!("../../shaders/cache.wgsl");
 
-/// The three ways of running a cache (seed 002, §3).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Variant {
-    OnePass,
-    TwoPass,
-    ThreePass,
-    /// The unmodified shader, run by the profiler as the reference; never
-    /// a rewrite.
-    Reference,
-}
+pub use crate::plan::{
+    CacheFormat, DepthConvention, Reconstruction, Variant, CACHE_PARAMS_BINDING,
+    CURRENT_PAYLOAD_BINDING, DEFAULT_DEPTH_EPSILON, FIRST_TWIN_BINDING, MAX_REFRESH_PERIOD,
+    PREVIOUS_AGE_BINDING, PREVIOUS_DEPTH_BINDING, PREVIOUS_PAYLOAD_BINDING, SAMPLER_BINDING,
+};
 
-impl Variant {
-    pub const ALL: [Variant; 3] = [Variant::OnePass, Variant::TwoPass, Variant::ThreePass];
-
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Variant::OnePass => "one-pass",
-            Variant::TwoPass => "two-pass",
-            Variant::ThreePass => "three-pass",
-            Variant::Reference => "reference",
-        }
-    }
-
-    fn stages(self) -> &'static [Stage] {
-        match self {
-            Variant::OnePass => &[Stage::OnePass],
-            Variant::TwoPass => &[Stage::ReuseOrDiscard, Stage::Full],
-            Variant::ThreePass => &[
-                Stage::ReprojectOrDiscard,
-                Stage::Payload,
-                Stage::ShadeFromCache,
-            ],
-            Variant::Reference => &[],
-        }
+/// The passes of each variant, as the stages of the fragment entry point
+/// they run (seed 002, §3).
+fn stages(variant: Variant) -> &'static [Stage] {
+    match variant {
+        Variant::OnePass => &[Stage::OnePass],
+        Variant::TwoPass => &[Stage::ReuseOrDiscard, Stage::Full],
+        Variant::ThreePass => &[
+            Stage::ReprojectOrDiscard,
+            Stage::Payload,
+            Stage::ShadeFromCache,
+        ],
+        Variant::Reference => &[],
     }
 }
-
-impl fmt::Display for Variant {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-/// The texture format of the payload cache.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum CacheFormat {
-    Rgba16float,
-    Rgba32float,
-}
-
-impl CacheFormat {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            CacheFormat::Rgba16float => "rgba16float",
-            CacheFormat::Rgba32float => "rgba32float",
-        }
-    }
-}
-
-/// How the payload and depth are read back where a point was last frame.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Reconstruction {
-    /// Bilinear over the 2×2 texels around the point; all four (those with
-    /// weight) must pass the depth test against last frame's depth buffer.
-    Bilinear,
-    /// The texel the point falls in, tested on its own depth.
-    Nearest,
-    /// Payload and depth filtered together from one texture, the depth in
-    /// its fourth channel (seed 002 §2.1): one read instead of a sample and
-    /// a gather. For payloads of up to three components.
-    BilinearPacked,
-    /// The texel the point falls in, its depth in its fourth channel: one
-    /// load instead of two. For payloads of up to three components.
-    NearestPacked,
-}
-
-impl Reconstruction {
-    pub const ALL: [Reconstruction; 4] = [
-        Reconstruction::Bilinear,
-        Reconstruction::Nearest,
-        Reconstruction::BilinearPacked,
-        Reconstruction::NearestPacked,
-    ];
-
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Reconstruction::Bilinear => "bilinear",
-            Reconstruction::Nearest => "nearest",
-            Reconstruction::BilinearPacked => "bilinear-packed",
-            Reconstruction::NearestPacked => "nearest-packed",
-        }
-    }
-
-    /// Whether the cache keeps the depth in the payload texture's fourth
-    /// channel rather than reading last frame's depth buffer.
-    pub fn packs_depth(self) -> bool {
-        matches!(
-            self,
-            Reconstruction::BilinearPacked | Reconstruction::NearestPacked
-        )
-    }
-}
-
-/// Which way the depth buffer runs: the host's projection decides, and the
-/// plan follows it (depth compares, the clear value, and the far-plane
-/// depth the cache's depth test measures from).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum DepthConvention {
-    /// Near plane at depth 0, far plane (or infinity) at 1; nearer is
-    /// `less`.
-    #[default]
-    Standard,
-    /// Reversed Z: near plane at 1, far plane (or infinity) at 0; nearer
-    /// is `greater`.
-    Reversed,
-}
-
-impl DepthConvention {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            DepthConvention::Standard => "standard",
-            DepthConvention::Reversed => "reversed",
-        }
-    }
-
-    /// The depth-buffer value of the far plane, or of infinity with an
-    /// infinite far plane: the depth buffer's clear value.
-    pub fn far_depth(self) -> f32 {
-        match self {
-            DepthConvention::Standard => 1.0,
-            DepthConvention::Reversed => 0.0,
-        }
-    }
-
-    /// The depth compare that keeps the nearer fragment, as a plan
-    /// writes it.
-    pub fn nearer(self) -> &'static str {
-        match self {
-            DepthConvention::Standard => "less",
-            DepthConvention::Reversed => "greater",
-        }
-    }
-}
-
-/// The largest refresh period Δn: the refresh indicator maps 16 hash bits
-/// onto [0, Δn) with a product that must fit a u32 (shaders/cache.wgsl,
-/// `cache_refresh`). 65535 frames is 18 minutes at 60 Hz.
-pub const MAX_REFRESH_PERIOD: u32 = 65535;
-
-/// The default ε of the cache's depth test (relative; see
-/// [`Options::depth_epsilon`]).
-pub const DEFAULT_DEPTH_EPSILON: f32 = 0.02;
 
 /// How to build the variants.
 #[derive(Clone, Debug, PartialEq)]
@@ -293,15 +157,6 @@ pub struct Rewritten {
     pub plan: Plan,
 }
 
-/// Bindings of the cache helpers within their group.
-pub const CACHE_PARAMS_BINDING: u32 = 0;
-pub const PREVIOUS_PAYLOAD_BINDING: u32 = 1;
-pub const PREVIOUS_DEPTH_BINDING: u32 = 2;
-pub const CURRENT_PAYLOAD_BINDING: u32 = 3;
-pub const SAMPLER_BINDING: u32 = 4;
-pub const PREVIOUS_AGE_BINDING: u32 = 5;
-/// Previous-frame twins come after the cache's own bindings.
-pub const FIRST_TWIN_BINDING: u32 = 6;
 /// WebGPU's default limit on bind groups.
 const MAX_BIND_GROUPS: u32 = 4;
 
@@ -758,7 +613,7 @@ fn rewrite_at(
         })
     };
     let mut passes = Vec::new();
-    for (index, &stage) in variant.stages().iter().enumerate() {
+    for (index, &stage) in stages(variant).iter().enumerate() {
         passes.push((stage, build_pass(stage, format!("pass{}", index + 1))?));
     }
     let classify = build_pass(Stage::Classify, "classify".into())?;

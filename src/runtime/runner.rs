@@ -155,6 +155,8 @@ impl Runner {
         size: (u32, u32),
         options: RunOptions,
     ) -> Result<Runner, String> {
+        // Checked once, here, before anything is made from it.
+        plan.check()?;
         let pipelines = pipelines(gpu, plan, &shader, options.pipelines)?;
         let classify = match (&plan.classify, options.classify) {
             (Some(pass), true) => {

@@ -1627,46 +1627,17 @@ fn frame_counter_wrap() {
 fn no_derivative_after_kill_in_any_emitted_pass() {
     let mut passes = 0;
     let mut deferred = 0;
-    for path in crate::util::corpus() {
-        let shader = shadecache::front::load(&crate::util::root().join(&path)).unwrap();
-        let analysis =
-            shadecache::analysis::analyze(&shader, &shadecache::analysis::Options::default())
-                .unwrap();
-        for candidate in &analysis.candidates {
-            for variant in shadecache::rewrite::Variant::ALL {
-                let Ok(rewritten) = shadecache::rewrite::rewrite(
-                    &shader,
-                    &analysis,
-                    candidate,
-                    variant,
-                    &shadecache::rewrite::Options::default(),
-                ) else {
-                    continue;
-                };
-                for pass in rewritten.passes.iter().chain([&rewritten.classify]) {
-                    shadecache::rewrite::uniformity::check_kills(&pass.module).unwrap_or_else(
-                        |err| {
-                            panic!(
-                                "{} {} {variant} {}: {err}",
-                                path.display(),
-                                candidate.node.id,
-                                pass.name
-                            )
-                        },
-                    );
-                    passes += 1;
-                    // The kill moved to the end: the entry point's last
-                    // statement before its return is the `if`.
-                    let body = &pass.module.entry_points.last().unwrap().function.body;
-                    if body.len() >= 2
-                        && matches!(body[body.len() - 2], naga::Statement::If { .. })
-                        && matches!(body.last(), Some(naga::Statement::Return { .. }))
-                    {
-                        deferred += 1;
-                    }
-                }
+    for rewrite in crate::corpus_rewrites::corpus_rewrites() {
+        let Ok(emitted) = &rewrite.outcome else {
+            continue;
+        };
+        for (pass, found) in &emitted.kills {
+            if let Err(err) = found {
+                panic!("{} {pass}: {err}", rewrite.label());
             }
+            passes += 1;
         }
+        deferred += emitted.deferred_kills;
     }
     assert!(passes > 3000, "{passes} passes");
     assert!(deferred > 0, "no pass defers its kill");

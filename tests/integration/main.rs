@@ -6,6 +6,7 @@ mod analyze;
 mod build_api;
 mod composed;
 mod corpus;
+mod corpus_rewrites;
 mod cost;
 mod default_scene;
 mod errors;

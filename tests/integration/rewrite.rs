@@ -8,7 +8,7 @@ use shadecache::back::{self, Language};
 use shadecache::front::{self, Shader};
 use shadecache::rewrite::{self, CacheFormat, Options, Rewritten, Variant};
 
-use crate::util::{corpus, root, shadecache, stderr, stdout, tint_validate};
+use crate::util::{root, shadecache, stderr, stdout, tint_validate};
 
 /// Loads a corpus shader under its path relative to the repository root,
 /// so plans and snapshots do not depend on where the checkout is.
@@ -37,39 +37,91 @@ fn wgsl(rewritten: &Rewritten) -> Vec<(String, String)> {
         .collect()
 }
 
-/// Emitted WGSL of two corpus shaders × three variants, so that a change in
-/// output is seen in review. The modules are compacted before writing, so
-/// handle numbering does not churn.
+/// A snapshot case, one file in `tests/snapshot-cases/`: a shader, its
+/// nodes, the variants (all when absent) and the back ends (WGSL when
+/// absent) whose output is kept, so a change in what is emitted shows in
+/// review. A new case is a new file.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SnapshotCase {
+    shader: String,
+    nodes: Vec<String>,
+    #[serde(default)]
+    variants: Vec<Variant>,
+    #[serde(default)]
+    languages: Vec<String>,
+}
+
+/// Every pass (the classification pass included) and the plan of every
+/// case's nodes × variants × back ends. The modules are compacted before
+/// writing, so handle numbering does not churn. Snapshot names are
+/// `shader__node__variant__pass` for WGSL and end in the back end's file
+/// suffix for the others.
 #[test]
-fn snapshots_of_emitted_wgsl() {
-    for (shader, node) in [
-        ("corpus/noise_marble.wgsl", "nb0c12cc4"),
-        ("corpus/shadow_pcf.wgsl", "nd71b08bc"),
-    ] {
-        let (shader_ir, analysis) = load(Path::new(shader));
-        let candidate = analysis.candidate(node).expect("the node is a candidate");
-        let stem = Path::new(shader).file_stem().unwrap().to_str().unwrap();
-        for variant in Variant::ALL {
-            let rewritten = rewrite::rewrite(
-                &shader_ir,
-                &analysis,
-                candidate,
-                variant,
-                &Options::default(),
-            )
-            .unwrap_or_else(|r| panic!("{shader} {node} {variant}: {r}"));
-            for (pass, text) in wgsl(&rewritten) {
-                insta::assert_snapshot!(format!("{stem}__{node}__{variant}__{pass}"), text);
+fn snapshots_of_emitted_passes() {
+    let dir = root().join("tests/snapshot-cases");
+    let mut cases: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    cases.sort();
+    assert!(!cases.is_empty());
+    for case_path in cases {
+        let case: SnapshotCase = toml::from_str(&std::fs::read_to_string(&case_path).unwrap())
+            .unwrap_or_else(|e| panic!("{}: {e}", case_path.display()));
+        let variants = if case.variants.is_empty() {
+            Variant::ALL.to_vec()
+        } else {
+            case.variants.clone()
+        };
+        let languages: Vec<Language> = if case.languages.is_empty() {
+            vec![Language::Wgsl]
+        } else {
+            case.languages
+                .iter()
+                .map(|l| match l.as_str() {
+                    "wgsl" => Language::Wgsl,
+                    "msl" => Language::Msl,
+                    "hlsl" => Language::Hlsl,
+                    "glsl" => Language::Glsl,
+                    other => panic!("{}: no text back end `{other}`", case_path.display()),
+                })
+                .collect()
+        };
+        let (shader, analysis) = load(Path::new(&case.shader));
+        let stem = Path::new(&case.shader)
+            .file_stem()
+            .unwrap()
+            .to_str()
+            .unwrap();
+        for node in &case.nodes {
+            let candidate = analysis
+                .candidate(node)
+                .unwrap_or_else(|| panic!("{}: `{node}` is no candidate", case_path.display()));
+            for &variant in &variants {
+                let rewritten =
+                    rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
+                        .unwrap_or_else(|r| panic!("{stem} {node} {variant}: {r}"));
+                for &language in &languages {
+                    for (file, bytes) in back::render_variant(&rewritten, language).unwrap() {
+                        let text = String::from_utf8(bytes).unwrap();
+                        let name = match language {
+                            Language::Wgsl => file.trim_end_matches(".wgsl").to_string(),
+                            _ => file,
+                        };
+                        insta::assert_snapshot!(format!("{stem}__{node}__{variant}__{name}"), text);
+                    }
+                }
+                if languages.contains(&Language::Wgsl) {
+                    let plan = serde_json::to_string_pretty(&rewritten.plan).unwrap();
+                    insta::assert_snapshot!(format!("{stem}__{node}__{variant}__plan"), plan);
+                }
             }
-            let plan = serde_json::to_string_pretty(&rewritten.plan).unwrap();
-            insta::assert_snapshot!(format!("{stem}__{node}__{variant}__plan"), plan);
         }
     }
 }
 
-/// Every corpus shader × every candidate × every variant: written as WGSL,
-/// each pass re-parses and validates with naga from its text; refusals
-/// carry a reason and are never internal errors.
 /// Writes a variant's WGSL passes under `out`; returns their paths.
 fn write_wgsl(out: &Path, rewritten: &Rewritten) -> Vec<PathBuf> {
     back::write_variant(out, rewritten, Language::Wgsl)
@@ -79,48 +131,41 @@ fn write_wgsl(out: &Path, rewritten: &Rewritten) -> Vec<PathBuf> {
         .collect()
 }
 
-fn emit_everything(dir: &Path) -> (Vec<PathBuf>, BTreeMap<String, usize>) {
-    let mut files = Vec::new();
-    let mut refusals = BTreeMap::new();
-    for path in corpus() {
-        let (shader, analysis) = load(&path);
-        let stem = path.file_stem().unwrap().to_str().unwrap().to_string();
-        for candidate in &analysis.candidates {
-            for variant in Variant::ALL {
-                match rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
-                {
-                    Ok(rewritten) => {
-                        let out = dir
-                            .join(&stem)
-                            .join(&candidate.node.id)
-                            .join(variant.as_str());
-                        files.extend(write_wgsl(&out, &rewritten));
-                    }
-                    Err(refusal) => {
-                        assert!(
-                            !refusal.reason.contains("internal error"),
-                            "{stem} {} {variant}: {}",
-                            candidate.node.id,
-                            refusal.reason
-                        );
-                        // Group by the kind of refusal (the reason up to
-                        // its first parenthesis or comma).
-                        let kind = refusal.reason.split([',', '(']).next().unwrap_or_default();
-                        *refusals
-                            .entry(format!("{variant}: {}", kind.trim()))
-                            .or_default() += 1;
-                    }
-                }
-            }
-        }
-    }
-    (files, refusals)
-}
-
+/// Every corpus shader × every candidate × every variant
+/// ([`crate::corpus_rewrites`]), written as WGSL: each pass re-parses and
+/// validates with naga from its text and Tint accepts it; refusals carry a
+/// reason and are never internal errors.
 #[test]
 fn every_emitted_module_validates_with_naga_and_tint() {
     let dir = tempfile::tempdir().unwrap();
-    let (files, refusals) = emit_everything(dir.path());
+    let mut files = Vec::new();
+    let mut refusals: BTreeMap<String, usize> = BTreeMap::new();
+    for rewrite in crate::corpus_rewrites::corpus_rewrites() {
+        match &rewrite.outcome {
+            Ok(emitted) => {
+                let out = dir.path().join(rewrite.label());
+                std::fs::create_dir_all(&out).unwrap();
+                for (name, text) in emitted.wgsl.iter().filter(|(n, _)| n.ends_with(".wgsl")) {
+                    let file = out.join(name);
+                    std::fs::write(&file, text).unwrap();
+                    files.push(file);
+                }
+            }
+            Err(reason) => {
+                assert!(
+                    !reason.contains("internal error"),
+                    "{}: {reason}",
+                    rewrite.label()
+                );
+                // Group by the kind of refusal (the reason up to its first
+                // parenthesis or comma).
+                let kind = reason.split([',', '(']).next().unwrap_or_default();
+                *refusals
+                    .entry(format!("{}: {}", rewrite.variant, kind.trim()))
+                    .or_default() += 1;
+            }
+        }
+    }
     assert!(files.len() > 1000, "{} files", files.len());
     for file in &files {
         let text = std::fs::read_to_string(file).unwrap();
@@ -252,7 +297,7 @@ fn plans_describe_the_passes() {
         .collect();
     assert_eq!(depth, ["greater", "greater", "equal"]);
     assert_eq!(reversed.clear.depth, 0.0);
-    let reference = shadecache::plan::reference(
+    let reference = shadecache::rewrite::plan::reference(
         &shader,
         &analysis,
         &Options {

@@ -1,0 +1,451 @@
+//! The plan of a shadecache variant: the data that says how to run it.
+//!
+//! A [`Plan`] is written as `plan.json` next to a variant's pass shaders,
+//! and whatever runs the variant — shadecache's own runtime and profiler,
+//! or an application — executes exactly what it says: the passes in
+//! order, per pass its shader and entry points, colour targets and
+//! formats, depth compare and write, whether it discards and which
+//! bindings it uses; the vertex layout; every binding the host supplies
+//! (the original resources, their previous-frame twins, the cache
+//! textures, the refresh uniforms); clear values; and the rule for
+//! swapping the double-buffered cache. The repository's
+//! `docs/plan-json.md` documents the format.
+//!
+//! This crate depends on serde alone, so an application reads plans
+//! without linking the toolchain (naga, wgpu, the profiler); the
+//! toolchain writes them with the same definitions.
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
+/// The depth buffer's format: it is also last frame's depth in the cache.
+pub const DEPTH_FORMAT: &str = "depth32float";
+
+/// The cache's age target: whole frames since each value was computed,
+/// exact up to 2048 (`shaders/cache.wgsl`, `CACHE_AGE_LIMIT`).
+pub const AGE_FORMAT: &str = "r16float";
+
+/// The version of the format this crate reads and writes: a plan's
+/// `format`.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// How to run one variant.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    /// Version of this format.
+    pub format: u32,
+    pub shader: String,
+    pub entry: String,
+    pub node: PlanNode,
+    pub variant: Variant,
+    pub passes: Vec<Pass>,
+    /// A diagnostic pass, drawn after the frame's passes and before the
+    /// swap: the cache's decision at each visible pixel as a colour (green
+    /// reuse, blue refresh, orange off-screen, red disoccluded). Not part
+    /// of rendering a frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub classify: Option<Pass>,
+    pub vertex_layout: Vec<VertexAttribute>,
+    /// For a fragment-only module: what the host's own vertex stage must
+    /// output for these passes (absent when the module has its vertex
+    /// stage and the passes carry it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub host_vertex: Option<HostVertex>,
+    pub bindings: Bindings,
+    pub cache: Cache,
+    pub refresh: Refresh,
+    pub clear: Clear,
+}
+
+/// What the vertex stage of a host drawing a fragment-only module's
+/// passes must output, beside what the fragment entry point already reads.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HostVertex {
+    /// The location of `previous_clip_position: vec4<f32>`: last frame's
+    /// clip position of the same vertex (the view-projection and model of
+    /// frame t − 1 applied to it), perspective-interpolated.
+    pub previous_clip_position_location: u32,
+    /// The same, in words, with the position's `@invariant`.
+    pub requirement: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlanNode {
+    pub id: String,
+    pub text: String,
+    #[serde(rename = "type")]
+    pub ty: String,
+    pub components: u32,
+    /// Absent for a node every pixel computes. `uniform-branch`: under
+    /// branches whose conditions depend only on uniforms, overrides and
+    /// constants (material flags), so a draw computes it everywhere or
+    /// nowhere; `per-pixel-branch`: under a branch some pixels take. Where
+    /// the node is not computed, the cache holds NaN ("no value") and the
+    /// classify pass marks the pixel absent (docs/rewrite.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<String>,
+    /// For a node inside a helper: the helper, and the calls from the
+    /// entry point down to it, which the passes inline (docs/rewrite.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub function: Option<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub call_path: Vec<PlanCall>,
+}
+
+/// One call on a node's call path.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PlanCall {
+    /// The helper called.
+    pub function: String,
+    /// The call's source text.
+    pub text: String,
+    /// 1-based line and column of the call in the shader.
+    pub at: [usize; 2],
+}
+
+/// One render pass.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Pass {
+    /// `pass1`, `pass2`...: also the shader file's stem.
+    pub name: String,
+    /// What the pass does, in words.
+    pub role: String,
+    /// The shader file (relative to the plan): WGSL unless `rewrite --emit`
+    /// chose another language; for GLSL, the vertex stage's file.
+    pub shader: String,
+    /// For a language with one file per stage (GLSL): every file of the
+    /// pass, vertex stage first. Empty otherwise.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub stage_shaders: Vec<String>,
+    pub vertex_entry: String,
+    pub fragment_entry: String,
+    pub color_targets: Vec<ColorTarget>,
+    pub depth: Depth,
+    pub discards: bool,
+    /// (group, binding) of every resource this pass's shaders use.
+    pub bindings: Vec<[u32; 2]>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ColorTarget {
+    pub location: u32,
+    /// `color` (the frame), `cache` (this frame's payload texture) or `age`
+    /// (this frame's age texture: frames since each cached value was
+    /// computed).
+    pub target: String,
+    pub format: String,
+    /// `clear` (first pass to write the target this frame) or `load`.
+    pub load: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Depth {
+    pub format: String,
+    /// `less` (`greater` with reversed Z) or `equal`; a host's plan may
+    /// also say `less-equal`, `greater-equal` or `always`.
+    pub compare: String,
+    pub write: bool,
+    /// `clear` or `load`.
+    pub load: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VertexAttribute {
+    pub location: u32,
+    pub name: String,
+    /// A WebGPU vertex format, e.g. `float32x3`.
+    pub format: String,
+    /// Which buffer steps it: the per-vertex one (buffer slot 0) or the
+    /// per-instance one (slot 1). Each is packed in the layout's order.
+    #[serde(default, skip_serializing_if = "StepMode::is_vertex")]
+    pub step: StepMode,
+    /// For the previous-frame twin of a per-instance input: the location
+    /// of the input whose last-frame value the host puts here (this
+    /// frame's on the first frame), as it does for a buffer's twin.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub previous_of: Option<u32>,
+}
+
+/// How a vertex input advances: once per vertex or once per instance.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum StepMode {
+    #[default]
+    Vertex,
+    Instance,
+}
+
+impl StepMode {
+    pub fn is_vertex(&self) -> bool {
+        *self == StepMode::Vertex
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Bindings {
+    /// The user's resources, as in the original shader.
+    pub original: Vec<Resource>,
+    /// Previous-frame twins: same type as the binding they shadow, filled
+    /// with last frame's contents (this frame's on the first frame).
+    pub previous: Vec<Twin>,
+    /// The cache's own resources.
+    pub cache: Vec<Resource>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Resource {
+    pub group: u32,
+    pub binding: u32,
+    pub name: String,
+    /// `uniform`, `storage`, `texture`, `depth-texture`, `sampler`...
+    pub kind: String,
+    /// For the cache's resources, what to bind, e.g. `previous payload`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Twin {
+    pub group: u32,
+    pub binding: u32,
+    pub name: String,
+    pub shadows: Resource,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Cache {
+    pub format: String,
+    /// Why the format is not the one asked for, when it is not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub format_note: Option<String>,
+    /// `bilinear` or `nearest`.
+    #[serde(default = "bilinear")]
+    pub reconstruction: String,
+    /// How many components of the payload texture hold the payload.
+    pub components: u32,
+    /// The double-buffering rule.
+    pub swap: String,
+    /// Byte layout of the refresh uniform (`CacheParams`), in order.
+    pub params: Vec<Field>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Field {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub ty: String,
+    pub offset: u32,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Refresh {
+    pub period: u32,
+    pub quad: u32,
+    pub depth_epsilon: f32,
+    /// Where the per-block offsets come from.
+    pub offsets: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Clear {
+    pub color: [f64; 4],
+    pub cache: [f64; 4],
+    /// The far plane's depth: 1.0, or 0.0 with reversed Z. Also the
+    /// `far_depth` of `CacheParams`.
+    pub depth: f64,
+}
+
+fn bilinear() -> String {
+    "bilinear".into()
+}
+
+/// The three ways of running a cache (seed 002, §3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Variant {
+    OnePass,
+    TwoPass,
+    ThreePass,
+    /// The unmodified shader, run by the profiler as the reference; never
+    /// a rewrite.
+    Reference,
+}
+
+impl Variant {
+    pub const ALL: [Variant; 3] = [Variant::OnePass, Variant::TwoPass, Variant::ThreePass];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Variant::OnePass => "one-pass",
+            Variant::TwoPass => "two-pass",
+            Variant::ThreePass => "three-pass",
+            Variant::Reference => "reference",
+        }
+    }
+}
+
+impl fmt::Display for Variant {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// The texture format of the payload cache.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CacheFormat {
+    Rgba16float,
+    Rgba32float,
+}
+
+impl CacheFormat {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CacheFormat::Rgba16float => "rgba16float",
+            CacheFormat::Rgba32float => "rgba32float",
+        }
+    }
+}
+
+/// How the payload and depth are read back where a point was last frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Reconstruction {
+    /// Bilinear over the 2×2 texels around the point; all four (those with
+    /// weight) must pass the depth test against last frame's depth buffer.
+    Bilinear,
+    /// The texel the point falls in, tested on its own depth.
+    Nearest,
+    /// Payload and depth filtered together from one texture, the depth in
+    /// its fourth channel (seed 002 §2.1): one read instead of a sample and
+    /// a gather. For payloads of up to three components.
+    BilinearPacked,
+    /// The texel the point falls in, its depth in its fourth channel: one
+    /// load instead of two. For payloads of up to three components.
+    NearestPacked,
+}
+
+impl Reconstruction {
+    pub const ALL: [Reconstruction; 4] = [
+        Reconstruction::Bilinear,
+        Reconstruction::Nearest,
+        Reconstruction::BilinearPacked,
+        Reconstruction::NearestPacked,
+    ];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Reconstruction::Bilinear => "bilinear",
+            Reconstruction::Nearest => "nearest",
+            Reconstruction::BilinearPacked => "bilinear-packed",
+            Reconstruction::NearestPacked => "nearest-packed",
+        }
+    }
+
+    /// Whether the cache keeps the depth in the payload texture's fourth
+    /// channel rather than reading last frame's depth buffer.
+    pub fn packs_depth(self) -> bool {
+        matches!(
+            self,
+            Reconstruction::BilinearPacked | Reconstruction::NearestPacked
+        )
+    }
+}
+
+/// Which way the depth buffer runs: the host's projection decides, and the
+/// plan follows it (depth compares, the clear value, and the far-plane
+/// depth the cache's depth test measures from).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DepthConvention {
+    /// Near plane at depth 0, far plane (or infinity) at 1; nearer is
+    /// `less`.
+    #[default]
+    Standard,
+    /// Reversed Z: near plane at 1, far plane (or infinity) at 0; nearer
+    /// is `greater`.
+    Reversed,
+}
+
+impl DepthConvention {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            DepthConvention::Standard => "standard",
+            DepthConvention::Reversed => "reversed",
+        }
+    }
+
+    /// The depth-buffer value of the far plane, or of infinity with an
+    /// infinite far plane: the depth buffer's clear value.
+    pub fn far_depth(self) -> f32 {
+        match self {
+            DepthConvention::Standard => 1.0,
+            DepthConvention::Reversed => 0.0,
+        }
+    }
+
+    /// The depth compare that keeps the nearer fragment, as a plan
+    /// writes it.
+    pub fn nearer(self) -> &'static str {
+        match self {
+            DepthConvention::Standard => "less",
+            DepthConvention::Reversed => "greater",
+        }
+    }
+}
+
+/// The largest refresh period Δn: the refresh indicator maps 16 hash bits
+/// onto [0, Δn) with a product that must fit a u32 (shaders/cache.wgsl,
+/// `cache_refresh`). 65535 frames is 18 minutes at 60 Hz.
+pub const MAX_REFRESH_PERIOD: u32 = 65535;
+
+/// The default ε of the cache's depth test, relative: a cached depth d
+/// agrees with the expected depth e when |d − e| < ε·|e − far depth|.
+pub const DEFAULT_DEPTH_EPSILON: f32 = 0.02;
+
+/// Bindings of the cache helpers within their group.
+pub const CACHE_PARAMS_BINDING: u32 = 0;
+pub const PREVIOUS_PAYLOAD_BINDING: u32 = 1;
+pub const PREVIOUS_DEPTH_BINDING: u32 = 2;
+pub const CURRENT_PAYLOAD_BINDING: u32 = 3;
+pub const SAMPLER_BINDING: u32 = 4;
+pub const PREVIOUS_AGE_BINDING: u32 = 5;
+/// Previous-frame twins come after the cache's own bindings.
+pub const FIRST_TWIN_BINDING: u32 = 6;
+
+impl Plan {
+    /// Checks what deserializing cannot: the format version, and that
+    /// every pass's bindings are among the plan's resources. Read a plan
+    /// with any serde format (`plan.json` is JSON), then check it once.
+    pub fn check(&self) -> Result<(), String> {
+        if self.format != FORMAT_VERSION {
+            return Err(format!(
+                "plan format {} is not the {FORMAT_VERSION} this reader knows",
+                self.format
+            ));
+        }
+        let declared = |[group, binding]: [u32; 2]| {
+            let at = |g: u32, b: u32| g == group && b == binding;
+            self.bindings
+                .original
+                .iter()
+                .any(|r| at(r.group, r.binding))
+                || self
+                    .bindings
+                    .previous
+                    .iter()
+                    .any(|t| at(t.group, t.binding))
+                || self.bindings.cache.iter().any(|r| at(r.group, r.binding))
+        };
+        for pass in self.passes.iter().chain(&self.classify) {
+            if let Some(&[group, binding]) = pass.bindings.iter().find(|&&b| !declared(b)) {
+                return Err(format!(
+                    "pass `{}` binds group {group}, binding {binding}, which the plan does not declare",
+                    pass.name
+                ));
+            }
+        }
+        Ok(())
+    }
+}

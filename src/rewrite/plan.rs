@@ -1,0 +1,555 @@
+//! variants → plans: building a variant's [`Plan`] from the rewrite that
+//! made its passes, and the plan of the unmodified shader the profiler
+//! runs as the reference. The plan's definition is the `shadecache-plan`
+//! crate's ([`crate::plan`]), which depends on nothing of ours.
+
+use naga::{Binding, Module, TypeInner};
+
+use super::fragment::{self, Stage, Writes};
+use super::vertex::VertexStage;
+use super::{Options, PassModule, Variant};
+use crate::analysis::{Analysis, Candidate};
+use crate::front::Shader;
+use crate::plan::*;
+use crate::rewrite;
+
+/// What [`build`] needs.
+#[derive(Debug)]
+pub struct Inputs<'a> {
+    pub shader: &'a Shader,
+    pub analysis: &'a Analysis,
+    pub candidate: &'a Candidate,
+    pub variant: Variant,
+    pub options: &'a Options,
+    pub slot: rewrite::CacheSlot,
+    pub vertex: &'a VertexStage,
+    pub passes: &'a [(Stage, PassModule)],
+    pub classify: &'a PassModule,
+    pub result: &'a naga::FunctionResult,
+}
+
+pub fn build(inputs: Inputs) -> Plan {
+    let Inputs {
+        shader,
+        analysis,
+        candidate,
+        variant,
+        options,
+        slot,
+        vertex,
+        passes,
+        classify,
+        result,
+    } = inputs;
+    let module = &shader.module;
+    let entry = &module.entry_points[analysis.entry_index];
+    let group = slot.group;
+    // A fragment-only module's passes have no vertex entry point: the
+    // host draws them with its own (`host_vertex`).
+    let vertex_entry = vertex.entry_index.map(|i| &module.entry_points[i]);
+    let vertex_name = vertex_entry.map_or(String::new(), |v| v.name.clone());
+    let color_locations = fragment::output_locations(module, result);
+    let cache_location = fragment::cache_location(module, result);
+
+    let mut plan_passes = Vec::new();
+    for (index, (stage, pass)) in passes.iter().enumerate() {
+        let first = index == 0;
+        let load = |first: bool| if first { "clear" } else { "load" }.to_string();
+        let color = |location: u32| ColorTarget {
+            location,
+            target: "color".into(),
+            format: options.color_format.clone(),
+            load: load(first || matches!(stage, Stage::ShadeFromCache)),
+        };
+        let cache = |location: u32| ColorTarget {
+            location,
+            target: "cache".into(),
+            format: options.cache_format.as_str().into(),
+            load: load(first),
+        };
+        let age = |location: u32| ColorTarget {
+            location,
+            target: "age".into(),
+            format: AGE_FORMAT.into(),
+            load: load(first),
+        };
+        let color_targets = match stage.writes() {
+            Writes::Color => color_locations.iter().map(|&l| color(l)).collect(),
+            Writes::Cache | Writes::Classes => vec![cache(0), age(1)],
+            Writes::ColorAndCache => {
+                let mut targets: Vec<_> = color_locations.iter().map(|&l| color(l)).collect();
+                targets.push(cache(cache_location));
+                targets.push(age(cache_location + 1));
+                targets
+            }
+        };
+        let (compare, write) = match stage {
+            Stage::ShadeFromCache => ("equal", false),
+            _ => (options.depth.nearer(), true),
+        };
+        plan_passes.push(Pass {
+            name: pass.name.clone(),
+            role: role(*stage).into(),
+            shader: format!("{}.wgsl", pass.name),
+            stage_shaders: Vec::new(),
+            vertex_entry: vertex_name.clone(),
+            fragment_entry: entry.name.clone(),
+            color_targets,
+            depth: Depth {
+                format: DEPTH_FORMAT.into(),
+                compare: compare.into(),
+                write,
+                load: load(first),
+            },
+            discards: stage.discards() || pass_discards(&pass.module),
+            bindings: used_bindings(&pass.module),
+        });
+    }
+
+    let entries: Vec<usize> = std::iter::once(analysis.entry_index)
+        .chain(vertex.entry_index)
+        .collect();
+    let original = entry_resources(module, &entries);
+    let previous = vertex
+        .twins
+        .iter()
+        .filter_map(|&(from, to)| {
+            let shadows = resource(module, &module.global_variables[from], None)?;
+            Some(Twin {
+                group,
+                binding: shadows_binding(vertex, slot, to),
+                name: format!("previous_{}", shadows.name),
+                shadows,
+            })
+        })
+        .collect();
+    let cache_resource = |binding: u32, name: &str, kind: &str, source: &str| Resource {
+        group,
+        binding: slot.first_binding + binding,
+        name: name.into(),
+        kind: kind.into(),
+        source: Some(source.into()),
+    };
+    let cache = vec![
+        cache_resource(
+            rewrite::CACHE_PARAMS_BINDING,
+            "cache_params",
+            "uniform",
+            "the refresh uniform (CacheParams), updated every frame",
+        ),
+        cache_resource(
+            rewrite::PREVIOUS_PAYLOAD_BINDING,
+            "cache_previous_payload",
+            "texture",
+            "last frame's payload texture",
+        ),
+        cache_resource(
+            rewrite::PREVIOUS_DEPTH_BINDING,
+            "cache_previous_depth",
+            "depth-texture",
+            "last frame's depth buffer",
+        ),
+        cache_resource(
+            rewrite::CURRENT_PAYLOAD_BINDING,
+            "cache_current_payload",
+            "texture",
+            "this frame's payload texture, after the passes that write it",
+        ),
+        cache_resource(
+            rewrite::SAMPLER_BINDING,
+            "cache_sampler",
+            "sampler",
+            "linear filtering, clamp to edge",
+        ),
+        cache_resource(
+            rewrite::PREVIOUS_AGE_BINDING,
+            "cache_previous_age",
+            "texture",
+            "last frame's age texture (r16float)",
+        ),
+    ];
+
+    Plan {
+        format: 1,
+        shader: shader.file.path.clone(),
+        entry: entry.name.clone(),
+        node: PlanNode {
+            id: candidate.node.id.clone(),
+            text: candidate.node.text.clone(),
+            ty: candidate.node.ty.clone(),
+            components: candidate.components,
+            path: None,
+            function: (!candidate.node.call_path.is_empty())
+                .then(|| candidate.node.function.clone()),
+            call_path: candidate
+                .node
+                .call_path
+                .iter()
+                .map(|step| PlanCall {
+                    function: step.function.clone(),
+                    text: step.text.clone(),
+                    at: step.span.start,
+                })
+                .collect(),
+        },
+        variant,
+        passes: plan_passes,
+        classify: Some(Pass {
+            name: classify.name.clone(),
+            role: role(Stage::Classify).into(),
+            shader: format!("{}.wgsl", classify.name),
+            stage_shaders: Vec::new(),
+            vertex_entry: vertex_name.clone(),
+            fragment_entry: entry.name.clone(),
+            color_targets: vec![ColorTarget {
+                location: 0,
+                target: "classes".into(),
+                format: "rgba8unorm".into(),
+                load: "clear".into(),
+            }],
+            depth: Depth {
+                format: DEPTH_FORMAT.into(),
+                compare: "equal".into(),
+                write: false,
+                load: "load".into(),
+            },
+            discards: false,
+            bindings: used_bindings(&classify.module),
+        }),
+        vertex_layout: vertex_entry.map_or(Vec::new(), |v| {
+            vertex_layout(module, &v.function, &vertex.instance_twins)
+        }),
+        host_vertex: vertex_entry.is_none().then(|| HostVertex {
+            previous_clip_position_location: vertex.previous_location,
+            requirement: format!(
+                "the module has no vertex stage: the host's must output, beside what `{}` reads, \
+                 `@location({}) previous_clip_position: vec4<f32>` (last frame's clip position \
+                 of the same vertex: last frame's view-projection and model applied to it, \
+                 perspective-interpolated) and mark its `@builtin(position)` `@invariant`",
+                entry.name, vertex.previous_location
+            ),
+        }),
+        bindings: Bindings {
+            original,
+            previous,
+            cache,
+        },
+        cache: Cache {
+            format: options.cache_format.as_str().into(),
+            format_note: None,
+            reconstruction: options.reconstruction.as_str().into(),
+            components: candidate.components,
+            swap: "two payload textures, two age textures and two depth buffers alternate: at the end of a frame, this frame's payload texture, age texture and depth buffer become last frame's (bound as cache_previous_payload, cache_previous_age and cache_previous_depth) and last frame's are rendered into next; on the first frame, after a resize or a camera cut, the previous depth is cleared to the far-plane depth (clear.depth) so every pixel misses".into(),
+            params: vec![
+                field("viewport", "vec2<f32>", 0),
+                field("depth_epsilon", "f32", 8),
+                field("refresh_phase", "u32", 12),
+                field("refresh_period", "u32", 16),
+                field("refresh_quad", "u32", 20),
+                field("frame", "u32", 24),
+                field("payload_limit", "f32", 28),
+                field("far_depth", "f32", 32),
+            ],
+        },
+        refresh: Refresh {
+            period: options.refresh_period,
+            quad: options.refresh_quad,
+            depth_epsilon: options.depth_epsilon,
+            offsets: "16 bits of a PCG hash of the k×k block coordinates, times the period, over 2^16; refresh when (offset + refresh_phase) mod period == 0, with refresh_phase = frame mod period kept by the host, or when the value's age (the age target) reaches min(period, 2048)".into(),
+        },
+        clear: Clear {
+            color: [0.0, 0.0, 0.0, 1.0],
+            cache: [0.0, 0.0, 0.0, 0.0],
+            depth: options.depth.far_depth().into(),
+        },
+    }
+}
+
+fn field(name: &str, ty: &str, offset: u32) -> Field {
+    Field {
+        name: name.into(),
+        ty: ty.into(),
+        offset,
+    }
+}
+
+fn role(stage: Stage) -> &'static str {
+    match stage {
+        Stage::OnePass => "reproject; hit: shade from the cached payload; miss or refresh: compute the payload; write colour and cache",
+        Stage::ReuseOrDiscard => "reproject; hit: shade from the cached payload, write colour and cache; miss or refresh: discard",
+        Stage::Full => "the pixels pass 1 left empty (depth test): compute payload and colour, write colour and cache",
+        Stage::ReprojectOrDiscard => "reproject; hit: write the cached payload to this frame's cache; miss or refresh: discard",
+        Stage::Payload => "the pixels pass 1 left empty (depth test): compute the payload into the cache",
+        Stage::ShadeFromCache => "every pixel (depth equal): shade from this frame's cache at the pixel",
+        Stage::Classify => "diagnostic, after the frame (depth equal): the cache's decision at each visible pixel",
+    }
+}
+
+fn shadows_binding(
+    vertex: &VertexStage,
+    slot: rewrite::CacheSlot,
+    twin: naga::Handle<naga::GlobalVariable>,
+) -> u32 {
+    vertex
+        .twins
+        .iter()
+        .position(|&(_, t)| t == twin)
+        .map_or(0, |i| {
+            slot.first_binding + rewrite::FIRST_TWIN_BINDING + i as u32
+        })
+}
+
+fn pass_discards(module: &Module) -> bool {
+    let mut discards = false;
+    let mut scan = |body: &naga::Block| {
+        crate::proc::each_statement(body, &mut |s| {
+            discards |= matches!(s, naga::Statement::Kill)
+        })
+    };
+    for (_, f) in module.functions.iter() {
+        scan(&f.body);
+    }
+    for ep in &module.entry_points {
+        scan(&ep.function.body);
+    }
+    discards
+}
+
+fn used_bindings(module: &Module) -> Vec<[u32; 2]> {
+    let mut out: Vec<[u32; 2]> = module
+        .global_variables
+        .iter()
+        .filter_map(|(_, g)| g.binding.as_ref().map(|b| [b.group, b.binding]))
+        .collect();
+    out.sort();
+    out
+}
+
+/// The resources the entry points at `entries` use, in the module's
+/// order: what a draw with them binds (a module may declare more, two at
+/// one slot when no entry point uses both).
+fn entry_resources(module: &Module, entries: &[usize]) -> Vec<Resource> {
+    let used = crate::proc::globals_used_by(module, entries);
+    module
+        .global_variables
+        .iter()
+        .filter(|(h, _)| used.contains(h))
+        .filter_map(|(_, g)| resource(module, g, None))
+        .collect()
+}
+
+fn resource(
+    module: &Module,
+    global: &naga::GlobalVariable,
+    source: Option<String>,
+) -> Option<Resource> {
+    let binding = global.binding.as_ref()?;
+    let kind = match global.space {
+        naga::AddressSpace::Uniform => "uniform",
+        naga::AddressSpace::Storage { access } if access.contains(naga::StorageAccess::STORE) => {
+            "storage-read-write"
+        }
+        naga::AddressSpace::Storage { .. } => "storage",
+        _ => match module.types[global.ty].inner {
+            TypeInner::Image {
+                class: naga::ImageClass::Storage { .. },
+                ..
+            } => "storage-texture",
+            TypeInner::Image {
+                dim,
+                arrayed,
+                class,
+            } => {
+                let depth = matches!(class, naga::ImageClass::Depth { .. });
+                match (dim, arrayed, depth) {
+                    (naga::ImageDimension::D2, false, false) => "texture",
+                    (naga::ImageDimension::D2, true, false) => "texture-array",
+                    (naga::ImageDimension::Cube, false, false) => "cube-texture",
+                    (naga::ImageDimension::Cube, true, false) => "cube-texture-array",
+                    (naga::ImageDimension::D2, false, true) => "depth-texture",
+                    (naga::ImageDimension::D2, true, true) => "depth-texture-array",
+                    (naga::ImageDimension::Cube, false, true) => "depth-cube-texture",
+                    (naga::ImageDimension::Cube, true, true) => "depth-cube-texture-array",
+                    (naga::ImageDimension::D1, ..) => "texture-1d",
+                    (naga::ImageDimension::D3, ..) => "texture-3d",
+                }
+            }
+            TypeInner::Sampler { comparison: true } => "comparison-sampler",
+            TypeInner::Sampler { .. } => "sampler",
+            _ => "other",
+        },
+    };
+    Some(Resource {
+        group: binding.group,
+        binding: binding.binding,
+        name: global.name.clone().unwrap_or_default(),
+        kind: kind.into(),
+        source,
+    })
+}
+
+/// The vertex buffer layout the original vertex entry point expects,
+/// per-instance inputs ([`rewrite::vertex::instance_locations`]) stepped
+/// per instance, followed by the previous-frame twins `twins` gives as
+/// (input's location, twin's location).
+fn vertex_layout(
+    module: &Module,
+    function: &naga::Function,
+    twins: &[(u32, u32)],
+) -> Vec<VertexAttribute> {
+    let per_instance = rewrite::vertex::instance_locations(module, function);
+    let mut out = Vec::new();
+    let mut add =
+        |name: Option<&String>, ty: naga::Handle<naga::Type>, binding: &Option<Binding>| {
+            if let Some(Binding::Location { location, .. }) = *binding {
+                out.push(VertexAttribute {
+                    location,
+                    name: name.cloned().unwrap_or_default(),
+                    format: vertex_format(&module.types[ty].inner),
+                    step: if per_instance.contains(&location) {
+                        StepMode::Instance
+                    } else {
+                        StepMode::Vertex
+                    },
+                    previous_of: None,
+                });
+            }
+        };
+    for argument in &function.arguments {
+        match module.types[argument.ty].inner {
+            TypeInner::Struct { ref members, .. } => {
+                for member in members {
+                    add(member.name.as_ref(), member.ty, &member.binding);
+                }
+            }
+            _ => add(argument.name.as_ref(), argument.ty, &argument.binding),
+        }
+    }
+    out.sort_by_key(|a| a.location);
+    let twinned: Vec<VertexAttribute> = twins
+        .iter()
+        .filter_map(|&(of, location)| {
+            let input = out.iter().find(|a| a.location == of)?;
+            Some(VertexAttribute {
+                location,
+                name: format!("previous_{}", input.name),
+                previous_of: Some(of),
+                ..input.clone()
+            })
+        })
+        .collect();
+    out.extend(twinned);
+    out
+}
+
+fn vertex_format(inner: &TypeInner) -> String {
+    let (scalar, count) = match *inner {
+        TypeInner::Scalar(s) => (s, 1),
+        TypeInner::Vector { size, scalar } => (scalar, size as u32),
+        _ => return "unsupported".into(),
+    };
+    let base = match scalar.kind {
+        naga::ScalarKind::Float if scalar.width == 2 => "float16",
+        naga::ScalarKind::Float => "float32",
+        naga::ScalarKind::Sint => "sint32",
+        naga::ScalarKind::Uint => "uint32",
+        _ => return "unsupported".into(),
+    };
+    if count == 1 {
+        base.into()
+    } else {
+        format!("{base}x{count}")
+    }
+}
+
+/// The plan of the unmodified shader, which the profiler runs as the
+/// reference: one pass, the original entry points, depth `less`
+/// (`greater` with reversed Z). Its
+/// shader file is the original source (`reference.wgsl`).
+pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Result<Plan, String> {
+    let module = &shader.module;
+    let entry = &module.entry_points[analysis.entry_index];
+    let vertex_index = rewrite::vertex::vertex_entry(
+        module,
+        analysis.entry_index,
+        options.vertex_entry.as_deref(),
+    )
+    .map_err(|r| r.reason)?;
+    let vertex_entry = &module.entry_points[vertex_index];
+    let Some(result) = entry.function.result.as_ref() else {
+        return Err("the fragment entry point returns nothing".into());
+    };
+    // What the draw binds: the original module may declare more.
+    let original = entry_resources(module, &[analysis.entry_index, vertex_index]);
+    let mut bindings: Vec<[u32; 2]> = original.iter().map(|r| [r.group, r.binding]).collect();
+    bindings.sort();
+    bindings.dedup();
+    let layout = crate::proc::layout(module, &entry.function, 8.0);
+    Ok(Plan {
+        format: 1,
+        shader: shader.file.path.clone(),
+        entry: entry.name.clone(),
+        node: PlanNode {
+            id: String::new(),
+            text: String::new(),
+            ty: String::new(),
+            components: 0,
+            path: None,
+            function: None,
+            call_path: Vec::new(),
+        },
+        variant: Variant::Reference,
+        passes: vec![Pass {
+            name: "reference".into(),
+            role: "the unmodified shader".into(),
+            shader: "reference.wgsl".into(),
+            stage_shaders: Vec::new(),
+            vertex_entry: vertex_entry.name.clone(),
+            fragment_entry: entry.name.clone(),
+            color_targets: fragment::output_locations(module, result)
+                .into_iter()
+                .map(|location| ColorTarget {
+                    location,
+                    target: "color".into(),
+                    format: options.color_format.clone(),
+                    load: "clear".into(),
+                })
+                .collect(),
+            depth: Depth {
+                format: DEPTH_FORMAT.into(),
+                compare: options.depth.nearer().into(),
+                write: true,
+                load: "clear".into(),
+            },
+            discards: layout.discards,
+            bindings,
+        }],
+        classify: None,
+        vertex_layout: vertex_layout(module, &vertex_entry.function, &[]),
+        host_vertex: None,
+        bindings: Bindings {
+            original,
+            previous: Vec::new(),
+            cache: Vec::new(),
+        },
+        cache: Cache {
+            format: options.cache_format.as_str().into(),
+            format_note: None,
+            reconstruction: options.reconstruction.as_str().into(),
+            components: 0,
+            swap: String::new(),
+            params: Vec::new(),
+        },
+        refresh: Refresh {
+            period: options.refresh_period,
+            quad: options.refresh_quad,
+            depth_epsilon: options.depth_epsilon,
+            offsets: String::new(),
+        },
+        clear: Clear {
+            color: [0.0, 0.0, 0.0, 1.0],
+            cache: [0.0; 4],
+            depth: options.depth.far_depth().into(),
+        },
+    })
+}
