@@ -69,8 +69,9 @@ pub(super) fn find(
     let dominated = private.dominated_sums(&weighted);
     // Every slice's cost and facts at once; where the slices share too
     // much for that, each candidate walks its own.
+    let varyings = super::varyings::per_frame_varyings(module, entry_index);
     let own_facts: Vec<SliceFacts> = (0..exprs.len())
-        .map(|i| SliceFacts::of_expression(module, function, &exprs, i))
+        .map(|i| SliceFacts::of_expression(module, function, &exprs, &varyings, i))
         .collect();
     let summaries = graph.summaries(&weighted, &own_facts);
     let summary = |expr: Handle<Expression>| -> (f64, SliceFacts) {
@@ -426,7 +427,7 @@ const PER_FRAME_PENALTY: f64 = 0.02;
 /// the names of the uniform and storage members it loads that say so:
 /// `time` (time, elapsed), `camera` (camera, cam, eye, view: positions and
 /// matrices), `light` (light, sun).
-const PER_FRAME_INPUTS: [(&str, &[&str]); 3] = [
+pub(super) const PER_FRAME_INPUTS: [(&str, &[&str]); 3] = [
     ("time", &["time", "elapsed"]),
     ("camera", &["camera", "cam", "eye", "view"]),
     ("light", &["light", "sun"]),
@@ -471,6 +472,7 @@ impl SliceFacts {
         module: &naga::Module,
         function: &naga::Function,
         exprs: &[&Expression],
+        varyings: &HashMap<u32, Vec<usize>>,
         i: usize,
     ) -> SliceFacts {
         let expr = exprs[i];
@@ -503,13 +505,15 @@ impl SliceFacts {
             )
         });
         set(SliceFacts::POSITION_XY, reads_position && !depth_only(expr));
-        if let Some(name) = loaded_buffer_member(module, exprs, expr) {
-            let name = name.to_ascii_lowercase();
-            for (slot, (_, words)) in PER_FRAME_INPUTS.iter().enumerate() {
-                if words.iter().any(|w| name.contains(w)) {
-                    facts.first_read[slot] = i as u32;
-                }
-            }
+        let mut slots = loaded_buffer_member(module, exprs, expr)
+            .map(|name| per_frame_slots(&name))
+            .unwrap_or_default();
+        // An input the vertex stage computed from per-frame values.
+        if let Some(location) = input_location(module, function, exprs, expr) {
+            slots.extend(varyings.get(&location).into_iter().flatten());
+        }
+        for slot in slots {
+            facts.first_read[slot] = i as u32;
         }
         facts
     }
@@ -555,9 +559,21 @@ impl super::graph::SliceFact for SliceFacts {
     }
 }
 
+/// The slots of [`PER_FRAME_INPUTS`] whose words a buffer member's name
+/// (`buffer.member`) contains.
+pub(super) fn per_frame_slots(name: &str) -> Vec<usize> {
+    let name = name.to_ascii_lowercase();
+    PER_FRAME_INPUTS
+        .iter()
+        .enumerate()
+        .filter(|(_, (_, words))| words.iter().any(|w| name.contains(w)))
+        .map(|(slot, _)| slot)
+        .collect()
+}
+
 /// The `buffer.member` (or `buffer`) of a uniform or storage buffer that
 /// `expr` reads: a member access of one, or a load of a whole one.
-fn loaded_buffer_member(
+pub(super) fn loaded_buffer_member(
     module: &naga::Module,
     exprs: &[&Expression],
     expr: &Expression,
@@ -586,6 +602,35 @@ fn loaded_buffer_member(
             Some(format!("{name}.{member}"))
         }
         Expression::Load { pointer } => global_name(exprs[pointer.index()]).map(|(name, _)| name),
+        _ => None,
+    }
+}
+
+/// The location of the fragment input `expr` reads: an argument with a
+/// location, or a member of a struct argument.
+fn input_location(
+    module: &naga::Module,
+    function: &naga::Function,
+    exprs: &[&Expression],
+    expr: &Expression,
+) -> Option<u32> {
+    let location = |binding: &Option<naga::Binding>| match *binding {
+        Some(naga::Binding::Location { location, .. }) => Some(location),
+        _ => None,
+    };
+    match *expr {
+        Expression::FunctionArgument(i) => location(&function.arguments.get(i as usize)?.binding),
+        Expression::AccessIndex { base, index } => {
+            let Expression::FunctionArgument(i) = *exprs[base.index()] else {
+                return None;
+            };
+            match module.types[function.arguments.get(i as usize)?.ty].inner {
+                TypeInner::Struct { ref members, .. } => {
+                    location(&members.get(index as usize)?.binding)
+                }
+                _ => None,
+            }
+        }
         _ => None,
     }
 }

@@ -40,6 +40,7 @@ mod id;
 pub mod range;
 mod spans;
 pub mod text;
+mod varyings;
 
 use std::ops::Range;
 

@@ -20,6 +20,7 @@ mod operands;
 mod placement;
 mod reaching;
 pub mod remap;
+mod stages;
 
 pub use operands::{operands, pointer_root, PointerRoot};
 pub use placement::{
@@ -27,6 +28,7 @@ pub use placement::{
     FunctionLayout, LoopBound, Placement, Store,
 };
 pub use reaching::{reaching_definitions, Definition};
+pub use stages::{instance_locations, located, output_values, vertex_entry};
 
 /// Whether a value with `binding` and type `ty` — an entry point's argument
 /// or result — carries a binding that `wanted` accepts, on itself or on one

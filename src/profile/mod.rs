@@ -1136,9 +1136,7 @@ fn used_bindings(
 ) -> Result<std::collections::HashSet<(String, [u32; 2])>, Error> {
     let module = &shader.module;
     let fragment = analysis::fragment_entry(shader, options.entry.as_deref())?;
-    let vertex =
-        crate::rewrite::vertex::vertex_entry(module, fragment, options.vertex_entry.as_deref())
-            .ok();
+    let vertex = crate::proc::vertex_entry(module, fragment, options.vertex_entry.as_deref()).ok();
     let entries: Vec<usize> = std::iter::once(fragment).chain(vertex).collect();
     Ok(crate::proc::resources_used_by(module, &entries))
 }

@@ -389,7 +389,7 @@ fn resource(
 }
 
 /// The vertex buffer layout the original vertex entry point expects,
-/// per-instance inputs ([`rewrite::vertex::instance_locations`]) stepped
+/// per-instance inputs ([`crate::proc::instance_locations`]) stepped
 /// per instance, followed by the previous-frame twins `twins` gives as
 /// (input's location, twin's location).
 fn vertex_layout(
@@ -397,7 +397,7 @@ fn vertex_layout(
     function: &naga::Function,
     twins: &[(u32, u32)],
 ) -> Vec<VertexAttribute> {
-    let per_instance = rewrite::vertex::instance_locations(module, function);
+    let per_instance = crate::proc::instance_locations(module, function);
     let mut out = Vec::new();
     let mut add =
         |name: Option<&String>, ty: naga::Handle<naga::Type>, binding: &Option<Binding>| {

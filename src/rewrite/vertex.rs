@@ -42,42 +42,6 @@ pub struct VertexStage {
 /// in locations 0 to 15.
 const MAX_VERTEX_ATTRIBUTES: u32 = 16;
 
-/// The vertex inputs of `function` that step per instance.
-///
-/// A shader does not say how its inputs step: the host's pipeline does.
-/// The tutorials' and engines' naming says it instead: an input is per
-/// instance when its struct type or argument is named for instances
-/// (`InstanceInput`, `instance: ...`), or its own name is (`instance_*`,
-/// Bevy's `i_*` prefix).
-pub fn instance_locations(module: &Module, function: &Function) -> BTreeSet<u32> {
-    let named_instance = |name: Option<&String>| {
-        name.is_some_and(|n| {
-            let n = n.to_ascii_lowercase();
-            n.contains("instance") || n.starts_with("i_")
-        })
-    };
-    let mut out = BTreeSet::new();
-    for argument in &function.arguments {
-        let ty = &module.types[argument.ty];
-        match ty.inner {
-            TypeInner::Struct { ref members, .. } => {
-                let whole =
-                    named_instance(ty.name.as_ref()) || named_instance(argument.name.as_ref());
-                for member in members {
-                    if whole || named_instance(member.name.as_ref()) {
-                        out.extend(location_of(&member.binding));
-                    }
-                }
-            }
-            _ if named_instance(argument.name.as_ref()) => {
-                out.extend(location_of(&argument.binding))
-            }
-            _ => {}
-        }
-    }
-    out
-}
-
 /// A per-instance input the position reads: its argument, the member
 /// within it for a struct argument, its location and type.
 #[derive(Clone, Copy, Debug)]
@@ -97,14 +61,14 @@ fn instance_inputs_of_position(
     function: &Function,
     position_member: Option<u32>,
 ) -> Vec<InstanceInput> {
-    let per_instance = instance_locations(module, function);
+    let per_instance = crate::proc::instance_locations(module, function);
     if per_instance.is_empty() {
         return Vec::new();
     }
     let layout = crate::proc::layout(module, function, 8.0);
     let graph = crate::analysis::graph::ExprGraph::new(function, &layout);
     let mut slice = ExprSet::with_capacity(function.expressions.len());
-    for value in position_values(function, &layout, position_member) {
+    for value in crate::proc::output_values(function, &layout, position_member) {
         slice.union_with(&graph.slice(value));
     }
     let (whole, struct_members) = arguments_read(module, function, &slice);
@@ -135,61 +99,6 @@ fn instance_inputs_of_position(
         }
     }
     out
-}
-
-/// The values that become the position output: the returned value, its
-/// component for a composed struct, or for a returned local struct what
-/// is stored into its position member (and any store that may write it:
-/// the whole variable, a deeper pointer into it).
-fn position_values(
-    function: &Function,
-    layout: &crate::proc::FunctionLayout,
-    position_member: Option<u32>,
-) -> Vec<Handle<Expression>> {
-    let exprs = &function.expressions;
-    let mut returned = Vec::new();
-    crate::proc::each_statement(&function.body, &mut |statement| {
-        if let Statement::Return { value: Some(value) } = *statement {
-            returned.push(value);
-        }
-    });
-    let mut values = Vec::new();
-    for value in returned {
-        let local = match (position_member, &exprs[value]) {
-            (Some(m), Expression::Compose { components, .. }) => {
-                values.extend(components.get(m as usize).copied());
-                continue;
-            }
-            (Some(_), &Expression::Load { pointer }) => match exprs[pointer] {
-                Expression::LocalVariable(local) => local,
-                _ => {
-                    values.push(value);
-                    continue;
-                }
-            },
-            _ => {
-                values.push(value);
-                continue;
-            }
-        };
-        let m = position_member.unwrap_or(0);
-        values.extend(function.local_variables[local].init);
-        let is_local =
-            |e: Handle<Expression>| matches!(exprs[e], Expression::LocalVariable(l) if l == local);
-        for store in &layout.stores {
-            if store.target != Some(crate::proc::PointerRoot::Local(local)) {
-                continue;
-            }
-            let other_member = matches!(
-                exprs[store.pointer],
-                Expression::AccessIndex { base, index } if is_local(base) && index != m
-            );
-            if !other_member {
-                values.push(store.value);
-            }
-        }
-    }
-    values
 }
 
 /// Which arguments a set of expressions reads: whole (`.0`), or only some
@@ -229,104 +138,14 @@ fn arguments_read(
 }
 
 /// The vertex entry point that draws with the fragment entry point at
-/// `fragment`: the one named `wanted`; else the module's only one; else,
-/// among several (a shadow pass and a main pass, as wgpu's `shadow`
-/// example has), the only one whose outputs are what the fragment stage
-/// takes — its input struct, or a value at every location it reads.
+/// `fragment` ([`crate::proc::vertex_entry`]), or the refusal saying why
+/// none does.
 pub fn vertex_entry(
     module: &Module,
     fragment: usize,
     wanted: Option<&str>,
 ) -> Result<usize, Refusal> {
-    let vertices = crate::proc::entry_points_of(module, naga::ShaderStage::Vertex);
-    let names = |indices: &[usize]| crate::proc::entry_point_names(module, indices);
-    let fragment = &module.entry_points[fragment];
-    let feeds_fragment =
-        |v: usize| feeds(module, &module.entry_points[v].function, &fragment.function);
-    if let Some(name) = wanted {
-        return match module.entry_points.iter().position(|ep| ep.name == name) {
-            Some(index) if !vertices.contains(&index) => Err(Refusal::new(format!(
-                "`{name}` is not a vertex entry point; the vertex entry points are {}",
-                names(&vertices)
-            ))),
-            Some(index) if feeds_fragment(index) => Ok(index),
-            Some(_) => Err(Refusal::new(format!(
-                "`{name}` does not output what `{}` takes (its input struct, or a value at each location it reads)",
-                fragment.name
-            ))),
-            None => Err(Refusal::new(format!(
-                "the shader has no entry point named `{name}`; its vertex entry points are {}",
-                names(&vertices)
-            ))),
-        };
-    }
-    if let [only] = vertices[..] {
-        return Ok(only);
-    }
-    if vertices.is_empty() {
-        return Err(Refusal::new(
-            "the shader has no vertex entry point to compute the previous position with",
-        ));
-    }
-    let feeding: Vec<usize> = vertices
-        .iter()
-        .copied()
-        .filter(|&v| feeds_fragment(v))
-        .collect();
-    match feeding[..] {
-        [only] => Ok(only),
-        [] => Err(Refusal::new(format!(
-            "none of the vertex entry points ({}) outputs what `{}` takes; name the one that draws with it with --vertex-entry",
-            names(&vertices),
-            fragment.name
-        ))),
-        _ => Err(Refusal::new(format!(
-            "several vertex entry points ({}) output what `{}` takes; name the one that draws with it with --vertex-entry",
-            names(&feeding),
-            fragment.name
-        ))),
-    }
-}
-
-/// Whether `vertex`'s outputs are what `fragment` takes: the same struct
-/// type, or a value of the same type at every location the fragment stage
-/// reads.
-fn feeds(module: &Module, vertex: &Function, fragment: &Function) -> bool {
-    let Some(result) = &vertex.result else {
-        return false;
-    };
-    if fragment.arguments.iter().any(|a| a.ty == result.ty) {
-        return true;
-    }
-    let outputs = located(module, &result.binding, result.ty);
-    fragment
-        .arguments
-        .iter()
-        .flat_map(|a| located(module, &a.binding, a.ty))
-        .all(|input| outputs.contains(&input))
-}
-
-/// The `(location, type)` pairs a value with `binding` and type `ty`
-/// carries, on itself or on its struct's members.
-fn located(
-    module: &Module,
-    binding: &Option<Binding>,
-    ty: Handle<naga::Type>,
-) -> Vec<(u32, naga::TypeInner)> {
-    let location = |binding: &Option<Binding>| match *binding {
-        Some(Binding::Location { location, .. }) => Some(location),
-        _ => None,
-    };
-    match module.types[ty].inner {
-        TypeInner::Struct { ref members, .. } => members
-            .iter()
-            .filter_map(|m| location(&m.binding).map(|l| (l, module.types[m.ty].inner.clone())))
-            .collect(),
-        ref inner => location(binding)
-            .map(|l| (l, inner.clone()))
-            .into_iter()
-            .collect(),
-    }
+    crate::proc::vertex_entry(module, fragment, wanted).map_err(Refusal::new)
 }
 
 /// Adds the previous clip position to the vertex entry point at
@@ -607,7 +426,7 @@ fn twin_locations(
     let used: BTreeSet<u32> = function
         .arguments
         .iter()
-        .flat_map(|a| located(module, &a.binding, a.ty))
+        .flat_map(|a| crate::proc::located(module, &a.binding, a.ty))
         .map(|(location, _)| location)
         .collect();
     let free: Vec<u32> = (0..MAX_VERTEX_ATTRIBUTES)

@@ -198,7 +198,7 @@ pub fn default_scene(
 /// what feeds each (nothing to write: they are fed by name); empty when
 /// it has none.
 fn instance_inputs_note(module: &Module, function: &naga::Function) -> String {
-    let per_instance = crate::rewrite::vertex::instance_locations(module, function);
+    let per_instance = crate::proc::instance_locations(module, function);
     let mut note = String::new();
     for argument in &function.arguments {
         let mut add = |name: Option<&String>, binding: &Option<naga::Binding>| {
@@ -250,7 +250,7 @@ pub fn for_shader(
     vertex_entry: Option<&str>,
 ) -> Result<SceneInit, crate::diagnostic::Error> {
     let fragment = crate::analysis::fragment_entry(shader, entry)?;
-    let vertex = crate::rewrite::vertex::vertex_entry(&shader.module, fragment, vertex_entry).ok();
+    let vertex = crate::proc::vertex_entry(&shader.module, fragment, vertex_entry).ok();
     Ok(default_scene(
         &shader.module,
         &shader.file.path,

@@ -9,7 +9,7 @@
 //! column by the trailing number of its name, a position, a colour
 //! (a constant, listed as defaulted), an integer (0, listed). Which inputs
 //! step per instance the plan says
-//! ([`crate::rewrite::vertex::instance_locations`]).
+//! ([`crate::proc::instance_locations`]).
 //!
 //! The transform they carry is the instance's whole world transform: the
 //! object's placement times the instance's within it. A storage buffer's

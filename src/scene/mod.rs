@@ -41,7 +41,7 @@ use glam::{Mat4, Vec3};
 use serde::Deserialize;
 
 use crate::diagnostic::{Diagnostic, Error, SourceFile};
-pub use crate::rewrite::DepthConvention;
+pub use crate::plan::DepthConvention;
 pub use instances::Instances;
 pub use mesh::{Mesh, MeshSource};
 
