@@ -281,7 +281,7 @@ pub fn entry_point(
             let cached = b.call(pieces.current, vec![frag_coord]);
             from_vec4(&mut b, cached, pieces.components)
         }
-        Stage::Classify => return Err(Refusal::new("internal error: classify has no payload")),
+        Stage::Classify => return Err(Refusal::internal("classify has no payload")),
     };
 
     let age = match age {
@@ -297,7 +297,7 @@ pub fn entry_point(
                 components: vec![cache, age],
             })
         }
-        Writes::Classes => return Err(Refusal::new("internal error: classify writes no payload")),
+        Writes::Classes => return Err(Refusal::internal("classify writes no payload")),
         Writes::Color => {
             let mut arguments = originals.clone();
             arguments.push(payload);

@@ -112,21 +112,42 @@ impl Default for Options {
 /// Why a variant was not produced.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Refusal {
+    pub kind: RefusalKind,
+    /// The reason, in words; an internal one starts "internal error:".
     pub reason: String,
 }
 
+/// What kind of refusal: a limit of what the rewrite supports, or a bug.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RefusalKind {
+    /// The shader asks for what a variant cannot do (the reason says what).
+    Unsupported,
+    /// The rewrite failed itself: what it built did not validate, or broke
+    /// a rule it checks. A bug in shadecache.
+    Internal,
+}
+
 impl Refusal {
+    /// A variant the shader cannot have, for `reason`.
     pub fn new(reason: impl Into<String>) -> Self {
         Refusal {
+            kind: RefusalKind::Unsupported,
             reason: reason.into(),
         }
     }
 
-    /// Whether the refusal is a bug of the rewrite (what it built did not
-    /// validate, or broke a rule it checks) rather than a limit of what it
-    /// supports.
+    /// A failure of the rewrite itself: `what` went wrong.
+    pub fn internal(what: impl fmt::Display) -> Self {
+        Refusal {
+            kind: RefusalKind::Internal,
+            reason: format!("internal error: {what}"),
+        }
+    }
+
+    /// Whether the refusal is a bug of the rewrite rather than a limit of
+    /// what it supports.
     pub fn is_internal(&self) -> bool {
-        self.reason.starts_with("internal error")
+        self.kind == RefusalKind::Internal
     }
 }
 
@@ -213,11 +234,7 @@ fn cache_helpers() -> Result<&'static naga::Module, Refusal> {
             .map_err(|err| err.render())
         })
         .as_ref()
-        .map_err(|err| {
-            Refusal::new(format!(
-                "internal error: the cache helpers do not parse: {err}"
-            ))
-        })
+        .map_err(|err| Refusal::internal(format!("the cache helpers do not parse: {err}")))
 }
 
 /// Rewrites `shader` to cache `candidate` with `variant`.
@@ -250,8 +267,8 @@ pub fn rewrite(
         candidate.node.expression,
     )
     .map_err(|err| {
-        Refusal::new(format!(
-            "internal error: inlining the calls down to `{}`: {err}",
+        Refusal::internal(format!(
+            "inlining the calls down to `{}`: {err}",
             candidate.node.function
         ))
     })?;
@@ -343,19 +360,14 @@ fn rewrite_at(
         slot.group,
         slot.first_binding,
     )
-    .map_err(|err| {
-        Refusal::new(format!(
-            "internal error: importing the cache helpers: {err}"
-        ))
-    })?;
+    .map_err(|err| Refusal::internal(format!("importing the cache helpers: {err}")))?;
     let group = slot.group;
-    let helper = |name: &str| {
-        imported.functions.get(name).copied().ok_or_else(|| {
-            Refusal::new(format!(
-                "internal error: `{name}` missing from the cache helpers"
-            ))
-        })
-    };
+    let helper =
+        |name: &str| {
+            imported.functions.get(name).copied().ok_or_else(|| {
+                Refusal::internal(format!("`{name}` missing from the cache helpers"))
+            })
+        };
     // rgba16float is filterable: one bilinear sample; rgba32float is not:
     // four loads. Nearest reads one texel of each. Packed reconstructions
     // read the depth from the payload texture instead.
@@ -596,16 +608,16 @@ fn rewrite_at(
         naga::compact::compact(&mut pass, naga::compact::KeepUnused::No);
         let info = crate::front::validate(&pass).map_err(|err| {
             let diagnostic = crate::diagnostic::Diagnostic::from_spanned_error(&err);
-            Refusal::new(format!(
-                "internal error: {name} does not validate: {} ({})",
+            Refusal::internal(format!(
+                "{name} does not validate: {} ({})",
                 diagnostic.message,
                 diagnostic.notes.join("; ")
             ))
         })?;
         uniformity::check(&pass, &info)
-            .map_err(|err| Refusal::new(format!("internal error: the rewrite left {err}")))?;
+            .map_err(|err| Refusal::internal(format!("the rewrite left {err}")))?;
         uniformity::check_kills(&pass)
-            .map_err(|err| Refusal::new(format!("internal error: the rewrite left {err}")))?;
+            .map_err(|err| Refusal::internal(format!("the rewrite left {err}")))?;
         Ok(PassModule {
             name,
             module: pass,
