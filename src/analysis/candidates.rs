@@ -550,6 +550,12 @@ impl SliceFacts {
     }
 }
 
+impl Default for SliceFacts {
+    fn default() -> Self {
+        SliceFacts::NONE
+    }
+}
+
 impl super::graph::SliceFact for SliceFacts {
     fn merge(&mut self, other: &Self) {
         self.flags |= other.flags;

@@ -201,8 +201,8 @@ impl ExprGraph {
 
 /// A fact about an expression that a slice has when any of its
 /// expressions has it: merging is idempotent, so an expression two paths
-/// reach counts once.
-pub trait SliceFact: Clone {
+/// reach counts once. The default is the fact of no expression.
+pub trait SliceFact: Clone + Default {
     fn merge(&mut self, other: &Self);
 }
 
@@ -279,11 +279,9 @@ impl ExprGraph {
         let mut facts: Vec<F> = Vec::with_capacity(components.len());
         let mut shared_sets: Vec<FixedBitSet> = Vec::with_capacity(components.len());
         for (c, members) in components.iter().enumerate() {
-            let mut own = members.iter().map(|m| m.index());
-            let first = own.next().expect("a component has a member");
-            let mut cost = weight[first];
-            let mut merged = fact[first].clone();
-            for m in own {
+            let mut cost = 0.0;
+            let mut merged = F::default();
+            for m in members.iter().map(|m| m.index()) {
                 cost += weight[m];
                 merged.merge(&fact[m]);
             }
@@ -470,7 +468,7 @@ impl Private {
 mod tests {
     use super::*;
 
-    #[derive(Clone, Debug, PartialEq)]
+    #[derive(Clone, Debug, Default, PartialEq)]
     struct Seen(u64);
 
     impl SliceFact for Seen {

@@ -513,9 +513,9 @@ pub fn profile(
         let rewritten = rewrite::rewrite(shader, &analysis, candidate, Variant::ThreePass, options)
             .map_err(|r| fail(format!("node {}: {}", candidate.node.id, r.reason)))?;
         let mut pass = rewritten.plan.passes[1].clone();
-        pass.depth.load = "clear".into();
+        pass.depth.load = plan::LoadOp::Clear;
         for target in &mut pass.color_targets {
-            target.load = "clear".into();
+            target.load = plan::LoadOp::Clear;
         }
         let plan = Plan {
             passes: vec![pass],

@@ -54,22 +54,22 @@ pub fn build(inputs: Inputs) -> Plan {
     let mut plan_passes = Vec::new();
     for (index, (stage, pass)) in passes.iter().enumerate() {
         let first = index == 0;
-        let load = |first: bool| if first { "clear" } else { "load" }.to_string();
+        let load = |first: bool| if first { LoadOp::Clear } else { LoadOp::Load };
         let color = |location: u32| ColorTarget {
             location,
-            target: "color".into(),
+            target: TargetKind::Color,
             format: options.color_format.clone(),
             load: load(first || matches!(stage, Stage::ShadeFromCache)),
         };
         let cache = |location: u32| ColorTarget {
             location,
-            target: "cache".into(),
+            target: TargetKind::Cache,
             format: options.cache_format.as_str().into(),
             load: load(first),
         };
         let age = |location: u32| ColorTarget {
             location,
-            target: "age".into(),
+            target: TargetKind::Age,
             format: AGE_FORMAT.into(),
             load: load(first),
         };
@@ -84,7 +84,7 @@ pub fn build(inputs: Inputs) -> Plan {
             }
         };
         let (compare, write) = match stage {
-            Stage::ShadeFromCache => ("equal", false),
+            Stage::ShadeFromCache => (CompareFunction::Equal, false),
             _ => (options.depth.nearer(), true),
         };
         plan_passes.push(Pass {
@@ -97,7 +97,7 @@ pub fn build(inputs: Inputs) -> Plan {
             color_targets,
             depth: Depth {
                 format: DEPTH_FORMAT.into(),
-                compare: compare.into(),
+                compare,
                 write,
                 load: load(first),
             },
@@ -203,15 +203,15 @@ pub fn build(inputs: Inputs) -> Plan {
             fragment_entry: entry.name.clone(),
             color_targets: vec![ColorTarget {
                 location: 0,
-                target: "classes".into(),
+                target: TargetKind::Classes,
                 format: "rgba8unorm".into(),
-                load: "clear".into(),
+                load: LoadOp::Clear,
             }],
             depth: Depth {
                 format: DEPTH_FORMAT.into(),
-                compare: "equal".into(),
+                compare: CompareFunction::Equal,
                 write: false,
-                load: "load".into(),
+                load: LoadOp::Load,
             },
             discards: false,
             bindings: used_bindings(&classify.module),
@@ -235,9 +235,9 @@ pub fn build(inputs: Inputs) -> Plan {
             cache,
         },
         cache: Cache {
-            format: options.cache_format.as_str().into(),
+            format: options.cache_format,
             format_note: None,
-            reconstruction: options.reconstruction.as_str().into(),
+            reconstruction: options.reconstruction,
             components: candidate.components,
             swap: "two payload textures, two age textures and two depth buffers alternate: at the end of a frame, this frame's payload texture, age texture and depth buffer become last frame's (bound as cache_previous_payload, cache_previous_age and cache_previous_depth) and last frame's are rendered into next; on the first frame, after a resize or a camera cut, the previous depth is cleared to the far-plane depth (clear.depth) so every pixel misses".into(),
             params: vec![
@@ -510,16 +510,16 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
                 .into_iter()
                 .map(|location| ColorTarget {
                     location,
-                    target: "color".into(),
+                    target: TargetKind::Color,
                     format: options.color_format.clone(),
-                    load: "clear".into(),
+                    load: LoadOp::Clear,
                 })
                 .collect(),
             depth: Depth {
                 format: DEPTH_FORMAT.into(),
-                compare: options.depth.nearer().into(),
+                compare: options.depth.nearer(),
                 write: true,
-                load: "clear".into(),
+                load: LoadOp::Clear,
             },
             discards: layout.discards,
             bindings,
@@ -533,9 +533,9 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
             cache: Vec::new(),
         },
         cache: Cache {
-            format: options.cache_format.as_str().into(),
+            format: options.cache_format,
             format_note: None,
-            reconstruction: options.reconstruction.as_str().into(),
+            reconstruction: options.reconstruction,
             components: 0,
             swap: String::new(),
             params: Vec::new(),

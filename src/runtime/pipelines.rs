@@ -1,6 +1,6 @@
 use std::borrow::Cow;
 
-use crate::plan::{Pass, Plan, StepMode, VertexAttribute};
+use crate::plan::{CompareFunction, Pass, Plan, StepMode, TargetKind, VertexAttribute};
 
 /// A headless wgpu device.
 #[derive(Debug)]
@@ -116,7 +116,7 @@ fn pipeline(
         };
         targets[index] = Some(wgpu::ColorTargetState {
             format: texture_format(&target.format)?,
-            blend: (options.count_shading && target.target == "color").then_some(
+            blend: (options.count_shading && target.target == TargetKind::Color).then_some(
                 wgpu::BlendState {
                     color: additive,
                     alpha: additive,
@@ -125,14 +125,13 @@ fn pipeline(
             write_mask: wgpu::ColorWrites::ALL,
         });
     }
-    let depth_compare = match pass.depth.compare.as_str() {
-        "less" => wgpu::CompareFunction::Less,
-        "less-equal" => wgpu::CompareFunction::LessEqual,
-        "greater" => wgpu::CompareFunction::Greater,
-        "greater-equal" => wgpu::CompareFunction::GreaterEqual,
-        "equal" => wgpu::CompareFunction::Equal,
-        "always" => wgpu::CompareFunction::Always,
-        other => return Err(format!("{}: unknown depth compare `{other}`", pass.name)),
+    let depth_compare = match pass.depth.compare {
+        CompareFunction::Less => wgpu::CompareFunction::Less,
+        CompareFunction::LessEqual => wgpu::CompareFunction::LessEqual,
+        CompareFunction::Greater => wgpu::CompareFunction::Greater,
+        CompareFunction::GreaterEqual => wgpu::CompareFunction::GreaterEqual,
+        CompareFunction::Equal => wgpu::CompareFunction::Equal,
+        CompareFunction::Always => wgpu::CompareFunction::Always,
     };
     Ok(gpu
         .device

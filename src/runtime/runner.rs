@@ -3,7 +3,7 @@
 use std::collections::HashMap;
 
 use super::pipelines::{attribute_size, pipelines, texture_format, Gpu, PipelineOptions};
-use crate::plan::{Pass, Plan, StepMode, VertexAttribute};
+use crate::plan::{CacheFormat, LoadOp, Pass, Plan, StepMode, TargetKind, VertexAttribute};
 use crate::scene::textures::Texels;
 
 /// An indexed triangle mesh whose vertices are laid out as the plan's
@@ -181,11 +181,11 @@ impl Runner {
             .passes
             .iter()
             .flat_map(|p| &p.color_targets)
-            .find(|t| t.target == "color")
+            .find(|t| t.target == TargetKind::Color)
             .map(|t| texture_format(&t.format))
             .transpose()?
             .unwrap_or(wgpu::TextureFormat::Rgba8Unorm);
-        let cache_format = texture_format(&plan.cache.format)?;
+        let cache_format = texture_format(plan.cache.format.as_str())?;
         let age_format = texture_format(crate::plan::AGE_FORMAT)?;
         let depth_format = wgpu::TextureFormat::Depth32Float;
         let buffer = |label: &str, bytes: &[u8], usage: wgpu::BufferUsages| {
@@ -409,7 +409,7 @@ impl Runner {
         params.extend(refresh.period.to_le_bytes());
         params.extend(refresh.quad.to_le_bytes());
         params.extend((self.frame as u32).to_le_bytes());
-        let limit = if self.plan.cache.format == "rgba16float" {
+        let limit = if self.plan.cache.format == CacheFormat::Rgba16float {
             65504.0f32
         } else {
             f32::MAX
@@ -493,18 +493,18 @@ impl Runner {
                 if attachments.len() <= index {
                     attachments.resize(index + 1, None);
                 }
-                let (view, clear) = match target.target.as_str() {
-                    "cache" => (&payload_views[current], self.plan.clear.cache),
-                    "age" => (&age_views[current], [0.0; 4]),
-                    "classes" => (&classes_view, [0.0, 0.0, 0.0, 0.0]),
-                    _ => (&color_view, self.plan.clear.color),
+                let (view, clear) = match target.target {
+                    TargetKind::Cache => (&payload_views[current], self.plan.clear.cache),
+                    TargetKind::Age => (&age_views[current], [0.0; 4]),
+                    TargetKind::Classes => (&classes_view, [0.0, 0.0, 0.0, 0.0]),
+                    TargetKind::Color => (&color_view, self.plan.clear.color),
                 };
                 attachments[index] = Some(wgpu::RenderPassColorAttachment {
                     view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
-                        load: if target.load == "clear" {
+                        load: if target.load == LoadOp::Clear {
                             wgpu::LoadOp::Clear(wgpu::Color {
                                 r: clear[0],
                                 g: clear[1],
@@ -528,7 +528,7 @@ impl Runner {
                     depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                         view: &depth_views[current],
                         depth_ops: Some(wgpu::Operations {
-                            load: if pass.depth.load == "clear" {
+                            load: if pass.depth.load == LoadOp::Clear {
                                 wgpu::LoadOp::Clear(self.plan.clear.depth as f32)
                             } else {
                                 wgpu::LoadOp::Load

@@ -864,7 +864,7 @@ fn confirmatory_run_repeats_the_winner() {
         assert_eq!(plan.node.id, row.node);
         assert_eq!(plan.variant, row.variant);
         assert_eq!(plan.refresh.period, row.refresh_period);
-        assert_eq!(plan.cache.format, row.cache_format.as_str());
+        assert_eq!(plan.cache.format, row.cache_format);
         assert!(stdout(&output).contains("measured again"));
     }
 }

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use shadecache::analysis::{self, Analysis};
 use shadecache::back::{self, Language};
 use shadecache::front::{self, Shader};
+use shadecache::plan::{CompareFunction, TargetKind};
 use shadecache::rewrite::{self, CacheFormat, Options, Rewritten, Variant};
 
 use crate::util::{root, shadecache, stderr, stdout, tint_validate};
@@ -248,29 +249,39 @@ fn plans_describe_the_passes() {
             .plan
     };
     let three = plan(Variant::ThreePass);
-    let depth: Vec<(&str, bool)> = three
+    let depth: Vec<(CompareFunction, bool)> = three
         .passes
         .iter()
-        .map(|p| (p.depth.compare.as_str(), p.depth.write))
+        .map(|p| (p.depth.compare, p.depth.write))
         .collect();
-    assert_eq!(depth, [("less", true), ("less", true), ("equal", false)]);
+    assert_eq!(
+        depth,
+        [
+            (CompareFunction::Less, true),
+            (CompareFunction::Less, true),
+            (CompareFunction::Equal, false)
+        ]
+    );
     assert_eq!(
         three.passes.iter().map(|p| p.discards).collect::<Vec<_>>(),
         [true, false, false]
     );
-    assert_eq!(three.passes[0].color_targets[0].target, "cache");
-    assert_eq!(three.passes[2].color_targets[0].target, "color");
+    assert_eq!(three.passes[0].color_targets[0].target, TargetKind::Cache);
+    assert_eq!(three.passes[2].color_targets[0].target, TargetKind::Color);
     // The uniform the vertex stage reads has a previous-frame twin.
     assert_eq!(three.bindings.previous.len(), 1);
     assert_eq!(three.bindings.previous[0].shadows.name, "frame");
     assert_eq!(three.bindings.previous[0].group, 1);
     let one = plan(Variant::OnePass);
-    let targets: Vec<&str> = one.passes[0]
+    let targets: Vec<TargetKind> = one.passes[0]
         .color_targets
         .iter()
-        .map(|t| t.target.as_str())
+        .map(|t| t.target)
         .collect();
-    assert_eq!(targets, ["color", "cache", "age"]);
+    assert_eq!(
+        targets,
+        [TargetKind::Color, TargetKind::Cache, TargetKind::Age]
+    );
     assert_eq!(one.passes[0].color_targets[2].format, "r16float");
     assert_eq!(one.vertex_layout.len(), 2);
     assert_eq!(one.vertex_layout[0].format, "float32x3");
@@ -290,12 +301,15 @@ fn plans_describe_the_passes() {
     )
     .unwrap()
     .plan;
-    let depth: Vec<&str> = reversed
-        .passes
-        .iter()
-        .map(|p| p.depth.compare.as_str())
-        .collect();
-    assert_eq!(depth, ["greater", "greater", "equal"]);
+    let depth: Vec<CompareFunction> = reversed.passes.iter().map(|p| p.depth.compare).collect();
+    assert_eq!(
+        depth,
+        [
+            CompareFunction::Greater,
+            CompareFunction::Greater,
+            CompareFunction::Equal
+        ]
+    );
     assert_eq!(reversed.clear.depth, 0.0);
     let reference = shadecache::rewrite::plan::reference(
         &shader,
@@ -306,7 +320,7 @@ fn plans_describe_the_passes() {
         },
     )
     .unwrap();
-    assert_eq!(reference.passes[0].depth.compare, "greater");
+    assert_eq!(reference.passes[0].depth.compare, CompareFunction::Greater);
     assert_eq!(reference.clear.depth, 0.0);
     let far = three.cache.params.last().unwrap();
     assert_eq!((far.name.as_str(), far.offset), ("far_depth", 32));
@@ -571,9 +585,9 @@ fn every_reconstruction_validates_and_builds() {
                                 continue;
                             }
                         };
-                    assert_eq!(rewritten.plan.cache.reconstruction, reconstruction.as_str());
+                    assert_eq!(rewritten.plan.cache.reconstruction, reconstruction);
                     // A three-pass cache may be widened to rgba32float.
-                    let filterable = rewritten.plan.cache.format == "rgba16float";
+                    let filterable = rewritten.plan.cache.format == CacheFormat::Rgba16float;
                     let lookup = match (reconstruction, filterable) {
                         (rewrite::Reconstruction::Bilinear, true) => "cache_lookup",
                         (rewrite::Reconstruction::Bilinear, false) => "cache_lookup_loads",
@@ -680,7 +694,7 @@ fn fs(in: VertexOutput) -> @location(0) vec4<f32> {
             .plan
     };
     let widened = plan(growth, Variant::ThreePass);
-    assert_eq!(widened.cache.format, "rgba32float");
+    assert_eq!(widened.cache.format, CacheFormat::Rgba32float);
     assert!(widened
         .cache
         .format_note
@@ -691,7 +705,7 @@ fn fs(in: VertexOutput) -> @location(0) vec4<f32> {
         .passes
         .iter()
         .flat_map(|p| &p.color_targets)
-        .filter(|t| t.target == "cache")
+        .filter(|t| t.target == TargetKind::Cache)
         .all(|t| t.format == "rgba32float"));
     for (candidate, variant) in [
         (wave, Variant::ThreePass),
@@ -699,7 +713,7 @@ fn fs(in: VertexOutput) -> @location(0) vec4<f32> {
         (growth, Variant::OnePass),
     ] {
         let kept = plan(candidate, variant);
-        assert_eq!(kept.cache.format, "rgba16float", "{variant}");
+        assert_eq!(kept.cache.format, CacheFormat::Rgba16float, "{variant}");
         assert_eq!(kept.cache.format_note, None);
     }
 }

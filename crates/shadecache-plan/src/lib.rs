@@ -130,13 +130,101 @@ pub struct Pass {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ColorTarget {
     pub location: u32,
-    /// `color` (the frame), `cache` (this frame's payload texture) or `age`
-    /// (this frame's age texture: frames since each cached value was
-    /// computed).
-    pub target: String,
+    /// What the pass renders into at this location.
+    pub target: TargetKind,
     pub format: String,
     /// `clear` (first pass to write the target this frame) or `load`.
-    pub load: String,
+    pub load: LoadOp,
+}
+
+/// What a colour target is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TargetKind {
+    /// The frame.
+    Color,
+    /// This frame's payload texture.
+    Cache,
+    /// This frame's age texture: frames since each cached value was
+    /// computed.
+    Age,
+    /// The classification pass's picture of the cache's decisions.
+    Classes,
+}
+
+/// What a pass does with a target's contents when it begins.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LoadOp {
+    /// Clear to the plan's clear value: the first pass to write it this
+    /// frame.
+    Clear,
+    /// Keep what earlier passes wrote.
+    Load,
+}
+
+impl TargetKind {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            TargetKind::Color => "color",
+            TargetKind::Cache => "cache",
+            TargetKind::Age => "age",
+            TargetKind::Classes => "classes",
+        }
+    }
+}
+
+impl LoadOp {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            LoadOp::Clear => "clear",
+            LoadOp::Load => "load",
+        }
+    }
+}
+
+impl CompareFunction {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CompareFunction::Less => "less",
+            CompareFunction::LessEqual => "less-equal",
+            CompareFunction::Greater => "greater",
+            CompareFunction::GreaterEqual => "greater-equal",
+            CompareFunction::Equal => "equal",
+            CompareFunction::Always => "always",
+        }
+    }
+}
+
+/// The plan's spelling of each.
+macro_rules! display_as_str {
+    ($($ty:ty),*) => {$(
+        impl fmt::Display for $ty {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(self.as_str())
+            }
+        }
+    )*};
+}
+display_as_str!(
+    TargetKind,
+    LoadOp,
+    CompareFunction,
+    CacheFormat,
+    Reconstruction,
+    DepthConvention
+);
+
+/// A depth test, as WebGPU spells it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CompareFunction {
+    Less,
+    LessEqual,
+    Greater,
+    GreaterEqual,
+    Equal,
+    Always,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -144,10 +232,9 @@ pub struct Depth {
     pub format: String,
     /// `less` (`greater` with reversed Z) or `equal`; a host's plan may
     /// also say `less-equal`, `greater-equal` or `always`.
-    pub compare: String,
+    pub compare: CompareFunction,
     pub write: bool,
-    /// `clear` or `load`.
-    pub load: String,
+    pub load: LoadOp,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -215,13 +302,12 @@ pub struct Twin {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Cache {
-    pub format: String,
+    pub format: CacheFormat,
     /// Why the format is not the one asked for, when it is not.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub format_note: Option<String>,
-    /// `bilinear` or `nearest`.
     #[serde(default = "bilinear")]
-    pub reconstruction: String,
+    pub reconstruction: Reconstruction,
     /// How many components of the payload texture hold the payload.
     pub components: u32,
     /// The double-buffering rule.
@@ -256,8 +342,8 @@ pub struct Clear {
     pub depth: f64,
 }
 
-fn bilinear() -> String {
-    "bilinear".into()
+fn bilinear() -> Reconstruction {
+    Reconstruction::Bilinear
 }
 
 /// The three ways of running a cache (seed 002, §3).
@@ -385,12 +471,11 @@ impl DepthConvention {
         }
     }
 
-    /// The depth compare that keeps the nearer fragment, as a plan
-    /// writes it.
-    pub fn nearer(self) -> &'static str {
+    /// The depth compare that keeps the nearer fragment.
+    pub fn nearer(self) -> CompareFunction {
         match self {
-            DepthConvention::Standard => "less",
-            DepthConvention::Reversed => "greater",
+            DepthConvention::Standard => CompareFunction::Less,
+            DepthConvention::Reversed => CompareFunction::Greater,
         }
     }
 }
