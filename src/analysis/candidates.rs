@@ -612,31 +612,40 @@ pub(super) fn loaded_buffer_member(
     }
 }
 
-/// The location of the fragment input `expr` reads: an argument with a
-/// location, or a member of a struct argument.
-fn input_location(
-    module: &naga::Module,
-    function: &naga::Function,
+/// The binding of the fragment input `expr` reads: an argument's, or a
+/// member's of a struct argument.
+fn input_binding<'a>(
+    module: &'a naga::Module,
+    function: &'a naga::Function,
     exprs: &[&Expression],
     expr: &Expression,
-) -> Option<u32> {
-    let location = |binding: &Option<naga::Binding>| match *binding {
-        Some(naga::Binding::Location { location, .. }) => Some(location),
-        _ => None,
-    };
+) -> Option<&'a naga::Binding> {
     match *expr {
-        Expression::FunctionArgument(i) => location(&function.arguments.get(i as usize)?.binding),
+        Expression::FunctionArgument(i) => function.arguments.get(i as usize)?.binding.as_ref(),
         Expression::AccessIndex { base, index } => {
             let Expression::FunctionArgument(i) = *exprs[base.index()] else {
                 return None;
             };
             match module.types[function.arguments.get(i as usize)?.ty].inner {
                 TypeInner::Struct { ref members, .. } => {
-                    location(&members.get(index as usize)?.binding)
+                    members.get(index as usize)?.binding.as_ref()
                 }
                 _ => None,
             }
         }
+        _ => None,
+    }
+}
+
+/// The location of the fragment input `expr` reads.
+fn input_location(
+    module: &naga::Module,
+    function: &naga::Function,
+    exprs: &[&Expression],
+    expr: &Expression,
+) -> Option<u32> {
+    match *input_binding(module, function, exprs, expr)? {
+        naga::Binding::Location { location, .. } => Some(location),
         _ => None,
     }
 }
@@ -649,24 +658,8 @@ fn carried_builtin(
     exprs: &[&Expression],
     expr: &Expression,
 ) -> Option<naga::BuiltIn> {
-    let builtin = |binding: &Option<naga::Binding>| match binding {
-        Some(naga::Binding::BuiltIn(builtin)) => Some(*builtin),
-        _ => None,
-    };
-    match *expr {
-        Expression::FunctionArgument(i) => builtin(&function.arguments.get(i as usize)?.binding),
-        Expression::AccessIndex { base, index } => {
-            let Expression::FunctionArgument(i) = *exprs[base.index()] else {
-                return None;
-            };
-            let argument = function.arguments.get(i as usize)?;
-            match module.types[argument.ty].inner {
-                TypeInner::Struct { ref members, .. } => {
-                    builtin(&members.get(index as usize)?.binding)
-                }
-                _ => None,
-            }
-        }
+    match *input_binding(module, function, exprs, expr)? {
+        naga::Binding::BuiltIn(builtin) => Some(builtin),
         _ => None,
     }
 }
