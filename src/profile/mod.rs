@@ -17,6 +17,7 @@
 //! 1 / (1 − ρ·f) (seed 002, §4), which every result is compared with.
 
 pub mod grid;
+mod inputs;
 pub mod metrics;
 
 use std::collections::HashMap;
@@ -32,7 +33,7 @@ use crate::report::{
     Report, ResultRow,
 };
 use crate::rewrite::{self, CacheFormat, Options as RewriteOptions, Reconstruction, Variant};
-use crate::runtime::{self, FrameInputs, Gpu, ObjectInputs, RunOptions, Runner};
+use crate::runtime::{self, FrameInputs, Gpu, RunOptions, Runner};
 use crate::scene::{self, Scene};
 use grid::{Axes, Design, Grid, Setting};
 use metrics::{Decisions, FrameError};
@@ -335,126 +336,16 @@ pub fn profile(
     // The scene must provide everything else the shader binds.
     scene::storage::check(&storage, scene)?;
     check_instancing(shader, scene, &reference_plan.vertex_layout)?;
-    let dir = scene_path.parent().unwrap_or(Path::new("."));
-    let mut textures = HashMap::new();
-    for resource in &reference_plan.bindings.original {
-        if !used.contains(&(resource.name.clone(), [resource.group, resource.binding])) {
-            continue;
-        }
-        match resource.kind.as_str() {
-            kind if runtime::is_sampled_texture(kind) => {
-                let source = scene.textures.get(&resource.name).ok_or_else(|| {
-                    fail(format!(
-                        "the shader binds texture `{}` (group {}, binding {}) and the scene does not provide it: add [textures.{}]",
-                        resource.name, resource.group, resource.binding, resource.name
-                    ))
-                })?;
-                // A depth texture (a shadow map) is made by the runtime,
-                // every texel at the far plane; RGBA texels cannot fill it.
-                if resource.kind.starts_with("depth-") && !source.is_far() {
-                    return Err(fail(format!(
-                        "texture `{}` is a depth texture: the scene can only give it as `generate = \"far\"`",
-                        resource.name
-                    )));
-                }
-                textures.insert(
-                    [resource.group, resource.binding],
-                    source.load(dir).map_err(fail)?,
-                );
-            }
-            "storage-read-write" => {
-                return Err(fail(format!(
-                    "the shader binds read-write storage `{}` (group {}, binding {}): a scene provides read-only storage only (`var<storage, read>`)",
-                    resource.name, resource.group, resource.binding
-                )))
-            }
-            "storage-texture" => {
-                return Err(fail(format!(
-                    "the shader binds storage texture `{}` (group {}, binding {}), which a scene cannot provide",
-                    resource.name, resource.group, resource.binding
-                )))
-            }
-            _ => {}
-        }
-    }
-    // What the scene defaulted, and the vertex inputs the mesh feeds a
-    // constant. An input it cannot feed is an error at the input.
-    let mut defaulted = scene.defaulted.clone();
-    for attribute in &reference_plan.vertex_layout {
-        let at_input = |message: String| {
-            let text = &shader.file.text;
-            let at = attribute_span(text, attribute.location, &attribute.name).unwrap_or(0..0);
-            Error::in_file(
-                shader.file.clone(),
-                Diagnostic::error(message).with_label(at, "this vertex input"),
-            )
-        };
-        let constant = match attribute.step {
-            plan::StepMode::Vertex => scene::mesh::VertexSource::of(attribute)
-                .map_err(at_input)?
-                .defaulted(attribute),
-            plan::StepMode::Instance => scene::instance_inputs::InstanceSource::of(attribute)
-                .map_err(at_input)?
-                .defaulted(),
-        };
-        if let Some(value) = constant {
-            defaulted.push(format!(
-                "vertex input @location({}) `{}` = {value}",
-                attribute.location, attribute.name
-            ));
-        }
-    }
-    let scene_meshes: Vec<scene::Mesh> = scene
-        .objects
-        .iter()
-        .map(|object| object.mesh.build(dir))
-        .collect::<Result<_, String>>()
-        .map_err(fail)?;
-    let layout = &reference_plan.vertex_layout;
-    let meshes: Vec<runtime::Mesh> = scene_meshes
-        .iter()
-        .map(|mesh| {
-            Ok(runtime::Mesh {
-                vertices: mesh.vertex_bytes(layout)?,
-                indices: mesh.indices.clone(),
-            })
-        })
-        .collect::<Result<_, String>>()
-        .map_err(fail)?;
-    let inputs_of = |scene: &Scene, frame: u32| -> Result<FrameInputs, Error> {
-        let state = scene.frame(frame, aspect);
-        let mut inputs = FrameInputs::default();
-        for (object, mesh) in scene_meshes.iter().enumerate() {
-            let mut buffers = HashMap::new();
-            for buffer in &uniforms {
-                let bytes = scene::uniforms::fill(buffer, scene, &state, object).map_err(fail)?;
-                buffers.insert([buffer.group, buffer.binding], bytes);
-            }
-            for buffer in &storage {
-                let bytes = scene::storage::fill(buffer, scene, &state, object).map_err(fail)?;
-                buffers.insert([buffer.group, buffer.binding], bytes);
-            }
-            let vertices = scene
-                .deformed(object, mesh, frame)
-                .map(|m| m.vertex_bytes(layout))
-                .transpose()
-                .map_err(fail)?;
-            let worlds: Vec<glam::Mat4> = state.instances[object]
-                .iter()
-                .map(|&instance| state.objects[object] * instance)
-                .collect();
-            let instance_inputs =
-                scene::instance_inputs::instance_inputs(layout, &worlds).map_err(fail)?;
-            inputs.objects.push(ObjectInputs {
-                mesh: object,
-                buffers,
-                vertices,
-                instances: scene.objects[object].instance_count(),
-                instance_inputs,
-            });
-        }
-        Ok(inputs)
-    };
+    let scene_inputs = inputs::SceneInputs::new(
+        shader,
+        scene,
+        scene_path,
+        &reference_plan,
+        &used,
+        (&uniforms, &storage),
+        aspect,
+    )?;
+    let inputs_of = |scene: &Scene, frame: u32| scene_inputs.frame(scene, frame);
 
     let gpu = Gpu::new().map_err(fail)?.ok_or_else(|| {
         fail("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers gives lavapipe)".into())
@@ -485,8 +376,8 @@ pub fn profile(
             &gpu,
             plan,
             source_of(sources),
-            &meshes,
-            &textures,
+            &scene_inputs.meshes,
+            &scene_inputs.textures,
             (size[0], size[1]),
             options,
         )
@@ -909,7 +800,7 @@ pub fn profile(
         entry: analysis.entry.clone(),
         scene: scene_path.display().to_string(),
         scene_description: scene.description.clone(),
-        defaulted,
+        defaulted: scene_inputs.defaulted.clone(),
         effects: scene.effects.clone(),
         size,
         frames,
@@ -1109,22 +1000,6 @@ fn confirm(
         time_ms,
         speedup: speedup(reference_ms, time_ms),
         speedup_ci: metrics::speedup_interval(&times[0], &times[1]),
-    })
-}
-
-/// Where vertex input `name` at `location` is declared: the first
-/// `@location(N)` followed by the name. naga keeps no span for entry point
-/// arguments and struct members; this only reads the text, to place a
-/// label.
-fn attribute_span(text: &str, location: u32, name: &str) -> Option<std::ops::Range<usize>> {
-    let marker = format!("@location({location})");
-    text.match_indices(&marker).find_map(|(at, _)| {
-        let after = at + marker.len();
-        let rest = &text[after..];
-        let found = rest.find(name)?;
-        // The name must come before the declaration ends.
-        (!rest[..found].contains([',', ';', '{', '}']))
-            .then(|| after + found..after + found + name.len())
     })
 }
 

@@ -1,0 +1,210 @@
+//! The scene's side of a measured run: what every configuration draws.
+//!
+//! The textures the shader binds, the meshes laid out as its vertex
+//! inputs, the list of what the scene gave a neutral value, and for each
+//! frame the buffers (uniforms, storage, per-instance inputs) the
+//! simulation fills. The reference and every variant draw the same
+//! inputs; another stage that runs a shader over a scene (whole-frame
+//! reuse) takes them from here too.
+
+use std::collections::{HashMap, HashSet};
+use std::path::Path;
+
+use crate::diagnostic::{Diagnostic, Error};
+use crate::front::Shader;
+use crate::plan::{self, Plan, VertexAttribute};
+use crate::runtime::{self, FrameInputs, ObjectInputs};
+use crate::scene::storage::StorageBuffer;
+use crate::scene::textures::Texels;
+use crate::scene::uniforms::UniformBuffer;
+use crate::scene::{self, Scene};
+
+/// What a scene gives a shader to draw.
+pub(super) struct SceneInputs<'a> {
+    /// The shader's sampled textures by `[group, binding]`.
+    pub textures: HashMap<[u32; 2], Texels>,
+    /// Each object's mesh, laid out as the shader's per-vertex inputs.
+    pub meshes: Vec<runtime::Mesh>,
+    /// What nothing said the value of: the scene's neutral values and the
+    /// vertex inputs fed a constant.
+    pub defaulted: Vec<String>,
+    scene_meshes: Vec<scene::Mesh>,
+    uniforms: &'a [UniformBuffer],
+    storage: &'a [StorageBuffer],
+    layout: &'a [VertexAttribute],
+    aspect: f32,
+}
+
+fn fail(message: String) -> Error {
+    Error::plain(Diagnostic::error(message))
+}
+
+impl<'a> SceneInputs<'a> {
+    /// Loads what `scene` (read from `scene_path`) gives the shader the
+    /// reference plan draws: every resource in `used` that is not a buffer
+    /// must come from the scene; a vertex input it cannot feed is an error
+    /// at the input.
+    pub fn new(
+        shader: &Shader,
+        scene: &Scene,
+        scene_path: &Path,
+        reference_plan: &'a Plan,
+        used: &HashSet<(String, [u32; 2])>,
+        (uniforms, storage): (&'a [UniformBuffer], &'a [StorageBuffer]),
+        aspect: f32,
+    ) -> Result<SceneInputs<'a>, Error> {
+        let dir = scene_path.parent().unwrap_or(Path::new("."));
+        let mut textures = HashMap::new();
+        for resource in &reference_plan.bindings.original {
+            if !used.contains(&(resource.name.clone(), [resource.group, resource.binding])) {
+                continue;
+            }
+            match resource.kind.as_str() {
+                kind if runtime::is_sampled_texture(kind) => {
+                    let source = scene.textures.get(&resource.name).ok_or_else(|| {
+                        fail(format!(
+                            "the shader binds texture `{}` (group {}, binding {}) and the scene does not provide it: add [textures.{}]",
+                            resource.name, resource.group, resource.binding, resource.name
+                        ))
+                    })?;
+                    // A depth texture (a shadow map) is made by the runtime,
+                    // every texel at the far plane; RGBA texels cannot fill it.
+                    if resource.kind.starts_with("depth-") && !source.is_far() {
+                        return Err(fail(format!(
+                            "texture `{}` is a depth texture: the scene can only give it as `generate = \"far\"`",
+                            resource.name
+                        )));
+                    }
+                    textures.insert(
+                        [resource.group, resource.binding],
+                        source.load(dir).map_err(fail)?,
+                    );
+                }
+                "storage-read-write" => {
+                    return Err(fail(format!(
+                        "the shader binds read-write storage `{}` (group {}, binding {}): a scene provides read-only storage only (`var<storage, read>`)",
+                        resource.name, resource.group, resource.binding
+                    )))
+                }
+                "storage-texture" => {
+                    return Err(fail(format!(
+                        "the shader binds storage texture `{}` (group {}, binding {}), which a scene cannot provide",
+                        resource.name, resource.group, resource.binding
+                    )))
+                }
+                _ => {}
+            }
+        }
+        // What the scene defaulted, and the vertex inputs the mesh feeds a
+        // constant. An input it cannot feed is an error at the input.
+        let mut defaulted = scene.defaulted.clone();
+        for attribute in &reference_plan.vertex_layout {
+            let at_input = |message: String| {
+                let text = &shader.file.text;
+                let at = attribute_span(text, attribute.location, &attribute.name).unwrap_or(0..0);
+                Error::in_file(
+                    shader.file.clone(),
+                    Diagnostic::error(message).with_label(at, "this vertex input"),
+                )
+            };
+            let constant = match attribute.step {
+                plan::StepMode::Vertex => scene::mesh::VertexSource::of(attribute)
+                    .map_err(at_input)?
+                    .defaulted(attribute),
+                plan::StepMode::Instance => scene::instance_inputs::InstanceSource::of(attribute)
+                    .map_err(at_input)?
+                    .defaulted(),
+            };
+            if let Some(value) = constant {
+                defaulted.push(format!(
+                    "vertex input @location({}) `{}` = {value}",
+                    attribute.location, attribute.name
+                ));
+            }
+        }
+        let scene_meshes: Vec<scene::Mesh> = scene
+            .objects
+            .iter()
+            .map(|object| object.mesh.build(dir))
+            .collect::<Result<_, String>>()
+            .map_err(fail)?;
+        let layout = &reference_plan.vertex_layout;
+        let meshes: Vec<runtime::Mesh> = scene_meshes
+            .iter()
+            .map(|mesh| {
+                Ok(runtime::Mesh {
+                    vertices: mesh.vertex_bytes(layout)?,
+                    indices: mesh.indices.clone(),
+                })
+            })
+            .collect::<Result<_, String>>()
+            .map_err(fail)?;
+        Ok(SceneInputs {
+            textures,
+            meshes,
+            defaulted,
+            scene_meshes,
+            uniforms,
+            storage,
+            layout,
+            aspect,
+        })
+    }
+
+    /// The buffers every object draws with at `frame` of `scene` (the
+    /// scene itself, or one with a single effect, for the miss causes).
+    pub fn frame(&self, scene: &Scene, frame: u32) -> Result<FrameInputs, Error> {
+        let (uniforms, storage, layout) = (self.uniforms, self.storage, self.layout);
+        let aspect = self.aspect;
+        let scene_meshes = &self.scene_meshes;
+
+        let state = scene.frame(frame, aspect);
+        let mut inputs = FrameInputs::default();
+        for (object, mesh) in scene_meshes.iter().enumerate() {
+            let mut buffers = HashMap::new();
+            for buffer in uniforms {
+                let bytes = scene::uniforms::fill(buffer, scene, &state, object).map_err(fail)?;
+                buffers.insert([buffer.group, buffer.binding], bytes);
+            }
+            for buffer in storage {
+                let bytes = scene::storage::fill(buffer, scene, &state, object).map_err(fail)?;
+                buffers.insert([buffer.group, buffer.binding], bytes);
+            }
+            let vertices = scene
+                .deformed(object, mesh, frame)
+                .map(|m| m.vertex_bytes(layout))
+                .transpose()
+                .map_err(fail)?;
+            let worlds: Vec<glam::Mat4> = state.instances[object]
+                .iter()
+                .map(|&instance| state.objects[object] * instance)
+                .collect();
+            let instance_inputs =
+                scene::instance_inputs::instance_inputs(layout, &worlds).map_err(fail)?;
+            inputs.objects.push(ObjectInputs {
+                mesh: object,
+                buffers,
+                vertices,
+                instances: scene.objects[object].instance_count(),
+                instance_inputs,
+            });
+        }
+        Ok(inputs)
+    }
+}
+
+/// Where vertex input `name` at `location` is declared: the first
+/// `@location(N)` followed by the name. naga keeps no span for entry point
+/// arguments and struct members; this only reads the text, to place a
+/// label.
+fn attribute_span(text: &str, location: u32, name: &str) -> Option<std::ops::Range<usize>> {
+    let marker = format!("@location({location})");
+    text.match_indices(&marker).find_map(|(at, _)| {
+        let after = at + marker.len();
+        let rest = &text[after..];
+        let found = rest.find(name)?;
+        // The name must come before the declaration ends.
+        (!rest[..found].contains([',', ';', '{', '}']))
+            .then(|| after + found..after + found + name.len())
+    })
+}
