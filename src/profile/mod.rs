@@ -648,107 +648,17 @@ pub fn profile(
             node_report(shader, candidate, payload_ms, fixed_ms, reference_ms)
         })
         .collect();
+    let measured = Measured {
+        reference_times: &reference_times,
+        reference_ms,
+        probes: &probes,
+        pixels: size[0] * size[1],
+    };
     let mut rows: Vec<(ResultRow, Picture)> = configs
         .into_iter()
         .map(|config| {
             let node = &node_reports[config.node];
-            let time_ms = metrics::median(&config.times);
-            let column = |f: fn(&Decisions) -> f64| {
-                metrics::mean(&config.decisions.iter().map(f).collect::<Vec<_>>())
-            };
-            let error = |f: fn(&FrameError) -> f64| {
-                metrics::mean(&config.errors.iter().map(f).collect::<Vec<_>>())
-            };
-            let hit_rate = column(|d| d.hit);
-            let f = node.p_over_t;
-            let ideal = 1.0 / (1.0 - hit_rate * f).max(1e-6);
-            // The most the variant could reach were its payload and shade
-            // free: its passes' fixed costs alone.
-            // (Without GPU timestamps there are no pass times: the frame's.)
-            let (fixed_frame_ms, fixed_passes) =
-                probed(&probes, ProbeOf::Variant(config.node, config.variant)).unwrap_or_default();
-            let fixed_ms = if fixed_passes.is_empty() {
-                fixed_frame_ms
-            } else {
-                fixed_passes.iter().map(|p| p.time_ms).sum()
-            };
-            let bound = speedup(reference_ms, fixed_ms);
-            let measured_speedup = speedup(reference_ms, time_ms);
-            let passes = pass_medians(&config.passes);
-            let row = ResultRow {
-                node: node.id.clone(),
-                node_text: node.text.clone(),
-                variant: config.variant,
-                refresh_period: config.setting.refresh_period,
-                refresh_quad: config.setting.refresh_quad,
-                reconstruction: config.setting.reconstruction,
-                cache_format: config.setting.cache_format,
-                depth_epsilon: config.setting.depth_epsilon,
-                time_ms,
-                passes,
-                speedup: measured_speedup,
-                speedup_ci: metrics::speedup_interval(&reference_times, &config.times),
-                psnr: error(|e| e.psnr),
-                psnr_frame: error(|e| e.psnr_frame),
-                worst_psnr: config
-                    .errors
-                    .iter()
-                    .map(|e| e.psnr)
-                    .fold(metrics::PSNR_CAP, f64::min),
-                flicker: metrics::mean(&config.flicker),
-                ssim: error(|e| e.ssim),
-                max_abs_error: config
-                    .errors
-                    .iter()
-                    .map(|e| e.max_abs_error)
-                    .fold(0.0, f64::max),
-                above_threshold: error(|e| e.above_threshold),
-                coverage: metrics::mean(
-                    &config
-                        .decisions
-                        .iter()
-                        .map(|d| d.covered as f64 / (size[0] * size[1]).max(1) as f64)
-                        .collect::<Vec<_>>(),
-                ),
-                hit_rate,
-                miss_rate: column(Decisions::miss),
-                offscreen_rate: column(|d| d.offscreen),
-                disocclusion_rate: column(|d| d.disoccluded),
-                invalid_rate: column(|d| d.invalid),
-                refresh_rate: column(|d| d.refresh),
-                max_age: config.ages.len().saturating_sub(1) as u32,
-                age_histogram: config.ages.clone(),
-                p_over_t: node.p_over_t,
-                ideal_speedup: ideal,
-                fixed_cost_ms: fixed_passes,
-                bound_with_fixed_costs: bound,
-                share_of_ideal: measured_speedup / ideal,
-                pareto_psnr: false,
-                pareto_ssim: false,
-                frame_stats: config
-                    .times
-                    .iter()
-                    .zip(&config.errors)
-                    .zip(&config.decisions)
-                    .enumerate()
-                    .map(|(frame, ((&time_ms, e), d))| FrameStats {
-                        time_ms,
-                        psnr: e.psnr,
-                        psnr_frame: e.psnr_frame,
-                        flicker: frame
-                            .checked_sub(1)
-                            .and_then(|i| config.flicker.get(i).copied())
-                            .unwrap_or(0.0),
-                        ssim: e.ssim,
-                        max_abs_error: e.max_abs_error,
-                        hit_rate: d.hit,
-                        miss_rate: d.miss(),
-                        refresh_rate: d.refresh,
-                    })
-                    .collect(),
-            };
-            let (color, classes) = config.last;
-            (row, (metrics::rgba8(&color), classes))
+            result_row(config, node, &measured)
         })
         .collect();
     rows.sort_by(|a, b| b.0.speedup.total_cmp(&a.0.speedup));
@@ -757,41 +667,15 @@ pub fn profile(
 
     // What causes the misses: the best configuration again, with one
     // declared effect at a time.
-    let mut miss_causes = Vec::new();
-    if let Some(best) = results.first() {
-        let rewritten = rewrite_of(shader, &analysis, best, &defaults)?;
-        let sources = sources_of(&rewritten)?;
-        let moving = scene
-            .effects
-            .iter()
-            .filter(|e| !matches!(e, scene::Effect::Disocclusion));
-        for &effect in moving {
-            let alone = Scene {
-                effects: vec![effect],
-                ..scene.clone()
-            };
-            let mut runner = new_runner(&rewritten.plan, &sources, run_options).map_err(fail)?;
-            let mut decisions = Vec::new();
-            for frame in 0..warmup + frames {
-                runner
-                    .frame(&gpu, &inputs_of(&alone, frame)?, None)
-                    .map_err(fail)?;
-                if frame >= warmup {
-                    let classes = runtime::read_texture(&gpu, runner.classes(), 4).map_err(fail)?;
-                    decisions.push(metrics::decisions(&classes));
-                }
-            }
-            let column = |f: fn(&Decisions) -> f64| {
-                metrics::mean(&decisions.iter().map(f).collect::<Vec<_>>())
-            };
-            miss_causes.push(MissCause {
-                effect,
-                miss_rate: column(Decisions::miss),
-                offscreen_rate: column(|d| d.offscreen),
-                disocclusion_rate: column(|d| d.disoccluded),
-            });
+    let miss_causes = match results.first() {
+        Some(best) => {
+            let rewritten = rewrite_of(shader, &analysis, best, &defaults)?;
+            let sources = sources_of(&rewritten)?;
+            let runner = || new_runner(&rewritten.plan, &sources, run_options);
+            miss_causes(&gpu, &runner, scene, &inputs_of, warmup, frames)?
         }
-    }
+        None => Vec::new(),
+    };
 
     let warnings = view_warnings(scene, aspect, warmup, &results);
     let report = Report {
@@ -945,6 +829,164 @@ fn view_warnings(scene: &Scene, aspect: f32, warmup: u32, results: &[ResultRow])
         }
     }
     warnings
+}
+
+/// What every configuration's row is measured against: the reference's
+/// frame times and median, the fixed-cost probes, the frame's pixels.
+struct Measured<'a> {
+    reference_times: &'a [f64],
+    reference_ms: f64,
+    probes: &'a [Probe],
+    pixels: u32,
+}
+
+/// One configuration's row of the report, from its measured frames, and
+/// its last frame's pictures.
+fn result_row(config: Config, node: &NodeReport, measured: &Measured) -> (ResultRow, Picture) {
+    let time_ms = metrics::median(&config.times);
+    let column = |f: fn(&Decisions) -> f64| {
+        metrics::mean(&config.decisions.iter().map(f).collect::<Vec<_>>())
+    };
+    let error =
+        |f: fn(&FrameError) -> f64| metrics::mean(&config.errors.iter().map(f).collect::<Vec<_>>());
+    let hit_rate = column(|d| d.hit);
+    let f = node.p_over_t;
+    let ideal = 1.0 / (1.0 - hit_rate * f).max(1e-6);
+    // The most the variant could reach were its payload and shade
+    // free: its passes' fixed costs alone.
+    // (Without GPU timestamps there are no pass times: the frame's.)
+    let (fixed_frame_ms, fixed_passes) = probed(
+        measured.probes,
+        ProbeOf::Variant(config.node, config.variant),
+    )
+    .unwrap_or_default();
+    let fixed_ms = if fixed_passes.is_empty() {
+        fixed_frame_ms
+    } else {
+        fixed_passes.iter().map(|p| p.time_ms).sum()
+    };
+    let bound = speedup(measured.reference_ms, fixed_ms);
+    let measured_speedup = speedup(measured.reference_ms, time_ms);
+    let passes = pass_medians(&config.passes);
+    let row = ResultRow {
+        node: node.id.clone(),
+        node_text: node.text.clone(),
+        variant: config.variant,
+        refresh_period: config.setting.refresh_period,
+        refresh_quad: config.setting.refresh_quad,
+        reconstruction: config.setting.reconstruction,
+        cache_format: config.setting.cache_format,
+        depth_epsilon: config.setting.depth_epsilon,
+        time_ms,
+        passes,
+        speedup: measured_speedup,
+        speedup_ci: metrics::speedup_interval(measured.reference_times, &config.times),
+        psnr: error(|e| e.psnr),
+        psnr_frame: error(|e| e.psnr_frame),
+        worst_psnr: config
+            .errors
+            .iter()
+            .map(|e| e.psnr)
+            .fold(metrics::PSNR_CAP, f64::min),
+        flicker: metrics::mean(&config.flicker),
+        ssim: error(|e| e.ssim),
+        max_abs_error: config
+            .errors
+            .iter()
+            .map(|e| e.max_abs_error)
+            .fold(0.0, f64::max),
+        above_threshold: error(|e| e.above_threshold),
+        coverage: metrics::mean(
+            &config
+                .decisions
+                .iter()
+                .map(|d| d.covered as f64 / measured.pixels.max(1) as f64)
+                .collect::<Vec<_>>(),
+        ),
+        hit_rate,
+        miss_rate: column(Decisions::miss),
+        offscreen_rate: column(|d| d.offscreen),
+        disocclusion_rate: column(|d| d.disoccluded),
+        invalid_rate: column(|d| d.invalid),
+        refresh_rate: column(|d| d.refresh),
+        max_age: config.ages.len().saturating_sub(1) as u32,
+        age_histogram: config.ages.clone(),
+        p_over_t: node.p_over_t,
+        ideal_speedup: ideal,
+        fixed_cost_ms: fixed_passes,
+        bound_with_fixed_costs: bound,
+        share_of_ideal: measured_speedup / ideal,
+        pareto_psnr: false,
+        pareto_ssim: false,
+        frame_stats: config
+            .times
+            .iter()
+            .zip(&config.errors)
+            .zip(&config.decisions)
+            .enumerate()
+            .map(|(frame, ((&time_ms, e), d))| FrameStats {
+                time_ms,
+                psnr: e.psnr,
+                psnr_frame: e.psnr_frame,
+                flicker: frame
+                    .checked_sub(1)
+                    .and_then(|i| config.flicker.get(i).copied())
+                    .unwrap_or(0.0),
+                ssim: e.ssim,
+                max_abs_error: e.max_abs_error,
+                hit_rate: d.hit,
+                miss_rate: d.miss(),
+                refresh_rate: d.refresh,
+            })
+            .collect(),
+    };
+    let (color, classes) = config.last;
+    (row, (metrics::rgba8(&color), classes))
+}
+
+/// The misses each declared effect causes alone: a run from `runner` per
+/// moving effect, the scene with only that effect, its decisions averaged
+/// over the measured frames (disocclusion is what the others cause).
+fn miss_causes(
+    gpu: &Gpu,
+    runner: &dyn Fn() -> Result<Runner, String>,
+    scene: &Scene,
+    inputs_of: &dyn Fn(&Scene, u32) -> Result<FrameInputs, Error>,
+    warmup: u32,
+    frames: u32,
+) -> Result<Vec<MissCause>, Error> {
+    let fail = |message: String| Error::plain(Diagnostic::error(message));
+    let mut causes = Vec::new();
+    let moving = scene
+        .effects
+        .iter()
+        .filter(|e| !matches!(e, scene::Effect::Disocclusion));
+    for &effect in moving {
+        let alone = Scene {
+            effects: vec![effect],
+            ..scene.clone()
+        };
+        let mut runner = runner().map_err(fail)?;
+        let mut decisions = Vec::new();
+        for frame in 0..warmup + frames {
+            runner
+                .frame(gpu, &inputs_of(&alone, frame)?, None)
+                .map_err(fail)?;
+            if frame >= warmup {
+                let classes = runtime::read_texture(gpu, runner.classes(), 4).map_err(fail)?;
+                decisions.push(metrics::decisions(&classes));
+            }
+        }
+        let column =
+            |f: fn(&Decisions) -> f64| metrics::mean(&decisions.iter().map(f).collect::<Vec<_>>());
+        causes.push(MissCause {
+            effect,
+            miss_rate: column(Decisions::miss),
+            offscreen_rate: column(|d| d.offscreen),
+            disocclusion_rate: column(|d| d.disoccluded),
+        });
+    }
+    Ok(causes)
 }
 
 /// What times a frame.
