@@ -4,9 +4,9 @@
 //! and with every requested node × variant × Δn × k, frame after frame,
 //! **interleaved** — each frame renders every configuration in turn — so
 //! machine drift hits all alike. Each pass is timed with GPU timestamp
-//! queries (wgpu-profiler); a frame's time is the sum of its passes, and a
-//! configuration's time the median over the measured frames (after the
-//! warm-up). After the warm-up every frame is read back and compared with
+//! queries (wgpu-profiler); a frame's time spans its passes, and a
+//! configuration's time is the median over the measured frames (after the
+//! warm-up), with an interval over frames and rounds. After the warm-up every frame is read back and compared with
 //! the reference frame of the same index (PSNR, SSIM, largest error, share
 //! of pixels above a threshold), and the classification pass counts hits,
 //! misses (off-screen, disoccluded) and refreshes.
@@ -15,10 +15,18 @@
 //! pixel, times the node's slice alone; over the reference time it is f,
 //! and with ρ the measured reuse fraction the ideal speed-up is
 //! 1 / (1 − ρ·f) (seed 002, §4), which every result is compared with.
+//!
+//! The stages, in order: the scene's inputs ([`inputs`]: textures,
+//! meshes, each frame's buffers); the configurations the [`grid`] keeps,
+//! each a runner; the interleaved measured run ([`run`]: anything
+//! [`run::Measured`] is drawn after the reference every frame); each
+//! configuration's row (`result_row`); the misses each effect causes alone
+//! (`miss_causes`); and the answer, its winner measured again (`confirm`).
 
 pub mod grid;
 mod inputs;
 pub mod metrics;
+mod run;
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -37,6 +45,7 @@ use crate::runtime::{self, FrameInputs, Gpu, RunOptions, Runner};
 use crate::scene::{self, Scene};
 use grid::{Axes, Design, Grid, Setting};
 use metrics::{Decisions, FrameError};
+use run::{measured_run, read_linear, timed, Clock, Measured, PayloadRun, ReferenceRun, Sample};
 
 pub use crate::analysis::Nodes;
 pub use crate::report::Budget;
@@ -191,6 +200,30 @@ struct Probe {
     passes: HashMap<String, Vec<f64>>,
 }
 
+/// A probe has no cache to warm: it runs from the last warm-up frame on
+/// (one frame before it is measured), not through the warm-up.
+impl Measured for Probe {
+    fn label(&self) -> &str {
+        "fixed cost"
+    }
+    fn runner(&mut self) -> &mut Runner {
+        &mut self.runner
+    }
+    fn first_frame(&self, warmup: u32) -> u32 {
+        warmup.saturating_sub(1)
+    }
+    fn traced(&self) -> bool {
+        false
+    }
+    fn record(&mut self, sample: Sample) -> Result<(), String> {
+        self.times.push(sample.time);
+        for (name, ms) in sample.passes {
+            self.passes.entry(name).or_default().push(ms);
+        }
+        Ok(())
+    }
+}
+
 impl Probe {
     fn new(of: ProbeOf, runner: Runner) -> Self {
         Probe {
@@ -246,6 +279,52 @@ struct Config {
     ages: Vec<u64>,
     /// The last measured frame, in linear float, and its classes.
     last: (metrics::LinearFrame, Vec<u8>),
+    /// The frame's size and the error threshold its frames are compared
+    /// with.
+    size: [u32; 2],
+    error_threshold: f64,
+}
+
+impl Measured for Config {
+    fn label(&self) -> &str {
+        &self.label
+    }
+    fn runner(&mut self) -> &mut Runner {
+        &mut self.runner
+    }
+    /// Its time and passes, its picture against the reference's (error,
+    /// flicker), the cache's decisions and the ages it showed.
+    fn record(&mut self, sample: Sample) -> Result<(), String> {
+        self.times.push(sample.time);
+        for (name, ms) in sample.passes {
+            self.passes.entry(name).or_default().push(ms);
+        }
+        let color = read_linear(sample.gpu, self.runner.color())?;
+        let classes = runtime::read_texture(sample.gpu, self.runner.classes(), 4)?;
+        let reference = sample.reference;
+        self.errors.push(metrics::compare(
+            &reference.now,
+            &color,
+            &classes,
+            self.size[0],
+            self.size[1],
+            self.error_threshold,
+        ));
+        if self.errors.len() > 1 {
+            self.flicker.push(metrics::flicker(
+                &reference.before,
+                &reference.now,
+                &self.last.0,
+                &color,
+                &classes,
+            ));
+        }
+        self.decisions.push(metrics::decisions(&classes));
+        let ages = runtime::read_texture(sample.gpu, self.runner.age(), 2)?;
+        metrics::add_ages(&classes, &ages, &mut self.ages);
+        self.last = (color, classes);
+        Ok(())
+    }
 }
 
 /// Profiles `shader` on `scene`. `scene_path` names the scene file (its
@@ -418,7 +497,10 @@ pub fn profile(
     let mut payloads = Vec::new();
     let mut probes = Vec::new();
     for (node, (candidate, _)) in nodes.iter().enumerate() {
-        payloads.push((payload_runner(candidate, &base)?, Vec::new()));
+        payloads.push(PayloadRun {
+            runner: payload_runner(candidate, &base)?,
+            times: Vec::new(),
+        });
         probes.push(Probe::new(
             ProbeOf::Payload(node),
             payload_runner(candidate, &free)?,
@@ -518,137 +600,51 @@ pub fn profile(
                     decisions: Vec::new(),
                     ages: Vec::new(),
                     last: (Vec::new(), Vec::new()),
+                    size,
+                    error_threshold: options.error_threshold,
                 });
             }
         }
     }
 
-    // Probes have no cache to warm: they run from the last warm-up frame
-    // on (one frame before they are measured), not through the warm-up.
-    let probes_from = warmup.saturating_sub(1);
-    let per_frame = 1 + payloads.len() + configs.len();
-    progress.start(
-        u64::from(warmup + frames) * per_frame as u64
-            + u64::from(warmup + frames - probes_from) * probes.len() as u64,
-    );
-    let mut reference_times = Vec::new();
-    let mut reference_pixels: metrics::LinearFrame = Vec::new();
-    let mut reference_before: metrics::LinearFrame = Vec::new();
-    let mut trace = Vec::new();
-    for frame in 0..warmup + frames {
-        let measured = frame >= warmup;
-        let last = frame + 1 == warmup + frames;
-        let inputs = inputs_of(scene, frame)?;
-
-        let (time, _, raw) = timed(
-            &gpu,
-            &mut profiler,
-            timestamps,
-            &mut reference,
-            &inputs,
-            "reference",
-        )
-        .map_err(fail)?;
-        if last {
-            trace.extend(raw);
-        }
-        progress.step("reference");
-        if measured {
-            reference_times.push(time);
-            reference_before = std::mem::replace(
-                &mut reference_pixels,
-                read_linear(&gpu, reference.color()).map_err(fail)?,
-            );
-        }
-        for (runner, times) in &mut payloads {
-            let (time, _, raw) =
-                timed(&gpu, &mut profiler, timestamps, runner, &inputs, "payload").map_err(fail)?;
-            if last {
-                trace.extend(raw);
-            }
-            progress.step("payload");
-            if measured {
-                times.push(time);
-            }
-        }
-        for probe in probes.iter_mut().filter(|_| frame >= probes_from) {
-            let (time, passes, _) = timed(
-                &gpu,
-                &mut profiler,
-                timestamps,
-                &mut probe.runner,
-                &inputs,
-                "fixed cost",
-            )
-            .map_err(fail)?;
-            progress.step("fixed cost");
-            if measured {
-                probe.times.push(time);
-                for (name, ms) in passes {
-                    probe.passes.entry(name).or_default().push(ms);
-                }
-            }
-        }
-        for config in &mut configs {
-            let (time, passes, raw) = timed(
-                &gpu,
-                &mut profiler,
-                timestamps,
-                &mut config.runner,
-                &inputs,
-                &config.label,
-            )
-            .map_err(fail)?;
-            if last {
-                trace.extend(raw);
-            }
-            progress.step(&config.label);
-            if !measured {
-                continue;
-            }
-            config.times.push(time);
-            for (name, ms) in passes {
-                config.passes.entry(name).or_default().push(ms);
-            }
-            let color = read_linear(&gpu, config.runner.color()).map_err(fail)?;
-            let classes = runtime::read_texture(&gpu, config.runner.classes(), 4).map_err(fail)?;
-            config.errors.push(metrics::compare(
-                &reference_pixels,
-                &color,
-                &classes,
-                size[0],
-                size[1],
-                options.error_threshold,
-            ));
-            if config.errors.len() > 1 {
-                config.flicker.push(metrics::flicker(
-                    &reference_before,
-                    &reference_pixels,
-                    &config.last.0,
-                    &color,
-                    &classes,
-                ));
-            }
-            config.decisions.push(metrics::decisions(&classes));
-            let ages = runtime::read_texture(&gpu, config.runner.age(), 2).map_err(fail)?;
-            metrics::add_ages(&classes, &ages, &mut config.ages);
-            config.last = (color, classes);
-        }
-    }
+    let mut clock = Clock {
+        gpu: &gpu,
+        profiler: &mut profiler,
+        timestamps,
+    };
+    let mut reference_run = ReferenceRun::default();
+    let mut measured: Vec<&mut dyn Measured> = Vec::new();
+    measured.extend(payloads.iter_mut().map(|p| p as &mut dyn Measured));
+    measured.extend(probes.iter_mut().map(|p| p as &mut dyn Measured));
+    measured.extend(configs.iter_mut().map(|c| c as &mut dyn Measured));
+    let trace = measured_run(
+        &mut clock,
+        (&mut reference, &mut reference_run),
+        &mut measured,
+        &|frame| inputs_of(scene, frame),
+        (warmup, frames),
+        progress,
+    )?;
+    drop(measured);
     progress.finish();
+    let ReferenceRun {
+        times: reference_times,
+        now: reference_pixels,
+        ..
+    } = reference_run;
 
     let reference_ms = metrics::median(&reference_times);
     let node_reports: Vec<NodeReport> = nodes
         .iter()
         .zip(&payloads)
         .enumerate()
-        .map(|(node, ((candidate, _), (_, times)))| {
-            let payload_ms = metrics::median(times);
+        .map(|(node, ((candidate, _), payload))| {
+            let payload_ms = metrics::median(&payload.times);
             let fixed_ms = probed(&probes, ProbeOf::Payload(node)).map_or(0.0, |(ms, _)| ms);
             node_report(shader, candidate, payload_ms, fixed_ms, reference_ms)
         })
         .collect();
-    let measured = Measured {
+    let baseline = Baseline {
         reference_times: &reference_times,
         reference_ms,
         probes: &probes,
@@ -658,7 +654,7 @@ pub fn profile(
         .into_iter()
         .map(|config| {
             let node = &node_reports[config.node];
-            result_row(config, node, &measured)
+            result_row(config, node, &baseline)
         })
         .collect();
     rows.sort_by(|a, b| b.0.speedup.total_cmp(&a.0.speedup));
@@ -774,13 +770,6 @@ pub fn profile(
 /// alike: linear float, values above 1 kept.
 pub const MEASURED_COLOR_FORMAT: &str = "rgba16float";
 
-/// A frame's colour target read back in linear float.
-fn read_linear(gpu: &Gpu, texture: &wgpu::Texture) -> Result<metrics::LinearFrame, String> {
-    Ok(metrics::linear_from_f16(&runtime::read_texture(
-        gpu, texture, 8,
-    )?))
-}
-
 /// Less than this share of the image covered, the figures say little.
 const FEW_PIXELS: f64 = 0.01;
 
@@ -833,7 +822,7 @@ fn view_warnings(scene: &Scene, aspect: f32, warmup: u32, results: &[ResultRow])
 
 /// What every configuration's row is measured against: the reference's
 /// frame times and median, the fixed-cost probes, the frame's pixels.
-struct Measured<'a> {
+struct Baseline<'a> {
     reference_times: &'a [f64],
     reference_ms: f64,
     probes: &'a [Probe],
@@ -842,7 +831,7 @@ struct Measured<'a> {
 
 /// One configuration's row of the report, from its measured frames, and
 /// its last frame's pictures.
-fn result_row(config: Config, node: &NodeReport, measured: &Measured) -> (ResultRow, Picture) {
+fn result_row(config: Config, node: &NodeReport, baseline: &Baseline) -> (ResultRow, Picture) {
     let time_ms = metrics::median(&config.times);
     let column = |f: fn(&Decisions) -> f64| {
         metrics::mean(&config.decisions.iter().map(f).collect::<Vec<_>>())
@@ -856,7 +845,7 @@ fn result_row(config: Config, node: &NodeReport, measured: &Measured) -> (Result
     // free: its passes' fixed costs alone.
     // (Without GPU timestamps there are no pass times: the frame's.)
     let (fixed_frame_ms, fixed_passes) = probed(
-        measured.probes,
+        baseline.probes,
         ProbeOf::Variant(config.node, config.variant),
     )
     .unwrap_or_default();
@@ -865,8 +854,8 @@ fn result_row(config: Config, node: &NodeReport, measured: &Measured) -> (Result
     } else {
         fixed_passes.iter().map(|p| p.time_ms).sum()
     };
-    let bound = speedup(measured.reference_ms, fixed_ms);
-    let measured_speedup = speedup(measured.reference_ms, time_ms);
+    let bound = speedup(baseline.reference_ms, fixed_ms);
+    let measured_speedup = speedup(baseline.reference_ms, time_ms);
     let passes = pass_medians(&config.passes);
     let row = ResultRow {
         node: node.id.clone(),
@@ -880,7 +869,7 @@ fn result_row(config: Config, node: &NodeReport, measured: &Measured) -> (Result
         time_ms,
         passes,
         speedup: measured_speedup,
-        speedup_ci: metrics::speedup_interval(measured.reference_times, &config.times),
+        speedup_ci: metrics::speedup_interval(baseline.reference_times, &config.times),
         psnr: error(|e| e.psnr),
         psnr_frame: error(|e| e.psnr_frame),
         worst_psnr: config
@@ -900,7 +889,7 @@ fn result_row(config: Config, node: &NodeReport, measured: &Measured) -> (Result
             &config
                 .decisions
                 .iter()
-                .map(|d| d.covered as f64 / measured.pixels.max(1) as f64)
+                .map(|d| d.covered as f64 / baseline.pixels.max(1) as f64)
                 .collect::<Vec<_>>(),
         ),
         hit_rate,
@@ -987,13 +976,6 @@ fn miss_causes(
         });
     }
     Ok(causes)
-}
-
-/// What times a frame.
-struct Clock<'a> {
-    gpu: &'a Gpu,
-    profiler: &'a mut wgpu_profiler::GpuProfiler,
-    timestamps: bool,
 }
 
 /// The original (`runners[0]`) and the run's winner (`runners[1]`) again,
@@ -1133,66 +1115,6 @@ pub fn rewrite_of(
             row.node, row.variant, refusal.reason
         )))
     })
-}
-
-/// A frame's time, each pass's (ms), and the profiler's raw scopes.
-type Timed = (
-    f64,
-    Vec<(String, f64)>,
-    Vec<wgpu_profiler::GpuTimerQueryResult>,
-);
-
-/// Renders one frame of `runner` and returns its time and each pass's, in
-/// ms: from GPU timestamps when the device has them, else from submission
-/// to completion on the CPU.
-fn timed(
-    gpu: &Gpu,
-    profiler: &mut wgpu_profiler::GpuProfiler,
-    timestamps: bool,
-    runner: &mut Runner,
-    inputs: &FrameInputs,
-    label: &str,
-) -> Result<Timed, String> {
-    let start = std::time::Instant::now();
-    runner.frame(gpu, inputs, timestamps.then_some((&mut *profiler, label)))?;
-    if timestamps {
-        profiler.end_frame().map_err(|err| err.to_string())?;
-    }
-    gpu.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|err| err.to_string())?;
-    let wall = start.elapsed().as_secs_f64() * 1e3;
-    if !timestamps {
-        return Ok((wall, Vec::new(), Vec::new()));
-    }
-    let results = profiler
-        .process_finished_frame(gpu.queue.get_timestamp_period())
-        .unwrap_or_default();
-    // The frame's time runs from the first pass's start timestamp to the
-    // last one's end: what runs between passes (barriers, layout changes,
-    // the hand-over from one pass to the next) is part of it.
-    let mut passes = Vec::new();
-    let mut span: Option<(f64, f64)> = None;
-    for result in &results {
-        if let Some(range) = &result.time {
-            let name = result
-                .label
-                .rsplit('/')
-                .next()
-                .unwrap_or_default()
-                .to_string();
-            // The classification is a diagnostic, not part of the frame.
-            if name != "classify" {
-                passes.push((name, (range.end - range.start) * 1e3));
-                span = Some(match span {
-                    None => (range.start, range.end),
-                    Some((start, end)) => (start.min(range.start), end.max(range.end)),
-                });
-            }
-        }
-    }
-    let total = span.map_or(0.0, |(start, end)| (end - start) * 1e3);
-    Ok((total, passes, results))
 }
 
 /// Looks shader files up by name, for `Runner::new` (which reads them
