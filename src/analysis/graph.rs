@@ -235,7 +235,7 @@ impl ExprGraph {
     /// components it needs, whose only path up leads to it; the slice's
     /// cost is its tree cost plus that of every shared component in it,
     /// a bit set over the shared components carried up like a fact.
-    /// `None` when those bit sets would outgrow [`SHARED_BITS_BUDGET`].
+    /// `None` when those bit sets would outgrow 16 MiB (`SHARED_BITS_BUDGET`).
     pub fn summaries<F: SliceFact>(&self, weight: &[f64], fact: &[F]) -> Option<Summaries<F>> {
         // Tarjan's order is a reverse topological one: what a component
         // needs comes before it.

@@ -6,7 +6,7 @@
 //! machine drift hits all alike. Each pass is timed with GPU timestamp
 //! queries (wgpu-profiler); a frame's time spans its passes, and a
 //! configuration's time is the median over the measured frames (after the
-//! warm-up), with an interval over frames and rounds. After the warm-up every frame is read back and compared with
+//! warm-up), with a bootstrap interval over the frames. After the warm-up every frame is read back and compared with
 //! the reference frame of the same index (PSNR, SSIM, largest error, share
 //! of pixels above a threshold), and the classification pass counts hits,
 //! misses (off-screen, disoccluded) and refreshes.
@@ -16,10 +16,10 @@
 //! and with ρ the measured reuse fraction the ideal speed-up is
 //! 1 / (1 − ρ·f) (seed 002, §4), which every result is compared with.
 //!
-//! The stages, in order: the scene's inputs ([`inputs`]: textures,
+//! The stages, in order: the scene's inputs (`inputs`: textures,
 //! meshes, each frame's buffers); the configurations the [`grid`] keeps,
-//! each a runner; the interleaved measured run ([`run`]: anything
-//! [`run::Measured`] is drawn after the reference every frame); each
+//! each a runner; the interleaved measured run (`run`: anything
+//! `run::Measured` is drawn after the reference every frame); each
 //! configuration's row (`result_row`); the misses each effect causes alone
 //! (`miss_causes`); and the answer, its winner measured again (`confirm`).
 
