@@ -59,8 +59,8 @@ impl<'a> SceneInputs<'a> {
             if !used.contains(&(resource.name.clone(), [resource.group, resource.binding])) {
                 continue;
             }
-            match resource.kind.as_str() {
-                kind if runtime::is_sampled_texture(kind) => {
+            match resource.kind {
+                kind if kind.sampled().is_some() => {
                     let source = scene.textures.get(&resource.name).ok_or_else(|| {
                         fail(format!(
                             "the shader binds texture `{}` (group {}, binding {}) and the scene does not provide it: add [textures.{}]",
@@ -69,7 +69,7 @@ impl<'a> SceneInputs<'a> {
                     })?;
                     // A depth texture (a shadow map) is made by the runtime,
                     // every texel at the far plane; RGBA texels cannot fill it.
-                    if resource.kind.starts_with("depth-") && !source.is_far() {
+                    if kind.sampled().is_some_and(|t| t.depth) && !source.is_far() {
                         return Err(fail(format!(
                             "texture `{}` is a depth texture: the scene can only give it as `generate = \"far\"`",
                             resource.name
@@ -80,13 +80,13 @@ impl<'a> SceneInputs<'a> {
                         source.load(dir).map_err(fail)?,
                     );
                 }
-                "storage-read-write" => {
+                plan::ResourceKind::StorageReadWrite => {
                     return Err(fail(format!(
                         "the shader binds read-write storage `{}` (group {}, binding {}): a scene provides read-only storage only (`var<storage, read>`)",
                         resource.name, resource.group, resource.binding
                     )))
                 }
-                "storage-texture" => {
+                plan::ResourceKind::StorageTexture => {
                     return Err(fail(format!(
                         "the shader binds storage texture `{}` (group {}, binding {}), which a scene cannot provide",
                         resource.name, resource.group, resource.binding

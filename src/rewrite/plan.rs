@@ -123,48 +123,48 @@ pub fn build(inputs: Inputs) -> Plan {
             })
         })
         .collect();
-    let cache_resource = |binding: u32, name: &str, kind: &str, source: &str| Resource {
+    let cache_resource = |binding: u32, name: &str, kind: ResourceKind, source: &str| Resource {
         group,
         binding: slot.first_binding + binding,
         name: name.into(),
-        kind: kind.into(),
+        kind,
         source: Some(source.into()),
     };
     let cache = vec![
         cache_resource(
             rewrite::CACHE_PARAMS_BINDING,
             "cache_params",
-            "uniform",
+            ResourceKind::Uniform,
             "the refresh uniform (CacheParams), updated every frame",
         ),
         cache_resource(
             rewrite::PREVIOUS_PAYLOAD_BINDING,
             "cache_previous_payload",
-            "texture",
+            ResourceKind::Texture,
             "last frame's payload texture",
         ),
         cache_resource(
             rewrite::PREVIOUS_DEPTH_BINDING,
             "cache_previous_depth",
-            "depth-texture",
+            ResourceKind::DepthTexture,
             "last frame's depth buffer",
         ),
         cache_resource(
             rewrite::CURRENT_PAYLOAD_BINDING,
             "cache_current_payload",
-            "texture",
+            ResourceKind::Texture,
             "this frame's payload texture, after the passes that write it",
         ),
         cache_resource(
             rewrite::SAMPLER_BINDING,
             "cache_sampler",
-            "sampler",
+            ResourceKind::Sampler,
             "linear filtering, clamp to edge",
         ),
         cache_resource(
             rewrite::PREVIOUS_AGE_BINDING,
             "cache_previous_age",
-            "texture",
+            ResourceKind::Texture,
             "last frame's age texture (r16float)",
         ),
     ];
@@ -344,17 +344,18 @@ fn resource(
     source: Option<String>,
 ) -> Option<Resource> {
     let binding = global.binding.as_ref()?;
+    use ResourceKind as K;
     let kind = match global.space {
-        naga::AddressSpace::Uniform => "uniform",
+        naga::AddressSpace::Uniform => K::Uniform,
         naga::AddressSpace::Storage { access } if access.contains(naga::StorageAccess::STORE) => {
-            "storage-read-write"
+            K::StorageReadWrite
         }
-        naga::AddressSpace::Storage { .. } => "storage",
+        naga::AddressSpace::Storage { .. } => K::Storage,
         _ => match module.types[global.ty].inner {
             TypeInner::Image {
                 class: naga::ImageClass::Storage { .. },
                 ..
-            } => "storage-texture",
+            } => K::StorageTexture,
             TypeInner::Image {
                 dim,
                 arrayed,
@@ -362,28 +363,28 @@ fn resource(
             } => {
                 let depth = matches!(class, naga::ImageClass::Depth { .. });
                 match (dim, arrayed, depth) {
-                    (naga::ImageDimension::D2, false, false) => "texture",
-                    (naga::ImageDimension::D2, true, false) => "texture-array",
-                    (naga::ImageDimension::Cube, false, false) => "cube-texture",
-                    (naga::ImageDimension::Cube, true, false) => "cube-texture-array",
-                    (naga::ImageDimension::D2, false, true) => "depth-texture",
-                    (naga::ImageDimension::D2, true, true) => "depth-texture-array",
-                    (naga::ImageDimension::Cube, false, true) => "depth-cube-texture",
-                    (naga::ImageDimension::Cube, true, true) => "depth-cube-texture-array",
-                    (naga::ImageDimension::D1, ..) => "texture-1d",
-                    (naga::ImageDimension::D3, ..) => "texture-3d",
+                    (naga::ImageDimension::D2, false, false) => K::Texture,
+                    (naga::ImageDimension::D2, true, false) => K::TextureArray,
+                    (naga::ImageDimension::Cube, false, false) => K::CubeTexture,
+                    (naga::ImageDimension::Cube, true, false) => K::CubeTextureArray,
+                    (naga::ImageDimension::D2, false, true) => K::DepthTexture,
+                    (naga::ImageDimension::D2, true, true) => K::DepthTextureArray,
+                    (naga::ImageDimension::Cube, false, true) => K::DepthCubeTexture,
+                    (naga::ImageDimension::Cube, true, true) => K::DepthCubeTextureArray,
+                    (naga::ImageDimension::D1, ..) => K::Texture1d,
+                    (naga::ImageDimension::D3, ..) => K::Texture3d,
                 }
             }
-            TypeInner::Sampler { comparison: true } => "comparison-sampler",
-            TypeInner::Sampler { .. } => "sampler",
-            _ => "other",
+            TypeInner::Sampler { comparison: true } => K::ComparisonSampler,
+            TypeInner::Sampler { .. } => K::Sampler,
+            _ => K::Other,
         },
     };
     Some(Resource {
         group: binding.group,
         binding: binding.binding,
         name: global.name.clone().unwrap_or_default(),
-        kind: kind.into(),
+        kind,
         source,
     })
 }

@@ -15,6 +15,4 @@ mod pipelines;
 mod runner;
 
 pub use pipelines::{pipelines, Gpu, PipelineOptions};
-pub use runner::{
-    is_sampled_texture, read_texture, FrameInputs, Mesh, ObjectInputs, RunOptions, Runner,
-};
+pub use runner::{read_texture, FrameInputs, Mesh, ObjectInputs, RunOptions, Runner};

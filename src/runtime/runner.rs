@@ -3,7 +3,9 @@
 use std::collections::HashMap;
 
 use super::pipelines::{attribute_size, pipelines, texture_format, Gpu, PipelineOptions};
-use crate::plan::{CacheFormat, LoadOp, Pass, Plan, StepMode, TargetKind, VertexAttribute};
+use crate::plan::{
+    CacheFormat, LoadOp, Pass, Plan, ResourceKind, StepMode, TargetKind, VertexAttribute,
+};
 use crate::scene::textures::Texels;
 
 /// An indexed triangle mesh whose vertices are laid out as the plan's
@@ -216,7 +218,7 @@ impl Runner {
         let mut samplers = HashMap::new();
         for resource in &plan.bindings.original {
             let key = [resource.group, resource.binding];
-            if let Some((depth, shape)) = sampled_shape(&resource.kind) {
+            if let Some((depth, shape)) = sampled_shape(resource.kind) {
                 let view = if depth {
                     far_depth(gpu, &resource.name, depth_format, shape)
                 } else {
@@ -228,9 +230,9 @@ impl Runner {
                 views.insert(key, view);
                 continue;
             }
-            match resource.kind.as_str() {
-                "sampler" | "comparison-sampler" => {
-                    let compare = resource.kind == "comparison-sampler";
+            match resource.kind {
+                ResourceKind::Sampler | ResourceKind::ComparisonSampler => {
+                    let compare = resource.kind == ResourceKind::ComparisonSampler;
                     samplers.insert(
                         key,
                         device.create_sampler(&wgpu::SamplerDescriptor {
@@ -246,7 +248,7 @@ impl Runner {
                         }),
                     );
                 }
-                "uniform" | "storage" => {}
+                ResourceKind::Uniform | ResourceKind::Storage => {}
                 other => {
                     return Err(format!(
                         "cannot bind `{}`: {other} bindings are not supported",
@@ -613,7 +615,7 @@ impl Runner {
                     .find(|t| t.group == group && t.binding == binding)
                     .map(|t| &t.shadows)
             })
-            .is_some_and(|resource| resource.kind == "storage");
+            .is_some_and(|resource| resource.kind == ResourceKind::Storage);
         let usage = if storage {
             wgpu::BufferUsages::STORAGE
         } else {
@@ -786,26 +788,18 @@ fn instance_records(
     Ok(out)
 }
 
-pub fn is_sampled_texture(kind: &str) -> bool {
-    sampled_shape(kind).is_some()
-}
-
 /// Whether a plan's texture kind is a depth texture, and its shape; `None`
 /// for what is not a sampled texture.
-fn sampled_shape(kind: &str) -> Option<(bool, SampledShape)> {
+fn sampled_shape(kind: ResourceKind) -> Option<(bool, SampledShape)> {
     use wgpu::TextureViewDimension as D;
-    let (depth, rest) = match kind.strip_prefix("depth-") {
-        Some(rest) => (true, rest),
-        None => (false, kind),
+    let texture = kind.sampled()?;
+    let (dimension, layers) = match (texture.cube, texture.arrayed) {
+        (false, false) => (D::D2, 1),
+        (false, true) => (D::D2Array, ARRAY_LAYERS),
+        (true, false) => (D::Cube, 6),
+        (true, true) => (D::CubeArray, 6 * CUBE_ARRAY_CUBES),
     };
-    let (dimension, layers) = match rest {
-        "texture" => (D::D2, 1),
-        "texture-array" => (D::D2Array, ARRAY_LAYERS),
-        "cube-texture" => (D::Cube, 6),
-        "cube-texture-array" => (D::CubeArray, 6 * CUBE_ARRAY_CUBES),
-        _ => return None,
-    };
-    Some((depth, SampledShape { dimension, layers }))
+    Some((texture.depth, SampledShape { dimension, layers }))
 }
 
 /// A depth texture of `shape` with every texel at the far plane (a shadow

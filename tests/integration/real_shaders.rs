@@ -531,7 +531,7 @@ fn a_shadow_and_forward_module_profiles_each_fragment_stage_without_a_scene() {
                 .bindings
                 .original
                 .iter()
-                .any(|r| r.kind == "depth-texture-array"));
+                .any(|r| r.kind == shadecache::plan::ResourceKind::DepthTextureArray));
         }
         let Some(_) = crate::gpu::gpu() else { continue };
         let scene = shadecache::scene::Scene::default_for(&shader, Some(entry), None).unwrap();

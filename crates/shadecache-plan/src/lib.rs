@@ -212,7 +212,8 @@ display_as_str!(
     CompareFunction,
     CacheFormat,
     Reconstruction,
-    DepthConvention
+    DepthConvention,
+    ResourceKind
 );
 
 /// A depth test, as WebGPU spells it.
@@ -285,11 +286,94 @@ pub struct Resource {
     pub group: u32,
     pub binding: u32,
     pub name: String,
-    /// `uniform`, `storage`, `texture`, `depth-texture`, `sampler`...
-    pub kind: String,
+    pub kind: ResourceKind,
     /// For the cache's resources, what to bind, e.g. `previous payload`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub source: Option<String>,
+}
+
+/// What a binding holds, as WGSL declares it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ResourceKind {
+    Uniform,
+    /// Read-only storage (`var<storage, read>`).
+    Storage,
+    StorageReadWrite,
+    StorageTexture,
+    Texture,
+    TextureArray,
+    CubeTexture,
+    CubeTextureArray,
+    DepthTexture,
+    DepthTextureArray,
+    DepthCubeTexture,
+    DepthCubeTextureArray,
+    #[serde(rename = "texture-1d")]
+    Texture1d,
+    #[serde(rename = "texture-3d")]
+    Texture3d,
+    Sampler,
+    ComparisonSampler,
+    /// Anything else a module may bind.
+    Other,
+}
+
+/// The shape of a sampled 2D or cube texture: what a host must create.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SampledTexture {
+    /// A depth texture (a shadow map).
+    pub depth: bool,
+    pub cube: bool,
+    pub arrayed: bool,
+}
+
+impl ResourceKind {
+    /// The shape of a sampled 2D or cube texture, plain or depth, single
+    /// or arrayed; `None` for everything else (buffers, samplers, 1D and
+    /// 3D and storage textures).
+    pub fn sampled(self) -> Option<SampledTexture> {
+        use ResourceKind as K;
+        let (depth, cube, arrayed) = match self {
+            K::Texture => (false, false, false),
+            K::TextureArray => (false, false, true),
+            K::CubeTexture => (false, true, false),
+            K::CubeTextureArray => (false, true, true),
+            K::DepthTexture => (true, false, false),
+            K::DepthTextureArray => (true, false, true),
+            K::DepthCubeTexture => (true, true, false),
+            K::DepthCubeTextureArray => (true, true, true),
+            _ => return None,
+        };
+        Some(SampledTexture {
+            depth,
+            cube,
+            arrayed,
+        })
+    }
+
+    pub fn as_str(self) -> &'static str {
+        use ResourceKind as K;
+        match self {
+            K::Uniform => "uniform",
+            K::Storage => "storage",
+            K::StorageReadWrite => "storage-read-write",
+            K::StorageTexture => "storage-texture",
+            K::Texture => "texture",
+            K::TextureArray => "texture-array",
+            K::CubeTexture => "cube-texture",
+            K::CubeTextureArray => "cube-texture-array",
+            K::DepthTexture => "depth-texture",
+            K::DepthTextureArray => "depth-texture-array",
+            K::DepthCubeTexture => "depth-cube-texture",
+            K::DepthCubeTextureArray => "depth-cube-texture-array",
+            K::Texture1d => "texture-1d",
+            K::Texture3d => "texture-3d",
+            K::Sampler => "sampler",
+            K::ComparisonSampler => "comparison-sampler",
+            K::Other => "other",
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
