@@ -48,6 +48,7 @@ use naga::{Expression, Handle};
 use serde::Serialize;
 
 pub use calls::CallStep;
+pub(crate) use candidates::type_name;
 pub use candidates::RejectReason;
 pub use entry::{fragment_entry, stage_name};
 pub use id::node_id;

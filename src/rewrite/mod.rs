@@ -237,6 +237,30 @@ fn cache_helpers() -> Result<&'static naga::Module, Refusal> {
         .map_err(|err| Refusal::internal(format!("the cache helpers do not parse: {err}")))
 }
 
+/// The byte layout of the refresh uniform, `CacheParams`, as
+/// `shaders/cache.wgsl` declares it (naga lays the struct out): what the
+/// plan's `cache.params` says and the host writes, stated once.
+pub fn cache_params_layout() -> Result<Vec<crate::plan::Field>, Refusal> {
+    let helpers = cache_helpers()?;
+    let params = helpers
+        .types
+        .iter()
+        .find(|(_, ty)| ty.name.as_deref() == Some("CacheParams"))
+        .ok_or_else(|| Refusal::internal("the cache helpers declare no `CacheParams`"))?
+        .1;
+    let naga::TypeInner::Struct { ref members, .. } = params.inner else {
+        return Err(Refusal::internal("`CacheParams` is not a struct"));
+    };
+    Ok(members
+        .iter()
+        .map(|member| crate::plan::Field {
+            name: member.name.clone().unwrap_or_default(),
+            ty: crate::analysis::type_name(&helpers.types, &helpers.types[member.ty].inner),
+            offset: member.offset,
+        })
+        .collect())
+}
+
 /// Rewrites `shader` to cache `candidate` with `variant`.
 ///
 /// A node inside a helper is cached where its call path puts it: the calls
@@ -641,6 +665,7 @@ fn rewrite_at(
         passes: &passes,
         classify: &classify,
         result: &pieces.result,
+        params: cache_params_layout()?,
     });
     let mut plan = plan;
     plan.cache.format_note = format_note;

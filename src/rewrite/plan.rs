@@ -26,6 +26,8 @@ pub struct Inputs<'a> {
     pub passes: &'a [(Stage, PassModule)],
     pub classify: &'a PassModule,
     pub result: &'a naga::FunctionResult,
+    /// `CacheParams`' layout ([`super::cache_params_layout`]).
+    pub params: Vec<Field>,
 }
 
 pub fn build(inputs: Inputs) -> Plan {
@@ -40,6 +42,7 @@ pub fn build(inputs: Inputs) -> Plan {
         passes,
         classify,
         result,
+        params,
     } = inputs;
     let module = &shader.module;
     let entry = &module.entry_points[analysis.entry_index];
@@ -240,16 +243,7 @@ pub fn build(inputs: Inputs) -> Plan {
             reconstruction: options.reconstruction,
             components: candidate.components,
             swap: "two payload textures, two age textures and two depth buffers alternate: at the end of a frame, this frame's payload texture, age texture and depth buffer become last frame's (bound as cache_previous_payload, cache_previous_age and cache_previous_depth) and last frame's are rendered into next; on the first frame, after a resize or a camera cut, the previous depth is cleared to the far-plane depth (clear.depth) so every pixel misses".into(),
-            params: vec![
-                field("viewport", "vec2<f32>", 0),
-                field("depth_epsilon", "f32", 8),
-                field("refresh_phase", "u32", 12),
-                field("refresh_period", "u32", 16),
-                field("refresh_quad", "u32", 20),
-                field("frame", "u32", 24),
-                field("payload_limit", "f32", 28),
-                field("far_depth", "f32", 32),
-            ],
+            params,
         },
         refresh: Refresh {
             period: options.refresh_period,
@@ -262,14 +256,6 @@ pub fn build(inputs: Inputs) -> Plan {
             cache: [0.0, 0.0, 0.0, 0.0],
             depth: options.depth.far_depth().into(),
         },
-    }
-}
-
-fn field(name: &str, ty: &str, offset: u32) -> Field {
-    Field {
-        name: name.into(),
-        ty: ty.into(),
-        offset,
     }
 }
 

@@ -4,7 +4,7 @@ use std::collections::HashMap;
 
 use super::pipelines::{attribute_size, pipelines, texture_format, Gpu, PipelineOptions};
 use crate::plan::{
-    CacheFormat, LoadOp, Pass, Plan, ResourceKind, StepMode, TargetKind, VertexAttribute,
+    CacheFormat, Field, LoadOp, Pass, Plan, ResourceKind, StepMode, TargetKind, VertexAttribute,
 };
 use crate::scene::textures::Texels;
 
@@ -64,9 +64,26 @@ pub struct RunOptions {
     pub classify: bool,
 }
 
-/// Bytes of the `CacheParams` uniform: the plan's fields (36 bytes) up to
-/// the struct's 8-byte alignment, rounded to 16.
-const PARAMS_SIZE: usize = 48;
+/// Bytes of the `CacheParams` uniform the plan lays out: its fields' end
+/// rounded up to 16 (WGSL's uniform layout), at least 16.
+fn params_size(fields: &[Field]) -> Result<usize, String> {
+    let mut end = 0;
+    for field in fields {
+        let width = match field.ty.as_str() {
+            "f32" | "u32" | "i32" => 4,
+            "vec2<f32>" | "vec2<u32>" => 8,
+            "vec4<f32>" | "vec4<u32>" => 16,
+            other => {
+                return Err(format!(
+                    "CacheParams field `{}` has a type this runtime cannot write: {other}",
+                    field.name
+                ))
+            }
+        };
+        end = end.max(field.offset as usize + width);
+    }
+    Ok(end.div_ceil(16).max(1) * 16)
+}
 
 struct GpuMesh {
     vertices: wgpu::Buffer,
@@ -279,7 +296,7 @@ impl Runner {
             ],
             params: buffer(
                 "cache params",
-                &[0; PARAMS_SIZE],
+                &vec![0; params_size(&plan.cache.params)?],
                 wgpu::BufferUsages::UNIFORM,
             ),
             meshes,
@@ -402,23 +419,7 @@ impl Runner {
         }
 
         // CacheParams, laid out as the plan's `cache.params`.
-        let refresh = &self.plan.refresh;
-        let mut params = Vec::with_capacity(PARAMS_SIZE);
-        params.extend((self.size.0 as f32).to_le_bytes());
-        params.extend((self.size.1 as f32).to_le_bytes());
-        params.extend(refresh.depth_epsilon.to_le_bytes());
-        params.extend(self.phase.to_le_bytes());
-        params.extend(refresh.period.to_le_bytes());
-        params.extend(refresh.quad.to_le_bytes());
-        params.extend((self.frame as u32).to_le_bytes());
-        let limit = if self.plan.cache.format == CacheFormat::Rgba16float {
-            65504.0f32
-        } else {
-            f32::MAX
-        };
-        params.extend(limit.to_le_bytes());
-        // far_depth: the depth test's tolerance is relative to it.
-        params.extend((self.plan.clear.depth as f32).to_le_bytes());
+        let params = self.cache_params()?;
         gpu.queue.write_buffer(&self.params, 0, &params);
 
         let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
@@ -638,6 +639,47 @@ impl Runner {
             })
         });
         gpu.queue.write_buffer(buffer, 0, bytes);
+    }
+
+    /// The `CacheParams` uniform's bytes for this frame: each field of the
+    /// plan's `cache.params` at its offset, by its name.
+    fn cache_params(&self) -> Result<Vec<u8>, String> {
+        let refresh = &self.plan.refresh;
+        let mut bytes = vec![0u8; params_size(&self.plan.cache.params)?];
+        for field in &self.plan.cache.params {
+            let value: Vec<u8> = match field.name.as_str() {
+                "viewport" => [self.size.0 as f32, self.size.1 as f32]
+                    .iter()
+                    .flat_map(|v| v.to_le_bytes())
+                    .collect(),
+                "depth_epsilon" => refresh.depth_epsilon.to_le_bytes().to_vec(),
+                "refresh_phase" => self.phase.to_le_bytes().to_vec(),
+                "refresh_period" => refresh.period.to_le_bytes().to_vec(),
+                "refresh_quad" => refresh.quad.to_le_bytes().to_vec(),
+                "frame" => (self.frame as u32).to_le_bytes().to_vec(),
+                // The largest value the payload texture holds: what is
+                // above it is "no value".
+                "payload_limit" => match self.plan.cache.format {
+                    CacheFormat::Rgba16float => 65504.0f32,
+                    CacheFormat::Rgba32float => f32::MAX,
+                }
+                .to_le_bytes()
+                .to_vec(),
+                // The depth test's tolerance is relative to it.
+                "far_depth" => (self.plan.clear.depth as f32).to_le_bytes().to_vec(),
+                other => {
+                    return Err(format!(
+                        "the plan's CacheParams has a field `{other}` this runtime does not fill"
+                    ))
+                }
+            };
+            let at = field.offset as usize;
+            bytes
+                .get_mut(at..at + value.len())
+                .ok_or_else(|| format!("CacheParams field `{}` lies outside it", field.name))?
+                .copy_from_slice(&value);
+        }
+        Ok(bytes)
     }
 
     /// Writes an object's per-instance vertex records, creating (or
