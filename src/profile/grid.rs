@@ -23,22 +23,11 @@
 //!    read-back plane (every format × reconstruction × ε at the base Δn
 //!    and k). The cross terms are the pruned rest.
 
-use serde::{Deserialize, Serialize};
-
+pub use crate::report::{Axes, Design, Pruned, Setting};
 use crate::rewrite::{CacheFormat, Options as RewriteOptions, Reconstruction};
 
 /// A (node, Δn) is pruned when even its ideal speed-up is below this.
 pub const MIN_IDEAL_SPEEDUP: f64 = 1.1;
-
-/// The values of each knob.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Axes {
-    pub refresh_periods: Vec<u32>,
-    pub refresh_quads: Vec<u32>,
-    pub reconstructions: Vec<Reconstruction>,
-    pub cache_formats: Vec<CacheFormat>,
-    pub depth_epsilons: Vec<f32>,
-}
 
 impl Axes {
     /// The sweep's grid: Δn ∈ {4, 8, 16, 32, 64}, k ∈ {1, 2, 4, 8}, both
@@ -109,16 +98,6 @@ impl Axes {
     }
 }
 
-/// The knobs of one configuration besides its node and variant.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Setting {
-    pub refresh_period: u32,
-    pub refresh_quad: u32,
-    pub reconstruction: Reconstruction,
-    pub cache_format: CacheFormat,
-    pub depth_epsilon: f32,
-}
-
 impl Setting {
     /// Rewrite options with this setting over `base`.
     pub fn rewrite_options(&self, base: &RewriteOptions) -> RewriteOptions {
@@ -131,29 +110,6 @@ impl Setting {
             ..base.clone()
         }
     }
-}
-
-/// How the grid is covered.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Design {
-    /// Every setting of the product.
-    Full,
-    /// The cost-model pruning and the two planes (see the module docs).
-    Planes,
-}
-
-/// What was left out of the grid, and why.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Pruned {
-    /// `cost-model` or `planes`.
-    pub rule: String,
-    /// The node it applies to, if one.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub node: Option<String>,
-    /// Node × variant × setting configurations left out.
-    pub configurations: usize,
-    pub reason: String,
 }
 
 /// The settings to measure per node, for `variants` variants each.

@@ -23,6 +23,7 @@
 //! configuration's row (`result_row`); the misses each effect causes alone
 //! (`miss_causes`); and the answer, its winner measured again (`confirm`).
 
+mod choice;
 pub mod grid;
 mod inputs;
 pub mod metrics;
@@ -37,7 +38,7 @@ use crate::diagnostic::{Diagnostic, Error};
 use crate::front::Shader;
 use crate::plan::{self, Plan};
 use crate::report::{
-    self, Confirmation, Device, FrameStats, GridReport, MissCause, NodeReport, PassTime, Reference,
+    Confirmation, Device, FrameStats, GridReport, MissCause, NodeReport, PassTime, Reference,
     Report, ResultRow,
 };
 use crate::rewrite::{self, CacheFormat, Options as RewriteOptions, Reconstruction, Variant};
@@ -162,22 +163,7 @@ impl Progress for Quiet {
     fn finish(&mut self) {}
 }
 
-/// What the report shows besides its numbers: the last measured frames,
-/// and the GPU timer scopes of the last frame.
-#[derive(Debug)]
-pub struct Pictures {
-    pub reference: Vec<u8>,
-    /// Colour and classes of each result, in `Report::results` order.
-    pub results: Vec<Picture>,
-    /// Every pass of every run in the last frame, for a Chrome trace.
-    pub trace: Vec<wgpu_profiler::GpuTimerQueryResult>,
-    /// The recommended configuration's rewrite, as it was measured (the
-    /// analysis bounded by the scene's uniform values), to write out.
-    pub chosen: Option<rewrite::Rewritten>,
-}
-
-/// A result's last measured colour and classes (RGBA8).
-type Picture = (Vec<u8>, Vec<u8>);
+pub use crate::report::{Picture, Pictures};
 
 /// What a [`Probe`] measures the fixed cost of.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -659,7 +645,7 @@ pub fn profile(
         .collect();
     rows.sort_by(|a, b| b.0.speedup.total_cmp(&a.0.speedup));
     let (mut results, pictures): (Vec<_>, Vec<_>) = rows.into_iter().unzip();
-    report::mark_pareto_fronts(reference_ms, &mut results);
+    choice::mark_pareto_fronts(reference_ms, &mut results);
 
     // What causes the misses: the best configuration again, with one
     // declared effect at a time.

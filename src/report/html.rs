@@ -550,8 +550,8 @@ fn grid_section(report: &Report) -> String {
         grid.full,
         grid.measured,
         match grid.design {
-            crate::profile::grid::Design::Full => "full",
-            crate::profile::grid::Design::Planes => "planes",
+            super::Design::Full => "full",
+            super::Design::Planes => "planes",
         },
         grid.base.refresh_period,
         grid.base.refresh_quad,

@@ -5,8 +5,24 @@
 
 use std::path::{Path, PathBuf};
 
+/// What the report shows besides its numbers: the last measured frames,
+/// and the GPU timer scopes of the last frame.
+#[derive(Debug)]
+pub struct Pictures {
+    pub reference: Vec<u8>,
+    /// Colour and classes of each result, in `Report::results` order.
+    pub results: Vec<Picture>,
+    /// Every pass of every run in the last frame, for a Chrome trace.
+    pub trace: Vec<wgpu_profiler::GpuTimerQueryResult>,
+    /// The recommended configuration's rewrite, as it was measured (the
+    /// analysis bounded by the scene's uniform values), to write out.
+    pub chosen: Option<crate::rewrite::Rewritten>,
+}
+
+/// A result's last measured colour and classes (RGBA8).
+pub type Picture = (Vec<u8>, Vec<u8>);
+
 use super::Report;
-use crate::profile::Pictures;
 
 /// Writes `maps/<rank>-<node>-<variant>-dn<Δn>-k<k>.png` for every result,
 /// and `reference.png`, `best.png` and `difference.png` (×4 amplified)

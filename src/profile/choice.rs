@@ -1,0 +1,331 @@
+//! The answer a profile gives, and the Pareto fronts it is chosen from:
+//! decisions over the measured rows, which the report then shows.
+
+use crate::report::{Budget, Choice, Confirmation, Report, ResultRow};
+
+/// Marks the rows on the Pareto front of GPU time against PSNR, and
+/// against SSIM: those no other configuration beats on one without losing
+/// on the other. The unmodified shader counts as a point (its time, an
+/// exact image), so a configuration slower than the original is never on
+/// a front.
+pub fn mark_pareto_fronts(reference_ms: f64, rows: &mut [ResultRow]) {
+    let front = |metric: fn(&ResultRow) -> f64, exact: f64| -> Vec<bool> {
+        let points: Vec<(f64, f64)> = rows
+            .iter()
+            .map(|r| (r.time_ms, metric(r)))
+            .chain([(reference_ms, exact)])
+            .collect();
+        let dominated = |&(t, m): &(f64, f64)| {
+            points
+                .iter()
+                .any(|&(u, n)| u <= t && n >= m && (u < t || n > m))
+        };
+        points[..rows.len()].iter().map(|p| !dominated(p)).collect()
+    };
+    let psnr = front(|r| r.psnr, f64::INFINITY);
+    let ssim = front(|r| r.ssim, 1.0);
+    for ((row, on_psnr), on_ssim) in rows.iter_mut().zip(psnr).zip(ssim) {
+        row.pareto_psnr = on_psnr;
+        row.pareto_ssim = on_ssim;
+    }
+}
+
+impl Report {
+    /// The answer from this run: the fastest configuration within
+    /// `budget` whose speed-up interval lies above 1×, or none, with what
+    /// came closest. The caller measures the winner again and settles the
+    /// answer with [`Choice::confirm`].
+    pub fn choose(&self, budget: Budget, budget_given: bool) -> Choice {
+        let rows = &self.results;
+        let faster = |i: &usize| rows[*i].speedup_ci[0] > 1.0;
+        let fastest = |among: &mut dyn Iterator<Item = usize>| {
+            among.min_by(|&a, &b| rows[a].time_ms.total_cmp(&rows[b].time_ms))
+        };
+        let within: Vec<usize> = (0..rows.len())
+            .filter(|&i| budget.admits(&rows[i]))
+            .collect();
+        let winner = fastest(&mut within.iter().copied().filter(faster));
+        let mut choice = Choice {
+            budget,
+            budget_given,
+            result: winner,
+            none_within_budget: within.is_empty(),
+            closest: None,
+            confirmation: None,
+            reason: String::new(),
+        };
+        if let Some(i) = winner {
+            choice.reason = format!(
+                "the fastest of the {} configurations within {budget} whose speed-up interval lies above 1×: {}",
+                within.len(),
+                self.measured(&rows[i])
+            );
+            return choice;
+        }
+        // What came closest: within the budget, the fastest; else, of those
+        // reliably faster, the least error; else the fastest of all.
+        choice.closest = if within.is_empty() {
+            (0..rows.len())
+                .filter(faster)
+                .max_by(|&a, &b| budget.metric(&rows[a]).total_cmp(&budget.metric(&rows[b])))
+                .or_else(|| fastest(&mut (0..rows.len())))
+        } else {
+            fastest(&mut within.iter().copied())
+        };
+        let closest = choice
+            .closest
+            .map(|i| format!(" Closest: {}.", self.measured(&rows[i])))
+            .unwrap_or_default();
+        choice.reason = if rows.is_empty() {
+            "no configuration could be measured: keep the original shader".into()
+        } else if within.is_empty() {
+            format!(
+                "none of the {} configurations is within {budget}: keep the original shader.{closest}",
+                rows.len()
+            )
+        } else {
+            format!(
+                "{} configurations are within {budget}, but none is faster than the original beyond this run's noise (a speed-up interval above 1×): keep the original shader.{closest}",
+                within.len()
+            )
+        };
+        choice
+    }
+
+    /// A row in words: node, variant, knobs, speed-up with its interval,
+    /// error.
+    pub fn measured(&self, row: &ResultRow) -> String {
+        format!(
+            "node {} `{}`, {}, {}: {:.3} ms against {:.3} ms for the original, {:.2}× [{:.2}, {:.2}], PSNR {:.1} dB, SSIM {:.4}",
+            row.node,
+            row.node_text,
+            row.variant,
+            row.setting(),
+            row.time_ms,
+            self.reference.time_ms,
+            row.speedup,
+            row.speedup_ci[0],
+            row.speedup_ci[1],
+            row.psnr,
+            row.ssim
+        )
+    }
+}
+
+impl Choice {
+    /// Settles the answer with the winner measured again: it stands only
+    /// when that run's interval lies above 1× as well.
+    pub fn confirm(&mut self, confirmation: Confirmation) {
+        let again = format!(
+            "measured again over {} frames, {:.3} ms against {:.3} ms, {:.2}× [{:.2}, {:.2}]",
+            confirmation.frames,
+            confirmation.time_ms,
+            confirmation.reference_ms,
+            confirmation.speedup,
+            confirmation.speedup_ci[0],
+            confirmation.speedup_ci[1]
+        );
+        if confirmation.speedup_ci[0] > 1.0 {
+            self.reason = format!("{}; {again}", self.reason);
+        } else {
+            self.closest = self.result.take();
+            self.reason = format!(
+                "the run's winner ({}) is not faster than the original when {again}: keep the original shader",
+                self.reason
+            );
+        }
+        self.confirmation = Some(confirmation);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plan::{CacheFormat, Reconstruction, Variant};
+    use crate::report::*;
+
+    fn row(time_ms: f64, psnr: f64, ssim: f64) -> ResultRow {
+        ResultRow {
+            node: format!("n{time_ms}"),
+            node_text: String::new(),
+            variant: Variant::ThreePass,
+            refresh_period: 32,
+            refresh_quad: 4,
+            reconstruction: Reconstruction::Bilinear,
+            cache_format: CacheFormat::Rgba16float,
+            depth_epsilon: 1e-3,
+            time_ms,
+            passes: Vec::new(),
+            speedup: 10.0 / time_ms,
+            speedup_ci: [9.0 / time_ms, 11.0 / time_ms],
+            psnr,
+            ssim,
+            psnr_frame: psnr,
+            worst_psnr: psnr,
+            flicker: 0.0,
+            max_abs_error: 0.0,
+            above_threshold: 0.0,
+            coverage: 1.0,
+            hit_rate: 0.0,
+            miss_rate: 0.0,
+            offscreen_rate: 0.0,
+            disocclusion_rate: 0.0,
+            invalid_rate: 0.0,
+            refresh_rate: 0.0,
+            max_age: 0,
+            age_histogram: Vec::new(),
+            p_over_t: 0.0,
+            ideal_speedup: 1.0,
+            fixed_cost_ms: Vec::new(),
+            bound_with_fixed_costs: 1.0,
+            share_of_ideal: 1.0,
+            pareto_psnr: false,
+            pareto_ssim: false,
+            frame_stats: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn the_front_keeps_the_rows_nothing_beats_on_both() {
+        // Reference 10 ms. (5, 30) and (7, 35) trade off; (6, 29) loses to
+        // (5, 30) on both; (8, 35) ties (7, 35) on PSNR but is slower;
+        // (12, 40) is slower than the exact original.
+        let mut rows = vec![
+            row(5.0, 30.0, 0.90),
+            row(6.0, 29.0, 0.95),
+            row(7.0, 35.0, 0.93),
+            row(8.0, 35.0, 0.99),
+            row(12.0, 40.0, 0.999),
+        ];
+        mark_pareto_fronts(10.0, &mut rows);
+        let psnr: Vec<bool> = rows.iter().map(|r| r.pareto_psnr).collect();
+        assert_eq!(psnr, [true, false, true, false, false]);
+        let ssim: Vec<bool> = rows.iter().map(|r| r.pareto_ssim).collect();
+        assert_eq!(ssim, [true, true, false, true, false]);
+    }
+
+    #[test]
+    fn equal_points_are_both_on_the_front() {
+        let mut rows = vec![row(5.0, 30.0, 0.9), row(5.0, 30.0, 0.9)];
+        mark_pareto_fronts(10.0, &mut rows);
+        assert!(rows.iter().all(|r| r.pareto_psnr && r.pareto_ssim));
+    }
+
+    fn report(results: Vec<ResultRow>) -> Report {
+        Report {
+            format: 1,
+            shader: String::new(),
+            entry: String::new(),
+            scene: String::new(),
+            scene_description: String::new(),
+            defaulted: Vec::new(),
+            effects: Vec::new(),
+            size: [8, 8],
+            frames: 1,
+            warmup: 0,
+            steady_state: true,
+            device: Device {
+                name: String::new(),
+                backend: String::new(),
+                driver: String::new(),
+            },
+            timing: String::new(),
+            command: String::new(),
+            reference: Reference {
+                time_ms: 10.0,
+                spread_ms: [10.0, 10.0],
+                fixed_ms: 0.0,
+                frame_ms: vec![10.0],
+            },
+            nodes: Vec::new(),
+            results,
+            miss_causes: Vec::new(),
+            warnings: Vec::new(),
+            grid: None,
+            choice: None,
+        }
+    }
+
+    #[test]
+    fn answer_respects_its_budget() {
+        let r = report(vec![
+            row(5.0, 28.0, 0.90),
+            row(7.0, 35.0, 0.93),
+            row(6.0, 31.0, 0.99),
+        ]);
+        let pick = |budget| r.choose(budget, true).result;
+        assert_eq!(pick(Budget::Psnr(30.0)), Some(2));
+        assert_eq!(pick(Budget::Psnr(33.0)), Some(1));
+        assert_eq!(pick(Budget::Ssim(0.95)), Some(2));
+        assert_eq!(pick(Budget::Psnr(20.0)), Some(0));
+        // The default budget is SSIM ≥ 0.95.
+        assert_eq!(r.choose(Budget::DEFAULT, false).result, Some(2));
+        let none = r.choose(Budget::Psnr(50.0), true);
+        assert_eq!(none.result, None);
+        assert!(none.none_within_budget);
+        assert!(none.reason.contains("none of the 3"), "{}", none.reason);
+        // Closest without the budget: the least error of those faster.
+        assert_eq!(none.closest, Some(1));
+    }
+
+    #[test]
+    fn answer_never_recommends_a_slowdown() {
+        // Slower than the original: no answer, though within the budget.
+        let r = report(vec![row(12.0, 35.0, 0.99)]);
+        let choice = r.choose(Budget::Psnr(30.0), true);
+        assert_eq!(choice.result, None);
+        assert!(!choice.none_within_budget);
+        assert_eq!(choice.closest, Some(0));
+        assert!(
+            choice.reason.contains("keep the original"),
+            "{}",
+            choice.reason
+        );
+        // Faster by its median, but its interval reaches below 1×: noise.
+        let mut noisy = row(9.0, 35.0, 0.99);
+        noisy.speedup_ci = [0.93, 1.25];
+        let choice = report(vec![noisy]).choose(Budget::Psnr(30.0), true);
+        assert_eq!(choice.result, None);
+        assert!(
+            choice.reason.contains("beyond this run's noise"),
+            "{}",
+            choice.reason
+        );
+    }
+
+    #[test]
+    fn a_winner_the_confirmatory_run_does_not_repeat_is_not_recommended() {
+        let r = report(vec![row(5.0, 35.0, 0.99)]);
+        let confirmation = |lo: f64| Confirmation {
+            frames: 8,
+            reference_ms: 10.0,
+            time_ms: 9.0,
+            speedup: 1.1,
+            speedup_ci: [lo, 1.3],
+        };
+        let mut kept = r.choose(Budget::Psnr(30.0), true);
+        kept.confirm(confirmation(1.02));
+        assert_eq!(kept.result, Some(0));
+        assert!(kept.reason.contains("measured again"), "{}", kept.reason);
+        let mut dropped = r.choose(Budget::Psnr(30.0), true);
+        dropped.confirm(confirmation(0.95));
+        assert_eq!(dropped.result, None);
+        assert_eq!(dropped.closest, Some(0));
+        assert!(dropped.confirmation.is_some());
+        assert!(
+            dropped.reason.contains("keep the original"),
+            "{}",
+            dropped.reason
+        );
+    }
+
+    #[test]
+    fn budgets_parse() {
+        assert_eq!("psnr:30".parse::<Budget>(), Ok(Budget::Psnr(30.0)));
+        assert_eq!("SSIM=0.95".parse::<Budget>(), Ok(Budget::Ssim(0.95)));
+        assert!("ssim:2".parse::<Budget>().is_err());
+        assert!("psnr:NaN".parse::<Budget>().is_err());
+        assert!("mse:1".parse::<Budget>().is_err());
+        assert!("30".parse::<Budget>().is_err());
+    }
+}
