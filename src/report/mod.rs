@@ -279,7 +279,7 @@ pub struct ResultRow {
     /// speedup / ideal_speedup.
     pub share_of_ideal: f64,
     /// On the Pareto front of time against PSNR, and against SSIM (see
-    /// [`mark_pareto_fronts`]).
+    /// `profile::choice::mark_pareto_fronts`).
     #[serde(default)]
     pub pareto_psnr: bool,
     #[serde(default)]
