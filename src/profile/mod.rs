@@ -468,7 +468,10 @@ pub fn profile(
      -> Result<Runner, Error> {
         let rewritten = rewrite::rewrite(shader, &analysis, candidate, Variant::ThreePass, options)
             .map_err(|r| fail(format!("node {}: {}", candidate.node.id, r.reason)))?;
-        let mut pass = rewritten.plan.passes[1].clone();
+        let payload_pass = rewrite::payload_pass(Variant::ThreePass)
+            .and_then(|index| rewritten.plan.passes.get(index))
+            .ok_or_else(|| fail("internal error: three-pass has no payload pass".into()))?;
+        let mut pass = payload_pass.clone();
         pass.depth.load = plan::LoadOp::Clear;
         for target in &mut pass.color_targets {
             target.load = plan::LoadOp::Clear;

@@ -102,6 +102,18 @@ impl Stage {
     pub fn discards(self) -> bool {
         matches!(self, Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard)
     }
+
+    /// Whether the screen shows the cached value itself (not recomputed
+    /// where it cannot be held): what a cache format must hold exactly.
+    pub fn shows_cached_value(self) -> bool {
+        matches!(self, Stage::ShadeFromCache)
+    }
+
+    /// Whether the payload is computed in the miss branch, in non-uniform
+    /// control flow: its derivatives must be taken before it.
+    pub fn computes_payload_on_miss(self) -> bool {
+        matches!(self, Stage::OnePass)
+    }
 }
 
 /// The `@location`s of a fragment result (a struct's members or the value).

@@ -47,6 +47,13 @@ pub use crate::plan::{
     PREVIOUS_AGE_BINDING, PREVIOUS_DEPTH_BINDING, PREVIOUS_PAYLOAD_BINDING, SAMPLER_BINDING,
 };
 
+/// The index of the pass of `variant` that computes the payload alone
+/// (three-pass's pass 2), which the profiler draws over every pixel for
+/// P/T; `None` for a variant without one.
+pub fn payload_pass(variant: Variant) -> Option<usize> {
+    stages(variant).iter().position(|&s| s == Stage::Payload)
+}
+
 /// The passes of each variant, as the stages of the fragment entry point
 /// they run (seed 002, §3).
 fn stages(variant: Variant) -> &'static [Stage] {
@@ -326,7 +333,8 @@ fn rewrite_at(
     // `cache_encode`). Where the analysis cannot bound the node's value
     // below 65504, three-pass keeps its cache in rgba32float.
     let widened;
-    let (options, format_note) = if variant == Variant::ThreePass
+    let shows_cached_value = stages(variant).iter().any(|s| s.shows_cached_value());
+    let (options, format_note) = if shows_cached_value
         && options.cache_format == CacheFormat::Rgba16float
         && !candidate.fits_f16
     {
@@ -367,7 +375,9 @@ fn rewrite_at(
         .ok_or_else(|| Refusal::new("the node is not evaluated by the entry point"))?;
     let node_order = layout.order_of(node).unwrap_or(usize::MAX);
     let discards_after = layout.kills.iter().any(|kill| kill.after > node_order);
-    if discards_after && variant != Variant::OnePass {
+    // A pass that discards misses cannot tell them from the pixels the
+    // shader itself would cut out after the node.
+    if discards_after && stages(variant).iter().any(|s| s.discards()) {
         return Err(Refusal::new(
             "the shader may discard after the node is computed, so the payload pass cannot know which pixels are cut out",
         ));
@@ -467,7 +477,7 @@ fn rewrite_at(
     let handles: Vec<naga::Handle<naga::Expression>> =
         function.expressions.iter().map(|(h, _)| h).collect();
     let mut hoist_derivatives = false;
-    if variant == Variant::OnePass {
+    if stages(variant).iter().any(|s| s.computes_payload_on_miss()) {
         // Gradients are hoisted from the entry point's own expressions; a
         // helper that takes them (egui's `sample_texture`) would be called
         // in the miss branch as it is.
