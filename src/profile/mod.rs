@@ -528,73 +528,15 @@ pub fn profile(
         new_runner(&free_reference_plan, &free_reference, plain).map_err(fail)?,
     ));
 
-    let mut configs = Vec::new();
-    // Configurations set up, to measure each once.
-    let mut seen = Vec::new();
-    for (node, (candidate, settings)) in nodes.iter().enumerate() {
-        for &variant in &options.variants {
-            for setting in settings.iter() {
-                let what = format!(
-                    "{} {variant} Δn={} k={} {} {} ε={}",
-                    candidate.node.id,
-                    setting.refresh_period,
-                    setting.refresh_quad,
-                    setting.reconstruction.as_str(),
-                    setting.cache_format.as_str(),
-                    setting.depth_epsilon
-                );
-                let rewritten = match rewrite::rewrite(
-                    shader,
-                    &analysis,
-                    candidate,
-                    variant,
-                    &setting.rewrite_options(&base),
-                ) {
-                    Ok(rewritten) => rewritten,
-                    Err(refusal) => {
-                        progress.refused(&what, &refusal.reason);
-                        continue;
-                    }
-                };
-                // The rewrite may keep a three-pass cache in rgba32float
-                // (a payload that may not fit f16): record what runs, and
-                // measure it once.
-                let mut setting = *setting;
-                if rewritten.plan.cache.format_note.is_some() {
-                    setting.cache_format = CacheFormat::Rgba32float;
-                }
-                if seen.contains(&(node, variant, setting)) {
-                    // Whichever of the pair came second: the widened
-                    // rgba16float one carries the note, the rgba32float one
-                    // asked for does not.
-                    let why = rewritten.plan.cache.format_note.as_deref().unwrap_or(
-                        "the rgba16float setting of this node ran in rgba32float, so this is the same configuration",
-                    );
-                    progress.refused(&what, &format!("measured already: {why}"));
-                    continue;
-                }
-                seen.push((node, variant, setting));
-                let runner = new_runner(&rewritten.plan, &sources_of(&rewritten)?, run_options)
-                    .map_err(|err| fail(format!("{what}: {err}")))?;
-                configs.push(Config {
-                    node,
-                    variant,
-                    setting,
-                    runner,
-                    label: what,
-                    times: Vec::new(),
-                    passes: HashMap::new(),
-                    errors: Vec::new(),
-                    flicker: Vec::new(),
-                    decisions: Vec::new(),
-                    ages: Vec::new(),
-                    last: (Vec::new(), Vec::new()),
-                    size,
-                    error_threshold: options.error_threshold,
-                });
-            }
-        }
-    }
+    let mut configs = configurations(
+        (shader, &analysis),
+        &nodes,
+        &options.variants,
+        &base,
+        &|plan, sources| new_runner(plan, sources, run_options),
+        (size, options.error_threshold),
+        progress,
+    )?;
 
     let mut clock = Clock {
         gpu: &gpu,
@@ -807,6 +749,96 @@ fn view_warnings(scene: &Scene, aspect: f32, warmup: u32, results: &[ResultRow])
         }
     }
     warnings
+}
+
+/// Makes a runner for a plan and its shaders by file name, drawing the
+/// scene's meshes and textures at the profile's size.
+type NewRunner<'a> = dyn Fn(&Plan, &HashMap<String, String>) -> Result<Runner, String> + 'a;
+
+/// Every node × variant × setting the grid keeps, rewritten and with its
+/// runner from `new_runner`; a refusal, or a setting that runs as another
+/// one (an rgba16float three-pass cache widened to rgba32float), is told
+/// to `progress` and skipped. Each compares its frames at `size` with
+/// `error_threshold`.
+fn configurations(
+    (shader, analysis): (&Shader, &analysis::Analysis),
+    nodes: &[(&Candidate, &[Setting])],
+    variants: &[Variant],
+    base: &RewriteOptions,
+    new_runner: &NewRunner,
+    (size, error_threshold): ([u32; 2], f64),
+    progress: &mut dyn Progress,
+) -> Result<Vec<Config>, Error> {
+    let fail = |message: String| Error::plain(Diagnostic::error(message));
+    let mut configs = Vec::new();
+    // Configurations set up, to measure each once.
+    let mut seen = Vec::new();
+    for (node, (candidate, settings)) in nodes.iter().enumerate() {
+        for &variant in variants {
+            for setting in settings.iter() {
+                let what = format!(
+                    "{} {variant} Δn={} k={} {} {} ε={}",
+                    candidate.node.id,
+                    setting.refresh_period,
+                    setting.refresh_quad,
+                    setting.reconstruction.as_str(),
+                    setting.cache_format.as_str(),
+                    setting.depth_epsilon
+                );
+                let rewritten = match rewrite::rewrite(
+                    shader,
+                    analysis,
+                    candidate,
+                    variant,
+                    &setting.rewrite_options(base),
+                ) {
+                    Ok(rewritten) => rewritten,
+                    Err(refusal) => {
+                        progress.refused(&what, &refusal.reason);
+                        continue;
+                    }
+                };
+                // The rewrite may keep a three-pass cache in rgba32float
+                // (a payload that may not fit f16): record what runs, and
+                // measure it once.
+                let mut setting = *setting;
+                if rewritten.plan.cache.format_note.is_some() {
+                    setting.cache_format = CacheFormat::Rgba32float;
+                }
+                if seen.contains(&(node, variant, setting)) {
+                    // Whichever of the pair came second: the widened
+                    // rgba16float one carries the note, the rgba32float one
+                    // asked for does not.
+                    let why = rewritten.plan.cache.format_note.as_deref().unwrap_or(
+                        "the rgba16float setting of this node ran in rgba32float, so this is the same configuration",
+                    );
+                    progress.refused(&what, &format!("measured already: {why}"));
+                    continue;
+                }
+                seen.push((node, variant, setting));
+                let runner = new_runner(&rewritten.plan, &sources_of(&rewritten)?)
+                    .map_err(|err| fail(format!("{what}: {err}")))?;
+                configs.push(Config {
+                    node,
+                    variant,
+                    setting,
+                    runner,
+                    label: what,
+                    times: Vec::new(),
+                    passes: HashMap::new(),
+                    errors: Vec::new(),
+                    flicker: Vec::new(),
+                    decisions: Vec::new(),
+                    ages: Vec::new(),
+                    last: (Vec::new(), Vec::new()),
+                    size,
+                    error_threshold,
+                });
+            }
+        }
+    }
+
+    Ok(configs)
 }
 
 /// What every configuration's row is measured against: the reference's
