@@ -11,7 +11,7 @@
 
 use std::collections::{BTreeSet, HashMap};
 
-use naga::{Binding, Expression, Handle, Module, Statement, TypeInner};
+use naga::{Expression, Handle, Module, Statement, TypeInner};
 
 use super::candidates::{loaded_buffer_member, per_frame_slots};
 use super::graph::{ExprGraph, ExprSet};
@@ -29,10 +29,7 @@ pub(super) fn per_frame_varyings(module: &Module, fragment: usize) -> HashMap<u3
     let Some(result) = &function.result else {
         return out;
     };
-    let location = |binding: &Option<Binding>| match *binding {
-        Some(Binding::Location { location, .. }) => Some(location),
-        _ => None,
-    };
+    let location = proc::location_of;
     let outputs: Vec<(u32, Option<u32>)> = match module.types[result.ty].inner {
         TypeInner::Struct { ref members, .. } => members
             .iter()

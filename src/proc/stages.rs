@@ -92,16 +92,12 @@ pub fn located(
     binding: &Option<Binding>,
     ty: Handle<naga::Type>,
 ) -> Vec<(u32, naga::TypeInner)> {
-    let location = |binding: &Option<Binding>| match *binding {
-        Some(Binding::Location { location, .. }) => Some(location),
-        _ => None,
-    };
     match module.types[ty].inner {
         TypeInner::Struct { ref members, .. } => members
             .iter()
-            .filter_map(|m| location(&m.binding).map(|l| (l, module.types[m.ty].inner.clone())))
+            .filter_map(|m| location_of(&m.binding).map(|l| (l, module.types[m.ty].inner.clone())))
             .collect(),
-        ref inner => location(binding)
+        ref inner => location_of(binding)
             .map(|l| (l, inner.clone()))
             .into_iter()
             .collect(),
@@ -131,18 +127,21 @@ pub fn instance_locations(module: &Module, function: &Function) -> BTreeSet<u32>
                     named_instance(ty.name.as_ref()) || named_instance(argument.name.as_ref());
                 for member in members {
                     if whole || named_instance(member.name.as_ref()) {
-                        out.extend(location(&member.binding));
+                        out.extend(location_of(&member.binding));
                     }
                 }
             }
-            _ if named_instance(argument.name.as_ref()) => out.extend(location(&argument.binding)),
+            _ if named_instance(argument.name.as_ref()) => {
+                out.extend(location_of(&argument.binding))
+            }
             _ => {}
         }
     }
     out
 }
 
-fn location(binding: &Option<Binding>) -> Option<u32> {
+/// The location a binding gives, if it is one.
+pub fn location_of(binding: &Option<Binding>) -> Option<u32> {
     match *binding {
         Some(Binding::Location { location, .. }) => Some(location),
         _ => None,

@@ -10,6 +10,7 @@
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
+use super::fail;
 use crate::diagnostic::{Diagnostic, Error};
 use crate::front::Shader;
 use crate::plan::{self, Plan, VertexAttribute};
@@ -33,10 +34,6 @@ pub(super) struct SceneInputs<'a> {
     storage: &'a [StorageBuffer],
     layout: &'a [VertexAttribute],
     aspect: f32,
-}
-
-fn fail(message: String) -> Error {
-    Error::plain(Diagnostic::error(message))
 }
 
 impl<'a> SceneInputs<'a> {

@@ -313,6 +313,12 @@ impl Measured for Config {
     }
 }
 
+/// A plain error for what the profile could not do (no position in a
+/// file to point at).
+fn fail(message: String) -> Error {
+    Error::plain(Diagnostic::error(message))
+}
+
 /// Profiles `shader` on `scene`. `scene_path` names the scene file (its
 /// folder resolves relative files).
 pub fn profile(
@@ -322,7 +328,6 @@ pub fn profile(
     options: &Options,
     progress: &mut dyn Progress,
 ) -> Result<(Report, Pictures), Error> {
-    let fail = |message: String| Error::plain(Diagnostic::error(message));
     if crate::rewrite::vertex::is_fragment_only(&shader.module) {
         return Err(Error::in_file(
             shader.file.clone(),
@@ -769,7 +774,6 @@ fn configurations(
     (size, error_threshold): ([u32; 2], f64),
     progress: &mut dyn Progress,
 ) -> Result<Vec<Config>, Error> {
-    let fail = |message: String| Error::plain(Diagnostic::error(message));
     let mut configs = Vec::new();
     // Configurations set up, to measure each once.
     let mut seen = Vec::new();
@@ -965,7 +969,6 @@ fn miss_causes(
     warmup: u32,
     frames: u32,
 ) -> Result<Vec<MissCause>, Error> {
-    let fail = |message: String| Error::plain(Diagnostic::error(message));
     let mut causes = Vec::new();
     let moving = scene
         .effects
@@ -1010,7 +1013,6 @@ fn confirm(
     frames: u32,
     progress: &mut dyn Progress,
 ) -> Result<Confirmation, Error> {
-    let fail = |message: String| Error::plain(Diagnostic::error(message));
     let [reference, chosen] = runners;
     let mut times = [Vec::new(), Vec::new()];
     for frame in 0..warmup + frames {

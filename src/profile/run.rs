@@ -10,11 +10,11 @@
 //! probes and configurations are `Measured`; another stage (whole-frame
 //! reuse) can add its own.
 
-use crate::diagnostic::{Diagnostic, Error};
+use crate::diagnostic::Error;
 use crate::runtime::{FrameInputs, Gpu, Runner};
 
 use super::metrics::{self, LinearFrame};
-use super::Progress;
+use super::{fail, Progress};
 
 /// One measured frame of one [`Measured`], as [`Measured::record`] gets it.
 pub(super) struct Sample<'a> {
@@ -86,7 +86,6 @@ pub(super) fn measured_run(
     (warmup, frames): (u32, u32),
     progress: &mut dyn Progress,
 ) -> Result<Vec<wgpu_profiler::GpuTimerQueryResult>, Error> {
-    let fail = |message: String| Error::plain(Diagnostic::error(message));
     let total = u64::from(warmup + frames)
         + measured
             .iter()

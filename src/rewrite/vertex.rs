@@ -76,7 +76,9 @@ fn instance_inputs_of_position(
     for (i, argument) in function.arguments.iter().enumerate() {
         let i = i as u32;
         let mut add = |member: Option<u32>, binding: &Option<Binding>, ty| {
-            if let Some(location) = location_of(binding).filter(|l| per_instance.contains(l)) {
+            if let Some(location) =
+                crate::proc::location_of(binding).filter(|l| per_instance.contains(l))
+            {
                 out.push(InstanceInput {
                     argument: i,
                     member,
@@ -527,10 +529,12 @@ pub fn fragment_only(module: &Module, fragment: usize) -> VertexStage {
     let mut locations = Vec::new();
     for argument in &function.arguments {
         match module.types[argument.ty].inner {
-            TypeInner::Struct { ref members, .. } => {
-                locations.extend(members.iter().filter_map(|m| location_of(&m.binding)))
-            }
-            _ => locations.extend(location_of(&argument.binding)),
+            TypeInner::Struct { ref members, .. } => locations.extend(
+                members
+                    .iter()
+                    .filter_map(|m| crate::proc::location_of(&m.binding)),
+            ),
+            _ => locations.extend(crate::proc::location_of(&argument.binding)),
         }
     }
     VertexStage {
@@ -538,13 +542,6 @@ pub fn fragment_only(module: &Module, fragment: usize) -> VertexStage {
         previous_location: locations.iter().map(|l| l + 1).max().unwrap_or(0),
         twins: Vec::new(),
         instance_twins: Vec::new(),
-    }
-}
-
-fn location_of(binding: &Option<Binding>) -> Option<u32> {
-    match *binding {
-        Some(Binding::Location { location, .. }) => Some(location),
-        _ => None,
     }
 }
 
