@@ -1,18 +1,23 @@
 //! plans → runs: executing a variant's plan with wgpu, headless, on any
-//! backend (Mesa's lavapipe in CI).
+//! backend (Mesa's lavapipe in CI), through the host crate
+//! (`shadecache-host`) that applications run variants with: what the
+//! profiler measures is what an application runs.
 //!
-//! [`pipelines`] turns a plan and its pass shaders into wgpu render
-//! pipelines exactly as the plan describes them (vertex layout, colour
-//! targets and formats, depth compare and write). [`Runner`] executes the
-//! plan frame after frame: it fills the shader's buffers and their
-//! previous-frame twins, the `CacheParams` uniform (refresh phase kept as
-//! c mod Δn), binds the double-buffered payload textures and depth buffers
-//! as the plan's bindings say, runs the passes in order with the plan's
-//! load operations, and swaps the cache. Scenes, timing and error
-//! measurement build on it.
+//! [`frame`] describes the frame the profiler draws as an application
+//! describes its own: the plan's vertex inputs packed per step, the bind
+//! group layouts the plan implies, its colour outputs. [`Runner`] is the
+//! application: it owns the scene's meshes, per-object buffers and
+//! textures, writes each frame's contents, and draws every object in each
+//! pass the host records; the host keeps the cache, the twins and the
+//! refresh uniform. [`textures`] uploads the scene's textures and reads
+//! targets back.
 
-mod pipelines;
+mod frame;
+mod gpu;
 mod runner;
+mod textures;
 
-pub use pipelines::{pipelines, Gpu, PipelineOptions};
-pub use runner::{read_texture, FrameInputs, Mesh, ObjectInputs, RunOptions, Runner};
+pub use frame::{build_passes, PipelineOptions, PlanFrame, RunOptions};
+pub use gpu::Gpu;
+pub use runner::{FrameInputs, Mesh, ObjectInputs, Runner};
+pub use textures::read_texture;

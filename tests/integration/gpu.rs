@@ -50,14 +50,14 @@ pub(crate) fn wgsl_sources(rewritten: &rewrite::Rewritten) -> HashMap<String, St
 pub fn build_pipelines(rewritten: &rewrite::Rewritten, what: &str) -> Option<usize> {
     let gpu = gpu()?;
     let sources = wgsl_sources(rewritten);
-    let pipelines = runtime::pipelines(
+    let pipelines = runtime::build_passes(
         &gpu,
         &rewritten.plan,
         |name| sources.get(name).cloned(),
         runtime::PipelineOptions::default(),
     )
     .unwrap_or_else(|err| panic!("{what}: {err}"));
-    Some(pipelines.len())
+    Some(pipelines)
 }
 
 /// Every pass of every corpus variant ([`crate::corpus_rewrites`])
@@ -77,14 +77,14 @@ fn every_pass_of_every_variant_builds_a_wgpu_pipeline() {
             .unwrap_or_else(|err| panic!("{}: {err}", rewrite.label()));
         let sources: HashMap<&str, &String> =
             emitted.wgsl.iter().map(|(n, t)| (n.as_str(), t)).collect();
-        let pipelines = runtime::pipelines(
+        let pipelines = runtime::build_passes(
             &gpu,
             &emitted.plan,
             |name| sources.get(name).map(|t| t.to_string()),
             runtime::PipelineOptions::default(),
         )
         .unwrap_or_else(|err| panic!("{}: {err}", rewrite.label()));
-        built += pipelines.len();
+        built += pipelines;
     }
     assert!(built > 1000, "{built} pipelines");
     eprintln!("built {built} pipelines");

@@ -624,7 +624,7 @@ fn every_reconstruction_validates_and_builds() {
                     files.extend(write_wgsl(&out, &rewritten));
                     if let Some(gpu) = &gpu {
                         let sources = crate::gpu::wgsl_sources(&rewritten);
-                        shadecache::runtime::pipelines(
+                        shadecache::runtime::build_passes(
                             gpu,
                             &rewritten.plan,
                             |name| sources.get(name).cloned(),

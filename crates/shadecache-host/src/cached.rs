@@ -1,0 +1,831 @@
+//! A variant made on the application's device, run frame after frame.
+
+use std::cell::RefCell;
+use std::collections::{BTreeMap, HashMap};
+use std::sync::{Arc, Mutex, Weak};
+
+use shadecache_plan::{LoadOp, Pass, Plan, ResourceKind, TargetKind};
+
+use crate::formats::{cache_format, texture_format};
+use crate::pipelines::{pipeline, pipeline_layout, HostFormats, PipelineInputs};
+use crate::timing::{NoTimer, PassTimer};
+use crate::twins::{Shared, TwinSources, Twins, TwinsInner};
+use crate::vertex::TwinSlot;
+use crate::{frame, layouts, params, vertex, Error, FrameLayout, Targets};
+
+/// What the host does beyond the plan's passes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Options {
+    /// Draw the plan's `classify` pass after each frame, into
+    /// [`CachedShader::classes`]: the cache's decision at each pixel.
+    pub classify: bool,
+    /// A debugging view: the frame's colour outputs blend additively, so
+    /// with a shader writing a constant a pixel counts its shadings.
+    pub count_shading: bool,
+}
+
+struct Built {
+    pass: Pass,
+    pipeline: wgpu::RenderPipeline,
+    /// The cache group's layout for this pass: the cache resources and
+    /// twins it binds, and only those (a pass that renders into this
+    /// frame's payload must not also bind it).
+    cache_layout: Option<wgpu::BindGroupLayout>,
+    /// Its place among the passes (the classification last).
+    index: usize,
+}
+
+/// The targets the host owns, double-buffered where last frame's is read.
+struct CacheTargets {
+    payload: [wgpu::Texture; 2],
+    age: [wgpu::Texture; 2],
+    depth: [wgpu::Texture; 2],
+    classes: wgpu::Texture,
+    payload_views: [wgpu::TextureView; 2],
+    age_views: [wgpu::TextureView; 2],
+    /// Attachment views.
+    depth_views: [wgpu::TextureView; 2],
+    /// Depth-aspect views, to bind.
+    depth_sampled: [wgpu::TextureView; 2],
+    classes_view: wgpu::TextureView,
+}
+
+/// A shader variant and its reprojection cache on the application's
+/// device. Made once from a plan and the application's frame; each frame,
+/// [`CachedShader::record`] records every pass into the application's
+/// encoder, calling back for the draws.
+pub struct CachedShader {
+    device: wgpu::Device,
+    plan: Plan,
+    options: Options,
+    passes: Vec<Built>,
+    classify: Option<Built>,
+    cache_group: Option<u32>,
+    twin_slots: Vec<TwinSlot>,
+    depth_format: wgpu::TextureFormat,
+    formats: HostFormats,
+    size: (u32, u32),
+    targets: CacheTargets,
+    /// Bumped when the targets are made again: bind groups of older ones
+    /// are stale.
+    generation: u64,
+    params: wgpu::Buffer,
+    sampler: wgpu::Sampler,
+    /// The cache group's bind groups when the plan has no twins: bound by
+    /// the host at the start of each pass.
+    shared: Option<Twins>,
+    current: usize,
+    frame: u64,
+    phase: u32,
+    /// Whether the next frame has no previous one (first frame, resize,
+    /// reset): last frame's depth is cleared to the far plane.
+    fresh: bool,
+    /// Twins made and not yet filled.
+    pending: Vec<Weak<TwinsInner>>,
+    next_twins: u64,
+}
+
+impl std::fmt::Debug for CachedShader {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CachedShader")
+            .field("variant", &self.plan.variant)
+            .field("size", &self.size)
+            .field("frame", &self.frame)
+            .finish_non_exhaustive()
+    }
+}
+
+impl CachedShader {
+    /// Makes every pass's pipeline on `device` from the plan, the pass
+    /// shaders (`shader` gives a file's WGSL by the name the plan uses)
+    /// and the application's frame, and the cache's targets at `size`.
+    /// Errors name what does not match, or what the variant refuses.
+    pub fn new<'s>(
+        device: &wgpu::Device,
+        plan: &Plan,
+        shader: impl Fn(&str) -> Option<&'s str>,
+        frame: &FrameLayout<'_>,
+        size: (u32, u32),
+        options: Options,
+    ) -> Result<CachedShader, Error> {
+        plan.check().map_err(Error::Plan)?;
+        frame::check(plan, frame)?;
+        let user_groups = layouts::user_groups(plan, frame.bind_group_layouts)?;
+        let (user_buffers, twin_slots) = vertex::layouts(plan, frame.vertex_buffers)?;
+        let formats = HostFormats {
+            cache: cache_format(plan.cache.format),
+            age: texture_format(shadecache_plan::AGE_FORMAT)?,
+            classes: wgpu::TextureFormat::Rgba8Unorm,
+        };
+        let layout = |label: &str, entries: &[wgpu::BindGroupLayoutEntry]| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries,
+            })
+        };
+        let cache_group = layouts::cache_group(plan);
+        let user: BTreeMap<u32, wgpu::BindGroupLayout> = user_groups
+            .iter()
+            .filter(|(&group, _)| Some(group) != cache_group)
+            .map(|(&group, entries)| (group, layout("application group", entries)))
+            .collect();
+        // The cache's entries, and the application's when it shares the
+        // cache's group.
+        let mut cache_entries = layouts::cache_entries(plan)?;
+        if let Some(shared) = cache_group.and_then(|group| user_groups.get(&group)) {
+            cache_entries.extend(shared.iter().copied());
+        }
+        let buffers: Vec<Option<wgpu::VertexBufferLayout<'_>>> = user_buffers
+            .iter()
+            .map(|l| l.as_ref().map(|l| l.borrowed()))
+            .chain(twin_slots.iter().map(|t| Some(t.layout.borrowed())))
+            .collect();
+        let build = |index: usize, pass: &Pass| -> Result<Built, Error> {
+            let source = shader(&pass.shader).ok_or_else(|| {
+                Error::Mismatch(format!(
+                    "{}: no shader `{}` was given",
+                    pass.name, pass.shader
+                ))
+            })?;
+            let cache_layout = cache_group.map(|group| {
+                let entries: Vec<wgpu::BindGroupLayoutEntry> = cache_entries
+                    .iter()
+                    .filter(|e| pass.bindings.contains(&[group, e.binding]))
+                    .copied()
+                    .collect();
+                layout("shadecache cache group", &entries)
+            });
+            let pipeline_layout =
+                pipeline_layout(device, &user, cache_group.zip(cache_layout.as_ref()));
+            let inputs = PipelineInputs {
+                layout: &pipeline_layout,
+                buffers: &buffers,
+                frame,
+                formats,
+                options,
+            };
+            Ok(Built {
+                pass: pass.clone(),
+                pipeline: pipeline(device, pass, source, &inputs)?,
+                cache_layout,
+                index,
+            })
+        };
+        let passes = plan
+            .passes
+            .iter()
+            .enumerate()
+            .map(|(index, pass)| build(index, pass))
+            .collect::<Result<_, _>>()?;
+        let classify = match (&plan.classify, options.classify) {
+            (Some(pass), true) => Some(build(plan.passes.len(), pass)?),
+            _ => None,
+        };
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("shadecache CacheParams"),
+            size: params::size(&plan.cache.params)? as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        // rgba32float cannot be filtered: its variants load texels, and
+        // the layout asks for a non-filtering sampler.
+        let filter = if formats.cache == wgpu::TextureFormat::Rgba16Float {
+            wgpu::FilterMode::Linear
+        } else {
+            wgpu::FilterMode::Nearest
+        };
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("shadecache cache sampler"),
+            mag_filter: filter,
+            min_filter: filter,
+            ..wgpu::SamplerDescriptor::default()
+        });
+        let mut cached = CachedShader {
+            device: device.clone(),
+            targets: CacheTargets::new(device, size, formats, frame.depth_format),
+            plan: plan.clone(),
+            options,
+            passes,
+            classify,
+            cache_group,
+            twin_slots,
+            depth_format: frame.depth_format,
+            formats,
+            size,
+            generation: 0,
+            params,
+            sampler,
+            shared: None,
+            current: 0,
+            frame: 0,
+            phase: 0,
+            fresh: true,
+            pending: Vec::new(),
+            next_twins: 0,
+        };
+        if plan.bindings.previous.is_empty() && cached.twin_slots.is_empty() {
+            cached.shared = Some(cached.twins(&TwinSources::default())?);
+        }
+        Ok(cached)
+    }
+
+    /// The twins of one draw's buffers (see [`Twins`]): made once per
+    /// draw, bound in the draw callback with [`Draw::bind`]. Errors when a
+    /// buffer the plan keeps last frame's copy of is not among `sources`,
+    /// or cannot be copied.
+    pub fn twins(&mut self, sources: &TwinSources<'_>) -> Result<Twins, Error> {
+        let mut copies = Vec::new();
+        let mut bound = Vec::new();
+        for twin in &self.plan.bindings.previous {
+            let key = [twin.shadows.group, twin.shadows.binding];
+            let &(_, source) =
+                sources
+                    .buffers
+                    .iter()
+                    .find(|(k, _)| *k == key)
+                    .ok_or_else(|| {
+                        Error::Mismatch(format!(
+                    "the variant reads last frame's `{}` (group {}, binding {}): give its buffer",
+                    twin.shadows.name, key[0], key[1]
+                ))
+                    })?;
+            let usage = match twin.shadows.kind {
+                ResourceKind::Uniform => wgpu::BufferUsages::UNIFORM,
+                _ => wgpu::BufferUsages::STORAGE,
+            };
+            let copy = self.twin_buffer(&twin.shadows.name, source, usage)?;
+            bound.push((twin.binding, copy.clone()));
+            copies.push((source.clone(), copy));
+        }
+        let shared = self.shared_resources(sources)?;
+        let mut vertex = Vec::new();
+        for slot in &self.twin_slots {
+            let &(_, source) = sources
+                .vertex_buffers
+                .iter()
+                .find(|(s, _)| *s == slot.source)
+                .ok_or_else(|| {
+                    Error::Mismatch(format!(
+                        "the variant reads last frame's vertex buffer {}: give it",
+                        slot.source
+                    ))
+                })?;
+            let name = format!("vertex buffer {}", slot.source);
+            let copy = self.twin_buffer(&name, source, wgpu::BufferUsages::VERTEX)?;
+            vertex.push((slot.slot, copy.clone()));
+            copies.push((source.clone(), copy));
+        }
+        let inner = Arc::new(TwinsInner {
+            id: self.next_twins,
+            copies,
+            bound,
+            shared,
+            vertex,
+            bind_groups: Mutex::new(HashMap::new()),
+        });
+        self.next_twins += 1;
+        self.pending.push(Arc::downgrade(&inner));
+        Ok(Twins { inner })
+    }
+
+    /// The application's resources in the cache's group, from `sources`.
+    fn shared_resources(&self, sources: &TwinSources<'_>) -> Result<Vec<(u32, Shared)>, Error> {
+        let Some(group) = self.cache_group else {
+            return Ok(Vec::new());
+        };
+        let mut shared = Vec::new();
+        for resource in self
+            .plan
+            .bindings
+            .original
+            .iter()
+            .filter(|r| r.group == group)
+        {
+            let key = [group, resource.binding];
+            let found = if let Some((_, b)) = sources.buffers.iter().find(|(k, _)| *k == key) {
+                Shared::Buffer((*b).clone())
+            } else if let Some((_, t)) = sources.textures.iter().find(|(k, _)| *k == key) {
+                Shared::Texture((*t).clone())
+            } else if let Some((_, s)) = sources.samplers.iter().find(|(k, _)| *k == key) {
+                Shared::Sampler((*s).clone())
+            } else {
+                return Err(Error::Mismatch(format!(
+                    "`{}` (group {group}, binding {}) shares its group with the cache, so the host binds it: give it among the draw's sources",
+                    resource.name, resource.binding
+                )));
+            };
+            shared.push((resource.binding, found));
+        }
+        Ok(shared)
+    }
+
+    fn twin_buffer(
+        &self,
+        name: &str,
+        source: &wgpu::Buffer,
+        usage: wgpu::BufferUsages,
+    ) -> Result<wgpu::Buffer, Error> {
+        if !source.usage().contains(wgpu::BufferUsages::COPY_SRC) {
+            return Err(Error::Mismatch(format!(
+                "the buffer of `{name}` lacks BufferUsages::COPY_SRC: the host copies it into last frame's each frame"
+            )));
+        }
+        Ok(self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(&format!("last frame's {name}")),
+            size: source.size().div_ceil(4) * 4,
+            usage: usage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        }))
+    }
+
+    /// Records one frame without timing: see [`CachedShader::record_timed`].
+    pub fn record(
+        &mut self,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &Targets<'_>,
+        draw: impl FnMut(&mut Draw<'_, '_>),
+    ) -> Result<(), Error> {
+        self.record_timed(queue, encoder, targets, &mut NoTimer, draw)
+    }
+
+    /// Records one frame into `encoder`: the refresh uniform, every pass
+    /// of the plan in order (and the classification when asked for), each
+    /// timed by `timer`, calling `draw` once per pass for the application's
+    /// draws, then the copies of this frame's buffers into their twins.
+    /// Submit the encoder before recording the next frame.
+    pub fn record_timed<T: PassTimer>(
+        &mut self,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &Targets<'_>,
+        timer: &mut T,
+        mut draw: impl FnMut(&mut Draw<'_, '_>),
+    ) -> Result<(), Error> {
+        self.check_targets(targets)?;
+        let state = params::FrameState {
+            size: self.size,
+            frame: self.frame,
+            phase: self.phase,
+        };
+        queue.write_buffer(&self.params, 0, &params::bytes(&self.plan, state)?);
+        let previous = 1 - self.current;
+        if self.fresh {
+            // No previous frame: a depth at the far plane makes every
+            // pixel miss (the depth test's tolerance, ε·|expected − far|,
+            // is below the distance of anything in front of it).
+            clear_depth(
+                encoder,
+                &self.targets.depth_views[previous],
+                self.plan.clear.depth as f32,
+            );
+        }
+        // Twins new this frame hold this frame's contents.
+        for inner in self.pending.drain(..).filter_map(|weak| weak.upgrade()) {
+            inner.copy(encoder);
+        }
+        let binder = Binder {
+            shader: self,
+            used: RefCell::new(Vec::new()),
+        };
+        let built = self.passes.iter().chain(&self.classify);
+        for built in built {
+            let attachments = self.attachments(&built.pass, targets);
+            let query = timer.begin(encoder, &built.pass.name);
+            {
+                let mut render = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some(&built.pass.name),
+                    color_attachments: &attachments,
+                    depth_stencil_attachment: Some(self.depth_attachment(&built.pass)),
+                    timestamp_writes: timer.timestamp_writes(&query),
+                    ..wgpu::RenderPassDescriptor::default()
+                });
+                render.set_pipeline(&built.pipeline);
+                let mut draws = Draw {
+                    render: &mut render,
+                    built,
+                    binder: &binder,
+                    error: None,
+                };
+                if let Some(shared) = &self.shared {
+                    draws.bind(shared);
+                }
+                draw(&mut draws);
+                if let Some(err) = draws.error.take() {
+                    return Err(err);
+                }
+            }
+            timer.end(encoder, query);
+        }
+        // This frame's contents are next frame's last-frame contents.
+        let mut used = binder.used.into_inner();
+        used.sort_by_key(|inner| inner.id);
+        used.dedup_by_key(|inner| inner.id);
+        for inner in &used {
+            inner.copy(encoder);
+        }
+        self.current = previous;
+        self.fresh = false;
+        self.frame = self.frame.wrapping_add(1);
+        let period = self.plan.refresh.period;
+        self.phase = if period == 0 {
+            0
+        } else {
+            (self.phase + 1) % period
+        };
+        Ok(())
+    }
+
+    fn check_targets(&self, targets: &Targets<'_>) -> Result<(), Error> {
+        for pass in &self.plan.passes {
+            for target in pass
+                .color_targets
+                .iter()
+                .filter(|t| t.target == TargetKind::Color)
+            {
+                let location = target.location as usize;
+                let view = targets
+                    .color
+                    .get(location)
+                    .copied()
+                    .flatten()
+                    .ok_or_else(|| {
+                        Error::Mismatch(format!("no colour view for @location({location})"))
+                    })?;
+                let texture = view.texture();
+                let size = (texture.width(), texture.height());
+                if size != self.size {
+                    return Err(Error::Mismatch(format!(
+                        "the colour target at @location({location}) is {}×{}, the cache {}×{}: call `resize` when the frame's size changes",
+                        size.0, size.1, self.size.0, self.size.1
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn attachments<'a>(
+        &'a self,
+        pass: &Pass,
+        targets: &Targets<'a>,
+    ) -> Vec<Option<wgpu::RenderPassColorAttachment<'a>>> {
+        let t = &self.targets;
+        let current = self.current;
+        let mut attachments: Vec<Option<wgpu::RenderPassColorAttachment<'a>>> = Vec::new();
+        for target in &pass.color_targets {
+            let index = target.location as usize;
+            if attachments.len() <= index {
+                attachments.resize(index + 1, None);
+            }
+            let color = |c: [f64; 4]| wgpu::Color {
+                r: c[0],
+                g: c[1],
+                b: c[2],
+                a: c[3],
+            };
+            let (view, clear) = match target.target {
+                TargetKind::Cache => (
+                    &t.payload_views[current],
+                    Some(color(self.plan.clear.cache)),
+                ),
+                TargetKind::Age => (&t.age_views[current], Some(wgpu::Color::TRANSPARENT)),
+                TargetKind::Classes => (&t.classes_view, Some(wgpu::Color::TRANSPARENT)),
+                // The application's own clear, on the pass that clears.
+                TargetKind::Color => match targets.color.get(index).copied().flatten() {
+                    Some(view) => (view, targets.clear),
+                    None => continue,
+                },
+            };
+            let load = match (target.load, clear) {
+                (LoadOp::Clear, Some(clear)) => wgpu::LoadOp::Clear(clear),
+                _ => wgpu::LoadOp::Load,
+            };
+            attachments[index] = Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load,
+                    store: wgpu::StoreOp::Store,
+                },
+            });
+        }
+        attachments
+    }
+
+    fn depth_attachment(&self, pass: &Pass) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+        let load = match pass.depth.load {
+            LoadOp::Clear => wgpu::LoadOp::Clear(self.plan.clear.depth as f32),
+            LoadOp::Load => wgpu::LoadOp::Load,
+        };
+        let stencil = self
+            .depth_format
+            .has_stencil_aspect()
+            .then_some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(0),
+                store: wgpu::StoreOp::Store,
+            });
+        wgpu::RenderPassDepthStencilAttachment {
+            view: &self.targets.depth_views[self.current],
+            depth_ops: Some(wgpu::Operations {
+                load,
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: stencil,
+        }
+    }
+
+    /// Makes the cache's targets at a new size: the next frame misses
+    /// everywhere, as the first.
+    pub fn resize(&mut self, size: (u32, u32)) {
+        if size == self.size {
+            return;
+        }
+        self.size = size;
+        self.targets = CacheTargets::new(&self.device, size, self.formats, self.depth_format);
+        self.generation += 1;
+        self.fresh = true;
+    }
+
+    /// Forgets last frame (a camera cut, a teleport): the next frame
+    /// misses everywhere.
+    pub fn reset(&mut self) {
+        self.fresh = true;
+    }
+
+    /// Sets the frame counter c, as if that many frames had been run, and
+    /// the refresh phase to c mod Δn; the phase then advances by one modulo
+    /// Δn per frame (so the period stays exact when the counter wraps).
+    pub fn set_frame_counter(&mut self, frame: u64) {
+        let period = u64::from(self.plan.refresh.period);
+        self.frame = frame;
+        self.phase = if period == 0 {
+            0
+        } else {
+            (frame % period) as u32
+        };
+    }
+
+    /// The frame counter c.
+    pub fn frame_counter(&self) -> u64 {
+        self.frame
+    }
+
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    /// The group the host binds: the cache's resources, the twins, and
+    /// the application's resources when the shader uses all four groups.
+    pub fn cache_group(&self) -> Option<u32> {
+        self.cache_group
+    }
+
+    pub fn options(&self) -> Options {
+        self.options
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    /// The last recorded frame's depth buffer.
+    pub fn depth(&self) -> &wgpu::Texture {
+        &self.targets.depth[1 - self.current]
+    }
+
+    /// The last recorded frame's payload texture.
+    pub fn payload(&self) -> &wgpu::Texture {
+        &self.targets.payload[1 - self.current]
+    }
+
+    /// The last recorded frame's age texture (r16float): at each pixel
+    /// whose cache entry was written, frames since its value was computed.
+    pub fn age(&self) -> &wgpu::Texture {
+        &self.targets.age[1 - self.current]
+    }
+
+    /// The last frame's classes, when classification is on.
+    pub fn classes(&self) -> &wgpu::Texture {
+        &self.targets.classes
+    }
+}
+
+impl CacheTargets {
+    fn new(
+        device: &wgpu::Device,
+        size: (u32, u32),
+        formats: HostFormats,
+        depth_format: wgpu::TextureFormat,
+    ) -> CacheTargets {
+        let make = |label: &str, format| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: size.0.max(1),
+                    height: size.1.max(1),
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let pair = |label: &str, format| [make(label, format), make(label, format)];
+        let payload = pair("shadecache payload", formats.cache);
+        let age = pair("shadecache age", formats.age);
+        let depth = pair("shadecache depth", depth_format);
+        let classes = make("shadecache classes", formats.classes);
+        let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
+        let depth_only = |t: &wgpu::Texture| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                aspect: wgpu::TextureAspect::DepthOnly,
+                ..wgpu::TextureViewDescriptor::default()
+            })
+        };
+        CacheTargets {
+            payload_views: [view(&payload[0]), view(&payload[1])],
+            age_views: [view(&age[0]), view(&age[1])],
+            depth_views: [view(&depth[0]), view(&depth[1])],
+            depth_sampled: [depth_only(&depth[0]), depth_only(&depth[1])],
+            classes_view: view(&classes),
+            payload,
+            age,
+            depth,
+            classes,
+        }
+    }
+}
+
+fn clear_depth(encoder: &mut wgpu::CommandEncoder, view: &wgpu::TextureView, depth: f32) {
+    let _pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("shadecache: no last frame"),
+        color_attachments: &[],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(depth),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        ..wgpu::RenderPassDescriptor::default()
+    });
+}
+
+/// Makes and finds the cache group's bind groups during a frame, and
+/// notes the twins drawn with.
+struct Binder<'s> {
+    shader: &'s CachedShader,
+    used: RefCell<Vec<Arc<TwinsInner>>>,
+}
+
+impl Binder<'_> {
+    /// The cache group's bind group for `twins` in a pass this frame.
+    fn bind_group(
+        &self,
+        built: &Built,
+        twins: &TwinsInner,
+    ) -> Result<Option<(u32, wgpu::BindGroup)>, Error> {
+        let shader = self.shader;
+        let (Some(group), Some(layout)) = (shader.cache_group, &built.cache_layout) else {
+            return Ok(None);
+        };
+        let mut cached = twins
+            .bind_groups
+            .lock()
+            .map_err(|_| Error::Wgpu("a twins' bind groups were poisoned".into()))?;
+        let stale = cached
+            .get(&built.index)
+            .is_none_or(|(generation, _)| *generation != shader.generation);
+        if stale {
+            let make = |current| self.make(built, layout, twins, current);
+            let groups = [make(0)?, make(1)?];
+            cached.insert(built.index, (shader.generation, groups));
+        }
+        Ok(cached
+            .get(&built.index)
+            .map(|(_, groups)| (group, groups[shader.current].clone())))
+    }
+
+    /// The cache group's bind group when `current` is this frame's slot.
+    fn make(
+        &self,
+        built: &Built,
+        layout: &wgpu::BindGroupLayout,
+        twins: &TwinsInner,
+        current: usize,
+    ) -> Result<wgpu::BindGroup, Error> {
+        let shader = self.shader;
+        let t = &shader.targets;
+        let previous = 1 - current;
+        let bound = |binding: u32| {
+            shader
+                .cache_group
+                .is_some_and(|group| built.pass.bindings.contains(&[group, binding]))
+        };
+        let mut entries = Vec::new();
+        for resource in shader
+            .plan
+            .bindings
+            .cache
+            .iter()
+            .filter(|r| bound(r.binding))
+        {
+            let resource_of = match resource.name.as_str() {
+                "cache_params" => shader.params.as_entire_binding(),
+                "cache_previous_payload" => {
+                    wgpu::BindingResource::TextureView(&t.payload_views[previous])
+                }
+                "cache_current_payload" => {
+                    wgpu::BindingResource::TextureView(&t.payload_views[current])
+                }
+                "cache_previous_age" => wgpu::BindingResource::TextureView(&t.age_views[previous]),
+                "cache_previous_depth" => {
+                    wgpu::BindingResource::TextureView(&t.depth_sampled[previous])
+                }
+                "cache_sampler" => wgpu::BindingResource::Sampler(&shader.sampler),
+                other => {
+                    return Err(Error::Plan(format!(
+                        "the cache binds `{other}`, which this host does not know"
+                    )))
+                }
+            };
+            entries.push(wgpu::BindGroupEntry {
+                binding: resource.binding,
+                resource: resource_of,
+            });
+        }
+        for (binding, buffer) in twins.bound.iter().filter(|(b, _)| bound(*b)) {
+            entries.push(wgpu::BindGroupEntry {
+                binding: *binding,
+                resource: buffer.as_entire_binding(),
+            });
+        }
+        for (binding, resource) in twins.shared.iter().filter(|(b, _)| bound(*b)) {
+            entries.push(wgpu::BindGroupEntry {
+                binding: *binding,
+                resource: resource.resource(),
+            });
+        }
+        let scope = shader
+            .device
+            .push_error_scope(wgpu::ErrorFilter::Validation);
+        let group = shader.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shadecache cache group"),
+            layout,
+            entries: &entries,
+        });
+        match pollster::block_on(scope.pop()) {
+            None => Ok(group),
+            Some(err) => Err(Error::Wgpu(format!("the cache group: {err}"))),
+        }
+    }
+}
+
+/// One pass being recorded: the application's draws go into
+/// [`Draw::render_pass`], each after [`Draw::bind`] of its twins.
+pub struct Draw<'r, 'e> {
+    render: &'r mut wgpu::RenderPass<'e>,
+    built: &'r Built,
+    binder: &'r Binder<'r>,
+    error: Option<Error>,
+}
+
+impl<'e> Draw<'_, 'e> {
+    /// The plan's pass being recorded (its name and role).
+    pub fn pass(&self) -> &Pass {
+        &self.built.pass
+    }
+
+    /// The render pass, with the pass's pipeline set: set the
+    /// application's bind groups and vertex buffers and draw, as in the
+    /// original pass.
+    pub fn render_pass(&mut self) -> &mut wgpu::RenderPass<'e> {
+        self.render
+    }
+
+    /// Binds the cache group with `twins` (last frame's copies of this
+    /// draw's buffers) and the vertex twins, for the draws that follow. An
+    /// error is returned from `record`.
+    pub fn bind(&mut self, twins: &Twins) {
+        match self.binder.bind_group(self.built, &twins.inner) {
+            Ok(Some((group, bind_group))) => self.render.set_bind_group(group, &bind_group, &[]),
+            Ok(None) => {}
+            Err(err) => {
+                self.error.get_or_insert(err);
+                return;
+            }
+        }
+        for (slot, buffer) in &twins.inner.vertex {
+            self.render.set_vertex_buffer(*slot, buffer.slice(..));
+        }
+        self.binder.used.borrow_mut().push(twins.inner.clone());
+    }
+}

@@ -1,0 +1,121 @@
+//! The application's frame as it is, and what a variant cannot do in it.
+
+use std::num::NonZeroU32;
+
+use shadecache_plan::{Plan, TargetKind};
+
+use crate::Error;
+
+/// How the application's original pass draws: what its pipeline was made
+/// with. The variant's pipelines are made from it, and it is checked
+/// against the plan.
+#[derive(Clone, Debug)]
+pub struct FrameLayout<'a> {
+    /// The vertex buffers of the original pipeline, by slot. The host adds
+    /// slots after them for last frame's copies of those the position
+    /// reads per instance.
+    pub vertex_buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+    /// The bind group layouts of the original pipeline, by group: their
+    /// entries, as given to `create_bind_group_layout`. Bind groups made
+    /// from a layout with the same entries bind to the variant's passes
+    /// (wgpu pools equal layouts). The plan's cache group is the host's.
+    pub bind_group_layouts: &'a [(u32, &'a [wgpu::BindGroupLayoutEntry])],
+    /// The colour targets, by the fragment output's `@location`.
+    pub color_targets: &'a [Option<wgpu::ColorTargetState>],
+    /// The depth buffer's format. The host renders depth itself, double
+    /// buffered (last frame's depth is part of the cache), in this format.
+    pub depth_format: wgpu::TextureFormat,
+    pub primitive: wgpu::PrimitiveState,
+    /// Samples per pixel; the cache holds one value per pixel: 1 only.
+    pub sample_count: u32,
+    /// The viewport the original pass draws into.
+    pub viewport: Viewport,
+    /// Multiview rendering (one draw into several layers).
+    pub multiview: Option<NonZeroU32>,
+}
+
+impl<'a> FrameLayout<'a> {
+    /// A single-sampled frame over the whole target with `depth32float`
+    /// depth and wgpu's default primitive state.
+    pub fn new(
+        vertex_buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+        bind_group_layouts: &'a [(u32, &'a [wgpu::BindGroupLayoutEntry])],
+        color_targets: &'a [Option<wgpu::ColorTargetState>],
+    ) -> Self {
+        FrameLayout {
+            vertex_buffers,
+            bind_group_layouts,
+            color_targets,
+            depth_format: wgpu::TextureFormat::Depth32Float,
+            primitive: wgpu::PrimitiveState::default(),
+            sample_count: 1,
+            viewport: Viewport::WholeTarget,
+            multiview: None,
+        }
+    }
+}
+
+/// Where the original pass draws in its targets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Viewport {
+    WholeTarget,
+    /// A rectangle of the target, in pixels: x, y, width, height.
+    Rect([f32; 4]),
+}
+
+/// The frame's colour views, by the fragment output's `@location`, and
+/// how the first pass that writes each starts.
+#[derive(Clone, Debug)]
+pub struct Targets<'a> {
+    pub color: &'a [Option<&'a wgpu::TextureView>],
+    /// The clear colour of the original pass; `None` keeps what the
+    /// targets hold (the original pass loads).
+    pub clear: Option<wgpu::Color>,
+}
+
+/// Refuses what a cache cannot do correctly, and checks that the frame
+/// has a target for every output the plan writes.
+pub(crate) fn check(plan: &Plan, frame: &FrameLayout<'_>) -> Result<(), Error> {
+    if frame.sample_count != 1 {
+        return Err(Error::Refused(format!(
+            "multisampling ({} samples): the cache holds one value and one depth per pixel, and a sample's reprojection would read its pixel's",
+            frame.sample_count
+        )));
+    }
+    if let Viewport::Rect(rect) = frame.viewport {
+        return Err(Error::Refused(format!(
+            "a viewport of {rect:?}, not the whole target: the cache's pixel addresses and the refresh pattern assume the viewport is the target"
+        )));
+    }
+    if let Some(views) = frame.multiview {
+        return Err(Error::Refused(format!(
+            "multiview ({views} views): one cache per view is not built; each view would reproject into the others' values"
+        )));
+    }
+    for pass in &plan.passes {
+        for target in &pass.color_targets {
+            if target.target != TargetKind::Color {
+                continue;
+            }
+            let location = target.location;
+            let Some(Some(state)) = frame.color_targets.get(location as usize) else {
+                return Err(Error::Mismatch(format!(
+                    "pass `{}` writes the fragment output @location({location}), and the frame has no colour target there",
+                    pass.name
+                )));
+            };
+            if state.blend.is_some() {
+                return Err(Error::Refused(format!(
+                    "blending into @location({location}): the cache keeps one surface per pixel, and a blended draw shows several; a cached value would be blended again with stale contents"
+                )));
+            }
+        }
+    }
+    if !frame.depth_format.has_depth_aspect() {
+        return Err(Error::Mismatch(format!(
+            "the depth format {:?} has no depth: the cache's depth test needs one",
+            frame.depth_format
+        )));
+    }
+    Ok(())
+}

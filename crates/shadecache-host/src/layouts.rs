@@ -1,0 +1,253 @@
+//! Bind group layouts: the application's groups, checked against the
+//! plan, and the cache's group, made from the plan.
+
+use std::collections::BTreeMap;
+
+use shadecache_plan::{CacheFormat, Plan, Resource, ResourceKind};
+
+use crate::Error;
+
+const VISIBLE: wgpu::ShaderStages = wgpu::ShaderStages::VERTEX_FRAGMENT;
+
+/// The layout entry a plan's resource implies: the binding type WGSL
+/// declares, visible to both stages (read-write storage to the fragment
+/// stage only). A sampled colour texture is taken as filterable float.
+/// `None` for what a layout cannot state from the plan (storage textures
+/// and `other`).
+pub fn entry_for(resource: &Resource) -> Option<wgpu::BindGroupLayoutEntry> {
+    use wgpu::TextureViewDimension as D;
+    use ResourceKind as K;
+    let texture = |dimension, depth: bool| wgpu::BindingType::Texture {
+        sample_type: if depth {
+            wgpu::TextureSampleType::Depth
+        } else {
+            wgpu::TextureSampleType::Float { filterable: true }
+        },
+        view_dimension: dimension,
+        multisampled: false,
+    };
+    let buffer = |ty| wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    let (ty, visibility) = match resource.kind {
+        K::Uniform => (buffer(wgpu::BufferBindingType::Uniform), VISIBLE),
+        K::Storage => (
+            buffer(wgpu::BufferBindingType::Storage { read_only: true }),
+            VISIBLE,
+        ),
+        K::StorageReadWrite => (
+            buffer(wgpu::BufferBindingType::Storage { read_only: false }),
+            wgpu::ShaderStages::FRAGMENT,
+        ),
+        K::Texture => (texture(D::D2, false), VISIBLE),
+        K::TextureArray => (texture(D::D2Array, false), VISIBLE),
+        K::CubeTexture => (texture(D::Cube, false), VISIBLE),
+        K::CubeTextureArray => (texture(D::CubeArray, false), VISIBLE),
+        K::DepthTexture => (texture(D::D2, true), VISIBLE),
+        K::DepthTextureArray => (texture(D::D2Array, true), VISIBLE),
+        K::DepthCubeTexture => (texture(D::Cube, true), VISIBLE),
+        K::DepthCubeTextureArray => (texture(D::CubeArray, true), VISIBLE),
+        K::Texture1d => (texture(D::D1, false), VISIBLE),
+        K::Texture3d => (texture(D::D3, false), VISIBLE),
+        K::Sampler => (
+            wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+            VISIBLE,
+        ),
+        K::ComparisonSampler => (
+            wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+            VISIBLE,
+        ),
+        K::StorageTexture | K::Other => return None,
+    };
+    Some(wgpu::BindGroupLayoutEntry {
+        binding: resource.binding,
+        visibility,
+        ty,
+        count: None,
+    })
+}
+
+/// The layout entries of the application's `group` as the plan implies
+/// them, for an application without layouts of its own (and for the
+/// profiler). Errors for a resource whose type the plan cannot state.
+pub fn plan_layout_entries(
+    plan: &Plan,
+    group: u32,
+) -> Result<Vec<wgpu::BindGroupLayoutEntry>, Error> {
+    plan.bindings
+        .original
+        .iter()
+        .filter(|r| r.group == group)
+        .map(|resource| {
+            entry_for(resource).ok_or_else(|| {
+                Error::Plan(format!(
+                    "`{}` is a {} binding, whose layout the plan cannot state: give the layout",
+                    resource.name, resource.kind
+                ))
+            })
+        })
+        .collect()
+}
+
+/// The groups the application binds, by the plan.
+pub fn plan_groups(plan: &Plan) -> Vec<u32> {
+    let mut groups: Vec<u32> = plan.bindings.original.iter().map(|r| r.group).collect();
+    groups.sort_unstable();
+    groups.dedup();
+    groups
+}
+
+/// The group the cache's resources and the twins are bound at, if the
+/// plan has any.
+pub(crate) fn cache_group(plan: &Plan) -> Option<u32> {
+    plan.bindings
+        .cache
+        .iter()
+        .map(|r| r.group)
+        .chain(plan.bindings.previous.iter().map(|t| t.group))
+        .next()
+}
+
+/// Checks the application's layouts against every resource the plan
+/// says its shaders bind; returns them by group. (A shader that uses all
+/// four groups shares its last with the cache: that group's layout is
+/// given too, and the host binds it.)
+pub(crate) fn user_groups<'a>(
+    plan: &Plan,
+    given: &'a [(u32, &'a [wgpu::BindGroupLayoutEntry])],
+) -> Result<BTreeMap<u32, &'a [wgpu::BindGroupLayoutEntry]>, Error> {
+    let mut groups = BTreeMap::new();
+    for &(group, entries) in given {
+        if groups.insert(group, entries).is_some() {
+            return Err(Error::Mismatch(format!(
+                "the frame gives group {group}'s layout twice"
+            )));
+        }
+    }
+    for resource in &plan.bindings.original {
+        let where_ = format!(
+            "`{}` (group {}, binding {})",
+            resource.name, resource.group, resource.binding
+        );
+        let entry = groups
+            .get(&resource.group)
+            .and_then(|entries| entries.iter().find(|e| e.binding == resource.binding))
+            .ok_or_else(|| {
+                Error::Mismatch(format!(
+                    "the shader binds {where_}, and the frame's layouts have no such entry"
+                ))
+            })?;
+        if !compatible(resource.kind, &entry.ty) {
+            return Err(Error::Mismatch(format!(
+                "the shader binds {where_} as a {} binding; the frame's layout has {:?}",
+                resource.kind, entry.ty
+            )));
+        }
+    }
+    Ok(groups)
+}
+
+/// Whether a layout entry's type can hold what WGSL declares as `kind`.
+fn compatible(kind: ResourceKind, ty: &wgpu::BindingType) -> bool {
+    use wgpu::BindingType as B;
+    use ResourceKind as K;
+    match (kind, ty) {
+        (K::Uniform, B::Buffer { ty, .. }) => *ty == wgpu::BufferBindingType::Uniform,
+        (K::Storage, B::Buffer { ty, .. }) => {
+            matches!(ty, wgpu::BufferBindingType::Storage { read_only: true })
+        }
+        (K::StorageReadWrite, B::Buffer { ty, .. }) => {
+            matches!(ty, wgpu::BufferBindingType::Storage { read_only: false })
+        }
+        (K::Sampler, B::Sampler(s)) => *s != wgpu::SamplerBindingType::Comparison,
+        (K::ComparisonSampler, B::Sampler(s)) => *s == wgpu::SamplerBindingType::Comparison,
+        (K::StorageTexture, B::StorageTexture { .. }) => true,
+        (K::Other, _) => true,
+        (
+            kind,
+            B::Texture {
+                sample_type,
+                view_dimension,
+                ..
+            },
+        ) => entry_for(&Resource {
+            group: 0,
+            binding: 0,
+            name: String::new(),
+            kind,
+            source: None,
+        })
+        .is_some_and(|expected| match expected.ty {
+            B::Texture {
+                sample_type: want,
+                view_dimension: dimension,
+                ..
+            } => {
+                dimension == *view_dimension
+                    && (want == wgpu::TextureSampleType::Depth)
+                        == (*sample_type == wgpu::TextureSampleType::Depth)
+            }
+            _ => false,
+        }),
+        _ => false,
+    }
+}
+
+/// The cache group's entries: the cache's own resources by name, and each
+/// twin as the resource it shadows.
+pub(crate) fn cache_entries(plan: &Plan) -> Result<Vec<wgpu::BindGroupLayoutEntry>, Error> {
+    // rgba32float is not filterable without an optional feature: its
+    // variants reconstruct from texel loads.
+    let payload_filterable = plan.cache.format == CacheFormat::Rgba16float;
+    let texture = |sample_type| wgpu::BindingType::Texture {
+        sample_type,
+        view_dimension: wgpu::TextureViewDimension::D2,
+        multisampled: false,
+    };
+    let mut entries = Vec::new();
+    for resource in &plan.bindings.cache {
+        let ty = match resource.name.as_str() {
+            "cache_params" => wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            "cache_previous_payload" | "cache_current_payload" => {
+                texture(wgpu::TextureSampleType::Float {
+                    filterable: payload_filterable,
+                })
+            }
+            "cache_previous_age" => texture(wgpu::TextureSampleType::Float { filterable: true }),
+            "cache_previous_depth" => texture(wgpu::TextureSampleType::Depth),
+            "cache_sampler" => wgpu::BindingType::Sampler(if payload_filterable {
+                wgpu::SamplerBindingType::Filtering
+            } else {
+                wgpu::SamplerBindingType::NonFiltering
+            }),
+            other => {
+                return Err(Error::Plan(format!(
+                    "the cache binds `{other}`, which this host does not know (a newer plan?)"
+                )))
+            }
+        };
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: resource.binding,
+            visibility: VISIBLE,
+            ty,
+            count: None,
+        });
+    }
+    for twin in &plan.bindings.previous {
+        let mut entry = entry_for(&twin.shadows).ok_or_else(|| {
+            Error::Plan(format!(
+                "`{}` shadows a {} binding, which cannot have a twin",
+                twin.name, twin.shadows.kind
+            ))
+        })?;
+        entry.binding = twin.binding;
+        entries.push(entry);
+    }
+    Ok(entries)
+}

@@ -1,0 +1,53 @@
+//! Runs a shadecache variant inside an application's own wgpu render loop.
+//!
+//! shadecache rewrites a shader into reprojection-cache variants (seed
+//! 002's one-, two- and three-pass) and writes, next to each variant's
+//! pass shaders, a [`Plan`]: the passes in order, their targets and depth
+//! state, the vertex inputs, and every binding the host supplies. Running
+//! a plan by hand means double-buffered cache textures, last frame's copies
+//! of the buffers the position reads, the refresh uniform, one pipeline per
+//! pass with the right clears and depth state, the first frame and
+//! resizes. This crate does that, on the application's device and in the
+//! application's encoder; shadecache's profiler measures variants through
+//! it, so what an application runs is what was measured.
+//!
+//! An application describes its original pass once, as a [`FrameLayout`]
+//! (its vertex buffer layouts, bind group layout entries, colour target
+//! states, depth format), and makes a [`CachedShader`] from the plan and
+//! the pass shaders. What a cache cannot do correctly — blending into a
+//! cached output, multisampling, a viewport smaller than the target,
+//! multiview — is refused there, with the reason, as is a frame that does
+//! not match what the shaders read ([`Error`]). Per draw it makes
+//! [`Twins`] from the draw's buffers. Per frame it writes its buffers as
+//! before and calls [`CachedShader::record`], which records every pass and
+//! calls back once per pass for the draws (the same draws as the original
+//! pass, after [`Draw::bind`]); the host copies the frame's buffers into
+//! their twins after the passes, so they hold last frame's contents
+//! whatever the application writes next. The first frame, a
+//! [`CachedShader::resize`] and a [`CachedShader::reset`] (a camera cut)
+//! miss everywhere. [`Timestamps`] times each pass with plain timestamp
+//! queries; [`PassTimer`] lets another timer do it.
+//!
+//! The crate depends on wgpu, serde and the plan schema only: an
+//! application links neither naga's front ends nor the toolchain.
+
+mod cached;
+mod error;
+mod formats;
+mod frame;
+mod layouts;
+mod params;
+mod pipelines;
+mod timing;
+mod twins;
+mod vertex;
+
+pub use cached::{CachedShader, Draw, Options};
+pub use error::Error;
+pub use formats::{cache_format, texture_format, vertex_format};
+pub use frame::{FrameLayout, Targets, Viewport};
+pub use layouts::{entry_for, plan_groups, plan_layout_entries};
+pub use shadecache_plan as plan;
+pub use shadecache_plan::Plan;
+pub use timing::{NoTimer, PassTime, PassTimer, Timestamps};
+pub use twins::{TwinSources, Twins};

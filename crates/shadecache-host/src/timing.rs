@@ -1,0 +1,153 @@
+//! Per-pass GPU timing: a small trait the host records through, and an
+//! implementation with plain timestamp queries. (shadecache's profiler
+//! implements the trait over wgpu-profiler.)
+
+use serde::Serialize;
+
+/// Times render passes. The host begins a query before each pass it
+/// records, gives the pass the query's timestamp writes, and ends it after.
+pub trait PassTimer {
+    type Query;
+    fn begin(&mut self, encoder: &mut wgpu::CommandEncoder, pass: &str) -> Self::Query;
+    fn timestamp_writes<'a>(
+        &'a self,
+        query: &'a Self::Query,
+    ) -> Option<wgpu::RenderPassTimestampWrites<'a>>;
+    fn end(&mut self, encoder: &mut wgpu::CommandEncoder, query: Self::Query);
+}
+
+/// No timing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoTimer;
+
+impl PassTimer for NoTimer {
+    type Query = ();
+    fn begin(&mut self, _: &mut wgpu::CommandEncoder, _: &str) {}
+    fn timestamp_writes<'a>(&'a self, _: &'a ()) -> Option<wgpu::RenderPassTimestampWrites<'a>> {
+        None
+    }
+    fn end(&mut self, _: &mut wgpu::CommandEncoder, _: ()) {}
+}
+
+/// One pass's GPU time.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PassTime {
+    pub pass: String,
+    pub milliseconds: f64,
+}
+
+/// Timestamp queries around each pass of one frame: begin a frame, record
+/// it through this timer, [`Timestamps::resolve`] into the same encoder,
+/// submit, then [`Timestamps::read`].
+#[derive(Debug)]
+pub struct Timestamps {
+    queries: wgpu::QuerySet,
+    resolved: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    capacity: u32,
+    period_ns: f32,
+    passes: Vec<String>,
+}
+
+impl Timestamps {
+    /// Room for `passes` passes a frame; `None` when the device was not
+    /// opened with `Features::TIMESTAMP_QUERY`.
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, passes: u32) -> Option<Timestamps> {
+        if !device.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
+            return None;
+        }
+        let count = passes.max(1) * 2;
+        let bytes = u64::from(count) * 8;
+        Some(Timestamps {
+            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("shadecache pass timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count,
+            }),
+            resolved: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("shadecache resolved timestamps"),
+                size: bytes,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            readback: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("shadecache timestamp readback"),
+                size: bytes,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            }),
+            capacity: passes.max(1),
+            period_ns: queue.get_timestamp_period(),
+            passes: Vec::new(),
+        })
+    }
+
+    /// Resolves this frame's queries; record after the passes.
+    pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+        let count = self.passes.len() as u32 * 2;
+        if count == 0 {
+            return;
+        }
+        encoder.resolve_query_set(&self.queries, 0..count, &self.resolved, 0);
+        encoder.copy_buffer_to_buffer(&self.resolved, 0, &self.readback, 0, u64::from(count) * 8);
+    }
+
+    /// The frame's pass times, once its commands were submitted; starts
+    /// the next frame.
+    pub fn read(&mut self, device: &wgpu::Device) -> Result<Vec<PassTime>, crate::Error> {
+        let passes = std::mem::take(&mut self.passes);
+        if passes.is_empty() {
+            return Ok(Vec::new());
+        }
+        let slice = self.readback.slice(..passes.len() as u64 * 16);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|err| crate::Error::Wgpu(err.to_string()))?;
+        let ticks: Vec<u64> = {
+            let data = slice
+                .get_mapped_range()
+                .map_err(|err| crate::Error::Wgpu(format!("{err:?}")))?;
+            data.chunks_exact(8)
+                .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+                .collect()
+        };
+        self.readback.unmap();
+        Ok(passes
+            .into_iter()
+            .zip(ticks.chunks_exact(2))
+            .map(|(pass, pair)| PassTime {
+                pass,
+                milliseconds: pair[1].saturating_sub(pair[0]) as f64 * f64::from(self.period_ns)
+                    / 1e6,
+            })
+            .collect())
+    }
+}
+
+impl PassTimer for Timestamps {
+    /// The pass's index this frame; `None` past the capacity.
+    type Query = Option<u32>;
+
+    fn begin(&mut self, _: &mut wgpu::CommandEncoder, pass: &str) -> Option<u32> {
+        let index = self.passes.len() as u32;
+        (index < self.capacity).then(|| {
+            self.passes.push(pass.to_string());
+            index
+        })
+    }
+
+    fn timestamp_writes<'a>(
+        &'a self,
+        query: &'a Option<u32>,
+    ) -> Option<wgpu::RenderPassTimestampWrites<'a>> {
+        let index = (*query)?;
+        Some(wgpu::RenderPassTimestampWrites {
+            query_set: &self.queries,
+            beginning_of_pass_write_index: Some(index * 2),
+            end_of_pass_write_index: Some(index * 2 + 1),
+        })
+    }
+
+    fn end(&mut self, _: &mut wgpu::CommandEncoder, _: Option<u32>) {}
+}

@@ -1,0 +1,257 @@
+//! The scene's textures on the GPU, and reading targets back.
+
+use std::collections::HashMap;
+
+use super::gpu::Gpu;
+use crate::plan::{Plan, ResourceKind};
+use crate::scene::textures::Texels;
+
+/// The scene's textures and samplers for the plan's bindings: texels
+/// uploaded, depth textures at the far plane.
+#[allow(clippy::type_complexity)]
+pub(super) fn scene_textures(
+    gpu: &Gpu,
+    plan: &Plan,
+    textures: &HashMap<[u32; 2], Texels>,
+) -> Result<
+    (
+        HashMap<[u32; 2], wgpu::TextureView>,
+        HashMap<[u32; 2], wgpu::Sampler>,
+    ),
+    String,
+> {
+    let mut views = HashMap::new();
+    let mut samplers = HashMap::new();
+    for resource in &plan.bindings.original {
+        let key = [resource.group, resource.binding];
+        if let Some((depth, shape)) = sampled_shape(resource.kind) {
+            let view = if depth {
+                far_depth(
+                    gpu,
+                    &resource.name,
+                    wgpu::TextureFormat::Depth32Float,
+                    shape,
+                )
+            } else {
+                let texels = textures
+                    .get(&key)
+                    .ok_or_else(|| format!("no texels for texture `{}`", resource.name))?;
+                upload(gpu, texels, shape)
+            };
+            views.insert(key, view);
+            continue;
+        }
+        match resource.kind {
+            ResourceKind::Sampler | ResourceKind::ComparisonSampler => {
+                let compare = resource.kind == ResourceKind::ComparisonSampler;
+                samplers.insert(
+                    key,
+                    gpu.device.create_sampler(&wgpu::SamplerDescriptor {
+                        label: Some(&resource.name),
+                        address_mode_u: wgpu::AddressMode::Repeat,
+                        address_mode_v: wgpu::AddressMode::Repeat,
+                        address_mode_w: wgpu::AddressMode::Repeat,
+                        mag_filter: wgpu::FilterMode::Linear,
+                        min_filter: wgpu::FilterMode::Linear,
+                        mipmap_filter: wgpu::MipmapFilterMode::Linear,
+                        compare: compare.then_some(wgpu::CompareFunction::LessEqual),
+                        ..wgpu::SamplerDescriptor::default()
+                    }),
+                );
+            }
+            ResourceKind::Uniform | ResourceKind::Storage | ResourceKind::StorageReadWrite => {}
+            other => {
+                return Err(format!(
+                    "cannot bind `{}`: {other} bindings are not supported",
+                    resource.name
+                ))
+            }
+        }
+    }
+    Ok((views, samplers))
+}
+
+fn clear_depth_in(encoder: &mut wgpu::CommandEncoder, view: &wgpu::TextureView, depth: f32) {
+    let _pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("clear depth"),
+        color_attachments: &[],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(depth),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        ..wgpu::RenderPassDescriptor::default()
+    });
+}
+
+/// How a texture the shader samples is made: its view's dimension and how
+/// many layers it has.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct SampledShape {
+    dimension: wgpu::TextureViewDimension,
+    layers: u32,
+}
+
+/// Layers of the arrays the runtime makes (a shadow map array indexed by
+/// light, say): the same texels, or the far plane, in each.
+const ARRAY_LAYERS: u32 = 8;
+/// Cubes of the cube arrays it makes.
+const CUBE_ARRAY_CUBES: u32 = 2;
+
+/// Whether a plan's texture kind is a depth texture, and its shape; `None`
+/// for what is not a sampled texture.
+fn sampled_shape(kind: ResourceKind) -> Option<(bool, SampledShape)> {
+    use wgpu::TextureViewDimension as D;
+    let texture = kind.sampled()?;
+    let (dimension, layers) = match (texture.cube, texture.arrayed) {
+        (false, false) => (D::D2, 1),
+        (false, true) => (D::D2Array, ARRAY_LAYERS),
+        (true, false) => (D::Cube, 6),
+        (true, true) => (D::CubeArray, 6 * CUBE_ARRAY_CUBES),
+    };
+    Some((texture.depth, SampledShape { dimension, layers }))
+}
+
+/// A depth texture of `shape` with every texel at the far plane (a shadow
+/// map that shadows nothing).
+fn far_depth(
+    gpu: &Gpu,
+    label: &str,
+    format: wgpu::TextureFormat,
+    shape: SampledShape,
+) -> wgpu::TextureView {
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: 64,
+            height: 64,
+            depth_or_array_layers: shape.layers,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    });
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    for layer in 0..shape.layers {
+        let view = texture.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2),
+            base_array_layer: layer,
+            array_layer_count: Some(1),
+            ..wgpu::TextureViewDescriptor::default()
+        });
+        clear_depth_in(&mut encoder, &view, 1.0);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(shape.dimension),
+        ..wgpu::TextureViewDescriptor::default()
+    })
+}
+
+/// Uploads RGBA8 texels into every layer of a texture of `shape` (a 2D
+/// texture, the six faces of a cube, an array of either).
+fn upload(gpu: &Gpu, texels: &Texels, shape: SampledShape) -> wgpu::TextureView {
+    let layers = shape.layers;
+    let size = wgpu::Extent3d {
+        width: texels.width,
+        height: texels.height,
+        depth_or_array_layers: layers,
+    };
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("scene texture"),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    for layer in 0..layers {
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: layer,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            &texels.rgba,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(texels.width * 4),
+                rows_per_image: Some(texels.height),
+            },
+            wgpu::Extent3d {
+                depth_or_array_layers: 1,
+                ..size
+            },
+        );
+    }
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(shape.dimension),
+        ..wgpu::TextureViewDescriptor::default()
+    })
+}
+
+/// Reads a texture back as raw rows of `bytes_per_texel × width` bytes.
+pub fn read_texture(
+    gpu: &Gpu,
+    texture: &wgpu::Texture,
+    bytes_per_texel: u32,
+) -> Result<Vec<u8>, String> {
+    let (width, height) = (texture.width(), texture.height());
+    let row = width * bytes_per_texel;
+    let padded =
+        row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: (padded * height) as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(height),
+            },
+        },
+        texture.size(),
+    );
+    gpu.queue.submit([encoder.finish()]);
+    let slice = buffer.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |_| {});
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|err| err.to_string())?;
+    let data = slice.get_mapped_range().map_err(|err| format!("{err:?}"))?;
+    let mut out = Vec::with_capacity((row * height) as usize);
+    for y in 0..height {
+        let start = (y * padded) as usize;
+        out.extend_from_slice(&data[start..start + row as usize]);
+    }
+    Ok(out)
+}
