@@ -256,6 +256,7 @@ pub fn build(inputs: Inputs) -> Plan {
             cache: [0.0, 0.0, 0.0, 0.0],
             depth: options.depth.far_depth().into(),
         },
+        assumes: FrameAssumptions::default(),
     }
 }
 
@@ -538,5 +539,6 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
             cache: [0.0; 4],
             depth: options.depth.far_depth().into(),
         },
+        assumes: FrameAssumptions::default(),
     })
 }

@@ -76,20 +76,21 @@ pub struct Targets<'a> {
 /// Refuses what a cache cannot do correctly, and checks that the frame
 /// has a target for every output the plan writes.
 pub(crate) fn check(plan: &Plan, frame: &FrameLayout<'_>) -> Result<(), Error> {
-    if frame.sample_count != 1 {
+    let assumes = &plan.assumes;
+    if frame.sample_count != assumes.sample_count {
         return Err(Error::Refused(format!(
-            "multisampling ({} samples): the cache holds one value and one depth per pixel, and a sample's reprojection would read its pixel's",
-            frame.sample_count
+            "{} samples per pixel where the plan assumes {}: the cache holds one value and one depth per pixel, and a sample's reprojection would read its pixel's",
+            frame.sample_count, assumes.sample_count
         )));
     }
-    if let Viewport::Rect(rect) = frame.viewport {
+    if let (Viewport::Rect(rect), false) = (frame.viewport, assumes.partial_viewport) {
         return Err(Error::Refused(format!(
             "a viewport of {rect:?}, not the whole target: the cache's pixel addresses and the refresh pattern assume the viewport is the target"
         )));
     }
-    if let Some(views) = frame.multiview {
+    if let (Some(views), false) = (frame.multiview, assumes.multiview) {
         return Err(Error::Refused(format!(
-            "multiview ({views} views): one cache per view is not built; each view would reproject into the others' values"
+            "multiview ({views} views): the plan has one cache, and each view would reproject into the others' values"
         )));
     }
     for pass in &plan.passes {
@@ -104,7 +105,7 @@ pub(crate) fn check(plan: &Plan, frame: &FrameLayout<'_>) -> Result<(), Error> {
                     pass.name
                 )));
             };
-            if state.blend.is_some() {
+            if state.blend.is_some() && !assumes.blending {
                 return Err(Error::Refused(format!(
                     "blending into @location({location}): the cache keeps one surface per pixel, and a blended draw shows several; a cached value would be blended again with stale contents"
                 )));

@@ -56,6 +56,36 @@ pub struct Plan {
     pub cache: Cache,
     pub refresh: Refresh,
     pub clear: Clear,
+    /// What the variant assumes of the frame it runs in; a host refuses a
+    /// frame that breaks it.
+    #[serde(default)]
+    pub assumes: FrameAssumptions,
+}
+
+/// What a variant assumes of the application's frame. The cache holds
+/// one value and one depth per pixel of the whole target, for the one
+/// surface the depth test keeps.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FrameAssumptions {
+    /// Samples per pixel of every target.
+    pub sample_count: u32,
+    /// Whether the colour outputs may blend with what the targets hold.
+    pub blending: bool,
+    /// Whether the viewport may be smaller than the targets.
+    pub partial_viewport: bool,
+    /// Whether one draw may render several views (multiview).
+    pub multiview: bool,
+}
+
+impl Default for FrameAssumptions {
+    fn default() -> Self {
+        FrameAssumptions {
+            sample_count: 1,
+            blending: false,
+            partial_viewport: false,
+            multiview: false,
+        }
+    }
 }
 
 /// What the vertex stage of a host drawing a fragment-only module's
