@@ -1,0 +1,452 @@
+//! The host crate on a small application: a square drawn with a camera
+//! and a model matrix (`fixtures/square.wgsl`), rewritten by shadecache
+//! into the fixtures' three-pass and one-pass variants (node `rings(...)`,
+//! Δn = 64). Each test is the application: its own buffers, layouts and
+//! render loop.
+//!
+//! GPU tests need an adapter (lavapipe in CI); without one they fail,
+//! unless `SHADECACHE_SKIP_GPU_TESTS=1` says to skip them.
+
+use shadecache_host::{
+    CachedShader, Error, FrameLayout, Options, Plan, Targets, TwinSources, Twins, Viewport,
+};
+
+const SIZE: u32 = 64;
+
+fn variant(name: &str) -> (Plan, Vec<(&'static str, &'static str)>) {
+    let (plan, files): (&str, Vec<(&str, &str)>) = match name {
+        "three-pass" => (
+            include_str!("fixtures/square/three-pass/plan.json"),
+            vec![
+                ("pass1.wgsl", include_str!("fixtures/square/three-pass/pass1.wgsl")),
+                ("pass2.wgsl", include_str!("fixtures/square/three-pass/pass2.wgsl")),
+                ("pass3.wgsl", include_str!("fixtures/square/three-pass/pass3.wgsl")),
+                ("classify.wgsl", include_str!("fixtures/square/three-pass/classify.wgsl")),
+            ],
+        ),
+        _ => (
+            include_str!("fixtures/square/one-pass/plan.json"),
+            vec![
+                ("pass1.wgsl", include_str!("fixtures/square/one-pass/pass1.wgsl")),
+                ("classify.wgsl", include_str!("fixtures/square/one-pass/classify.wgsl")),
+            ],
+        ),
+    };
+    (serde_json::from_str(plan).expect("the fixture plan reads"), files)
+}
+
+struct Gpu {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+}
+
+fn gpu() -> Option<Gpu> {
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let Ok(adapter) =
+        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+    else {
+        if std::env::var_os("SHADECACHE_SKIP_GPU_TESTS").is_some() {
+            eprintln!("SKIPPED: no GPU adapter (SHADECACHE_SKIP_GPU_TESTS is set)");
+            return None;
+        }
+        panic!("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers), or set SHADECACHE_SKIP_GPU_TESTS=1");
+    };
+    let (device, queue) =
+        pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor::default()))
+            .expect("a device");
+    Some(Gpu { device, queue })
+}
+
+const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 2] =
+    wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2];
+
+fn uniform_entry() -> [wgpu::BindGroupLayoutEntry; 1] {
+    [wgpu::BindGroupLayoutEntry {
+        binding: 0,
+        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }]
+}
+
+fn color_target() -> wgpu::ColorTargetState {
+    wgpu::ColorTargetState {
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    }
+}
+
+/// Calls `f` with the application's frame as its original pipeline has
+/// it; `edit` changes it first.
+fn with_frame<R>(edit: impl FnOnce(&mut FrameLayout<'_>), f: impl FnOnce(&FrameLayout<'_>) -> R) -> R {
+    let buffers = [Some(wgpu::VertexBufferLayout {
+        array_stride: 20,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &VERTEX_ATTRIBUTES,
+    })];
+    let entries = uniform_entry();
+    let groups = [(0, &entries[..]), (1, &entries[..])];
+    let colors = [Some(color_target())];
+    let mut frame = FrameLayout::new(&buffers, &groups, &colors);
+    edit(&mut frame);
+    f(&frame)
+}
+
+fn make(gpu: &Gpu, name: &str, edit: impl FnOnce(&mut FrameLayout<'_>)) -> Result<CachedShader, Error> {
+    let (plan, files) = variant(name);
+    with_frame(edit, |frame| {
+        CachedShader::new(
+            &gpu.device,
+            &plan,
+            |file| files.iter().find(|(n, _)| *n == file).map(|(_, t)| *t),
+            frame,
+            (SIZE, SIZE),
+            Options::default(),
+        )
+    })
+}
+
+fn matrix(x: f32) -> [f32; 16] {
+    // Column-major: scale by a half, move by x.
+    [
+        0.5, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, x, 0.0, 0.5, 1.0,
+    ]
+}
+
+fn bytes(values: &[f32]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+/// The application: its buffers, bind groups, target, and the variant.
+struct App {
+    cached: CachedShader,
+    camera: wgpu::Buffer,
+    object: wgpu::Buffer,
+    groups: [wgpu::BindGroup; 2],
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    twins: Twins,
+    target: wgpu::Texture,
+}
+
+fn buffer(gpu: &Gpu, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: contents.len() as u64,
+        usage: usage | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    gpu.queue.write_buffer(&buffer, 0, contents);
+    buffer
+}
+
+fn target(gpu: &Gpu, size: u32) -> wgpu::Texture {
+    gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("frame"),
+        size: wgpu::Extent3d {
+            width: size,
+            height: size,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
+impl App {
+    fn new(gpu: &Gpu, name: &str) -> App {
+        let mut cached = make(gpu, name, |_| {}).expect("the variant is made");
+        let identity = [
+            1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ];
+        let uniform = wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_SRC;
+        let camera = buffer(gpu, &bytes(&identity), uniform);
+        let object = buffer(gpu, &bytes(&matrix(0.0)), uniform);
+        // The application's layout, made from its own entries.
+        let entries = uniform_entry();
+        let layout = gpu
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: None,
+                entries: &entries,
+            });
+        let group = |buffer: &wgpu::Buffer| {
+            gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout: &layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buffer.as_entire_binding(),
+                }],
+            })
+        };
+        let groups = [group(&camera), group(&object)];
+        #[rustfmt::skip]
+        let square = bytes(&[
+            -1.0, -1.0, 0.0, 0.0, 1.0,
+            1.0, -1.0, 0.0, 1.0, 1.0,
+            1.0, 1.0, 0.0, 1.0, 0.0,
+            -1.0, 1.0, 0.0, 0.0, 0.0,
+        ]);
+        let vertices = buffer(gpu, &square, wgpu::BufferUsages::VERTEX);
+        let index_bytes: Vec<u8> = [0u32, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes()).collect();
+        let indices = buffer(gpu, &index_bytes, wgpu::BufferUsages::INDEX);
+        let twins = cached
+            .twins(&TwinSources {
+                buffers: &[([0, 0], &camera), ([1, 0], &object)],
+                ..TwinSources::default()
+            })
+            .expect("twins");
+        App {
+            cached,
+            camera,
+            object,
+            groups,
+            vertices,
+            indices,
+            twins,
+            target: target(gpu, SIZE),
+        }
+    }
+
+    /// Writes the object's matrix, as an application does, then records
+    /// and submits a frame.
+    fn frame(&mut self, gpu: &Gpu, x: f32) {
+        gpu.queue.write_buffer(&self.object, 0, &bytes(&matrix(x)));
+        let view = self.target.create_view(&wgpu::TextureViewDescriptor::default());
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        let color = [Some(&view)];
+        let targets = Targets {
+            color: &color,
+            clear: Some(wgpu::Color::BLACK),
+        };
+        let (groups, twins) = (&self.groups, &self.twins);
+        let (vertices, indices) = (&self.vertices, &self.indices);
+        self.cached
+            .record(&gpu.queue, &mut encoder, &targets, |draw| {
+                draw.bind(twins);
+                let pass = draw.render_pass();
+                pass.set_bind_group(0, &groups[0], &[]);
+                pass.set_bind_group(1, &groups[1], &[]);
+                pass.set_vertex_buffer(0, vertices.slice(..));
+                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..6, 0, 0..1);
+            })
+            .expect("the frame records");
+        gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// The last frame's age at each pixel, row by row.
+    fn ages(&self, gpu: &Gpu) -> Vec<f32> {
+        read(gpu, self.cached.age(), 2)
+            .chunks_exact(2)
+            .map(|h| f16_to_f32(u16::from_le_bytes([h[0], h[1]])))
+            .collect()
+    }
+}
+
+/// An IEEE half float's value (normal numbers and zero: ages are small
+/// whole numbers).
+fn f16_to_f32(bits: u16) -> f32 {
+    let exponent = i32::from((bits >> 10) & 0x1f);
+    let mantissa = f32::from(bits & 0x3ff);
+    if exponent == 0 {
+        return mantissa * 2f32.powi(-24);
+    }
+    (1.0 + mantissa / 1024.0) * 2f32.powi(exponent - 15)
+}
+
+fn read(gpu: &Gpu, texture: &wgpu::Texture, bytes_per_texel: u32) -> Vec<u8> {
+    let (width, height) = (texture.width(), texture.height());
+    let row = width * bytes_per_texel;
+    let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: u64::from(padded * height),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(height),
+            },
+        },
+        texture.size(),
+    );
+    gpu.queue.submit([encoder.finish()]);
+    buffer.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .expect("the read finishes");
+    let data = buffer.slice(..).get_mapped_range().expect("mapped");
+    (0..height as usize)
+        .flat_map(|y| data[y * padded as usize..][..row as usize].to_vec())
+        .collect()
+}
+
+/// The pixels well inside the square at x (in clip space), 2 pixels in
+/// from its edges: a bilinear lookup there reads the square only.
+fn inside(x: f32, size: u32) -> impl Iterator<Item = usize> {
+    let to_pixel = |clip: f32| (clip + 1.0) * 0.5 * size as f32;
+    let (left, right) = (to_pixel(x - 0.5) as usize + 2, to_pixel(x + 0.5) as usize - 2);
+    let (top, bottom) = (to_pixel(-0.5) as usize + 2, to_pixel(0.5) as usize - 2);
+    (top..bottom).flat_map(move |y| (left..right).map(move |x| y * size as usize + x))
+}
+
+fn ages_at(ages: &[f32], pixels: impl Iterator<Item = usize>) -> Vec<f32> {
+    let mut found: Vec<f32> = pixels.map(|p| ages[p]).collect();
+    found.sort_by(f32::total_cmp);
+    found.dedup();
+    found
+}
+
+/// The share of `pixels` whose value is `age` frames old. With Δn = 64 a
+/// few 4×4 blocks refresh in any frame (age 0): a reused frame has most
+/// pixels, not all, at its age.
+fn share_at(ages: &[f32], pixels: impl Iterator<Item = usize>, age: f32) -> f64 {
+    let found: Vec<f32> = pixels.map(|p| ages[p]).collect();
+    found.iter().filter(|&&a| a == age).count() as f64 / found.len() as f64
+}
+
+/// Most of the pixels reused: all but the refreshed blocks.
+const REUSED: f64 = 0.9;
+
+#[test]
+fn a_frame_that_does_not_match_the_plan_is_an_error_naming_it() {
+    let Some(gpu) = gpu() else { return };
+    let mismatch = |edit: &dyn Fn(&mut FrameLayout<'_>), named: &str| {
+        let one = [VERTEX_ATTRIBUTES[0]];
+        let result = make(&gpu, "three-pass", |frame| {
+            edit(frame);
+            if named == "tex_coords" {
+                // No buffer holds @location(1).
+                frame.vertex_buffers = Box::leak(Box::new([Some(wgpu::VertexBufferLayout {
+                    array_stride: 12,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: Box::leak(Box::new(one)),
+                })]));
+            }
+        });
+        match result {
+            Err(Error::Mismatch(text)) => assert!(text.contains(named), "{text}"),
+            other => panic!("{named}: {other:?}"),
+        }
+    };
+    mismatch(&|_| {}, "tex_coords");
+    // The object's matrix declared as storage.
+    let storage = [wgpu::BindGroupLayoutEntry {
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        ..uniform_entry()[0]
+    }];
+    let storage: &'static [wgpu::BindGroupLayoutEntry] = Box::leak(Box::new(storage));
+    let uniform: &'static [wgpu::BindGroupLayoutEntry] = Box::leak(Box::new(uniform_entry()));
+    let groups: &'static [(u32, &[wgpu::BindGroupLayoutEntry])] =
+        Box::leak(Box::new([(0, uniform), (1, storage)]));
+    mismatch(&|frame| frame.bind_group_layouts = groups, "`object`");
+    mismatch(&|frame| frame.color_targets = &[], "@location(0)");
+
+    // Twins without the object's buffer, and with one that cannot be copied.
+    let mut cached = make(&gpu, "three-pass", |_| {}).unwrap();
+    let copyable = buffer(&gpu, &[0; 64], wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_SRC);
+    let fixed = buffer(&gpu, &[0; 64], wgpu::BufferUsages::UNIFORM);
+    let missing = cached.twins(&TwinSources {
+        buffers: &[([0, 0], &copyable)],
+        ..TwinSources::default()
+    });
+    assert!(matches!(&missing, Err(Error::Mismatch(t)) if t.contains("`object`")), "{missing:?}");
+    let uncopyable = cached.twins(&TwinSources {
+        buffers: &[([0, 0], &copyable), ([1, 0], &fixed)],
+        ..TwinSources::default()
+    });
+    assert!(matches!(&uncopyable, Err(Error::Mismatch(t)) if t.contains("COPY_SRC")), "{uncopyable:?}");
+}
+
+#[test]
+fn what_a_cache_cannot_do_is_refused() {
+    let Some(gpu) = gpu() else { return };
+    let refused = |edit: &dyn Fn(&mut FrameLayout<'_>), why: &str| match make(&gpu, "one-pass", edit) {
+        Err(Error::Refused(text)) => assert!(text.contains(why), "{text}"),
+        other => panic!("{why}: {other:?}"),
+    };
+    refused(&|frame| frame.sample_count = 4, "samples per pixel");
+    refused(&|frame| frame.viewport = Viewport::Rect([0.0, 0.0, 32.0, 32.0]), "viewport");
+    refused(&|frame| frame.multiview = std::num::NonZeroU32::new(2), "multiview");
+    let blended: &'static [Option<wgpu::ColorTargetState>] = Box::leak(Box::new([Some(
+        wgpu::ColorTargetState {
+            blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+            ..color_target()
+        },
+    )]));
+    refused(&|frame| frame.color_targets = blended, "blending");
+}
+
+/// The first frame computes everything; a still frame reuses everything
+/// inside the square; `reset()` and `resize()` compute everything again.
+#[test]
+fn resize_and_reset_give_misses_not_stale_reuse() {
+    let Some(gpu) = gpu() else { return };
+    let mut app = App::new(&gpu, "three-pass");
+    app.frame(&gpu, 0.0);
+    assert_eq!(ages_at(&app.ages(&gpu), inside(0.0, SIZE)), [0.0], "first frame");
+    app.frame(&gpu, 0.0);
+    assert!(share_at(&app.ages(&gpu), inside(0.0, SIZE), 1.0) > REUSED, "still frame");
+    app.cached.reset();
+    app.frame(&gpu, 0.0);
+    assert_eq!(ages_at(&app.ages(&gpu), inside(0.0, SIZE)), [0.0], "after reset");
+    app.frame(&gpu, 0.0);
+    assert!(share_at(&app.ages(&gpu), inside(0.0, SIZE), 1.0) > REUSED);
+    let small = 48;
+    app.cached.resize((small, small));
+    app.target = target(&gpu, small);
+    app.frame(&gpu, 0.0);
+    assert_eq!(ages_at(&app.ages(&gpu), inside(0.0, small)), [0.0], "after resize");
+    app.frame(&gpu, 0.0);
+    assert!(share_at(&app.ages(&gpu), inside(0.0, small), 1.0) > REUSED);
+}
+
+/// A square moving right reprojects into where it was: every pixel inside
+/// it hits, the band it moved onto included. That holds only when the
+/// object's twin holds last frame's matrix when the next frame runs: the
+/// host copies after the frame's passes, before the application's writes
+/// for the next frame take effect.
+#[test]
+fn the_twin_copy_precedes_the_next_frames_writes() {
+    let Some(gpu) = gpu() else { return };
+    let mut app = App::new(&gpu, "three-pass");
+    app.frame(&gpu, -0.25);
+    app.frame(&gpu, 0.0);
+    let hits = share_at(&app.ages(&gpu), inside(0.0, SIZE), 1.0);
+    assert!(hits > REUSED, "moving square: {hits}");
+    // The camera's twin too: the camera moves the square back.
+    let shifted = [
+        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, -0.25, 0.0, 0.0, 1.0,
+    ];
+    gpu.queue.write_buffer(&app.camera, 0, &bytes(&shifted));
+    app.frame(&gpu, 0.0);
+    let hits = share_at(&app.ages(&gpu), inside(-0.25, SIZE), 2.0);
+    assert!(hits > REUSED, "moving camera: {hits}");
+}
