@@ -3,6 +3,7 @@
 //! module per area (as naga's own tests are laid out).
 
 mod analyze;
+mod app;
 mod build_api;
 mod composed;
 mod corpus;

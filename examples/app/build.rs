@@ -1,0 +1,18 @@
+//! Rewrites the planet's shader into its three-pass cache variant at build
+//! time. The node is the marble albedo, `marble(in.surface)`: its id comes
+//! from `shadecache analyze shaders/planet.wgsl` (candidate #5; the lit
+//! colour above it changes with the sun, the albedo only with the surface).
+
+fn main() -> Result<(), shadecache::build::BuildError> {
+    shadecache::build::Build::new()
+        .shader("shaders/planet.wgsl")
+        .node("nf50106c5")
+        .variant(shadecache::rewrite::Variant::ThreePass)
+        .options(shadecache::rewrite::Options {
+            refresh_period: 16,
+            color_format: "rgba16float".into(),
+            ..shadecache::rewrite::Options::default()
+        })
+        .run()?;
+    Ok(())
+}

@@ -1,0 +1,219 @@
+//! `examples/app`: a wgpu application whose build script rewrites its own
+//! shader and whose render loop runs the variant with the host crate. It
+//! builds from the checkout and runs headless on lavapipe; its cached
+//! frames are compared with its original frames.
+
+use std::path::Path;
+use std::process::Command;
+
+use crate::util::root;
+
+/// Runs the app with `args`; its stdout.
+fn run_app(args: &[&str], out: &Path) -> String {
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root().join("target"));
+    let output = Command::new(env!("CARGO"))
+        .args(["run", "--quiet", "--locked", "--manifest-path"])
+        .arg(root().join("examples/app/Cargo.toml"))
+        .arg("--")
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        // Share the repository's target directory so shadecache and its
+        // dependencies are not compiled again.
+        .env("CARGO_TARGET_DIR", target)
+        .output()
+        .expect("cargo runs");
+    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stdout}\n{stderr}");
+    stdout
+}
+
+/// The numbers of the app's steady-state line: mean PSNR, worst PSNR,
+/// max error.
+fn steady_state(stdout: &str) -> [f64; 3] {
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("steady state"))
+        .unwrap_or_else(|| panic!("no steady-state line:\n{stdout}"));
+    let numbers: Vec<f64> = line
+        .split([' ', ','])
+        .filter_map(|word| word.parse().ok())
+        .collect();
+    match numbers[..] {
+        [mean, worst, max_error] => [mean, worst, max_error],
+        _ => panic!("{line}"),
+    }
+}
+
+/// With Δn = 1 every pixel is computed every frame: each cached frame is
+/// the original frame, up to the f16 cache's rounding (below one step of
+/// an 8-bit display).
+#[test]
+fn example_app_at_refresh_period_one_equals_its_original_frames() {
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let out = tempfile::tempdir().unwrap();
+    let stdout = run_app(
+        &["--refresh-period", "1", "--frames", "4", "--size", "96"],
+        out.path(),
+    );
+    for line in stdout.lines().filter(|l| l.starts_with("frame")) {
+        let error: f64 = line.rsplit(' ').next().unwrap().parse().unwrap();
+        assert!(error <= 1.0 / 255.0, "{line}");
+    }
+    let [_, _, max_error] = steady_state(&stdout);
+    assert!(max_error <= 1.0 / 255.0, "{stdout}");
+    for name in ["original_000.png", "cached_000.png"] {
+        assert!(out.path().join(name).is_file(), "{name}");
+    }
+    assert!(stdout.contains("GPU ms per frame: original"), "{stdout}");
+}
+
+/// In the steady state the app's error stays within what `profile`
+/// measures for the same node and knobs on the same scene
+/// (`examples/app/scene.toml`): the profiler and the app run the variant
+/// through the same host crate.
+#[test]
+fn example_app_error_stays_within_what_profile_measured() {
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let out = tempfile::tempdir().unwrap();
+    let app = run_app(&["--frames", "8", "--size", "96"], out.path());
+    let [mean, worst, _] = steady_state(&app);
+    let profile = crate::util::shadecache([
+        "profile",
+        root()
+            .join("examples/app/shaders/planet.wgsl")
+            .to_str()
+            .unwrap(),
+        "--scene",
+        root().join("examples/app/scene.toml").to_str().unwrap(),
+        "--nodes",
+        "nf50106c5",
+        "--variant",
+        "three-pass",
+        "--refresh-period",
+        "16",
+        "--cache-format",
+        "rgba16float",
+        "--frames",
+        "8",
+        "--size",
+        "96x96",
+        "--quiet",
+        "--out",
+        out.path().join("profile").to_str().unwrap(),
+    ]);
+    assert!(
+        profile.status.success(),
+        "{}",
+        crate::util::stderr(&profile)
+    );
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.path().join("profile/report.json")).unwrap(),
+    )
+    .unwrap();
+    let row = &report["results"][0];
+    let (psnr, worst_psnr) = (
+        row["psnr"].as_f64().unwrap(),
+        row["worst_psnr"].as_f64().unwrap(),
+    );
+    // The same scene drawn by two programs: within half a decibel.
+    assert!(
+        mean >= psnr - 0.5,
+        "app {mean} dB, profile {psnr} dB\n{app}"
+    );
+    assert!(
+        worst >= worst_psnr - 0.5,
+        "app {worst} dB, profile {worst_psnr} dB\n{app}"
+    );
+    assert!(mean < 90.0, "the app's cache reuses nothing: {app}");
+}
+
+/// The host crate's test fixtures are what the toolchain writes today, so
+/// the host is tested on current plans.
+#[test]
+fn host_crate_fixtures_are_what_rewrite_writes() {
+    let fixtures = root().join("crates/shadecache-host/tests/fixtures");
+    let out = tempfile::tempdir().unwrap();
+    let output = crate::util::shadecache([
+        "rewrite",
+        "crates/shadecache-host/tests/fixtures/square.wgsl",
+        "--node",
+        "nf0aaf62f",
+        "--variant",
+        "three-pass,one-pass",
+        "--refresh-period",
+        "64",
+        "--out",
+        out.path().to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", crate::util::stderr(&output));
+    for variant in ["three-pass", "one-pass"] {
+        for entry in std::fs::read_dir(out.path().join(variant)).unwrap() {
+            let path = entry.unwrap().path();
+            let name = path.file_name().unwrap();
+            let written = std::fs::read_to_string(&path).unwrap();
+            let fixture = std::fs::read_to_string(fixtures.join("square").join(variant).join(name))
+                .unwrap_or_default();
+            assert!(
+                written == fixture,
+                "{variant}/{}: the fixture is stale; rewrite it with the command in this test",
+                name.to_string_lossy()
+            );
+        }
+    }
+}
+
+/// The crates in `cargo tree -p PACKAGE -e normal EXTRA...`.
+fn tree(package: &str, extra: &[&str]) -> Vec<String> {
+    let output = Command::new(env!("CARGO"))
+        .current_dir(root())
+        .args(["tree", "-p", package, "-e", "normal", "--prefix", "none"])
+        .args(["--offline", "--locked"])
+        .args(extra)
+        .output()
+        .expect("cargo runs");
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .filter_map(|l| l.split(' ').next().map(str::to_string))
+        .collect()
+}
+
+/// An application links the host crate without the toolchain: its
+/// dependencies are wgpu, serde and the plan schema (and pollster, to wait
+/// on wgpu), and none of the toolchain's, except what wgpu itself brings
+/// (its WGSL front end reports with codespan-reporting).
+#[test]
+fn host_crate_depends_on_wgpu_serde_and_the_plan_only() {
+    let mut direct = tree("shadecache-host", &["--depth", "1"]).split_off(1);
+    direct.sort();
+    assert_eq!(direct, ["pollster", "serde", "shadecache-plan", "wgpu"]);
+    let crates = tree("shadecache-host", &[]);
+    let through_wgpu = tree("wgpu", &[]);
+    for toolchain in [
+        "clap",
+        "petgraph",
+        "codespan-reporting",
+        "toml",
+        "image",
+        "indicatif",
+        "wgpu-profiler",
+        "naga_oil",
+        "shadecache",
+    ] {
+        let pulled = crates.iter().any(|c| c == toolchain);
+        let by_wgpu = through_wgpu.iter().any(|c| c == toolchain);
+        assert!(!pulled || by_wgpu, "the host crate pulls in {toolchain}");
+    }
+}
