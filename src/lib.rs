@@ -24,7 +24,8 @@
 //! * [`back`]: writing the passes with naga's back ends;
 //! * [`build`]: the same from a build script;
 //! * [`scene`]: what a profile renders, the default scene, roles;
-//! * [`runtime`]: wgpu pipelines from a plan, and running it frame by frame;
+//! * [`runtime`]: the scene drawn through the host crate
+//!   (`shadecache-host`), which runs a plan as applications do;
 //! * [`profile`]: measuring variants against the unmodified shader;
 //! * [`report`]: the report's JSON, HTML and pictures;
 //! * [`diagnostic`]: the error type and its codespan rendering;
