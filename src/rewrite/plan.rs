@@ -61,7 +61,7 @@ pub fn build(inputs: Inputs) -> Plan {
         let color = |location: u32| ColorTarget {
             location,
             target: TargetKind::Color,
-            format: options.color_format.clone(),
+            format: output_format(module, result, location, &options.color_format),
             load: load(first || matches!(stage, Stage::ShadeFromCache)),
         };
         let cache = |location: u32| ColorTarget {
@@ -258,6 +258,40 @@ pub fn build(inputs: Inputs) -> Plan {
         },
         assumes: FrameAssumptions::default(),
     }
+}
+
+/// The target format for the fragment output at `location`: `float` (the
+/// colour format asked for) for a float output, a 32-bit integer format
+/// with as many channels for an integer one (a G-buffer's ids).
+fn output_format(
+    module: &Module,
+    result: &naga::FunctionResult,
+    location: u32,
+    float: &str,
+) -> String {
+    let at = |binding: &Option<Binding>| matches!(binding, Some(Binding::Location { location: l, .. }) if *l == location);
+    let ty = match module.types[result.ty].inner {
+        TypeInner::Struct { ref members, .. } => {
+            members.iter().find(|m| at(&m.binding)).map(|m| m.ty)
+        }
+        _ => at(&result.binding).then_some(result.ty),
+    };
+    let (size, kind) = match ty.map(|ty| &module.types[ty].inner) {
+        Some(&TypeInner::Scalar(scalar)) => (1, scalar.kind),
+        Some(&TypeInner::Vector { size, scalar }) => (size as u32, scalar.kind),
+        _ => return float.to_string(),
+    };
+    let kind = match kind {
+        naga::ScalarKind::Uint => "uint",
+        naga::ScalarKind::Sint => "sint",
+        _ => return float.to_string(),
+    };
+    let channels = match size {
+        1 => "r",
+        2 => "rg",
+        _ => "rgba",
+    };
+    format!("{channels}32{kind}")
 }
 
 fn role(stage: Stage) -> &'static str {
@@ -499,7 +533,7 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
                 .map(|location| ColorTarget {
                     location,
                     target: TargetKind::Color,
-                    format: options.color_format.clone(),
+                    format: output_format(module, result, location, &options.color_format),
                     load: LoadOp::Clear,
                 })
                 .collect(),

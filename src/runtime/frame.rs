@@ -82,13 +82,11 @@ impl PlanFrame {
         })
     }
 
-    /// The frame's format at output `location`.
-    pub(super) fn color_format(&self, location: usize) -> Option<wgpu::TextureFormat> {
+    /// The frame's colour formats, by output location.
+    pub(super) fn color_formats(&self) -> impl Iterator<Item = Option<wgpu::TextureFormat>> + '_ {
         self.colors
-            .get(location)
-            .cloned()
-            .flatten()
-            .map(|s| s.format)
+            .iter()
+            .map(|state| state.as_ref().map(|s| s.format))
     }
 
     /// Calls `f` with the frame's layout (its parts borrow from here).

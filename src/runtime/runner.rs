@@ -10,7 +10,7 @@ use shadecache_host::{CachedShader, Draw, PassTimer, Targets, TwinSources, Twins
 use super::frame::{sources, PlanFrame, RunOptions};
 use super::gpu::Gpu;
 use super::textures::scene_textures;
-use crate::plan::{Plan, ResourceKind, TargetKind};
+use crate::plan::{Plan, ResourceKind};
 use crate::scene::textures::Texels;
 
 /// An indexed triangle mesh whose vertices are laid out as the plan's
@@ -77,7 +77,12 @@ struct Object {
 /// per-object buffers, and the variant.
 pub struct Runner {
     cached: CachedShader,
-    color: wgpu::Texture,
+    /// The frame's colour targets by output location, each in the plan's
+    /// format for it.
+    colors: Vec<Option<(wgpu::Texture, wgpu::TextureView)>>,
+    /// What [`Runner::color`] shows for a plan without colour outputs:
+    /// the clear colour.
+    fallback: wgpu::Texture,
     meshes: Vec<GpuMesh>,
     objects: Vec<Object>,
     /// The application's group layouts, as the plan implies them.
@@ -175,13 +180,16 @@ impl Runner {
             })
             .map_err(|err| err.to_string())?;
         let device = &gpu.device;
-        let color_format = plan
-            .passes
-            .iter()
-            .flat_map(|p| &p.color_targets)
-            .find(|t| t.target == TargetKind::Color)
-            .and_then(|t| frame.color_format(t.location as usize))
-            .unwrap_or(wgpu::TextureFormat::Rgba8Unorm);
+        let colors = frame
+            .color_formats()
+            .map(|format| {
+                format.map(|format| {
+                    let texture = target(device, "color", size, format);
+                    let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+                    (texture, view)
+                })
+            })
+            .collect();
         let meshes = meshes
             .iter()
             .map(|mesh| {
@@ -208,7 +216,8 @@ impl Runner {
         let (views, samplers) = scene_textures(gpu, plan, textures)?;
         Ok(Runner {
             cached,
-            color: target(device, "color", size, color_format),
+            colors,
+            fallback: target(device, "no colour", size, wgpu::TextureFormat::Rgba8Unorm),
             meshes,
             objects: Vec::new(),
             layouts,
@@ -233,7 +242,12 @@ impl Runner {
 
     /// The frame's colour target.
     pub fn color(&self) -> &wgpu::Texture {
-        &self.color
+        self.colors
+            .iter()
+            .flatten()
+            .map(|(texture, _)| texture)
+            .next()
+            .unwrap_or(&self.fallback)
     }
 
     /// The last frame's classes, when classification is on.
@@ -275,24 +289,11 @@ impl Runner {
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        let color_view = self
-            .color
-            .create_view(&wgpu::TextureViewDescriptor::default());
-        let locations = self
-            .plan()
-            .passes
+        let color: Vec<Option<&wgpu::TextureView>> = self
+            .colors
             .iter()
-            .flat_map(|p| &p.color_targets)
-            .filter(|t| t.target == TargetKind::Color)
-            .map(|t| t.location as usize + 1)
-            .max()
-            .unwrap_or(0);
-        let mut color: Vec<Option<&wgpu::TextureView>> = vec![None; locations];
-        for target in self.plan().passes.iter().flat_map(|p| &p.color_targets) {
-            if target.target == TargetKind::Color {
-                color[target.location as usize] = Some(&color_view);
-            }
-        }
+            .map(|target| target.as_ref().map(|(_, view)| view))
+            .collect();
         let clear = self.plan().clear.color;
         let targets = Targets {
             color: &color,

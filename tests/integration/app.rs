@@ -140,32 +140,43 @@ fn example_app_error_stays_within_what_profile_measured() {
 #[test]
 fn host_crate_fixtures_are_what_rewrite_writes() {
     let fixtures = root().join("crates/shadecache-host/tests/fixtures");
-    let out = tempfile::tempdir().unwrap();
-    let output = crate::util::shadecache([
-        "rewrite",
-        "crates/shadecache-host/tests/fixtures/square.wgsl",
-        "--node",
-        "nf0aaf62f",
-        "--variant",
-        "three-pass,one-pass",
-        "--refresh-period",
-        "64",
-        "--out",
-        out.path().to_str().unwrap(),
-    ]);
-    assert!(output.status.success(), "{}", crate::util::stderr(&output));
-    for variant in ["three-pass", "one-pass"] {
-        for entry in std::fs::read_dir(out.path().join(variant)).unwrap() {
-            let path = entry.unwrap().path();
-            let name = path.file_name().unwrap();
-            let written = std::fs::read_to_string(&path).unwrap();
-            let fixture = std::fs::read_to_string(fixtures.join("square").join(variant).join(name))
-                .unwrap_or_default();
-            assert!(
-                written == fixture,
-                "{variant}/{}: the fixture is stale; rewrite it with the command in this test",
-                name.to_string_lossy()
-            );
+    for (shader, node, variants) in [
+        ("square", "nf0aaf62f", ["three-pass", "one-pass"].as_slice()),
+        ("gbuffer", "nf0aaf62f", ["three-pass"].as_slice()),
+    ] {
+        let out = tempfile::tempdir().unwrap();
+        let source = format!("crates/shadecache-host/tests/fixtures/{shader}.wgsl");
+        let list = variants.join(",");
+        let output = crate::util::shadecache([
+            "rewrite",
+            &source,
+            "--node",
+            node,
+            "--variant",
+            &list,
+            "--refresh-period",
+            "64",
+            "--out",
+            out.path().to_str().unwrap(),
+        ]);
+        assert!(output.status.success(), "{}", crate::util::stderr(&output));
+        for &variant in variants {
+            // One variant is written into the folder itself.
+            let written = match variants.len() {
+                1 => out.path().to_path_buf(),
+                _ => out.path().join(variant),
+            };
+            for entry in std::fs::read_dir(written).unwrap() {
+                let path = entry.unwrap().path();
+                let name = path.file_name().unwrap();
+                let text = std::fs::read_to_string(&path).unwrap();
+                let fixture = fixtures.join(shader).join(variant).join(name);
+                assert!(
+                    std::fs::read_to_string(&fixture).is_ok_and(|f| f == text),
+                    "{}: the fixture is stale; write it again with `shadecache rewrite {source} --node {node} --variant {list} --refresh-period 64`",
+                    fixture.display()
+                );
+            }
         }
     }
 }

@@ -36,6 +36,27 @@ fn variant(name: &str) -> (Plan, Vec<(&'static str, &'static str)>) {
                 ),
             ],
         ),
+        "gbuffer" => (
+            include_str!("fixtures/gbuffer/three-pass/plan.json"),
+            vec![
+                (
+                    "pass1.wgsl",
+                    include_str!("fixtures/gbuffer/three-pass/pass1.wgsl"),
+                ),
+                (
+                    "pass2.wgsl",
+                    include_str!("fixtures/gbuffer/three-pass/pass2.wgsl"),
+                ),
+                (
+                    "pass3.wgsl",
+                    include_str!("fixtures/gbuffer/three-pass/pass3.wgsl"),
+                ),
+                (
+                    "classify.wgsl",
+                    include_str!("fixtures/gbuffer/three-pass/classify.wgsl"),
+                ),
+            ],
+        ),
         _ => (
             include_str!("fixtures/square/one-pass/plan.json"),
             vec![
@@ -166,7 +187,8 @@ struct App {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
     twins: Twins,
-    target: wgpu::Texture,
+    /// The frame's colour targets, by output location.
+    targets: Vec<wgpu::Texture>,
 }
 
 fn buffer(gpu: &Gpu, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
@@ -180,7 +202,7 @@ fn buffer(gpu: &Gpu, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer
     buffer
 }
 
-fn target(gpu: &Gpu, size: u32) -> wgpu::Texture {
+fn target(gpu: &Gpu, size: u32, format: wgpu::TextureFormat) -> wgpu::Texture {
     gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("frame"),
         size: wgpu::Extent3d {
@@ -191,15 +213,33 @@ fn target(gpu: &Gpu, size: u32) -> wgpu::Texture {
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8Unorm,
+        format,
         usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
     })
 }
 
 impl App {
+    /// The square with one rgba8unorm target.
     fn new(gpu: &Gpu, name: &str) -> App {
-        let mut cached = make(gpu, name, |_| {}).expect("the variant is made");
+        App::with_targets(gpu, name, &[wgpu::TextureFormat::Rgba8Unorm])
+    }
+
+    /// The square drawn into targets of `formats`, by output location.
+    fn with_targets(gpu: &Gpu, name: &str, formats: &[wgpu::TextureFormat]) -> App {
+        let states: Vec<Option<wgpu::ColorTargetState>> = formats
+            .iter()
+            .map(|&format| {
+                Some(wgpu::ColorTargetState {
+                    format,
+                    ..color_target()
+                })
+            })
+            .collect();
+        let mut cached = make(gpu, name, |frame| {
+            frame.color_targets = Box::leak(states.into())
+        })
+        .expect("the variant is made");
         let identity = [
             1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
         ];
@@ -252,7 +292,7 @@ impl App {
             vertices,
             indices,
             twins,
-            target: target(gpu, SIZE),
+            targets: formats.iter().map(|&f| target(gpu, SIZE, f)).collect(),
         }
     }
 
@@ -260,13 +300,15 @@ impl App {
     /// and submits a frame.
     fn frame(&mut self, gpu: &Gpu, x: f32) {
         gpu.queue.write_buffer(&self.object, 0, &bytes(&matrix(x)));
-        let view = self
-            .target
-            .create_view(&wgpu::TextureViewDescriptor::default());
+        let views: Vec<wgpu::TextureView> = self
+            .targets
+            .iter()
+            .map(|t| t.create_view(&wgpu::TextureViewDescriptor::default()))
+            .collect();
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        let color = [Some(&view)];
+        let color: Vec<Option<&wgpu::TextureView>> = views.iter().map(Some).collect();
         let targets = Targets {
             color: &color,
             clear: Some(wgpu::Color::BLACK),
@@ -491,7 +533,7 @@ fn resize_and_reset_give_misses_not_stale_reuse() {
     assert!(share_at(&app.ages(&gpu), inside(0.0, SIZE), 1.0) > REUSED);
     let small = 48;
     app.cached.resize((small, small));
-    app.target = target(&gpu, small);
+    app.targets = vec![target(&gpu, small, wgpu::TextureFormat::Rgba8Unorm)];
     app.frame(&gpu, 0.0);
     assert_eq!(
         ages_at(&app.ages(&gpu), inside(0.0, small)),
@@ -523,4 +565,31 @@ fn the_twin_copy_precedes_the_next_frames_writes() {
     app.frame(&gpu, 0.0);
     let hits = share_at(&app.ages(&gpu), inside(-0.25, SIZE), 2.0);
     assert!(hits > REUSED, "moving camera: {hits}");
+}
+
+/// A deferred renderer's frame: an HDR colour target and an integer
+/// material-id target, the formats the application's frame has (the plan
+/// assumes rgba8unorm and rgba32uint). Values above 1 survive in the
+/// cached frames, and the ids are written by the pass that shades.
+#[test]
+fn a_g_buffer_with_an_hdr_and_an_integer_target_runs() {
+    let Some(gpu) = gpu() else { return };
+    let formats = [
+        wgpu::TextureFormat::Rgba16Float,
+        wgpu::TextureFormat::Rgba32Uint,
+    ];
+    let mut app = App::with_targets(&gpu, "gbuffer", &formats);
+    for frame in 0..3 {
+        app.frame(&gpu, 0.0);
+        let colors = read(&gpu, &app.targets[0], 8);
+        let ids = read(&gpu, &app.targets[1], 16);
+        let mut brightest = 0f32;
+        for pixel in inside(0.0, SIZE) {
+            let id = u32::from_le_bytes(ids[pixel * 16..][..4].try_into().unwrap());
+            assert_eq!(id, 7, "frame {frame}, pixel {pixel}");
+            let red = u16::from_le_bytes([colors[pixel * 8], colors[pixel * 8 + 1]]);
+            brightest = brightest.max(f16_to_f32(red));
+        }
+        assert!(brightest > 1.5, "frame {frame}: HDR clamped to {brightest}");
+    }
 }
