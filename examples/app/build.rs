@@ -10,7 +10,7 @@ fn main() -> Result<(), shadecache::build::BuildError> {
         .variant(shadecache::rewrite::Variant::ThreePass)
         .options(shadecache::rewrite::Options {
             refresh_period: 16,
-            color_format: "rgba16float".into(),
+            color_format: shadecache::plan::TextureFormat::Rgba16Float,
             ..shadecache::rewrite::Options::default()
         })
         .run()?;

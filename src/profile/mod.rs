@@ -390,7 +390,7 @@ pub fn profile(
     let defaults = RewriteOptions {
         depth: scene.camera.depth,
         vertex_entry: options.vertex_entry.clone(),
-        color_format: MEASURED_COLOR_FORMAT.into(),
+        color_format: MEASURED_COLOR_FORMAT,
         ..RewriteOptions::default()
     };
     let base = base_setting.rewrite_options(&defaults);
@@ -704,7 +704,8 @@ pub fn profile(
 
 /// The colour target of every measured frame, reference and variants
 /// alike: linear float, values above 1 kept.
-pub const MEASURED_COLOR_FORMAT: &str = "rgba16float";
+pub const MEASURED_COLOR_FORMAT: crate::plan::TextureFormat =
+    crate::plan::TextureFormat::Rgba16Float;
 
 /// Less than this share of the image covered, the figures say little.
 const FEW_PIXELS: f64 = 0.01;

@@ -88,7 +88,7 @@ pub struct Options {
     pub depth: DepthConvention,
     pub reconstruction: Reconstruction,
     /// Format of the colour targets, written into the plan.
-    pub color_format: String,
+    pub color_format: crate::plan::TextureFormat,
     /// The vertex entry point that draws with the fragment one; `None`
     /// infers it ([`vertex::vertex_entry`]).
     pub vertex_entry: Option<String>,
@@ -109,7 +109,7 @@ impl Default for Options {
             depth_epsilon: DEFAULT_DEPTH_EPSILON,
             depth: DepthConvention::Standard,
             reconstruction: Reconstruction::Bilinear,
-            color_format: "rgba8unorm".into(),
+            color_format: crate::plan::TextureFormat::Rgba8Unorm,
             vertex_entry: None,
             free_payload: false,
         }
@@ -676,7 +676,8 @@ fn rewrite_at(
         classify: &classify,
         result: &pieces.result,
         params: cache_params_layout()?,
-    });
+    })
+    .map_err(Refusal::new)?;
     let mut plan = plan;
     plan.cache.format_note = format_note;
     plan.node.path = node_path.as_ref().map(|p| p.describe().to_string());

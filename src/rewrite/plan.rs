@@ -30,7 +30,7 @@ pub struct Inputs<'a> {
     pub params: Vec<Field>,
 }
 
-pub fn build(inputs: Inputs) -> Plan {
+pub fn build(inputs: Inputs) -> Result<Plan, String> {
     let Inputs {
         shader,
         analysis,
@@ -61,19 +61,19 @@ pub fn build(inputs: Inputs) -> Plan {
         let color = |location: u32| ColorTarget {
             location,
             target: TargetKind::Color,
-            format: output_format(module, result, location, &options.color_format),
+            format: output_format(module, result, location, options.color_format),
             load: load(first || matches!(stage, Stage::ShadeFromCache)),
         };
         let cache = |location: u32| ColorTarget {
             location,
             target: TargetKind::Cache,
-            format: options.cache_format.as_str().into(),
+            format: options.cache_format.texture_format(),
             load: load(first),
         };
         let age = |location: u32| ColorTarget {
             location,
             target: TargetKind::Age,
-            format: AGE_FORMAT.into(),
+            format: AGE_FORMAT,
             load: load(first),
         };
         let color_targets = match stage.writes() {
@@ -99,7 +99,7 @@ pub fn build(inputs: Inputs) -> Plan {
             fragment_entry: entry.name.clone(),
             color_targets,
             depth: Depth {
-                format: DEPTH_FORMAT.into(),
+                format: DEPTH_FORMAT,
                 compare,
                 write,
                 load: load(first),
@@ -172,7 +172,7 @@ pub fn build(inputs: Inputs) -> Plan {
         ),
     ];
 
-    Plan {
+    Ok(Plan {
         format: 1,
         shader: shader.file.path.clone(),
         entry: entry.name.clone(),
@@ -207,11 +207,11 @@ pub fn build(inputs: Inputs) -> Plan {
             color_targets: vec![ColorTarget {
                 location: 0,
                 target: TargetKind::Classes,
-                format: "rgba8unorm".into(),
+                format: TextureFormat::Rgba8Unorm,
                 load: LoadOp::Clear,
             }],
             depth: Depth {
-                format: DEPTH_FORMAT.into(),
+                format: DEPTH_FORMAT,
                 compare: CompareFunction::Equal,
                 write: false,
                 load: LoadOp::Load,
@@ -219,9 +219,10 @@ pub fn build(inputs: Inputs) -> Plan {
             discards: false,
             bindings: used_bindings(&classify.module),
         }),
-        vertex_layout: vertex_entry.map_or(Vec::new(), |v| {
-            vertex_layout(module, &v.function, &vertex.instance_twins)
-        }),
+        vertex_layout: match vertex_entry {
+            Some(v) => vertex_layout(module, &v.function, &vertex.instance_twins)?,
+            None => Vec::new(),
+        },
         host_vertex: vertex_entry.is_none().then(|| HostVertex {
             previous_clip_position_location: vertex.previous_location,
             requirement: format!(
@@ -257,7 +258,7 @@ pub fn build(inputs: Inputs) -> Plan {
             depth: options.depth.far_depth().into(),
         },
         assumes: FrameAssumptions::default(),
-    }
+    })
 }
 
 /// The target format for the fragment output at `location`: `float` (the
@@ -267,8 +268,8 @@ fn output_format(
     module: &Module,
     result: &naga::FunctionResult,
     location: u32,
-    float: &str,
-) -> String {
+    float: TextureFormat,
+) -> TextureFormat {
     let at = |binding: &Option<Binding>| matches!(binding, Some(Binding::Location { location: l, .. }) if *l == location);
     let ty = match module.types[result.ty].inner {
         TypeInner::Struct { ref members, .. } => {
@@ -279,19 +280,18 @@ fn output_format(
     let (size, kind) = match ty.map(|ty| &module.types[ty].inner) {
         Some(&TypeInner::Scalar(scalar)) => (1, scalar.kind),
         Some(&TypeInner::Vector { size, scalar }) => (size as u32, scalar.kind),
-        _ => return float.to_string(),
+        _ => return float,
     };
-    let kind = match kind {
-        naga::ScalarKind::Uint => "uint",
-        naga::ScalarKind::Sint => "sint",
-        _ => return float.to_string(),
-    };
-    let channels = match size {
-        1 => "r",
-        2 => "rg",
-        _ => "rgba",
-    };
-    format!("{channels}32{kind}")
+    use TextureFormat as T;
+    match (kind, size) {
+        (naga::ScalarKind::Uint, 1) => T::R32Uint,
+        (naga::ScalarKind::Uint, 2) => T::Rg32Uint,
+        (naga::ScalarKind::Uint, _) => T::Rgba32Uint,
+        (naga::ScalarKind::Sint, 1) => T::R32Sint,
+        (naga::ScalarKind::Sint, 2) => T::Rg32Sint,
+        (naga::ScalarKind::Sint, _) => T::Rgba32Sint,
+        _ => float,
+    }
 }
 
 fn role(stage: Stage) -> &'static str {
@@ -418,33 +418,42 @@ fn vertex_layout(
     module: &Module,
     function: &naga::Function,
     twins: &[(u32, u32)],
-) -> Vec<VertexAttribute> {
+) -> Result<Vec<VertexAttribute>, String> {
     let per_instance = crate::proc::instance_locations(module, function);
     let mut out = Vec::new();
-    let mut add =
-        |name: Option<&String>, ty: naga::Handle<naga::Type>, binding: &Option<Binding>| {
-            if let Some(Binding::Location { location, .. }) = *binding {
-                out.push(VertexAttribute {
-                    location,
-                    name: name.cloned().unwrap_or_default(),
-                    format: vertex_format(&module.types[ty].inner),
-                    step: if per_instance.contains(&location) {
-                        StepMode::Instance
-                    } else {
-                        StepMode::Vertex
-                    },
-                    previous_of: None,
-                });
-            }
-        };
+    let mut add = |name: Option<&String>,
+                   ty: naga::Handle<naga::Type>,
+                   binding: &Option<Binding>| {
+        if let Some(Binding::Location { location, .. }) = *binding {
+            let name = name.cloned().unwrap_or_default();
+            let format = vertex_format(&module.types[ty].inner).ok_or_else(|| {
+                    format!(
+                        "vertex input @location({location}) `{name}` is a {}, which no WebGPU vertex format holds",
+                        crate::analysis::type_name(&module.types, &module.types[ty].inner)
+                    )
+                })?;
+            out.push(VertexAttribute {
+                location,
+                name,
+                format,
+                step: if per_instance.contains(&location) {
+                    StepMode::Instance
+                } else {
+                    StepMode::Vertex
+                },
+                previous_of: None,
+            });
+        }
+        Ok::<(), String>(())
+    };
     for argument in &function.arguments {
         match module.types[argument.ty].inner {
             TypeInner::Struct { ref members, .. } => {
                 for member in members {
-                    add(member.name.as_ref(), member.ty, &member.binding);
+                    add(member.name.as_ref(), member.ty, &member.binding)?;
                 }
             }
-            _ => add(argument.name.as_ref(), argument.ty, &argument.binding),
+            _ => add(argument.name.as_ref(), argument.ty, &argument.binding)?,
         }
     }
     out.sort_by_key(|a| a.location);
@@ -461,27 +470,36 @@ fn vertex_layout(
         })
         .collect();
     out.extend(twinned);
-    out
+    Ok(out)
 }
 
-fn vertex_format(inner: &TypeInner) -> String {
+/// The vertex format of an input of WGSL type `inner`; `None` for what
+/// WebGPU cannot feed (a three-component `f16` vector).
+fn vertex_format(inner: &TypeInner) -> Option<VertexFormat> {
     let (scalar, count) = match *inner {
         TypeInner::Scalar(s) => (s, 1),
         TypeInner::Vector { size, scalar } => (scalar, size as u32),
-        _ => return "unsupported".into(),
+        _ => return None,
     };
-    let base = match scalar.kind {
-        naga::ScalarKind::Float if scalar.width == 2 => "float16",
-        naga::ScalarKind::Float => "float32",
-        naga::ScalarKind::Sint => "sint32",
-        naga::ScalarKind::Uint => "uint32",
-        _ => return "unsupported".into(),
-    };
-    if count == 1 {
-        base.into()
-    } else {
-        format!("{base}x{count}")
-    }
+    use VertexFormat as V;
+    Some(match (scalar.kind, scalar.width, count) {
+        (naga::ScalarKind::Float, 2, 1) => V::Float16,
+        (naga::ScalarKind::Float, 2, 2) => V::Float16x2,
+        (naga::ScalarKind::Float, 2, 4) => V::Float16x4,
+        (naga::ScalarKind::Float, 4, 1) => V::Float32,
+        (naga::ScalarKind::Float, 4, 2) => V::Float32x2,
+        (naga::ScalarKind::Float, 4, 3) => V::Float32x3,
+        (naga::ScalarKind::Float, 4, 4) => V::Float32x4,
+        (naga::ScalarKind::Sint, 4, 1) => V::Sint32,
+        (naga::ScalarKind::Sint, 4, 2) => V::Sint32x2,
+        (naga::ScalarKind::Sint, 4, 3) => V::Sint32x3,
+        (naga::ScalarKind::Sint, 4, 4) => V::Sint32x4,
+        (naga::ScalarKind::Uint, 4, 1) => V::Uint32,
+        (naga::ScalarKind::Uint, 4, 2) => V::Uint32x2,
+        (naga::ScalarKind::Uint, 4, 3) => V::Uint32x3,
+        (naga::ScalarKind::Uint, 4, 4) => V::Uint32x4,
+        _ => return None,
+    })
 }
 
 /// The plan of the unmodified shader, which the profiler runs as the
@@ -533,12 +551,12 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
                 .map(|location| ColorTarget {
                     location,
                     target: TargetKind::Color,
-                    format: output_format(module, result, location, &options.color_format),
+                    format: output_format(module, result, location, options.color_format),
                     load: LoadOp::Clear,
                 })
                 .collect(),
             depth: Depth {
-                format: DEPTH_FORMAT.into(),
+                format: DEPTH_FORMAT,
                 compare: options.depth.nearer(),
                 write: true,
                 load: LoadOp::Clear,
@@ -547,7 +565,7 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
             bindings,
         }],
         classify: None,
-        vertex_layout: vertex_layout(module, &vertex_entry.function, &[]),
+        vertex_layout: vertex_layout(module, &vertex_entry.function, &[])?,
         host_vertex: None,
         bindings: Bindings {
             original,

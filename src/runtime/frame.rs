@@ -68,8 +68,7 @@ impl PlanFrame {
                 colors.resize(index + 1, None);
             }
             colors[index] = Some(wgpu::ColorTargetState {
-                format: shadecache_host::texture_format(&target.format)
-                    .map_err(|err| err.to_string())?,
+                format: shadecache_host::texture_format(target.format),
                 blend: None,
                 write_mask: wgpu::ColorWrites::ALL,
             });
@@ -132,8 +131,7 @@ fn packed(
         .iter()
         .filter(|attribute| attribute.step == step && attribute.previous_of.is_none())
         .map(|attribute| {
-            let format =
-                shadecache_host::vertex_format(&attribute.format).map_err(|err| err.to_string())?;
+            let format = shadecache_host::vertex_format(attribute.format);
             let out = wgpu::VertexAttribute {
                 format,
                 offset,

@@ -213,7 +213,7 @@ fn instance_inputs_note(module: &Module, function: &naga::Function) -> String {
                 location,
                 name: name.clone(),
                 // Only the name and the width matter here.
-                format: "float32x4".into(),
+                format: crate::plan::VertexFormat::Float32x4,
                 step: crate::plan::StepMode::Instance,
                 previous_of: None,
             };

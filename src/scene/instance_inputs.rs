@@ -48,8 +48,8 @@ impl InstanceSource {
         let index: Option<usize> = name[stem.len()..].parse().ok();
         let has = |words: &[&str]| words.iter().any(|w| stem.contains(w));
         let transposed = has(&["transpose"]);
-        let float = attribute.format.starts_with("float32");
-        let width = components(&attribute.format);
+        let float = attribute.format.is_float32();
+        let width = attribute.format.components() as usize;
         let cannot = |why: &str| {
             format!(
                 "the simulation cannot feed per-instance vertex input @location({}) `{}` ({}): {why}",
@@ -150,13 +150,6 @@ impl InstanceSource {
     }
 }
 
-fn components(format: &str) -> usize {
-    match format.rsplit_once('x') {
-        Some((_, n)) => n.parse().unwrap_or(1),
-        None => 1,
-    }
-}
-
 /// This frame's per-instance input records, as the runtime takes them
 /// ([`crate::runtime::ObjectInputs::instance_inputs`]): for each
 /// instance's world transform in `worlds`, the layout's per-instance
@@ -167,8 +160,9 @@ pub fn instance_inputs(layout: &[VertexAttribute], worlds: &[Mat4]) -> Result<Ve
         .iter()
         .filter(|a| a.step == StepMode::Instance && a.previous_of.is_none())
         .map(|a| {
-            let float = a.format.starts_with("float32");
-            Ok((InstanceSource::of(a)?, components(&a.format).min(4), float))
+            let float = a.format.is_float32();
+            let width = a.format.components() as usize;
+            Ok((InstanceSource::of(a)?, width, float))
         })
         .collect::<Result<_, String>>()?;
     let mut bytes = Vec::new();
@@ -199,7 +193,7 @@ mod tests {
         VertexAttribute {
             location,
             name: name.into(),
-            format: format.into(),
+            format: format.parse().unwrap(),
             step: StepMode::Instance,
             previous_of: None,
         }

@@ -455,9 +455,8 @@ impl VertexSource {
             2 => Some(VertexSource::Uv),
             _ => None,
         });
-        let float = attribute.format.starts_with("float32");
-        let integer =
-            attribute.format.starts_with("uint32") || attribute.format.starts_with("sint32");
+        let float = attribute.format.is_float32();
+        let integer = !attribute.format.is_float();
         match source {
             Some(source) if float => Ok(source),
             Some(VertexSource::Position) if integer => Ok(VertexSource::IntegerPosition),
@@ -489,7 +488,8 @@ impl VertexSource {
 
 /// Whether an integer input is a packed colour (egui's `a_color: u32`).
 fn packed_colour(attribute: &crate::plan::VertexAttribute) -> bool {
-    attribute.name.to_ascii_lowercase().contains("col") && attribute.format == "uint32"
+    attribute.name.to_ascii_lowercase().contains("col")
+        && attribute.format == crate::plan::VertexFormat::Uint32
 }
 
 impl Mesh {
@@ -501,10 +501,7 @@ impl Mesh {
             .iter()
             .filter(|attribute| attribute.step == crate::plan::StepMode::Vertex)
             .map(|attribute| {
-                let width = match attribute.format.rsplit_once('x') {
-                    Some((_, n)) => n.parse().unwrap_or(1),
-                    None => 1,
-                };
+                let width = attribute.format.components() as usize;
                 let word = if packed_colour(attribute) {
                     u32::MAX
                 } else {

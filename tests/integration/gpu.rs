@@ -160,7 +160,7 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
     let (shader, analysis) = crate::util::analyzed("counting.wgsl", COUNTING_SHADER);
     let candidate = crate::util::candidate(&analysis, "sin(in.normal * 10.0)");
     let options = Options {
-        color_format: "rgba16float".into(),
+        color_format: shadecache::plan::TextureFormat::Rgba16Float,
         refresh_period: 4,
         refresh_quad: 2,
         ..Options::default()

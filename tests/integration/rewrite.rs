@@ -282,9 +282,9 @@ fn plans_describe_the_passes() {
         targets,
         [TargetKind::Color, TargetKind::Cache, TargetKind::Age]
     );
-    assert_eq!(one.passes[0].color_targets[2].format, "r16float");
+    assert_eq!(one.passes[0].color_targets[2].format.as_str(), "r16float");
     assert_eq!(one.vertex_layout.len(), 2);
-    assert_eq!(one.vertex_layout[0].format, "float32x3");
+    assert_eq!(one.vertex_layout[0].format.as_str(), "float32x3");
     assert_eq!(three.clear.depth, 1.0);
 
     // Reversed Z: nearer is `greater`, the far plane (and the clear) is 0,
@@ -706,7 +706,7 @@ fn fs(in: VertexOutput) -> @location(0) vec4<f32> {
         .iter()
         .flat_map(|p| &p.color_targets)
         .filter(|t| t.target == TargetKind::Cache)
-        .all(|t| t.format == "rgba32float"));
+        .all(|t| t.format.as_str() == "rgba32float"));
     for (candidate, variant) in [
         (wave, Variant::ThreePass),
         (growth, Variant::TwoPass),

@@ -114,7 +114,7 @@ impl CachedShader {
         let (user_buffers, twin_slots) = vertex::layouts(plan, frame.vertex_buffers)?;
         let formats = HostFormats {
             cache: cache_format(plan.cache.format),
-            age: texture_format(shadecache_plan::AGE_FORMAT)?,
+            age: texture_format(shadecache_plan::AGE_FORMAT),
             classes: wgpu::TextureFormat::Rgba8Unorm,
         };
         let layout = |label: &str, entries: &[wgpu::BindGroupLayoutEntry]| {

@@ -1,52 +1,56 @@
-//! The plan names formats as WebGPU spells them; these are wgpu's.
+//! The plan's formats as wgpu's.
 
-use crate::Error;
+use shadecache_plan::{TextureFormat, VertexFormat};
 
-/// The wgpu texture format a plan names (`rgba16float`, `depth32float`).
-pub fn texture_format(name: &str) -> Result<wgpu::TextureFormat, Error> {
+/// The wgpu texture format a plan names.
+pub fn texture_format(format: TextureFormat) -> wgpu::TextureFormat {
     use wgpu::TextureFormat as T;
-    Ok(match name {
-        "rgba8unorm" => T::Rgba8Unorm,
-        "rgba8unorm-srgb" => T::Rgba8UnormSrgb,
-        "bgra8unorm" => T::Bgra8Unorm,
-        "bgra8unorm-srgb" => T::Bgra8UnormSrgb,
-        "r16float" => T::R16Float,
-        "rg16float" => T::Rg16Float,
-        "rgba16float" => T::Rgba16Float,
-        "r32float" => T::R32Float,
-        "rgba32float" => T::Rgba32Float,
-        "r32uint" => T::R32Uint,
-        "rg32uint" => T::Rg32Uint,
-        "rgba32uint" => T::Rgba32Uint,
-        "r32sint" => T::R32Sint,
-        "rg32sint" => T::Rg32Sint,
-        "rgba32sint" => T::Rgba32Sint,
-        "depth16unorm" => T::Depth16Unorm,
-        "depth24plus" => T::Depth24Plus,
-        "depth24plus-stencil8" => T::Depth24PlusStencil8,
-        "depth32float" => T::Depth32Float,
-        other => return Err(Error::Plan(format!("unknown texture format `{other}`"))),
-    })
+    use TextureFormat as F;
+    match format {
+        F::Rgba8Unorm => T::Rgba8Unorm,
+        F::Rgba8UnormSrgb => T::Rgba8UnormSrgb,
+        F::Bgra8Unorm => T::Bgra8Unorm,
+        F::Bgra8UnormSrgb => T::Bgra8UnormSrgb,
+        F::R16Float => T::R16Float,
+        F::Rg16Float => T::Rg16Float,
+        F::Rgba16Float => T::Rgba16Float,
+        F::R32Float => T::R32Float,
+        F::Rg32Float => T::Rg32Float,
+        F::Rgba32Float => T::Rgba32Float,
+        F::R32Uint => T::R32Uint,
+        F::Rg32Uint => T::Rg32Uint,
+        F::Rgba32Uint => T::Rgba32Uint,
+        F::R32Sint => T::R32Sint,
+        F::Rg32Sint => T::Rg32Sint,
+        F::Rgba32Sint => T::Rgba32Sint,
+        F::Depth16Unorm => T::Depth16Unorm,
+        F::Depth24Plus => T::Depth24Plus,
+        F::Depth24PlusStencil8 => T::Depth24PlusStencil8,
+        F::Depth32Float => T::Depth32Float,
+    }
 }
 
-/// The wgpu vertex format a plan names (`float32x3`).
-pub fn vertex_format(name: &str) -> Result<wgpu::VertexFormat, Error> {
-    use wgpu::VertexFormat as F;
-    Ok(match name {
-        "float32" => F::Float32,
-        "float32x2" => F::Float32x2,
-        "float32x3" => F::Float32x3,
-        "float32x4" => F::Float32x4,
-        "sint32" => F::Sint32,
-        "sint32x2" => F::Sint32x2,
-        "sint32x3" => F::Sint32x3,
-        "sint32x4" => F::Sint32x4,
-        "uint32" => F::Uint32,
-        "uint32x2" => F::Uint32x2,
-        "uint32x3" => F::Uint32x3,
-        "uint32x4" => F::Uint32x4,
-        other => return Err(Error::Plan(format!("unknown vertex format `{other}`"))),
-    })
+/// The wgpu vertex format a plan names.
+pub fn vertex_format(format: VertexFormat) -> wgpu::VertexFormat {
+    use wgpu::VertexFormat as W;
+    use VertexFormat as F;
+    match format {
+        F::Float16 => W::Float16,
+        F::Float16x2 => W::Float16x2,
+        F::Float16x4 => W::Float16x4,
+        F::Float32 => W::Float32,
+        F::Float32x2 => W::Float32x2,
+        F::Float32x3 => W::Float32x3,
+        F::Float32x4 => W::Float32x4,
+        F::Sint32 => W::Sint32,
+        F::Sint32x2 => W::Sint32x2,
+        F::Sint32x3 => W::Sint32x3,
+        F::Sint32x4 => W::Sint32x4,
+        F::Uint32 => W::Uint32,
+        F::Uint32x2 => W::Uint32x2,
+        F::Uint32x3 => W::Uint32x3,
+        F::Uint32x4 => W::Uint32x4,
+    }
 }
 
 /// The texture format of the payload cache.

@@ -66,7 +66,7 @@ pub(crate) fn layouts(
     };
     let mut twins: Vec<TwinSlot> = Vec::new();
     for input in &plan.vertex_layout {
-        let format = vertex_format(&input.format)?;
+        let format = vertex_format(input.format);
         let step = match input.step {
             StepMode::Vertex => wgpu::VertexStepMode::Vertex,
             StepMode::Instance => wgpu::VertexStepMode::Instance,

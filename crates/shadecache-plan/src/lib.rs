@@ -20,15 +20,256 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 /// The depth buffer's format: it is also last frame's depth in the cache.
-pub const DEPTH_FORMAT: &str = "depth32float";
+pub const DEPTH_FORMAT: TextureFormat = TextureFormat::Depth32Float;
 
 /// The cache's age target: whole frames since each value was computed,
 /// exact up to 2048 (`shaders/cache.wgsl`, `CACHE_AGE_LIMIT`).
-pub const AGE_FORMAT: &str = "r16float";
+pub const AGE_FORMAT: TextureFormat = TextureFormat::R16Float;
 
 /// The version of the format this crate reads and writes: a plan's
 /// `format`.
 pub const FORMAT_VERSION: u32 = 1;
+
+/// A texture format a plan names: a colour target, the cache, the depth
+/// buffer. Written as WebGPU spells it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum TextureFormat {
+    #[serde(rename = "rgba8unorm")]
+    Rgba8Unorm,
+    #[serde(rename = "rgba8unorm-srgb")]
+    Rgba8UnormSrgb,
+    #[serde(rename = "bgra8unorm")]
+    Bgra8Unorm,
+    #[serde(rename = "bgra8unorm-srgb")]
+    Bgra8UnormSrgb,
+    #[serde(rename = "r16float")]
+    R16Float,
+    #[serde(rename = "rg16float")]
+    Rg16Float,
+    #[serde(rename = "rgba16float")]
+    Rgba16Float,
+    #[serde(rename = "r32float")]
+    R32Float,
+    #[serde(rename = "rg32float")]
+    Rg32Float,
+    #[serde(rename = "rgba32float")]
+    Rgba32Float,
+    #[serde(rename = "r32uint")]
+    R32Uint,
+    #[serde(rename = "rg32uint")]
+    Rg32Uint,
+    #[serde(rename = "rgba32uint")]
+    Rgba32Uint,
+    #[serde(rename = "r32sint")]
+    R32Sint,
+    #[serde(rename = "rg32sint")]
+    Rg32Sint,
+    #[serde(rename = "rgba32sint")]
+    Rgba32Sint,
+    #[serde(rename = "depth16unorm")]
+    Depth16Unorm,
+    #[serde(rename = "depth24plus")]
+    Depth24Plus,
+    #[serde(rename = "depth24plus-stencil8")]
+    Depth24PlusStencil8,
+    #[serde(rename = "depth32float")]
+    Depth32Float,
+}
+
+impl TextureFormat {
+    pub const ALL: [TextureFormat; 20] = [
+        TextureFormat::Rgba8Unorm,
+        TextureFormat::Rgba8UnormSrgb,
+        TextureFormat::Bgra8Unorm,
+        TextureFormat::Bgra8UnormSrgb,
+        TextureFormat::R16Float,
+        TextureFormat::Rg16Float,
+        TextureFormat::Rgba16Float,
+        TextureFormat::R32Float,
+        TextureFormat::Rg32Float,
+        TextureFormat::Rgba32Float,
+        TextureFormat::R32Uint,
+        TextureFormat::Rg32Uint,
+        TextureFormat::Rgba32Uint,
+        TextureFormat::R32Sint,
+        TextureFormat::Rg32Sint,
+        TextureFormat::Rgba32Sint,
+        TextureFormat::Depth16Unorm,
+        TextureFormat::Depth24Plus,
+        TextureFormat::Depth24PlusStencil8,
+        TextureFormat::Depth32Float,
+    ];
+
+    /// WebGPU's spelling, as the plan writes it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            TextureFormat::Rgba8Unorm => "rgba8unorm",
+            TextureFormat::Rgba8UnormSrgb => "rgba8unorm-srgb",
+            TextureFormat::Bgra8Unorm => "bgra8unorm",
+            TextureFormat::Bgra8UnormSrgb => "bgra8unorm-srgb",
+            TextureFormat::R16Float => "r16float",
+            TextureFormat::Rg16Float => "rg16float",
+            TextureFormat::Rgba16Float => "rgba16float",
+            TextureFormat::R32Float => "r32float",
+            TextureFormat::Rg32Float => "rg32float",
+            TextureFormat::Rgba32Float => "rgba32float",
+            TextureFormat::R32Uint => "r32uint",
+            TextureFormat::Rg32Uint => "rg32uint",
+            TextureFormat::Rgba32Uint => "rgba32uint",
+            TextureFormat::R32Sint => "r32sint",
+            TextureFormat::Rg32Sint => "rg32sint",
+            TextureFormat::Rgba32Sint => "rgba32sint",
+            TextureFormat::Depth16Unorm => "depth16unorm",
+            TextureFormat::Depth24Plus => "depth24plus",
+            TextureFormat::Depth24PlusStencil8 => "depth24plus-stencil8",
+            TextureFormat::Depth32Float => "depth32float",
+        }
+    }
+}
+
+impl fmt::Display for TextureFormat {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for TextureFormat {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        TextureFormat::ALL
+            .into_iter()
+            .find(|format| format.as_str() == text)
+            .ok_or_else(|| format!("unknown texture format `{text}`"))
+    }
+}
+
+/// A vertex input's format, as WebGPU spells it (`float32x3`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum VertexFormat {
+    #[serde(rename = "float16")]
+    Float16,
+    #[serde(rename = "float16x2")]
+    Float16x2,
+    #[serde(rename = "float16x4")]
+    Float16x4,
+    #[serde(rename = "float32")]
+    Float32,
+    #[serde(rename = "float32x2")]
+    Float32x2,
+    #[serde(rename = "float32x3")]
+    Float32x3,
+    #[serde(rename = "float32x4")]
+    Float32x4,
+    #[serde(rename = "sint32")]
+    Sint32,
+    #[serde(rename = "sint32x2")]
+    Sint32x2,
+    #[serde(rename = "sint32x3")]
+    Sint32x3,
+    #[serde(rename = "sint32x4")]
+    Sint32x4,
+    #[serde(rename = "uint32")]
+    Uint32,
+    #[serde(rename = "uint32x2")]
+    Uint32x2,
+    #[serde(rename = "uint32x3")]
+    Uint32x3,
+    #[serde(rename = "uint32x4")]
+    Uint32x4,
+}
+
+impl VertexFormat {
+    pub const ALL: [VertexFormat; 15] = [
+        VertexFormat::Float16,
+        VertexFormat::Float16x2,
+        VertexFormat::Float16x4,
+        VertexFormat::Float32,
+        VertexFormat::Float32x2,
+        VertexFormat::Float32x3,
+        VertexFormat::Float32x4,
+        VertexFormat::Sint32,
+        VertexFormat::Sint32x2,
+        VertexFormat::Sint32x3,
+        VertexFormat::Sint32x4,
+        VertexFormat::Uint32,
+        VertexFormat::Uint32x2,
+        VertexFormat::Uint32x3,
+        VertexFormat::Uint32x4,
+    ];
+
+    /// WebGPU's spelling, as the plan writes it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            VertexFormat::Float16 => "float16",
+            VertexFormat::Float16x2 => "float16x2",
+            VertexFormat::Float16x4 => "float16x4",
+            VertexFormat::Float32 => "float32",
+            VertexFormat::Float32x2 => "float32x2",
+            VertexFormat::Float32x3 => "float32x3",
+            VertexFormat::Float32x4 => "float32x4",
+            VertexFormat::Sint32 => "sint32",
+            VertexFormat::Sint32x2 => "sint32x2",
+            VertexFormat::Sint32x3 => "sint32x3",
+            VertexFormat::Sint32x4 => "sint32x4",
+            VertexFormat::Uint32 => "uint32",
+            VertexFormat::Uint32x2 => "uint32x2",
+            VertexFormat::Uint32x3 => "uint32x3",
+            VertexFormat::Uint32x4 => "uint32x4",
+        }
+    }
+}
+
+impl fmt::Display for VertexFormat {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for VertexFormat {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        VertexFormat::ALL
+            .into_iter()
+            .find(|format| format.as_str() == text)
+            .ok_or_else(|| format!("unknown vertex format `{text}`"))
+    }
+}
+
+impl VertexFormat {
+    /// Components per input: 1 to 4.
+    pub fn components(self) -> u32 {
+        match self.as_str().rsplit_once('x') {
+            Some((_, count)) => count.parse().unwrap_or(1),
+            None => 1,
+        }
+    }
+
+    /// Whether the input is floating point (else a 32-bit integer).
+    pub fn is_float(self) -> bool {
+        self.as_str().starts_with("float")
+    }
+
+    /// Whether the input is 32-bit floating point.
+    pub fn is_float32(self) -> bool {
+        use VertexFormat as V;
+        matches!(
+            self,
+            V::Float32 | V::Float32x2 | V::Float32x3 | V::Float32x4
+        )
+    }
+
+    /// Bytes of one input.
+    pub fn size(self) -> u32 {
+        let width = if self.as_str().starts_with("float16") {
+            2
+        } else {
+            4
+        };
+        width * self.components()
+    }
+}
 
 /// How to run one variant.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -162,7 +403,7 @@ pub struct ColorTarget {
     pub location: u32,
     /// What the pass renders into at this location.
     pub target: TargetKind,
-    pub format: String,
+    pub format: TextureFormat,
     /// `clear` (first pass to write the target this frame) or `load`.
     pub load: LoadOp,
 }
@@ -260,7 +501,7 @@ pub enum CompareFunction {
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Depth {
-    pub format: String,
+    pub format: TextureFormat,
     /// `less` (`greater` with reversed Z) or `equal`; a host's plan may
     /// also say `less-equal`, `greater-equal` or `always`.
     pub compare: CompareFunction,
@@ -273,7 +514,7 @@ pub struct VertexAttribute {
     pub location: u32,
     pub name: String,
     /// A WebGPU vertex format, e.g. `float32x3`.
-    pub format: String,
+    pub format: VertexFormat,
     /// Which buffer steps it: the per-vertex one (buffer slot 0) or the
     /// per-instance one (slot 1). Each is packed in the layout's order.
     #[serde(default, skip_serializing_if = "StepMode::is_vertex")]
@@ -500,6 +741,13 @@ pub enum CacheFormat {
 }
 
 impl CacheFormat {
+    /// The payload texture's format.
+    pub fn texture_format(self) -> TextureFormat {
+        match self {
+            CacheFormat::Rgba16float => TextureFormat::Rgba16Float,
+            CacheFormat::Rgba32float => TextureFormat::Rgba32Float,
+        }
+    }
     pub fn as_str(self) -> &'static str {
         match self {
             CacheFormat::Rgba16float => "rgba16float",
