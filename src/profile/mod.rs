@@ -23,11 +23,13 @@
 //! configuration's row (`result_row`); the misses each effect causes alone
 //! (`miss_causes`); and the answer, its winner measured again (`confirm`).
 
+mod bench;
 mod choice;
 pub mod grid;
 mod inputs;
 pub mod metrics;
 mod run;
+mod setup;
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -42,11 +44,11 @@ use crate::report::{
     Report, ResultRow,
 };
 use crate::rewrite::{self, CacheFormat, Options as RewriteOptions, Reconstruction, Variant};
-use crate::runtime::{self, FrameInputs, Gpu, RunOptions, Runner};
+use crate::runtime::{self, FrameInputs, Gpu, Runner};
 use crate::scene::{self, Scene};
-use grid::{Axes, Design, Grid, Setting};
+use grid::{Axes, Design, Setting};
 use metrics::{Decisions, FrameError};
-use run::{measured_run, read_linear, timed, Clock, Measured, PayloadRun, ReferenceRun, Sample};
+use run::{measured_run, read_linear, timed, Clock, Measured, ReferenceRun, Sample};
 
 pub use crate::analysis::Nodes;
 pub use crate::report::Budget;
@@ -328,226 +330,49 @@ pub fn profile(
     options: &Options,
     progress: &mut dyn Progress,
 ) -> Result<(Report, Pictures), Error> {
-    if crate::rewrite::vertex::is_fragment_only(&shader.module) {
-        return Err(Error::in_file(
-            shader.file.clone(),
-            Diagnostic::error(format!(
-                "`{}` has no vertex stage, and drawing it needs one: give the module that has it with --vertex FILE",
-                shader.file.path
-            ))
-            .with_label(0..0, "a fragment-only module")
-            .with_note("`rewrite` emits its fragment passes without one; plan.json's `host_vertex` says what the host's vertex stage must output"),
-        ));
-    }
-    let size = options.size.unwrap_or(scene.size);
-    let longest_period = options.axes().refresh_periods.iter().copied().max();
-    let (frames, warmup) = (
-        options.frames.unwrap_or(scene.frames).max(1),
-        options
-            .warmup
-            .unwrap_or_else(|| scene.warmup.max(longest_period.unwrap_or(0))),
-    );
-    // Whether every measured frame sees the cache in its steady state.
-    let steady_state = longest_period.is_none_or(|period| warmup >= period);
-    // The scene must provide every uniform the shader reads; the values it
-    // gives bound the candidates' values (whether a payload fits f16 here).
-    // What the draw binds: the resources of the fragment entry point and
-    // of the vertex entry point drawing with it (a module may declare more).
-    let used = used_bindings(shader, options)?;
-    let mut uniforms = scene::uniforms::buffers(&shader.module);
-    uniforms.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
-    let mut storage = scene::storage::buffers(&shader.module);
-    storage.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
-    scene::roles::check(&uniforms, &storage, scene)?;
-    scene::uniforms::check(&uniforms, scene).map_err(fail)?;
-    let mut analysis = analysis::analyze(
-        shader,
-        &analysis::Options {
-            entry: options.entry.clone(),
-            ..analysis::Options::default()
-        },
-    )?;
-    let aspect = size[0] as f32 / size[1] as f32;
-    analysis.bound_uniforms(
-        shader,
-        &scene::uniforms::bounds(&uniforms, scene, aspect, warmup + frames).map_err(fail)?,
-    );
-    let nodes = analysis.select(&shader.file, &options.nodes)?;
-    let estimates: Vec<(String, f64)> =
-        nodes.iter().map(|c| (c.node.id.clone(), c.ratio)).collect();
-    let grid = Grid::new(
-        options.axes(),
-        options.design,
-        &estimates,
-        options.variants.len(),
-    );
-    let base_setting = grid
-        .axes
-        .base()
-        .ok_or_else(|| fail("every knob needs at least one value to measure".into()))?;
-    // Frames are rendered to rgba16float and compared in linear float: an
-    // 8-bit target would clamp what is above 1 and quantise the rest.
-    let defaults = RewriteOptions {
-        depth: scene.camera.depth,
-        vertex_entry: options.vertex_entry.clone(),
-        color_format: MEASURED_COLOR_FORMAT,
-        ..RewriteOptions::default()
-    };
-    let base = base_setting.rewrite_options(&defaults);
-    // The nodes the grid kept, with their settings.
-    let nodes: Vec<(&Candidate, &[Setting])> = nodes
-        .iter()
-        .zip(&grid.settings)
-        .filter(|(_, settings)| !settings.is_empty())
-        .map(|(candidate, settings)| (*candidate, settings.as_slice()))
-        .collect();
-    let reference_plan = rewrite::plan::reference(shader, &analysis, &base).map_err(fail)?;
-
+    refuse_fragment_only(shader)?;
+    let prepared = setup::prepare(shader, scene, options)?;
+    let nodes = prepared.nodes();
+    let (size, warmup, frames) = (prepared.size, prepared.warmup, prepared.frames);
+    let reference_plan =
+        rewrite::plan::reference(shader, &prepared.analysis, &prepared.base).map_err(fail)?;
     // The scene must provide everything else the shader binds.
-    scene::storage::check(&storage, scene)?;
+    scene::storage::check(&prepared.storage, scene)?;
     check_instancing(shader, scene, &reference_plan.vertex_layout)?;
     let scene_inputs = inputs::SceneInputs::new(
         shader,
         scene,
         scene_path,
         &reference_plan,
-        &used,
-        (&uniforms, &storage),
-        aspect,
+        &prepared.used,
+        (&prepared.uniforms, &prepared.storage),
+        prepared.aspect,
     )?;
     let inputs_of = |scene: &Scene, frame: u32| scene_inputs.frame(scene, frame);
 
     let gpu = Gpu::new().map_err(fail)?.ok_or_else(|| {
         fail("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers gives lavapipe)".into())
     })?;
-    let timestamps = gpu
-        .device
-        .features()
-        .contains(wgpu::Features::TIMESTAMP_QUERY);
-    let mut profiler =
-        wgpu_profiler::GpuProfiler::new(&gpu.device, wgpu_profiler::GpuProfilerSettings::default())
-            .map_err(|err| fail(format!("cannot start the GPU profiler: {err}")))?;
-
-    let pipeline_options = runtime::PipelineOptions {
+    let mut clock = Clock::new(&gpu)?;
+    let bench = bench::Bench {
+        gpu: &gpu,
+        inputs: &scene_inputs,
+        size,
         cull_back_faces: scene.cull_back_faces,
-        ..runtime::PipelineOptions::default()
     };
-    let run_options = RunOptions {
-        classify: true,
-        pipelines: pipeline_options,
-    };
-    let plain = RunOptions {
-        classify: false,
-        pipelines: pipeline_options,
-    };
-    // Every run draws the same meshes and textures at the same size.
-    let new_runner = |plan: &Plan, sources: &HashMap<String, String>, options: RunOptions| {
-        Runner::new(
-            &gpu,
-            plan,
-            source_of(sources),
-            &scene_inputs.meshes,
-            &scene_inputs.textures,
-            (size[0], size[1]),
-            options,
-        )
-    };
-    // The user's source, as written; a module given its vertex stage from
-    // another file has no one source, and is written back by naga.
-    let reference_text = match shader.vertex_file {
-        None => shader.file.text.clone(),
-        Some(_) => crate::back::wgsl_text(&shader.module, &shader.info).map_err(fail)?,
-    };
-    let reference_sources = HashMap::from([("reference.wgsl".to_string(), reference_text)]);
-    let mut reference = new_runner(&reference_plan, &reference_sources, plain)
-        .map_err(|err| fail(format!("the reference does not run: {err}")))?;
-
-    // Per node: a payload pass over every pixel, for P/T, and the same
-    // pass with the payload made free, for its fixed cost.
-    let free = RewriteOptions {
-        free_payload: true,
-        ..base.clone()
-    };
-    let payload_runner = |candidate: &Candidate,
-                          options: &RewriteOptions|
-     -> Result<Runner, Error> {
-        let rewritten = rewrite::rewrite(shader, &analysis, candidate, Variant::ThreePass, options)
-            .map_err(|r| fail(format!("node {}: {}", candidate.node.id, r.reason)))?;
-        let payload_pass = rewrite::payload_pass(Variant::ThreePass)
-            .and_then(|index| rewritten.plan.passes.get(index))
-            .ok_or_else(|| fail("internal error: three-pass has no payload pass".into()))?;
-        let mut pass = payload_pass.clone();
-        pass.depth.load = plan::LoadOp::Clear;
-        for target in &mut pass.color_targets {
-            target.load = plan::LoadOp::Clear;
-        }
-        let plan = Plan {
-            passes: vec![pass],
-            classify: None,
-            ..rewritten.plan.clone()
-        };
-        new_runner(&plan, &sources_of(&rewritten)?, plain).map_err(fail)
-    };
-    let mut payloads = Vec::new();
-    let mut probes = Vec::new();
-    for (node, (candidate, _)) in nodes.iter().enumerate() {
-        payloads.push(PayloadRun {
-            runner: payload_runner(candidate, &base)?,
-            times: Vec::new(),
-        });
-        probes.push(Probe::new(
-            ProbeOf::Payload(node),
-            payload_runner(candidate, &free)?,
-        ));
-        // Each variant with its payload and shade free: its fixed cost.
-        for &variant in &options.variants {
-            let Ok(rewritten) = rewrite::rewrite(shader, &analysis, candidate, variant, &free)
-            else {
-                continue;
-            };
-            let runner =
-                new_runner(&rewritten.plan, &sources_of(&rewritten)?, plain).map_err(fail)?;
-            probes.push(Probe::new(ProbeOf::Variant(node, variant), runner));
-        }
-    }
-    // The original with its fragment stage free: the reference's own
-    // fixed cost, which every variant pays too.
-    // It binds only what its vertex stage still reads: its plan is its own.
-    let (free_reference, free_reference_plan) = {
-        let mut module = shader.module.clone();
-        rewrite::free_function(&mut module.entry_points[analysis.entry_index].function);
-        let info = crate::front::validate(&module)
-            .map_err(|err| fail(format!("internal error: the free reference: {err}")))?;
-        let text = back::wgsl_text(&module, &info).map_err(fail)?;
-        let free = Shader {
-            file: shader.file.clone(),
-            module,
-            info,
-            vertex_file: shader.vertex_file.clone(),
-        };
-        let plan = rewrite::plan::reference(&free, &analysis, &base).map_err(fail)?;
-        (HashMap::from([("reference.wgsl".to_string(), text)]), plan)
-    };
-    probes.push(Probe::new(
-        ProbeOf::Reference,
-        new_runner(&free_reference_plan, &free_reference, plain).map_err(fail)?,
-    ));
-
+    let mut reference = bench::reference(&bench, shader, &reference_plan)?;
+    let (mut payloads, mut probes) =
+        bench::fixed_cost_runs(&bench, shader, &prepared, &nodes, &options.variants)?;
     let mut configs = configurations(
-        (shader, &analysis),
+        (shader, &prepared.analysis),
         &nodes,
         &options.variants,
-        &base,
-        &|plan, sources| new_runner(plan, sources, run_options),
+        &prepared.base,
+        &|plan, sources| bench.runner(plan, sources, true),
         (size, options.error_threshold),
         progress,
     )?;
 
-    let mut clock = Clock {
-        gpu: &gpu,
-        profiler: &mut profiler,
-        timestamps,
-    };
     let mut reference_run = ReferenceRun::default();
     let mut measured: Vec<&mut dyn Measured> = Vec::new();
     measured.extend(payloads.iter_mut().map(|p| p as &mut dyn Measured));
@@ -563,13 +388,8 @@ pub fn profile(
     )?;
     drop(measured);
     progress.finish();
-    let ReferenceRun {
-        times: reference_times,
-        now: reference_pixels,
-        ..
-    } = reference_run;
 
-    let reference_ms = metrics::median(&reference_times);
+    let reference_ms = metrics::median(&reference_run.times);
     let node_reports: Vec<NodeReport> = nodes
         .iter()
         .zip(&payloads)
@@ -581,125 +401,213 @@ pub fn profile(
         })
         .collect();
     let baseline = Baseline {
-        reference_times: &reference_times,
+        reference_times: &reference_run.times,
         reference_ms,
         probes: &probes,
         pixels: size[0] * size[1],
     };
-    let mut rows: Vec<(ResultRow, Picture)> = configs
-        .into_iter()
-        .map(|config| {
-            let node = &node_reports[config.node];
-            result_row(config, node, &baseline)
-        })
-        .collect();
-    rows.sort_by(|a, b| b.0.speedup.total_cmp(&a.0.speedup));
-    let (mut results, pictures): (Vec<_>, Vec<_>) = rows.into_iter().unzip();
-    choice::mark_pareto_fronts(reference_ms, &mut results);
+    let (results, pictures) = rows(configs, &node_reports, &baseline);
 
     // What causes the misses: the best configuration again, with one
     // declared effect at a time.
     let miss_causes = match results.first() {
         Some(best) => {
-            let rewritten = rewrite_of(shader, &analysis, best, &defaults)?;
+            let rewritten = rewrite_of(shader, &prepared.analysis, best, &prepared.defaults)?;
             let sources = sources_of(&rewritten)?;
-            let runner = || new_runner(&rewritten.plan, &sources, run_options);
+            let runner = || bench.runner(&rewritten.plan, &sources, true);
             miss_causes(&gpu, &runner, scene, &inputs_of, warmup, frames)?
         }
         None => Vec::new(),
     };
-
-    let warnings = view_warnings(scene, aspect, warmup, &results);
     let report = Report {
-        format: 1,
-        shader: shader.file.path.clone(),
-        entry: analysis.entry.clone(),
-        scene: scene_path.display().to_string(),
-        scene_description: scene.description.clone(),
+        warnings: view_warnings(scene, prepared.aspect, warmup, &results),
         defaulted: scene_inputs.defaulted.clone(),
+        shader: shader.file.path.clone(),
+        scene: scene_path.display().to_string(),
+        command: options.command.clone(),
+        ..report_of(scene, &prepared, &clock, &reference_run.times, &probes)
+    };
+    let mut report = Report {
+        nodes: node_reports,
+        results,
+        miss_causes,
+        ..report
+    };
+    if let Some(grid) = &mut report.grid {
+        grid.measured = report.results.len();
+    }
+
+    // The answer, and its winner measured again before it is given.
+    let winner = Winner {
+        shader,
+        prepared: &prepared,
+        bench: &bench,
+        scene,
+    };
+    let (choice, chosen) = winner.choose(&report, options, &mut clock, &mut reference, progress)?;
+    let report = Report {
+        choice: Some(choice),
+        ..report
+    };
+    let reference = metrics::rgba8(&reference_run.now);
+    Ok((
+        report,
+        Pictures {
+            reference,
+            results: pictures,
+            trace,
+            chosen,
+        },
+    ))
+}
+
+/// A fragment-only module cannot be drawn by itself.
+fn refuse_fragment_only(shader: &Shader) -> Result<(), Error> {
+    if !crate::rewrite::vertex::is_fragment_only(&shader.module) {
+        return Ok(());
+    }
+    Err(Error::in_file(
+        shader.file.clone(),
+        Diagnostic::error(format!(
+            "`{}` has no vertex stage, and drawing it needs one: give the module that has it with --vertex FILE",
+            shader.file.path
+        ))
+        .with_label(0..0, "a fragment-only module")
+        .with_note("`rewrite` emits its fragment passes without one; plan.json's `host_vertex` says what the host's vertex stage must output"),
+    ))
+}
+
+/// Every configuration's row, fastest first, the Pareto fronts marked;
+/// and each one's pictures.
+fn rows(
+    configs: Vec<Config>,
+    node_reports: &[NodeReport],
+    baseline: &Baseline,
+) -> (Vec<ResultRow>, Vec<Picture>) {
+    let mut rows: Vec<(ResultRow, Picture)> = configs
+        .into_iter()
+        .map(|config| {
+            let node = &node_reports[config.node];
+            result_row(config, node, baseline)
+        })
+        .collect();
+    rows.sort_by(|a, b| b.0.speedup.total_cmp(&a.0.speedup));
+    let (mut results, pictures): (Vec<_>, Vec<_>) = rows.into_iter().unzip();
+    choice::mark_pareto_fronts(baseline.reference_ms, &mut results);
+    (results, pictures)
+}
+
+/// The report's run-wide fields: the frames, the device and its clock,
+/// the reference, the grid. Per-node, per-result and per-shader fields
+/// are left empty for the caller.
+fn report_of(
+    scene: &Scene,
+    prepared: &setup::Prepared,
+    clock: &Clock,
+    reference_times: &[f64],
+    probes: &[Probe],
+) -> Report {
+    let adapter = &clock.gpu.adapter;
+    let grid = &prepared.grid;
+    Report {
+        format: 1,
+        shader: String::new(),
+        entry: prepared.analysis.entry.clone(),
+        scene: String::new(),
+        scene_description: scene.description.clone(),
+        defaulted: Vec::new(),
         effects: scene.effects.clone(),
-        size,
-        frames,
-        warmup,
-        steady_state,
+        size: prepared.size,
+        frames: prepared.frames,
+        warmup: prepared.warmup,
+        steady_state: prepared.steady_state,
         device: Device {
-            name: gpu.adapter.name.clone(),
-            backend: format!("{:?}", gpu.adapter.backend),
-            driver: format!("{} {}", gpu.adapter.driver, gpu.adapter.driver_info)
+            name: adapter.name.clone(),
+            backend: format!("{:?}", adapter.backend),
+            driver: format!("{} {}", adapter.driver, adapter.driver_info)
                 .trim()
                 .to_string(),
         },
-        timing: if timestamps {
+        timing: if clock.timestamps {
             "gpu-timestamps"
         } else {
             "cpu-wall-clock"
         }
         .into(),
-        command: options.command.clone(),
+        command: String::new(),
         reference: Reference {
-            time_ms: reference_ms,
+            time_ms: metrics::median(reference_times),
             spread_ms: [
-                metrics::quantile(&reference_times, 0.1),
-                metrics::quantile(&reference_times, 0.9),
+                metrics::quantile(reference_times, 0.1),
+                metrics::quantile(reference_times, 0.9),
             ],
-            fixed_ms: probed(&probes, ProbeOf::Reference).map_or(0.0, |(ms, _)| ms),
-            frame_ms: reference_times,
+            fixed_ms: probed(probes, ProbeOf::Reference).map_or(0.0, |(ms, _)| ms),
+            frame_ms: reference_times.to_vec(),
         },
-        nodes: node_reports,
+        nodes: Vec::new(),
         grid: Some(GridReport {
             design: grid.design,
-            base: base_setting,
+            base: prepared.base_setting,
             axes: grid.axes.clone(),
             full: grid.full,
-            measured: results.len(),
+            measured: 0,
             pruned: grid.pruned.clone(),
         }),
-        results,
-        warnings,
-        miss_causes,
+        results: Vec::new(),
+        warnings: Vec::new(),
+        miss_causes: Vec::new(),
         choice: None,
-    };
-    // The answer, and its winner measured again before it is given.
-    let budget = options.max_error.unwrap_or(Budget::DEFAULT);
-    let mut choice = report.choose(budget, options.max_error.is_some());
-    let mut chosen = None;
-    if let Some(winner) = choice.result {
-        let rewritten = rewrite_of(shader, &analysis, &report.results[winner], &defaults)?;
-        let mut runner =
-            new_runner(&rewritten.plan, &sources_of(&rewritten)?, plain).map_err(fail)?;
-        let mut clock = Clock {
-            gpu: &gpu,
-            profiler: &mut profiler,
-            timestamps,
+    }
+}
+
+/// Choosing the answer from a report, and measuring its winner again.
+struct Winner<'a> {
+    shader: &'a Shader,
+    prepared: &'a setup::Prepared,
+    bench: &'a bench::Bench<'a>,
+    scene: &'a Scene,
+}
+
+impl Winner<'_> {
+    /// The choice within the budget, confirmed by a run of the original
+    /// and the winner of their own; and the winner's rewrite, which is
+    /// what was measured, when the confirmation keeps it.
+    fn choose(
+        &self,
+        report: &Report,
+        options: &Options,
+        clock: &mut Clock,
+        reference: &mut Runner,
+        progress: &mut dyn Progress,
+    ) -> Result<(crate::report::Choice, Option<rewrite::Rewritten>), Error> {
+        let budget = options.max_error.unwrap_or(Budget::DEFAULT);
+        let mut choice = report.choose(budget, options.max_error.is_some());
+        let Some(winner) = choice.result else {
+            return Ok((choice, None));
         };
+        let (analysis, defaults) = (&self.prepared.analysis, &self.prepared.defaults);
+        let rewritten = rewrite_of(self.shader, analysis, &report.results[winner], defaults)?;
+        let sources = sources_of(&rewritten)?;
+        let mut runner = self
+            .bench
+            .runner(&rewritten.plan, &sources, false)
+            .map_err(fail)?;
+        let (warmup, frames) = (self.prepared.warmup, self.prepared.frames);
         progress.start(u64::from(warmup + frames) * 2);
+        let inputs = |frame| self.bench.inputs.frame(self.scene, frame);
         let confirmation = confirm(
-            &mut clock,
-            [&mut reference, &mut runner],
-            &|frame| inputs_of(scene, frame),
+            clock,
+            [reference, &mut runner],
+            &inputs,
             warmup,
             frames,
             progress,
         )?;
         progress.finish();
         choice.confirm(confirmation);
-        if choice.result.is_some() {
-            chosen = Some(rewritten);
-        }
+        let chosen = choice.result.is_some().then_some(rewritten);
+        Ok((choice, chosen))
     }
-    let report = Report {
-        choice: Some(choice),
-        ..report
-    };
-    Ok((
-        report,
-        Pictures {
-            reference: metrics::rgba8(&reference_pixels),
-            results: pictures,
-            trace,
-            chosen,
-        },
-    ))
 }
 
 /// The colour target of every measured frame, reference and variants
@@ -1028,7 +936,7 @@ fn confirm(
             let label = ["reference again", "chosen again"][which];
             let (time, _, _) = timed(
                 clock.gpu,
-                clock.profiler,
+                &mut clock.profiler,
                 clock.timestamps,
                 runner,
                 &inputs,
@@ -1139,12 +1047,6 @@ pub fn rewrite_of(
             row.node, row.variant, refusal.reason
         )))
     })
-}
-
-/// Looks shader files up by name, for `Runner::new` (which reads them
-/// only while it builds its pipelines).
-fn source_of(sources: &HashMap<String, String>) -> impl Fn(&str) -> Option<String> + '_ {
-    move |name| sources.get(name).cloned()
 }
 
 /// Each shader file of a variant as WGSL text, by the name its plan uses.

@@ -100,7 +100,7 @@ pub(super) fn measured_run(
 
         let (time, _, raw) = timed(
             clock.gpu,
-            clock.profiler,
+            &mut clock.profiler,
             clock.timestamps,
             reference,
             &inputs,
@@ -123,7 +123,7 @@ pub(super) fn measured_run(
             let label = item.label().to_string();
             let (time, passes, raw) = timed(
                 clock.gpu,
-                clock.profiler,
+                &mut clock.profiler,
                 clock.timestamps,
                 item.runner(),
                 &inputs,
@@ -158,8 +158,29 @@ pub(super) fn read_linear(gpu: &Gpu, texture: &wgpu::Texture) -> Result<LinearFr
 /// What times a frame.
 pub(super) struct Clock<'a> {
     pub gpu: &'a Gpu,
-    pub profiler: &'a mut wgpu_profiler::GpuProfiler,
+    pub profiler: wgpu_profiler::GpuProfiler,
+    /// Whether the device has timestamp queries (else frames are timed on
+    /// the CPU, submission to completion).
     pub timestamps: bool,
+}
+
+impl<'a> Clock<'a> {
+    pub fn new(gpu: &'a Gpu) -> Result<Clock<'a>, crate::diagnostic::Error> {
+        let timestamps = gpu
+            .device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY);
+        let profiler = wgpu_profiler::GpuProfiler::new(
+            &gpu.device,
+            wgpu_profiler::GpuProfilerSettings::default(),
+        )
+        .map_err(|err| super::fail(format!("cannot start the GPU profiler: {err}")))?;
+        Ok(Clock {
+            gpu,
+            profiler,
+            timestamps,
+        })
+    }
 }
 
 /// A frame's time, each pass's (ms), and the profiler's raw scopes.

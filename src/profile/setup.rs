@@ -1,0 +1,134 @@
+//! What a profile measures, before anything is drawn: the frame counts,
+//! the buffers the draw binds, the analysis bounded by the scene's values,
+//! the nodes the grid keeps with their settings, and the rewrite options
+//! every run shares.
+
+use std::collections::HashSet;
+
+use super::grid::{Grid, Setting};
+use super::{fail, used_bindings, Options, MEASURED_COLOR_FORMAT};
+use crate::analysis::{self, Analysis, Candidate};
+use crate::diagnostic::Error;
+use crate::front::Shader;
+use crate::rewrite::Options as RewriteOptions;
+use crate::scene::storage::StorageBuffer;
+use crate::scene::uniforms::UniformBuffer;
+use crate::scene::{self, Scene};
+
+/// A profile's plan of work.
+pub(super) struct Prepared {
+    pub size: [u32; 2],
+    pub aspect: f32,
+    /// Frames measured, and warm-up frames before them.
+    pub frames: u32,
+    pub warmup: u32,
+    /// Whether every measured frame sees the cache in its steady state
+    /// (the warm-up covers the longest refresh period).
+    pub steady_state: bool,
+    /// The name and (group, binding) of every resource the draw binds.
+    pub used: HashSet<(String, [u32; 2])>,
+    pub uniforms: Vec<UniformBuffer>,
+    pub storage: Vec<StorageBuffer>,
+    pub analysis: Analysis,
+    /// The candidates asked for, in the grid's node order.
+    pub selected: Vec<Candidate>,
+    pub grid: Grid,
+    /// The grid's base setting, and the rewrite options it gives.
+    pub base_setting: Setting,
+    pub base: RewriteOptions,
+    /// The options every rewrite starts from: the scene's depth convention,
+    /// the vertex entry point, the measured colour format.
+    pub defaults: RewriteOptions,
+}
+
+impl Prepared {
+    /// The nodes the grid kept, with their settings.
+    pub fn nodes(&self) -> Vec<(&Candidate, &[Setting])> {
+        self.selected
+            .iter()
+            .zip(&self.grid.settings)
+            .filter(|(_, settings)| !settings.is_empty())
+            .map(|(candidate, settings)| (candidate, settings.as_slice()))
+            .collect()
+    }
+}
+
+/// Checks the scene against what the shader reads and plans the profile.
+pub(super) fn prepare(
+    shader: &Shader,
+    scene: &Scene,
+    options: &Options,
+) -> Result<Prepared, Error> {
+    let size = options.size.unwrap_or(scene.size);
+    let longest_period = options.axes().refresh_periods.iter().copied().max();
+    let frames = options.frames.unwrap_or(scene.frames).max(1);
+    let warmup = options
+        .warmup
+        .unwrap_or_else(|| scene.warmup.max(longest_period.unwrap_or(0)));
+    // The scene must provide every uniform the shader reads; the values it
+    // gives bound the candidates' values (whether a payload fits f16 here).
+    // What the draw binds: the resources of the fragment entry point and
+    // of the vertex entry point drawing with it (a module may declare more).
+    let used = used_bindings(shader, options)?;
+    let mut uniforms = scene::uniforms::buffers(&shader.module);
+    uniforms.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
+    let mut storage = scene::storage::buffers(&shader.module);
+    storage.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
+    scene::roles::check(&uniforms, &storage, scene)?;
+    scene::uniforms::check(&uniforms, scene).map_err(fail)?;
+    let mut analysis = analysis::analyze(
+        shader,
+        &analysis::Options {
+            entry: options.entry.clone(),
+            ..analysis::Options::default()
+        },
+    )?;
+    let aspect = size[0] as f32 / size[1] as f32;
+    analysis.bound_uniforms(
+        shader,
+        &scene::uniforms::bounds(&uniforms, scene, aspect, warmup + frames).map_err(fail)?,
+    );
+    let selected: Vec<Candidate> = analysis
+        .select(&shader.file, &options.nodes)?
+        .into_iter()
+        .cloned()
+        .collect();
+    let estimates: Vec<(String, f64)> = selected
+        .iter()
+        .map(|c| (c.node.id.clone(), c.ratio))
+        .collect();
+    let grid = Grid::new(
+        options.axes(),
+        options.design,
+        &estimates,
+        options.variants.len(),
+    );
+    let base_setting = grid
+        .axes
+        .base()
+        .ok_or_else(|| fail("every knob needs at least one value to measure".into()))?;
+    // Frames are rendered to rgba16float and compared in linear float: an
+    // 8-bit target would clamp what is above 1 and quantise the rest.
+    let defaults = RewriteOptions {
+        depth: scene.camera.depth,
+        vertex_entry: options.vertex_entry.clone(),
+        color_format: MEASURED_COLOR_FORMAT,
+        ..RewriteOptions::default()
+    };
+    Ok(Prepared {
+        size,
+        aspect,
+        frames,
+        warmup,
+        steady_state: longest_period.is_none_or(|period| warmup >= period),
+        used,
+        uniforms,
+        storage,
+        selected,
+        grid,
+        base: base_setting.rewrite_options(&defaults),
+        base_setting,
+        defaults,
+        analysis,
+    })
+}
