@@ -23,8 +23,10 @@ pub mod builder;
 pub mod copy;
 pub mod fragment;
 pub mod gradients;
+mod helpers;
 pub mod path;
 pub mod plan;
+mod split;
 pub mod uniformity;
 pub mod vertex;
 
@@ -307,7 +309,10 @@ pub fn rewrite(
 }
 
 /// Rewrites `shader` to cache the value of `node`, an expression of its
-/// fragment entry point, as `candidate` describes it.
+/// fragment entry point, as `candidate` describes it: the settings and
+/// the node checked, the cache's helpers imported, the vertex stage
+/// instrumented, the fragment stage split at the node into payload and
+/// shade, a module per pass, and the plan.
 fn rewrite_at(
     shader: &Shader,
     analysis: &Analysis,
@@ -316,42 +321,9 @@ fn rewrite_at(
     variant: Variant,
     options: &Options,
 ) -> Result<Rewritten, Refusal> {
-    if variant == Variant::Reference {
-        return Err(Refusal::new(
-            "the reference is the original shader; there is nothing to rewrite",
-        ));
-    }
-    if options.refresh_period > MAX_REFRESH_PERIOD {
-        return Err(Refusal::new(format!(
-            "a refresh period of {} frames is beyond the largest the refresh indicator takes, {MAX_REFRESH_PERIOD}",
-            options.refresh_period
-        )));
-    }
-    // Three-pass shades from the cached value itself, so a payload an
-    // rgba16float cache cannot hold would be wrong on screen (one- and
-    // two-pass recompute it instead: the lookup misses, see
-    // `cache_encode`). Where the analysis cannot bound the node's value
-    // below 65504, three-pass keeps its cache in rgba32float.
-    let widened;
-    let shows_cached_value = stages(variant).iter().any(|s| s.shows_cached_value());
-    let (options, format_note) = if shows_cached_value
-        && options.cache_format == CacheFormat::Rgba16float
-        && !candidate.fits_f16
-    {
-        widened = Options {
-            cache_format: CacheFormat::Rgba32float,
-            ..options.clone()
-        };
-        (
-            &widened,
-            Some(format!(
-                "rgba32float instead of rgba16float: the node's value may reach 65504 (it is {}), and three-pass shades from the cached value",
-                crate::analysis::range::describe(candidate.range)
-            )),
-        )
-    } else {
-        (options, None)
-    };
+    refuse_settings(variant, options)?;
+    let (options, format_note) = cache_format(variant, options, candidate);
+    let options = &options;
     let original = &shader.module;
     let entry = &original.entry_points[analysis.entry_index];
     let function = &entry.function;
@@ -363,77 +335,20 @@ fn rewrite_at(
             "the fragment stage writes @builtin(frag_depth); the cache's depth test needs rasterised depth",
         ));
     }
-
     // Trip counts do not matter here, only where expressions run.
     let layout = crate::proc::layout(
         original,
         function,
         crate::cost::Weights::default().default_loop_trips,
     );
-    let at = layout
-        .placement(node)
-        .ok_or_else(|| Refusal::new("the node is not evaluated by the entry point"))?;
-    let node_order = layout.order_of(node).unwrap_or(usize::MAX);
-    let discards_after = layout.kills.iter().any(|kill| kill.after > node_order);
-    // A pass that discards misses cannot tell them from the pixels the
-    // shader itself would cut out after the node.
-    if discards_after && stages(variant).iter().any(|s| s.discards()) {
-        return Err(Refusal::new(
-            "the shader may discard after the node is computed, so the payload pass cannot know which pixels are cut out",
-        ));
-    }
+    let graph = ExprGraph::new(function, &layout);
+    let slice = split::PayloadSlice::of(original, function, &layout, &graph, node, variant)?;
     // Where the cache's resources go: the first bind group the user's
     // shader leaves free; when it uses all four WebGPU allows, after its
     // last binding in the last one.
     let slot = CacheSlot::for_module(original);
-
     let mut module = original.clone();
-    let imported = crate::proc::import::import(
-        &mut module,
-        cache_helpers()?,
-        slot.group,
-        slot.first_binding,
-    )
-    .map_err(|err| Refusal::internal(format!("importing the cache helpers: {err}")))?;
-    let group = slot.group;
-    let helper =
-        |name: &str| {
-            imported.functions.get(name).copied().ok_or_else(|| {
-                Refusal::internal(format!("`{name}` missing from the cache helpers"))
-            })
-        };
-    // rgba16float is filterable: one bilinear sample; rgba32float is not:
-    // four loads. Nearest reads one texel of each. Packed reconstructions
-    // read the depth from the payload texture instead.
-    let lookup_name = match (options.reconstruction, options.cache_format) {
-        (Reconstruction::Nearest, _) => "cache_lookup_nearest",
-        (Reconstruction::Bilinear, CacheFormat::Rgba16float) => "cache_lookup",
-        (Reconstruction::Bilinear, CacheFormat::Rgba32float) => "cache_lookup_loads",
-        (Reconstruction::NearestPacked, _) => "cache_lookup_nearest_packed",
-        (Reconstruction::BilinearPacked, CacheFormat::Rgba16float) => "cache_lookup_packed",
-        (Reconstruction::BilinearPacked, CacheFormat::Rgba32float) => "cache_lookup_loads_packed",
-    };
-    let pack = if options.reconstruction.packs_depth() {
-        if candidate.components > 3 {
-            return Err(Refusal::new(format!(
-                "{} keeps the depth in the cache's fourth channel, and this payload has four components; use {} or {}",
-                options.reconstruction.as_str(),
-                Reconstruction::Bilinear.as_str(),
-                Reconstruction::Nearest.as_str()
-            )));
-        }
-        Some(helper("cache_pack")?)
-    } else {
-        None
-    };
-    let (lookup, refresh, current, classify) = (
-        helper(lookup_name)?,
-        helper("cache_refresh")?,
-        helper("cache_current")?,
-        helper("cache_classify")?,
-    );
-    let absent = helper("cache_absent")?;
-
+    let helpers = helpers::CacheHelpers::import(&mut module, slot, options, candidate)?;
     // A fragment-only module (its vertex stage composed elsewhere) gets
     // fragment passes that take the previous clip position as an input;
     // the plan says what the host's vertex stage must output.
@@ -445,226 +360,43 @@ fn rewrite_at(
             analysis.entry_index,
             options.vertex_entry.as_deref(),
         )?;
-        vertex::instrument(
-            &mut module,
-            vertex_index,
-            group,
-            slot.first_binding + FIRST_TWIN_BINDING,
-        )?
+        let twins = slot.first_binding + FIRST_TWIN_BINDING;
+        vertex::instrument(&mut module, vertex_index, slot.group, twins)?
     };
     mark_positions_invariant(&mut module);
-
-    // Split the fragment entry point at the node.
-    let graph = ExprGraph::new(function, &layout);
-    let mut payload_live = graph.slice(node);
-    // Under branches, the payload evaluates the path to the node too.
-    // A pixel that returns before the node does not compute it either.
-    let early_returns = layout
-        .returns
-        .iter()
-        .filter(|r| r.after <= node_order)
-        .map(|r| &r.placement);
-    let node_path = path::Path::of(function, &graph, at, early_returns);
-    if let Some(node_path) = &node_path {
-        payload_live.union_with(&node_path.live);
-    }
-    for kill in layout.kills.iter().filter(|k| k.after <= node_order) {
-        for &condition in &kill.placement.controls {
-            payload_live.union_with(&graph.slice(condition));
-        }
-    }
-    let exprs: Vec<&naga::Expression> = function.expressions.iter().map(|(_, e)| e).collect();
-    let handles: Vec<naga::Handle<naga::Expression>> =
-        function.expressions.iter().map(|(h, _)| h).collect();
-    let mut hoist_derivatives = false;
-    if stages(variant).iter().any(|s| s.computes_payload_on_miss()) {
-        // Gradients are hoisted from the entry point's own expressions; a
-        // helper that takes them (egui's `sample_texture`) would be called
-        // in the miss branch as it is.
-        if let Some(call) = layout.calls.iter().find(|call| {
-            call.result
-                .is_some_and(|r| payload_live.contains(r.index()))
-                && uniformity::needs_derivatives(original, call.function)
-        }) {
-            return Err(Refusal::new(format!(
-                "one-pass computes the payload only on a miss, in non-uniform control flow, and the payload calls `{}`, which takes implicit derivatives inside the helper, where they cannot be computed before the miss branch; two-pass and three-pass compute the payload in uniform control flow",
-                original.functions[call.function].name.as_deref().unwrap_or("a helper")
-            )));
-        }
-        for i in payload_live.ones() {
-            let Some(what) = uniformity::implicit_derivative(exprs[i]) else {
-                continue;
-            };
-            hoist_derivatives = true;
-            // Gradients can be hoisted only from straight-line code: one
-            // taken inside a loop or a branch has no single value to compute
-            // before one-pass's miss branch.
-            if layout
-                .placement(handles[i])
-                .is_some_and(|at| at.loop_depth > 0 || !at.controls.is_empty())
-            {
-                return Err(Refusal::new(format!(
-                    "one-pass computes the payload only on a miss, in non-uniform control flow, and the payload takes implicit derivatives ({what}) inside a loop or branch, which cannot be computed before the miss branch; two-pass and three-pass compute the payload in uniform control flow"
-                )));
-            }
-        }
-    }
-    let shade_live = graph.remainder(node);
-    let payload_ty = type_handle(
+    let functions = split::split(
         &mut module,
-        shader.info.get_entry_point(analysis.entry_index),
+        (shader, analysis, candidate),
+        &graph,
+        &slice,
         node,
-    );
-    let stripped = without_bindings(&function.arguments);
-    let (payload, gradients) = if hoist_derivatives {
-        let hoisted = gradients::hoist(
-            &mut module,
-            original,
-            function,
-            shader.info.get_entry_point(analysis.entry_index),
-            &graph,
-            &payload_live,
-            node,
-            &stripped,
-            payload_ty,
-            &entry.name,
-            absent,
-            candidate.components,
-        )?;
-        (hoisted.payload, Some(hoisted.gradients))
-    } else {
-        let mut payload_copy = copy::FunctionCopy::new(
-            original,
-            function,
-            &payload_live,
-            naga::Function {
-                name: Some(format!("{}_payload", entry.name)),
-                arguments: stripped.clone(),
-                result: Some(naga::FunctionResult {
-                    ty: payload_ty,
-                    binding: None,
-                }),
-                ..naga::Function::default()
-            },
-        );
-        payload_copy.return_at(node);
-        let payload_fn = path::finish_payload(payload_copy, absent, candidate.components);
-        (
-            module.functions.append(payload_fn, naga::Span::UNDEFINED),
-            None,
-        )
-    };
-    let mut shade_arguments = stripped;
-    shade_arguments.push(naga::FunctionArgument {
-        name: Some("cached".into()),
-        ty: payload_ty,
-        binding: None,
-    });
-    let cached_index = shade_arguments.len() as u32 - 1;
-    let mut shade_copy = copy::FunctionCopy::new(
-        original,
-        function,
-        &shade_live,
-        naga::Function {
-            name: Some(format!("{}_shade", entry.name)),
-            arguments: shade_arguments,
-            result: Some(naga::FunctionResult {
-                ty: result.ty,
-                binding: None,
-            }),
-            ..naga::Function::default()
-        },
-    );
-    shade_copy.substitute(node, naga::Expression::FunctionArgument(cached_index));
-    let shade_fn = shade_copy.run();
-    let shade = module.functions.append(shade_fn, naga::Span::UNDEFINED);
-    if options.free_payload {
-        free_function(module.functions.get_mut(payload));
-        free_function(module.functions.get_mut(shade));
-    }
-    let vec4 = module.types.insert(
-        naga::Type {
-            name: None,
-            inner: naga::TypeInner::Vector {
-                size: naga::VectorSize::Quad,
-                scalar: naga::Scalar::F32,
-            },
-        },
-        naga::Span::UNDEFINED,
-    );
-    let presence = match &node_path {
-        Some(node_path) => Some((
-            path::presence(
-                &mut module,
-                original,
-                function,
-                node_path,
-                node,
-                without_bindings(&function.arguments),
-                format!("{}_computes_node", entry.name),
-            ),
-            helper("cache_classify_absent")?,
-        )),
-        None => None,
-    };
-    let pieces = Pieces {
-        arguments: function.arguments.clone(),
+        (options, helpers.absent),
+    )?;
+    let pieces = helpers.pieces(
+        entry,
         result,
-        name: entry.name.clone(),
-        payload,
-        gradients,
-        shade,
-        payload_ty,
-        components: candidate.components,
-        previous_location: vertex.previous_location,
-        lookup,
-        refresh,
-        current,
-        classify,
-        age_written: helper("cache_age_written")?,
-        presence,
-        encode: helper("cache_encode")?,
-        pack,
-        vec4,
-    };
-
-    let build_pass = |stage: Stage, name: String| -> Result<PassModule, Refusal> {
-        let mut pass = module.clone();
-        let fragment = fragment::entry_point(&mut pass, &pieces, stage)?;
-        let vertex_entry = vertex.entry_index.map(|i| pass.entry_points[i].clone());
-        pass.entry_points = vertex_entry
-            .into_iter()
-            .chain([naga::EntryPoint {
-                function: fragment,
-                ..entry.clone()
-            }])
-            .collect();
-        naga::compact::compact(&mut pass, naga::compact::KeepUnused::No);
-        let info = crate::front::validate(&pass).map_err(|err| {
-            let diagnostic = crate::diagnostic::Diagnostic::from_spanned_error(&err);
-            Refusal::internal(format!(
-                "{name} does not validate: {} ({})",
-                diagnostic.message,
-                diagnostic.notes.join("; ")
-            ))
-        })?;
-        uniformity::check(&pass, &info)
-            .map_err(|err| Refusal::internal(format!("the rewrite left {err}")))?;
-        uniformity::check_kills(&pass)
-            .map_err(|err| Refusal::internal(format!("the rewrite left {err}")))?;
-        Ok(PassModule {
-            name,
-            module: pass,
-            info,
-        })
-    };
+        functions,
+        candidate,
+        vertex.previous_location,
+    );
     let mut passes = Vec::new();
     for (index, &stage) in stages(variant).iter().enumerate() {
-        passes.push((stage, build_pass(stage, format!("pass{}", index + 1))?));
+        let name = format!("pass{}", index + 1);
+        passes.push((
+            stage,
+            pass_module(&module, &pieces, &vertex, entry, stage, name)?,
+        ));
     }
-    let classify = build_pass(Stage::Classify, "classify".into())?;
+    let classify = pass_module(
+        &module,
+        &pieces,
+        &vertex,
+        entry,
+        Stage::Classify,
+        "classify".into(),
+    )?;
 
-    let plan = plan::build(plan::Inputs {
+    let mut plan = plan::build(plan::Inputs {
         shader,
         analysis,
         candidate,
@@ -678,15 +410,100 @@ fn rewrite_at(
         params: cache_params_layout()?,
     })
     .map_err(Refusal::new)?;
-    let mut plan = plan;
     plan.cache.format_note = format_note;
-    plan.node.path = node_path.as_ref().map(|p| p.describe().to_string());
+    plan.node.path = slice.path.as_ref().map(|p| p.describe().to_string());
     Ok(Rewritten {
         variant,
         node: candidate.node.id.clone(),
         passes: passes.into_iter().map(|(_, p)| p).collect(),
         classify,
         plan,
+    })
+}
+
+/// Settings no variant can be built with.
+fn refuse_settings(variant: Variant, options: &Options) -> Result<(), Refusal> {
+    if variant == Variant::Reference {
+        return Err(Refusal::new(
+            "the reference is the original shader; there is nothing to rewrite",
+        ));
+    }
+    if options.refresh_period > MAX_REFRESH_PERIOD {
+        return Err(Refusal::new(format!(
+            "a refresh period of {} frames is beyond the largest the refresh indicator takes, {MAX_REFRESH_PERIOD}",
+            options.refresh_period
+        )));
+    }
+    Ok(())
+}
+
+/// The options with the cache format the variant can use, and why it
+/// differs from the one asked for. Three-pass shades from the cached value
+/// itself, so a payload an rgba16float cache cannot hold would be wrong on
+/// screen (one- and two-pass recompute it instead: the lookup misses, see
+/// `cache_encode`). Where the analysis cannot bound the node's value below
+/// 65504, three-pass keeps its cache in rgba32float.
+fn cache_format(
+    variant: Variant,
+    options: &Options,
+    candidate: &Candidate,
+) -> (Options, Option<String>) {
+    let shows_cached_value = stages(variant).iter().any(|s| s.shows_cached_value());
+    if shows_cached_value && options.cache_format == CacheFormat::Rgba16float && !candidate.fits_f16
+    {
+        let widened = Options {
+            cache_format: CacheFormat::Rgba32float,
+            ..options.clone()
+        };
+        let note = format!(
+            "rgba32float instead of rgba16float: the node's value may reach 65504 (it is {}), and three-pass shades from the cached value",
+            crate::analysis::range::describe(candidate.range)
+        );
+        (widened, Some(note))
+    } else {
+        (options.clone(), None)
+    }
+}
+
+/// One pass's module: the rewritten module with the vertex entry point
+/// and the pass's fragment entry point for `stage`, compacted, validated,
+/// and checked for derivatives in non-uniform control flow and after a
+/// kill.
+fn pass_module(
+    module: &naga::Module,
+    pieces: &Pieces,
+    vertex: &vertex::VertexStage,
+    entry: &naga::EntryPoint,
+    stage: Stage,
+    name: String,
+) -> Result<PassModule, Refusal> {
+    let mut pass = module.clone();
+    let fragment = fragment::entry_point(&mut pass, pieces, stage)?;
+    let vertex_entry = vertex.entry_index.map(|i| pass.entry_points[i].clone());
+    pass.entry_points = vertex_entry
+        .into_iter()
+        .chain([naga::EntryPoint {
+            function: fragment,
+            ..entry.clone()
+        }])
+        .collect();
+    naga::compact::compact(&mut pass, naga::compact::KeepUnused::No);
+    let info = crate::front::validate(&pass).map_err(|err| {
+        let diagnostic = crate::diagnostic::Diagnostic::from_spanned_error(&err);
+        Refusal::internal(format!(
+            "{name} does not validate: {} ({})",
+            diagnostic.message,
+            diagnostic.notes.join("; ")
+        ))
+    })?;
+    uniformity::check(&pass, &info)
+        .map_err(|err| Refusal::internal(format!("the rewrite left {err}")))?;
+    uniformity::check_kills(&pass)
+        .map_err(|err| Refusal::internal(format!("the rewrite left {err}")))?;
+    Ok(PassModule {
+        name,
+        module: pass,
+        info,
     })
 }
 

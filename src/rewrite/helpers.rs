@@ -1,0 +1,127 @@
+//! The cache's helper functions (`shaders/cache.wgsl`), imported into the
+//! module being rewritten: the lookup the settings choose, the refresh
+//! decision, the classification, the encoding of a written payload.
+
+use naga::{Function, Handle, Module};
+
+use super::fragment::Pieces;
+use super::split::Split;
+use super::{cache_helpers, CacheSlot, Options, Refusal};
+use crate::analysis::Candidate;
+use crate::plan::{CacheFormat, Reconstruction};
+
+/// The imported helpers a variant's passes call.
+pub(super) struct CacheHelpers {
+    lookup: Handle<Function>,
+    refresh: Handle<Function>,
+    current: Handle<Function>,
+    classify: Handle<Function>,
+    classify_absent: Handle<Function>,
+    age_written: Handle<Function>,
+    encode: Handle<Function>,
+    /// With a packed reconstruction, `cache_pack`.
+    pack: Option<Handle<Function>>,
+    /// "No value": a payload's value where the node is not computed.
+    pub absent: Handle<Function>,
+    vec4: Handle<naga::Type>,
+}
+
+impl CacheHelpers {
+    /// Imports the helpers into `module`, their resources bound at `slot`.
+    pub fn import(
+        module: &mut Module,
+        slot: CacheSlot,
+        options: &Options,
+        candidate: &Candidate,
+    ) -> Result<CacheHelpers, Refusal> {
+        let imported =
+            crate::proc::import::import(module, cache_helpers()?, slot.group, slot.first_binding)
+                .map_err(|err| Refusal::internal(format!("importing the cache helpers: {err}")))?;
+        let helper = |name: &str| {
+            imported.functions.get(name).copied().ok_or_else(|| {
+                Refusal::internal(format!("`{name}` missing from the cache helpers"))
+            })
+        };
+        // rgba16float is filterable: one bilinear sample; rgba32float is
+        // not: four loads. Nearest reads one texel of each. Packed
+        // reconstructions read the depth from the payload texture instead.
+        let lookup = match (options.reconstruction, options.cache_format) {
+            (Reconstruction::Nearest, _) => "cache_lookup_nearest",
+            (Reconstruction::Bilinear, CacheFormat::Rgba16float) => "cache_lookup",
+            (Reconstruction::Bilinear, CacheFormat::Rgba32float) => "cache_lookup_loads",
+            (Reconstruction::NearestPacked, _) => "cache_lookup_nearest_packed",
+            (Reconstruction::BilinearPacked, CacheFormat::Rgba16float) => "cache_lookup_packed",
+            (Reconstruction::BilinearPacked, CacheFormat::Rgba32float) => {
+                "cache_lookup_loads_packed"
+            }
+        };
+        let pack = if options.reconstruction.packs_depth() {
+            if candidate.components > 3 {
+                return Err(Refusal::new(format!(
+                    "{} keeps the depth in the cache's fourth channel, and this payload has four components; use {} or {}",
+                    options.reconstruction.as_str(),
+                    Reconstruction::Bilinear.as_str(),
+                    Reconstruction::Nearest.as_str()
+                )));
+            }
+            Some(helper("cache_pack")?)
+        } else {
+            None
+        };
+        let vec4 = module.types.insert(
+            naga::Type {
+                name: None,
+                inner: naga::TypeInner::Vector {
+                    size: naga::VectorSize::Quad,
+                    scalar: naga::Scalar::F32,
+                },
+            },
+            naga::Span::UNDEFINED,
+        );
+        Ok(CacheHelpers {
+            lookup: helper(lookup)?,
+            refresh: helper("cache_refresh")?,
+            current: helper("cache_current")?,
+            classify: helper("cache_classify")?,
+            classify_absent: helper("cache_classify_absent")?,
+            age_written: helper("cache_age_written")?,
+            encode: helper("cache_encode")?,
+            absent: helper("cache_absent")?,
+            pack,
+            vec4,
+        })
+    }
+
+    /// What the passes' fragment entry points are built from.
+    pub fn pieces(
+        &self,
+        entry: &naga::EntryPoint,
+        result: naga::FunctionResult,
+        split: Split,
+        candidate: &Candidate,
+        previous_location: u32,
+    ) -> Pieces {
+        Pieces {
+            arguments: entry.function.arguments.clone(),
+            result,
+            name: entry.name.clone(),
+            payload: split.payload,
+            gradients: split.gradients,
+            shade: split.shade,
+            payload_ty: split.payload_ty,
+            components: candidate.components,
+            previous_location,
+            lookup: self.lookup,
+            refresh: self.refresh,
+            current: self.current,
+            classify: self.classify,
+            age_written: self.age_written,
+            presence: split
+                .presence
+                .map(|presence| (presence, self.classify_absent)),
+            encode: self.encode,
+            pack: self.pack,
+            vec4: self.vec4,
+        }
+    }
+}
