@@ -5,7 +5,7 @@
 
 use std::collections::{BTreeMap, HashMap};
 
-use shadecache_host::{CachedShader, Draw, PassTimer, Targets, TwinSources, Twins};
+use shadecache_host::{render_target, CachedShader, Draw, PassTimer, Targets, TwinSources, Twins};
 
 use super::frame::{sources, PlanFrame, RunOptions};
 use super::gpu::Gpu;
@@ -99,30 +99,6 @@ impl std::fmt::Debug for Runner {
     }
 }
 
-fn target(
-    device: &wgpu::Device,
-    label: &str,
-    size: (u32, u32),
-    format: wgpu::TextureFormat,
-) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: size.0,
-            height: size.1,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
-}
-
 /// The wgpu-profiler, timing each pass as `<label>/<pass>`.
 struct Profiled<'p> {
     profiler: &'p mut wgpu_profiler::GpuProfiler,
@@ -184,7 +160,7 @@ impl Runner {
             .color_formats()
             .map(|format| {
                 format.map(|format| {
-                    let texture = target(device, "color", size, format);
+                    let texture = render_target(device, "color", size, format);
                     let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
                     (texture, view)
                 })
@@ -217,7 +193,7 @@ impl Runner {
         Ok(Runner {
             cached,
             colors,
-            fallback: target(device, "no colour", size, wgpu::TextureFormat::Rgba8Unorm),
+            fallback: render_target(device, "no colour", size, wgpu::TextureFormat::Rgba8Unorm),
             meshes,
             objects: Vec::new(),
             layouts,

@@ -24,7 +24,7 @@ use std::path::PathBuf;
 
 use planet::Planet;
 use shadecache_host::{
-    CachedShader, FrameLayout, PassTimer, Plan, Targets, Timestamps, TwinSources,
+    render_target, CachedShader, FrameLayout, PassTimer, Plan, Targets, Timestamps, TwinSources,
 };
 
 /// The variant the build script wrote, by the plan's file names.
@@ -120,23 +120,6 @@ fn gpu() -> Result<Gpu, Box<dyn Error>> {
     })
 }
 
-fn texture(gpu: &Gpu, size: u32, format: wgpu::TextureFormat) -> wgpu::Texture {
-    gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: None,
-        size: wgpu::Extent3d {
-            width: size,
-            height: size,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
-}
-
 /// The original pipeline, as the application made it before caching.
 fn original_pipeline(gpu: &Gpu, planet: &Planet) -> wgpu::RenderPipeline {
     let module = gpu
@@ -218,8 +201,10 @@ fn main() -> Result<(), Box<dyn Error>> {
         ..TwinSources::default()
     })?;
     let mut timer = Timestamps::new(&gpu.device, &gpu.queue, 4);
-    let targets = [COLOR_FORMAT, COLOR_FORMAT].map(|f| texture(&gpu, args.size, f));
-    let depth = texture(&gpu, args.size, planet::DEPTH_FORMAT);
+    let size = (args.size, args.size);
+    let targets =
+        ["original", "cached"].map(|label| render_target(&gpu.device, label, size, COLOR_FORMAT));
+    let depth = render_target(&gpu.device, "depth", size, planet::DEPTH_FORMAT);
     let views = targets
         .each_ref()
         .map(|t| t.create_view(&wgpu::TextureViewDescriptor::default()));
