@@ -11,13 +11,18 @@
 //! and time every pass with timestamp queries.
 //!
 //! Headless: it renders offscreen, writes a few frames as PNG and prints
-//! per-frame errors and per-pass GPU times.
+//! per-frame errors and per-pass GPU times. With the `window` feature and
+//! a display, `--window` draws into a window instead, the space bar
+//! switching between the original pipeline and the cached variant.
 //!
 //! ```text
 //! cargo run --release -- [--frames N] [--warmup N] [--size PIXELS] [--refresh-period N] [--out DIR]
+//! cargo run --release --features window -- --window [--refresh-period N]
 //! ```
 
 mod planet;
+#[cfg(feature = "window")]
+mod window;
 
 use std::error::Error;
 use std::path::PathBuf;
@@ -71,6 +76,9 @@ struct Args {
     size: u32,
     refresh_period: Option<u32>,
     out: PathBuf,
+    /// Draw into a window instead, switching between the original and the
+    /// cached variant with the space bar.
+    window: bool,
 }
 
 fn args() -> Result<Args, String> {
@@ -80,6 +88,7 @@ fn args() -> Result<Args, String> {
         size: 256,
         refresh_period: None,
         out: PathBuf::from("frames"),
+        window: false,
     };
     let mut given = std::env::args().skip(1);
     while let Some(flag) = given.next() {
@@ -91,6 +100,7 @@ fn args() -> Result<Args, String> {
             "--size" => args.size = number(value()?)?.max(16),
             "--refresh-period" => args.refresh_period = Some(number(value()?)?),
             "--out" => args.out = PathBuf::from(value()?),
+            "--window" => args.window = true,
             other => return Err(format!("unknown argument `{other}`")),
         }
     }
@@ -121,7 +131,11 @@ fn gpu() -> Result<Gpu, Box<dyn Error>> {
 }
 
 /// The original pipeline, as the application made it before caching.
-fn original_pipeline(gpu: &Gpu, planet: &Planet) -> wgpu::RenderPipeline {
+fn original_pipeline(
+    gpu: &Gpu,
+    planet: &Planet,
+    format: wgpu::TextureFormat,
+) -> wgpu::RenderPipeline {
     let module = gpu
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -158,7 +172,7 @@ fn original_pipeline(gpu: &Gpu, planet: &Planet) -> wgpu::RenderPipeline {
                 module: &module,
                 entry_point: Some("fs_main"),
                 compilation_options: Default::default(),
-                targets: &[Some(COLOR_FORMAT.into())],
+                targets: &[Some(format.into())],
             }),
             multiview_mask: None,
             cache: None,
@@ -166,9 +180,15 @@ fn original_pipeline(gpu: &Gpu, planet: &Planet) -> wgpu::RenderPipeline {
 }
 
 /// The cached variant on the application's device, from its own layouts.
-fn cached_shader(gpu: &Gpu, args: &Args) -> Result<CachedShader, Box<dyn Error>> {
+/// The cached variant drawing into `format` targets of `size`.
+fn cached_shader(
+    gpu: &Gpu,
+    refresh_period: Option<u32>,
+    format: wgpu::TextureFormat,
+    size: (u32, u32),
+) -> Result<CachedShader, Box<dyn Error>> {
     let mut plan: Plan = serde_json::from_str(PLAN)?;
-    if let Some(period) = args.refresh_period {
+    if let Some(period) = refresh_period {
         // Δn is data: the refresh uniform carries it to the passes.
         plan.refresh.period = period;
     }
@@ -177,7 +197,7 @@ fn cached_shader(gpu: &Gpu, args: &Args) -> Result<CachedShader, Box<dyn Error>>
         (0, &planet::UNIFORM_ENTRY[..]),
         (1, &planet::UNIFORM_ENTRY[..]),
     ];
-    let colors = [Some(COLOR_FORMAT.into())];
+    let colors = [Some(format.into())];
     let frame = FrameLayout::new(&buffers, &groups, &colors);
     let source = |name: &str| PASSES.iter().find(|(n, _)| *n == name).map(|(_, s)| *s);
     Ok(CachedShader::new(
@@ -185,23 +205,31 @@ fn cached_shader(gpu: &Gpu, args: &Args) -> Result<CachedShader, Box<dyn Error>>
         &plan,
         source,
         &frame,
-        (args.size, args.size),
+        size,
         shadecache_host::Options::default(),
     )?)
 }
 
 fn main() -> Result<(), Box<dyn Error>> {
     let args = args()?;
+    if args.window {
+        #[cfg(feature = "window")]
+        return window::run(args.refresh_period);
+        #[cfg(not(feature = "window"))]
+        return Err(
+            "--window needs the `window` feature: cargo run --features window -- --window".into(),
+        );
+    }
     let gpu = gpu()?;
     let planet = Planet::new(&gpu.device, &gpu.queue, 1.0);
-    let original = original_pipeline(&gpu, &planet);
-    let mut cached = cached_shader(&gpu, &args)?;
+    let original = original_pipeline(&gpu, &planet, COLOR_FORMAT);
+    let size = (args.size, args.size);
+    let mut cached = cached_shader(&gpu, args.refresh_period, COLOR_FORMAT, size)?;
     let twins = cached.twins(&TwinSources {
         buffers: &[([0, 0], &planet.globals), ([1, 0], &planet.locals)],
         ..TwinSources::default()
     })?;
     let mut timer = Timestamps::new(&gpu.device, &gpu.queue, 4);
-    let size = (args.size, args.size);
     let targets =
         ["original", "cached"].map(|label| render_target(&gpu.device, label, size, COLOR_FORMAT));
     let depth = render_target(&gpu.device, "depth", size, planet::DEPTH_FORMAT);
