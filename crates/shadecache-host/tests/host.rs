@@ -222,11 +222,18 @@ fn target(gpu: &Gpu, size: u32, format: wgpu::TextureFormat) -> wgpu::Texture {
 impl App {
     /// The square with one rgba8unorm target.
     fn new(gpu: &Gpu, name: &str) -> App {
-        App::with_targets(gpu, name, &[wgpu::TextureFormat::Rgba8Unorm])
+        let depth = wgpu::TextureFormat::Depth32Float;
+        App::with_targets(gpu, name, &[wgpu::TextureFormat::Rgba8Unorm], depth)
     }
 
-    /// The square drawn into targets of `formats`, by output location.
-    fn with_targets(gpu: &Gpu, name: &str, formats: &[wgpu::TextureFormat]) -> App {
+    /// The square drawn into targets of `formats`, by output location,
+    /// with depth in `depth`.
+    fn with_targets(
+        gpu: &Gpu,
+        name: &str,
+        formats: &[wgpu::TextureFormat],
+        depth: wgpu::TextureFormat,
+    ) -> App {
         let states: Vec<Option<wgpu::ColorTargetState>> = formats
             .iter()
             .map(|&format| {
@@ -237,7 +244,8 @@ impl App {
             })
             .collect();
         let mut cached = make(gpu, name, |frame| {
-            frame.color_targets = Box::leak(states.into())
+            frame.color_targets = Box::leak(states.into());
+            frame.depth_format = depth;
         })
         .expect("the variant is made");
         let identity = [
@@ -578,7 +586,8 @@ fn a_g_buffer_with_an_hdr_and_an_integer_target_runs() {
         wgpu::TextureFormat::Rgba16Float,
         wgpu::TextureFormat::Rgba32Uint,
     ];
-    let mut app = App::with_targets(&gpu, "gbuffer", &formats);
+    let depth = wgpu::TextureFormat::Depth32Float;
+    let mut app = App::with_targets(&gpu, "gbuffer", &formats, depth);
     for frame in 0..3 {
         app.frame(&gpu, 0.0);
         let colors = read(&gpu, &app.targets[0], 8);
@@ -592,4 +601,20 @@ fn a_g_buffer_with_an_hdr_and_an_integer_target_runs() {
         }
         assert!(brightest > 1.5, "frame {frame}: HDR clamped to {brightest}");
     }
+}
+
+/// The application's depth format is the one the host renders and keeps
+/// as last frame's depth: with depth and stencil in one texture, the cache
+/// binds its depth aspect and reuses as with depth32float.
+#[test]
+fn a_depth_stencil_format_renders_and_reuses() {
+    let Some(gpu) = gpu() else { return };
+    let formats = [wgpu::TextureFormat::Rgba8Unorm];
+    let depth = wgpu::TextureFormat::Depth24PlusStencil8;
+    let mut app = App::with_targets(&gpu, "three-pass", &formats, depth);
+    assert_eq!(app.cached.depth().format(), depth);
+    app.frame(&gpu, 0.0);
+    assert_eq!(ages_at(&app.ages(&gpu), inside(0.0, SIZE)), [0.0]);
+    app.frame(&gpu, 0.0);
+    assert!(share_at(&app.ages(&gpu), inside(0.0, SIZE), 1.0) > REUSED);
 }
