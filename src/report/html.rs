@@ -9,7 +9,7 @@ use base64::Engine;
 
 use super::plots::{chart, escape, informative, Series};
 use super::{images, Report, ResultRow};
-use crate::rewrite::Variant;
+use crate::plan::Variant;
 
 /// Renders `report`; PNGs under `dir` (from [`super::write_images`]) are
 /// embedded.

@@ -10,8 +10,8 @@ use shadecache_host::{render_target, CachedShader, Draw, PassTimer, Targets, Twi
 use super::frame::{sources, PlanFrame, RunOptions};
 use super::gpu::Gpu;
 use super::textures::scene_textures;
+use super::textures::Texels;
 use crate::plan::{Plan, ResourceKind};
-use crate::scene::textures::Texels;
 
 /// An indexed triangle mesh whose vertices are laid out as the plan's
 /// per-vertex inputs, packed in order.

@@ -4,7 +4,14 @@ use std::collections::HashMap;
 
 use super::gpu::Gpu;
 use crate::plan::{Plan, ResourceKind};
-use crate::scene::textures::Texels;
+
+/// A texture's RGBA8 texels, row by row, as the runtime uploads them.
+#[derive(Clone, Debug)]
+pub struct Texels {
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
+}
 
 /// The scene's textures and samplers for the plan's bindings: texels
 /// uploaded, depth textures at the far plane.

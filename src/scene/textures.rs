@@ -37,13 +37,7 @@ pub enum Pattern {
     Far,
 }
 
-/// RGBA8 texels, row by row.
-#[derive(Clone, Debug)]
-pub struct Texels {
-    pub width: u32,
-    pub height: u32,
-    pub rgba: Vec<u8>,
-}
+pub use crate::runtime::Texels;
 
 impl TextureSource {
     /// Whether this is the far-plane pattern a depth texture takes.
