@@ -103,6 +103,17 @@ impl Stage {
         matches!(self, Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard)
     }
 
+    /// Whether the pass looks the fragment up in last frame's cache, and
+    /// so reads the previous clip position. The others are drawn with the
+    /// vertex stage as the original has it (no previous-frame twin, no
+    /// extra varying).
+    pub fn reprojects(self) -> bool {
+        matches!(
+            self,
+            Stage::OnePass | Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard | Stage::Classify
+        )
+    }
+
     /// Whether the screen shows the cached value itself (not recomputed
     /// where it cannot be held): what a cache format must hold exactly.
     pub fn shows_cached_value(self) -> bool {
@@ -161,18 +172,21 @@ pub fn entry_point(
             *invariant = true;
         }
     }
-    let previous_index = arguments.len() as u32;
-    arguments.push(naga::FunctionArgument {
-        name: Some("previous_clip_position".into()),
-        ty: pieces.vec4,
-        binding: Some(Binding::Location {
-            location: pieces.previous_location,
-            interpolation: Some(naga::Interpolation::Perspective),
-            sampling: Some(naga::Sampling::Center),
-            blend_src: None,
-            per_primitive: false,
-        }),
-    });
+    let previous_index = stage.reprojects().then_some(arguments.len() as u32);
+    if stage.reprojects() {
+        arguments.push(naga::FunctionArgument {
+            name: Some("previous_clip_position".into()),
+            ty: pieces.vec4,
+            binding: Some(Binding::Location {
+                location: pieces.previous_location,
+                interpolation: Some(naga::Interpolation::Perspective),
+                sampling: Some(naga::Sampling::Center),
+                blend_src: None,
+                per_primitive: false,
+            }),
+        });
+    }
+    let frag_coord_index = arguments.len() as u32;
     let frag_coord_at = find_frag_coord(module, &pieces.arguments);
     if frag_coord_at.is_none() {
         arguments.push(naga::FunctionArgument {
@@ -202,18 +216,21 @@ pub fn entry_point(
     let originals: Vec<_> = (0..pieces.arguments.len() as u32)
         .map(|i| b.argument(i))
         .collect();
-    let previous = b.argument(previous_index);
+    // Last frame's clip position, in the passes that reproject.
+    let previous = previous_index
+        .map(|i| b.argument(i))
+        .ok_or_else(|| Refusal::internal(format!("{stage:?} reads no previous clip position")));
     let frag_coord = match frag_coord_at {
         Some(FragCoord::Argument(i)) => b.argument(i),
         Some(FragCoord::Member(i, m)) => {
             let arg = b.argument(i);
             b.member(arg, m)
         }
-        None => b.argument(previous_index + 1),
+        None => b.argument(frag_coord_index),
     };
 
     if stage == Stage::Classify {
-        let lookup = b.call(pieces.lookup, vec![previous]);
+        let lookup = b.call(pieces.lookup, vec![previous?]);
         let status = b.member(lookup, 2);
         let age = b.member(lookup, 3);
         let mut classes = b.call(pieces.classify, vec![status, frag_coord, age]);
@@ -233,7 +250,7 @@ pub fn entry_point(
     let mut age = None;
     let payload = match stage {
         Stage::OnePass => {
-            let (lookup, reuse) = reuse_condition(&mut b, pieces, previous, frag_coord);
+            let (lookup, reuse) = reuse_condition(&mut b, pieces, previous?, frag_coord);
             age = Some(b.call(pieces.age_written, vec![lookup, reuse]));
             let mut payload_arguments = originals.clone();
             if let Some(gradients) = pieces.gradients {
@@ -267,7 +284,7 @@ pub fn entry_point(
             b.expr(Expression::Load { pointer })
         }
         Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard => {
-            let (lookup, reuse) = reuse_condition(&mut b, pieces, previous, frag_coord);
+            let (lookup, reuse) = reuse_condition(&mut b, pieces, previous?, frag_coord);
             age = Some(b.call(pieces.age_written, vec![lookup, reuse]));
             // naga writes `discard` as OpKill, which ends the invocation:
             // a derivative after it is undefined in every quad a missed

@@ -479,7 +479,14 @@ fn pass_module(
 ) -> Result<PassModule, Refusal> {
     let mut pass = module.clone();
     let fragment = fragment::entry_point(&mut pass, pieces, stage)?;
-    let vertex_entry = vertex.entry_index.map(|i| pass.entry_points[i].clone());
+    let mut vertex_entry = vertex.entry_index.map(|i| pass.entry_points[i].clone());
+    // A pass that does not reproject draws with the vertex stage as the
+    // original has it: no twins read, no previous position interpolated.
+    if let (Some(entry), Some(plain), false) =
+        (&mut vertex_entry, &vertex.plain, stage.reprojects())
+    {
+        entry.function = plain.clone();
+    }
     pass.entry_points = vertex_entry
         .into_iter()
         .chain([naga::EntryPoint {

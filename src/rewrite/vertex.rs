@@ -36,6 +36,10 @@ pub struct VertexStage {
     /// input the position reads: the new entry point takes last frame's
     /// value of it at the twin's location.
     pub instance_twins: Vec<(u32, u32)>,
+    /// The entry point's function for the passes that do not reproject:
+    /// the original inputs and outputs, the same position helper (so
+    /// depth tests between passes stay exact), no previous clip position.
+    pub plain: Option<Function>,
 }
 
 /// WebGPU's default `maxVertexAttributes`: inputs and their twins must fit
@@ -414,7 +418,33 @@ pub fn instrument(
         previous_location,
         twins,
         instance_twins,
+        plain: Some(plain_entry(function, current)),
     })
+}
+
+/// `function`'s entry point as a call of `current`, the vertex function
+/// as a helper: what the passes that do not reproject draw with.
+fn plain_entry(function: &Function, current: Handle<Function>) -> Function {
+    let mut result = function.result.clone();
+    // A bare position output is invariant like the struct members
+    // `mark_positions_invariant` handles.
+    if let Some(Binding::BuiltIn(BuiltIn::Position { invariant })) =
+        result.as_mut().and_then(|r| r.binding.as_mut())
+    {
+        *invariant = true;
+    }
+    let mut b = Builder::new(Function {
+        name: function.name.clone(),
+        arguments: function.arguments.clone(),
+        result,
+        ..Function::default()
+    });
+    let arguments: Vec<_> = (0..function.arguments.len() as u32)
+        .map(|i| b.argument(i))
+        .collect();
+    let value = b.call(current, arguments);
+    b.push(Statement::Return { value: Some(value) });
+    b.finish()
 }
 
 /// Free input locations for the twins of `inputs`, lowest first, as
@@ -542,6 +572,7 @@ pub fn fragment_only(module: &Module, fragment: usize) -> VertexStage {
         previous_location: locations.iter().map(|l| l + 1).max().unwrap_or(0),
         twins: Vec::new(),
         instance_twins: Vec::new(),
+        plain: None,
     }
 }
 
