@@ -44,9 +44,8 @@ use fragment::{Pieces, Stage};
 pub const CACHE_WGSL: &str = include_str!("../../shaders/cache.wgsl");
 
 pub use crate::plan::{
-    CacheFormat, DepthConvention, Reconstruction, Variant, CACHE_PARAMS_BINDING,
-    CURRENT_PAYLOAD_BINDING, DEFAULT_DEPTH_EPSILON, FIRST_TWIN_BINDING, MAX_REFRESH_PERIOD,
-    PREVIOUS_AGE_BINDING, PREVIOUS_DEPTH_BINDING, PREVIOUS_PAYLOAD_BINDING, SAMPLER_BINDING,
+    CacheFormat, DepthConvention, Reconstruction, Variant, DEFAULT_DEPTH_EPSILON,
+    MAX_REFRESH_PERIOD,
 };
 
 /// The index of the pass of `variant` that computes the payload alone
@@ -191,8 +190,8 @@ pub struct Rewritten {
 const MAX_BIND_GROUPS: u32 = 4;
 
 /// Where the cache's own resources and the previous-frame twins are bound:
-/// the cache's at `first_binding +` [`CACHE_PARAMS_BINDING`] and on, the
-/// twins from `first_binding +` [`FIRST_TWIN_BINDING`].
+/// the cache's at `first_binding +` their bindings in `shaders/cache.wgsl`,
+/// the twins after them ([`first_twin_binding`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CacheSlot {
     pub group: u32,
@@ -231,7 +230,7 @@ impl CacheSlot {
 }
 
 /// `shaders/cache.wgsl` parsed and validated, once per process.
-fn cache_helpers() -> Result<&'static naga::Module, Refusal> {
+pub(crate) fn cache_helpers() -> Result<&'static naga::Module, Refusal> {
     static HELPERS: std::sync::OnceLock<Result<naga::Module, String>> = std::sync::OnceLock::new();
     HELPERS
         .get_or_init(|| {
@@ -244,6 +243,18 @@ fn cache_helpers() -> Result<&'static naga::Module, Refusal> {
         })
         .as_ref()
         .map_err(|err| Refusal::internal(format!("the cache helpers do not parse: {err}")))
+}
+
+/// The first binding after the cache's own (`shaders/cache.wgsl`'s, from
+/// 0 in their group): where the previous-frame twins start.
+pub(crate) fn first_twin_binding() -> Result<u32, String> {
+    let helpers = cache_helpers().map_err(|r| r.reason)?;
+    Ok(helpers
+        .global_variables
+        .iter()
+        .filter_map(|(_, g)| g.binding.as_ref().map(|b| b.binding + 1))
+        .max()
+        .unwrap_or(0))
 }
 
 /// The byte layout of the refresh uniform, `CacheParams`, as
@@ -360,7 +371,7 @@ fn rewrite_at(
             analysis.entry_index,
             options.vertex_entry.as_deref(),
         )?;
-        let twins = slot.first_binding + FIRST_TWIN_BINDING;
+        let twins = slot.first_binding + first_twin_binding().map_err(Refusal::internal)?;
         vertex::instrument(&mut module, vertex_index, slot.group, twins)?
     };
     mark_positions_invariant(&mut module);

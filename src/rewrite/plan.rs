@@ -113,6 +113,7 @@ pub fn build(inputs: Inputs) -> Result<Plan, String> {
         .chain(vertex.entry_index)
         .collect();
     let original = entry_resources(module, &entries);
+    let first_twin = slot.first_binding + rewrite::first_twin_binding()?;
     let previous = vertex
         .twins
         .iter()
@@ -120,57 +121,13 @@ pub fn build(inputs: Inputs) -> Result<Plan, String> {
             let shadows = resource(module, &module.global_variables[from], None)?;
             Some(Twin {
                 group,
-                binding: shadows_binding(vertex, slot, to),
+                binding: twin_binding(vertex, first_twin, to),
                 name: format!("previous_{}", shadows.name),
                 shadows,
             })
         })
         .collect();
-    let cache_resource = |binding: u32, name: &str, kind: ResourceKind, source: &str| Resource {
-        group,
-        binding: slot.first_binding + binding,
-        name: name.into(),
-        kind,
-        source: Some(source.into()),
-    };
-    let cache = vec![
-        cache_resource(
-            rewrite::CACHE_PARAMS_BINDING,
-            "cache_params",
-            ResourceKind::Uniform,
-            "the refresh uniform (CacheParams), updated every frame",
-        ),
-        cache_resource(
-            rewrite::PREVIOUS_PAYLOAD_BINDING,
-            "cache_previous_payload",
-            ResourceKind::Texture,
-            "last frame's payload texture",
-        ),
-        cache_resource(
-            rewrite::PREVIOUS_DEPTH_BINDING,
-            "cache_previous_depth",
-            ResourceKind::DepthTexture,
-            "last frame's depth buffer",
-        ),
-        cache_resource(
-            rewrite::CURRENT_PAYLOAD_BINDING,
-            "cache_current_payload",
-            ResourceKind::Texture,
-            "this frame's payload texture, after the passes that write it",
-        ),
-        cache_resource(
-            rewrite::SAMPLER_BINDING,
-            "cache_sampler",
-            ResourceKind::Sampler,
-            "linear filtering, clamp to edge",
-        ),
-        cache_resource(
-            rewrite::PREVIOUS_AGE_BINDING,
-            "cache_previous_age",
-            ResourceKind::Texture,
-            "last frame's age texture (r16float)",
-        ),
-    ];
+    let cache = cache_resources(group, slot.first_binding)?;
 
     Ok(Plan {
         format: 1,
@@ -306,18 +263,15 @@ fn role(stage: Stage) -> &'static str {
     }
 }
 
-fn shadows_binding(
+/// The binding of `twin`: the twins follow the cache's own bindings, in
+/// the order the vertex stage made them.
+fn twin_binding(
     vertex: &VertexStage,
-    slot: rewrite::CacheSlot,
+    first_twin: u32,
     twin: naga::Handle<naga::GlobalVariable>,
 ) -> u32 {
-    vertex
-        .twins
-        .iter()
-        .position(|&(_, t)| t == twin)
-        .map_or(0, |i| {
-            slot.first_binding + rewrite::FIRST_TWIN_BINDING + i as u32
-        })
+    let index = vertex.twins.iter().position(|&(_, t)| t == twin);
+    first_twin + index.unwrap_or(0) as u32
 }
 
 fn pass_discards(module: &Module) -> bool {
@@ -357,6 +311,38 @@ fn entry_resources(module: &Module, entries: &[usize]) -> Vec<Resource> {
         .filter(|(h, _)| used.contains(h))
         .filter_map(|(_, g)| resource(module, g, None))
         .collect()
+}
+
+/// The cache's own resources, as `shaders/cache.wgsl` declares them (its
+/// bindings from `first_binding` on in `group`), each with what to bind.
+fn cache_resources(group: u32, first_binding: u32) -> Result<Vec<Resource>, String> {
+    let helpers = rewrite::cache_helpers().map_err(|r| r.reason)?;
+    let mut resources: Vec<Resource> = helpers
+        .global_variables
+        .iter()
+        .filter_map(|(_, global)| {
+            let name = global.name.clone()?;
+            let mut resource = resource(helpers, global, Some(what_to_bind(&name).into()))?;
+            resource.group = group;
+            resource.binding += first_binding;
+            Some(resource)
+        })
+        .collect();
+    resources.sort_by_key(|r| r.binding);
+    Ok(resources)
+}
+
+/// What a host binds for each of the cache's resources.
+fn what_to_bind(name: &str) -> &'static str {
+    match name {
+        "cache_params" => "the refresh uniform (CacheParams), updated every frame",
+        "cache_previous_payload" => "last frame's payload texture",
+        "cache_previous_depth" => "last frame's depth buffer",
+        "cache_current_payload" => "this frame's payload texture, after the passes that write it",
+        "cache_sampler" => "linear filtering, clamp to edge",
+        "cache_previous_age" => "last frame's age texture (r16float)",
+        _ => "see shaders/cache.wgsl",
+    }
 }
 
 fn resource(

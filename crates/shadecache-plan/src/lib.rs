@@ -851,16 +851,6 @@ pub const MAX_REFRESH_PERIOD: u32 = 65535;
 /// agrees with the expected depth e when |d − e| < ε·|e − far depth|.
 pub const DEFAULT_DEPTH_EPSILON: f32 = 0.02;
 
-/// Bindings of the cache helpers within their group.
-pub const CACHE_PARAMS_BINDING: u32 = 0;
-pub const PREVIOUS_PAYLOAD_BINDING: u32 = 1;
-pub const PREVIOUS_DEPTH_BINDING: u32 = 2;
-pub const CURRENT_PAYLOAD_BINDING: u32 = 3;
-pub const SAMPLER_BINDING: u32 = 4;
-pub const PREVIOUS_AGE_BINDING: u32 = 5;
-/// Previous-frame twins come after the cache's own bindings.
-pub const FIRST_TWIN_BINDING: u32 = 6;
-
 impl Plan {
     /// Checks what deserializing cannot: the format version, and that
     /// every pass's bindings are among the plan's resources. Read a plan
