@@ -105,9 +105,11 @@ impl<'a> SceneInputs<'a> {
                 )
             };
             let constant = match attribute.step {
-                plan::StepMode::Vertex => scene::mesh::VertexSource::of(attribute)
-                    .map_err(at_input)?
-                    .defaulted(attribute),
+                plan::StepMode::Vertex => {
+                    scene::mesh::VertexSource::of(attribute, &scene.vertex_inputs)
+                        .map_err(at_input)?
+                        .defaulted(attribute)
+                }
                 plan::StepMode::Instance => scene::instance_inputs::InstanceSource::of(attribute)
                     .map_err(at_input)?
                     .defaulted(),
@@ -130,7 +132,7 @@ impl<'a> SceneInputs<'a> {
             .iter()
             .map(|mesh| {
                 Ok(runtime::Mesh {
-                    vertices: mesh.vertex_bytes(layout)?,
+                    vertices: mesh.vertex_bytes(layout, &scene.vertex_inputs)?,
                     indices: mesh.indices.clone(),
                 })
             })
@@ -169,7 +171,7 @@ impl<'a> SceneInputs<'a> {
             }
             let vertices = scene
                 .deformed(object, mesh, frame)
-                .map(|m| m.vertex_bytes(layout))
+                .map(|m| m.vertex_bytes(layout, &scene.vertex_inputs))
                 .transpose()
                 .map_err(fail)?;
             let worlds: Vec<glam::Mat4> = state.instances[object]

@@ -408,7 +408,7 @@ fn gltf(path: &Path) -> Result<Mesh, String> {
 }
 
 /// What feeds one vertex input of the shader.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum VertexSource {
     Position,
     Normal,
@@ -426,6 +426,8 @@ pub enum VertexSource {
     /// An integer normal: the mesh's × 127, rounded, as a snorm8 packing
     /// gives it.
     IntegerNormal,
+    /// The scene's constant for the input (`[vertex_inputs]`).
+    Constant([f32; 4]),
 }
 
 impl VertexSource {
@@ -433,7 +435,16 @@ impl VertexSource {
     /// `tangent`, `uv`/`tex_coord`, `color`), else by the corpus's
     /// locations (0 position, 1 normal, 2 uv). Only float inputs can be
     /// fed; a wider input than the source is padded (w = 1 for points).
-    pub fn of(attribute: &crate::plan::VertexAttribute) -> Result<VertexSource, String> {
+    pub fn of(
+        attribute: &crate::plan::VertexAttribute,
+        constants: &std::collections::BTreeMap<String, super::VertexConstant>,
+    ) -> Result<VertexSource, String> {
+        if let (Some(constant), true) = (
+            constants.get(&attribute.name),
+            attribute.format.is_float32(),
+        ) {
+            return Ok(VertexSource::Constant(constant.components()));
+        }
         let name = attribute.name.to_ascii_lowercase();
         let has = |words: &[&str]| words.iter().any(|w| name.contains(w));
         let by_name = if has(&["pos"]) {
@@ -463,8 +474,8 @@ impl VertexSource {
             Some(VertexSource::Normal) if integer => Ok(VertexSource::IntegerNormal),
             _ if integer => Ok(VertexSource::Integer),
             _ => Err(format!(
-                "the scene's mesh cannot feed vertex input @location({}) `{}` ({}): it gives float inputs named like position, normal, tangent, uv (tex_coord) or color, or at locations 0 (position), 1 (normal) and 2 (uv)",
-                attribute.location, attribute.name, attribute.format
+                "the scene's mesh cannot feed vertex input @location({}) `{}` ({}): it gives float inputs named like position, normal, tangent, uv (tex_coord) or color, or at locations 0 (position), 1 (normal) and 2 (uv); give it a constant in the scene, `[vertex_inputs]` `{} = 0.5`",
+                attribute.location, attribute.name, attribute.format, attribute.name
             )),
         }
     }
@@ -496,7 +507,11 @@ impl Mesh {
     /// Vertex bytes for the shader's per-vertex attributes, packed in
     /// `layout`'s order, each fed by its [`VertexSource`] (per-instance
     /// ones are [`super::instance_inputs`]'s).
-    pub fn vertex_bytes(&self, layout: &[crate::plan::VertexAttribute]) -> Result<Vec<u8>, String> {
+    pub fn vertex_bytes(
+        &self,
+        layout: &[crate::plan::VertexAttribute],
+        constants: &std::collections::BTreeMap<String, super::VertexConstant>,
+    ) -> Result<Vec<u8>, String> {
         let sources: Vec<(VertexSource, usize, u32)> = layout
             .iter()
             .filter(|attribute| attribute.step == crate::plan::StepMode::Vertex)
@@ -507,7 +522,7 @@ impl Mesh {
                 } else {
                     0
                 };
-                Ok((VertexSource::of(attribute)?, width, word))
+                Ok((VertexSource::of(attribute, constants)?, width, word))
             })
             .collect::<Result<_, String>>()?;
         let mut bytes = Vec::new();
@@ -544,6 +559,7 @@ impl Mesh {
                     }
                     VertexSource::Uv => [self.uvs[i].x, self.uvs[i].y, 0.0, 1.0],
                     VertexSource::Colour => [1.0; 4],
+                    VertexSource::Constant(values) => values,
                 };
                 for v in &values[..width.min(4)] {
                     bytes.extend(v.to_le_bytes());

@@ -106,6 +106,11 @@ pub struct Scene {
     /// table sets members for it alone).
     #[serde(default)]
     pub storage: BTreeMap<String, toml::Spanned<StorageTable>>,
+    /// Constants for float vertex inputs the mesh has nothing for (a text
+    /// renderer's per-glyph `depth`), by the input's name: one value, or
+    /// one per component.
+    #[serde(default)]
+    pub vertex_inputs: BTreeMap<String, VertexConstant>,
     /// Seconds per frame for the `time` uniform.
     #[serde(default = "default_frame_time")]
     pub seconds_per_frame: f32,
@@ -380,6 +385,31 @@ pub struct FrameState {
     /// Each object's instances' transforms in the object's space (one
     /// identity for an object that is not instanced).
     pub instances: Vec<Vec<Mat4>>,
+}
+
+/// A vertex input's constant: one value for every component, or one per
+/// component.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum VertexConstant {
+    Scalar(f32),
+    Vector(Vec<f32>),
+}
+
+impl VertexConstant {
+    /// Four components: a scalar in each, a vector padded (w = 1).
+    pub fn components(&self) -> [f32; 4] {
+        match self {
+            VertexConstant::Scalar(value) => [*value; 4],
+            VertexConstant::Vector(values) => {
+                let mut out = [0.0, 0.0, 0.0, 1.0];
+                for (slot, value) in out.iter_mut().zip(values) {
+                    *slot = *value;
+                }
+                out
+            }
+        }
+    }
 }
 
 impl Scene {

@@ -187,3 +187,80 @@ fn fs(in: V) -> @location(0) vec4<f32> {
     let column = shader.lines().nth(3).unwrap().find("bone_weight").unwrap() + 1;
     assert!(err.contains(&format!("skinned.wgsl:4:{column}")), "{err}");
 }
+
+/// A float vertex input the mesh has nothing for (a text renderer's
+/// per-glyph `depth`; here `layer`).
+const LAYERED: &str = r#"
+struct Frame {
+    clip_from_world: mat4x4<f32>,
+    world_from_local: mat4x4<f32>,
+}
+@group(0) @binding(0) var<uniform> frame: Frame;
+
+struct VertexInput {
+    @location(0) position: vec3<f32>,
+    @location(3) layer: f32,
+}
+
+struct VertexOutput {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) layer: f32,
+    @location(1) local: vec3<f32>,
+}
+
+@vertex
+fn vs_main(in: VertexInput) -> VertexOutput {
+    var out: VertexOutput;
+    out.clip = frame.clip_from_world * frame.world_from_local * vec4<f32>(in.position, 1.0);
+    out.layer = in.layer;
+    out.local = in.position;
+    return out;
+}
+
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
+    var bands = 0.0;
+    for (var i = 0; i < 8; i++) {
+        bands += sin(in.local.x * 3.0 * f32(i + 1)) * 0.1;
+    }
+    return vec4<f32>(bands, in.layer, 0.0, 1.0);
+}
+"#;
+
+/// Without a constant for it the profile stops at the input, saying how
+/// to give one; with `[vertex_inputs]` in the scene the input is that
+/// constant and the shader profiles.
+#[test]
+fn a_vertex_input_the_mesh_cannot_feed_takes_the_scenes_constant() {
+    let (_shader_dir, shader) = temp_file("layered.wgsl", LAYERED.as_bytes());
+    let shader = shader.to_str().unwrap();
+    let sphere =
+        "frames = 2\nwarmup = 1\nsize = [32, 32]\n\n[[objects]]\nmesh = { kind = \"sphere\" }\n";
+    let err = profile_error(shader, sphere);
+    assert!(err.contains("`layer`"), "{err}");
+    assert!(err.contains("[vertex_inputs]"), "{err}");
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let scene = format!("{sphere}\n[vertex_inputs]\nlayer = 0.25\n");
+    let (_scene_dir, scene) = temp_file("scene.toml", scene.as_bytes());
+    let out = tempfile::tempdir().unwrap();
+    let output = shadecache([
+        "profile".as_ref(),
+        shader.as_ref(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--variant".as_ref(),
+        "two-pass".as_ref(),
+        "--nodes".as_ref(),
+        "top:1".as_ref(),
+        "--quiet".as_ref(),
+        "--out".as_ref(),
+        out.path().as_os_str(),
+    ] as [&OsStr; 11]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let report: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.path().join("report.json")).unwrap())
+            .unwrap();
+    assert!(report["results"][0]["coverage"].as_f64().unwrap() > 0.1);
+}
