@@ -95,6 +95,7 @@ impl<'a> SceneInputs<'a> {
         // What the scene defaulted, and the vertex inputs the mesh feeds a
         // constant. An input it cannot feed is an error at the input.
         let mut defaulted = scene.defaulted.clone();
+        defaulted.extend(scene::uniforms::zeroed(uniforms));
         for attribute in &reference_plan.vertex_layout {
             let at_input = |message: String| {
                 let text = &shader.file.text;

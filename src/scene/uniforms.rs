@@ -56,14 +56,20 @@ pub fn check(buffers: &[UniformBuffer], scene: &Scene) -> Result<(), String> {
             if is_padding(&member.name) || scene.role(&buffer.name, &member.name).is_some() {
                 continue;
             }
+            // A type a scene cannot write (an array of more than 64
+            // elements: 256 lights, a cluster index) is zero, listed as
+            // defaulted ([`zeroed`]).
+            if member.shape == Shape::Other {
+                if scene.uniforms.contains_key(&member.name) {
+                    return Err(format!(
+                        "uniform member `{}.{}` has a type a scene cannot write (f32, u32, i32, their vectors and f32 matrices, arrays of up to 64 of them); leave it out and it is zero",
+                        buffer.name, member.name
+                    ));
+                }
+                continue;
+            }
             if !scene.uniforms.contains_key(&member.name) {
                 missing.push(format!("`{}.{}`", buffer.name, member.name));
-            }
-            if member.shape == Shape::Other {
-                return Err(format!(
-                    "uniform member `{}.{}` has a type a scene cannot write (f32, u32, i32, their vectors and f32 matrices are supported)",
-                    buffer.name, member.name
-                ));
             }
         }
     }
@@ -79,6 +85,26 @@ pub fn check(buffers: &[UniformBuffer], scene: &Scene) -> Result<(), String> {
     }
 }
 
+/// The members of `buffers` a scene cannot write, which are zero: what
+/// the report lists as defaulted.
+pub fn zeroed(buffers: &[UniformBuffer]) -> Vec<String> {
+    buffers
+        .iter()
+        .flat_map(|buffer| {
+            buffer
+                .members
+                .iter()
+                .filter(|m| m.shape == Shape::Other && !is_padding(&m.name))
+                .map(move |m| {
+                    format!(
+                        "uniform `{}.{}` = zero (a type a scene cannot write)",
+                        buffer.name, m.name
+                    )
+                })
+        })
+        .collect()
+}
+
 /// The bytes of `buffer` for frame `state` and object `object`.
 pub fn fill(
     buffer: &UniformBuffer,
@@ -89,6 +115,9 @@ pub fn fill(
     let mut bytes = vec![0u8; buffer.size as usize];
     for member in &buffer.members {
         if is_padding(&member.name) {
+            continue;
+        }
+        if member.shape == Shape::Other {
             continue;
         }
         let role = scene.role(&buffer.name, &member.name);

@@ -264,3 +264,85 @@ fn a_vertex_input_the_mesh_cannot_feed_takes_the_scenes_constant() {
             .unwrap();
     assert!(report["results"][0]["coverage"].as_f64().unwrap() > 0.1);
 }
+
+/// Bevy's lights as a uniform array (`array<PointLight, 256u>`, its
+/// build without storage buffers): longer than a scene writes member by
+/// member.
+const LIGHT_ARRAY: &str = r#"
+struct Frame {
+    clip_from_world: mat4x4<f32>,
+    world_from_local: mat4x4<f32>,
+}
+struct PointLight {
+    position_radius: vec4<f32>,
+    color: vec4<f32>,
+}
+struct PointLights {
+    data: array<PointLight, 256u>,
+}
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var<uniform> point_lights: PointLights;
+
+struct VertexOutput {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) local: vec3<f32>,
+}
+
+@vertex
+fn vs_main(@location(0) position: vec3<f32>) -> VertexOutput {
+    var out: VertexOutput;
+    out.clip = frame.clip_from_world * frame.world_from_local * vec4<f32>(position, 1.0);
+    out.local = position;
+    return out;
+}
+
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
+    var lit = vec3<f32>(0.1);
+    for (var i = 0u; i < 4u; i++) {
+        let light = point_lights.data[i];
+        let d = length(light.position_radius.xyz - in.local);
+        lit += light.color.rgb / (1.0 + d * d) + vec3<f32>(sin(in.local.x * f32(i + 3u)) * 0.05);
+    }
+    return vec4<f32>(lit, 1.0);
+}
+"#;
+
+/// A uniform array longer than a scene writes member by member is zero
+/// (no lights), listed as defaulted; a scene that tries to set it is told
+/// to leave it out.
+#[test]
+fn a_long_uniform_array_is_zero_and_listed_as_defaulted() {
+    let (_dir, shader) = temp_file("lights.wgsl", LIGHT_ARRAY.as_bytes());
+    let err = profile_error(
+        shader.to_str().unwrap(),
+        "[[objects]]\nmesh = { kind = \"sphere\" }\n\n[uniforms]\ndata = 1.0\n",
+    );
+    assert!(err.contains("`point_lights.data`"), "{err}");
+    assert!(err.contains("leave it out"), "{err}");
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let out = tempfile::tempdir().unwrap();
+    let output = shadecache([
+        "profile".as_ref(),
+        shader.as_os_str(),
+        "--variant".as_ref(),
+        "two-pass".as_ref(),
+        "--nodes".as_ref(),
+        "top:1".as_ref(),
+        "--frames".as_ref(),
+        "2".as_ref(),
+        "--size".as_ref(),
+        "32x32".as_ref(),
+        "--quiet".as_ref(),
+        "--out".as_ref(),
+        out.path().as_os_str(),
+    ] as [&OsStr; 13]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = stdout(&output);
+    assert!(
+        text.contains("uniform `point_lights.data` = zero"),
+        "{text}"
+    );
+}
