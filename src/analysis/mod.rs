@@ -49,7 +49,7 @@ use serde::Serialize;
 
 pub use calls::CallStep;
 pub(crate) use candidates::type_name;
-pub use candidates::RejectReason;
+pub use candidates::{name_words, RejectReason};
 pub use entry::{fragment_entry, stage_name};
 pub use id::node_id;
 

@@ -281,7 +281,7 @@ fn what(member: &Member) -> String {
 /// directions normalised, matrices the identity, integers 0 and counts 1.
 /// `None` for a shape a scene cannot write.
 fn neutral(member: &Member) -> Option<String> {
-    let words = words(&member.name);
+    let words = crate::analysis::name_words(&member.name);
     let has = |list: &[&str]| words.iter().any(|w| list.contains(&w.as_str()));
     let count = has(&["count", "num", "len", "length", "size"]);
     let direction = has(&["dir", "direction", "normal", "axis"]);
@@ -324,29 +324,6 @@ fn neutral(member: &Member) -> Option<String> {
         ),
         Shape::Other => return None,
     })
-}
-
-/// The words of a name, lowercase: `lightCount` and `light_count` both
-/// give `light`, `count`.
-fn words(name: &str) -> Vec<String> {
-    let mut out = vec![String::new()];
-    let mut previous_lower = false;
-    for c in name.chars() {
-        if c == '_' || c == '-' || c.is_ascii_digit() {
-            out.push(String::new());
-            previous_lower = false;
-            continue;
-        }
-        if c.is_uppercase() && previous_lower {
-            out.push(String::new());
-        }
-        previous_lower = c.is_lowercase();
-        if let Some(last) = out.last_mut() {
-            last.push(c.to_ascii_lowercase());
-        }
-    }
-    out.retain(|w| !w.is_empty());
-    out
 }
 
 /// The generated pattern for a texture, and why.
