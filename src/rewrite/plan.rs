@@ -51,63 +51,17 @@ pub fn build(inputs: Inputs) -> Result<Plan, String> {
     // host draws them with its own (`host_vertex`).
     let vertex_entry = vertex.entry_index.map(|i| &module.entry_points[i]);
     let vertex_name = vertex_entry.map_or(String::new(), |v| v.name.clone());
-    let color_locations = fragment::output_locations(module, result);
-    let cache_location = fragment::cache_location(module, result);
-
-    let mut plan_passes = Vec::new();
-    for (index, (stage, pass)) in passes.iter().enumerate() {
-        let first = index == 0;
-        let load = |first: bool| if first { LoadOp::Clear } else { LoadOp::Load };
-        let color = |location: u32| ColorTarget {
-            location,
-            target: TargetKind::Color,
-            format: output_format(module, result, location, options.color_format),
-            load: load(first || matches!(stage, Stage::ShadeFromCache)),
-        };
-        let cache = |location: u32| ColorTarget {
-            location,
-            target: TargetKind::Cache,
-            format: options.cache_format.texture_format(),
-            load: load(first),
-        };
-        let age = |location: u32| ColorTarget {
-            location,
-            target: TargetKind::Age,
-            format: AGE_FORMAT,
-            load: load(first),
-        };
-        let color_targets = match stage.writes() {
-            Writes::Color => color_locations.iter().map(|&l| color(l)).collect(),
-            Writes::Cache | Writes::Classes => vec![cache(0), age(1)],
-            Writes::ColorAndCache => {
-                let mut targets: Vec<_> = color_locations.iter().map(|&l| color(l)).collect();
-                targets.push(cache(cache_location));
-                targets.push(age(cache_location + 1));
-                targets
-            }
-        };
-        let (compare, write) = match stage {
-            Stage::ShadeFromCache => (CompareFunction::Equal, false),
-            _ => (options.depth.nearer(), true),
-        };
-        plan_passes.push(Pass {
-            name: pass.name.clone(),
-            role: role(*stage).into(),
-            shader: format!("{}.wgsl", pass.name),
-            stage_shaders: Vec::new(),
-            vertex_entry: vertex_name.clone(),
-            fragment_entry: entry.name.clone(),
-            color_targets,
-            depth: Depth {
-                format: DEPTH_FORMAT,
-                compare,
-                write,
-                load: load(first),
-            },
-            discards: stage.discards() || pass_discards(&pass.module),
-            bindings: used_bindings(&pass.module),
-        });
-    }
+    let names = PassNames {
+        vertex: vertex_name.clone(),
+        fragment: entry.name.clone(),
+    };
+    let plan_passes = passes
+        .iter()
+        .enumerate()
+        .map(|(index, (stage, pass))| {
+            plan_pass(module, result, options, (*stage, pass), index == 0, &names)
+        })
+        .collect();
 
     let entries: Vec<usize> = std::iter::once(analysis.entry_index)
         .chain(vertex.entry_index)
@@ -133,49 +87,10 @@ pub fn build(inputs: Inputs) -> Result<Plan, String> {
         format: 1,
         shader: shader.file.path.clone(),
         entry: entry.name.clone(),
-        node: PlanNode {
-            id: candidate.node.id.clone(),
-            text: candidate.node.text.clone(),
-            ty: candidate.node.ty.clone(),
-            components: candidate.components,
-            path: None,
-            function: (!candidate.node.call_path.is_empty())
-                .then(|| candidate.node.function.clone()),
-            call_path: candidate
-                .node
-                .call_path
-                .iter()
-                .map(|step| PlanCall {
-                    function: step.function.clone(),
-                    text: step.text.clone(),
-                    at: step.span.start,
-                })
-                .collect(),
-        },
+        node: plan_node(candidate),
         variant,
         passes: plan_passes,
-        classify: Some(Pass {
-            name: classify.name.clone(),
-            role: role(Stage::Classify).into(),
-            shader: format!("{}.wgsl", classify.name),
-            stage_shaders: Vec::new(),
-            vertex_entry: vertex_name.clone(),
-            fragment_entry: entry.name.clone(),
-            color_targets: vec![ColorTarget {
-                location: 0,
-                target: TargetKind::Classes,
-                format: TextureFormat::Rgba8Unorm,
-                load: LoadOp::Clear,
-            }],
-            depth: Depth {
-                format: DEPTH_FORMAT,
-                compare: CompareFunction::Equal,
-                write: false,
-                load: LoadOp::Load,
-            },
-            discards: false,
-            bindings: used_bindings(&classify.module),
-        }),
+        classify: Some(classify_pass(classify, &names)),
         vertex_layout: match vertex_entry {
             Some(v) => vertex_layout(module, &v.function, &vertex.instance_twins)?,
             None => Vec::new(),
@@ -216,6 +131,127 @@ pub fn build(inputs: Inputs) -> Result<Plan, String> {
         },
         assumes: FrameAssumptions::default(),
     })
+}
+
+/// The entry points every pass draws with.
+struct PassNames {
+    /// Empty for a fragment-only module, whose host draws with its own.
+    vertex: String,
+    fragment: String,
+}
+
+/// One pass of the plan: its targets (the frame's outputs, the cache and
+/// its age) with their loads, its depth state, whether it discards and
+/// what it binds.
+fn plan_pass(
+    module: &Module,
+    result: &naga::FunctionResult,
+    options: &Options,
+    (stage, pass): (Stage, &PassModule),
+    first: bool,
+    names: &PassNames,
+) -> Pass {
+    let load = |first: bool| if first { LoadOp::Clear } else { LoadOp::Load };
+    let color = |location: u32| ColorTarget {
+        location,
+        target: TargetKind::Color,
+        format: output_format(module, result, location, options.color_format),
+        load: load(first || matches!(stage, Stage::ShadeFromCache)),
+    };
+    let cache = |location: u32| ColorTarget {
+        location,
+        target: TargetKind::Cache,
+        format: options.cache_format.texture_format(),
+        load: load(first),
+    };
+    let age = |location: u32| ColorTarget {
+        location,
+        target: TargetKind::Age,
+        format: AGE_FORMAT,
+        load: load(first),
+    };
+    let color_locations = fragment::output_locations(module, result);
+    let cache_location = fragment::cache_location(module, result);
+    let color_targets = match stage.writes() {
+        Writes::Color => color_locations.iter().map(|&l| color(l)).collect(),
+        Writes::Cache | Writes::Classes => vec![cache(0), age(1)],
+        Writes::ColorAndCache => {
+            let mut targets: Vec<_> = color_locations.iter().map(|&l| color(l)).collect();
+            targets.push(cache(cache_location));
+            targets.push(age(cache_location + 1));
+            targets
+        }
+    };
+    let (compare, write) = match stage {
+        Stage::ShadeFromCache => (CompareFunction::Equal, false),
+        _ => (options.depth.nearer(), true),
+    };
+    Pass {
+        name: pass.name.clone(),
+        role: role(stage).into(),
+        shader: format!("{}.wgsl", pass.name),
+        stage_shaders: Vec::new(),
+        vertex_entry: names.vertex.clone(),
+        fragment_entry: names.fragment.clone(),
+        color_targets,
+        depth: Depth {
+            format: DEPTH_FORMAT,
+            compare,
+            write,
+            load: load(first),
+        },
+        discards: stage.discards() || pass_discards(&pass.module),
+        bindings: used_bindings(&pass.module),
+    }
+}
+
+/// The diagnostic pass, drawn after a frame over what it drew (depth
+/// equal): the cache's decision at each pixel as a colour.
+fn classify_pass(classify: &PassModule, names: &PassNames) -> Pass {
+    Pass {
+        name: classify.name.clone(),
+        role: role(Stage::Classify).into(),
+        shader: format!("{}.wgsl", classify.name),
+        stage_shaders: Vec::new(),
+        vertex_entry: names.vertex.clone(),
+        fragment_entry: names.fragment.clone(),
+        color_targets: vec![ColorTarget {
+            location: 0,
+            target: TargetKind::Classes,
+            format: TextureFormat::Rgba8Unorm,
+            load: LoadOp::Clear,
+        }],
+        depth: Depth {
+            format: DEPTH_FORMAT,
+            compare: CompareFunction::Equal,
+            write: false,
+            load: LoadOp::Load,
+        },
+        discards: false,
+        bindings: used_bindings(&classify.module),
+    }
+}
+
+/// The cached node as the plan names it, with the calls down to it.
+fn plan_node(candidate: &Candidate) -> PlanNode {
+    PlanNode {
+        id: candidate.node.id.clone(),
+        text: candidate.node.text.clone(),
+        ty: candidate.node.ty.clone(),
+        components: candidate.components,
+        path: None,
+        function: (!candidate.node.call_path.is_empty()).then(|| candidate.node.function.clone()),
+        call_path: candidate
+            .node
+            .call_path
+            .iter()
+            .map(|step| PlanCall {
+                function: step.function.clone(),
+                text: step.text.clone(),
+                at: step.span.start,
+            })
+            .collect(),
+    }
 }
 
 /// The target format for the fragment output at `location`: `float` (the
