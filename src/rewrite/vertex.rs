@@ -174,35 +174,105 @@ pub fn instrument(
         TypeInner::Struct { ref members, span } => Some((members.clone(), span)),
         _ => None,
     };
-    let position_member = match (&members, is_position(&result.binding)) {
-        (None, true) => None,
-        (Some((members, _)), false) => match members.iter().position(|m| is_position(&m.binding)) {
-            Some(index) => Some(index as u32),
-            None => {
-                return Err(Refusal::new(
-                    "the vertex entry point does not output @builtin(position)",
-                ))
-            }
-        },
-        _ => {
-            return Err(Refusal::new(
-                "the vertex entry point does not output @builtin(position)",
-            ))
-        }
-    };
+    let position_member = position_member(&members, &result)?;
 
     // Per-instance inputs the position reads, each with a twin input at a
     // free location that carries last frame's value.
     let instance_inputs = instance_inputs_of_position(module, function, position_member);
     let instance_twins = twin_locations(module, function, &instance_inputs)?;
 
-    // Helper functions reachable from the entry point, callees first.
-    let mut reachable = Vec::new();
-    collect_callees(module, &function.body, &mut reachable, &mut BTreeSet::new());
+    let twins = twin_resources(module, entry_index, group, first_binding);
+    let twin_map: HashMap<_, _> = twins.iter().copied().collect();
+    let function_twins = twin_helpers(module, function, &twin_map);
+    let helpers = PositionHelpers::add(
+        module,
+        (&entry.name, function),
+        result.ty,
+        (&twin_map, &function_twins),
+        position_member,
+    );
+    let (output, previous_location) =
+        cache_output(module, members, &result, helpers.vec4, &entry.name);
 
-    // Resources the position computation may read: uniforms and read-only
-    // storage, in the entry point or any helper it calls.
-    // (In handle order, so twins get the same bindings on every run.)
+    // The new entry point: call both, forward every member, add the
+    // previous position.
+    let mut entry_arguments = function.arguments.clone();
+    entry_arguments.extend(twin_arguments(
+        module,
+        function,
+        &instance_inputs,
+        &instance_twins,
+    ));
+    let mut b = Builder::new(Function {
+        name: function.name.clone(),
+        arguments: entry_arguments,
+        result: Some(naga::FunctionResult {
+            ty: output.ty,
+            binding: None,
+        }),
+        ..Function::default()
+    });
+    let arguments: Vec<_> = (0..function.arguments.len() as u32)
+        .map(|i| b.argument(i))
+        .collect();
+    let now = b.call(helpers.current, arguments.clone());
+    let previous_arguments =
+        last_frame_arguments(module, function, &mut b, arguments, &instance_inputs);
+    let before = b.call(helpers.previous, previous_arguments);
+    let mut components: Vec<_> = match position_member {
+        Some(_) => (0..output.members - 1).map(|i| b.member(now, i)).collect(),
+        None => vec![now],
+    };
+    components.push(before);
+    let value = b.expr(Expression::Compose {
+        ty: output.ty,
+        components,
+    });
+    b.push(Statement::Return { value: Some(value) });
+    module.entry_points[entry_index].function = b.finish();
+
+    Ok(VertexStage {
+        entry_index: Some(entry_index),
+        previous_location,
+        twins,
+        instance_twins,
+        plain: Some(plain_entry(function, helpers.current)),
+    })
+}
+
+/// Each twinned resource's twin.
+type GlobalTwins = HashMap<Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>>;
+/// Each helper that reads a twinned resource, and its twin.
+type FunctionTwins = HashMap<Handle<Function>, Handle<Function>>;
+
+/// The result member that is `@builtin(position)`; `None` when the
+/// result is the position itself.
+fn position_member(
+    members: &Option<(Vec<naga::StructMember>, u32)>,
+    result: &naga::FunctionResult,
+) -> Result<Option<u32>, Refusal> {
+    let missing = || Refusal::new("the vertex entry point does not output @builtin(position)");
+    match (members, is_position(&result.binding)) {
+        (None, true) => Ok(None),
+        (Some((members, _)), false) => members
+            .iter()
+            .position(|m| is_position(&m.binding))
+            .map(|index| Some(index as u32))
+            .ok_or_else(missing),
+        _ => Err(missing()),
+    }
+}
+
+/// A twin in `group` from `first_binding` on of each resource the
+/// position computation may read: uniforms and read-only storage, in the
+/// entry point or any helper it calls. (In handle order, so twins get the
+/// same bindings on every run.)
+fn twin_resources(
+    module: &mut Module,
+    entry_index: usize,
+    group: u32,
+    first_binding: u32,
+) -> Vec<(Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>)> {
     let mut read: Vec<_> = crate::proc::globals_used_by(module, &[entry_index])
         .into_iter()
         .collect();
@@ -230,11 +300,15 @@ pub fn instrument(
         binding += 1;
         twins.push((g, twin));
     }
-    let twin_map: HashMap<_, _> = twins.iter().copied().collect();
+    twins
+}
 
-    // Previous-frame twins of the helpers that read a twinned resource
-    // (directly or through their callees).
-    let mut function_twins: HashMap<Handle<Function>, Handle<Function>> = HashMap::new();
+/// Previous-frame twins of the helpers `function` calls that read a
+/// twinned resource (directly or through their callees), callees first.
+fn twin_helpers(module: &mut Module, function: &Function, twin_map: &GlobalTwins) -> FunctionTwins {
+    let mut reachable = Vec::new();
+    collect_callees(module, &function.body, &mut reachable, &mut BTreeSet::new());
+    let mut function_twins = FunctionTwins::new();
     for &f in &reachable {
         let source = module.functions[f].clone();
         let reads_twinned =
@@ -256,7 +330,7 @@ pub fn instrument(
                 ..Function::default()
             },
         );
-        for (&from, &to) in &twin_map {
+        for (&from, &to) in twin_map {
             copy.replace_global(from, to);
         }
         for (&from, &to) in &function_twins {
@@ -266,67 +340,100 @@ pub fn instrument(
         let handle = module.functions.append(twin, naga::Span::UNDEFINED);
         function_twins.insert(f, handle);
     }
+    function_twins
+}
 
-    let stripped_arguments = super::without_bindings(&function.arguments);
+/// The vertex function as two helpers: `<entry>_current`, unchanged, and
+/// `<entry>_previous`, with last frame's resources, returning only the
+/// position.
+struct PositionHelpers {
+    current: Handle<Function>,
+    previous: Handle<Function>,
+    vec4: Handle<naga::Type>,
+}
 
-    // The vertex function as a helper, unchanged.
-    let all = everything(function);
-    let current = FunctionCopy::new(
-        module,
-        function,
-        &all,
-        Function {
-            name: Some(format!("{}_current", entry.name)),
-            arguments: stripped_arguments.clone(),
-            result: Some(naga::FunctionResult {
-                ty: result.ty,
-                binding: None,
-            }),
-            ..Function::default()
-        },
-    )
-    .run();
-
-    // ... and with last frame's resources, returning only the position.
-    let vec4 = module.types.insert(
-        naga::Type {
-            name: None,
-            inner: TypeInner::Vector {
-                size: naga::VectorSize::Quad,
-                scalar: naga::Scalar::F32,
+impl PositionHelpers {
+    fn add(
+        module: &mut Module,
+        (name, function): (&str, &Function),
+        result_ty: Handle<naga::Type>,
+        (twin_map, function_twins): (&GlobalTwins, &FunctionTwins),
+        position_member: Option<u32>,
+    ) -> PositionHelpers {
+        let stripped_arguments = super::without_bindings(&function.arguments);
+        let all = everything(function);
+        let current = FunctionCopy::new(
+            module,
+            function,
+            &all,
+            Function {
+                name: Some(format!("{name}_current")),
+                arguments: stripped_arguments.clone(),
+                result: Some(naga::FunctionResult {
+                    ty: result_ty,
+                    binding: None,
+                }),
+                ..Function::default()
             },
-        },
-        naga::Span::UNDEFINED,
-    );
-    let mut previous = FunctionCopy::new(
-        module,
-        function,
-        &all,
-        Function {
-            name: Some(format!("{}_previous", entry.name)),
-            arguments: stripped_arguments,
-            result: Some(naga::FunctionResult {
-                ty: vec4,
-                binding: None,
-            }),
-            ..Function::default()
-        },
-    );
-    for (&from, &to) in &twin_map {
-        previous.replace_global(from, to);
+        )
+        .run();
+        let vec4 = module.types.insert(
+            naga::Type {
+                name: None,
+                inner: TypeInner::Vector {
+                    size: naga::VectorSize::Quad,
+                    scalar: naga::Scalar::F32,
+                },
+            },
+            naga::Span::UNDEFINED,
+        );
+        let mut previous = FunctionCopy::new(
+            module,
+            function,
+            &all,
+            Function {
+                name: Some(format!("{name}_previous")),
+                arguments: stripped_arguments,
+                result: Some(naga::FunctionResult {
+                    ty: vec4,
+                    binding: None,
+                }),
+                ..Function::default()
+            },
+        );
+        for (&from, &to) in twin_map {
+            previous.replace_global(from, to);
+        }
+        for (&from, &to) in function_twins {
+            previous.replace_function(from, to);
+        }
+        if let Some(index) = position_member {
+            previous.return_member(index);
+        }
+        let previous = previous.run();
+        PositionHelpers {
+            current: module.functions.append(current, naga::Span::UNDEFINED),
+            previous: module.functions.append(previous, naga::Span::UNDEFINED),
+            vec4,
+        }
     }
-    for (&from, &to) in &function_twins {
-        previous.replace_function(from, to);
-    }
-    if let Some(index) = position_member {
-        previous.return_member(index);
-    }
-    let previous = previous.run();
-    let current = module.functions.append(current, naga::Span::UNDEFINED);
-    let previous = module.functions.append(previous, naga::Span::UNDEFINED);
+}
 
-    // The new output: the old members (position now invariant) and the
-    // previous clip position at the next free location.
+/// The new entry point's output type and how many members it has.
+struct CacheOutput {
+    ty: Handle<naga::Type>,
+    members: u32,
+}
+
+/// The new output: the old members (the position now invariant) and the
+/// previous clip position at the next free location, which it returns.
+fn cache_output(
+    module: &mut Module,
+    members: Option<(Vec<naga::StructMember>, u32)>,
+    result: &naga::FunctionResult,
+    vec4: Handle<naga::Type>,
+    entry_name: &str,
+) -> (CacheOutput, u32) {
     let (mut new_members, old_span) = members.unwrap_or_else(|| {
         (
             vec![naga::StructMember {
@@ -364,10 +471,10 @@ pub fn instrument(
         }),
         offset,
     });
-    let member_count = new_members.len() as u32;
-    let output = module.types.insert(
+    let count = new_members.len() as u32;
+    let ty = module.types.insert(
         naga::Type {
-            name: Some(format!("{}CacheOutput", pascal(&entry.name))),
+            name: Some(format!("{}CacheOutput", pascal(entry_name))),
             inner: TypeInner::Struct {
                 members: new_members,
                 span: offset + 16,
@@ -375,51 +482,7 @@ pub fn instrument(
         },
         naga::Span::UNDEFINED,
     );
-
-    // The new entry point: call both, forward every member, add the
-    // previous position.
-    let mut entry_arguments = function.arguments.clone();
-    entry_arguments.extend(twin_arguments(
-        module,
-        function,
-        &instance_inputs,
-        &instance_twins,
-    ));
-    let mut b = Builder::new(Function {
-        name: function.name.clone(),
-        arguments: entry_arguments,
-        result: Some(naga::FunctionResult {
-            ty: output,
-            binding: None,
-        }),
-        ..Function::default()
-    });
-    let arguments: Vec<_> = (0..function.arguments.len() as u32)
-        .map(|i| b.argument(i))
-        .collect();
-    let now = b.call(current, arguments.clone());
-    let previous_arguments =
-        last_frame_arguments(module, function, &mut b, arguments, &instance_inputs);
-    let before = b.call(previous, previous_arguments);
-    let mut components: Vec<_> = match position_member {
-        Some(_) => (0..member_count - 1).map(|i| b.member(now, i)).collect(),
-        None => vec![now],
-    };
-    components.push(before);
-    let value = b.expr(Expression::Compose {
-        ty: output,
-        components,
-    });
-    b.push(Statement::Return { value: Some(value) });
-    module.entry_points[entry_index].function = b.finish();
-
-    Ok(VertexStage {
-        entry_index: Some(entry_index),
-        previous_location,
-        twins,
-        instance_twins,
-        plain: Some(plain_entry(function, current)),
-    })
+    (CacheOutput { ty, members: count }, previous_location)
 }
 
 /// `function`'s entry point as a call of `current`, the vertex function
