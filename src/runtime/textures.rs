@@ -78,22 +78,6 @@ pub(super) fn scene_textures(
     Ok((views, samplers))
 }
 
-fn clear_depth_in(encoder: &mut wgpu::CommandEncoder, view: &wgpu::TextureView, depth: f32) {
-    let _pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some("clear depth"),
-        color_attachments: &[],
-        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view,
-            depth_ops: Some(wgpu::Operations {
-                load: wgpu::LoadOp::Clear(depth),
-                store: wgpu::StoreOp::Store,
-            }),
-            stencil_ops: None,
-        }),
-        ..wgpu::RenderPassDescriptor::default()
-    });
-}
-
 /// How a texture the shader samples is made: its view's dimension and how
 /// many layers it has.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -154,7 +138,7 @@ fn far_depth(
             array_layer_count: Some(1),
             ..wgpu::TextureViewDescriptor::default()
         });
-        clear_depth_in(&mut encoder, &view, 1.0);
+        shadecache_host::clear_depth(&mut encoder, &view, 1.0);
     }
     gpu.queue.submit([encoder.finish()]);
     texture.create_view(&wgpu::TextureViewDescriptor {

@@ -672,7 +672,10 @@ pub fn render_target(
     })
 }
 
-fn clear_depth(encoder: &mut wgpu::CommandEncoder, view: &wgpu::TextureView, depth: f32) {
+/// Clears a depth view to `depth` (a render pass with no colour): how the
+/// host marks last frame's depth as the far plane, and how a shadow map
+/// that shadows nothing is made.
+pub fn clear_depth(encoder: &mut wgpu::CommandEncoder, view: &wgpu::TextureView, depth: f32) {
     let _pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some("shadecache: no last frame"),
         color_attachments: &[],

@@ -42,7 +42,7 @@ mod timing;
 mod twins;
 mod vertex;
 
-pub use cached::{render_target, CachedShader, Draw, Options};
+pub use cached::{clear_depth, render_target, CachedShader, Draw, Options};
 pub use error::Error;
 pub use formats::{cache_format, texture_format, vertex_format};
 pub use frame::{FrameLayout, Targets, Viewport};

@@ -180,6 +180,46 @@ fn original_pipeline(
 }
 
 /// The cached variant on the application's device, from its own layouts.
+/// The original pass into `view`, cleared to `clear`, with its own
+/// depth; timed as `original` when a timer is given.
+fn draw_original(
+    encoder: &mut wgpu::CommandEncoder,
+    (pipeline, planet): (&wgpu::RenderPipeline, &Planet),
+    (view, depth): (&wgpu::TextureView, &wgpu::TextureView),
+    clear: wgpu::Color,
+    mut timer: Option<&mut Timestamps>,
+) {
+    let query = timer.as_mut().map(|t| t.begin(encoder, "original"));
+    let writes = timer
+        .as_ref()
+        .zip(query.as_ref())
+        .and_then(|(t, q)| t.timestamp_writes(q));
+    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("original"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(clear),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: writes,
+        ..Default::default()
+    });
+    pass.set_pipeline(pipeline);
+    planet.draw(&mut pass);
+}
+
 /// The cached variant drawing into `format` targets of `size`.
 fn cached_shader(
     gpu: &Gpu,
@@ -255,37 +295,13 @@ fn main() -> Result<(), Box<dyn Error>> {
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         // The original pass.
-        {
-            let query = timer.as_mut().map(|t| t.begin(&mut encoder, "original"));
-            let writes = timer
-                .as_ref()
-                .zip(query.as_ref())
-                .and_then(|(t, q)| t.timestamp_writes(q));
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("original"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &views[0],
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: writes,
-                ..Default::default()
-            });
-            pass.set_pipeline(&original);
-            planet.draw(&mut pass);
-        }
+        draw_original(
+            &mut encoder,
+            (&original, &planet),
+            (&views[0], &depth_view),
+            wgpu::Color::TRANSPARENT,
+            timer.as_mut(),
+        );
         // The cached variant: the same draw in each of its passes.
         let color = [Some(&views[1])];
         let frame_targets = Targets {

@@ -7,7 +7,7 @@
 use std::error::Error;
 use std::sync::Arc;
 
-use shadecache_host::{CachedShader, PassTimer, Targets, Timestamps, TwinSources, Twins};
+use shadecache_host::{CachedShader, Targets, Timestamps, TwinSources, Twins};
 use winit::application::ApplicationHandler;
 use winit::event::{ElementState, KeyEvent, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
@@ -15,7 +15,7 @@ use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 use super::planet::{self, Planet};
-use super::{cached_shader, original_pipeline, Gpu};
+use super::{cached_shader, draw_original, original_pipeline, Gpu};
 
 pub fn run(refresh_period: Option<u32>) -> Result<(), Box<dyn Error>> {
     let event_loop = EventLoop::new()?;
@@ -237,39 +237,13 @@ impl State {
                     .record(&self.gpu.queue, &mut encoder, &targets, draw)?,
             }
         } else {
-            let query = self
-                .timer
-                .as_mut()
-                .map(|t| t.begin(&mut encoder, "original"));
-            let writes = self
-                .timer
-                .as_ref()
-                .zip(query.as_ref())
-                .and_then(|(t, q)| t.timestamp_writes(q));
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("original"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(clear),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: writes,
-                ..Default::default()
-            });
-            pass.set_pipeline(&self.original);
-            self.planet.draw(&mut pass);
+            draw_original(
+                &mut encoder,
+                (&self.original, &self.planet),
+                (&view, &self.depth),
+                clear,
+                self.timer.as_mut(),
+            );
         }
         if let Some(timer) = &self.timer {
             timer.resolve(&mut encoder);
