@@ -186,7 +186,7 @@ fn tree(package: &str, extra: &[&str]) -> Vec<String> {
     let output = Command::new(env!("CARGO"))
         .current_dir(root())
         .args(["tree", "-p", package, "-e", "normal", "--prefix", "none"])
-        .args(["--offline", "--locked"])
+        .arg("--locked")
         .args(extra)
         .output()
         .expect("cargo runs");
