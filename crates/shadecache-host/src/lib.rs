@@ -30,6 +30,45 @@
 //!
 //! The crate depends on wgpu, serde and the plan schema only: an
 //! application links neither naga's front ends nor the toolchain.
+//!
+//! ```no_run
+//! use shadecache_host::{CachedShader, FrameLayout, Options, Plan, Targets, TwinSources};
+//!
+//! # fn run(
+//! #     device: &wgpu::Device,
+//! #     queue: &wgpu::Queue,
+//! #     plan_json: &str,
+//! #     pass_source: impl Fn(&str) -> Option<&'static str>,
+//! #     vertex_layout: wgpu::VertexBufferLayout<'_>,
+//! #     uniform_entries: &[wgpu::BindGroupLayoutEntry],
+//! #     globals: &wgpu::Buffer,
+//! #     globals_group: &wgpu::BindGroup,
+//! #     vertices: &wgpu::Buffer,
+//! #     view: &wgpu::TextureView,
+//! # ) -> Result<(), Box<dyn std::error::Error>> {
+//! let plan: Plan = serde_json::from_str(plan_json)?;
+//! let colors = [Some(wgpu::ColorTargetState::from(wgpu::TextureFormat::Rgba8Unorm))];
+//! let buffers = [Some(vertex_layout)];
+//! let groups = [(0, uniform_entries)];
+//! let frame = FrameLayout::new(&buffers, &groups, &colors);
+//! let mut cached = CachedShader::new(device, &plan, pass_source, &frame, (1280, 720), Options::default())?;
+//! // The draw's buffers (made with COPY_SRC): the host keeps last frame's copies.
+//! let twins = cached.twins(&TwinSources { buffers: &[([0, 0], globals)], ..Default::default() })?;
+//!
+//! // Each frame: write `globals` as before, then
+//! let mut encoder = device.create_command_encoder(&Default::default());
+//! let targets = Targets { color: &[Some(view)], clear: Some(wgpu::Color::BLACK) };
+//! cached.record(queue, &mut encoder, &targets, |draw| {
+//!     draw.bind(&twins);
+//!     let pass = draw.render_pass();
+//!     pass.set_bind_group(0, globals_group, &[]);
+//!     pass.set_vertex_buffer(0, vertices.slice(..));
+//!     pass.draw(0..3, 0..1);
+//! })?;
+//! queue.submit([encoder.finish()]);
+//! # Ok(())
+//! # }
+//! ```
 
 mod cached;
 mod error;
