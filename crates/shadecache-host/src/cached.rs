@@ -7,6 +7,7 @@ use std::sync::{Arc, Mutex, Weak};
 use shadecache_plan::{LoadOp, Pass, Plan, ResourceKind, TargetKind};
 
 use crate::formats::{cache_format, texture_format};
+use crate::layouts::CacheResource;
 use crate::pipelines::{pipeline, pipeline_layout, HostFormats, PipelineInputs};
 use crate::timing::{NoTimer, PassTimer};
 use crate::twins::{Shared, TwinSources, Twins, TwinsInner};
@@ -71,8 +72,9 @@ pub struct CachedShader {
     generation: u64,
     params: wgpu::Buffer,
     sampler: wgpu::Sampler,
-    /// The cache group's bind groups when the plan has no twins: bound by
-    /// the host at the start of each pass.
+    /// The cache group's bind groups when nothing of a draw's is in it
+    /// (no twins, no resource of the application's): bound by the host at
+    /// the start of each pass.
     shared: Option<Twins>,
     current: usize,
     frame: u64,
@@ -223,7 +225,16 @@ impl CachedShader {
             pending: Vec::new(),
             next_twins: 0,
         };
-        if plan.bindings.previous.is_empty() && cached.twin_slots.is_empty() {
+        // With nothing of the draw's in the cache group, the host binds it
+        // itself.
+        let draws_own = !plan.bindings.previous.is_empty()
+            || !cached.twin_slots.is_empty()
+            || plan
+                .bindings
+                .original
+                .iter()
+                .any(|r| Some(r.group) == cache_group);
+        if !draws_own {
             cached.shared = Some(cached.twins(&TwinSources::default())?);
         }
         Ok(cached)
@@ -386,7 +397,7 @@ impl CachedShader {
         }
         let binder = Binder {
             shader: self,
-            used: RefCell::new(Vec::new()),
+            used: RefCell::new(BTreeMap::new()),
         };
         let built = self.passes.iter().chain(&self.classify);
         for built in built {
@@ -418,10 +429,7 @@ impl CachedShader {
             timer.end(encoder, query);
         }
         // This frame's contents are next frame's last-frame contents.
-        let mut used = binder.used.into_inner();
-        used.sort_by_key(|inner| inner.id);
-        used.dedup_by_key(|inner| inner.id);
-        for inner in &used {
+        for inner in binder.used.into_inner().values() {
             inner.copy(encoder);
         }
         self.current = previous;
@@ -692,10 +700,10 @@ pub fn clear_depth(encoder: &mut wgpu::CommandEncoder, view: &wgpu::TextureView,
 }
 
 /// Makes and finds the cache group's bind groups during a frame, and
-/// notes the twins drawn with.
+/// notes the twins drawn with, by id.
 struct Binder<'s> {
     shader: &'s CachedShader,
-    used: RefCell<Vec<Arc<TwinsInner>>>,
+    used: RefCell<BTreeMap<u64, Arc<TwinsInner>>>,
 }
 
 impl Binder<'_> {
@@ -750,24 +758,14 @@ impl Binder<'_> {
             .iter()
             .filter(|r| bound(r.binding))
         {
-            let resource_of = match resource.name.as_str() {
-                "cache_params" => shader.params.as_entire_binding(),
-                "cache_previous_payload" => {
-                    wgpu::BindingResource::TextureView(&t.payload_views[previous])
-                }
-                "cache_current_payload" => {
-                    wgpu::BindingResource::TextureView(&t.payload_views[current])
-                }
-                "cache_previous_age" => wgpu::BindingResource::TextureView(&t.age_views[previous]),
-                "cache_previous_depth" => {
-                    wgpu::BindingResource::TextureView(&t.depth_sampled[previous])
-                }
-                "cache_sampler" => wgpu::BindingResource::Sampler(&shader.sampler),
-                other => {
-                    return Err(Error::Plan(format!(
-                        "the cache binds `{other}`, which this host does not know"
-                    )))
-                }
+            let view = wgpu::BindingResource::TextureView;
+            let resource_of = match CacheResource::named(&resource.name)? {
+                CacheResource::Params => shader.params.as_entire_binding(),
+                CacheResource::PreviousPayload => view(&t.payload_views[previous]),
+                CacheResource::CurrentPayload => view(&t.payload_views[current]),
+                CacheResource::PreviousAge => view(&t.age_views[previous]),
+                CacheResource::PreviousDepth => view(&t.depth_sampled[previous]),
+                CacheResource::Sampler => wgpu::BindingResource::Sampler(&shader.sampler),
             };
             entries.push(wgpu::BindGroupEntry {
                 binding: resource.binding,
@@ -838,6 +836,10 @@ impl<'e> Draw<'_, 'e> {
         for (slot, buffer) in &twins.inner.vertex {
             self.render.set_vertex_buffer(*slot, buffer.slice(..));
         }
-        self.binder.used.borrow_mut().push(twins.inner.clone());
+        self.binder
+            .used
+            .borrow_mut()
+            .entry(twins.inner.id)
+            .or_insert_with(|| twins.inner.clone());
     }
 }

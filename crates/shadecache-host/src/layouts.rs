@@ -9,12 +9,11 @@ use crate::Error;
 
 const VISIBLE: wgpu::ShaderStages = wgpu::ShaderStages::VERTEX_FRAGMENT;
 
-/// The layout entry a plan's resource implies: the binding type WGSL
-/// declares, visible to both stages (read-write storage to the fragment
-/// stage only). A sampled colour texture is taken as filterable float.
-/// `None` for what a layout cannot state from the plan (storage textures
-/// and `other`).
-pub fn entry_for(resource: &Resource) -> Option<wgpu::BindGroupLayoutEntry> {
+/// The binding type WGSL declares as `kind`, and the stages it is
+/// visible to (both; read-write storage the fragment stage only). A
+/// sampled colour texture is taken as filterable float. `None` for what a
+/// layout cannot state from the plan (storage textures and `other`).
+fn binding_type(kind: ResourceKind) -> Option<(wgpu::BindingType, wgpu::ShaderStages)> {
     use wgpu::TextureViewDimension as D;
     use ResourceKind as K;
     let texture = |dimension, depth: bool| wgpu::BindingType::Texture {
@@ -26,12 +25,7 @@ pub fn entry_for(resource: &Resource) -> Option<wgpu::BindGroupLayoutEntry> {
         view_dimension: dimension,
         multisampled: false,
     };
-    let buffer = |ty| wgpu::BindingType::Buffer {
-        ty,
-        has_dynamic_offset: false,
-        min_binding_size: None,
-    };
-    let (ty, visibility) = match resource.kind {
+    let (ty, visibility) = match kind {
         K::Uniform => (buffer(wgpu::BufferBindingType::Uniform), VISIBLE),
         K::Storage => (
             buffer(wgpu::BufferBindingType::Storage { read_only: true }),
@@ -61,6 +55,21 @@ pub fn entry_for(resource: &Resource) -> Option<wgpu::BindGroupLayoutEntry> {
         ),
         K::StorageTexture | K::Other => return None,
     };
+    Some((ty, visibility))
+}
+
+fn buffer(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+/// The layout entry a plan's resource implies ([`binding_type`]); `None`
+/// for what a layout cannot state from the plan.
+pub fn entry_for(resource: &Resource) -> Option<wgpu::BindGroupLayoutEntry> {
+    let (ty, visibility) = binding_type(resource.kind)?;
     Some(wgpu::BindGroupLayoutEntry {
         binding: resource.binding,
         visibility,
@@ -149,22 +158,17 @@ pub(crate) fn user_groups<'a>(
     Ok(groups)
 }
 
-/// Whether a layout entry's type can hold what WGSL declares as `kind`.
+/// Whether a layout entry's type can hold what WGSL declares as `kind`:
+/// the same binding type, up to what WGSL does not say (a texture's float
+/// filterability, a sampler's filtering).
 fn compatible(kind: ResourceKind, ty: &wgpu::BindingType) -> bool {
     use wgpu::BindingType as B;
     use ResourceKind as K;
+    let is_depth = |t: &wgpu::TextureSampleType| *t == wgpu::TextureSampleType::Depth;
     match (kind, ty) {
-        (K::Uniform, B::Buffer { ty, .. }) => *ty == wgpu::BufferBindingType::Uniform,
-        (K::Storage, B::Buffer { ty, .. }) => {
-            matches!(ty, wgpu::BufferBindingType::Storage { read_only: true })
-        }
-        (K::StorageReadWrite, B::Buffer { ty, .. }) => {
-            matches!(ty, wgpu::BufferBindingType::Storage { read_only: false })
-        }
-        (K::Sampler, B::Sampler(s)) => *s != wgpu::SamplerBindingType::Comparison,
-        (K::ComparisonSampler, B::Sampler(s)) => *s == wgpu::SamplerBindingType::Comparison,
-        (K::StorageTexture, B::StorageTexture { .. }) => true,
         (K::Other, _) => true,
+        (K::StorageTexture, B::StorageTexture { .. }) => true,
+        (K::Sampler, B::Sampler(s)) => *s != wgpu::SamplerBindingType::Comparison,
         (
             kind,
             B::Texture {
@@ -172,70 +176,84 @@ fn compatible(kind: ResourceKind, ty: &wgpu::BindingType) -> bool {
                 view_dimension,
                 ..
             },
-        ) => entry_for(&Resource {
-            group: 0,
-            binding: 0,
-            name: String::new(),
-            kind,
-            source: None,
-        })
-        .is_some_and(|expected| match expected.ty {
-            B::Texture {
-                sample_type: want,
-                view_dimension: dimension,
-                ..
-            } => {
-                dimension == *view_dimension
-                    && (want == wgpu::TextureSampleType::Depth)
-                        == (*sample_type == wgpu::TextureSampleType::Depth)
-            }
-            _ => false,
-        }),
-        _ => false,
+        ) => matches!(
+            binding_type(kind),
+            Some((B::Texture { sample_type: want, view_dimension: dimension, .. }, _))
+                if dimension == *view_dimension && is_depth(&want) == is_depth(sample_type)
+        ),
+        (kind, ty) => binding_type(kind).is_some_and(|(want, _)| want == *ty),
     }
 }
 
-/// The cache group's entries: the cache's own resources by name, and each
-/// twin as the resource it shadows.
-pub(crate) fn cache_entries(plan: &Plan) -> Result<Vec<wgpu::BindGroupLayoutEntry>, Error> {
-    // rgba32float is not filterable without an optional feature: its
-    // variants reconstruct from texel loads.
-    let payload_filterable = plan.cache.format == CacheFormat::Rgba16float;
-    let texture = |sample_type| wgpu::BindingType::Texture {
-        sample_type,
-        view_dimension: wgpu::TextureViewDimension::D2,
-        multisampled: false,
-    };
-    let mut entries = Vec::new();
-    for resource in &plan.bindings.cache {
-        let ty = match resource.name.as_str() {
-            "cache_params" => wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            "cache_previous_payload" | "cache_current_payload" => {
-                texture(wgpu::TextureSampleType::Float {
-                    filterable: payload_filterable,
-                })
-            }
-            "cache_previous_age" => texture(wgpu::TextureSampleType::Float { filterable: true }),
-            "cache_previous_depth" => texture(wgpu::TextureSampleType::Depth),
-            "cache_sampler" => wgpu::BindingType::Sampler(if payload_filterable {
-                wgpu::SamplerBindingType::Filtering
-            } else {
-                wgpu::SamplerBindingType::NonFiltering
-            }),
+/// The cache's own resources, as `shaders/cache.wgsl` names them: what a
+/// host binds for each.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum CacheResource {
+    /// The refresh uniform, `CacheParams`.
+    Params,
+    PreviousPayload,
+    CurrentPayload,
+    PreviousAge,
+    PreviousDepth,
+    Sampler,
+}
+
+impl CacheResource {
+    pub fn named(name: &str) -> Result<CacheResource, Error> {
+        Ok(match name {
+            "cache_params" => CacheResource::Params,
+            "cache_previous_payload" => CacheResource::PreviousPayload,
+            "cache_current_payload" => CacheResource::CurrentPayload,
+            "cache_previous_age" => CacheResource::PreviousAge,
+            "cache_previous_depth" => CacheResource::PreviousDepth,
+            "cache_sampler" => CacheResource::Sampler,
             other => {
                 return Err(Error::Plan(format!(
                     "the cache binds `{other}`, which this host does not know (a newer plan?)"
                 )))
             }
+        })
+    }
+
+    /// Its binding type. rgba32float is not filterable without an
+    /// optional feature: its variants reconstruct from texel loads, with a
+    /// non-filtering sampler.
+    fn binding_type(self, payload_filterable: bool) -> wgpu::BindingType {
+        let texture = |sample_type| wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
         };
+        match self {
+            CacheResource::Params => buffer(wgpu::BufferBindingType::Uniform),
+            CacheResource::PreviousPayload | CacheResource::CurrentPayload => {
+                texture(wgpu::TextureSampleType::Float {
+                    filterable: payload_filterable,
+                })
+            }
+            CacheResource::PreviousAge => {
+                texture(wgpu::TextureSampleType::Float { filterable: true })
+            }
+            CacheResource::PreviousDepth => texture(wgpu::TextureSampleType::Depth),
+            CacheResource::Sampler => wgpu::BindingType::Sampler(if payload_filterable {
+                wgpu::SamplerBindingType::Filtering
+            } else {
+                wgpu::SamplerBindingType::NonFiltering
+            }),
+        }
+    }
+}
+
+/// The cache group's entries: the cache's own resources, and each twin as
+/// the resource it shadows.
+pub(crate) fn cache_entries(plan: &Plan) -> Result<Vec<wgpu::BindGroupLayoutEntry>, Error> {
+    let payload_filterable = plan.cache.format == CacheFormat::Rgba16float;
+    let mut entries = Vec::new();
+    for resource in &plan.bindings.cache {
         entries.push(wgpu::BindGroupLayoutEntry {
             binding: resource.binding,
             visibility: VISIBLE,
-            ty,
+            ty: CacheResource::named(&resource.name)?.binding_type(payload_filterable),
             count: None,
         });
     }
