@@ -113,7 +113,10 @@ pub(super) fn measured_run(
         progress.step("reference");
         if is_measured {
             run.times.push(time);
-            let now = read_linear(clock.gpu, reference.color()).map_err(fail)?;
+            let color = reference
+                .color()
+                .ok_or_else(|| fail("the reference draws no colour".into()))?;
+            let now = read_linear(clock.gpu, color).map_err(fail)?;
             run.before = std::mem::replace(&mut run.now, now);
         }
         for item in measured.iter_mut() {

@@ -48,7 +48,7 @@ impl PlanFrame {
             .into_iter()
             .enumerate()
         {
-            vertex[slot] = packed(&plan.vertex_layout, step)?;
+            vertex[slot] = packed(&plan.vertex_layout, step);
         }
         let groups = shadecache_host::plan_groups(plan)
             .into_iter()
@@ -122,10 +122,7 @@ impl PlanFrame {
 
 /// The plan's inputs that step as `step` and are not twins, packed in
 /// order.
-fn packed(
-    layout: &[VertexAttribute],
-    step: StepMode,
-) -> Result<Vec<wgpu::VertexAttribute>, String> {
+fn packed(layout: &[VertexAttribute], step: StepMode) -> Vec<wgpu::VertexAttribute> {
     let mut offset = 0;
     layout
         .iter()
@@ -138,16 +135,13 @@ fn packed(
                 shader_location: attribute.location,
             };
             offset += format.size();
-            Ok(out)
+            out
         })
         .collect()
 }
 
 /// The shaders a plan names, read once.
-pub(super) fn sources(
-    plan: &Plan,
-    shader: impl Fn(&str) -> Option<String>,
-) -> HashMap<String, String> {
+fn sources(plan: &Plan, shader: impl Fn(&str) -> Option<String>) -> HashMap<String, String> {
     plan.passes
         .iter()
         .chain(&plan.classify)
@@ -155,30 +149,49 @@ pub(super) fn sources(
         .collect()
 }
 
-/// Makes every pass of `plan` on the GPU as the runner would, with the
-/// frame the plan implies: returns how many pipelines were made.
+/// The variant on the GPU from `plan` and its shaders (`shader` gives a
+/// file's text by the plan's name), drawn in the frame the plan implies at
+/// `size`: what the runner draws with, and the frame it was made for.
+pub(super) fn cached_shader(
+    gpu: &Gpu,
+    plan: &Plan,
+    shader: impl Fn(&str) -> Option<String>,
+    size: (u32, u32),
+    options: RunOptions,
+) -> Result<(CachedShader, PlanFrame), String> {
+    let sources = sources(plan, shader);
+    let frame = PlanFrame::new(plan, options.pipelines)?;
+    let cached = frame
+        .with_layout(|layout| {
+            CachedShader::new(
+                &gpu.device,
+                plan,
+                |name| sources.get(name).map(String::as_str),
+                layout,
+                size,
+                shadecache_host::Options {
+                    classify: options.classify,
+                    count_shading: options.pipelines.count_shading,
+                },
+            )
+        })
+        .map_err(|err| err.to_string())?;
+    Ok((cached, frame))
+}
+
+/// Makes every pass of `plan` on the GPU as the runner would, the
+/// classification included, with the frame the plan implies: returns how
+/// many pipelines were made.
 pub fn build_passes(
     gpu: &Gpu,
     plan: &Plan,
     shader: impl Fn(&str) -> Option<String>,
     options: PipelineOptions,
 ) -> Result<usize, String> {
-    let sources = sources(plan, shader);
-    let frame = PlanFrame::new(plan, options)?;
-    let cached = frame.with_layout(|layout| {
-        CachedShader::new(
-            &gpu.device,
-            plan,
-            |name| sources.get(name).map(String::as_str),
-            layout,
-            (1, 1),
-            shadecache_host::Options {
-                count_shading: options.count_shading,
-                classify: false,
-            },
-        )
-    });
-    cached
-        .map(|c| c.plan().passes.len())
-        .map_err(|err| err.to_string())
+    let options = RunOptions {
+        pipelines: options,
+        classify: true,
+    };
+    let (cached, _) = cached_shader(gpu, plan, shader, (1, 1), options)?;
+    Ok(cached.plan().passes.len() + usize::from(cached.plan().classify.is_some()))
 }

@@ -7,7 +7,7 @@ use std::collections::{BTreeMap, HashMap};
 
 use shadecache_host::{render_target, CachedShader, Draw, PassTimer, Targets, TwinSources, Twins};
 
-use super::frame::{sources, PlanFrame, RunOptions};
+use super::frame::{cached_shader, RunOptions};
 use super::gpu::Gpu;
 use super::textures::scene_textures;
 use super::textures::Texels;
@@ -77,12 +77,11 @@ struct Object {
 /// per-object buffers, and the variant.
 pub struct Runner {
     cached: CachedShader,
+    /// The frame's first colour output, which the profile reads back.
+    color: Option<wgpu::Texture>,
     /// The frame's colour targets by output location, each in the plan's
     /// format for it.
-    colors: Vec<Option<(wgpu::Texture, wgpu::TextureView)>>,
-    /// What [`Runner::color`] shows for a plan without colour outputs:
-    /// the clear colour.
-    fallback: wgpu::Texture,
+    color_views: Vec<Option<wgpu::TextureView>>,
     meshes: Vec<GpuMesh>,
     objects: Vec<Object>,
     /// The application's group layouts, as the plan implies them.
@@ -138,32 +137,21 @@ impl Runner {
         size: (u32, u32),
         options: RunOptions,
     ) -> Result<Runner, String> {
-        let sources = sources(plan, shader);
-        let frame = PlanFrame::new(plan, options.pipelines)?;
-        let cached = frame
-            .with_layout(|layout| {
-                CachedShader::new(
-                    &gpu.device,
-                    plan,
-                    |name| sources.get(name).map(String::as_str),
-                    layout,
-                    size,
-                    shadecache_host::Options {
-                        classify: options.classify,
-                        count_shading: options.pipelines.count_shading,
-                    },
-                )
-            })
-            .map_err(|err| err.to_string())?;
+        let (cached, frame) = cached_shader(gpu, plan, shader, size, options)?;
         let device = &gpu.device;
-        let colors = frame
+        let colors: Vec<Option<wgpu::Texture>> = frame
             .color_formats()
-            .map(|format| {
-                format.map(|format| {
-                    let texture = render_target(device, "color", size, format);
-                    let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
-                    (texture, view)
-                })
+            .map(|format| format.map(|format| render_target(device, "color", size, format)))
+            .collect();
+        // What the profile reads back: the first output (none for a plan
+        // that writes only the cache, such as a payload pass alone).
+        let color = colors.iter().flatten().next().cloned();
+        let color_views = colors
+            .iter()
+            .map(|texture| {
+                texture
+                    .as_ref()
+                    .map(|t| t.create_view(&wgpu::TextureViewDescriptor::default()))
             })
             .collect();
         let meshes = meshes
@@ -192,8 +180,8 @@ impl Runner {
         let (views, samplers) = scene_textures(gpu, plan, textures)?;
         Ok(Runner {
             cached,
-            colors,
-            fallback: render_target(device, "no colour", size, wgpu::TextureFormat::Rgba8Unorm),
+            color,
+            color_views,
             meshes,
             objects: Vec::new(),
             layouts,
@@ -216,14 +204,10 @@ impl Runner {
         self.cached.plan()
     }
 
-    /// The frame's colour target.
-    pub fn color(&self) -> &wgpu::Texture {
-        self.colors
-            .iter()
-            .flatten()
-            .map(|(texture, _)| texture)
-            .next()
-            .unwrap_or(&self.fallback)
+    /// The frame's first colour target; `None` for a plan that writes only
+    /// the cache.
+    pub fn color(&self) -> Option<&wgpu::Texture> {
+        self.color.as_ref()
     }
 
     /// The last frame's classes, when classification is on.
@@ -265,11 +249,8 @@ impl Runner {
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        let color: Vec<Option<&wgpu::TextureView>> = self
-            .colors
-            .iter()
-            .map(|target| target.as_ref().map(|(_, view)| view))
-            .collect();
+        let color: Vec<Option<&wgpu::TextureView>> =
+            self.color_views.iter().map(Option::as_ref).collect();
         let clear = self.plan().clear.color;
         let targets = Targets {
             color: &color,

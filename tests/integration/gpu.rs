@@ -211,7 +211,7 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
         };
         runner.frame(&gpu, &inputs, None).unwrap();
 
-        let color = runtime::read_texture(&gpu, runner.color(), 8).unwrap();
+        let color = runtime::read_texture(&gpu, runner.color().unwrap(), 8).unwrap();
         let depth = runtime::read_texture(&gpu, runner.depth(), 4).unwrap();
         // After the first frame most pixels are reused: pass 1 writes their
         // depth and pass 2 is depth-tested against it, so all three passes'
