@@ -33,46 +33,27 @@ pub const FORMAT_VERSION: u32 = 1;
 /// A texture format a plan names: a colour target, the cache, the depth
 /// buffer. Written as WebGPU spells it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(into = "&'static str", try_from = "String")]
 pub enum TextureFormat {
-    #[serde(rename = "rgba8unorm")]
     Rgba8Unorm,
-    #[serde(rename = "rgba8unorm-srgb")]
     Rgba8UnormSrgb,
-    #[serde(rename = "bgra8unorm")]
     Bgra8Unorm,
-    #[serde(rename = "bgra8unorm-srgb")]
     Bgra8UnormSrgb,
-    #[serde(rename = "r16float")]
     R16Float,
-    #[serde(rename = "rg16float")]
     Rg16Float,
-    #[serde(rename = "rgba16float")]
     Rgba16Float,
-    #[serde(rename = "r32float")]
     R32Float,
-    #[serde(rename = "rg32float")]
     Rg32Float,
-    #[serde(rename = "rgba32float")]
     Rgba32Float,
-    #[serde(rename = "r32uint")]
     R32Uint,
-    #[serde(rename = "rg32uint")]
     Rg32Uint,
-    #[serde(rename = "rgba32uint")]
     Rgba32Uint,
-    #[serde(rename = "r32sint")]
     R32Sint,
-    #[serde(rename = "rg32sint")]
     Rg32Sint,
-    #[serde(rename = "rgba32sint")]
     Rgba32Sint,
-    #[serde(rename = "depth16unorm")]
     Depth16Unorm,
-    #[serde(rename = "depth24plus")]
     Depth24Plus,
-    #[serde(rename = "depth24plus-stencil8")]
     Depth24PlusStencil8,
-    #[serde(rename = "depth32float")]
     Depth32Float,
 }
 
@@ -144,38 +125,38 @@ impl std::str::FromStr for TextureFormat {
     }
 }
 
+impl From<TextureFormat> for &'static str {
+    fn from(format: TextureFormat) -> &'static str {
+        format.as_str()
+    }
+}
+
+impl TryFrom<String> for TextureFormat {
+    type Error = String;
+
+    fn try_from(text: String) -> Result<Self, String> {
+        text.parse()
+    }
+}
+
 /// A vertex input's format, as WebGPU spells it (`float32x3`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(into = "&'static str", try_from = "String")]
 pub enum VertexFormat {
-    #[serde(rename = "float16")]
     Float16,
-    #[serde(rename = "float16x2")]
     Float16x2,
-    #[serde(rename = "float16x4")]
     Float16x4,
-    #[serde(rename = "float32")]
     Float32,
-    #[serde(rename = "float32x2")]
     Float32x2,
-    #[serde(rename = "float32x3")]
     Float32x3,
-    #[serde(rename = "float32x4")]
     Float32x4,
-    #[serde(rename = "sint32")]
     Sint32,
-    #[serde(rename = "sint32x2")]
     Sint32x2,
-    #[serde(rename = "sint32x3")]
     Sint32x3,
-    #[serde(rename = "sint32x4")]
     Sint32x4,
-    #[serde(rename = "uint32")]
     Uint32,
-    #[serde(rename = "uint32x2")]
     Uint32x2,
-    #[serde(rename = "uint32x3")]
     Uint32x3,
-    #[serde(rename = "uint32x4")]
     Uint32x4,
 }
 
@@ -237,6 +218,20 @@ impl std::str::FromStr for VertexFormat {
     }
 }
 
+impl From<VertexFormat> for &'static str {
+    fn from(format: VertexFormat) -> &'static str {
+        format.as_str()
+    }
+}
+
+impl TryFrom<String> for VertexFormat {
+    type Error = String;
+
+    fn try_from(text: String) -> Result<Self, String> {
+        text.parse()
+    }
+}
+
 impl VertexFormat {
     /// Components per input: 1 to 4.
     pub fn components(self) -> u32 {
@@ -258,16 +253,6 @@ impl VertexFormat {
             self,
             V::Float32 | V::Float32x2 | V::Float32x3 | V::Float32x4
         )
-    }
-
-    /// Bytes of one input.
-    pub fn size(self) -> u32 {
-        let width = if self.as_str().starts_with("float16") {
-            2
-        } else {
-            4
-        };
-        width * self.components()
     }
 }
 
