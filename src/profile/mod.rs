@@ -287,7 +287,11 @@ impl Measured for Config {
         for (name, ms) in sample.passes {
             self.passes.entry(name).or_default().push(ms);
         }
-        let color = read_linear(sample.gpu, self.runner.color())?;
+        let color = self
+            .runner
+            .color()
+            .ok_or("the configuration draws no colour")?;
+        let color = read_linear(sample.gpu, color)?;
         let classes = runtime::read_texture(sample.gpu, self.runner.classes(), 4)?;
         let reference = sample.reference;
         self.errors.push(metrics::compare(
@@ -419,23 +423,22 @@ pub fn profile(
         }
         None => Vec::new(),
     };
-    let report = Report {
+    let run = RunContext {
+        shader,
+        scene: (scene, scene_path),
+        options,
+        prepared: &prepared,
+        clock: &clock,
+        reference_times: &reference_run.times,
+        probes: &probes,
+    };
+    let report = run.report(Findings {
         warnings: view_warnings(scene, prepared.aspect, warmup, &results),
         defaulted: scene_inputs.defaulted.clone(),
-        shader: shader.file.path.clone(),
-        scene: scene_path.display().to_string(),
-        command: options.command.clone(),
-        ..report_of(scene, &prepared, &clock, &reference_run.times, &probes)
-    };
-    let mut report = Report {
         nodes: node_reports,
         results,
         miss_causes,
-        ..report
-    };
-    if let Some(grid) = &mut report.grid {
-        grid.measured = report.results.len();
-    }
+    });
 
     // The answer, and its winner measured again before it is given.
     let winner = Winner {
@@ -497,66 +500,86 @@ fn rows(
     (results, pictures)
 }
 
-/// The report's run-wide fields: the frames, the device and its clock,
-/// the reference, the grid. Per-node, per-result and per-shader fields
-/// are left empty for the caller.
-fn report_of(
-    scene: &Scene,
-    prepared: &setup::Prepared,
-    clock: &Clock,
-    reference_times: &[f64],
-    probes: &[Probe],
-) -> Report {
-    let adapter = &clock.gpu.adapter;
-    let grid = &prepared.grid;
-    Report {
-        format: 1,
-        shader: String::new(),
-        entry: prepared.analysis.entry.clone(),
-        scene: String::new(),
-        scene_description: scene.description.clone(),
-        defaulted: Vec::new(),
-        effects: scene.effects.clone(),
-        size: prepared.size,
-        frames: prepared.frames,
-        warmup: prepared.warmup,
-        steady_state: prepared.steady_state,
-        device: Device {
-            name: adapter.name.clone(),
-            backend: format!("{:?}", adapter.backend),
-            driver: format!("{} {}", adapter.driver, adapter.driver_info)
-                .trim()
-                .to_string(),
-        },
-        timing: if clock.timestamps {
-            "gpu-timestamps"
-        } else {
-            "cpu-wall-clock"
+/// What a profile ran with: the shader, the scene and its file, the
+/// options, the plan of work, the clock, the reference's frame times and
+/// the fixed-cost probes.
+struct RunContext<'a> {
+    shader: &'a Shader,
+    scene: (&'a Scene, &'a Path),
+    options: &'a Options,
+    prepared: &'a setup::Prepared,
+    clock: &'a Clock<'a>,
+    reference_times: &'a [f64],
+    probes: &'a [Probe],
+}
+
+/// What the run found: per node, per configuration, the miss causes, and
+/// what the report warns of and lists as defaulted.
+struct Findings {
+    nodes: Vec<NodeReport>,
+    results: Vec<ResultRow>,
+    miss_causes: Vec<MissCause>,
+    warnings: Vec<String>,
+    defaulted: Vec<String>,
+}
+
+impl RunContext<'_> {
+    /// The report, before the choice.
+    fn report(&self, findings: Findings) -> Report {
+        let (scene, scene_path) = self.scene;
+        let prepared = self.prepared;
+        let adapter = &self.clock.gpu.adapter;
+        let grid = &prepared.grid;
+        let reference_times = self.reference_times;
+        Report {
+            format: 1,
+            shader: self.shader.file.path.clone(),
+            entry: prepared.analysis.entry.clone(),
+            scene: scene_path.display().to_string(),
+            scene_description: scene.description.clone(),
+            defaulted: findings.defaulted,
+            effects: scene.effects.clone(),
+            size: prepared.size,
+            frames: prepared.frames,
+            warmup: prepared.warmup,
+            steady_state: prepared.steady_state,
+            device: Device {
+                name: adapter.name.clone(),
+                backend: format!("{:?}", adapter.backend),
+                driver: format!("{} {}", adapter.driver, adapter.driver_info)
+                    .trim()
+                    .to_string(),
+            },
+            timing: if self.clock.timestamps {
+                "gpu-timestamps"
+            } else {
+                "cpu-wall-clock"
+            }
+            .into(),
+            command: self.options.command.clone(),
+            reference: Reference {
+                time_ms: metrics::median(reference_times),
+                spread_ms: [
+                    metrics::quantile(reference_times, 0.1),
+                    metrics::quantile(reference_times, 0.9),
+                ],
+                fixed_ms: probed(self.probes, ProbeOf::Reference).map_or(0.0, |(ms, _)| ms),
+                frame_ms: reference_times.to_vec(),
+            },
+            nodes: findings.nodes,
+            grid: Some(GridReport {
+                design: grid.design,
+                base: prepared.base_setting,
+                axes: grid.axes.clone(),
+                full: grid.full,
+                measured: findings.results.len(),
+                pruned: grid.pruned.clone(),
+            }),
+            results: findings.results,
+            warnings: findings.warnings,
+            miss_causes: findings.miss_causes,
+            choice: None,
         }
-        .into(),
-        command: String::new(),
-        reference: Reference {
-            time_ms: metrics::median(reference_times),
-            spread_ms: [
-                metrics::quantile(reference_times, 0.1),
-                metrics::quantile(reference_times, 0.9),
-            ],
-            fixed_ms: probed(probes, ProbeOf::Reference).map_or(0.0, |(ms, _)| ms),
-            frame_ms: reference_times.to_vec(),
-        },
-        nodes: Vec::new(),
-        grid: Some(GridReport {
-            design: grid.design,
-            base: prepared.base_setting,
-            axes: grid.axes.clone(),
-            full: grid.full,
-            measured: 0,
-            pruned: grid.pruned.clone(),
-        }),
-        results: Vec::new(),
-        warnings: Vec::new(),
-        miss_causes: Vec::new(),
-        choice: None,
     }
 }
 
