@@ -186,13 +186,13 @@ pub(super) fn split(
     };
     let shade = shade_function(
         module,
-        original,
-        function,
+        (original, function),
         graph,
         node,
+        stripped,
         payload_ty,
         &entry.name,
-    )?;
+    );
     if options.free_payload {
         free_function(module.functions.get_mut(payload));
         free_function(module.functions.get_mut(shade));
@@ -217,22 +217,17 @@ pub(super) fn split(
     })
 }
 
-/// The entry point's remainder after the node, taking the node's value as
-/// a last argument, `cached`.
+/// The entry point's remainder after the node, taking the binding-free
+/// `arguments` and the node's value as a last one, `cached`.
 fn shade_function(
     module: &mut Module,
-    original: &Module,
-    function: &Function,
+    (original, function): (&Module, &Function),
     graph: &ExprGraph,
     node: Handle<Expression>,
+    mut arguments: Vec<naga::FunctionArgument>,
     payload_ty: Handle<naga::Type>,
     entry_name: &str,
-) -> Result<Handle<Function>, Refusal> {
-    let result = function
-        .result
-        .as_ref()
-        .ok_or_else(|| Refusal::new("the fragment entry point returns nothing"))?;
-    let mut arguments = without_bindings(&function.arguments);
+) -> Handle<Function> {
     arguments.push(naga::FunctionArgument {
         name: Some("cached".into()),
         ty: payload_ty,
@@ -247,7 +242,7 @@ fn shade_function(
         Function {
             name: Some(format!("{entry_name}_shade")),
             arguments,
-            result: Some(naga::FunctionResult {
+            result: function.result.as_ref().map(|result| naga::FunctionResult {
                 ty: result.ty,
                 binding: None,
             }),
@@ -255,7 +250,7 @@ fn shade_function(
         },
     );
     shade_copy.substitute(node, Expression::FunctionArgument(cached_index));
-    Ok(module
+    module
         .functions
-        .append(shade_copy.run(), naga::Span::UNDEFINED))
+        .append(shade_copy.run(), naga::Span::UNDEFINED)
 }
