@@ -211,7 +211,10 @@ struct VertexOutput {
 @vertex
 fn vs_main(in: VertexInput) -> VertexOutput {
     var out: VertexOutput;
-    out.clip = frame.clip_from_world * frame.world_from_local * vec4<f32>(in.position, 1.0);
+    // The constant sizes the sphere: 0.25 draws it whole, anything that
+    // ignores the constant (zero) draws nothing.
+    let placed = in.position * in.layer * 4.0;
+    out.clip = frame.clip_from_world * frame.world_from_local * vec4<f32>(placed, 1.0);
     out.layer = in.layer;
     out.local = in.position;
     return out;
@@ -229,7 +232,8 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
 
 /// Without a constant for it the profile stops at the input, saying how
 /// to give one; with `[vertex_inputs]` in the scene the input is that
-/// constant and the shader profiles.
+/// constant (the sphere it sizes covers the frame) and the shader
+/// profiles.
 #[test]
 fn a_vertex_input_the_mesh_cannot_feed_takes_the_scenes_constant() {
     let (_shader_dir, shader) = temp_file("layered.wgsl", LAYERED.as_bytes());

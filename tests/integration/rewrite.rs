@@ -738,3 +738,47 @@ fn variant_takes_a_list() {
     assert!(dir.path().join("three-pass/plan.json").is_file());
     assert!(!dir.path().join("one-pass").exists());
 }
+
+/// Passes that do not look the fragment up in last frame's cache (two-pass
+/// pass 2, three-pass passes 2 and 3) draw with the vertex stage as the
+/// original has it: no previous clip position computed or interpolated,
+/// no previous-frame twin bound. The passes that do reproject keep both.
+/// Over every corpus rewrite.
+#[test]
+fn only_passes_that_reproject_compute_the_previous_position() {
+    let mut plain = 0;
+    for rewrite in crate::corpus_rewrites::corpus_rewrites() {
+        let Ok(emitted) = &rewrite.outcome else {
+            continue;
+        };
+        let plan = &emitted.plan;
+        if plan.host_vertex.is_some() {
+            continue;
+        }
+        let twins: Vec<[u32; 2]> = plan
+            .bindings
+            .previous
+            .iter()
+            .map(|t| [t.group, t.binding])
+            .collect();
+        for (index, pass) in plan.passes.iter().enumerate() {
+            let reprojects = index == 0;
+            let text = emitted
+                .wgsl
+                .iter()
+                .find(|(name, _)| *name == pass.shader)
+                .map(|(_, text)| text.as_str())
+                .unwrap_or_else(|| panic!("{}: no {}", rewrite.label(), pass.shader));
+            let label = format!("{} {}", rewrite.label(), pass.name);
+            assert_eq!(
+                text.contains("previous_clip_position"),
+                reprojects,
+                "{label}"
+            );
+            let binds_twin = pass.bindings.iter().any(|b| twins.contains(b));
+            assert!(reprojects || !binds_twin, "{label} binds a twin");
+            plain += usize::from(!reprojects);
+        }
+    }
+    assert!(plain > 500, "{plain} passes checked");
+}
