@@ -129,19 +129,10 @@ impl Stage {
 
 /// The `@location`s of a fragment result (a struct's members or the value).
 pub fn output_locations(module: &Module, result: &naga::FunctionResult) -> Vec<u32> {
-    match module.types[result.ty].inner {
-        TypeInner::Struct { ref members, .. } => members
-            .iter()
-            .filter_map(|m| match m.binding {
-                Some(Binding::Location { location, .. }) => Some(location),
-                _ => None,
-            })
-            .collect(),
-        _ => match result.binding {
-            Some(Binding::Location { location, .. }) => vec![location],
-            _ => vec![],
-        },
-    }
+    crate::proc::located(module, &result.binding, result.ty)
+        .into_iter()
+        .map(|(location, _)| location)
+        .collect()
 }
 
 /// Where the cache goes: the location after the original outputs. The

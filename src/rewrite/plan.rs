@@ -263,16 +263,12 @@ fn output_format(
     location: u32,
     float: TextureFormat,
 ) -> TextureFormat {
-    let at = |binding: &Option<Binding>| matches!(binding, Some(Binding::Location { location: l, .. }) if *l == location);
-    let ty = match module.types[result.ty].inner {
-        TypeInner::Struct { ref members, .. } => {
-            members.iter().find(|m| at(&m.binding)).map(|m| m.ty)
-        }
-        _ => at(&result.binding).then_some(result.ty),
-    };
-    let (size, kind) = match ty.map(|ty| &module.types[ty].inner) {
-        Some(&TypeInner::Scalar(scalar)) => (1, scalar.kind),
-        Some(&TypeInner::Vector { size, scalar }) => (size as u32, scalar.kind),
+    let output = crate::proc::located(module, &result.binding, result.ty)
+        .into_iter()
+        .find(|(l, _)| *l == location);
+    let (size, kind) = match output.map(|(_, inner)| inner) {
+        Some(TypeInner::Scalar(scalar)) => (1, scalar.kind),
+        Some(TypeInner::Vector { size, scalar }) => (size as u32, scalar.kind),
         _ => return float,
     };
     use TextureFormat as T;

@@ -447,10 +447,7 @@ fn cache_output(
     });
     let previous_location = new_members
         .iter()
-        .filter_map(|m| match m.binding {
-            Some(Binding::Location { location, .. }) => Some(location + 1),
-            _ => None,
-        })
+        .filter_map(|m| crate::proc::location_of(&m.binding).map(|l| l + 1))
         .max()
         .unwrap_or(0);
     for member in &mut new_members {
