@@ -957,15 +957,7 @@ fn confirm(
                 &mut *chosen
             };
             let label = ["reference again", "chosen again"][which];
-            let (time, _, _) = timed(
-                clock.gpu,
-                &mut clock.profiler,
-                clock.timestamps,
-                runner,
-                &inputs,
-                label,
-            )
-            .map_err(fail)?;
+            let (time, _, _) = timed(clock, runner, &inputs, label).map_err(fail)?;
             progress.step(label);
             if frame >= warmup {
                 times[which].push(time);

@@ -98,15 +98,7 @@ pub(super) fn measured_run(
         let last = frame + 1 == warmup + frames;
         let inputs = inputs_of(frame)?;
 
-        let (time, _, raw) = timed(
-            clock.gpu,
-            &mut clock.profiler,
-            clock.timestamps,
-            reference,
-            &inputs,
-            "reference",
-        )
-        .map_err(fail)?;
+        let (time, _, raw) = timed(clock, reference, &inputs, "reference").map_err(fail)?;
         if last {
             trace.extend(raw);
         }
@@ -124,15 +116,7 @@ pub(super) fn measured_run(
                 continue;
             }
             let label = item.label().to_string();
-            let (time, passes, raw) = timed(
-                clock.gpu,
-                &mut clock.profiler,
-                clock.timestamps,
-                item.runner(),
-                &inputs,
-                &label,
-            )
-            .map_err(fail)?;
+            let (time, passes, raw) = timed(clock, item.runner(), &inputs, &label).map_err(fail)?;
             if last && item.traced() {
                 trace.extend(raw);
             }
@@ -197,13 +181,12 @@ pub(super) type Timed = (
 /// ms: from GPU timestamps when the device has them, else from submission
 /// to completion on the CPU.
 pub(super) fn timed(
-    gpu: &Gpu,
-    profiler: &mut wgpu_profiler::GpuProfiler,
-    timestamps: bool,
+    clock: &mut Clock,
     runner: &mut Runner,
     inputs: &FrameInputs,
     label: &str,
 ) -> Result<Timed, String> {
+    let (gpu, profiler, timestamps) = (clock.gpu, &mut clock.profiler, clock.timestamps);
     let start = std::time::Instant::now();
     runner.frame(gpu, inputs, timestamps.then_some((&mut *profiler, label)))?;
     if timestamps {
