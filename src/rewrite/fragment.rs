@@ -67,11 +67,16 @@ pub enum Writes {
     Color,
     /// The cache's decision as a colour, at location 0.
     Classes,
+    /// The G-buffer's textures, at locations from 0.
+    GBuffer,
 }
 
 /// The fragment entry point of one pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stage {
+    /// The deferred variant's geometry pass: depth, and the fragment's
+    /// inputs and previous clip position into the G-buffer.
+    GBuffer,
     /// One-pass: hit → shade from the cache; miss or refresh → payload.
     OnePass,
     /// Two-pass, pass 1: hit → colour + cache; miss or refresh → discard.
@@ -96,6 +101,7 @@ impl Stage {
             Stage::ReprojectOrDiscard | Stage::Payload => Writes::Cache,
             Stage::ShadeFromCache => Writes::Color,
             Stage::Classify => Writes::Classes,
+            Stage::GBuffer => Writes::GBuffer,
         }
     }
 
@@ -110,7 +116,11 @@ impl Stage {
     pub fn reprojects(self) -> bool {
         matches!(
             self,
-            Stage::OnePass | Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard | Stage::Classify
+            Stage::OnePass
+                | Stage::ReuseOrDiscard
+                | Stage::ReprojectOrDiscard
+                | Stage::Classify
+                | Stage::GBuffer
         )
     }
 
@@ -145,17 +155,44 @@ pub fn cache_location(module: &Module, result: &naga::FunctionResult) -> u32 {
         .unwrap_or(0)
 }
 
-/// Builds the fragment entry point for `stage`.
-pub fn entry_point(
-    module: &mut Module,
+/// Where a pass's fragment stage reads the original inputs from.
+#[derive(Clone, Copy, Debug)]
+pub enum Inputs<'g> {
+    /// Its own arguments: the rasterised varyings of the geometry.
+    Varyings,
+    /// This frame's G-buffer at the pixel (the deferred variant's
+    /// screen-space passes).
+    GBuffer(&'g super::gbuffer::GBuffer),
+}
+
+/// What a fragment entry point works from: the original entry point's
+/// arguments, last frame's clip position (where the pass reprojects) and
+/// the fragment's position.
+pub(super) struct Fragment {
+    pub originals: Vec<Handle<Expression>>,
+    pub previous: Option<Handle<Expression>>,
+    pub frag_coord: Handle<Expression>,
+}
+
+/// Where [`read_varyings`] finds what it reads among the arguments
+/// [`varying_arguments`] made.
+pub(super) struct VaryingsAt {
+    originals: u32,
+    previous: Option<u32>,
+    frag_coord: FragCoord,
+}
+
+/// The arguments of a fragment entry point drawn over the geometry: the
+/// original ones (a bare `@builtin(position)` made invariant like the
+/// struct members `mark_positions_invariant` handles), the previous clip
+/// position where `reprojects`, and the fragment position when the
+/// original does not take it.
+pub(super) fn varying_arguments(
+    module: &Module,
     pieces: &Pieces,
-    stage: Stage,
-) -> Result<Function, Refusal> {
-    // Arguments: the original ones, the previous clip position, and the
-    // fragment position when the original does not take it.
+    reprojects: bool,
+) -> (Vec<naga::FunctionArgument>, VaryingsAt) {
     let mut arguments = pieces.arguments.clone();
-    // A bare `@builtin(position)` argument is invariant like the struct
-    // members `mark_positions_invariant` handles.
     for argument in &mut arguments {
         if let Some(Binding::BuiltIn(naga::BuiltIn::Position { invariant })) =
             argument.binding.as_mut()
@@ -163,8 +200,8 @@ pub fn entry_point(
             *invariant = true;
         }
     }
-    let previous_index = stage.reprojects().then_some(arguments.len() as u32);
-    if stage.reprojects() {
+    let previous = reprojects.then_some(arguments.len() as u32);
+    if reprojects {
         arguments.push(naga::FunctionArgument {
             name: Some("previous_clip_position".into()),
             ty: pieces.vec4,
@@ -177,18 +214,70 @@ pub fn entry_point(
             }),
         });
     }
-    let frag_coord_index = arguments.len() as u32;
-    let frag_coord_at = find_frag_coord(module, &pieces.arguments);
-    if frag_coord_at.is_none() {
-        arguments.push(naga::FunctionArgument {
-            name: Some("frag_coord".into()),
-            ty: pieces.vec4,
-            binding: Some(Binding::BuiltIn(naga::BuiltIn::Position {
-                invariant: true,
-            })),
-        });
-    }
+    let frag_coord = match find_frag_coord(module, &pieces.arguments) {
+        Some(at) => at,
+        None => {
+            arguments.push(frag_coord_argument(pieces.vec4));
+            FragCoord::Argument(arguments.len() as u32 - 1)
+        }
+    };
+    let at = VaryingsAt {
+        originals: pieces.arguments.len() as u32,
+        previous,
+        frag_coord,
+    };
+    (arguments, at)
+}
 
+/// `@builtin(position) frag_coord: vec4<f32>`, invariant.
+pub(super) fn frag_coord_argument(vec4: Handle<naga::Type>) -> naga::FunctionArgument {
+    naga::FunctionArgument {
+        name: Some("frag_coord".into()),
+        ty: vec4,
+        binding: Some(Binding::BuiltIn(naga::BuiltIn::Position {
+            invariant: true,
+        })),
+    }
+}
+
+/// Reads the arguments [`varying_arguments`] made.
+pub(super) fn read_varyings(b: &mut Builder, at: &VaryingsAt) -> Fragment {
+    let originals = (0..at.originals).map(|i| b.argument(i)).collect();
+    let previous = at.previous.map(|i| b.argument(i));
+    let frag_coord = match at.frag_coord {
+        FragCoord::Argument(i) => b.argument(i),
+        FragCoord::Member(i, m) => {
+            let arg = b.argument(i);
+            b.member(arg, m)
+        }
+    };
+    Fragment {
+        originals,
+        previous,
+        frag_coord,
+    }
+}
+
+/// Builds the fragment entry point for `stage`, reading the original
+/// inputs from `inputs`.
+pub fn entry_point(
+    module: &mut Module,
+    pieces: &Pieces,
+    stage: Stage,
+    inputs: Inputs,
+) -> Result<Function, Refusal> {
+    if stage == Stage::GBuffer {
+        return Err(Refusal::internal(
+            "the G-buffer pass is built by `GBuffer::write_entry`",
+        ));
+    }
+    let (arguments, varyings) = match inputs {
+        Inputs::Varyings => {
+            let (arguments, at) = varying_arguments(module, pieces, stage.reprojects());
+            (arguments, Some(at))
+        }
+        Inputs::GBuffer(_) => (vec![frag_coord_argument(pieces.vec4)], None),
+    };
     let (result_ty, cache_member) = output_type(module, pieces, stage.writes());
     let mut b = Builder::new(Function {
         name: Some(pieces.name.clone()),
@@ -199,26 +288,24 @@ pub fn entry_point(
                 Writes::Classes => Some(location(0)),
                 Writes::Color => pieces.result.binding.clone(),
                 // A struct: its members carry the bindings.
-                Writes::Cache | Writes::ColorAndCache => None,
+                Writes::Cache | Writes::ColorAndCache | Writes::GBuffer => None,
             },
         }),
         ..Function::default()
     });
-    let originals: Vec<_> = (0..pieces.arguments.len() as u32)
-        .map(|i| b.argument(i))
-        .collect();
-    // Last frame's clip position, in the passes that reproject.
-    let previous = previous_index
-        .map(|i| b.argument(i))
-        .ok_or_else(|| Refusal::internal(format!("{stage:?} reads no previous clip position")));
-    let frag_coord = match frag_coord_at {
-        Some(FragCoord::Argument(i)) => b.argument(i),
-        Some(FragCoord::Member(i, m)) => {
-            let arg = b.argument(i);
-            b.member(arg, m)
-        }
-        None => b.argument(frag_coord_index),
+    let fragment = match (inputs, &varyings) {
+        (Inputs::GBuffer(gbuffer), _) => gbuffer.read(&mut b, module, pieces),
+        (Inputs::Varyings, Some(at)) => read_varyings(&mut b, at),
+        (Inputs::Varyings, None) => return Err(Refusal::internal("varyings without arguments")),
     };
+    let Fragment {
+        originals,
+        previous,
+        frag_coord,
+    } = fragment;
+    // Last frame's clip position, in the passes that reproject.
+    let previous = previous
+        .ok_or_else(|| Refusal::internal(format!("{stage:?} reads no previous clip position")));
 
     if stage == Stage::Classify {
         let lookup = b.call(pieces.lookup, vec![previous?]);
@@ -301,7 +388,9 @@ pub fn entry_point(
             let cached = b.call(pieces.current, vec![frag_coord]);
             from_vec4(&mut b, cached, pieces.components)
         }
-        Stage::Classify => return Err(Refusal::internal("classify has no payload")),
+        Stage::Classify | Stage::GBuffer => {
+            return Err(Refusal::internal(format!("{stage:?} has no payload")))
+        }
     };
 
     let age = match age {
@@ -317,7 +406,9 @@ pub fn entry_point(
                 components: vec![cache, age],
             })
         }
-        Writes::Classes => return Err(Refusal::internal("classify writes no payload")),
+        Writes::Classes | Writes::GBuffer => {
+            return Err(Refusal::internal(format!("{stage:?} writes no payload")))
+        }
         Writes::Color => {
             let mut arguments = originals.clone();
             arguments.push(payload);
@@ -388,7 +479,7 @@ fn output_type(
     writes: Writes,
 ) -> (Handle<naga::Type>, Option<u32>) {
     match writes {
-        Writes::Classes => (pieces.vec4, None),
+        Writes::Classes | Writes::GBuffer => (pieces.vec4, None),
         Writes::Cache => {
             let f32_ty = f32_type(module);
             let ty = module.types.insert(
@@ -543,13 +634,14 @@ fn to_vec4(
     })
 }
 
+#[derive(Clone, Copy, Debug)]
 enum FragCoord {
     Argument(u32),
     Member(u32, u32),
 }
 
 /// Whether a binding is `@builtin(position)`, invariant or not.
-pub(super) fn is_position(binding: &Option<Binding>) -> bool {
+pub(crate) fn is_position(binding: &Option<Binding>) -> bool {
     matches!(
         binding,
         Some(Binding::BuiltIn(naga::BuiltIn::Position { .. }))

@@ -22,6 +22,7 @@
 pub mod builder;
 pub mod copy;
 pub mod fragment;
+pub mod gbuffer;
 pub mod gradients;
 mod helpers;
 pub mod path;
@@ -62,6 +63,13 @@ fn stages(variant: Variant) -> &'static [Stage] {
         Variant::OnePass => &[Stage::OnePass],
         Variant::TwoPass => &[Stage::ReuseOrDiscard, Stage::Full],
         Variant::ThreePass => &[
+            Stage::ReprojectOrDiscard,
+            Stage::Payload,
+            Stage::ShadeFromCache,
+        ],
+        // Three-pass's passes in screen space, after the one geometry pass.
+        Variant::Deferred => &[
+            Stage::GBuffer,
             Stage::ReprojectOrDiscard,
             Stage::Payload,
             Stage::ShadeFromCache,
@@ -390,22 +398,38 @@ fn rewrite_at(
         candidate,
         vertex.previous_location,
     );
+    // The deferred variant's G-buffer textures are bound after the twins.
+    let gbuffer = match variant {
+        Variant::Deferred => {
+            let first = slot.first_binding
+                + first_twin_binding().map_err(Refusal::internal)?
+                + vertex.twins.len() as u32;
+            let packs_depth = options.reconstruction.packs_depth();
+            Some(gbuffer::GBuffer::new(
+                &mut module,
+                &pieces,
+                packs_depth,
+                (slot.group, first),
+            )?)
+        }
+        _ => None,
+    };
+    let stage_pass = |stage: Stage, name: String| {
+        pass_module(
+            &module,
+            &pieces,
+            &vertex,
+            entry,
+            stage,
+            name,
+            gbuffer.as_ref(),
+        )
+    };
     let mut passes = Vec::new();
     for (index, &stage) in stages(variant).iter().enumerate() {
-        let name = format!("pass{}", index + 1);
-        passes.push((
-            stage,
-            pass_module(&module, &pieces, &vertex, entry, stage, name)?,
-        ));
+        passes.push((stage, stage_pass(stage, format!("pass{}", index + 1))?));
     }
-    let classify = pass_module(
-        &module,
-        &pieces,
-        &vertex,
-        entry,
-        Stage::Classify,
-        "classify".into(),
-    )?;
+    let classify = stage_pass(Stage::Classify, "classify".into())?;
 
     let mut plan = plan::build(plan::Inputs {
         shader,
@@ -417,6 +441,7 @@ fn rewrite_at(
         vertex: &vertex,
         passes: &passes,
         classify: &classify,
+        gbuffer: gbuffer.as_ref(),
         result: &pieces.result,
         params: cache_params_layout()?,
     })
@@ -479,7 +504,8 @@ fn cache_format(
 /// One pass's module: the rewritten module with the vertex entry point
 /// and the pass's fragment entry point for `stage`, compacted, validated,
 /// and checked for derivatives in non-uniform control flow and after a
-/// kill.
+/// kill. With a `gbuffer` (the deferred variant), every pass but the
+/// G-buffer pass itself runs in screen space and reads it.
 fn pass_module(
     module: &naga::Module,
     pieces: &Pieces,
@@ -487,15 +513,32 @@ fn pass_module(
     entry: &naga::EntryPoint,
     stage: Stage,
     name: String,
+    gbuffer: Option<&gbuffer::GBuffer>,
 ) -> Result<PassModule, Refusal> {
     let mut pass = module.clone();
-    let fragment = fragment::entry_point(&mut pass, pieces, stage)?;
-    let mut vertex_entry = vertex.entry_index.map(|i| pass.entry_points[i].clone());
+    let (fragment, screen) = match (gbuffer, stage) {
+        (Some(gbuffer), Stage::GBuffer) => (gbuffer.write_entry(&mut pass, pieces), None),
+        (Some(gbuffer), _) => (
+            fragment::entry_point(&mut pass, pieces, stage, fragment::Inputs::GBuffer(gbuffer))?,
+            Some(gbuffer.fullscreen.clone()),
+        ),
+        (None, _) => (
+            fragment::entry_point(&mut pass, pieces, stage, fragment::Inputs::Varyings)?,
+            None,
+        ),
+    };
+    let mut vertex_entry = match screen {
+        Some(fullscreen) => Some(fullscreen),
+        None => vertex.entry_index.map(|i| pass.entry_points[i].clone()),
+    };
     // A pass that does not reproject draws with the vertex stage as the
     // original has it: no twins read, no previous position interpolated.
-    if let (Some(entry), Some(plain), false) =
-        (&mut vertex_entry, &vertex.plain, stage.reprojects())
-    {
+    if let (Some(entry), Some(plain), false, None) = (
+        &mut vertex_entry,
+        &vertex.plain,
+        stage.reprojects(),
+        gbuffer,
+    ) {
         entry.function = plain.clone();
     }
     pass.entry_points = vertex_entry

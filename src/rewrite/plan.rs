@@ -25,6 +25,8 @@ pub struct Inputs<'a> {
     pub vertex: &'a VertexStage,
     pub passes: &'a [(Stage, PassModule)],
     pub classify: &'a PassModule,
+    /// The deferred variant's G-buffer.
+    pub gbuffer: Option<&'a rewrite::gbuffer::GBuffer>,
     pub result: &'a naga::FunctionResult,
     /// `CacheParams`' layout ([`super::cache_params_layout`]).
     pub params: Vec<Field>,
@@ -41,6 +43,7 @@ pub fn build(inputs: Inputs) -> Result<Plan, String> {
         vertex,
         passes,
         classify,
+        gbuffer,
         result,
         params,
     } = inputs;
@@ -55,13 +58,11 @@ pub fn build(inputs: Inputs) -> Result<Plan, String> {
         vertex: vertex_name.clone(),
         fragment: entry.name.clone(),
     };
-    let plan_passes = passes
+    let mut plan_passes: Vec<Pass> = passes
         .iter()
-        .enumerate()
-        .map(|(index, (stage, pass))| {
-            plan_pass(module, result, options, (*stage, pass), index == 0, &names)
-        })
+        .map(|(stage, pass)| plan_pass(module, result, options, (*stage, pass), &names, gbuffer))
         .collect();
+    first_writers_clear(&mut plan_passes);
 
     let entries: Vec<usize> = std::iter::once(analysis.entry_index)
         .chain(vertex.entry_index)
@@ -81,7 +82,10 @@ pub fn build(inputs: Inputs) -> Result<Plan, String> {
             })
         })
         .collect();
-    let cache = cache_resources(group, slot.first_binding)?;
+    let mut cache = cache_resources(group, slot.first_binding)?;
+    if let Some(gbuffer) = gbuffer {
+        cache.extend(gbuffer_resources(gbuffer));
+    }
 
     Ok(Plan {
         format: 1,
@@ -90,7 +94,7 @@ pub fn build(inputs: Inputs) -> Result<Plan, String> {
         node: plan_node(candidate),
         variant,
         passes: plan_passes,
-        classify: Some(classify_pass(classify, &names)),
+        classify: Some(classify_pass(classify, &names, gbuffer.is_some())),
         vertex_layout: match vertex_entry {
             Some(v) => vertex_layout(module, &v.function, &vertex.instance_twins)?,
             None => Vec::new(),
@@ -141,35 +145,32 @@ struct PassNames {
 }
 
 /// One pass of the plan: its targets (the frame's outputs, the cache and
-/// its age) with their loads, its depth state, whether it discards and
-/// what it binds.
+/// its age, the G-buffer) with their loads (made right by
+/// [`first_writers_clear`]), its depth and stencil state, what it draws,
+/// whether it discards and what it binds.
 fn plan_pass(
     module: &Module,
     result: &naga::FunctionResult,
     options: &Options,
     (stage, pass): (Stage, &PassModule),
-    first: bool,
     names: &PassNames,
+    gbuffer: Option<&rewrite::gbuffer::GBuffer>,
 ) -> Pass {
-    let load = |first: bool| if first { LoadOp::Clear } else { LoadOp::Load };
-    let color = |location: u32| ColorTarget {
+    let target = |location: u32, target: TargetKind, format: TextureFormat| ColorTarget {
         location,
-        target: TargetKind::Color,
-        format: output_format(module, result, location, options.color_format),
-        load: load(first || matches!(stage, Stage::ShadeFromCache)),
+        target,
+        format,
+        load: LoadOp::Load,
     };
-    let cache = |location: u32| ColorTarget {
-        location,
-        target: TargetKind::Cache,
-        format: options.cache_format.texture_format(),
-        load: load(first),
+    let color = |l: u32| {
+        target(
+            l,
+            TargetKind::Color,
+            output_format(module, result, l, options.color_format),
+        )
     };
-    let age = |location: u32| ColorTarget {
-        location,
-        target: TargetKind::Age,
-        format: AGE_FORMAT,
-        load: load(first),
-    };
+    let cache = |l: u32| target(l, TargetKind::Cache, options.cache_format.texture_format());
+    let age = |l: u32| target(l, TargetKind::Age, AGE_FORMAT);
     let color_locations = fragment::output_locations(module, result);
     let cache_location = fragment::cache_location(module, result);
     let color_targets = match stage.writes() {
@@ -181,39 +182,125 @@ fn plan_pass(
             targets.push(age(cache_location + 1));
             targets
         }
+        Writes::GBuffer => gbuffer
+            .map(|g| g.formats.as_slice())
+            .unwrap_or_default()
+            .iter()
+            .enumerate()
+            .map(|(i, &format)| target(i as u32, TargetKind::GBuffer, format))
+            .collect(),
     };
+    let screen = gbuffer.is_some() && stage != Stage::GBuffer;
     let (compare, write) = match stage {
+        _ if screen => (CompareFunction::Always, false),
         Stage::ShadeFromCache => (CompareFunction::Equal, false),
         _ => (options.depth.nearer(), true),
     };
     Pass {
         name: pass.name.clone(),
-        role: role(stage).into(),
+        role: role(stage, screen).into(),
         shader: format!("{}.wgsl", pass.name),
         stage_shaders: Vec::new(),
-        vertex_entry: names.vertex.clone(),
+        vertex_entry: if screen {
+            FULLSCREEN_ENTRY.into()
+        } else {
+            names.vertex.clone()
+        },
         fragment_entry: names.fragment.clone(),
         color_targets,
         depth: Depth {
             format: DEPTH_FORMAT,
             compare,
             write,
-            load: load(first),
+            load: LoadOp::Load,
         },
         discards: stage.discards() || pass_discards(&pass.module),
         bindings: used_bindings(&pass.module),
+        draw: if screen {
+            DrawKind::Fullscreen
+        } else {
+            DrawKind::Geometry
+        },
+        stencil: gbuffer.map(|_| deferred_stencil(stage)),
+    }
+}
+
+/// The vertex entry point of the deferred variant's screen-space passes.
+const FULLSCREEN_ENTRY: &str = "shadecache_fullscreen";
+
+/// The stencil bit a deferred lookup sets where it reused the cache.
+const REUSED_BIT: u32 = 0x80;
+/// The stencil bits that hold the draw's ordinal.
+const ORDINAL_BITS: u32 = 0x7f;
+
+/// The deferred variant's stencil, by pass: the geometry pass writes
+/// each draw's ordinal where the draw is visible; the lookup, drawn per
+/// draw over the screen, runs on that draw's pixels and marks those it
+/// reuses; the misses run where the draw's pixels are not marked; the
+/// shading (and the classification) on all the draw's pixels.
+fn deferred_stencil(stage: Stage) -> Stencil {
+    let test = |read_mask| Stencil {
+        compare: CompareFunction::Equal,
+        read_mask,
+        write_mask: 0,
+        replace: false,
+        reference_bits: 0,
+    };
+    match stage {
+        Stage::GBuffer => Stencil {
+            compare: CompareFunction::Always,
+            read_mask: 0xff,
+            write_mask: ORDINAL_BITS,
+            replace: true,
+            reference_bits: 0,
+        },
+        Stage::ReprojectOrDiscard => Stencil {
+            write_mask: REUSED_BIT,
+            replace: true,
+            reference_bits: REUSED_BIT,
+            ..test(ORDINAL_BITS)
+        },
+        Stage::Payload => test(0xff),
+        _ => test(ORDINAL_BITS),
+    }
+}
+
+/// Makes the first pass that writes each kind of target (and the depth)
+/// clear it, and the later ones load it.
+fn first_writers_clear(passes: &mut [Pass]) {
+    let mut written = Vec::new();
+    for (index, pass) in passes.iter_mut().enumerate() {
+        pass.depth.load = if index == 0 {
+            LoadOp::Clear
+        } else {
+            LoadOp::Load
+        };
+        for target in &mut pass.color_targets {
+            let key = (target.target, target.location);
+            target.load = if written.contains(&key) {
+                LoadOp::Load
+            } else {
+                LoadOp::Clear
+            };
+        }
+        written.extend(pass.color_targets.iter().map(|t| (t.target, t.location)));
     }
 }
 
 /// The diagnostic pass, drawn after a frame over what it drew (depth
-/// equal): the cache's decision at each pixel as a colour.
-fn classify_pass(classify: &PassModule, names: &PassNames) -> Pass {
+/// equal, or the draw's stencil in screen space): the cache's decision at
+/// each pixel as a colour.
+fn classify_pass(classify: &PassModule, names: &PassNames, deferred: bool) -> Pass {
     Pass {
         name: classify.name.clone(),
-        role: role(Stage::Classify).into(),
+        role: role(Stage::Classify, deferred).into(),
         shader: format!("{}.wgsl", classify.name),
         stage_shaders: Vec::new(),
-        vertex_entry: names.vertex.clone(),
+        vertex_entry: if deferred {
+            FULLSCREEN_ENTRY.into()
+        } else {
+            names.vertex.clone()
+        },
         fragment_entry: names.fragment.clone(),
         color_targets: vec![ColorTarget {
             location: 0,
@@ -223,12 +310,22 @@ fn classify_pass(classify: &PassModule, names: &PassNames) -> Pass {
         }],
         depth: Depth {
             format: DEPTH_FORMAT,
-            compare: CompareFunction::Equal,
+            compare: if deferred {
+                CompareFunction::Always
+            } else {
+                CompareFunction::Equal
+            },
             write: false,
             load: LoadOp::Load,
         },
         discards: false,
         bindings: used_bindings(&classify.module),
+        draw: if deferred {
+            DrawKind::Fullscreen
+        } else {
+            DrawKind::Geometry
+        },
+        stencil: deferred.then(|| deferred_stencil(Stage::Classify)),
     }
 }
 
@@ -283,8 +380,18 @@ fn output_format(
     }
 }
 
-fn role(stage: Stage) -> &'static str {
+fn role(stage: Stage, screen: bool) -> &'static str {
+    if screen {
+        return match stage {
+            Stage::ReprojectOrDiscard => "screen space, per draw over its pixels (stencil): reproject; hit: write the cached payload to this frame's cache and mark the pixel; miss or refresh: discard",
+            Stage::Payload => "screen space, per draw over its unmarked pixels (stencil): compute the payload from the G-buffer into the cache",
+            Stage::ShadeFromCache => "screen space, per draw over its pixels (stencil): shade from the G-buffer and this frame's cache at the pixel",
+            Stage::Classify => "diagnostic, after the frame, in screen space: the cache's decision at each visible pixel",
+            _ => "screen space",
+        };
+    }
     match stage {
+        Stage::GBuffer => "the only geometry pass: depth, each draw's ordinal in the stencil, and the fragment's inputs and previous clip position into the G-buffer",
         Stage::OnePass => "reproject; hit: shade from the cached payload; miss or refresh: compute the payload; write colour and cache",
         Stage::ReuseOrDiscard => "reproject; hit: shade from the cached payload, write colour and cache; miss or refresh: discard",
         Stage::Full => "the pixels pass 1 left empty (depth test): compute payload and colour, write colour and cache",
@@ -401,7 +508,15 @@ fn resource(
                 class,
             } => {
                 let depth = matches!(class, naga::ImageClass::Depth { .. });
+                let uint = matches!(
+                    class,
+                    naga::ImageClass::Sampled {
+                        kind: naga::ScalarKind::Uint,
+                        multi: false
+                    }
+                );
                 match (dim, arrayed, depth) {
+                    (naga::ImageDimension::D2, false, false) if uint => K::UintTexture,
                     (naga::ImageDimension::D2, false, false) => K::Texture,
                     (naga::ImageDimension::D2, true, false) => K::TextureArray,
                     (naga::ImageDimension::Cube, false, false) => K::CubeTexture,
@@ -581,6 +696,8 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
             },
             discards: layout.discards,
             bindings,
+            draw: DrawKind::Geometry,
+            stencil: None,
         }],
         classify: None,
         vertex_layout: vertex_layout(module, &vertex_entry.function, &[])?,
@@ -611,4 +728,33 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
         },
         assumes: FrameAssumptions::default(),
     })
+}
+
+/// The G-buffer's textures as the plan lists them, each with what it
+/// holds.
+fn gbuffer_resources(gbuffer: &rewrite::gbuffer::GBuffer) -> Vec<Resource> {
+    gbuffer
+        .formats
+        .iter()
+        .enumerate()
+        .map(|(t, format)| {
+            let holds: Vec<&str> = gbuffer
+                .holds
+                .iter()
+                .skip(t * 4)
+                .take(4)
+                .map(String::as_str)
+                .collect();
+            Resource {
+                group: gbuffer.group,
+                binding: gbuffer.first_binding + t as u32,
+                name: rewrite::gbuffer::texture_name(t),
+                kind: ResourceKind::UintTexture,
+                source: Some(format!(
+                    "this frame's G-buffer texture {t} ({format}, rendered by the geometry pass): the bits of {}",
+                    holds.join(", ")
+                )),
+            }
+        })
+        .collect()
 }

@@ -9,7 +9,8 @@ pub struct Gpu {
 }
 
 impl Gpu {
-    /// The first adapter any backend offers, with default limits. `None`
+    /// The first adapter any backend offers, with default limits but for
+    /// colour attachments. `None`
     /// when the machine has no GPU and no software driver.
     pub fn new() -> Result<Option<Gpu>, String> {
         let instance =
@@ -22,10 +23,24 @@ impl Gpu {
         };
         // Timestamp queries where the adapter has them (lavapipe does): the
         // profiler times each pass with them.
-        let features = adapter.features() & wgpu_profiler::GpuProfiler::ALL_WGPU_TIMER_FEATURES;
+        // 32-bit float depth with stencil where it has it: the deferred
+        // variant's depth buffer holds each draw's ordinal in the stencil.
+        let features = adapter.features()
+            & (wgpu_profiler::GpuProfiler::ALL_WGPU_TIMER_FEATURES
+                | wgpu::Features::DEPTH32FLOAT_STENCIL8);
+        // The deferred variant's G-buffer takes as many colour targets, and
+        // bytes of them per pixel, as the adapter grants (WebGPU's defaults
+        // are 8 targets and 32 bytes).
+        let granted = adapter.limits();
+        let limits = wgpu::Limits {
+            max_color_attachments: granted.max_color_attachments,
+            max_color_attachment_bytes_per_sample: granted.max_color_attachment_bytes_per_sample,
+            ..wgpu::Limits::default()
+        };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("shadecache"),
             required_features: features,
+            required_limits: limits,
             ..wgpu::DeviceDescriptor::default()
         }))
         .map_err(|err| format!("cannot open a device on {}: {err}", adapter.get_info().name))?;

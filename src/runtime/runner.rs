@@ -275,7 +275,7 @@ impl Runner {
                     render.set_vertex_buffer(1, instances.slice(..));
                 }
                 render.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-                render.draw_indexed(0..mesh.count, 0, 0..draw.instances);
+                pass.draw_indexed(0..mesh.count, 0, 0..draw.instances);
             }
         };
         let recorded = match profiler {

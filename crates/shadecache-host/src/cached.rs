@@ -4,9 +4,9 @@ use std::cell::RefCell;
 use std::collections::{BTreeMap, HashMap};
 use std::sync::{Arc, Mutex, Weak};
 
-use shadecache_plan::{LoadOp, Pass, Plan, ResourceKind, TargetKind};
+use shadecache_plan::{DrawKind, LoadOp, Pass, Plan, ResourceKind, TargetKind, MAX_STENCIL_DRAWS};
 
-use crate::formats::{cache_format, texture_format};
+use crate::formats::{cache_format, host_depth_format, texture_format};
 use crate::layouts::CacheResource;
 use crate::pipelines::{pipeline, pipeline_layout, HostFormats, PipelineInputs};
 use crate::timing::{NoTimer, PassTimer};
@@ -42,6 +42,8 @@ struct CacheTargets {
     age: [wgpu::Texture; 2],
     depth: [wgpu::Texture; 2],
     classes: wgpu::Texture,
+    /// This frame's G-buffer (the deferred variant), by index.
+    gbuffer: Vec<wgpu::TextureView>,
     payload_views: [wgpu::TextureView; 2],
     age_views: [wgpu::TextureView; 2],
     /// Attachment views.
@@ -65,6 +67,7 @@ pub struct CachedShader {
     twin_slots: Vec<TwinSlot>,
     depth_format: wgpu::TextureFormat,
     formats: HostFormats,
+    gbuffer_formats: Vec<wgpu::TextureFormat>,
     size: (u32, u32),
     targets: CacheTargets,
     /// Bumped when the targets are made again: bind groups of older ones
@@ -119,6 +122,9 @@ impl CachedShader {
             age: texture_format(shadecache_plan::AGE_FORMAT),
             classes: wgpu::TextureFormat::Rgba8Unorm,
         };
+        let needs_stencil = plan.passes.iter().any(|p| p.stencil.is_some());
+        let depth_format = host_depth_format(device, frame.depth_format, needs_stencil);
+        let gbuffer_formats = gbuffer_formats(plan);
         let layout = |label: &str, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(label),
@@ -164,6 +170,8 @@ impl CachedShader {
                 buffers: &buffers,
                 frame,
                 formats,
+                depth_format,
+                gbuffer: &gbuffer_formats,
                 options,
             };
             Ok(Built {
@@ -204,15 +212,16 @@ impl CachedShader {
         });
         let mut cached = CachedShader {
             device: device.clone(),
-            targets: CacheTargets::new(device, size, formats, frame.depth_format),
+            targets: CacheTargets::new(device, size, formats, depth_format, &gbuffer_formats),
             plan: plan.clone(),
             options,
             passes,
             classify,
             cache_group,
             twin_slots,
-            depth_format: frame.depth_format,
+            depth_format,
             formats,
+            gbuffer_formats,
             size,
             generation: 0,
             params,
@@ -417,6 +426,7 @@ impl CachedShader {
                     built,
                     binder: &binder,
                     error: None,
+                    drawn: 0,
                 };
                 if let Some(shared) = &self.shared {
                     draws.bind(shared);
@@ -424,6 +434,12 @@ impl CachedShader {
                 draw(&mut draws);
                 if let Some(err) = draws.error.take() {
                     return Err(err);
+                }
+                if built.pass.stencil.is_some() && draws.drawn == 0 {
+                    return Err(Error::Mismatch(format!(
+                        "pass `{}` marks each draw's pixels in the stencil: draw through `Draw::draw_indexed` or `Draw::draw`, not the render pass itself",
+                        built.pass.name
+                    )));
                 }
             }
             timer.end(encoder, query);
@@ -499,6 +515,10 @@ impl CachedShader {
                 ),
                 TargetKind::Age => (&t.age_views[current], Some(wgpu::Color::TRANSPARENT)),
                 TargetKind::Classes => (&t.classes_view, Some(wgpu::Color::TRANSPARENT)),
+                TargetKind::GBuffer => match t.gbuffer.get(index) {
+                    Some(view) => (view, Some(wgpu::Color::TRANSPARENT)),
+                    None => continue,
+                },
                 // The application's own clear, on the pass that clears.
                 TargetKind::Color => match targets.color.get(index).copied().flatten() {
                     Some(view) => (view, targets.clear),
@@ -527,11 +547,16 @@ impl CachedShader {
             LoadOp::Clear => wgpu::LoadOp::Clear(self.plan.clear.depth as f32),
             LoadOp::Load => wgpu::LoadOp::Load,
         };
+        // The stencil holds the deferred variant's draw ordinals and reuse
+        // marks from its geometry pass on; other plans do not use it.
         let stencil = self
             .depth_format
             .has_stencil_aspect()
             .then_some(wgpu::Operations {
-                load: wgpu::LoadOp::Clear(0),
+                load: match pass.depth.load {
+                    LoadOp::Clear => wgpu::LoadOp::Clear(0),
+                    LoadOp::Load => wgpu::LoadOp::Load,
+                },
                 store: wgpu::StoreOp::Store,
             });
         wgpu::RenderPassDepthStencilAttachment {
@@ -551,7 +576,13 @@ impl CachedShader {
             return;
         }
         self.size = size;
-        self.targets = CacheTargets::new(&self.device, size, self.formats, self.depth_format);
+        self.targets = CacheTargets::new(
+            &self.device,
+            size,
+            self.formats,
+            self.depth_format,
+            &self.gbuffer_formats,
+        );
         self.generation += 1;
         self.fresh = true;
     }
@@ -620,12 +651,32 @@ impl CachedShader {
     }
 }
 
+/// The formats of the G-buffer textures the plan's passes render into,
+/// by index (the target's location).
+fn gbuffer_formats(plan: &Plan) -> Vec<wgpu::TextureFormat> {
+    let mut formats = Vec::new();
+    for target in plan
+        .passes
+        .iter()
+        .flat_map(|p| &p.color_targets)
+        .filter(|t| t.target == TargetKind::GBuffer)
+    {
+        let index = target.location as usize;
+        if formats.len() <= index {
+            formats.resize(index + 1, wgpu::TextureFormat::R32Uint);
+        }
+        formats[index] = texture_format(target.format);
+    }
+    formats
+}
+
 impl CacheTargets {
     fn new(
         device: &wgpu::Device,
         size: (u32, u32),
         formats: HostFormats,
         depth_format: wgpu::TextureFormat,
+        gbuffer_formats: &[wgpu::TextureFormat],
     ) -> CacheTargets {
         let make = |label: &str, format| render_target(device, label, size, format);
         let pair = |label: &str, format| [make(label, format), make(label, format)];
@@ -640,7 +691,12 @@ impl CacheTargets {
                 ..wgpu::TextureViewDescriptor::default()
             })
         };
+        let gbuffer = gbuffer_formats
+            .iter()
+            .map(|&format| view(&make("shadecache G-buffer", format)))
+            .collect();
         CacheTargets {
+            gbuffer,
             payload_views: [view(&payload[0]), view(&payload[1])],
             age_views: [view(&age[0]), view(&age[1])],
             depth_views: [view(&depth[0]), view(&depth[1])],
@@ -766,6 +822,14 @@ impl Binder<'_> {
                 CacheResource::PreviousAge => view(&t.age_views[previous]),
                 CacheResource::PreviousDepth => view(&t.depth_sampled[previous]),
                 CacheResource::Sampler => wgpu::BindingResource::Sampler(&shader.sampler),
+                CacheResource::GBuffer(index) => {
+                    view(t.gbuffer.get(index).ok_or_else(|| {
+                        Error::Plan(format!(
+                            "`{}` names G-buffer texture {index}, which the plan's G-buffer pass does not make",
+                            resource.name
+                        ))
+                    })?)
+                }
             };
             entries.push(wgpu::BindGroupEntry {
                 binding: resource.binding,
@@ -799,13 +863,16 @@ impl Binder<'_> {
     }
 }
 
-/// One pass being recorded: the application's draws go into
-/// [`Draw::render_pass`], each after [`Draw::bind`] of its twins.
+/// One pass being recorded. The application sets its bind groups and
+/// buffers on [`Draw::render_pass`] and draws with [`Draw::draw_indexed`]
+/// or [`Draw::draw`], each draw after [`Draw::bind`] of its twins.
 pub struct Draw<'r, 'e> {
     render: &'r mut wgpu::RenderPass<'e>,
     built: &'r Built,
     binder: &'r Binder<'r>,
     error: Option<Error>,
+    /// Draws so far in this pass: the next one's stencil ordinal.
+    drawn: u32,
 }
 
 impl<'e> Draw<'_, 'e> {
@@ -819,6 +886,56 @@ impl<'e> Draw<'_, 'e> {
     /// original pass.
     pub fn render_pass(&mut self) -> &mut wgpu::RenderPass<'e> {
         self.render
+    }
+
+    /// Draws indexed geometry, as `RenderPass::draw_indexed`. In a pass
+    /// that marks or tests each draw's pixels in the stencil (the deferred
+    /// variant's), the draw's ordinal is the stencil reference, and a
+    /// screen-space pass draws one triangle over the screen instead, with
+    /// the bind groups set for this draw.
+    pub fn draw_indexed(
+        &mut self,
+        indices: std::ops::Range<u32>,
+        base_vertex: i32,
+        instances: std::ops::Range<u32>,
+    ) {
+        if self.next_draw() {
+            self.render.draw_indexed(indices, base_vertex, instances);
+        }
+    }
+
+    /// Draws non-indexed geometry, as `RenderPass::draw`; see
+    /// [`Draw::draw_indexed`].
+    pub fn draw(&mut self, vertices: std::ops::Range<u32>, instances: std::ops::Range<u32>) {
+        if self.next_draw() {
+            self.render.draw(vertices, instances);
+        }
+    }
+
+    /// Sets the stencil reference of the next draw and draws the screen's
+    /// triangle for a screen-space pass; whether the application's own
+    /// geometry is to be drawn.
+    fn next_draw(&mut self) -> bool {
+        self.drawn += 1;
+        let pass = &self.built.pass;
+        if let Some(stencil) = pass.stencil {
+            if self.drawn > MAX_STENCIL_DRAWS {
+                self.error.get_or_insert(Error::Mismatch(format!(
+                    "pass `{}` has more than {MAX_STENCIL_DRAWS} draws, the most the stencil tells apart",
+                    pass.name
+                )));
+                return false;
+            }
+            self.render
+                .set_stencil_reference(self.drawn | stencil.reference_bits);
+        }
+        match pass.draw {
+            DrawKind::Geometry => true,
+            DrawKind::Fullscreen => {
+                self.render.draw(0..3, 0..1);
+                false
+            }
+        }
     }
 
     /// Binds the cache group with `twins` (last frame's copies of this

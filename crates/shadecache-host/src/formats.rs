@@ -72,3 +72,44 @@ pub(crate) fn compare_function(compare: shadecache_plan::CompareFunction) -> wgp
         C::Always => wgpu::CompareFunction::Always,
     }
 }
+
+/// The stencil state a plan's pass asks for, the same for both faces.
+pub(crate) fn stencil_state(stencil: shadecache_plan::Stencil) -> wgpu::StencilState {
+    let face = wgpu::StencilFaceState {
+        compare: compare_function(stencil.compare),
+        fail_op: wgpu::StencilOperation::Keep,
+        depth_fail_op: wgpu::StencilOperation::Keep,
+        pass_op: if stencil.replace {
+            wgpu::StencilOperation::Replace
+        } else {
+            wgpu::StencilOperation::Keep
+        },
+    };
+    wgpu::StencilState {
+        front: face,
+        back: face,
+        read_mask: stencil.read_mask,
+        write_mask: stencil.write_mask,
+    }
+}
+
+/// The depth format of the host's depth buffers: the frame's, unless the
+/// plan tests the stencil and the frame's format has none; then 32-bit
+/// float depth with stencil where the device has it, else
+/// `depth24plus-stencil8` (every WebGPU device has it).
+pub(crate) fn host_depth_format(
+    device: &wgpu::Device,
+    frame: wgpu::TextureFormat,
+    needs_stencil: bool,
+) -> wgpu::TextureFormat {
+    if !needs_stencil || frame.has_stencil_aspect() {
+        frame
+    } else if device
+        .features()
+        .contains(wgpu::Features::DEPTH32FLOAT_STENCIL8)
+    {
+        wgpu::TextureFormat::Depth32FloatStencil8
+    } else {
+        wgpu::TextureFormat::Depth24PlusStencil8
+    }
+}

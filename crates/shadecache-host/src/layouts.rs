@@ -36,6 +36,14 @@ fn binding_type(kind: ResourceKind) -> Option<(wgpu::BindingType, wgpu::ShaderSt
             wgpu::ShaderStages::FRAGMENT,
         ),
         K::Texture => (texture(D::D2, false), VISIBLE),
+        K::UintTexture => (
+            wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Uint,
+                view_dimension: D::D2,
+                multisampled: false,
+            },
+            VISIBLE,
+        ),
         K::TextureArray => (texture(D::D2Array, false), VISIBLE),
         K::CubeTexture => (texture(D::Cube, false), VISIBLE),
         K::CubeTextureArray => (texture(D::CubeArray, false), VISIBLE),
@@ -185,8 +193,12 @@ fn compatible(kind: ResourceKind, ty: &wgpu::BindingType) -> bool {
     }
 }
 
-/// The cache's own resources, as `shaders/cache.wgsl` names them: what a
-/// host binds for each.
+/// How the G-buffer's textures are named in the plan: `gbuffer_a`,
+/// `gbuffer_b`... for the first, the second...
+pub(crate) const GBUFFER_PREFIX: &str = "gbuffer_";
+
+/// The cache's own resources, as `shaders/cache.wgsl` names them (and the
+/// deferred variant's G-buffer): what a host binds for each.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum CacheResource {
     /// The refresh uniform, `CacheParams`.
@@ -196,10 +208,17 @@ pub(crate) enum CacheResource {
     PreviousAge,
     PreviousDepth,
     Sampler,
+    /// This frame's G-buffer texture of that index (the deferred
+    /// variant's), read with `textureLoad`.
+    GBuffer(usize),
 }
 
 impl CacheResource {
     pub fn named(name: &str) -> Result<CacheResource, Error> {
+        if let Some(&[letter @ b'a'..=b'z']) = name.strip_prefix(GBUFFER_PREFIX).map(str::as_bytes)
+        {
+            return Ok(CacheResource::GBuffer((letter - b'a') as usize));
+        }
         Ok(match name {
             "cache_params" => CacheResource::Params,
             "cache_previous_payload" => CacheResource::PreviousPayload,
@@ -235,6 +254,7 @@ impl CacheResource {
                 texture(wgpu::TextureSampleType::Float { filterable: true })
             }
             CacheResource::PreviousDepth => texture(wgpu::TextureSampleType::Depth),
+            CacheResource::GBuffer(_) => texture(wgpu::TextureSampleType::Uint),
             CacheResource::Sampler => wgpu::BindingType::Sampler(if payload_filterable {
                 wgpu::SamplerBindingType::Filtering
             } else {

@@ -3,9 +3,9 @@
 use std::borrow::Cow;
 use std::collections::BTreeMap;
 
-use shadecache_plan::{Pass, TargetKind};
+use shadecache_plan::{DrawKind, Pass, TargetKind};
 
-use crate::formats::compare_function;
+use crate::formats::{compare_function, stencil_state};
 use crate::{Error, FrameLayout, Options};
 
 /// The formats of the targets the host owns.
@@ -57,6 +57,11 @@ pub(crate) struct PipelineInputs<'a> {
     pub buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
     pub frame: &'a FrameLayout<'a>,
     pub formats: HostFormats,
+    /// The format of the host's depth buffers: the frame's, or one with a
+    /// stencil aspect when the plan's passes test the stencil.
+    pub depth_format: wgpu::TextureFormat,
+    /// The G-buffer textures' formats, by index.
+    pub gbuffer: &'a [wgpu::TextureFormat],
     pub options: Options,
 }
 
@@ -73,6 +78,12 @@ pub(crate) fn pipeline(
         source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(source)),
     });
     let targets = color_targets(pass, inputs)?;
+    // A screen-space pass draws one triangle over the screen, from the
+    // vertex index alone, whatever the application's geometry.
+    let (buffers, primitive) = match pass.draw {
+        DrawKind::Geometry => (inputs.buffers, inputs.frame.primitive),
+        DrawKind::Fullscreen => (&[][..], wgpu::PrimitiveState::default()),
+    };
     let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(&pass.name),
         layout: Some(inputs.layout),
@@ -80,14 +91,14 @@ pub(crate) fn pipeline(
             module: &module,
             entry_point: Some(&pass.vertex_entry),
             compilation_options: wgpu::PipelineCompilationOptions::default(),
-            buffers: inputs.buffers,
+            buffers,
         },
-        primitive: inputs.frame.primitive,
+        primitive,
         depth_stencil: Some(wgpu::DepthStencilState {
-            format: inputs.frame.depth_format,
+            format: inputs.depth_format,
             depth_write_enabled: Some(pass.depth.write),
             depth_compare: Some(compare_function(pass.depth.compare)),
-            stencil: wgpu::StencilState::default(),
+            stencil: pass.stencil.map(stencil_state).unwrap_or_default(),
             bias: wgpu::DepthBiasState::default(),
         }),
         multisample: wgpu::MultisampleState::default(),
@@ -132,6 +143,12 @@ fn color_targets(
             TargetKind::Cache => host(inputs.formats.cache),
             TargetKind::Age => host(inputs.formats.age),
             TargetKind::Classes => host(inputs.formats.classes),
+            TargetKind::GBuffer => host(inputs.gbuffer.get(index).copied().ok_or_else(|| {
+                Error::Plan(format!(
+                    "pass `{}` writes G-buffer texture {index}, which the plan's G-buffer pass does not make",
+                    pass.name
+                ))
+            })?),
             TargetKind::Color => {
                 let mut state = inputs
                     .frame

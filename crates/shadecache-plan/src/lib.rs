@@ -381,7 +381,53 @@ pub struct Pass {
     pub discards: bool,
     /// (group, binding) of every resource this pass's shaders use.
     pub bindings: Vec<[u32; 2]>,
+    /// What the pass draws: the application's geometry, or one triangle
+    /// over the screen per application draw (the deferred variant's
+    /// screen-space passes).
+    #[serde(default, skip_serializing_if = "DrawKind::is_geometry")]
+    pub draw: DrawKind,
+    /// The stencil test and write of the pass; absent when it has none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stencil: Option<Stencil>,
 }
+
+/// What a pass draws.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DrawKind {
+    /// The application's draws, as in its original pass.
+    #[default]
+    Geometry,
+    /// For each of the application's draws, with its bind groups, one
+    /// triangle covering the screen (three vertices, no vertex buffer),
+    /// with the stencil reference of that draw: the pass reads the
+    /// G-buffer and runs only where the draw's surface is visible.
+    Fullscreen,
+}
+
+impl DrawKind {
+    pub fn is_geometry(&self) -> bool {
+        *self == DrawKind::Geometry
+    }
+}
+
+/// A stencil test, the same for front and back faces. The reference is
+/// the draw's ordinal in its pass (1 for the first draw) OR-ed with
+/// `reference_bits`; ordinals run to [`MAX_STENCIL_DRAWS`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Stencil {
+    pub compare: CompareFunction,
+    pub read_mask: u32,
+    pub write_mask: u32,
+    /// `true`: replace the masked bits with the reference where the test
+    /// passes (and the fragment is not discarded); `false`: keep them.
+    pub replace: bool,
+    pub reference_bits: u32,
+}
+
+/// The most draws a pass with a stencil test may have: their ordinals
+/// take the stencil's low seven bits, the top bit marks reused pixels.
+pub const MAX_STENCIL_DRAWS: u32 = 127;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ColorTarget {
@@ -406,6 +452,10 @@ pub enum TargetKind {
     Age,
     /// The classification pass's picture of the cache's decisions.
     Classes,
+    /// One of this frame's G-buffer textures (the deferred variant): the
+    /// location is its index.
+    #[serde(rename = "g-buffer")]
+    GBuffer,
 }
 
 /// What a pass does with a target's contents when it begins.
@@ -426,6 +476,7 @@ impl TargetKind {
             TargetKind::Cache => "cache",
             TargetKind::Age => "age",
             TargetKind::Classes => "classes",
+            TargetKind::GBuffer => "g-buffer",
         }
     }
 }
@@ -558,6 +609,8 @@ pub enum ResourceKind {
     StorageReadWrite,
     StorageTexture,
     Texture,
+    /// `texture_2d<u32>`, read with `textureLoad` (a G-buffer).
+    UintTexture,
     TextureArray,
     CubeTexture,
     CubeTextureArray,
@@ -616,6 +669,7 @@ impl ResourceKind {
             K::StorageReadWrite => "storage-read-write",
             K::StorageTexture => "storage-texture",
             K::Texture => "texture",
+            K::UintTexture => "uint-texture",
             K::TextureArray => "texture-array",
             K::CubeTexture => "cube-texture",
             K::CubeTextureArray => "cube-texture-array",
@@ -693,19 +747,29 @@ pub enum Variant {
     OnePass,
     TwoPass,
     ThreePass,
+    /// One geometry pass writes depth and the fragment inputs into a
+    /// G-buffer; the lookup, the misses and the shading run in screen
+    /// space.
+    Deferred,
     /// The unmodified shader, run by the profiler as the reference; never
     /// a rewrite.
     Reference,
 }
 
 impl Variant {
-    pub const ALL: [Variant; 3] = [Variant::OnePass, Variant::TwoPass, Variant::ThreePass];
+    pub const ALL: [Variant; 4] = [
+        Variant::OnePass,
+        Variant::TwoPass,
+        Variant::ThreePass,
+        Variant::Deferred,
+    ];
 
     pub fn as_str(self) -> &'static str {
         match self {
             Variant::OnePass => "one-pass",
             Variant::TwoPass => "two-pass",
             Variant::ThreePass => "three-pass",
+            Variant::Deferred => "deferred",
             Variant::Reference => "reference",
         }
     }

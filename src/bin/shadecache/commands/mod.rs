@@ -16,7 +16,7 @@ use shadecache::front::{self, Shader};
 pub enum Command {
     /// List the values of a fragment shader that could be cached, ranked by estimated P/T.
     Analyze(analyze::Args),
-    /// Write one-, two- and three-pass reprojection-cache variants of a shader, with their pass plans.
+    /// Write one-, two-, three-pass and deferred reprojection-cache variants of a shader, with their pass plans.
     Rewrite(rewrite::Args),
     /// Run the variants on a scene, measure time and error against the original, and write a report.
     Profile(profile::Args),

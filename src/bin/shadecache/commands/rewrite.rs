@@ -75,6 +75,9 @@ pub enum VariantArg {
     OnePass,
     TwoPass,
     ThreePass,
+    /// One geometry pass into a G-buffer; lookup, misses and shading in
+    /// screen space.
+    Deferred,
     All,
 }
 
@@ -87,6 +90,7 @@ impl VariantArg {
                 VariantArg::OnePass => &[Variant::OnePass],
                 VariantArg::TwoPass => &[Variant::TwoPass],
                 VariantArg::ThreePass => &[Variant::ThreePass],
+                VariantArg::Deferred => &[Variant::Deferred],
                 VariantArg::All => &Variant::ALL,
             };
             for &variant in named {

@@ -1,0 +1,860 @@
+//! The deferred variant's G-buffer: what its one geometry pass keeps of
+//! each visible fragment, so that the lookup, the misses and the shading
+//! run in screen space without drawing the geometry again.
+//!
+//! The geometry pass runs the instrumented vertex stage (with its
+//! previous-frame twin) and a fragment stage that only stores: last
+//! frame's clip position, the fragment position's depth and w, and every
+//! input of the original fragment entry point that the payload and shade
+//! functions read — varyings, `front_facing`, `primitive_index` — as
+//! 32-bit words, bit for bit (`bitcast`), packed into as few `r32uint`,
+//! `rg32uint` or `rgba32uint` targets as hold them. Integer targets keep
+//! every bit: a NaN varying stays the NaN it was, an `i32` id its value.
+//!
+//! A screen-space pass draws one triangle over the screen per draw of the
+//! application (the stencil holds each draw's ordinal, so the draw's own
+//! bind groups shade its own pixels) and rebuilds the original inputs
+//! from the G-buffer at its pixel: the same values the original fragment
+//! stage received, so at Δn = 1 the variant draws the reference. The
+//! fragment position's x and y are the pixel centre, as in the original.
+//!
+//! Derivatives in the screen-space passes (`dpdx`, `fwidth`, the implicit
+//! level of detail of `textureSample`) are taken of the values rebuilt
+//! from the G-buffer, in uniform control flow, across the 2×2 quads of
+//! the screen: inside a surface they are the original's (a varying is
+//! linear across a triangle, and its neighbour pixels hold the same
+//! plane's values); at a silhouette the neighbour holds another surface,
+//! or nothing, where the original extrapolated its own triangle with a
+//! helper invocation. The derivative there is the difference across the
+//! edge.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use naga::{
+    Binding, Expression, Function, Handle, Module, Scalar, ScalarKind, Statement, TypeInner,
+    VectorSize,
+};
+
+use super::builder::Builder;
+use super::fragment::{self, Fragment, Pieces};
+use super::Refusal;
+use crate::plan::TextureFormat;
+
+/// WebGPU's `maxColorAttachments`: eight targets of four words at most.
+const MAX_TARGETS: u32 = 8;
+
+/// How the G-buffer of one rewrite is laid out, and the module's pieces
+/// that read and write it.
+#[derive(Debug)]
+pub struct GBuffer {
+    leaves: Vec<Leaf>,
+    /// What each word holds, in words.
+    pub holds: Vec<String>,
+    /// Each texture's format, by index (= location in the geometry pass).
+    pub formats: Vec<TextureFormat>,
+    /// Each texture's global variable (`gbuffer_0`...), read by the
+    /// screen-space passes.
+    pub textures: Vec<Handle<naga::GlobalVariable>>,
+    /// The vertex stage of the screen-space passes: one triangle over the
+    /// screen, from the vertex index.
+    pub fullscreen: naga::EntryPoint,
+    /// The words of the fragment position's z and w, where kept.
+    depth_word: Option<u32>,
+    w_word: Option<u32>,
+    /// Where the textures are bound: `group`, from `first_binding` on.
+    pub group: u32,
+    pub first_binding: u32,
+}
+
+/// One input of the original fragment entry point: an argument, or a
+/// member of a struct argument.
+#[derive(Debug)]
+struct Leaf {
+    argument: u32,
+    member: Option<u32>,
+    ty: Handle<naga::Type>,
+    stored: Stored,
+}
+
+#[derive(Debug)]
+enum Stored {
+    /// Not read by the payload or the shade: a zero stands in.
+    Unread,
+    /// `@builtin(position)`: the pixel centre and the stored z and w.
+    Position,
+    /// `@builtin(front_facing)`: one word, 0 or 1.
+    FrontFacing { word: u32 },
+    /// A number or a vector of them, a word per component.
+    Words {
+        first: u32,
+        scalar: Scalar,
+        size: Option<VectorSize>,
+    },
+}
+
+/// How many of a struct argument's members the functions read: all of
+/// it (passed on whole), or some members.
+#[derive(Debug)]
+enum Read {
+    Whole,
+    Members(BTreeSet<u32>),
+}
+
+impl GBuffer {
+    /// Lays out the G-buffer for `pieces` and declares its textures in
+    /// `group` from `first_binding` on. Refuses a fragment stage that
+    /// discards (its coverage is decided by shading, which the geometry
+    /// pass does not run), inputs a G-buffer cannot hold, and inputs
+    /// beyond eight targets.
+    ///
+    /// The words: last frame's position in NDC (x, y, z: the clip
+    /// position divided by w in the geometry pass, as the lookup would
+    /// divide it, so the lookup sees the same numbers), the fragment's
+    /// depth where the shader reads `@builtin(position)` or the cache
+    /// packs the depth, its w where the shader reads the position, then
+    /// the inputs read.
+    pub fn new(
+        module: &mut Module,
+        pieces: &Pieces,
+        packs_depth: bool,
+        (group, first_binding): (u32, u32),
+    ) -> Result<GBuffer, Refusal> {
+        refuse_discards(module, pieces)?;
+        let read = arguments_read(module, pieces);
+        let reads_position = reads_position(module, pieces, &read);
+        let mut holds: Vec<String> = ["previous_ndc.x", "previous_ndc.y", "previous_ndc.z"]
+            .map(String::from)
+            .to_vec();
+        let depth_word = (reads_position || packs_depth).then(|| {
+            holds.push("position.z".into());
+            holds.len() as u32 - 1
+        });
+        let w_word = reads_position.then(|| {
+            holds.push("position.w".into());
+            holds.len() as u32 - 1
+        });
+        let mut leaves = Vec::new();
+        for (index, argument) in pieces.arguments.iter().enumerate() {
+            let index = index as u32;
+            let name = argument
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("argument{index}"));
+            match module.types[argument.ty].inner {
+                TypeInner::Struct { ref members, .. } => {
+                    for (m, member) in members.iter().enumerate() {
+                        let m = m as u32;
+                        let is_read = match read.get(&index) {
+                            Some(Read::Whole) => true,
+                            Some(Read::Members(set)) => set.contains(&m),
+                            None => false,
+                        };
+                        let label = format!(
+                            "{name}.{}",
+                            member.name.clone().unwrap_or_else(|| m.to_string())
+                        );
+                        let stored = store(
+                            module,
+                            &member.binding,
+                            member.ty,
+                            is_read,
+                            &label,
+                            &mut holds,
+                        )?;
+                        leaves.push(Leaf {
+                            argument: index,
+                            member: Some(m),
+                            ty: member.ty,
+                            stored,
+                        });
+                    }
+                }
+                _ => {
+                    let is_read = read.contains_key(&index);
+                    let stored = store(
+                        module,
+                        &argument.binding,
+                        argument.ty,
+                        is_read,
+                        &name,
+                        &mut holds,
+                    )?;
+                    leaves.push(Leaf {
+                        argument: index,
+                        member: None,
+                        ty: argument.ty,
+                        stored,
+                    });
+                }
+            }
+        }
+        let words = holds.len() as u32;
+        if words > MAX_TARGETS * 4 {
+            return Err(Refusal::new(format!(
+                "the G-buffer would need {words} words per pixel ({} bytes: {}), beyond the {} words of WebGPU's {MAX_TARGETS} colour targets",
+                words * 4,
+                holds.join(", "),
+                MAX_TARGETS * 4
+            )));
+        }
+        let formats: Vec<TextureFormat> = (0..words.div_ceil(4))
+            .map(|t| match (words - t * 4).min(4) {
+                1 => TextureFormat::R32Uint,
+                2 => TextureFormat::Rg32Uint,
+                _ => TextureFormat::Rgba32Uint,
+            })
+            .collect();
+        let texture_ty = module.types.insert(
+            naga::Type {
+                name: None,
+                inner: TypeInner::Image {
+                    dim: naga::ImageDimension::D2,
+                    arrayed: false,
+                    class: naga::ImageClass::Sampled {
+                        kind: ScalarKind::Uint,
+                        multi: false,
+                    },
+                },
+            },
+            naga::Span::UNDEFINED,
+        );
+        let textures = (0..formats.len() as u32)
+            .map(|t| {
+                module.global_variables.append(
+                    naga::GlobalVariable {
+                        name: Some(texture_name(t as usize)),
+                        space: naga::AddressSpace::Handle,
+                        binding: Some(naga::ResourceBinding {
+                            group,
+                            binding: first_binding + t,
+                        }),
+                        ty: texture_ty,
+                        init: None,
+                        memory_decorations: Default::default(),
+                    },
+                    naga::Span::UNDEFINED,
+                )
+            })
+            .collect();
+        Ok(GBuffer {
+            leaves,
+            holds,
+            formats,
+            textures,
+            fullscreen: fullscreen_entry(module, pieces.vec4),
+            depth_word,
+            w_word,
+            group,
+            first_binding,
+        })
+    }
+
+    /// The geometry pass's fragment entry point: the original inputs and
+    /// the previous clip position as words into the G-buffer's targets.
+    pub fn write_entry(&self, module: &mut Module, pieces: &Pieces) -> Function {
+        let (arguments, at) = fragment::varying_arguments(module, pieces, true);
+        let output = self.output_type(module);
+        let mut b = Builder::new(Function {
+            name: Some(pieces.name.clone()),
+            arguments,
+            result: Some(naga::FunctionResult {
+                ty: output,
+                binding: None,
+            }),
+            ..Function::default()
+        });
+        let Fragment {
+            originals,
+            previous,
+            frag_coord,
+        } = fragment::read_varyings(&mut b, &at);
+        let mut words = Vec::new();
+        if let Some(previous) = previous {
+            let ndc = previous_ndc(&mut b, module, previous);
+            let bits = bitcast(&mut b, ndc, ScalarKind::Uint);
+            words.extend((0..3).map(|c| b.member(bits, c)));
+        }
+        let bits = bitcast(&mut b, frag_coord, ScalarKind::Uint);
+        if self.depth_word.is_some() {
+            words.push(b.member(bits, 2));
+        }
+        if self.w_word.is_some() {
+            words.push(b.member(bits, 3));
+        }
+        for leaf in &self.leaves {
+            let value = match leaf.member {
+                Some(m) => b.member(originals[leaf.argument as usize], m),
+                None => originals[leaf.argument as usize],
+            };
+            match leaf.stored {
+                Stored::Unread | Stored::Position => {}
+                Stored::FrontFacing { .. } => {
+                    let one = b.expr(Expression::Literal(naga::Literal::U32(1)));
+                    let zero = b.expr(Expression::Literal(naga::Literal::U32(0)));
+                    words.push(b.expr(Expression::Select {
+                        condition: value,
+                        accept: one,
+                        reject: zero,
+                    }));
+                }
+                Stored::Words { scalar, size, .. } => {
+                    let bits = if scalar.kind == ScalarKind::Uint {
+                        value
+                    } else {
+                        bitcast(&mut b, value, ScalarKind::Uint)
+                    };
+                    match size {
+                        None => words.push(bits),
+                        Some(size) => words.extend((0..size as u32).map(|c| b.member(bits, c))),
+                    }
+                }
+            }
+        }
+        let zero = b.expr(Expression::Literal(naga::Literal::U32(0)));
+        let mut components = Vec::new();
+        for (t, format) in self.formats.iter().enumerate() {
+            let count = format_words(*format);
+            let mut parts: Vec<_> = (0..count)
+                .map(|c| words.get(t * 4 + c).copied().unwrap_or(zero))
+                .collect();
+            let texel = if count == 1 {
+                parts.remove(0)
+            } else {
+                let ty = vector_type(module, vector_size(count as u32), Scalar::U32);
+                b.expr(Expression::Compose {
+                    ty,
+                    components: parts,
+                })
+            };
+            components.push(texel);
+        }
+        let value = b.expr(Expression::Compose {
+            ty: output,
+            components,
+        });
+        b.push(Statement::Return { value: Some(value) });
+        b.finish()
+    }
+
+    /// Rebuilds, in a screen-space pass whose only argument is the
+    /// fragment position, what the original fragment stage received at
+    /// this pixel, with last frame's clip position.
+    pub(super) fn read(&self, b: &mut Builder, module: &mut Module, pieces: &Pieces) -> Fragment {
+        let screen = b.argument(0);
+        let xy = b.expr(Expression::Swizzle {
+            size: VectorSize::Bi,
+            vector: screen,
+            pattern: [
+                naga::SwizzleComponent::X,
+                naga::SwizzleComponent::Y,
+                naga::SwizzleComponent::X,
+                naga::SwizzleComponent::X,
+            ],
+        });
+        let texel = b.expr(Expression::As {
+            expr: xy,
+            kind: ScalarKind::Sint,
+            convert: Some(4),
+        });
+        b.name(texel, "texel");
+        let level = b.expr(Expression::Literal(naga::Literal::I32(0)));
+        let texels: Vec<Handle<Expression>> = self
+            .textures
+            .iter()
+            .enumerate()
+            .map(|(t, &global)| {
+                let image = b.expr(Expression::GlobalVariable(global));
+                let loaded = b.expr(Expression::ImageLoad {
+                    image,
+                    coordinate: texel,
+                    array_index: None,
+                    sample: None,
+                    level: Some(level),
+                });
+                b.name(loaded, &format!("g{t}"));
+                loaded
+            })
+            .collect();
+        let word = |b: &mut Builder, w: u32| b.member(texels[(w / 4) as usize], w % 4);
+        // Last frame's clip position as the NDC over w = 1: the lookup's
+        // division by w then gives the stored NDC back exactly.
+        let ndc_bits = b.expr(Expression::Swizzle {
+            size: VectorSize::Tri,
+            vector: texels[0],
+            pattern: [
+                naga::SwizzleComponent::X,
+                naga::SwizzleComponent::Y,
+                naga::SwizzleComponent::Z,
+                naga::SwizzleComponent::X,
+            ],
+        });
+        let ndc = bitcast(b, ndc_bits, ScalarKind::Float);
+        let one = b.literal_f32(1.0);
+        let previous = b.expr(Expression::Compose {
+            ty: pieces.vec4,
+            components: vec![ndc, one],
+        });
+        b.name(previous, "previous_clip_position");
+        let x = b.member(screen, 0);
+        let y = b.member(screen, 1);
+        let kept = |b: &mut Builder, at: Option<u32>, otherwise: f32| match at {
+            Some(at) => {
+                let bits = word(b, at);
+                bitcast(b, bits, ScalarKind::Float)
+            }
+            None => b.literal_f32(otherwise),
+        };
+        let z = kept(b, self.depth_word, 0.0);
+        let w = kept(b, self.w_word, 1.0);
+        let frag_coord = b.expr(Expression::Compose {
+            ty: pieces.vec4,
+            components: vec![x, y, z, w],
+        });
+        b.name(frag_coord, "frag_coord");
+        let mut values: BTreeMap<(u32, Option<u32>), Handle<Expression>> = BTreeMap::new();
+        for leaf in &self.leaves {
+            let value = match leaf.stored {
+                Stored::Unread => b.expr(Expression::ZeroValue(leaf.ty)),
+                Stored::Position => frag_coord,
+                Stored::FrontFacing { word: at } => {
+                    let bits = word(b, at);
+                    let zero = b.expr(Expression::Literal(naga::Literal::U32(0)));
+                    b.expr(Expression::Binary {
+                        op: naga::BinaryOperator::NotEqual,
+                        left: bits,
+                        right: zero,
+                    })
+                }
+                Stored::Words {
+                    first,
+                    scalar,
+                    size,
+                } => {
+                    let bits = match size {
+                        None => word(b, first),
+                        Some(size) => {
+                            let components = (0..size as u32).map(|c| word(b, first + c)).collect();
+                            let ty = vector_type(module, size, Scalar::U32);
+                            b.expr(Expression::Compose { ty, components })
+                        }
+                    };
+                    if scalar.kind == ScalarKind::Uint {
+                        bits
+                    } else {
+                        bitcast(b, bits, scalar.kind)
+                    }
+                }
+            };
+            values.insert((leaf.argument, leaf.member), value);
+        }
+        let originals = pieces
+            .arguments
+            .iter()
+            .enumerate()
+            .map(|(index, argument)| {
+                let index = index as u32;
+                match module.types[argument.ty].inner {
+                    TypeInner::Struct { ref members, .. } => {
+                        let components = (0..members.len() as u32)
+                            .map(|m| values[&(index, Some(m))])
+                            .collect();
+                        b.expr(Expression::Compose {
+                            ty: argument.ty,
+                            components,
+                        })
+                    }
+                    _ => values[&(index, None)],
+                }
+            })
+            .collect();
+        Fragment {
+            originals,
+            previous: Some(previous),
+            frag_coord,
+        }
+    }
+
+    /// The geometry pass's result: a member per target, at its location.
+    fn output_type(&self, module: &mut Module) -> Handle<naga::Type> {
+        let members = self
+            .formats
+            .iter()
+            .enumerate()
+            .map(|(t, format)| {
+                let count = format_words(*format) as u32;
+                let ty = if count == 1 {
+                    scalar_type(module, Scalar::U32)
+                } else {
+                    vector_type(module, vector_size(count), Scalar::U32)
+                };
+                naga::StructMember {
+                    name: Some(format!("g{t}")),
+                    ty,
+                    binding: Some(Binding::Location {
+                        location: t as u32,
+                        interpolation: None,
+                        sampling: None,
+                        blend_src: None,
+                        per_primitive: false,
+                    }),
+                    offset: t as u32 * 16,
+                }
+            })
+            .collect();
+        module.types.insert(
+            naga::Type {
+                name: Some("GBufferOutput".into()),
+                inner: TypeInner::Struct {
+                    members,
+                    span: self.formats.len() as u32 * 16,
+                },
+            },
+            naga::Span::UNDEFINED,
+        )
+    }
+}
+
+/// Last frame's NDC, `clip.xyz / clip.w`, where the point was in front
+/// of the camera (w > 0); (−4, −4, 0) otherwise (and for a NaN w), off
+/// the viewport, so the lookup still finds it off-screen.
+fn previous_ndc(
+    b: &mut Builder,
+    module: &mut Module,
+    previous: Handle<Expression>,
+) -> Handle<Expression> {
+    let xyz = b.expr(Expression::Swizzle {
+        size: VectorSize::Tri,
+        vector: previous,
+        pattern: [
+            naga::SwizzleComponent::X,
+            naga::SwizzleComponent::Y,
+            naga::SwizzleComponent::Z,
+            naga::SwizzleComponent::X,
+        ],
+    });
+    let w = b.member(previous, 3);
+    let ws = b.expr(Expression::Splat {
+        size: VectorSize::Tri,
+        value: w,
+    });
+    let ndc = b.expr(Expression::Binary {
+        op: naga::BinaryOperator::Divide,
+        left: xyz,
+        right: ws,
+    });
+    let zero = b.literal_f32(0.0);
+    let in_front = b.expr(Expression::Binary {
+        op: naga::BinaryOperator::Greater,
+        left: w,
+        right: zero,
+    });
+    let off = b.literal_f32(-4.0);
+    let vec3 = vector_type(module, VectorSize::Tri, Scalar::F32);
+    let outside = b.expr(Expression::Compose {
+        ty: vec3,
+        components: vec![off, off, zero],
+    });
+    let ndc = b.expr(Expression::Select {
+        condition: in_front,
+        accept: ndc,
+        reject: outside,
+    });
+    b.name(ndc, "previous_ndc");
+    ndc
+}
+
+/// Whether the functions read `@builtin(position)`.
+fn reads_position(module: &Module, pieces: &Pieces, read: &BTreeMap<u32, Read>) -> bool {
+    pieces
+        .arguments
+        .iter()
+        .enumerate()
+        .any(|(index, argument)| match module.types[argument.ty].inner {
+            TypeInner::Struct { ref members, .. } => {
+                members.iter().enumerate().any(|(m, member)| {
+                    fragment::is_position(&member.binding)
+                        && match read.get(&(index as u32)) {
+                            Some(Read::Whole) => true,
+                            Some(Read::Members(set)) => set.contains(&(m as u32)),
+                            None => false,
+                        }
+                })
+            }
+            _ => fragment::is_position(&argument.binding) && read.contains_key(&(index as u32)),
+        })
+}
+
+/// How one input is kept: its words appended to `holds`, labelled.
+fn store(
+    module: &Module,
+    binding: &Option<Binding>,
+    ty: Handle<naga::Type>,
+    is_read: bool,
+    label: &str,
+    holds: &mut Vec<String>,
+) -> Result<Stored, Refusal> {
+    use naga::BuiltIn as B;
+    match binding {
+        Some(Binding::BuiltIn(B::Position { .. })) => return Ok(Stored::Position),
+        _ if !is_read => return Ok(Stored::Unread),
+        Some(Binding::BuiltIn(B::FrontFacing)) => {
+            holds.push(label.to_string());
+            return Ok(Stored::FrontFacing {
+                word: holds.len() as u32 - 1,
+            });
+        }
+        Some(Binding::BuiltIn(B::PrimitiveIndex)) | Some(Binding::Location { .. }) => {}
+        Some(Binding::BuiltIn(other)) => {
+            return Err(Refusal::new(format!(
+                "the fragment stage reads @builtin({other:?}) (`{label}`), which a G-buffer pass cannot pass on to screen space"
+            )))
+        }
+        None => {
+            return Err(Refusal::internal(format!(
+                "fragment input `{label}` has no binding"
+            )))
+        }
+    }
+    let (scalar, size) = match module.types[ty].inner {
+        TypeInner::Scalar(scalar) => (scalar, None),
+        TypeInner::Vector { size, scalar } => (scalar, Some(size)),
+        ref other => {
+            return Err(Refusal::internal(format!(
+                "fragment input `{label}` is a {other:?}"
+            )))
+        }
+    };
+    if scalar.width != 4 {
+        return Err(Refusal::new(format!(
+            "the fragment input `{label}` is {}-bit; the G-buffer holds 32-bit words",
+            scalar.width * 8
+        )));
+    }
+    let first = holds.len() as u32;
+    match size {
+        None => holds.push(label.to_string()),
+        Some(size) => holds.extend(
+            ["x", "y", "z", "w"][..size as usize]
+                .iter()
+                .map(|c| format!("{label}.{c}")),
+        ),
+    }
+    Ok(Stored::Words {
+        first,
+        scalar,
+        size,
+    })
+}
+
+/// Which of the original entry point's arguments (and of a struct's
+/// members) the payload, shade, gradient and presence functions read.
+fn arguments_read(module: &Module, pieces: &Pieces) -> BTreeMap<u32, Read> {
+    let functions = [Some(pieces.payload), Some(pieces.shade), pieces.gradients]
+        .into_iter()
+        .chain([pieces.presence.map(|(presence, _)| presence)])
+        .flatten();
+    let mut read: BTreeMap<u32, Read> = BTreeMap::new();
+    let mut note = |argument: u32, member: Option<u32>| match (read.get_mut(&argument), member) {
+        (Some(Read::Whole), _) => {}
+        (Some(Read::Members(set)), Some(m)) => {
+            set.insert(m);
+        }
+        (_, None) => {
+            read.insert(argument, Read::Whole);
+        }
+        (None, Some(m)) => {
+            read.insert(argument, Read::Members(BTreeSet::from([m])));
+        }
+    };
+    for handle in functions {
+        let function = &module.functions[handle];
+        let argument_of = |h: Handle<Expression>| match function.expressions[h] {
+            Expression::FunctionArgument(i) if (i as usize) < pieces.arguments.len() => Some(i),
+            _ => None,
+        };
+        for (_, expr) in function.expressions.iter() {
+            if let Expression::AccessIndex { base, index } = *expr {
+                if let Some(argument) = argument_of(base) {
+                    note(argument, Some(index));
+                }
+                continue;
+            }
+            for operand in crate::proc::operands(expr) {
+                if let Some(argument) = argument_of(operand) {
+                    note(argument, None);
+                }
+            }
+        }
+        crate::proc::each_statement(&function.body, &mut |statement| {
+            for value in statement_values(statement) {
+                if let Some(argument) = argument_of(value) {
+                    note(argument, None);
+                }
+            }
+        });
+    }
+    read
+}
+
+/// The values a statement reads directly (not through an expression).
+fn statement_values(statement: &Statement) -> Vec<Handle<Expression>> {
+    match *statement {
+        Statement::Call { ref arguments, .. } => arguments.clone(),
+        Statement::Return { value } => value.into_iter().collect(),
+        Statement::Store { pointer, value } => vec![pointer, value],
+        Statement::If { condition, .. } => vec![condition],
+        Statement::Switch { selector, .. } => vec![selector],
+        Statement::ImageStore {
+            image,
+            coordinate,
+            array_index,
+            value,
+        } => [Some(image), Some(coordinate), array_index, Some(value)]
+            .into_iter()
+            .flatten()
+            .collect(),
+        Statement::Atomic { pointer, value, .. } => vec![pointer, value],
+        _ => Vec::new(),
+    }
+}
+
+/// Refuses a fragment stage that discards: what it covers is decided by
+/// its shading, which the geometry pass does not run.
+fn refuse_discards(module: &Module, pieces: &Pieces) -> Result<(), Refusal> {
+    let mut seen = BTreeSet::new();
+    let mut stack = vec![pieces.payload, pieces.shade];
+    while let Some(handle) = stack.pop() {
+        if !seen.insert(handle) {
+            continue;
+        }
+        let mut kills = false;
+        crate::proc::each_statement(&module.functions[handle].body, &mut |s| match *s {
+            Statement::Kill => kills = true,
+            Statement::Call { function, .. } => stack.push(function),
+            _ => {}
+        });
+        if kills {
+            return Err(Refusal::new(
+                "the fragment stage discards (an alpha test?): which pixels it covers is decided by its shading, which the deferred variant's geometry pass does not run",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `@vertex fn shadecache_fullscreen(@builtin(vertex_index) i: u32) ->
+/// @builtin(position) vec4<f32>`: vertices 0, 1, 2 at (−1, −1), (3, −1)
+/// and (−1, 3) in clip space, a triangle that covers the screen, at depth
+/// 0 (the screen-space passes test no depth).
+fn fullscreen_entry(module: &mut Module, vec4: Handle<naga::Type>) -> naga::EntryPoint {
+    let u32_ty = scalar_type(module, Scalar::U32);
+    let mut b = Builder::new(Function {
+        name: Some("shadecache_fullscreen".into()),
+        arguments: vec![naga::FunctionArgument {
+            name: Some("vertex".into()),
+            ty: u32_ty,
+            binding: Some(Binding::BuiltIn(naga::BuiltIn::VertexIndex)),
+        }],
+        result: Some(naga::FunctionResult {
+            ty: vec4,
+            binding: Some(Binding::BuiltIn(naga::BuiltIn::Position {
+                invariant: false,
+            })),
+        }),
+        ..Function::default()
+    });
+    let vertex = b.argument(0);
+    let u = |b: &mut Builder, v: u32| b.expr(Expression::Literal(naga::Literal::U32(v)));
+    let f = |b: &mut Builder, v: f32| b.literal_f32(v);
+    let binary = |b: &mut Builder, op, left, right| b.expr(Expression::Binary { op, left, right });
+    use naga::BinaryOperator as Op;
+    let one = u(&mut b, 1);
+    let two = u(&mut b, 2);
+    let shifted = binary(&mut b, Op::ShiftLeft, vertex, one);
+    let x_bits = binary(&mut b, Op::And, shifted, two);
+    let y_bits = binary(&mut b, Op::And, vertex, two);
+    let coordinate = |b: &mut Builder, bits| {
+        let value = b.expr(Expression::As {
+            expr: bits,
+            kind: ScalarKind::Float,
+            convert: Some(4),
+        });
+        let two = f(b, 2.0);
+        let one = f(b, 1.0);
+        let scaled = binary(b, Op::Multiply, value, two);
+        binary(b, Op::Subtract, scaled, one)
+    };
+    let x = coordinate(&mut b, x_bits);
+    let y = coordinate(&mut b, y_bits);
+    let z = f(&mut b, 0.0);
+    let w = f(&mut b, 1.0);
+    let position = b.expr(Expression::Compose {
+        ty: vec4,
+        components: vec![x, y, z, w],
+    });
+    b.push(Statement::Return {
+        value: Some(position),
+    });
+    naga::EntryPoint {
+        name: "shadecache_fullscreen".into(),
+        stage: naga::ShaderStage::Vertex,
+        early_depth_test: None,
+        workgroup_size: [0; 3],
+        workgroup_size_overrides: None,
+        function: b.finish(),
+        mesh_info: None,
+        task_payload: None,
+        incoming_ray_payload: None,
+    }
+}
+
+/// The name of G-buffer texture `index`: `gbuffer_a`, `gbuffer_b`... (a
+/// letter, since naga's writer suffixes names that end in a digit).
+pub fn texture_name(index: usize) -> String {
+    format!("gbuffer_{}", (b'a' + index as u8) as char)
+}
+
+/// `bitcast` of a scalar or vector to `kind`, keeping its width and size.
+fn bitcast(b: &mut Builder, value: Handle<Expression>, kind: ScalarKind) -> Handle<Expression> {
+    b.expr(Expression::As {
+        expr: value,
+        kind,
+        convert: None,
+    })
+}
+
+fn format_words(format: TextureFormat) -> usize {
+    match format {
+        TextureFormat::R32Uint => 1,
+        TextureFormat::Rg32Uint => 2,
+        _ => 4,
+    }
+}
+
+fn vector_size(count: u32) -> VectorSize {
+    match count {
+        2 => VectorSize::Bi,
+        3 => VectorSize::Tri,
+        _ => VectorSize::Quad,
+    }
+}
+
+fn scalar_type(module: &mut Module, scalar: Scalar) -> Handle<naga::Type> {
+    module.types.insert(
+        naga::Type {
+            name: None,
+            inner: TypeInner::Scalar(scalar),
+        },
+        naga::Span::UNDEFINED,
+    )
+}
+
+fn vector_type(module: &mut Module, size: VectorSize, scalar: Scalar) -> Handle<naga::Type> {
+    module.types.insert(
+        naga::Type {
+            name: None,
+            inner: TypeInner::Vector { size, scalar },
+        },
+        naga::Span::UNDEFINED,
+    )
+}
