@@ -743,11 +743,30 @@ fn refuse_discards(module: &Module, pieces: &Pieces) -> Result<(), Refusal> {
 }
 
 /// `@vertex fn shadecache_fullscreen(@builtin(vertex_index) i: u32) ->
-/// @builtin(position) vec4<f32>`: vertices 0, 1, 2 at (−1, −1), (3, −1)
+/// FullscreenOutput` (its `@builtin(position)`): vertices 0, 1, 2 at (−1, −1), (3, −1)
 /// and (−1, 3) in clip space, a triangle that covers the screen, at depth
 /// 0 (the screen-space passes test no depth).
 fn fullscreen_entry(module: &mut Module, vec4: Handle<naga::Type>) -> naga::EntryPoint {
     let u32_ty = scalar_type(module, Scalar::U32);
+    // A struct, so that the position is written `@invariant` like every
+    // position the rewrite emits.
+    let output = module.types.insert(
+        naga::Type {
+            name: Some("FullscreenOutput".into()),
+            inner: TypeInner::Struct {
+                members: vec![naga::StructMember {
+                    name: Some("position".into()),
+                    ty: vec4,
+                    binding: Some(Binding::BuiltIn(naga::BuiltIn::Position {
+                        invariant: true,
+                    })),
+                    offset: 0,
+                }],
+                span: 16,
+            },
+        },
+        naga::Span::UNDEFINED,
+    );
     let mut b = Builder::new(Function {
         name: Some("shadecache_fullscreen".into()),
         arguments: vec![naga::FunctionArgument {
@@ -756,10 +775,8 @@ fn fullscreen_entry(module: &mut Module, vec4: Handle<naga::Type>) -> naga::Entr
             binding: Some(Binding::BuiltIn(naga::BuiltIn::VertexIndex)),
         }],
         result: Some(naga::FunctionResult {
-            ty: vec4,
-            binding: Some(Binding::BuiltIn(naga::BuiltIn::Position {
-                invariant: false,
-            })),
+            ty: output,
+            binding: None,
         }),
         ..Function::default()
     });
@@ -792,9 +809,11 @@ fn fullscreen_entry(module: &mut Module, vec4: Handle<naga::Type>) -> naga::Entr
         ty: vec4,
         components: vec![x, y, z, w],
     });
-    b.push(Statement::Return {
-        value: Some(position),
+    let value = b.expr(Expression::Compose {
+        ty: output,
+        components: vec![position],
     });
+    b.push(Statement::Return { value: Some(value) });
     naga::EntryPoint {
         name: "shadecache_fullscreen".into(),
         stage: naga::ShaderStage::Vertex,

@@ -10,6 +10,7 @@ mod corpus;
 mod corpus_rewrites;
 mod cost;
 mod default_scene;
+mod deferred;
 mod errors;
 mod gpu;
 mod hard_cases;

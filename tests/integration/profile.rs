@@ -118,7 +118,7 @@ fn static_scene_without_refresh_reuses_every_pixel() {
     let Some((_, report, _)) = run(&marble_scene("", ""), opts) else {
         return;
     };
-    assert_eq!(report.results.len(), 3 * 4);
+    assert_eq!(report.results.len(), Variant::ALL.len() * 4);
     for row in &report.results {
         for (frame, stats) in row.frame_stats.iter().enumerate() {
             assert_eq!(
@@ -155,7 +155,7 @@ fn refresh_period_one_equals_the_reference() {
     ) else {
         return;
     };
-    assert_eq!(report.results.len(), 3 * 4);
+    assert_eq!(report.results.len(), Variant::ALL.len() * 4);
     for row in &report.results {
         assert_eq!(row.hit_rate, 0.0, "{}", row.variant);
         assert!(
@@ -309,7 +309,7 @@ fn report_json_carries_the_documented_fields() {
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.path().join("report.json")).unwrap()).unwrap();
     let results = report["results"].as_array().unwrap();
-    assert_eq!(results.len(), 2 * 3);
+    assert_eq!(results.len(), 2 * Variant::ALL.len());
     for row in results {
         for key in [
             "node",
@@ -327,7 +327,8 @@ fn report_json_carries_the_documented_fields() {
         ] {
             assert!(!row[key].is_null(), "{key} missing: {row}");
         }
-        assert!(["one-pass", "two-pass", "three-pass"].contains(&row["variant"].as_str().unwrap()));
+        assert!(["one-pass", "two-pass", "three-pass", "deferred"]
+            .contains(&row["variant"].as_str().unwrap()));
         assert!(row["speedup"].as_f64().unwrap() > 0.0);
     }
     assert!(report["reference"]["time_ms"].as_f64().unwrap() > 0.0);
@@ -335,7 +336,7 @@ fn report_json_carries_the_documented_fields() {
     assert!(html.contains("<svg") && html.contains("data:image/png;base64,"));
     assert!(html.contains("Which value to cache"));
     let maps = std::fs::read_dir(out.path().join("maps")).unwrap().count();
-    assert_eq!(maps, 6);
+    assert_eq!(maps, 2 * Variant::ALL.len());
     assert!(out.path().join("images/difference.png").is_file());
     let trace: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.path().join("trace.json")).unwrap()).unwrap();
@@ -503,7 +504,7 @@ fn nan_payload_does_not_spread() {
 /// finite neighbour's value, where the reference shows whatever clamp(NaN)
 /// gives: not an error of the cache.)
 fn assert_contained(report: &shadecache::report::Report, detected: f64) {
-    assert_eq!(report.results.len(), 3 * 4);
+    assert_eq!(report.results.len(), Variant::ALL.len() * 4);
     for row in &report.results {
         let what = format!("{} {}", row.variant, row.reconstruction.as_str());
         assert!(row.invalid_rate > detected, "{what}: {}", row.invalid_rate);
@@ -559,15 +560,15 @@ fn f16_overflow_is_recomputed_not_reused() {
             .unwrap();
         let wide = wide.results.iter().find(|r| r.variant == variant).unwrap();
         assert_eq!(wide.invalid_rate, 0.0, "{variant}");
-        if variant == Variant::ThreePass {
-            // Three-pass shades from the cached value, so it cannot
-            // recompute: the analysis cannot bound exp() below 65504, and
+        if matches!(variant, Variant::ThreePass | Variant::Deferred) {
+            // Three-pass (and deferred, its passes in screen space) shades
+            // from the cached value, so it cannot recompute: the analysis cannot bound exp() below 65504, and
             // the rewrite keeps this cache in rgba32float.
             assert_eq!(narrow.cache_format, CacheFormat::Rgba32float);
             assert_eq!(narrow.invalid_rate, 0.0);
             assert!(
                 (narrow.max_abs_error - wide.max_abs_error).abs() <= 0.02,
-                "three-pass: {} against {}",
+                "{variant}: {} against {}",
                 narrow.max_abs_error,
                 wide.max_abs_error
             );
@@ -976,7 +977,7 @@ fn fixed_cost_bound_is_at_least_the_measured_speedup() {
         &mut Quiet,
     )
     .unwrap();
-    assert_eq!(report.results.len(), 3);
+    assert_eq!(report.results.len(), Variant::ALL.len());
     assert!(report.reference.fixed_ms > 0.0);
     for row in &report.results {
         let fixed: f64 = row.fixed_cost_ms.iter().map(|p| p.time_ms).sum();

@@ -190,6 +190,9 @@ fn every_emitted_module_validates_with_naga_and_tint() {
     let expected = [
         "two-pass: the shader may discard after the node is computed",
         "three-pass: the shader may discard after the node is computed",
+        // discard_cutout.wgsl: an alpha test decides coverage by shading.
+        "deferred: the fragment stage discards",
+        "deferred: the shader may discard after the node is computed",
         // pbr_material_flags.wgsl samples its textures under material-flag
         // branches.
         "one-pass: one-pass computes the payload only on a miss",
@@ -228,6 +231,7 @@ fn rewrite_all_nodes_writes_every_candidate_and_variant() {
                 Variant::OnePass => 1,
                 Variant::TwoPass => 2,
                 Variant::ThreePass => 3,
+                Variant::Deferred => 4,
                 Variant::Reference => unreachable!("not a rewrite"),
             };
             assert_eq!(passes.len(), expected);
@@ -236,7 +240,10 @@ fn rewrite_all_nodes_writes_every_candidate_and_variant() {
             }
         }
     }
-    assert!(stdout(&output).contains(&format!("wrote {} variants", analysis.candidates.len() * 3)));
+    assert!(stdout(&output).contains(&format!(
+        "wrote {} variants",
+        analysis.candidates.len() * Variant::ALL.len()
+    )));
 }
 
 #[test]
@@ -600,8 +607,10 @@ fn every_reconstruction_validates_and_builds() {
                             "cache_lookup_nearest_packed"
                         }
                     };
-                    // Pass 1 of every variant reprojects.
-                    let (_, text) = &wgsl(&rewritten)[0];
+                    // Pass 1 of every variant reprojects (the deferred
+                    // variant's pass 2, after its G-buffer pass).
+                    let lookup_pass = usize::from(variant == Variant::Deferred);
+                    let (_, text) = &wgsl(&rewritten)[lookup_pass];
                     assert!(text.contains(&format!("fn {lookup}(")), "{text}");
                     // Only bilinear gathers last frame's depths (every
                     // bilinear footprint gathers its four ages).
@@ -643,8 +652,8 @@ fn every_reconstruction_validates_and_builds() {
         }
     }
     // `vec4<f32>(color, 1.0)` is among the first five, for both packed
-    // reconstructions, both formats and three variants.
-    assert_eq!(refused, 2 * 2 * 3);
+    // reconstructions, both formats and every variant.
+    assert_eq!(refused, 2 * 2 * Variant::ALL.len());
     for result in tint_validate(&files) {
         assert!(
             result.ok,
@@ -762,6 +771,18 @@ fn only_passes_that_reproject_compute_the_previous_position() {
             .map(|t| [t.group, t.binding])
             .collect();
         for (index, pass) in plan.passes.iter().enumerate() {
+            let binds_twin = pass.bindings.iter().any(|b| twins.contains(b));
+            if pass.draw == shadecache::plan::DrawKind::Fullscreen {
+                // The deferred variant's screen-space passes read last
+                // frame's position from the G-buffer, never a twin.
+                assert!(
+                    !binds_twin,
+                    "{} {} binds a twin",
+                    rewrite.label(),
+                    pass.name
+                );
+                continue;
+            }
             let reprojects = index == 0;
             let text = emitted
                 .wgsl
@@ -775,7 +796,6 @@ fn only_passes_that_reproject_compute_the_previous_position() {
                 reprojects,
                 "{label}"
             );
-            let binds_twin = pass.bindings.iter().any(|b| twins.contains(b));
             assert!(reprojects || !binds_twin, "{label} binds a twin");
             plain += usize::from(!reprojects);
         }
