@@ -64,13 +64,19 @@ pub fn build_pipelines(rewritten: &rewrite::Rewritten, what: &str) -> Option<usi
 /// builds a wgpu render pipeline, as its plan describes it.
 #[test]
 fn every_pass_of_every_variant_builds_a_wgpu_pipeline() {
-    let Some(gpu) = gpu() else { return };
+    let Some(mut gpu) = gpu() else { return };
     eprintln!("adapter: {} ({:?})", gpu.adapter.name, gpu.adapter.backend);
     let mut built = 0;
-    for rewrite in crate::corpus_rewrites::corpus_rewrites() {
+    for (index, rewrite) in crate::corpus_rewrites::corpus_rewrites().iter().enumerate() {
         let Ok(emitted) = &rewrite.outcome else {
             continue;
         };
+        // A fresh device now and then: lavapipe keeps what it compiled
+        // for a device until the device goes (measured: 24 GB over the
+        // corpus's 4,000 pipelines on one device).
+        if index % 200 == 199 {
+            gpu = crate::gpu::gpu().expect("the adapter found before");
+        }
         emitted
             .plan
             .check()

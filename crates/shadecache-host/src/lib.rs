@@ -21,7 +21,9 @@
 //! [`Twins`] from the draw's buffers. Per frame it writes its buffers as
 //! before and calls [`CachedShader::record`], which records every pass and
 //! calls back once per pass for the draws (the same draws as the original
-//! pass, after [`Draw::bind`]); the host copies the frame's buffers into
+//! pass, after [`Draw::bind`], each through [`Draw::draw_indexed`] or
+//! [`Draw::draw`], which the deferred variant's screen-space passes turn
+//! into one triangle over the screen per draw); the host copies the frame's buffers into
 //! their twins after the passes, so they hold last frame's contents
 //! whatever the application writes next. The first frame, a
 //! [`CachedShader::resize`] and a [`CachedShader::reset`] (a camera cut)
@@ -63,7 +65,7 @@
 //!     let pass = draw.render_pass();
 //!     pass.set_bind_group(0, globals_group, &[]);
 //!     pass.set_vertex_buffer(0, vertices.slice(..));
-//!     pass.draw(0..3, 0..1);
+//!     draw.draw(0..3, 0..1);
 //! })?;
 //! queue.submit([encoder.finish()]);
 //! # Ok(())
