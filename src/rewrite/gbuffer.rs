@@ -341,16 +341,7 @@ impl GBuffer {
     /// this pixel, with last frame's clip position.
     pub(super) fn read(&self, b: &mut Builder, module: &mut Module, pieces: &Pieces) -> Fragment {
         let screen = b.argument(0);
-        let xy = b.expr(Expression::Swizzle {
-            size: VectorSize::Bi,
-            vector: screen,
-            pattern: [
-                naga::SwizzleComponent::X,
-                naga::SwizzleComponent::Y,
-                naga::SwizzleComponent::X,
-                naga::SwizzleComponent::X,
-            ],
-        });
+        let xy = leading(b, screen, VectorSize::Bi);
         let texel = b.expr(Expression::As {
             expr: xy,
             kind: ScalarKind::Sint,
@@ -378,16 +369,7 @@ impl GBuffer {
         let word = |b: &mut Builder, w: u32| b.member(texels[(w / 4) as usize], w % 4);
         // Last frame's clip position as the NDC over w = 1: the lookup's
         // division by w then gives the stored NDC back exactly.
-        let ndc_bits = b.expr(Expression::Swizzle {
-            size: VectorSize::Tri,
-            vector: texels[0],
-            pattern: [
-                naga::SwizzleComponent::X,
-                naga::SwizzleComponent::Y,
-                naga::SwizzleComponent::Z,
-                naga::SwizzleComponent::X,
-            ],
-        });
+        let ndc_bits = leading(b, texels[0], VectorSize::Tri);
         let ndc = bitcast(b, ndc_bits, ScalarKind::Float);
         let one = b.literal_f32(1.0);
         let previous = b.expr(Expression::Compose {
@@ -522,16 +504,7 @@ fn previous_ndc(
     module: &mut Module,
     previous: Handle<Expression>,
 ) -> Handle<Expression> {
-    let xyz = b.expr(Expression::Swizzle {
-        size: VectorSize::Tri,
-        vector: previous,
-        pattern: [
-            naga::SwizzleComponent::X,
-            naga::SwizzleComponent::Y,
-            naga::SwizzleComponent::Z,
-            naga::SwizzleComponent::X,
-        ],
-    });
+    let xyz = leading(b, previous, VectorSize::Tri);
     let w = b.member(previous, 3);
     let ws = b.expr(Expression::Splat {
         size: VectorSize::Tri,
@@ -831,6 +804,16 @@ fn fullscreen_entry(module: &mut Module, vec4: Handle<naga::Type>) -> naga::Entr
 /// letter, since naga's writer suffixes names that end in a digit).
 pub fn texture_name(index: usize) -> String {
     format!("gbuffer_{}", (b'a' + index as u8) as char)
+}
+
+/// The first `size` components of `vector` (`.xy`, `.xyz`).
+fn leading(b: &mut Builder, vector: Handle<Expression>, size: VectorSize) -> Handle<Expression> {
+    use naga::SwizzleComponent as C;
+    b.expr(Expression::Swizzle {
+        size,
+        vector,
+        pattern: [C::X, C::Y, C::Z, C::W],
+    })
 }
 
 /// `bitcast` of a scalar or vector to `kind`, keeping its width and size.
