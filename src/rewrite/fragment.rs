@@ -271,12 +271,20 @@ pub fn entry_point(
             "the G-buffer pass is built by `GBuffer::write_entry`",
         ));
     }
-    let (arguments, varyings) = match inputs {
+    // Where the inputs come from: the arguments made here, or the G-buffer.
+    enum Reader<'g> {
+        Arguments(VaryingsAt),
+        GBuffer(&'g super::gbuffer::GBuffer),
+    }
+    let (arguments, reader) = match inputs {
         Inputs::Varyings => {
             let (arguments, at) = varying_arguments(module, pieces, stage.reprojects());
-            (arguments, Some(at))
+            (arguments, Reader::Arguments(at))
         }
-        Inputs::GBuffer(_) => (vec![frag_coord_argument(pieces.vec4)], None),
+        Inputs::GBuffer(gbuffer) => (
+            vec![frag_coord_argument(pieces.vec4)],
+            Reader::GBuffer(gbuffer),
+        ),
     };
     let (result_ty, cache_member) = output_type(module, pieces, stage.writes());
     let mut b = Builder::new(Function {
@@ -293,10 +301,9 @@ pub fn entry_point(
         }),
         ..Function::default()
     });
-    let fragment = match (inputs, &varyings) {
-        (Inputs::GBuffer(gbuffer), _) => gbuffer.read(&mut b, module, pieces),
-        (Inputs::Varyings, Some(at)) => read_varyings(&mut b, at),
-        (Inputs::Varyings, None) => return Err(Refusal::internal("varyings without arguments")),
+    let fragment = match reader {
+        Reader::Arguments(at) => read_varyings(&mut b, &at),
+        Reader::GBuffer(gbuffer) => gbuffer.read(&mut b, module, pieces),
     };
     let Fragment {
         originals,

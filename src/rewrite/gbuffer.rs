@@ -4,9 +4,9 @@
 //!
 //! The geometry pass runs the instrumented vertex stage (with its
 //! previous-frame twin) and a fragment stage that only stores: last
-//! frame's clip position, the fragment position's depth and w, and every
-//! input of the original fragment entry point that the payload and shade
-//! functions read — varyings, `front_facing`, `primitive_index` — as
+//! frame's NDC, the fragment position's depth and w where they are read,
+//! and every input of the original fragment entry point that the payload
+//! and shade functions read — varyings, `front_facing`, `primitive_index` — as
 //! 32-bit words, bit for bit (`bitcast`), packed into as few `r32uint`,
 //! `rg32uint` or `rgba32uint` targets as hold them. Integer targets keep
 //! every bit: a NaN varying stays the NaN it was, an `i32` id its value.
@@ -52,9 +52,9 @@ pub struct GBuffer {
     pub holds: Vec<String>,
     /// Each texture's format, by index (= location in the geometry pass).
     pub formats: Vec<TextureFormat>,
-    /// Each texture's global variable (`gbuffer_0`...), read by the
+    /// Each texture's global variable ([`texture_name`]), read by the
     /// screen-space passes.
-    pub textures: Vec<Handle<naga::GlobalVariable>>,
+    textures: Vec<Handle<naga::GlobalVariable>>,
     /// The vertex stage of the screen-space passes: one triangle over the
     /// screen, from the vertex index.
     pub fullscreen: naga::EntryPoint,
@@ -100,6 +100,66 @@ enum Read {
     Members(BTreeSet<u32>),
 }
 
+impl Read {
+    /// Whether `member` (`None`: the argument itself) is read.
+    fn includes(read: Option<&Read>, member: Option<u32>) -> bool {
+        match (read, member) {
+            (None, _) => false,
+            (Some(Read::Whole), _) | (Some(_), None) => true,
+            (Some(Read::Members(set)), Some(m)) => set.contains(&m),
+        }
+    }
+}
+
+/// An input of the original fragment entry point as the G-buffer sees it,
+/// before its words are laid out.
+struct Input {
+    argument: u32,
+    member: Option<u32>,
+    binding: Option<Binding>,
+    ty: Handle<naga::Type>,
+    label: String,
+    is_read: bool,
+}
+
+/// Every input of the original entry point, a struct argument's members
+/// each on its own, with whether the functions read it.
+fn inputs(module: &Module, pieces: &Pieces, read: &BTreeMap<u32, Read>) -> Vec<Input> {
+    let mut inputs = Vec::new();
+    for (index, argument) in pieces.arguments.iter().enumerate() {
+        let index = index as u32;
+        let name = argument
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("argument{index}"));
+        let read = read.get(&index);
+        match module.types[argument.ty].inner {
+            TypeInner::Struct { ref members, .. } => {
+                inputs.extend(members.iter().enumerate().map(|(m, member)| Input {
+                    argument: index,
+                    member: Some(m as u32),
+                    binding: member.binding.clone(),
+                    ty: member.ty,
+                    label: format!(
+                        "{name}.{}",
+                        member.name.clone().unwrap_or_else(|| m.to_string())
+                    ),
+                    is_read: Read::includes(read, Some(m as u32)),
+                }))
+            }
+            _ => inputs.push(Input {
+                argument: index,
+                member: None,
+                binding: argument.binding.clone(),
+                ty: argument.ty,
+                label: name,
+                is_read: Read::includes(read, None),
+            }),
+        }
+    }
+    inputs
+}
+
 impl GBuffer {
     /// Lays out the G-buffer for `pieces` and declares its textures in
     /// `group` from `first_binding` on. Refuses a fragment stage that
@@ -120,8 +180,10 @@ impl GBuffer {
         (group, first_binding): (u32, u32),
     ) -> Result<GBuffer, Refusal> {
         refuse_discards(module, pieces)?;
-        let read = arguments_read(module, pieces);
-        let reads_position = reads_position(module, pieces, &read);
+        let inputs = inputs(module, pieces, &arguments_read(module, pieces));
+        let reads_position = inputs
+            .iter()
+            .any(|input| input.is_read && fragment::is_position(&input.binding));
         let mut holds: Vec<String> = ["previous_ndc.x", "previous_ndc.y", "previous_ndc.z"]
             .map(String::from)
             .to_vec();
@@ -133,61 +195,25 @@ impl GBuffer {
             holds.push("position.w".into());
             holds.len() as u32 - 1
         });
-        let mut leaves = Vec::new();
-        for (index, argument) in pieces.arguments.iter().enumerate() {
-            let index = index as u32;
-            let name = argument
-                .name
-                .clone()
-                .unwrap_or_else(|| format!("argument{index}"));
-            match module.types[argument.ty].inner {
-                TypeInner::Struct { ref members, .. } => {
-                    for (m, member) in members.iter().enumerate() {
-                        let m = m as u32;
-                        let is_read = match read.get(&index) {
-                            Some(Read::Whole) => true,
-                            Some(Read::Members(set)) => set.contains(&m),
-                            None => false,
-                        };
-                        let label = format!(
-                            "{name}.{}",
-                            member.name.clone().unwrap_or_else(|| m.to_string())
-                        );
-                        let stored = store(
-                            module,
-                            &member.binding,
-                            member.ty,
-                            is_read,
-                            &label,
-                            &mut holds,
-                        )?;
-                        leaves.push(Leaf {
-                            argument: index,
-                            member: Some(m),
-                            ty: member.ty,
-                            stored,
-                        });
-                    }
-                }
-                _ => {
-                    let is_read = read.contains_key(&index);
-                    let stored = store(
-                        module,
-                        &argument.binding,
-                        argument.ty,
-                        is_read,
-                        &name,
-                        &mut holds,
-                    )?;
-                    leaves.push(Leaf {
-                        argument: index,
-                        member: None,
-                        ty: argument.ty,
-                        stored,
-                    });
-                }
-            }
-        }
+        let leaves = inputs
+            .into_iter()
+            .map(|input| {
+                let stored = store(
+                    module,
+                    &input.binding,
+                    input.ty,
+                    input.is_read,
+                    &input.label,
+                    &mut holds,
+                )?;
+                Ok(Leaf {
+                    argument: input.argument,
+                    member: input.member,
+                    ty: input.ty,
+                    stored,
+                })
+            })
+            .collect::<Result<Vec<_>, Refusal>>()?;
         let words = holds.len() as u32;
         if words > MAX_TARGETS * 4 {
             return Err(Refusal::new(format!(
@@ -251,7 +277,7 @@ impl GBuffer {
 
     /// The geometry pass's fragment entry point: the original inputs and
     /// the previous clip position as words into the G-buffer's targets.
-    pub fn write_entry(&self, module: &mut Module, pieces: &Pieces) -> Function {
+    pub fn write_entry(&self, module: &mut Module, pieces: &Pieces) -> Result<Function, Refusal> {
         let (arguments, at) = fragment::varying_arguments(module, pieces, true);
         let output = self.output_type(module);
         let mut b = Builder::new(Function {
@@ -268,12 +294,11 @@ impl GBuffer {
             previous,
             frag_coord,
         } = fragment::read_varyings(&mut b, &at);
-        let mut words = Vec::new();
-        if let Some(previous) = previous {
-            let ndc = previous_ndc(&mut b, module, previous);
-            let bits = bitcast(&mut b, ndc, ScalarKind::Uint);
-            words.extend((0..3).map(|c| b.member(bits, c)));
-        }
+        let previous = previous
+            .ok_or_else(|| Refusal::internal("the G-buffer pass reads no previous position"))?;
+        let ndc = previous_ndc(&mut b, module, previous);
+        let bits = bitcast(&mut b, ndc, ScalarKind::Uint);
+        let mut words: Vec<_> = (0..3).map(|c| b.member(bits, c)).collect();
         let bits = bitcast(&mut b, frag_coord, ScalarKind::Uint);
         if self.depth_word.is_some() {
             words.push(b.member(bits, 2));
@@ -333,7 +358,7 @@ impl GBuffer {
             components,
         });
         b.push(Statement::Return { value: Some(value) });
-        b.finish()
+        Ok(b.finish())
     }
 
     /// Rebuilds, in a screen-space pass whose only argument is the
@@ -534,27 +559,6 @@ fn previous_ndc(
     });
     b.name(ndc, "previous_ndc");
     ndc
-}
-
-/// Whether the functions read `@builtin(position)`.
-fn reads_position(module: &Module, pieces: &Pieces, read: &BTreeMap<u32, Read>) -> bool {
-    pieces
-        .arguments
-        .iter()
-        .enumerate()
-        .any(|(index, argument)| match module.types[argument.ty].inner {
-            TypeInner::Struct { ref members, .. } => {
-                members.iter().enumerate().any(|(m, member)| {
-                    fragment::is_position(&member.binding)
-                        && match read.get(&(index as u32)) {
-                            Some(Read::Whole) => true,
-                            Some(Read::Members(set)) => set.contains(&(m as u32)),
-                            None => false,
-                        }
-                })
-            }
-            _ => fragment::is_position(&argument.binding) && read.contains_key(&(index as u32)),
-        })
 }
 
 /// How one input is kept: its words appended to `holds`, labelled.

@@ -516,8 +516,8 @@ fn pass_module(
     gbuffer: Option<&gbuffer::GBuffer>,
 ) -> Result<PassModule, Refusal> {
     let mut pass = module.clone();
-    let (fragment, screen) = match (gbuffer, stage) {
-        (Some(gbuffer), Stage::GBuffer) => (gbuffer.write_entry(&mut pass, pieces), None),
+    let (fragment, screen_vertex) = match (gbuffer, stage) {
+        (Some(gbuffer), Stage::GBuffer) => (gbuffer.write_entry(&mut pass, pieces)?, None),
         (Some(gbuffer), _) => (
             fragment::entry_point(&mut pass, pieces, stage, fragment::Inputs::GBuffer(gbuffer))?,
             Some(gbuffer.fullscreen.clone()),
@@ -527,7 +527,7 @@ fn pass_module(
             None,
         ),
     };
-    let mut vertex_entry = match screen {
+    let mut vertex_entry = match screen_vertex {
         Some(fullscreen) => Some(fullscreen),
         None => vertex.entry_index.map(|i| pass.entry_points[i].clone()),
     };

@@ -94,7 +94,9 @@ pub fn build(inputs: Inputs) -> Result<Plan, String> {
         node: plan_node(candidate),
         variant,
         passes: plan_passes,
-        classify: Some(classify_pass(classify, &names, gbuffer.is_some())),
+        classify: Some(classify_pass(
+            module, result, options, classify, &names, gbuffer,
+        )),
         vertex_layout: match vertex_entry {
             Some(v) => vertex_layout(module, &v.function, &vertex.instance_twins)?,
             None => Vec::new(),
@@ -175,7 +177,8 @@ fn plan_pass(
     let cache_location = fragment::cache_location(module, result);
     let color_targets = match stage.writes() {
         Writes::Color => color_locations.iter().map(|&l| color(l)).collect(),
-        Writes::Cache | Writes::Classes => vec![cache(0), age(1)],
+        Writes::Cache => vec![cache(0), age(1)],
+        Writes::Classes => vec![target(0, TargetKind::Classes, TextureFormat::Rgba8Unorm)],
         Writes::ColorAndCache => {
             let mut targets: Vec<_> = color_locations.iter().map(|&l| color(l)).collect();
             targets.push(cache(cache_location));
@@ -193,7 +196,7 @@ fn plan_pass(
     let screen = gbuffer.is_some() && stage != Stage::GBuffer;
     let (compare, write) = match stage {
         _ if screen => (CompareFunction::Always, false),
-        Stage::ShadeFromCache => (CompareFunction::Equal, false),
+        Stage::ShadeFromCache | Stage::Classify => (CompareFunction::Equal, false),
         _ => (options.depth.nearer(), true),
     };
     Pass {
@@ -201,10 +204,9 @@ fn plan_pass(
         role: role(stage, screen).into(),
         shader: format!("{}.wgsl", pass.name),
         stage_shaders: Vec::new(),
-        vertex_entry: if screen {
-            FULLSCREEN_ENTRY.into()
-        } else {
-            names.vertex.clone()
+        vertex_entry: match gbuffer {
+            Some(gbuffer) if screen => gbuffer.fullscreen.name.clone(),
+            _ => names.vertex.clone(),
         },
         fragment_entry: names.fragment.clone(),
         color_targets,
@@ -224,9 +226,6 @@ fn plan_pass(
         stencil: gbuffer.map(|_| deferred_stencil(stage)),
     }
 }
-
-/// The vertex entry point of the deferred variant's screen-space passes.
-const FULLSCREEN_ENTRY: &str = "shadecache_fullscreen";
 
 /// The stencil bit a deferred lookup sets where it reused the cache.
 const REUSED_BIT: u32 = 0x80;
@@ -289,44 +288,27 @@ fn first_writers_clear(passes: &mut [Pass]) {
 
 /// The diagnostic pass, drawn after a frame over what it drew (depth
 /// equal, or the draw's stencil in screen space): the cache's decision at
-/// each pixel as a colour.
-fn classify_pass(classify: &PassModule, names: &PassNames, deferred: bool) -> Pass {
-    Pass {
-        name: classify.name.clone(),
-        role: role(Stage::Classify, deferred).into(),
-        shader: format!("{}.wgsl", classify.name),
-        stage_shaders: Vec::new(),
-        vertex_entry: if deferred {
-            FULLSCREEN_ENTRY.into()
-        } else {
-            names.vertex.clone()
-        },
-        fragment_entry: names.fragment.clone(),
-        color_targets: vec![ColorTarget {
-            location: 0,
-            target: TargetKind::Classes,
-            format: TextureFormat::Rgba8Unorm,
-            load: LoadOp::Clear,
-        }],
-        depth: Depth {
-            format: DEPTH_FORMAT,
-            compare: if deferred {
-                CompareFunction::Always
-            } else {
-                CompareFunction::Equal
-            },
-            write: false,
-            load: LoadOp::Load,
-        },
-        discards: false,
-        bindings: used_bindings(&classify.module),
-        draw: if deferred {
-            DrawKind::Fullscreen
-        } else {
-            DrawKind::Geometry
-        },
-        stencil: deferred.then(|| deferred_stencil(Stage::Classify)),
+/// each pixel as a colour, into a target it clears.
+fn classify_pass(
+    module: &Module,
+    result: &naga::FunctionResult,
+    options: &Options,
+    classify: &PassModule,
+    names: &PassNames,
+    gbuffer: Option<&rewrite::gbuffer::GBuffer>,
+) -> Pass {
+    let mut pass = plan_pass(
+        module,
+        result,
+        options,
+        (Stage::Classify, classify),
+        names,
+        gbuffer,
+    );
+    for target in &mut pass.color_targets {
+        target.load = LoadOp::Clear;
     }
+    pass
 }
 
 /// The cached node as the plan names it, with the calls down to it.
