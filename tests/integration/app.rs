@@ -141,7 +141,11 @@ fn example_app_error_stays_within_what_profile_measured() {
 fn host_crate_fixtures_are_what_rewrite_writes() {
     let fixtures = root().join("crates/shadecache-host/tests/fixtures");
     for (shader, node, variants) in [
-        ("square", "nf0aaf62f", ["three-pass", "one-pass"].as_slice()),
+        (
+            "square",
+            "nf0aaf62f",
+            ["three-pass", "one-pass", "deferred"].as_slice(),
+        ),
         ("gbuffer", "nf0aaf62f", ["three-pass"].as_slice()),
     ] {
         let out = tempfile::tempdir().unwrap();

@@ -36,6 +36,31 @@ fn variant(name: &str) -> (Plan, Vec<(&'static str, &'static str)>) {
                 ),
             ],
         ),
+        "deferred" => (
+            include_str!("fixtures/square/deferred/plan.json"),
+            vec![
+                (
+                    "pass1.wgsl",
+                    include_str!("fixtures/square/deferred/pass1.wgsl"),
+                ),
+                (
+                    "pass2.wgsl",
+                    include_str!("fixtures/square/deferred/pass2.wgsl"),
+                ),
+                (
+                    "pass3.wgsl",
+                    include_str!("fixtures/square/deferred/pass3.wgsl"),
+                ),
+                (
+                    "pass4.wgsl",
+                    include_str!("fixtures/square/deferred/pass4.wgsl"),
+                ),
+                (
+                    "classify.wgsl",
+                    include_str!("fixtures/square/deferred/classify.wgsl"),
+                ),
+            ],
+        ),
         "gbuffer" => (
             include_str!("fixtures/gbuffer/three-pass/plan.json"),
             vec![
@@ -219,6 +244,15 @@ fn target(gpu: &Gpu, size: u32, format: wgpu::TextureFormat) -> wgpu::Texture {
     })
 }
 
+/// How the application's draw call is made.
+#[derive(Clone, Copy)]
+enum Drawn {
+    /// Through [`shadecache_host::Draw::draw_indexed`].
+    ThroughHost,
+    /// On the render pass itself, past the host.
+    OnTheRenderPass,
+}
+
 impl App {
     /// The square with one rgba8unorm target.
     fn new(gpu: &Gpu, name: &str) -> App {
@@ -307,6 +341,12 @@ impl App {
     /// Writes the object's matrix, as an application does, then records
     /// and submits a frame.
     fn frame(&mut self, gpu: &Gpu, x: f32) {
+        self.record(gpu, x, Drawn::ThroughHost)
+            .expect("the frame records");
+    }
+
+    /// [`App::frame`], drawing as `drawn` says; the error `record` gives.
+    fn record(&mut self, gpu: &Gpu, x: f32, drawn: Drawn) -> Result<(), Error> {
         gpu.queue.write_buffer(&self.object, 0, &bytes(&matrix(x)));
         let views: Vec<wgpu::TextureView> = self
             .targets
@@ -331,10 +371,13 @@ impl App {
                 pass.set_bind_group(1, &groups[1], &[]);
                 pass.set_vertex_buffer(0, vertices.slice(..));
                 pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..6, 0, 0..1);
-            })
-            .expect("the frame records");
+                match drawn {
+                    Drawn::ThroughHost => draw.draw_indexed(0..6, 0, 0..1),
+                    Drawn::OnTheRenderPass => pass.draw_indexed(0..6, 0, 0..1),
+                }
+            })?;
         gpu.queue.submit([encoder.finish()]);
+        Ok(())
     }
 
     /// The last frame's age at each pixel, row by row.
@@ -617,4 +660,59 @@ fn a_depth_stencil_format_renders_and_reuses() {
     assert_eq!(ages_at(&app.ages(&gpu), inside(0.0, SIZE)), [0.0]);
     app.frame(&gpu, 0.0);
     assert!(share_at(&app.ages(&gpu), inside(0.0, SIZE), 1.0) > REUSED);
+}
+
+/// The deferred variant through the host: one geometry pass, screen-space
+/// passes drawn per draw. Its first frame (every pixel computed) is
+/// three-pass's to the bit (both shade from an rgba16float cache), it
+/// reuses a moving square and under a moving camera as three-pass does
+/// (the twins feed its geometry pass), and the host gives its depth buffer
+/// the stencil the plan tests though the frame's format has none.
+#[test]
+fn a_deferred_plan_runs_through_the_host() {
+    let Some(gpu) = gpu() else { return };
+    let mut three = App::new(&gpu, "three-pass");
+    let mut deferred = App::new(&gpu, "deferred");
+    assert!(deferred.cached.depth().format().has_stencil_aspect());
+    three.frame(&gpu, -0.25);
+    deferred.frame(&gpu, -0.25);
+    let (a, b) = (
+        read(&gpu, &three.targets[0], 4),
+        read(&gpu, &deferred.targets[0], 4),
+    );
+    let covered = inside(-0.25, SIZE).count();
+    assert!(covered > 100);
+    for pixel in inside(-0.25, SIZE) {
+        assert_eq!(a[pixel * 4..][..4], b[pixel * 4..][..4], "pixel {pixel}");
+    }
+    // Outside the square the frame keeps the application's clear colour.
+    assert_eq!(b[..4], [0, 0, 0, 255]);
+    deferred.frame(&gpu, 0.0);
+    let hits = share_at(&deferred.ages(&gpu), inside(0.0, SIZE), 1.0);
+    assert!(hits > REUSED, "moving square: {hits}");
+    let shifted = [
+        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, -0.25, 0.0, 0.0, 1.0,
+    ];
+    gpu.queue
+        .write_buffer(&deferred.camera, 0, &bytes(&shifted));
+    deferred.frame(&gpu, 0.0);
+    let hits = share_at(&deferred.ages(&gpu), inside(-0.25, SIZE), 2.0);
+    assert!(hits > REUSED, "moving camera: {hits}");
+}
+
+/// A deferred plan's passes mark each draw's pixels in the stencil, which
+/// only a draw made through `Draw` does: a draw made on the render pass
+/// itself is an error that says how to draw, not a blank frame.
+#[test]
+fn a_deferred_draw_made_past_the_host_is_an_error() {
+    let Some(gpu) = gpu() else { return };
+    let mut app = App::new(&gpu, "deferred");
+    let err = app
+        .record(&gpu, 0.0, Drawn::OnTheRenderPass)
+        .expect_err("the stencil passes saw no draw");
+    assert!(err.to_string().contains("Draw::draw_indexed"), "{err}");
+    let mut three = App::new(&gpu, "three-pass");
+    three
+        .record(&gpu, 0.0, Drawn::OnTheRenderPass)
+        .expect("a plan without stencil takes the render pass's own draws");
 }
