@@ -61,6 +61,11 @@ pub struct GBuffer {
     /// The words of the fragment position's z and w, where kept.
     depth_word: Option<u32>,
     w_word: Option<u32>,
+    /// The fragment stage can `discard`: the geometry pass runs the
+    /// payload and the shade for their discards alone (their values
+    /// unused, so a compiler keeps only what decides the discard), and the
+    /// stencil then holds only the pixels the original covers.
+    coverage_by_shading: bool,
     /// Where the textures are bound: `group`, from `first_binding` on.
     pub group: u32,
     pub first_binding: u32,
@@ -162,10 +167,8 @@ fn inputs(module: &Module, pieces: &Pieces, read: &BTreeMap<u32, Read>) -> Vec<I
 
 impl GBuffer {
     /// Lays out the G-buffer for `pieces` and declares its textures in
-    /// `group` from `first_binding` on. Refuses a fragment stage that
-    /// discards (its coverage is decided by shading, which the geometry
-    /// pass does not run), inputs a G-buffer cannot hold, and inputs
-    /// beyond eight targets.
+    /// `group` from `first_binding` on. Refuses inputs a G-buffer cannot
+    /// hold, and inputs beyond eight targets.
     ///
     /// The words: last frame's position in NDC (x, y, z: the clip
     /// position divided by w in the geometry pass, as the lookup would
@@ -179,7 +182,6 @@ impl GBuffer {
         packs_depth: bool,
         (group, first_binding): (u32, u32),
     ) -> Result<GBuffer, Refusal> {
-        refuse_discards(module, pieces)?;
         let inputs = inputs(module, pieces, &arguments_read(module, pieces));
         let reads_position = inputs
             .iter()
@@ -270,6 +272,7 @@ impl GBuffer {
             fullscreen: fullscreen_entry(module, pieces.vec4),
             depth_word,
             w_word,
+            coverage_by_shading: discards(module, pieces),
             group,
             first_binding,
         })
@@ -296,6 +299,12 @@ impl GBuffer {
         } = fragment::read_varyings(&mut b, &at);
         let previous = previous
             .ok_or_else(|| Refusal::internal("the G-buffer pass reads no previous position"))?;
+        if self.coverage_by_shading {
+            let payload = b.call(pieces.payload, originals.clone());
+            let mut arguments = originals.clone();
+            arguments.push(payload);
+            b.call(pieces.shade, arguments);
+        }
         let ndc = previous_ndc(&mut b, module, previous);
         let bits = bitcast(&mut b, ndc, ScalarKind::Uint);
         let mut words: Vec<_> = (0..3).map(|c| b.member(bits, c)).collect();
@@ -695,28 +704,24 @@ fn statement_values(statement: &Statement) -> Vec<Handle<Expression>> {
     }
 }
 
-/// Refuses a fragment stage that discards: what it covers is decided by
-/// its shading, which the geometry pass does not run.
-fn refuse_discards(module: &Module, pieces: &Pieces) -> Result<(), Refusal> {
+/// Whether the payload or the shade function (or what they call) can
+/// `discard`: then which pixels the fragment stage covers is decided by
+/// its shading (an alpha test, a cut-out material).
+fn discards(module: &Module, pieces: &Pieces) -> bool {
     let mut seen = BTreeSet::new();
     let mut stack = vec![pieces.payload, pieces.shade];
+    let mut kills = false;
     while let Some(handle) = stack.pop() {
         if !seen.insert(handle) {
             continue;
         }
-        let mut kills = false;
         crate::proc::each_statement(&module.functions[handle].body, &mut |s| match *s {
             Statement::Kill => kills = true,
             Statement::Call { function, .. } => stack.push(function),
             _ => {}
         });
-        if kills {
-            return Err(Refusal::new(
-                "the fragment stage discards (an alpha test?): which pixels it covers is decided by its shading, which the deferred variant's geometry pass does not run",
-            ));
-        }
     }
-    Ok(())
+    kills
 }
 
 /// `@vertex fn shadecache_fullscreen(@builtin(vertex_index) i: u32) ->

@@ -43,8 +43,11 @@ impl PayloadSlice {
         let node_order = layout.order_of(node).unwrap_or(usize::MAX);
         let discards_after = layout.kills.iter().any(|kill| kill.after > node_order);
         // A pass that discards misses cannot tell them from the pixels the
-        // shader itself would cut out after the node.
-        if discards_after && stages(variant).iter().any(|s| s.discards()) {
+        // shader itself would cut out after the node, unless a G-buffer
+        // pass has decided coverage before it (the stencil holds it).
+        let passes = stages(variant);
+        let coverage_decided = passes.contains(&super::fragment::Stage::GBuffer);
+        if discards_after && !coverage_decided && passes.iter().any(|s| s.discards()) {
             return Err(Refusal::new(
                 "the shader may discard after the node is computed, so the payload pass cannot know which pixels are cut out",
             ));

@@ -190,9 +190,6 @@ fn every_emitted_module_validates_with_naga_and_tint() {
     let expected = [
         "two-pass: the shader may discard after the node is computed",
         "three-pass: the shader may discard after the node is computed",
-        // discard_cutout.wgsl: an alpha test decides coverage by shading.
-        "deferred: the fragment stage discards",
-        "deferred: the shader may discard after the node is computed",
         // pbr_material_flags.wgsl samples its textures under material-flag
         // branches.
         "one-pass: one-pass computes the payload only on a miss",
