@@ -11,6 +11,10 @@
 //! `rg32uint` or `rgba32uint` targets as hold them. Integer targets keep
 //! every bit: a NaN varying stays the NaN it was, an `i32` id its value.
 //!
+//! Where the fragment stage can `discard` (an alpha test), the geometry
+//! pass also calls the payload and the shade for their discards, so that
+//! its depth and stencil hold the pixels the original covers.
+//!
 //! A screen-space pass draws one triangle over the screen per draw of the
 //! application (the stencil holds each draw's ordinal, so the draw's own
 //! bind groups shade its own pixels) and rebuilds the original inputs
