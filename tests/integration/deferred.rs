@@ -108,9 +108,12 @@ fn deferred_refresh_period_one_equals_the_reference() {
 }
 
 /// A static scene with refresh off: after the first frame every covered
-/// pixel of both draws is reused (the lookup marks it in the stencil and
-/// the miss pass runs nowhere), and the image is the reference's within
-/// the cache format's step.
+/// pixel of both draws is reused, and the image is the reference's within
+/// the cache format's step. The values shown age frame after frame, which
+/// they do only if the miss pass runs nowhere: it writes age 0 where it
+/// runs (checked: without the lookup's stencil mark, the miss pass
+/// recomputes every pixel, the oldest value shown is 0 frames old and
+/// this fails).
 #[test]
 fn deferred_static_scene_reuses_every_pixel() {
     let mut opts = options(&[0], &[4]);
@@ -126,6 +129,7 @@ fn deferred_static_scene_reuses_every_pixel() {
             assert_eq!(stats.hit_rate, 1.0, "{what} frame {frame}: {stats:?}");
             assert_eq!(stats.miss_rate, 0.0, "{what} frame {frame}");
         }
+        assert!(row.max_age >= 2, "{what}: oldest value {}", row.max_age);
         assert!(
             row.max_abs_error <= 1.0 / 255.0 + 1e-9,
             "{what}: {}",
