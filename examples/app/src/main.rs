@@ -310,7 +310,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         };
         let draw = |draw: &mut shadecache_host::Draw<'_, '_>| {
             draw.bind(&twins);
-            planet.draw(draw.render_pass());
+            planet.draw_cached(draw);
         };
         match timer.as_mut() {
             Some(timer) => {

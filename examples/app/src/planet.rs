@@ -110,11 +110,23 @@ impl Planet {
 
     /// The planet's draw, as in the original pass.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        self.bind(pass);
+        pass.draw_indexed(0..self.index_count, 0, 0..1);
+    }
+
+    /// The same draw in a cached variant's pass: the bindings on its
+    /// render pass, the draw call through the host, which in a deferred
+    /// plan's screen-space passes draws the screen's triangle instead.
+    pub fn draw_cached(&self, draw: &mut shadecache_host::Draw<'_, '_>) {
+        self.bind(draw.render_pass());
+        draw.draw_indexed(0..self.index_count, 0, 0..1);
+    }
+
+    fn bind(&self, pass: &mut wgpu::RenderPass<'_>) {
         pass.set_bind_group(0, &self.globals_group, &[]);
         pass.set_bind_group(1, &self.locals_group, &[]);
         pass.set_vertex_buffer(0, self.vertices.slice(..));
         pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..self.index_count, 0, 0..1);
     }
 }
 

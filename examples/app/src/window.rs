@@ -222,7 +222,7 @@ impl State {
             let (planet, twins) = (&self.planet, &self.twins);
             let draw = |draw: &mut shadecache_host::Draw<'_, '_>| {
                 draw.bind(twins);
-                planet.draw(draw.render_pass());
+                planet.draw_cached(draw);
             };
             match self.timer.as_mut() {
                 Some(timer) => self.cached.record_timed(
