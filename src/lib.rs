@@ -48,6 +48,7 @@ pub mod build;
 pub mod cost;
 pub mod diagnostic;
 pub mod front;
+pub mod interpolate;
 pub mod plan;
 pub mod proc;
 pub mod profile;

@@ -20,7 +20,7 @@ use crate::rewrite::{self, Options as RewriteOptions, Variant};
 use crate::runtime::{Gpu, PipelineOptions, RunOptions, Runner};
 
 /// Makes runners that draw the profile's scene.
-pub(super) struct Bench<'a> {
+pub(crate) struct Bench<'a> {
     pub gpu: &'a Gpu,
     pub inputs: &'a SceneInputs<'a>,
     pub size: [u32; 2],
@@ -57,7 +57,7 @@ impl Bench<'_> {
 /// The reference: the user's source as written (a module given its
 /// vertex stage from another file has no one source, and is written back
 /// by naga).
-pub(super) fn reference(bench: &Bench, shader: &Shader, plan: &Plan) -> Result<Runner, Error> {
+pub(crate) fn reference(bench: &Bench, shader: &Shader, plan: &Plan) -> Result<Runner, Error> {
     let text = match shader.vertex_file {
         None => shader.file.text.clone(),
         Some(_) => back::wgsl_text(&shader.module, &shader.info).map_err(fail)?,

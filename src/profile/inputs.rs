@@ -21,7 +21,7 @@ use crate::scene::uniforms::UniformBuffer;
 use crate::scene::{self, Scene};
 
 /// What a scene gives a shader to draw.
-pub(super) struct SceneInputs<'a> {
+pub(crate) struct SceneInputs<'a> {
     /// The shader's sampled textures by `[group, binding]`.
     pub textures: HashMap<[u32; 2], Texels>,
     /// Each object's mesh, laid out as the shader's per-vertex inputs.

@@ -23,13 +23,13 @@
 //! configuration's row (`result_row`); the misses each effect causes alone
 //! (`miss_causes`); and the answer, its winner measured again (`confirm`).
 
-mod bench;
+pub(crate) mod bench;
 mod choice;
 pub mod grid;
-mod inputs;
+pub(crate) mod inputs;
 pub mod metrics;
-mod run;
-mod setup;
+pub(crate) mod run;
+pub(crate) mod setup;
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -321,7 +321,7 @@ impl Measured for Config {
 
 /// A plain error for what the profile could not do (no position in a
 /// file to point at).
-fn fail(message: String) -> Error {
+pub(crate) fn fail(message: String) -> Error {
     Error::plain(Diagnostic::error(message))
 }
 
@@ -978,11 +978,12 @@ fn confirm(
 /// point chosen by `options` and its vertex entry point use.
 fn used_bindings(
     shader: &Shader,
-    options: &Options,
+    entry: Option<&str>,
+    vertex_entry: Option<&str>,
 ) -> Result<std::collections::HashSet<(String, [u32; 2])>, Error> {
     let module = &shader.module;
-    let fragment = analysis::fragment_entry(shader, options.entry.as_deref())?;
-    let vertex = crate::proc::vertex_entry(module, fragment, options.vertex_entry.as_deref()).ok();
+    let fragment = analysis::fragment_entry(shader, entry)?;
+    let vertex = crate::proc::vertex_entry(module, fragment, vertex_entry).ok();
     let entries: Vec<usize> = std::iter::once(fragment).chain(vertex).collect();
     Ok(crate::proc::resources_used_by(module, &entries))
 }
@@ -991,7 +992,7 @@ fn used_bindings(
 /// apart: one that reads `@builtin(instance_index)` in its vertex stage,
 /// or takes per-instance vertex inputs. Otherwise every instance would be
 /// drawn at the same place.
-fn check_instancing(
+pub(crate) fn check_instancing(
     shader: &Shader,
     scene: &Scene,
     layout: &[plan::VertexAttribute],

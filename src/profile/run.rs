@@ -136,14 +136,14 @@ pub(super) fn measured_run(
 }
 
 /// Reads a colour target (rgba16float) back in linear float.
-pub(super) fn read_linear(gpu: &Gpu, texture: &wgpu::Texture) -> Result<LinearFrame, String> {
+pub(crate) fn read_linear(gpu: &Gpu, texture: &wgpu::Texture) -> Result<LinearFrame, String> {
     Ok(metrics::linear_from_f16(&crate::runtime::read_texture(
         gpu, texture, 8,
     )?))
 }
 
 /// What times a frame.
-pub(super) struct Clock<'a> {
+pub(crate) struct Clock<'a> {
     pub gpu: &'a Gpu,
     pub profiler: wgpu_profiler::GpuProfiler,
     /// Whether the device has timestamp queries (else frames are timed on
@@ -171,7 +171,7 @@ impl<'a> Clock<'a> {
 }
 
 /// A frame's time, each pass's (ms), and the profiler's raw scopes.
-pub(super) type Timed = (
+pub(crate) type Timed = (
     f64,
     Vec<(String, f64)>,
     Vec<wgpu_profiler::GpuTimerQueryResult>,
@@ -180,15 +180,27 @@ pub(super) type Timed = (
 /// Renders one frame of `runner` and returns its time and each pass's, in
 /// ms: from GPU timestamps when the device has them, else from submission
 /// to completion on the CPU.
-pub(super) fn timed(
+pub(crate) fn timed(
     clock: &mut Clock,
     runner: &mut Runner,
     inputs: &FrameInputs,
     label: &str,
 ) -> Result<Timed, String> {
+    let gpu = clock.gpu;
+    timed_recording(clock, label, |profiler| runner.frame(gpu, inputs, profiler))
+}
+
+/// Times what `record` submits, as [`timed`] times a runner's frame:
+/// `record` gets the profiler and the label to scope its passes with
+/// (`<label>/<pass>`) when the device has timestamp queries.
+pub(crate) fn timed_recording(
+    clock: &mut Clock,
+    label: &str,
+    record: impl FnOnce(Option<(&mut wgpu_profiler::GpuProfiler, &str)>) -> Result<(), String>,
+) -> Result<Timed, String> {
     let (gpu, profiler, timestamps) = (clock.gpu, &mut clock.profiler, clock.timestamps);
     let start = std::time::Instant::now();
-    runner.frame(gpu, inputs, timestamps.then_some((&mut *profiler, label)))?;
+    record(timestamps.then_some((&mut *profiler, label)))?;
     if timestamps {
         profiler.end_frame().map_err(|err| err.to_string())?;
     }

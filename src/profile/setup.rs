@@ -53,6 +53,60 @@ impl Prepared {
     }
 }
 
+/// What a shader binds on a scene, checked: the resources its draw binds,
+/// the uniform and storage buffers the scene fills, and the analysis of
+/// its fragment entry point bounded by the scene's values.
+pub(crate) struct SceneBindings {
+    pub aspect: f32,
+    /// The name and (group, binding) of every resource the draw binds.
+    pub used: HashSet<(String, [u32; 2])>,
+    pub uniforms: Vec<UniformBuffer>,
+    pub storage: Vec<StorageBuffer>,
+    pub analysis: Analysis,
+}
+
+/// Checks `scene` against what `shader` reads (its fragment entry point
+/// `entry` and the vertex entry point drawing with it), for `frames`
+/// frames at `size`.
+pub(crate) fn scene_bindings(
+    shader: &Shader,
+    scene: &Scene,
+    (entry, vertex_entry): (Option<&str>, Option<&str>),
+    size: [u32; 2],
+    frames: u32,
+) -> Result<SceneBindings, Error> {
+    // The scene must provide every uniform the shader reads; the values it
+    // gives bound the candidates' values (whether a payload fits f16 here).
+    // What the draw binds: the resources of the fragment entry point and
+    // of the vertex entry point drawing with it (a module may declare more).
+    let used = used_bindings(shader, entry, vertex_entry)?;
+    let mut uniforms = scene::uniforms::buffers(&shader.module);
+    uniforms.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
+    let mut storage = scene::storage::buffers(&shader.module);
+    storage.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
+    scene::roles::check(&uniforms, &storage, scene)?;
+    scene::uniforms::check(&uniforms, scene).map_err(fail)?;
+    let mut analysis = analysis::analyze(
+        shader,
+        &analysis::Options {
+            entry: entry.map(str::to_string),
+            ..analysis::Options::default()
+        },
+    )?;
+    let aspect = size[0] as f32 / size[1] as f32;
+    analysis.bound_uniforms(
+        shader,
+        &scene::uniforms::bounds(&uniforms, scene, aspect, frames).map_err(fail)?,
+    );
+    Ok(SceneBindings {
+        aspect,
+        used,
+        uniforms,
+        storage,
+        analysis,
+    })
+}
+
 /// Checks the scene against what the shader reads and plans the profile.
 pub(super) fn prepare(
     shader: &Shader,
@@ -65,29 +119,19 @@ pub(super) fn prepare(
     let warmup = options
         .warmup
         .unwrap_or_else(|| scene.warmup.max(longest_period.unwrap_or(0)));
-    // The scene must provide every uniform the shader reads; the values it
-    // gives bound the candidates' values (whether a payload fits f16 here).
-    // What the draw binds: the resources of the fragment entry point and
-    // of the vertex entry point drawing with it (a module may declare more).
-    let used = used_bindings(shader, options)?;
-    let mut uniforms = scene::uniforms::buffers(&shader.module);
-    uniforms.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
-    let mut storage = scene::storage::buffers(&shader.module);
-    storage.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
-    scene::roles::check(&uniforms, &storage, scene)?;
-    scene::uniforms::check(&uniforms, scene).map_err(fail)?;
-    let mut analysis = analysis::analyze(
+    let SceneBindings {
+        aspect,
+        used,
+        uniforms,
+        storage,
+        analysis,
+    } = scene_bindings(
         shader,
-        &analysis::Options {
-            entry: options.entry.clone(),
-            ..analysis::Options::default()
-        },
+        scene,
+        (options.entry.as_deref(), options.vertex_entry.as_deref()),
+        size,
+        warmup + frames,
     )?;
-    let aspect = size[0] as f32 / size[1] as f32;
-    analysis.bound_uniforms(
-        shader,
-        &scene::uniforms::bounds(&uniforms, scene, aspect, warmup + frames).map_err(fail)?,
-    );
     let selected: Vec<Candidate> = analysis
         .select(&shader.file, &options.nodes)?
         .into_iter()

@@ -4,7 +4,7 @@
 
 mod html;
 mod images;
-mod plots;
+pub(crate) mod plots;
 
 pub use images::{Picture, Pictures};
 

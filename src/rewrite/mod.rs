@@ -584,7 +584,7 @@ pub fn free_function(function: &mut naga::Function) {
 }
 
 /// Whether the fragment result writes `@builtin(frag_depth)`.
-fn writes_frag_depth(module: &naga::Module, result: &naga::FunctionResult) -> bool {
+pub(crate) fn writes_frag_depth(module: &naga::Module, result: &naga::FunctionResult) -> bool {
     crate::proc::has_binding(module, &result.binding, result.ty, |b| {
         matches!(b, naga::Binding::BuiltIn(naga::BuiltIn::FragDepth))
     })
@@ -592,7 +592,7 @@ fn writes_frag_depth(module: &naga::Module, result: &naga::FunctionResult) -> bo
 
 /// Marks every `@builtin(position)` of every struct invariant, so the
 /// vertex output and the fragment input agree.
-fn mark_positions_invariant(module: &mut naga::Module) {
+pub(crate) fn mark_positions_invariant(module: &mut naga::Module) {
     let handles: Vec<_> = module.types.iter().map(|(h, _)| h).collect();
     for handle in handles {
         let ty = &module.types[handle];

@@ -336,7 +336,7 @@ fn plan_node(candidate: &Candidate) -> PlanNode {
 /// The target format for the fragment output at `location`: `float` (the
 /// colour format asked for) for a float output, a 32-bit integer format
 /// with as many channels for an integer one (a G-buffer's ids).
-fn output_format(
+pub(crate) fn output_format(
     module: &Module,
     result: &naga::FunctionResult,
     location: u32,
@@ -424,7 +424,7 @@ fn used_bindings(module: &Module) -> Vec<[u32; 2]> {
 /// The resources the entry points at `entries` use, in the module's
 /// order: what a draw with them binds (a module may declare more, two at
 /// one slot when no entry point uses both).
-fn entry_resources(module: &Module, entries: &[usize]) -> Vec<Resource> {
+pub(crate) fn entry_resources(module: &Module, entries: &[usize]) -> Vec<Resource> {
     let used = crate::proc::globals_used_by(module, entries);
     module
         .global_variables

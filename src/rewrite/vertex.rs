@@ -163,6 +163,65 @@ pub fn instrument(
     group: u32,
     first_binding: u32,
 ) -> Result<VertexStage, Refusal> {
+    let previous = TwinTime {
+        name: "previous",
+        group,
+        first_binding,
+    };
+    let mut stage = instrument_times(module, entry_index, &[previous], true)?;
+    let TimedPosition {
+        location, twins, ..
+    } = stage.times.remove(0);
+    Ok(VertexStage {
+        entry_index: Some(entry_index),
+        previous_location: location,
+        twins,
+        instance_twins: stage.instance_twins,
+        plain: Some(stage.plain),
+    })
+}
+
+/// One other time the position is computed at: `<name>_clip_position`
+/// from twins `<name>_<resource>` bound in `group` from `first_binding`
+/// on, which the host fills with that time's contents (last frame's for
+/// the cache; the previous and the next I-frame's for whole-frame reuse).
+#[derive(Clone, Copy, Debug)]
+pub struct TwinTime {
+    pub name: &'static str,
+    pub group: u32,
+    pub first_binding: u32,
+}
+
+/// The position at one [`TwinTime`]: the output's location and the
+/// (original, twin) resources it reads.
+#[derive(Debug)]
+pub struct TimedPosition {
+    pub name: &'static str,
+    pub location: u32,
+    pub twins: Vec<(Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>)>,
+}
+
+/// What [`instrument_times`] made of the vertex entry point.
+#[derive(Debug)]
+pub struct TimedVertexStage {
+    /// One per time asked for, in order, at consecutive locations.
+    pub times: Vec<TimedPosition>,
+    /// As [`VertexStage::instance_twins`] (the first time's only).
+    pub instance_twins: Vec<(u32, u32)>,
+    /// As [`VertexStage::plain`].
+    pub plain: Function,
+}
+
+/// Adds the clip position at each of `times` to the vertex entry point at
+/// `entry_index`. Per-instance vertex inputs the position reads get twin
+/// inputs for the first time only, and only with `instance_twins`; else
+/// they are refused (nothing supplies their values at other times).
+pub fn instrument_times(
+    module: &mut Module,
+    entry_index: usize,
+    times: &[TwinTime],
+    instance_twins: bool,
+) -> Result<TimedVertexStage, Refusal> {
     let entry = module.entry_points[entry_index].clone();
     let function = &entry.function;
     let Some(result) = function.result.clone() else {
@@ -179,23 +238,36 @@ pub fn instrument(
     // Per-instance inputs the position reads, each with a twin input at a
     // free location that carries last frame's value.
     let instance_inputs = instance_inputs_of_position(module, function, position_member);
+    if !instance_twins && !instance_inputs.is_empty() {
+        return Err(Refusal::new(format!(
+            "the position reads {} per-instance vertex input(s), whose values at other times are not supplied here",
+            instance_inputs.len()
+        )));
+    }
     let instance_twins = twin_locations(module, function, &instance_inputs)?;
 
-    let twins = twin_resources(module, entry_index, group, first_binding);
-    let twin_map: HashMap<_, _> = twins.iter().copied().collect();
-    let function_twins = twin_helpers(module, function, &twin_map);
+    let mut twins_per_time = Vec::new();
+    let mut twin_maps = Vec::new();
+    for time in times {
+        let twins = twin_resources(module, entry_index, time);
+        let twin_map: GlobalTwins = twins.iter().copied().collect();
+        let function_twins = twin_helpers(module, function, &twin_map, time.name);
+        twins_per_time.push(twins);
+        twin_maps.push((time.name, twin_map, function_twins));
+    }
     let helpers = PositionHelpers::add(
         module,
         (&entry.name, function),
         result.ty,
-        (&twin_map, &function_twins),
+        &twin_maps,
         position_member,
     );
-    let (output, previous_location) =
-        cache_output(module, members, &result, helpers.vec4, &entry.name);
+    let names: Vec<&str> = times.iter().map(|t| t.name).collect();
+    let (output, locations) =
+        timed_output(module, members, &result, helpers.vec4, &entry.name, &names);
 
-    // The new entry point: call both, forward every member, add the
-    // previous position.
+    // The new entry point: call the current and each other time's,
+    // forward every member, add the other positions.
     let mut entry_arguments = function.arguments.clone();
     entry_arguments.extend(twin_arguments(
         module,
@@ -216,14 +288,28 @@ pub fn instrument(
         .map(|i| b.argument(i))
         .collect();
     let now = b.call(helpers.current, arguments.clone());
-    let previous_arguments =
-        last_frame_arguments(module, function, &mut b, arguments, &instance_inputs);
-    let before = b.call(helpers.previous, previous_arguments);
+    let mut others = Vec::new();
+    for (i, &helper) in helpers.others.iter().enumerate() {
+        let other_arguments = if i == 0 {
+            last_frame_arguments(
+                module,
+                function,
+                &mut b,
+                arguments.clone(),
+                &instance_inputs,
+            )
+        } else {
+            arguments.clone()
+        };
+        others.push(b.call(helper, other_arguments));
+    }
     let mut components: Vec<_> = match position_member {
-        Some(_) => (0..output.members - 1).map(|i| b.member(now, i)).collect(),
+        Some(_) => (0..output.members - times.len() as u32)
+            .map(|i| b.member(now, i))
+            .collect(),
         None => vec![now],
     };
-    components.push(before);
+    components.extend(others);
     let value = b.expr(Expression::Compose {
         ty: output.ty,
         components,
@@ -231,12 +317,19 @@ pub fn instrument(
     b.push(Statement::Return { value: Some(value) });
     module.entry_points[entry_index].function = b.finish();
 
-    Ok(VertexStage {
-        entry_index: Some(entry_index),
-        previous_location,
-        twins,
+    Ok(TimedVertexStage {
+        times: times
+            .iter()
+            .zip(locations)
+            .zip(twins_per_time)
+            .map(|((time, location), twins)| TimedPosition {
+                name: time.name,
+                location,
+                twins,
+            })
+            .collect(),
         instance_twins,
-        plain: Some(plain_entry(function, helpers.current)),
+        plain: plain_entry(function, helpers.current),
     })
 }
 
@@ -263,49 +356,58 @@ fn position_member(
     }
 }
 
-/// A twin in `group` from `first_binding` on of each resource the
-/// position computation may read: uniforms and read-only storage, in the
-/// entry point or any helper it calls. (In handle order, so twins get the
-/// same bindings on every run.)
+/// A twin for `time` of each resource the position computation may read:
+/// uniforms and read-only storage, in the entry point or any helper it
+/// calls, bound in the time's group from its first binding on. (In handle
+/// order, so twins get the same bindings on every run.)
 fn twin_resources(
     module: &mut Module,
     entry_index: usize,
-    group: u32,
-    first_binding: u32,
+    time: &TwinTime,
 ) -> Vec<(Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>)> {
-    let mut read: Vec<_> = crate::proc::globals_used_by(module, &[entry_index])
-        .into_iter()
-        .collect();
-    read.sort();
     let mut twins = Vec::new();
-    let mut binding = first_binding;
-    for g in read {
+    for (binding, g) in (time.first_binding..).zip(twinned(module, entry_index)) {
         let global = module.global_variables[g].clone();
-        let twin_it = match global.space {
-            naga::AddressSpace::Uniform => true,
-            naga::AddressSpace::Storage { access } => !access.contains(naga::StorageAccess::STORE),
-            _ => false,
-        };
-        if !twin_it {
-            continue;
-        }
         let twin = module.global_variables.append(
             naga::GlobalVariable {
-                name: global.name.as_ref().map(|n| format!("previous_{n}")),
-                binding: Some(naga::ResourceBinding { group, binding }),
+                name: global.name.as_ref().map(|n| format!("{}_{n}", time.name)),
+                binding: Some(naga::ResourceBinding {
+                    group: time.group,
+                    binding,
+                }),
                 ..global
             },
             naga::Span::UNDEFINED,
         );
-        binding += 1;
         twins.push((g, twin));
     }
     twins
 }
 
-/// Previous-frame twins of the helpers `function` calls that read a
+/// The resources the vertex entry point at `entry_index` reads that get
+/// twins, in handle order: uniforms and read-only storage, read directly
+/// or through helpers.
+pub fn twinned(module: &Module, entry_index: usize) -> Vec<Handle<naga::GlobalVariable>> {
+    let mut read: Vec<_> = crate::proc::globals_used_by(module, &[entry_index])
+        .into_iter()
+        .filter(|&g| match module.global_variables[g].space {
+            naga::AddressSpace::Uniform => true,
+            naga::AddressSpace::Storage { access } => !access.contains(naga::StorageAccess::STORE),
+            _ => false,
+        })
+        .collect();
+    read.sort();
+    read
+}
+
+/// Twins (`<helper>_<time>`) of the helpers `function` calls that read a
 /// twinned resource (directly or through their callees), callees first.
-fn twin_helpers(module: &mut Module, function: &Function, twin_map: &GlobalTwins) -> FunctionTwins {
+fn twin_helpers(
+    module: &mut Module,
+    function: &Function,
+    twin_map: &GlobalTwins,
+    time: &str,
+) -> FunctionTwins {
     let mut reachable = Vec::new();
     collect_callees(module, &function.body, &mut reachable, &mut BTreeSet::new());
     let mut function_twins = FunctionTwins::new();
@@ -324,7 +426,7 @@ fn twin_helpers(module: &mut Module, function: &Function, twin_map: &GlobalTwins
             &source,
             &all,
             Function {
-                name: source.name.as_ref().map(|n| format!("{n}_previous")),
+                name: source.name.as_ref().map(|n| format!("{n}_{time}")),
                 arguments: source.arguments.clone(),
                 result: source.result.clone(),
                 ..Function::default()
@@ -343,12 +445,12 @@ fn twin_helpers(module: &mut Module, function: &Function, twin_map: &GlobalTwins
     function_twins
 }
 
-/// The vertex function as two helpers: `<entry>_current`, unchanged, and
-/// `<entry>_previous`, with last frame's resources, returning only the
-/// position.
+/// The vertex function as helpers: `<entry>_current`, unchanged, and one
+/// `<entry>_<time>` per other time, reading that time's twins and
+/// returning only the position.
 struct PositionHelpers {
     current: Handle<Function>,
-    previous: Handle<Function>,
+    others: Vec<Handle<Function>>,
     vec4: Handle<naga::Type>,
 }
 
@@ -357,7 +459,7 @@ impl PositionHelpers {
         module: &mut Module,
         (name, function): (&str, &Function),
         result_ty: Handle<naga::Type>,
-        (twin_map, function_twins): (&GlobalTwins, &FunctionTwins),
+        times: &[(&str, GlobalTwins, FunctionTwins)],
         position_member: Option<u32>,
     ) -> PositionHelpers {
         let stripped_arguments = super::without_bindings(&function.arguments);
@@ -387,33 +489,38 @@ impl PositionHelpers {
             },
             naga::Span::UNDEFINED,
         );
-        let mut previous = FunctionCopy::new(
-            module,
-            function,
-            &all,
-            Function {
-                name: Some(format!("{name}_previous")),
-                arguments: stripped_arguments,
-                result: Some(naga::FunctionResult {
-                    ty: vec4,
-                    binding: None,
-                }),
-                ..Function::default()
-            },
-        );
-        for (&from, &to) in twin_map {
-            previous.replace_global(from, to);
+        let current = module.functions.append(current, naga::Span::UNDEFINED);
+        let mut others = Vec::new();
+        for (time, twin_map, function_twins) in times {
+            let mut other = FunctionCopy::new(
+                module,
+                function,
+                &all,
+                Function {
+                    name: Some(format!("{name}_{time}")),
+                    arguments: stripped_arguments.clone(),
+                    result: Some(naga::FunctionResult {
+                        ty: vec4,
+                        binding: None,
+                    }),
+                    ..Function::default()
+                },
+            );
+            for (&from, &to) in twin_map {
+                other.replace_global(from, to);
+            }
+            for (&from, &to) in function_twins {
+                other.replace_function(from, to);
+            }
+            if let Some(index) = position_member {
+                other.return_member(index);
+            }
+            let other = other.run();
+            others.push(module.functions.append(other, naga::Span::UNDEFINED));
         }
-        for (&from, &to) in function_twins {
-            previous.replace_function(from, to);
-        }
-        if let Some(index) = position_member {
-            previous.return_member(index);
-        }
-        let previous = previous.run();
         PositionHelpers {
-            current: module.functions.append(current, naga::Span::UNDEFINED),
-            previous: module.functions.append(previous, naga::Span::UNDEFINED),
+            current,
+            others,
             vec4,
         }
     }
@@ -425,15 +532,18 @@ struct CacheOutput {
     members: u32,
 }
 
-/// The new output: the old members (the position now invariant) and the
-/// previous clip position at the next free location, which it returns.
-fn cache_output(
+/// The new output: the old members (the position now invariant) and each
+/// other time's clip position, `<time>_clip_position`, at the next free
+/// locations, which it returns. A single `previous` time names the type
+/// `<Entry>CacheOutput` (the cache variants'), else `<Entry>TimedOutput`.
+fn timed_output(
     module: &mut Module,
     members: Option<(Vec<naga::StructMember>, u32)>,
     result: &naga::FunctionResult,
     vec4: Handle<naga::Type>,
     entry_name: &str,
-) -> (CacheOutput, u32) {
+    times: &[&str],
+) -> (CacheOutput, Vec<u32>) {
     let (mut new_members, old_span) = members.unwrap_or_else(|| {
         (
             vec![naga::StructMember {
@@ -445,7 +555,7 @@ fn cache_output(
             16,
         )
     });
-    let previous_location = new_members
+    let first_location = new_members
         .iter()
         .filter_map(|m| crate::proc::location_of(&m.binding).map(|l| l + 1))
         .max()
@@ -455,31 +565,42 @@ fn cache_output(
             *invariant = true;
         }
     }
-    let offset = old_span.div_ceil(16) * 16;
-    new_members.push(naga::StructMember {
-        name: Some("previous_clip_position".into()),
-        ty: vec4,
-        binding: Some(Binding::Location {
-            location: previous_location,
-            interpolation: Some(naga::Interpolation::Perspective),
-            sampling: Some(naga::Sampling::Center),
-            blend_src: None,
-            per_primitive: false,
-        }),
-        offset,
-    });
+    let mut offset = old_span.div_ceil(16) * 16;
+    let mut locations = Vec::new();
+    for (i, time) in times.iter().enumerate() {
+        let location = first_location + i as u32;
+        new_members.push(naga::StructMember {
+            name: Some(format!("{time}_clip_position")),
+            ty: vec4,
+            binding: Some(Binding::Location {
+                location,
+                interpolation: Some(naga::Interpolation::Perspective),
+                sampling: Some(naga::Sampling::Center),
+                blend_src: None,
+                per_primitive: false,
+            }),
+            offset,
+        });
+        offset += 16;
+        locations.push(location);
+    }
     let count = new_members.len() as u32;
+    let kind = if times == ["previous"] {
+        "CacheOutput"
+    } else {
+        "TimedOutput"
+    };
     let ty = module.types.insert(
         naga::Type {
-            name: Some(format!("{}CacheOutput", pascal(entry_name))),
+            name: Some(format!("{}{kind}", pascal(entry_name))),
             inner: TypeInner::Struct {
                 members: new_members,
-                span: offset + 16,
+                span: offset,
             },
         },
         naga::Span::UNDEFINED,
     );
-    (CacheOutput { ty, members: count }, previous_location)
+    (CacheOutput { ty, members: count }, locations)
 }
 
 /// `function`'s entry point as a call of `current`, the vertex function

@@ -79,6 +79,8 @@ pub struct Runner {
     cached: CachedShader,
     /// The frame's first colour output, which the profile reads back.
     color: Option<wgpu::Texture>,
+    /// Every colour target, by output location.
+    colors: Vec<Option<wgpu::Texture>>,
     /// The frame's colour targets by output location, each in the plan's
     /// format for it.
     color_views: Vec<Option<wgpu::TextureView>>,
@@ -181,6 +183,7 @@ impl Runner {
         Ok(Runner {
             cached,
             color,
+            colors,
             color_views,
             meshes,
             objects: Vec::new(),
@@ -208,6 +211,11 @@ impl Runner {
     /// the cache.
     pub fn color(&self) -> Option<&wgpu::Texture> {
         self.color.as_ref()
+    }
+
+    /// The frame's colour target at output `location`, if it has one.
+    pub fn color_at(&self, location: u32) -> Option<&wgpu::Texture> {
+        self.colors.get(location as usize)?.as_ref()
     }
 
     /// The last frame's classes, when classification is on.

@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod analyze;
+pub mod interpolate;
 pub mod profile;
 pub mod rewrite;
 pub mod scene;
@@ -20,6 +21,8 @@ pub enum Command {
     Rewrite(rewrite::Args),
     /// Run the variants on a scene, measure time and error against the original, and write a report.
     Profile(profile::Args),
+    /// Render the frames between I-frames with whole-frame reuse methods, measure their time and error against rendering every frame, and write a report.
+    Interpolate(interpolate::Args),
     /// Scenes for `profile`: `scene init SHADER > scene.toml` writes the default scene to edit.
     Scene(scene::Args),
 }
@@ -29,6 +32,7 @@ pub fn exec(command: Command, color: Color) -> Result<(), Error> {
         Command::Analyze(args) => analyze::exec(args, color),
         Command::Rewrite(args) => rewrite::exec(args, color),
         Command::Profile(args) => profile::exec(args, color),
+        Command::Interpolate(args) => interpolate::exec(args, color),
         Command::Scene(args) => scene::exec(args, color),
     }
 }

@@ -97,7 +97,7 @@ pub struct Args {
     pub stages: super::StageArgs,
 }
 
-fn parse_size(text: &str) -> Result<[u32; 2], String> {
+pub(super) fn parse_size(text: &str) -> Result<[u32; 2], String> {
     let (w, h) = text
         .split_once(['x', 'X'])
         .ok_or("expected WIDTHxHEIGHT, e.g. 256x256")?;
@@ -135,9 +135,9 @@ fn parse_nodes(text: &str) -> Result<Nodes, Error> {
 }
 
 /// A progress bar on stderr (hidden when stderr is not a terminal).
-struct Bar {
-    bar: Option<indicatif::ProgressBar>,
-    quiet: bool,
+pub(super) struct Bar {
+    pub bar: Option<indicatif::ProgressBar>,
+    pub quiet: bool,
 }
 
 impl Progress for Bar {

@@ -1,0 +1,197 @@
+//! `shadecache interpolate`: render I-frames and build the frames between
+//! them with each whole-frame reuse method, measure their time and error
+//! against rendering every frame, write a report.
+
+use std::path::PathBuf;
+
+use shadecache::diagnostic::{Color, Diagnostic, Error};
+use shadecache::interpolate::{self, report, Method, Options};
+use shadecache::scene::Scene;
+
+use super::profile::{parse_size, Bar};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodArg {
+    All,
+    Reference,
+    SampleAndHold,
+    LinearBlend,
+    ImageBased,
+    HalfVelocity,
+}
+
+impl MethodArg {
+    fn methods(args: &[MethodArg]) -> Vec<Method> {
+        let mut methods: Vec<Method> = args
+            .iter()
+            .flat_map(|arg| match arg {
+                MethodArg::All => Method::ALL.to_vec(),
+                MethodArg::Reference => vec![Method::Reference],
+                MethodArg::SampleAndHold => vec![Method::SampleAndHold],
+                MethodArg::LinearBlend => vec![Method::LinearBlend],
+                MethodArg::ImageBased => vec![Method::ImageBased],
+                MethodArg::HalfVelocity => vec![Method::HalfVelocity],
+            })
+            .collect();
+        methods.sort();
+        methods.dedup();
+        methods
+    }
+}
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The WGSL shader to render.
+    pub shader: PathBuf,
+
+    /// The scene to render (TOML; see docs/scene-toml.md). Without one,
+    /// the default scene `shadecache scene init` writes.
+    #[arg(long, value_name = "SCENE.toml")]
+    pub scene: Option<PathBuf>,
+
+    /// Methods to run, separated by commas; the reference is rendered
+    /// every frame whichever are named.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "all")]
+    pub method: Vec<MethodArg>,
+
+    /// n: displayed frames per I-frame interval (an I-frame and n − 1
+    /// B-frames).
+    #[arg(long, value_name = "N", default_value_t = 4, value_parser = clap::value_parser!(u32).range(2..=64))]
+    pub frames_per_interval: u32,
+
+    /// m: iterations of the image-based search.
+    #[arg(long, value_name = "M", default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=32))]
+    pub iterations: u32,
+
+    /// ε1: the image-based search's largest residual, in pixels.
+    #[arg(long, value_name = "PX", default_value_t = 1.0)]
+    pub screen_epsilon: f32,
+
+    /// ε2: the relative depth tolerance of the image-based visibility
+    /// tests and of half-velocity's merge.
+    #[arg(long, value_name = "E", default_value_t = shadecache::rewrite::DEFAULT_DEPTH_EPSILON, value_parser = super::rewrite::epsilon)]
+    pub depth_epsilon: f32,
+
+    /// Start the image-based search only from the pixel itself (no dual
+    /// initialisation).
+    #[arg(long)]
+    pub no_dual_init: bool,
+
+    /// Half-velocity's direction test: the cosine below which a tail's
+    /// velocity is dropped.
+    #[arg(
+        long,
+        value_name = "C",
+        default_value_t = 0.5,
+        allow_negative_numbers = true
+    )]
+    pub min_cosine: f32,
+
+    /// Frame size (default: the scene's).
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<[u32; 2]>,
+
+    /// Displayed frames to measure, rounded up to whole intervals
+    /// (default: the scene's frames).
+    #[arg(long, value_name = "N")]
+    pub frames: Option<u32>,
+
+    /// Where to write report.json, report.html and the pictures.
+    #[arg(long, value_name = "DIR", default_value = "shadecache-interpolation")]
+    pub out: PathBuf,
+
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+
+    #[command(flatten)]
+    pub stages: super::StageArgs,
+}
+
+pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
+    if !(args.screen_epsilon > 0.0 && args.screen_epsilon.is_finite()) {
+        return Err(Error::plain(Diagnostic::error(format!(
+            "--screen-epsilon must be a positive number of pixels, not {}",
+            args.screen_epsilon
+        ))));
+    }
+    let shader = args.stages.load(&args.shader)?;
+    let (scene, scene_path) = match &args.scene {
+        Some(path) => (Scene::load(path)?, path.clone()),
+        None => (
+            Scene::default_for(
+                &shader,
+                args.stages.entry.as_deref(),
+                args.stages.vertex_entry.as_deref(),
+            )?,
+            PathBuf::from("default scene"),
+        ),
+    };
+    let options = Options {
+        methods: MethodArg::methods(&args.method),
+        frames_per_interval: args.frames_per_interval,
+        iterations: args.iterations,
+        screen_epsilon: args.screen_epsilon,
+        depth_epsilon: args.depth_epsilon,
+        dual_init: !args.no_dual_init,
+        min_cosine: args.min_cosine,
+        size: args.size,
+        frames: args.frames,
+        entry: args.stages.entry.clone(),
+        vertex_entry: args.stages.vertex_entry.clone(),
+    };
+    let mut bar = Bar {
+        bar: None,
+        quiet: args.quiet,
+    };
+    let (report, pictures) =
+        interpolate::interpolate(&shader, &scene, &scene_path, &options, &mut bar)?;
+
+    let io = |what: &str, err: String| {
+        Error::plain(Diagnostic::error(format!("cannot write {what}: {err}")))
+    };
+    std::fs::create_dir_all(&args.out).map_err(|e| io("the report folder", e.to_string()))?;
+    report::write_images(&args.out, &report, &pictures).map_err(|e| io("the pictures", e))?;
+    let json =
+        serde_json::to_string_pretty(&report).map_err(|e| io("report.json", e.to_string()))?;
+    std::fs::write(args.out.join("report.json"), json + "\n")
+        .map_err(|e| io("report.json", e.to_string()))?;
+    std::fs::write(args.out.join("report.html"), report::html(&report))
+        .map_err(|e| io("report.html", e.to_string()))?;
+
+    let mut summary = format!(
+        "{} on {} ({}×{}, n = {}, {} interval(s) measured, {}): reference {:.3} ms, I-frame with flows {:.3} ms\n",
+        report.shader,
+        report.scene,
+        report.size[0],
+        report.size[1],
+        report.frames_per_interval,
+        report.intervals,
+        report.adapter,
+        report.reference_ms,
+        report.i_frame_ms
+    );
+    for m in &report.methods {
+        summary.push_str(&format!(
+            "  {:<16} amortised {:.2}× (I-frame {:.2}×, B-frame {:.3}×), B-frames SSIM {:.4} (worst {:.4}), PSNR {:.1} dB{}\n",
+            m.method.name(),
+            m.amortized_time_ratio,
+            m.i_frame_time_ratio,
+            m.b_frame_time_ratio,
+            m.ssim_mean,
+            m.ssim_min,
+            m.psnr_mean,
+            m.double_miss_rate
+                .map_or(String::new(), |r| format!(", double misses {:.2}%", r * 100.0))
+        ));
+    }
+    for note in &report.notes {
+        summary.push_str(&format!("  note: {note}\n"));
+    }
+    summary.push_str(&format!("  answer: {}\n", report.answer));
+    summary.push_str(&format!(
+        "report: {}\n",
+        args.out.join("report.html").display()
+    ));
+    super::write_stdout(&summary)
+}

@@ -1,0 +1,315 @@
+//! The B-frame passes: one fullscreen pass per B-frame, reading two
+//! I-frames' colour, depth and flows (`shaders/bframe.wgsl`), writing the
+//! B-frame's colour and what each pixel decided.
+
+use std::collections::HashMap;
+
+use super::Method;
+use crate::runtime::Gpu;
+
+/// The B-frame shaders.
+pub const BFRAME_WGSL: &str = include_str!("../../shaders/bframe.wgsl");
+
+/// The B-frame's colour format: the measured colour format, so a B-frame
+/// compares with the reference as an I-frame does.
+pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// The decisions' format: one `u32` code per pixel (`shaders/bframe.wgsl`'s
+/// `SAME_SURFACE`...).
+pub const DECISION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+
+/// What each B-frame pixel decided, as the shader codes it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum Decision {
+    /// Both searches found the same surface (or, for half-velocity, the
+    /// later frame's velocity was used).
+    SameSurface = 0,
+    /// Two surfaces were found and the nearer taken (half-velocity: the
+    /// earlier frame's velocity extrapolated a tail).
+    NearerSurface = 1,
+    /// Only one search converged (half-velocity: the direction test held
+    /// the pixel).
+    OneDirection = 2,
+    /// Neither converged where an I-frame has geometry.
+    DoubleMiss = 3,
+    /// No geometry in either I-frame at the pixel, and nothing found.
+    Background = 4,
+}
+
+/// The knobs of a B-frame pass, as `BFrameParams` lays them out.
+#[derive(Clone, Copy, Debug)]
+pub struct BFrameParams {
+    pub viewport: [f32; 2],
+    pub alpha: f32,
+    pub iterations: u32,
+    pub screen_epsilon: f32,
+    pub depth_epsilon: f32,
+    pub far_depth: f32,
+    pub dual_init: bool,
+    pub min_cosine: f32,
+}
+
+impl BFrameParams {
+    /// The uniform's bytes (`BFrameParams` in `shaders/bframe.wgsl`: nine
+    /// 4-byte fields in order, padded to 48).
+    fn bytes(&self) -> Vec<u8> {
+        let words: [u32; 12] = [
+            self.viewport[0].to_bits(),
+            self.viewport[1].to_bits(),
+            self.alpha.to_bits(),
+            self.iterations,
+            self.screen_epsilon.to_bits(),
+            self.depth_epsilon.to_bits(),
+            self.far_depth.to_bits(),
+            u32::from(self.dual_init),
+            self.min_cosine.to_bits(),
+            0,
+            0,
+            0,
+        ];
+        words.iter().flat_map(|w| w.to_le_bytes()).collect()
+    }
+}
+
+/// One I-frame as the B-frame passes read it.
+#[derive(Clone, Copy, Debug)]
+pub struct IFrameTextures<'a> {
+    pub color: &'a wgpu::Texture,
+    pub depth: &'a wgpu::Texture,
+    /// Its flow to the I-frame before it.
+    pub flow_previous: &'a wgpu::Texture,
+    /// Its flow to the I-frame after it.
+    pub flow_next: &'a wgpu::Texture,
+}
+
+/// The B-frame pipelines of the methods asked for, and their targets.
+#[derive(Debug)]
+pub struct BFrames {
+    pipelines: HashMap<Method, wgpu::RenderPipeline>,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    sampler: wgpu::Sampler,
+    color: wgpu::Texture,
+    decisions: wgpu::Texture,
+}
+
+fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+impl BFrames {
+    /// Builds the passes of `methods` (those that are B-frame passes) for
+    /// frames of `size`.
+    pub fn new(gpu: &Gpu, size: (u32, u32), methods: &[Method]) -> Result<BFrames, String> {
+        let device = &gpu.device;
+        let float = wgpu::TextureSampleType::Float { filterable: true };
+        let entries = [
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
+            texture_entry(2, float),
+            texture_entry(3, wgpu::TextureSampleType::Depth),
+            texture_entry(4, float),
+            texture_entry(5, float),
+            texture_entry(6, float),
+            texture_entry(7, wgpu::TextureSampleType::Depth),
+            texture_entry(8, float),
+        ];
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("B-frame"),
+            entries: &entries,
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("B-frame"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("shaders/bframe.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(BFRAME_WGSL.into()),
+        });
+        let mut pipelines = HashMap::new();
+        for &method in methods {
+            let Some(entry) = method.fragment_entry() else {
+                continue;
+            };
+            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(method.name()),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_fullscreen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    targets: &[Some(COLOR_FORMAT.into()), Some(DECISION_FORMAT.into())],
+                }),
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: None,
+                multisample: wgpu::MultisampleState::default(),
+                multiview_mask: None,
+                cache: None,
+            });
+            pipelines.insert(method, pipeline);
+        }
+        if let Some(err) = pollster::block_on(scope.pop()) {
+            return Err(format!("the B-frame passes do not build: {err}"));
+        }
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("B-frame parameters"),
+            size: 48,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("linear clamp"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..wgpu::SamplerDescriptor::default()
+        });
+        let target = |label, format| shadecache_host::render_target(device, label, size, format);
+        Ok(BFrames {
+            pipelines,
+            layout,
+            params,
+            sampler,
+            color: target("B-frame", COLOR_FORMAT),
+            decisions: target("B-frame decisions", DECISION_FORMAT),
+        })
+    }
+
+    /// The last B-frame's colour.
+    pub fn color(&self) -> &wgpu::Texture {
+        &self.color
+    }
+
+    /// The last B-frame's decisions ([`Decision`] per pixel).
+    pub fn decisions(&self) -> &wgpu::Texture {
+        &self.decisions
+    }
+
+    /// Renders the B-frame of `method` between `earlier` and `later`, its
+    /// pass timed as `<label>/<method>` when a profiler is given.
+    pub fn render(
+        &self,
+        gpu: &Gpu,
+        method: Method,
+        (earlier, later): (&IFrameTextures, &IFrameTextures),
+        params: &BFrameParams,
+        profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+    ) -> Result<(), String> {
+        let pipeline = self
+            .pipelines
+            .get(&method)
+            .ok_or_else(|| format!("{} has no B-frame pass", method.name()))?;
+        gpu.queue.write_buffer(&self.params, 0, &params.bytes());
+        let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
+        let depth = |t: &wgpu::Texture| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                aspect: wgpu::TextureAspect::DepthOnly,
+                ..wgpu::TextureViewDescriptor::default()
+            })
+        };
+        let views = [
+            view(earlier.color),
+            depth(earlier.depth),
+            view(earlier.flow_previous),
+            view(earlier.flow_next),
+            view(later.color),
+            depth(later.depth),
+            view(later.flow_previous),
+        ];
+        let mut entries = vec![
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: self.params.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::Sampler(&self.sampler),
+            },
+        ];
+        entries.extend(
+            views
+                .iter()
+                .zip(2..)
+                .map(|(view, binding)| wgpu::BindGroupEntry {
+                    binding,
+                    resource: wgpu::BindingResource::TextureView(view),
+                }),
+        );
+        let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("B-frame"),
+            layout: &self.layout,
+            entries: &entries,
+        });
+        let (color, decisions) = (view(&self.color), view(&self.decisions));
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        let mut profiler = profiler;
+        let query = profiler.as_mut().map(|(profiler, label)| {
+            profiler.begin_pass_query(format!("{label}/{}", method.name()), &mut encoder)
+        });
+        {
+            let attachment = |view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            };
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some(method.name()),
+                color_attachments: &[attachment(&color), attachment(&decisions)],
+                depth_stencil_attachment: None,
+                timestamp_writes: query
+                    .as_ref()
+                    .and_then(|q| q.render_pass_timestamp_writes()),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+        if let (Some((profiler, _)), Some(query)) = (profiler.as_mut(), query) {
+            profiler.end_query(&mut encoder, query);
+            profiler.resolve_queries(&mut encoder);
+        }
+        gpu.queue.submit([encoder.finish()]);
+        Ok(())
+    }
+}

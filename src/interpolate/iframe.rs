@@ -1,0 +1,437 @@
+//! The I-frame pass, on naga IR: the user's shader drawing its frame as
+//! before, plus the two 3-D flow fields of seed 000 §5 (eqs. 1–2) as
+//! extra colour outputs.
+//!
+//! - The vertex stage computes the position three times with identical
+//!   code ([`crate::rewrite::vertex::instrument_times`]): now, with the
+//!   *previous* I-frame's resources, and with the *next* I-frame's. Every
+//!   uniform and read-only storage buffer the position reads gets a twin
+//!   per time; the host fills them with that time's contents.
+//! - The fragment stage runs the original fragment function as a helper
+//!   (its outputs, discards and derivatives unchanged) and then writes
+//!   `flow_previous` (Vb: to the previous I-frame) and `flow_next` (Vf: to
+//!   the next) in `rgba16float` at the locations after the user's outputs
+//!   (`shaders/iframe.wgsl`'s `flow_to`). Colour plus two such flows is
+//!   within WebGPU's default 32 bytes of colour attachments per sample.
+//!
+//! The paper renders Vf in a geometry pass of its own, because an
+//! interactive application knows t + 1's parameters only after drawing t.
+//! A scripted scene knows them in advance, so both flows come from one
+//! pass here; the report says so, since it is cheaper than the paper's
+//! cost structure by one depth-and-flow geometry pass.
+
+use std::sync::OnceLock;
+
+use naga::{Binding, BuiltIn, Expression, Function, Handle, Module, Statement, TypeInner};
+
+use crate::analysis::graph::ExprSet;
+use crate::analysis::Analysis;
+use crate::front::Shader;
+use crate::plan::{ColorTarget, LoadOp, Plan, TargetKind, TextureFormat};
+use crate::rewrite::builder::Builder;
+use crate::rewrite::copy::FunctionCopy;
+use crate::rewrite::vertex::{self, TwinTime};
+use crate::rewrite::{self, CacheSlot, Options, Refusal};
+
+/// The flows' format: filterable, and small enough that colour and two
+/// flows fit the default attachment budget.
+pub const FLOW_FORMAT: TextureFormat = TextureFormat::Rgba16Float;
+
+/// The I-frame helpers (`shaders/iframe.wgsl`).
+const IFRAME_WGSL: &str = include_str!("../../shaders/iframe.wgsl");
+
+/// The I-frame pass's module, its WGSL and its plan, and which bindings
+/// the host fills with which time's contents.
+#[derive(Debug)]
+pub struct IFrameShader {
+    pub module: Module,
+    pub info: naga::valid::ModuleInfo,
+    pub text: String,
+    /// One geometry pass: the user's colour targets, then `flow_previous`
+    /// and `flow_next`.
+    pub plan: Plan,
+    /// Locations of `flow_previous` and `flow_next`.
+    pub flow_locations: [u32; 2],
+    /// `[group, binding]` of the flow parameters (`FlowParams`).
+    pub params: [u32; 2],
+    /// (original, previous I-frame's twin) `[group, binding]`s.
+    pub previous: Vec<([u32; 2], [u32; 2])>,
+    /// (original, next I-frame's twin) `[group, binding]`s.
+    pub next: Vec<([u32; 2], [u32; 2])>,
+}
+
+/// `shaders/iframe.wgsl` parsed, once per process.
+fn iframe_helpers() -> Result<&'static Module, Refusal> {
+    static HELPERS: OnceLock<Result<Module, String>> = OnceLock::new();
+    HELPERS
+        .get_or_init(|| {
+            crate::front::parse(crate::diagnostic::SourceFile::new(
+                "shaders/iframe.wgsl",
+                IFRAME_WGSL,
+            ))
+            .map(|shader| shader.module)
+            .map_err(|err| err.render())
+        })
+        .as_ref()
+        .map_err(|err| Refusal::internal(format!("the I-frame helpers do not parse: {err}")))
+}
+
+/// Instruments `shader`'s fragment entry point (the analysis's) and the
+/// vertex entry point that draws with it into the I-frame pass.
+pub fn instrument(
+    shader: &Shader,
+    analysis: &Analysis,
+    options: &Options,
+) -> Result<IFrameShader, Refusal> {
+    let original = &shader.module;
+    let entry_index = analysis.entry_index;
+    let entry = original.entry_points[entry_index].clone();
+    let Some(result) = entry.function.result.clone() else {
+        return Err(Refusal::new("the fragment entry point returns nothing"));
+    };
+    if rewrite::writes_frag_depth(original, &result) {
+        return Err(Refusal::new(
+            "the fragment stage writes @builtin(frag_depth); the flows are taken at the rasterised depth",
+        ));
+    }
+    if vertex::is_fragment_only(original) && options.vertex_entry.is_none() {
+        return Err(Refusal::new(
+            "the module has no vertex stage whose position could be computed at the previous and next I-frames; give it with --vertex",
+        ));
+    }
+    let vertex_index =
+        vertex::vertex_entry(original, entry_index, options.vertex_entry.as_deref())?;
+
+    let slot = CacheSlot::for_module(original);
+    let mut module = original.clone();
+    let imported = crate::proc::import::import(
+        &mut module,
+        iframe_helpers()?,
+        slot.group,
+        slot.first_binding,
+    )
+    .map_err(|err| Refusal::internal(format!("importing the I-frame helpers: {err}")))?;
+    let flow_to = *imported
+        .functions
+        .get("flow_to")
+        .ok_or_else(|| Refusal::internal("`flow_to` missing from the I-frame helpers"))?;
+    let params_global = *imported
+        .globals
+        .get("flow_params")
+        .ok_or_else(|| Refusal::internal("`flow_params` missing from the I-frame helpers"))?;
+
+    // The twins follow the flow parameters: the previous I-frame's, then
+    // the next one's.
+    let twinned = vertex::twinned(&module, vertex_index).len() as u32;
+    let first = slot.first_binding + 1;
+    let times = [
+        TwinTime {
+            name: "previous",
+            group: slot.group,
+            first_binding: first,
+        },
+        TwinTime {
+            name: "next",
+            group: slot.group,
+            first_binding: first + twinned,
+        },
+    ];
+    let stage = vertex::instrument_times(&mut module, vertex_index, &times, false)?;
+    rewrite::mark_positions_invariant(&mut module);
+    let locations = [stage.times[0].location, stage.times[1].location];
+    let flow_locations = flow_entry(
+        &mut module,
+        entry_index,
+        &entry,
+        &result,
+        locations,
+        flow_to,
+    )?;
+
+    let info = crate::front::validate(&module)
+        .map_err(|err| Refusal::internal(format!("the I-frame pass does not validate: {err}")))?;
+    let text = crate::back::wgsl_text(&module, &info).map_err(Refusal::internal)?;
+    let plan = plan(
+        shader,
+        analysis,
+        options,
+        &module,
+        (entry_index, vertex_index),
+        flow_locations,
+    )
+    .map_err(Refusal::internal)?;
+    let key = |g: Handle<naga::GlobalVariable>| {
+        let binding = module.global_variables[g]
+            .binding
+            .expect("twins and the resources they shadow are bound");
+        [binding.group, binding.binding]
+    };
+    let pairs = |i: usize| -> Vec<([u32; 2], [u32; 2])> {
+        stage.times[i]
+            .twins
+            .iter()
+            .map(|&(from, to)| (key(from), key(to)))
+            .collect()
+    };
+    Ok(IFrameShader {
+        params: key(params_global),
+        previous: pairs(0),
+        next: pairs(1),
+        plan,
+        flow_locations,
+        text,
+        info,
+        module,
+    })
+}
+
+/// Where the fragment entry point reads `@builtin(position)`.
+enum FragCoord {
+    /// Argument `i` is the position.
+    Argument(u32),
+    /// Member `m` of struct argument `i` is.
+    Member(u32, u32),
+    /// Neither: the new entry point adds it as its last argument.
+    Added,
+}
+
+fn frag_coord(module: &Module, function: &Function) -> FragCoord {
+    for (i, argument) in function.arguments.iter().enumerate() {
+        if rewrite::fragment::is_position(&argument.binding) {
+            return FragCoord::Argument(i as u32);
+        }
+        if let TypeInner::Struct { ref members, .. } = module.types[argument.ty].inner {
+            if let Some(m) = members
+                .iter()
+                .position(|m| rewrite::fragment::is_position(&m.binding))
+            {
+                return FragCoord::Member(i as u32, m as u32);
+            }
+        }
+    }
+    FragCoord::Added
+}
+
+fn vec4_type(module: &mut Module) -> Handle<naga::Type> {
+    module.types.insert(
+        naga::Type {
+            name: None,
+            inner: TypeInner::Vector {
+                size: naga::VectorSize::Quad,
+                scalar: naga::Scalar::F32,
+            },
+        },
+        naga::Span::UNDEFINED,
+    )
+}
+
+fn located(location: u32) -> Binding {
+    Binding::Location {
+        location,
+        interpolation: Some(naga::Interpolation::Perspective),
+        sampling: Some(naga::Sampling::Center),
+        blend_src: None,
+        per_primitive: false,
+    }
+}
+
+/// Replaces the fragment entry point with one that calls the original as
+/// `<entry>_shade` and adds the two flows to its outputs; returns their
+/// locations. `clip_locations` are where the vertex stage outputs the
+/// previous and the next clip position.
+fn flow_entry(
+    module: &mut Module,
+    entry_index: usize,
+    entry: &naga::EntryPoint,
+    result: &naga::FunctionResult,
+    clip_locations: [u32; 2],
+    flow_to: Handle<Function>,
+) -> Result<[u32; 2], Refusal> {
+    let function = &entry.function;
+    let mut all = ExprSet::with_capacity(function.expressions.len());
+    all.insert_range(..);
+    let shade = FunctionCopy::new(
+        module,
+        function,
+        &all,
+        Function {
+            name: Some(format!("{}_shade", entry.name)),
+            arguments: rewrite::without_bindings(&function.arguments),
+            result: Some(naga::FunctionResult {
+                ty: result.ty,
+                binding: None,
+            }),
+            ..Function::default()
+        },
+    )
+    .run();
+    let shade = module.functions.append(shade, naga::Span::UNDEFINED);
+    let vec4 = vec4_type(module);
+
+    // The output: the user's members (or its one output), then the flows.
+    let (mut members, span, is_struct) = match module.types[result.ty].inner {
+        TypeInner::Struct { ref members, span } => (members.clone(), span, true),
+        _ => (
+            vec![naga::StructMember {
+                name: Some("color".into()),
+                ty: result.ty,
+                binding: result.binding.clone(),
+                offset: 0,
+            }],
+            16,
+            false,
+        ),
+    };
+    let user_members = members.len() as u32;
+    let first_flow = rewrite::fragment::output_locations(module, result)
+        .into_iter()
+        .map(|l| l + 1)
+        .max()
+        .unwrap_or(0);
+    let flow_locations = [first_flow, first_flow + 1];
+    let mut offset = span.div_ceil(16) * 16;
+    for (name, location) in ["flow_previous", "flow_next"]
+        .into_iter()
+        .zip(flow_locations)
+    {
+        members.push(naga::StructMember {
+            name: Some(name.into()),
+            ty: vec4,
+            binding: Some(Binding::Location {
+                location,
+                interpolation: None,
+                sampling: None,
+                blend_src: None,
+                per_primitive: false,
+            }),
+            offset,
+        });
+        offset += 16;
+    }
+    let output = module.types.insert(
+        naga::Type {
+            name: Some(format!("{}IFrameOutput", vertex::pascal(&entry.name))),
+            inner: TypeInner::Struct {
+                members,
+                span: offset,
+            },
+        },
+        naga::Span::UNDEFINED,
+    );
+
+    let coord = frag_coord(module, function);
+    let mut arguments = function.arguments.clone();
+    if let FragCoord::Added = coord {
+        arguments.push(naga::FunctionArgument {
+            name: Some("frag_coord".into()),
+            ty: vec4,
+            binding: Some(Binding::BuiltIn(BuiltIn::Position { invariant: true })),
+        });
+    }
+    for (name, location) in ["previous_clip_position", "next_clip_position"]
+        .into_iter()
+        .zip(clip_locations)
+    {
+        arguments.push(naga::FunctionArgument {
+            name: Some(name.into()),
+            ty: vec4,
+            binding: Some(located(location)),
+        });
+    }
+    let count = function.arguments.len() as u32;
+    let mut b = Builder::new(Function {
+        name: function.name.clone(),
+        arguments: arguments.clone(),
+        result: Some(naga::FunctionResult {
+            ty: output,
+            binding: None,
+        }),
+        ..Function::default()
+    });
+    let originals: Vec<_> = (0..count).map(|i| b.argument(i)).collect();
+    let shaded = b.call(shade, originals.clone());
+    let position = match coord {
+        FragCoord::Argument(i) => originals[i as usize],
+        FragCoord::Member(i, m) => b.member(originals[i as usize], m),
+        FragCoord::Added => b.argument(count),
+    };
+    let clips = arguments.len() as u32 - 2;
+    let previous = b.argument(clips);
+    let next = b.argument(clips + 1);
+    let flow_previous = b.call(flow_to, vec![position, previous]);
+    let flow_next = b.call(flow_to, vec![position, next]);
+    let mut components: Vec<_> = if is_struct {
+        (0..user_members).map(|m| b.member(shaded, m)).collect()
+    } else {
+        vec![shaded]
+    };
+    components.extend([flow_previous, flow_next]);
+    let value = b.expr(Expression::Compose {
+        ty: output,
+        components,
+    });
+    b.push(Statement::Return { value: Some(value) });
+    module.entry_points[entry_index].function = b.finish();
+    Ok(flow_locations)
+}
+
+/// The I-frame pass's plan: the reference's, with the flows among its
+/// targets and every resource the instrumented entry points read (the
+/// flow parameters and the twins with the user's).
+fn plan(
+    shader: &Shader,
+    analysis: &Analysis,
+    options: &Options,
+    module: &Module,
+    (fragment, vertex): (usize, usize),
+    flow_locations: [u32; 2],
+) -> Result<Plan, String> {
+    let mut plan = rewrite::plan::reference(shader, analysis, options)?;
+    let original = rewrite::plan::entry_resources(module, &[fragment, vertex]);
+    let mut bindings: Vec<[u32; 2]> = original.iter().map(|r| [r.group, r.binding]).collect();
+    bindings.sort();
+    bindings.dedup();
+    plan.bindings.original = original;
+    let pass = &mut plan.passes[0];
+    pass.name = "iframe".into();
+    pass.role = "the shader as written, plus the flows to the previous and the next I-frame".into();
+    pass.shader = "iframe.wgsl".into();
+    pass.bindings = bindings;
+    pass.color_targets
+        .extend(flow_locations.into_iter().map(|location| ColorTarget {
+            location,
+            target: TargetKind::Color,
+            format: FLOW_FORMAT,
+            load: LoadOp::Clear,
+        }));
+    Ok(plan)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn instrumented(source: &str) -> IFrameShader {
+        let shader = crate::front::parse(crate::diagnostic::SourceFile::new("test.wgsl", source))
+            .expect("parses");
+        let analysis = crate::analysis::analyze(&shader, &Default::default()).expect("analyses");
+        instrument(&shader, &analysis, &Options::default()).expect("instruments")
+    }
+
+    #[test]
+    fn iframe_pass_outputs_both_flows_after_the_users_outputs() {
+        let iframe = instrumented(include_str!("../../corpus/noise_marble.wgsl"));
+        assert_eq!(iframe.flow_locations, [1, 2]);
+        // Frame's uniform at group 0: the flow parameters and its two
+        // twins in the first free group.
+        assert_eq!(iframe.params, [1, 0]);
+        assert_eq!(iframe.previous, vec![([0, 0], [1, 1])]);
+        assert_eq!(iframe.next, vec![([0, 0], [1, 2])]);
+        assert!(iframe.text.contains("fn vs_main_previous("));
+        assert!(iframe.text.contains("fn vs_main_next("));
+        assert!(iframe.text.contains("flow_to("));
+        let targets = &iframe.plan.passes[0].color_targets;
+        assert_eq!(targets.len(), 3);
+        assert_eq!(targets[2].format, FLOW_FORMAT);
+    }
+}

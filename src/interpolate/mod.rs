@@ -1,0 +1,207 @@
+//! Whole-frame reuse: render some frames (I-frames) and build the frames
+//! between them (B-frames) from what the I-frames stored.
+//!
+//! The reprojection cache (the rest of this crate) keeps one value of a
+//! shader from frame to frame. This stage keeps whole frames: seeds 000
+//! (Yang et al., "Image-based bidirectional scene reprojection") and 003
+//! (Andreev, "How to get from 30 to 60 frames per second in video games
+//! for free"), as `../shared/design/seeds-000-003.md` turns them into
+//! passes. `n` displayed frames make an I-frame interval: the frame at
+//! its start is rendered, the n − 1 after it are B-frames at
+//! α = 1/n … (n − 1)/n between it (I-frame 0, time t) and the next
+//! (I-frame 1, time t + 1).
+//!
+//! # The I-frame pass ([`iframe`])
+//!
+//! The user's shader, instrumented on naga IR: its vertex stage computes
+//! the position with the previous and the next I-frame's resources too
+//! (twins, as the cache's previous-frame twin), and its fragment stage
+//! adds two flows to its outputs, Vb (to the previous I-frame) and Vf (to
+//! the next): Δx, Δy in pixels and Δz in depth, `rgba16float`. That is
+//! everything the B-frame methods read: colour, depth, Vb, Vf. Nothing
+//! about the user's matrices is assumed; a shader whose position cannot be
+//! twinned (per-instance inputs, none at all) is refused with the reason.
+//!
+//! # The B-frame methods ([`bframe`], `shaders/bframe.wgsl`)
+//!
+//! Each is a fullscreen pass over the two I-frames' textures:
+//! - `image-based` (000 §5): for each B-frame pixel p a fixed-point search
+//!   q ← p − α·Vf(q) into I-frame 0 and q ← p − (1 − α)·Vb(q) into I-frame
+//!   1, m iterations each without early exit (eqs. 3–12); with dual
+//!   initialisation each also starts from the other frame's velocity at p
+//!   (eqs. 16–17) and keeps the smaller residual. §5.2 decides: both
+//!   residuals under ε1 and depths agreeing, the smaller residual; depths
+//!   disagreeing, the nearer surface; only one under ε1, that one; neither
+//!   (a double miss), the smaller residual. The point found is carried to
+//!   the other I-frame by its exact flow and the two colours blended by α
+//!   where it is visible there (eqs. 14–15), else its own colour is shown.
+//!   What the paper leaves open is decided as the design note proposes:
+//!   ε1 = 1 px; ε2 and the visibility test are the cache's relative depth
+//!   test; "exactly one under ε1" is treated as case 2; case 3 uses eqs.
+//!   14–15. Latest-frame initialisation (eqs. 18–19) is not built yet.
+//! - `half-velocity` (003): I-frame 0 sampled back along the velocity, α
+//!   of the way (half-way at n = 2): p + α·Vb₁(p), Vb₁ being I-frame 1's
+//!   flow to I-frame 0 (the current velocity, negated). Velocity merging:
+//!   where I-frame 0's surface is nearer than I-frame 1's at p (the tail a
+//!   moving object leaves behind), I-frame 0's own velocity Vb₀ is used
+//!   instead, extrapolated, unless its direction differs from the current
+//!   one's by more than `min_cosine`, where the pixel is held ("no worse
+//!   than 30 fps"). It reads no colour of I-frame 1: no extra latency.
+//!   Andreev's dynamic-object mask and inpainting are not built yet.
+//! - Baselines, in the same run: `reference` (every frame rendered),
+//!   `sample-and-hold` (I-frame 0 shown again) and `linear-blend` (the two
+//!   I-frames cross-faded at the same pixel).
+//!
+//! # The run ([`run`])
+//!
+//! Displayed frame by displayed frame the reference is rendered and read
+//! back; at each interval's end the I-frame, then every method's B-frames
+//! of the interval, each compared with the reference of its own time. The
+//! frames are timed with GPU timestamps through the profiler's clock
+//! ([`crate::profile::run::timed`]), drawn through the same runtime and
+//! host crate, fed by the same scene inputs, and compared by the same
+//! metrics. Two I-frame runners alternate, so I-frame 0 and I-frame 1
+//! stay alive side by side without copies.
+//!
+//! # What is measured ([`report`])
+//!
+//! Per method: the I-frame's time over a reference frame (1 for the
+//! methods that need no flows: their I-frame is the original), one
+//! B-frame's, the amortised (T_I + (n − 1)·T_B) / (n·T_ref) (000's Table 3
+//! measure), and SSIM and PSNR of the B-frames against the reference
+//! rendered at the same time; for image-based the share of pixels that
+//! were double misses.
+//!
+//! The paper renders the forward flow in a geometry pass of its own (an
+//! interactive application knows t + 1's parameters only after drawing
+//! t); a scripted scene knows them, so one pass writes both flows here,
+//! which the report says.
+
+pub mod bframe;
+pub mod iframe;
+pub mod report;
+pub(crate) mod run;
+
+use std::path::Path;
+
+use crate::diagnostic::Error;
+use crate::front::Shader;
+use crate::profile::Progress;
+use crate::scene::Scene;
+
+/// A way to show the frames between I-frames.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Every frame rendered.
+    Reference,
+    /// The earlier I-frame shown again.
+    SampleAndHold,
+    /// The two I-frames cross-faded.
+    LinearBlend,
+    /// Seed 000 §5.
+    ImageBased,
+    /// Seed 003.
+    HalfVelocity,
+}
+
+impl Method {
+    pub const ALL: [Method; 5] = [
+        Method::Reference,
+        Method::SampleAndHold,
+        Method::LinearBlend,
+        Method::ImageBased,
+        Method::HalfVelocity,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Reference => "reference",
+            Method::SampleAndHold => "sample-and-hold",
+            Method::LinearBlend => "linear-blend",
+            Method::ImageBased => "image-based",
+            Method::HalfVelocity => "half-velocity",
+        }
+    }
+
+    /// Its B-frame pass's entry point in `shaders/bframe.wgsl`; `None`
+    /// for the reference, which renders every frame.
+    pub fn fragment_entry(self) -> Option<&'static str> {
+        match self {
+            Method::Reference => None,
+            Method::SampleAndHold => Some("fs_sample_and_hold"),
+            Method::LinearBlend => Some("fs_linear_blend"),
+            Method::ImageBased => Some("fs_image_based"),
+            Method::HalfVelocity => Some("fs_half_velocity"),
+        }
+    }
+
+    /// Whether its B-frames read the I-frames' flows (its I-frames are
+    /// the instrumented pass; else the original shader).
+    pub fn reads_flows(self) -> bool {
+        matches!(self, Method::ImageBased | Method::HalfVelocity)
+    }
+
+    /// Whether its B-frames read the later I-frame, which must then be
+    /// rendered before them: (n − 1)/n of an interval of added latency.
+    pub fn reads_later_frame(self) -> bool {
+        matches!(
+            self,
+            Method::LinearBlend | Method::ImageBased | Method::HalfVelocity
+        )
+    }
+}
+
+/// What to run and with which knobs; `None` takes the scene's.
+#[derive(Clone, Debug)]
+pub struct Options {
+    pub methods: Vec<Method>,
+    /// n: displayed frames per I-frame interval (at least 2).
+    pub frames_per_interval: u32,
+    /// m: search iterations (at least 1).
+    pub iterations: u32,
+    /// ε1, in pixels.
+    pub screen_epsilon: f32,
+    /// ε2 and the visibility test's relative depth tolerance.
+    pub depth_epsilon: f32,
+    /// Dual initialisation (000 eqs. 16–17) besides the default start.
+    pub dual_init: bool,
+    /// Half-velocity's direction test.
+    pub min_cosine: f32,
+    pub size: Option<[u32; 2]>,
+    /// Displayed frames measured (rounded up to whole intervals).
+    pub frames: Option<u32>,
+    pub entry: Option<String>,
+    pub vertex_entry: Option<String>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            methods: Method::ALL.to_vec(),
+            frames_per_interval: 4,
+            iterations: 3,
+            screen_epsilon: 1.0,
+            depth_epsilon: crate::rewrite::DEFAULT_DEPTH_EPSILON,
+            dual_init: true,
+            min_cosine: 0.5,
+            size: None,
+            frames: None,
+            entry: None,
+            vertex_entry: None,
+        }
+    }
+}
+
+/// Renders `scene` with every method of `options` and with the reference,
+/// and measures them. `scene_path` names the scene file (its folder
+/// resolves relative files).
+pub fn interpolate(
+    shader: &Shader,
+    scene: &Scene,
+    scene_path: &Path,
+    options: &Options,
+    progress: &mut dyn Progress,
+) -> Result<(report::Report, report::Pictures), Error> {
+    run::run(shader, scene, scene_path, options, progress)
+}

@@ -1,0 +1,276 @@
+//! What `shadecache interpolate` writes: `report.json` (its schema in
+//! `docs/report-interpolation-json.md`), `report.html` and the pictures of
+//! each method's worst B-frame.
+
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use super::Method;
+use crate::report::plots::{self, Series};
+
+/// Version of `report.json`'s format.
+pub const FORMAT: u32 = 1;
+
+/// The mean SSIM a method must keep for the report's answer to pick it.
+pub const ANSWER_SSIM: f64 = 0.95;
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub format: u32,
+    pub shader: String,
+    pub scene: String,
+    /// The adapter the run drew on.
+    pub adapter: String,
+    /// `gpu-timestamps`, or `cpu` where the device has no timestamp
+    /// queries (then times include submission).
+    pub timing: String,
+    pub size: [u32; 2],
+    /// n: displayed frames per I-frame interval.
+    pub frames_per_interval: u32,
+    /// Intervals measured (after one of warm-up).
+    pub intervals: u32,
+    pub parameters: Parameters,
+    /// Median time of a reference frame (ms).
+    pub reference_ms: f64,
+    /// Median time of the I-frame pass with both flows (ms).
+    pub i_frame_ms: f64,
+    /// The I-frames against the reference at the same time: the worst
+    /// PSNR (dB, capped at 100). The I-frame is the user's shader with
+    /// outputs added, so it must equal the reference.
+    pub i_frame_psnr_min: f64,
+    pub methods: Vec<MethodReport>,
+    /// SSIM of every displayed frame measured, per method.
+    pub frames: Vec<DisplayedFrame>,
+    pub notes: Vec<String>,
+    /// How many frames can be skipped, with which method, at what cost.
+    pub answer: String,
+}
+
+/// The knobs of the run, as the B-frame passes used them.
+#[derive(Clone, Debug, Serialize)]
+pub struct Parameters {
+    /// m.
+    pub iterations: u32,
+    /// ε1, pixels.
+    pub screen_epsilon: f32,
+    /// ε2 and the visibility test: relative depth tolerance.
+    pub depth_epsilon: f32,
+    pub dual_init: bool,
+    pub latest_frame_init: bool,
+    /// Half-velocity's direction test.
+    pub min_cosine: f32,
+    pub flow_format: String,
+    /// How the flows were rendered.
+    pub flows: String,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct MethodReport {
+    pub method: Method,
+    pub frames_per_interval: u32,
+    /// T_I / T_ref: the I-frame's passes (with flows where the method
+    /// reads them) over a reference frame.
+    pub i_frame_time_ratio: f64,
+    /// T_B / T_ref: one B-frame over a reference frame.
+    pub b_frame_time_ratio: f64,
+    /// (T_I + (n − 1)·T_B) / (n·T_ref).
+    pub amortized_time_ratio: f64,
+    /// Median B-frame time (ms); 0 for the reference.
+    pub b_frame_ms: f64,
+    /// Over the B-frames, against the reference at the same time.
+    pub ssim_mean: f64,
+    pub ssim_min: f64,
+    pub psnr_mean: f64,
+    /// Share of the B-frames' pixels with geometry in either I-frame that
+    /// neither search found (image-based only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub double_miss_rate: Option<f64>,
+    /// Latency it adds, in displayed frames: the B-frames of an interval
+    /// wait for its closing I-frame when the method reads it.
+    pub added_latency_frames: f64,
+    /// The displayed frame of its worst B-frame (lowest SSIM).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub worst_frame: Option<u32>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct DisplayedFrame {
+    pub frame: u32,
+    /// Where it is in its interval: 0 for an I-frame.
+    pub alpha: f64,
+    /// Per method, in the order of `methods`.
+    pub ssim: Vec<f64>,
+}
+
+/// Each method's worst B-frame: (method, the reference, the B-frame), as
+/// RGBA8.
+#[derive(Clone, Debug, Default)]
+pub struct Pictures {
+    pub worst: Vec<(Method, Vec<u8>, Vec<u8>)>,
+}
+
+/// The answer: the cheapest method (amortised) whose mean SSIM is at
+/// least [`ANSWER_SSIM`].
+pub fn answer(methods: &[MethodReport], n: u32) -> String {
+    let skipped = format!("{} of every {n} frames interpolated", n - 1);
+    let best = methods
+        .iter()
+        .filter(|m| m.method != Method::Reference && m.ssim_mean >= ANSWER_SSIM)
+        .min_by(|a, b| a.amortized_time_ratio.total_cmp(&b.amortized_time_ratio));
+    match best {
+        Some(m) if m.amortized_time_ratio < 1.0 => format!(
+            "at n = {n} ({skipped}), {} costs {:.2}× of rendering every frame, with B-frames at mean SSIM {:.4} (worst {:.4}) and {} frame(s) of added latency",
+            m.method.name(),
+            m.amortized_time_ratio,
+            m.ssim_mean,
+            m.ssim_min,
+            m.added_latency_frames
+        ),
+        Some(m) => format!(
+            "at n = {n} ({skipped}), {} keeps mean SSIM {:.4} but costs {:.2}× of rendering every frame: render every frame",
+            m.method.name(),
+            m.ssim_mean,
+            m.amortized_time_ratio
+        ),
+        None => format!(
+            "at n = {n} ({skipped}), no method keeps mean SSIM ≥ {ANSWER_SSIM}: render every frame, or interpolate fewer"
+        ),
+    }
+}
+
+/// Writes each method's worst B-frame, its reference and their
+/// difference (×4) as `images/<method>-{reference,result,difference}.png`.
+pub fn write_images(
+    dir: &Path,
+    report: &Report,
+    pictures: &Pictures,
+) -> Result<Vec<PathBuf>, String> {
+    let [width, height] = report.size;
+    let images = dir.join("images");
+    std::fs::create_dir_all(&images)
+        .map_err(|e| format!("cannot create `{}`: {e}", images.display()))?;
+    let mut written = Vec::new();
+    for (method, reference, result) in &pictures.worst {
+        let difference: Vec<u8> = reference
+            .iter()
+            .zip(result)
+            .map(|(&a, &b)| {
+                (i32::from(a) - i32::from(b))
+                    .unsigned_abs()
+                    .saturating_mul(4)
+                    .min(255) as u8
+            })
+            .collect();
+        for (what, rgba) in [
+            ("reference", reference),
+            ("result", result),
+            ("difference", &difference),
+        ] {
+            let opaque: Vec<u8> = rgba
+                .chunks_exact(4)
+                .flat_map(|p| [p[0], p[1], p[2], 255])
+                .collect();
+            let path = images.join(format!("{}-{what}.png", method.name()));
+            image::save_buffer(
+                &path,
+                &opaque,
+                width,
+                height,
+                image::ExtendedColorType::Rgba8,
+            )
+            .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+            written.push(path);
+        }
+    }
+    Ok(written)
+}
+
+/// The HTML report: the answer, the time ratios and errors per method,
+/// SSIM per displayed frame (000's figs. 7–10), each method's worst
+/// B-frame beside its reference.
+pub fn html(report: &Report) -> String {
+    let esc = plots::escape;
+    let mut out = String::new();
+    let _ = write!(
+        out,
+        "<!doctype html><meta charset=utf-8><title>shadecache interpolate: {}</title>\
+         <style>body{{font-family:sans-serif;max-width:960px;margin:2em auto}}table{{border-collapse:collapse}}td,th{{padding:2px 8px;border-bottom:1px solid #ddd;text-align:right}}th:first-child,td:first-child{{text-align:left}}img{{image-rendering:pixelated;width:256px}}</style>\
+         <h1>{} on {}</h1><p>{}×{}, n = {}, {} interval(s) measured, {} ({}).</p><p><b>Answer:</b> {}</p>",
+        esc(&report.shader),
+        esc(&report.shader),
+        esc(&report.scene),
+        report.size[0],
+        report.size[1],
+        report.frames_per_interval,
+        report.intervals,
+        esc(&report.adapter),
+        esc(&report.timing),
+        esc(&report.answer),
+    );
+    let _ = write!(
+        out,
+        "<h2>Methods</h2><p>Reference frame {:.3} ms; I-frame with flows {:.3} ms (worst PSNR against the reference {:.1} dB).</p>\
+         <table><tr><th>method</th><th>I-frame ×</th><th>B-frame ×</th><th>amortised ×</th><th>SSIM mean</th><th>SSIM min</th><th>PSNR mean</th><th>double misses</th><th>latency (frames)</th></tr>",
+        report.reference_ms, report.i_frame_ms, report.i_frame_psnr_min
+    );
+    for m in &report.methods {
+        let _ = write!(
+            out,
+            "<tr><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.1}</td><td>{}</td><td>{}</td></tr>",
+            m.method.name(),
+            m.i_frame_time_ratio,
+            m.b_frame_time_ratio,
+            m.amortized_time_ratio,
+            m.ssim_mean,
+            m.ssim_min,
+            m.psnr_mean,
+            m.double_miss_rate
+                .map_or("—".to_string(), |r| format!("{:.2}%", r * 100.0)),
+            m.added_latency_frames
+        );
+    }
+    out.push_str("</table>");
+    let series: Vec<Series> = report
+        .methods
+        .iter()
+        .enumerate()
+        .map(|(i, m)| Series {
+            name: m.method.name().into(),
+            points: report
+                .frames
+                .iter()
+                .map(|f| (f64::from(f.frame), f.ssim[i]))
+                .collect(),
+            line: true,
+            ..Series::default()
+        })
+        .collect();
+    out.push_str("<h2>SSIM per displayed frame</h2>");
+    out.push_str(&plots::chart(
+        "SSIM against the reference at the same time (I-frames every n frames)",
+        "displayed frame",
+        "SSIM",
+        &series,
+        None,
+    ));
+    out.push_str("<h2>Worst B-frame per method</h2><p>Reference, result, difference ×4.</p>");
+    for m in &report.methods {
+        if let Some(frame) = m.worst_frame {
+            let name = m.method.name();
+            let _ = write!(
+                out,
+                "<h3>{name}, frame {frame}</h3><img src=\"images/{name}-reference.png\"> <img src=\"images/{name}-result.png\"> <img src=\"images/{name}-difference.png\">"
+            );
+        }
+    }
+    if !report.notes.is_empty() {
+        out.push_str("<h2>Notes</h2><ul>");
+        for note in &report.notes {
+            let _ = write!(out, "<li>{}</li>", esc(note));
+        }
+        out.push_str("</ul>");
+    }
+    out
+}

@@ -1,0 +1,540 @@
+//! The interpolation run: interval by interval, the reference at every
+//! displayed frame, the closing I-frame, then each method's B-frames,
+//! every one timed and compared with the reference of its own time.
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+use super::bframe::{BFrameParams, BFrames, Decision, IFrameTextures};
+use super::iframe::{self, IFrameShader};
+use super::report::{self, DisplayedFrame, MethodReport, Parameters, Pictures, Report};
+use super::{Method, Options};
+use crate::diagnostic::Error;
+use crate::front::Shader;
+use crate::profile::bench::{self, Bench};
+use crate::profile::inputs::SceneInputs;
+use crate::profile::metrics::{self, FrameError, LinearFrame};
+use crate::profile::run::{read_linear, timed, timed_recording, Clock};
+use crate::profile::{fail, Progress, MEASURED_COLOR_FORMAT};
+use crate::rewrite::Options as RewriteOptions;
+use crate::runtime::{FrameInputs, Gpu, Runner};
+use crate::scene::Scene;
+
+/// Intervals drawn before the measured ones: the first I-frame has no
+/// previous one, and the device warms up.
+const WARMUP_INTERVALS: u32 = 1;
+
+/// The error threshold of [`metrics::compare`]'s share above it (unused
+/// by the report; one 8-bit step).
+const THRESHOLD: f64 = 1.0 / 255.0;
+
+/// One method's measured B-frames.
+#[derive(Default)]
+struct MethodRun {
+    times: Vec<f64>,
+    /// (displayed frame, α, error).
+    frames: Vec<(u32, f64, FrameError)>,
+    decisions: [u64; 5],
+    /// The lowest-SSIM B-frame: (SSIM, frame, reference, result).
+    worst: Option<(f64, u32, Vec<u8>, Vec<u8>)>,
+}
+
+/// The knobs checked, and what a run needs of them.
+fn check(options: &Options) -> Result<(), Error> {
+    if options.frames_per_interval < 2 {
+        return Err(fail(format!(
+            "--frames-per-interval must be at least 2 (an I-frame and a B-frame), not {}",
+            options.frames_per_interval
+        )));
+    }
+    if options.iterations == 0 {
+        return Err(fail(
+            "--iterations must be at least 1: the search takes m ≥ 1 fixed-point steps".into(),
+        ));
+    }
+    if options.methods.is_empty() {
+        return Err(fail("no method to run".into()));
+    }
+    Ok(())
+}
+
+pub(super) fn run(
+    shader: &Shader,
+    scene: &Scene,
+    scene_path: &Path,
+    options: &Options,
+    progress: &mut dyn Progress,
+) -> Result<(Report, Pictures), Error> {
+    check(options)?;
+    let n = options.frames_per_interval;
+    let size = options.size.unwrap_or(scene.size);
+    let intervals = options.frames.unwrap_or(scene.frames).max(1).div_ceil(n);
+    let last_frame = (WARMUP_INTERVALS + intervals + 1) * n;
+    let bindings = crate::profile::setup::scene_bindings(
+        shader,
+        scene,
+        (options.entry.as_deref(), options.vertex_entry.as_deref()),
+        size,
+        last_frame,
+    )?;
+    let rewrite_options = RewriteOptions {
+        depth: scene.camera.depth,
+        vertex_entry: options.vertex_entry.clone(),
+        color_format: MEASURED_COLOR_FORMAT,
+        ..RewriteOptions::default()
+    };
+    let reference_plan =
+        crate::rewrite::plan::reference(shader, &bindings.analysis, &rewrite_options)
+            .map_err(fail)?;
+    let instrumented =
+        iframe::instrument(shader, &bindings.analysis, &rewrite_options).map_err(|refusal| {
+            fail(format!(
+                "the I-frame pass cannot be made: {}",
+                refusal.reason
+            ))
+        })?;
+    crate::scene::storage::check(&bindings.storage, scene)?;
+    crate::profile::check_instancing(shader, scene, &reference_plan.vertex_layout)?;
+    let inputs = SceneInputs::new(
+        shader,
+        scene,
+        scene_path,
+        &reference_plan,
+        &bindings.used,
+        (&bindings.uniforms, &bindings.storage),
+        bindings.aspect,
+    )?;
+    let gpu = Gpu::new().map_err(fail)?.ok_or_else(|| {
+        fail("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers gives lavapipe)".into())
+    })?;
+    let mut clock = Clock::new(&gpu)?;
+    let bench = Bench {
+        gpu: &gpu,
+        inputs: &inputs,
+        size,
+        cull_back_faces: scene.cull_back_faces,
+    };
+    let mut reference = bench::reference(&bench, shader, &reference_plan)?;
+    let sources = HashMap::from([("iframe.wgsl".to_string(), instrumented.text.clone())]);
+    let iframe_runner = || {
+        bench
+            .runner(&instrumented.plan, &sources, false)
+            .map_err(|err| fail(format!("the I-frame pass does not run: {err}")))
+    };
+    let mut slots = [iframe_runner()?, iframe_runner()?];
+    let bframes = BFrames::new(&gpu, (size[0], size[1]), &options.methods).map_err(fail)?;
+    let b_methods: Vec<Method> = options
+        .methods
+        .iter()
+        .copied()
+        .filter(|m| m.fragment_entry().is_some())
+        .collect();
+
+    let inputs_of = |frame: u32| inputs.frame(scene, frame);
+    let run = Schedule {
+        gpu: &gpu,
+        instrumented: &instrumented,
+        bframes: &bframes,
+        methods: &b_methods,
+        options,
+        size,
+        far_depth: scene.camera.depth.far_depth(),
+    };
+    let total = u64::from(WARMUP_INTERVALS + intervals)
+        * u64::from(n + 1 + b_methods.len() as u32 * (n - 1));
+    progress.start(total);
+    let mut measured = Measured::default();
+    // The first I-frame: the one the first interval opens with.
+    timed(
+        &mut clock,
+        &mut slots[0],
+        &run.iframe_inputs(&inputs_of, 0)?,
+        "iframe",
+    )
+    .map_err(fail)?;
+    for interval in 0..WARMUP_INTERVALS + intervals {
+        let record = interval >= WARMUP_INTERVALS;
+        run.interval(
+            &mut clock,
+            (&mut reference, &mut slots),
+            &inputs_of,
+            (interval, record),
+            &mut measured,
+            progress,
+        )?;
+    }
+    progress.finish();
+    Ok(run.report(shader, scene_path, &clock, measured, intervals))
+}
+
+/// What the run keeps of the measured intervals.
+#[derive(Default)]
+struct Measured {
+    reference_times: Vec<f64>,
+    iframe_times: Vec<f64>,
+    /// The I-frames against the reference at the same time.
+    iframe_errors: Vec<(u32, FrameError)>,
+    methods: BTreeMap<Method, MethodRun>,
+}
+
+/// What every interval of the run shares.
+struct Schedule<'a> {
+    gpu: &'a Gpu,
+    instrumented: &'a IFrameShader,
+    bframes: &'a BFrames,
+    /// The methods with B-frame passes.
+    methods: &'a [Method],
+    options: &'a Options,
+    size: [u32; 2],
+    far_depth: f32,
+}
+
+impl Schedule<'_> {
+    /// The I-frame's inputs at `frame`: the scene's, with the twins filled
+    /// with the previous and the next I-frame's buffers (the first
+    /// I-frame's previous is itself) and the flow parameters.
+    fn iframe_inputs(
+        &self,
+        inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
+        frame: u32,
+    ) -> Result<FrameInputs, Error> {
+        let n = self.options.frames_per_interval;
+        let mut now = inputs_of(frame)?;
+        let before = inputs_of(frame.saturating_sub(n))?;
+        let after = inputs_of(frame + n)?;
+        let params: Vec<u8> = [self.size[0] as f32, self.size[1] as f32, 0.0, 0.0]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        for (index, object) in now.objects.iter_mut().enumerate() {
+            for (twins, other) in [
+                (&self.instrumented.previous, &before),
+                (&self.instrumented.next, &after),
+            ] {
+                for (original, twin) in twins {
+                    let bytes = other
+                        .objects
+                        .get(index)
+                        .and_then(|o| o.buffers.get(original))
+                        .ok_or_else(|| {
+                            fail(format!(
+                                "internal error: object {index} has no buffer at group {} binding {} to twin",
+                                original[0], original[1]
+                            ))
+                        })?;
+                    object.buffers.insert(*twin, bytes.clone());
+                }
+            }
+            object
+                .buffers
+                .insert(self.instrumented.params, params.clone());
+        }
+        Ok(now)
+    }
+
+    fn textures<'r>(&self, runner: &'r Runner) -> Result<IFrameTextures<'r>, Error> {
+        let [previous, next] = self.instrumented.flow_locations;
+        let missing =
+            |what: &str| fail(format!("internal error: the I-frame has no {what} target"));
+        Ok(IFrameTextures {
+            color: runner.color().ok_or_else(|| missing("colour"))?,
+            depth: runner.depth(),
+            flow_previous: runner
+                .color_at(previous)
+                .ok_or_else(|| missing("flow_previous"))?,
+            flow_next: runner.color_at(next).ok_or_else(|| missing("flow_next"))?,
+        })
+    }
+
+    /// Draws interval `interval`: the reference at each of its displayed
+    /// frames, its closing I-frame, every method's B-frames; keeps the
+    /// measurements when `record`.
+    fn interval(
+        &self,
+        clock: &mut Clock,
+        (reference, slots): (&mut Runner, &mut [Runner; 2]),
+        inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
+        (interval, record): (u32, bool),
+        measured: &mut Measured,
+        progress: &mut dyn Progress,
+    ) -> Result<(), Error> {
+        let n = self.options.frames_per_interval;
+        let start = interval * n;
+        let (width, height) = (self.size[0], self.size[1]);
+        let covered = vec![255u8; (width * height * 4) as usize];
+
+        // The reference at every displayed frame of the interval, the
+        // closing I-frame's time included.
+        let mut pictures: Vec<LinearFrame> = Vec::new();
+        for k in 1..=n {
+            let (time, _, _) =
+                timed(clock, reference, &inputs_of(start + k)?, "reference").map_err(fail)?;
+            progress.step("reference");
+            let color = reference
+                .color()
+                .ok_or_else(|| fail("the reference draws no colour".into()))?;
+            pictures.push(read_linear(self.gpu, color).map_err(fail)?);
+            if record {
+                measured.reference_times.push(time);
+            }
+        }
+
+        // The closing I-frame, into the slot the opening one is not in.
+        let (earlier, later) = ((interval % 2) as usize, ((interval + 1) % 2) as usize);
+        let end = start + n;
+        let (time, _, _) = timed(
+            clock,
+            &mut slots[later],
+            &self.iframe_inputs(inputs_of, end)?,
+            "iframe",
+        )
+        .map_err(fail)?;
+        progress.step("iframe");
+        if record {
+            measured.iframe_times.push(time);
+            let color = slots[later]
+                .color()
+                .ok_or_else(|| fail("the I-frame draws no colour".into()))?;
+            let frame = read_linear(self.gpu, color).map_err(fail)?;
+            let error = metrics::compare(
+                &pictures[n as usize - 1],
+                &frame,
+                &covered,
+                width,
+                height,
+                THRESHOLD,
+            );
+            measured.iframe_errors.push((end, error));
+        }
+
+        let textures = (
+            self.textures(&slots[earlier])?,
+            self.textures(&slots[later])?,
+        );
+        for &method in self.methods {
+            for k in 1..n {
+                let alpha = f64::from(k) / f64::from(n);
+                let params = BFrameParams {
+                    viewport: [width as f32, height as f32],
+                    alpha: alpha as f32,
+                    iterations: self.options.iterations,
+                    screen_epsilon: self.options.screen_epsilon,
+                    depth_epsilon: self.options.depth_epsilon,
+                    far_depth: self.far_depth,
+                    dual_init: self.options.dual_init,
+                    min_cosine: self.options.min_cosine,
+                };
+                let (time, _, _) = timed_recording(clock, "bframe", |profiler| {
+                    self.bframes.render(
+                        self.gpu,
+                        method,
+                        (&textures.0, &textures.1),
+                        &params,
+                        profiler,
+                    )
+                })
+                .map_err(fail)?;
+                progress.step(method.name());
+                if !record {
+                    continue;
+                }
+                let frame = read_linear(self.gpu, self.bframes.color()).map_err(fail)?;
+                let decisions = crate::runtime::read_texture(self.gpu, self.bframes.decisions(), 4)
+                    .map_err(fail)?;
+                let reference_picture = &pictures[k as usize - 1];
+                let error = metrics::compare(
+                    reference_picture,
+                    &frame,
+                    &covered,
+                    width,
+                    height,
+                    THRESHOLD,
+                );
+                let entry = measured.methods.entry(method).or_default();
+                entry.times.push(time);
+                for word in decisions.chunks_exact(4) {
+                    let code = u32::from_le_bytes([word[0], word[1], word[2], word[3]]) as usize;
+                    if let Some(count) = entry.decisions.get_mut(code) {
+                        *count += 1;
+                    }
+                }
+                let displayed = start + k;
+                if entry.worst.as_ref().is_none_or(|w| error.ssim < w.0) {
+                    entry.worst = Some((
+                        error.ssim,
+                        displayed,
+                        metrics::rgba8(reference_picture),
+                        metrics::rgba8(&frame),
+                    ));
+                }
+                entry.frames.push((displayed, alpha, error));
+            }
+        }
+        Ok(())
+    }
+
+    fn report(
+        &self,
+        shader: &Shader,
+        scene_path: &Path,
+        clock: &Clock,
+        measured: Measured,
+        intervals: u32,
+    ) -> (Report, Pictures) {
+        let n = self.options.frames_per_interval;
+        let reference_ms = metrics::median(&measured.reference_times);
+        let iframe_ms = metrics::median(&measured.iframe_times);
+        let latency = f64::from(n - 1);
+        let mut methods = Vec::new();
+        let mut pictures = Pictures::default();
+        for &method in &self.options.methods {
+            let run = measured.methods.get(&method);
+            let b_ms = run.map_or(0.0, |r| metrics::median(&r.times));
+            let i_ms = if method.reads_flows() {
+                iframe_ms
+            } else {
+                reference_ms
+            };
+            let (i_ratio, b_ratio, amortized) = if method == Method::Reference {
+                (1.0, 1.0, 1.0)
+            } else {
+                (
+                    i_ms / reference_ms,
+                    b_ms / reference_ms,
+                    (i_ms + f64::from(n - 1) * b_ms) / (f64::from(n) * reference_ms),
+                )
+            };
+            let errors: Vec<&FrameError> = run
+                .map(|r| r.frames.iter().map(|(_, _, e)| e).collect())
+                .unwrap_or_default();
+            let ssims: Vec<f64> = errors.iter().map(|e| e.ssim).collect();
+            let psnrs: Vec<f64> = errors.iter().map(|e| e.psnr_frame).collect();
+            let double_miss_rate = (method == Method::ImageBased).then(|| {
+                let d = run.map_or([0; 5], |r| r.decisions);
+                let with_geometry: u64 = d.iter().sum::<u64>() - d[Decision::Background as usize];
+                if with_geometry == 0 {
+                    0.0
+                } else {
+                    d[Decision::DoubleMiss as usize] as f64 / with_geometry as f64
+                }
+            });
+            if let Some((_, _, reference, result)) = run.and_then(|r| r.worst.clone()) {
+                pictures.worst.push((method, reference, result));
+            }
+            methods.push(MethodReport {
+                method,
+                frames_per_interval: n,
+                i_frame_time_ratio: i_ratio,
+                b_frame_time_ratio: b_ratio,
+                amortized_time_ratio: amortized,
+                b_frame_ms: b_ms,
+                ssim_mean: if method == Method::Reference {
+                    1.0
+                } else {
+                    metrics::mean(&ssims)
+                },
+                ssim_min: ssims.iter().copied().fold(1.0, f64::min),
+                psnr_mean: if method == Method::Reference {
+                    metrics::PSNR_CAP
+                } else {
+                    metrics::mean(&psnrs)
+                },
+                double_miss_rate,
+                added_latency_frames: if method.reads_later_frame() {
+                    latency
+                } else {
+                    0.0
+                },
+                worst_frame: run.and_then(|r| r.worst.as_ref().map(|w| w.1)),
+            });
+        }
+        let frames = displayed_frames(&self.options.methods, &measured, n);
+        let mut notes = vec![
+            "one I-frame pass writes both flows: the paper renders the forward flow in a geometry pass of its own, so its I-frames cost more than these".to_string(),
+        ];
+        if !self.options.methods.contains(&Method::Reference) {
+            notes.push("the reference is rendered every frame all the same: the errors and ratios are against it".into());
+        }
+        let answer = report::answer(&methods, n);
+        let report = Report {
+            format: report::FORMAT,
+            shader: shader.file.path.clone(),
+            scene: scene_path.display().to_string(),
+            adapter: format!("{} ({:?})", self.gpu.adapter.name, self.gpu.adapter.backend),
+            timing: if clock.timestamps {
+                "gpu-timestamps"
+            } else {
+                "cpu"
+            }
+            .into(),
+            size: self.size,
+            frames_per_interval: n,
+            intervals,
+            parameters: Parameters {
+                iterations: self.options.iterations,
+                screen_epsilon: self.options.screen_epsilon,
+                depth_epsilon: self.options.depth_epsilon,
+                dual_init: self.options.dual_init,
+                latest_frame_init: false,
+                min_cosine: self.options.min_cosine,
+                flow_format: "rgba16float".into(),
+                flows: "both flows from the I-frame pass (next- and previous-I-frame twins)".into(),
+            },
+            reference_ms,
+            i_frame_ms: iframe_ms,
+            i_frame_psnr_min: measured
+                .iframe_errors
+                .iter()
+                .map(|(_, e)| e.psnr_frame)
+                .fold(metrics::PSNR_CAP, f64::min),
+            methods,
+            frames,
+            notes,
+            answer,
+        };
+        (report, pictures)
+    }
+}
+
+/// SSIM of every displayed frame measured, per method: an I-frame's is
+/// the I-frame's against the reference (every method shows it), a
+/// B-frame's the method's; the reference's is 1.
+fn displayed_frames(methods: &[Method], measured: &Measured, n: u32) -> Vec<DisplayedFrame> {
+    let mut frames: BTreeMap<u32, DisplayedFrame> = BTreeMap::new();
+    for &(frame, ref error) in &measured.iframe_errors {
+        frames.insert(
+            frame,
+            DisplayedFrame {
+                frame,
+                alpha: 0.0,
+                ssim: methods
+                    .iter()
+                    .map(|&m| {
+                        if m == Method::Reference {
+                            1.0
+                        } else {
+                            error.ssim
+                        }
+                    })
+                    .collect(),
+            },
+        );
+    }
+    for (i, &method) in methods.iter().enumerate() {
+        let Some(run) = measured.methods.get(&method) else {
+            continue;
+        };
+        for &(frame, alpha, ref error) in &run.frames {
+            let entry = frames.entry(frame).or_insert_with(|| DisplayedFrame {
+                frame,
+                alpha,
+                ssim: vec![1.0; methods.len()],
+            });
+            entry.ssim[i] = error.ssim;
+        }
+    }
+    // The first measured interval opens with the warm-up's I-frame, which
+    // is not compared: its frames start after it.
+    let _ = n;
+    frames.into_values().collect()
+}
