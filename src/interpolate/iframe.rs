@@ -40,6 +40,29 @@ pub const FLOW_FORMAT: TextureFormat = TextureFormat::Rgba16Float;
 /// The I-frame helpers (`shaders/iframe.wgsl`).
 const IFRAME_WGSL: &str = include_str!("../../shaders/iframe.wgsl");
 
+/// The scene-assisted B-frame helpers (`shaders/bframe_scene.wgsl`).
+const BFRAME_SCENE_WGSL: &str = include_str!("../../shaders/bframe_scene.wgsl");
+
+/// The fragment entry point of the scene-assisted B-frame pass.
+pub const SCENE_ASSISTED_ENTRY: &str = "fs_scene_assisted";
+
+/// The decisions' format in the scene-assisted pass (as the fullscreen
+/// B-frame passes').
+pub const DECISION_FORMAT: TextureFormat = TextureFormat::R32Uint;
+
+/// How a scene-assisted B-frame treats what neither I-frame shows
+/// (`SceneParams::mode` in `shaders/bframe_scene.wgsl`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SceneMode {
+    /// The nearer of the two I-frames' colours (the paper's choice).
+    ClosestOnMiss = 0,
+    /// Shaded by the original fragment stage in a second pass.
+    ShadeOnMiss = 1,
+    /// A baseline: I-frame 0 alone, its colour kept even where the point
+    /// is not visible there (no reshading).
+    ReverseReprojection = 2,
+}
+
 /// The I-frame pass's module, its WGSL and its plan, and which bindings
 /// the host fills with which time's contents.
 #[derive(Debug)]
@@ -58,23 +81,46 @@ pub struct IFrameShader {
     pub previous: Vec<([u32; 2], [u32; 2])>,
     /// (original, next I-frame's twin) `[group, binding]`s.
     pub next: Vec<([u32; 2], [u32; 2])>,
+    /// The bind group of the scene-assisted pass's I-frame textures
+    /// (`shaders/bframe_scene.wgsl`'s resources, from binding 0), or why
+    /// the module has no scene-assisted pass.
+    pub scene_group: Result<u32, String>,
+    /// The scene-assisted pass's outputs: colour at the user's first
+    /// colour location, decisions after the user's outputs.
+    pub scene_locations: [u32; 2],
+    /// Resources of the scene-assisted pass and of the original fragment
+    /// entry point (`<entry>_original`), with the vertex stage's.
+    scene_bindings: Vec<crate::plan::Resource>,
+    original_entry: String,
 }
 
-/// `shaders/iframe.wgsl` parsed, once per process.
-fn iframe_helpers() -> Result<&'static Module, Refusal> {
-    static HELPERS: OnceLock<Result<Module, String>> = OnceLock::new();
-    HELPERS
-        .get_or_init(|| {
-            crate::front::parse(crate::diagnostic::SourceFile::new(
-                "shaders/iframe.wgsl",
-                IFRAME_WGSL,
-            ))
+/// A helper module of the stage parsed, once per process.
+fn helpers(
+    cell: &'static OnceLock<Result<Module, String>>,
+    name: &str,
+    text: &str,
+) -> Result<&'static Module, Refusal> {
+    cell.get_or_init(|| {
+        crate::front::parse(crate::diagnostic::SourceFile::new(name, text))
             .map(|shader| shader.module)
             .map_err(|err| err.render())
-        })
-        .as_ref()
-        .map_err(|err| Refusal::internal(format!("the I-frame helpers do not parse: {err}")))
+    })
+    .as_ref()
+    .map_err(|err| Refusal::internal(format!("`{name}` does not parse: {err}")))
 }
+
+fn iframe_helpers() -> Result<&'static Module, Refusal> {
+    static HELPERS: OnceLock<Result<Module, String>> = OnceLock::new();
+    helpers(&HELPERS, "shaders/iframe.wgsl", IFRAME_WGSL)
+}
+
+fn scene_helpers() -> Result<&'static Module, Refusal> {
+    static HELPERS: OnceLock<Result<Module, String>> = OnceLock::new();
+    helpers(&HELPERS, "shaders/bframe_scene.wgsl", BFRAME_SCENE_WGSL)
+}
+
+/// WebGPU's default limit on bind groups.
+const MAX_BIND_GROUPS: u32 = 4;
 
 /// Instruments `shader`'s fragment entry point (the analysis's) and the
 /// vertex entry point that draws with it into the I-frame pass.
@@ -148,6 +194,30 @@ pub fn instrument(
         flow_to,
     )?;
 
+    // The scene-assisted pass, and the original fragment stage for its
+    // shade-on-miss pass, where a bind group is left for the I-frames'
+    // textures.
+    let color_location = rewrite::fragment::output_locations(original, &result)
+        .first()
+        .copied()
+        .unwrap_or(0);
+    let scene_locations = [color_location, flow_locations[0]];
+    let original_entry = format!("{}_original", entry.name);
+    let scene_group = if slot.group + 1 < MAX_BIND_GROUPS {
+        let group = slot.group + 1;
+        scene_entry(&mut module, locations, scene_locations, group)?;
+        module.entry_points.push(naga::EntryPoint {
+            name: original_entry.clone(),
+            ..entry.clone()
+        });
+        Ok(group)
+    } else {
+        Err(format!(
+            "the shader leaves no bind group free for the I-frames' textures after the twins' (group {})",
+            slot.group
+        ))
+    };
+
     let info = crate::front::validate(&module)
         .map_err(|err| Refusal::internal(format!("the I-frame pass does not validate: {err}")))?;
     let text = crate::back::wgsl_text(&module, &info).map_err(Refusal::internal)?;
@@ -160,6 +230,17 @@ pub fn instrument(
         flow_locations,
     )
     .map_err(Refusal::internal)?;
+    let scene_bindings = {
+        let entries: Vec<usize> = module
+            .entry_points
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| e.name == SCENE_ASSISTED_ENTRY || e.name == original_entry)
+            .map(|(i, _)| i)
+            .chain([vertex_index])
+            .collect();
+        rewrite::plan::entry_resources(&module, &entries)
+    };
     let key = |g: Handle<naga::GlobalVariable>| {
         let binding = module.global_variables[g]
             .binding
@@ -174,6 +255,10 @@ pub fn instrument(
             .collect()
     };
     Ok(IFrameShader {
+        scene_group,
+        scene_locations,
+        scene_bindings,
+        original_entry,
         params: key(params_global),
         previous: pairs(0),
         next: pairs(1),
@@ -373,6 +458,172 @@ fn flow_entry(
     b.push(Statement::Return { value: Some(value) });
     module.entry_points[entry_index].function = b.finish();
     Ok(flow_locations)
+}
+
+/// Adds the scene-assisted B-frame's fragment entry point: the previous
+/// and next clip positions in (at `clip_locations`), the colour the
+/// I-frames give (`scene_assisted` of `shaders/bframe_scene.wgsl`,
+/// imported with its resources in `group`) and the decision out, at
+/// `locations`.
+fn scene_entry(
+    module: &mut Module,
+    clip_locations: [u32; 2],
+    locations: [u32; 2],
+    group: u32,
+) -> Result<(), Refusal> {
+    let imported = crate::proc::import::import(module, scene_helpers()?, group, 0)
+        .map_err(|err| Refusal::internal(format!("importing the scene-assisted helpers: {err}")))?;
+    let helper = *imported.functions.get("scene_assisted").ok_or_else(|| {
+        Refusal::internal("`scene_assisted` missing from the scene-assisted helpers")
+    })?;
+    let vec4 = vec4_type(module);
+    let u32_ty = module.types.insert(
+        naga::Type {
+            name: None,
+            inner: TypeInner::Scalar(naga::Scalar::U32),
+        },
+        naga::Span::UNDEFINED,
+    );
+    let output_binding = |location| {
+        Some(Binding::Location {
+            location,
+            interpolation: None,
+            sampling: None,
+            blend_src: None,
+            per_primitive: false,
+        })
+    };
+    let output = module.types.insert(
+        naga::Type {
+            name: Some("SceneAssistedOutput".into()),
+            inner: TypeInner::Struct {
+                members: vec![
+                    naga::StructMember {
+                        name: Some("color".into()),
+                        ty: vec4,
+                        binding: output_binding(locations[0]),
+                        offset: 0,
+                    },
+                    naga::StructMember {
+                        name: Some("decision".into()),
+                        ty: u32_ty,
+                        binding: output_binding(locations[1]),
+                        offset: 16,
+                    },
+                ],
+                span: 32,
+            },
+        },
+        naga::Span::UNDEFINED,
+    );
+    let arguments = ["previous_clip_position", "next_clip_position"]
+        .into_iter()
+        .zip(clip_locations)
+        .map(|(name, location)| naga::FunctionArgument {
+            name: Some(name.into()),
+            ty: vec4,
+            binding: Some(located(location)),
+        })
+        .collect();
+    let mut b = Builder::new(Function {
+        name: Some(SCENE_ASSISTED_ENTRY.into()),
+        arguments,
+        result: Some(naga::FunctionResult {
+            ty: output,
+            binding: None,
+        }),
+        ..Function::default()
+    });
+    let (previous, next) = (b.argument(0), b.argument(1));
+    let found = b.call(helper, vec![previous, next]);
+    let components = vec![b.member(found, 0), b.member(found, 1)];
+    let value = b.expr(Expression::Compose {
+        ty: output,
+        components,
+    });
+    b.push(Statement::Return { value: Some(value) });
+    module.entry_points.push(naga::EntryPoint {
+        name: SCENE_ASSISTED_ENTRY.into(),
+        stage: naga::ShaderStage::Fragment,
+        early_depth_test: None,
+        workgroup_size: [0; 3],
+        workgroup_size_overrides: None,
+        function: b.finish(),
+        mesh_info: None,
+        task_payload: None,
+        incoming_ray_payload: None,
+    });
+    Ok(())
+}
+
+impl IFrameShader {
+    /// The scene-assisted B-frame's plan in `mode`: the geometry at the
+    /// B-frame's time reprojected into both I-frames (its colour and
+    /// decisions), and for shade-on-miss a second pass of the original
+    /// fragment stage over what the first discarded (its depth test keeps
+    /// to the pixels no earlier fragment covered).
+    pub fn scene_plan(&self, mode: SceneMode) -> Result<Plan, String> {
+        let group = self.scene_group.clone()?;
+        let mut plan = self.plan.clone();
+        plan.bindings.original = self.scene_bindings.clone();
+        let iframe = &self.plan.passes[0];
+        let color_format = iframe
+            .color_targets
+            .iter()
+            .find(|t| t.location == self.scene_locations[0])
+            .map_or(TextureFormat::Rgba16Float, |t| t.format);
+        let pass_bindings = |group_too: bool| -> Vec<[u32; 2]> {
+            let mut keys: Vec<[u32; 2]> = self
+                .scene_bindings
+                .iter()
+                .filter(|r| group_too || r.group != group)
+                .map(|r| [r.group, r.binding])
+                .collect();
+            keys.sort();
+            keys.dedup();
+            keys
+        };
+        let mut passes = vec![crate::plan::Pass {
+            name: "scene".into(),
+            role: "the geometry at the B-frame's time, coloured from the I-frames where its points are visible there".into(),
+            fragment_entry: SCENE_ASSISTED_ENTRY.into(),
+            color_targets: vec![
+                ColorTarget {
+                    location: self.scene_locations[0],
+                    target: TargetKind::Color,
+                    format: color_format,
+                    load: LoadOp::Clear,
+                },
+                ColorTarget {
+                    location: self.scene_locations[1],
+                    target: TargetKind::Color,
+                    format: DECISION_FORMAT,
+                    load: LoadOp::Clear,
+                },
+            ],
+            discards: mode == SceneMode::ShadeOnMiss,
+            bindings: pass_bindings(true),
+            ..iframe.clone()
+        }];
+        if mode == SceneMode::ShadeOnMiss {
+            let mut shade = iframe.clone();
+            shade.name = "shade".into();
+            shade.role =
+                "the original fragment stage where neither I-frame shows the surface".into();
+            shade.fragment_entry = self.original_entry.clone();
+            shade
+                .color_targets
+                .retain(|t| !self.flow_locations.contains(&t.location));
+            for target in &mut shade.color_targets {
+                target.load = LoadOp::Load;
+            }
+            shade.depth.load = LoadOp::Load;
+            shade.bindings = pass_bindings(false);
+            passes.push(shade);
+        }
+        plan.passes = passes;
+        Ok(plan)
+    }
 }
 
 /// The I-frame pass's plan: the reference's, with the flows among its

@@ -103,15 +103,25 @@ pub enum Method {
     ImageBased,
     /// Seed 003.
     HalfVelocity,
+    /// Seed 000 §4, closest-on-miss (the paper's choice).
+    SceneAssisted,
+    /// Seed 000 §4, shade-on-miss.
+    SceneAssistedShadeOnMiss,
+    /// Single-direction reverse reprojection from the earlier I-frame, no
+    /// reshading (a baseline).
+    ReverseReprojection,
 }
 
 impl Method {
-    pub const ALL: [Method; 5] = [
+    pub const ALL: [Method; 8] = [
         Method::Reference,
         Method::SampleAndHold,
         Method::LinearBlend,
         Method::ImageBased,
         Method::HalfVelocity,
+        Method::SceneAssisted,
+        Method::SceneAssistedShadeOnMiss,
+        Method::ReverseReprojection,
     ];
 
     pub fn name(self) -> &'static str {
@@ -121,6 +131,20 @@ impl Method {
             Method::LinearBlend => "linear-blend",
             Method::ImageBased => "image-based",
             Method::HalfVelocity => "half-velocity",
+            Method::SceneAssisted => "scene-assisted",
+            Method::SceneAssistedShadeOnMiss => "scene-assisted-shade-on-miss",
+            Method::ReverseReprojection => "reverse-reprojection",
+        }
+    }
+
+    /// Its scene-assisted pass's mode, for the methods that rasterise the
+    /// geometry at each B-frame.
+    pub fn scene_mode(self) -> Option<iframe::SceneMode> {
+        match self {
+            Method::SceneAssisted => Some(iframe::SceneMode::ClosestOnMiss),
+            Method::SceneAssistedShadeOnMiss => Some(iframe::SceneMode::ShadeOnMiss),
+            Method::ReverseReprojection => Some(iframe::SceneMode::ReverseReprojection),
+            _ => None,
         }
     }
 
@@ -128,11 +152,11 @@ impl Method {
     /// for the reference, which renders every frame.
     pub fn fragment_entry(self) -> Option<&'static str> {
         match self {
-            Method::Reference => None,
             Method::SampleAndHold => Some("fs_sample_and_hold"),
             Method::LinearBlend => Some("fs_linear_blend"),
             Method::ImageBased => Some("fs_image_based"),
             Method::HalfVelocity => Some("fs_half_velocity"),
+            _ => None,
         }
     }
 
@@ -142,12 +166,18 @@ impl Method {
         matches!(self, Method::ImageBased | Method::HalfVelocity)
     }
 
-    /// Whether its B-frames read the later I-frame, which must then be
-    /// rendered before them: (n − 1)/n of an interval of added latency.
+    /// Whether its B-frames read the later I-frame's colour, which must
+    /// then be rendered before they are shown: n − 1 displayed frames of
+    /// added latency. Half-velocity reads only the later frame's depth and
+    /// velocity, which an engine renders first (003's one-frame mode: the
+    /// middle frame is shown while the rest of the frame renders).
     pub fn reads_later_frame(self) -> bool {
         matches!(
             self,
-            Method::LinearBlend | Method::ImageBased | Method::HalfVelocity
+            Method::LinearBlend
+                | Method::ImageBased
+                | Method::SceneAssisted
+                | Method::SceneAssistedShadeOnMiss
         )
     }
 }

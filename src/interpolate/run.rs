@@ -17,7 +17,7 @@ use crate::profile::metrics::{self, FrameError, LinearFrame};
 use crate::profile::run::{read_linear, timed, timed_recording, Clock};
 use crate::profile::{fail, Progress, MEASURED_COLOR_FORMAT};
 use crate::rewrite::Options as RewriteOptions;
-use crate::runtime::{FrameInputs, Gpu, Runner};
+use crate::runtime::{FrameInputs, Gpu, RunOptions, Runner};
 use crate::scene::Scene;
 
 /// Intervals drawn before the measured ones: the first I-frame has no
@@ -122,6 +122,29 @@ pub(super) fn run(
             .map_err(|err| fail(format!("the I-frame pass does not run: {err}")))
     };
     let mut slots = [iframe_runner()?, iframe_runner()?];
+    let mut notes = Vec::new();
+    let mut scene_runs = Vec::new();
+    for &method in &options.methods {
+        let Some(mode) = method.scene_mode() else {
+            continue;
+        };
+        let made = instrumented.scene_group.clone().and_then(|group| {
+            let plan = instrumented.scene_plan(mode)?;
+            let runner = bench.runner_with(
+                &plan,
+                &sources,
+                RunOptions {
+                    external_group: Some(group),
+                    ..RunOptions::default()
+                },
+            )?;
+            Ok(SceneRun::new(&gpu, method, runner))
+        });
+        match made {
+            Ok(run) => scene_runs.push(run),
+            Err(reason) => notes.push(format!("{} refused: {reason}", method.name())),
+        }
+    }
     let bframes = BFrames::new(&gpu, (size[0], size[1]), &options.methods).map_err(fail)?;
     let b_methods: Vec<Method> = options
         .methods
@@ -141,14 +164,14 @@ pub(super) fn run(
         far_depth: scene.camera.depth.far_depth(),
     };
     let total = u64::from(WARMUP_INTERVALS + intervals)
-        * u64::from(n + 1 + b_methods.len() as u32 * (n - 1));
+        * u64::from(n + 1 + (b_methods.len() + scene_runs.len()) as u32 * (n - 1));
     progress.start(total);
     let mut measured = Measured::default();
     // The first I-frame: the one the first interval opens with.
     timed(
         &mut clock,
         &mut slots[0],
-        &run.iframe_inputs(&inputs_of, 0)?,
+        &run.twinned_inputs(&inputs_of, [0, 0, n])?,
         "iframe",
     )
     .map_err(fail)?;
@@ -156,7 +179,7 @@ pub(super) fn run(
         let record = interval >= WARMUP_INTERVALS;
         run.interval(
             &mut clock,
-            (&mut reference, &mut slots),
+            (&mut reference, &mut slots, &mut scene_runs),
             &inputs_of,
             (interval, record),
             &mut measured,
@@ -164,7 +187,114 @@ pub(super) fn run(
         )?;
     }
     progress.finish();
-    Ok(run.report(shader, scene_path, &clock, measured, intervals))
+    Ok(run.report(shader, scene_path, &clock, measured, intervals, notes))
+}
+
+/// A B-frame read back: when it is, its time (ms), its colour and its
+/// decisions.
+struct BFrameSample {
+    displayed: u32,
+    alpha: f64,
+    time: f64,
+    frame: LinearFrame,
+    decisions: Vec<u8>,
+}
+
+/// A scene-assisted method: its runner (the geometry at each B-frame's
+/// time, through the host) and what it binds of the I-frames.
+struct SceneRun {
+    method: Method,
+    runner: Runner,
+    params: wgpu::Buffer,
+    sampler: wgpu::Sampler,
+}
+
+impl SceneRun {
+    fn new(gpu: &Gpu, method: Method, runner: Runner) -> SceneRun {
+        SceneRun {
+            method,
+            runner,
+            params: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("scene-assisted parameters"),
+                size: 32,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            sampler: gpu.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("linear clamp"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..wgpu::SamplerDescriptor::default()
+            }),
+        }
+    }
+
+    /// Binds the two I-frames and this B-frame's parameters
+    /// (`SceneParams` of `shaders/bframe_scene.wgsl`).
+    fn bind(
+        &mut self,
+        gpu: &Gpu,
+        (earlier, later): &(IFrameTextures, IFrameTextures),
+        params: &BFrameParams,
+    ) -> Result<(), Error> {
+        let mode = self.method.scene_mode().map_or(0, |m| m as u32);
+        let words = [
+            params.viewport[0].to_bits(),
+            params.viewport[1].to_bits(),
+            params.alpha.to_bits(),
+            params.depth_epsilon.to_bits(),
+            params.far_depth.to_bits(),
+            mode,
+            0,
+            0,
+        ];
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        gpu.queue.write_buffer(&self.params, 0, &bytes);
+        let layout = self.runner.external_layout().ok_or_else(|| {
+            fail("internal error: the scene-assisted plan has no I-frame group".into())
+        })?;
+        let color = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
+        let depth = |t: &wgpu::Texture| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                aspect: wgpu::TextureAspect::DepthOnly,
+                ..wgpu::TextureViewDescriptor::default()
+            })
+        };
+        let views = [
+            color(earlier.color),
+            depth(earlier.depth),
+            color(later.color),
+            depth(later.depth),
+        ];
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: self.params.as_entire_binding(),
+        }];
+        entries.extend(
+            views
+                .iter()
+                .zip(1..)
+                .map(|(view, binding)| wgpu::BindGroupEntry {
+                    binding,
+                    resource: wgpu::BindingResource::TextureView(view),
+                }),
+        );
+        entries.push(wgpu::BindGroupEntry {
+            binding: 5,
+            resource: wgpu::BindingResource::Sampler(&self.sampler),
+        });
+        let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("I-frames"),
+            layout,
+            entries: &entries,
+        });
+        if let Some(err) = pollster::block_on(scope.pop()) {
+            return Err(fail(format!("the I-frames cannot be bound: {err}")));
+        }
+        self.runner.set_external_bind_group(bind_group);
+        Ok(())
+    }
 }
 
 /// What the run keeps of the measured intervals.
@@ -190,18 +320,19 @@ struct Schedule<'a> {
 }
 
 impl Schedule<'_> {
-    /// The I-frame's inputs at `frame`: the scene's, with the twins filled
-    /// with the previous and the next I-frame's buffers (the first
-    /// I-frame's previous is itself) and the flow parameters.
-    fn iframe_inputs(
+    /// The inputs of the instrumented module at `frames[0]`: the scene's,
+    /// with the previous twins filled with frame `frames[1]`'s buffers,
+    /// the next twins with `frames[2]`'s, and the flow parameters. An
+    /// I-frame's are its neighbours' (the first I-frame's previous is
+    /// itself); a scene-assisted B-frame's the I-frames around it.
+    fn twinned_inputs(
         &self,
         inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
-        frame: u32,
+        [frame, previous, next]: [u32; 3],
     ) -> Result<FrameInputs, Error> {
-        let n = self.options.frames_per_interval;
         let mut now = inputs_of(frame)?;
-        let before = inputs_of(frame.saturating_sub(n))?;
-        let after = inputs_of(frame + n)?;
+        let before = inputs_of(previous)?;
+        let after = inputs_of(next)?;
         let params: Vec<u8> = [self.size[0] as f32, self.size[1] as f32, 0.0, 0.0]
             .iter()
             .flat_map(|v| v.to_le_bytes())
@@ -252,7 +383,7 @@ impl Schedule<'_> {
     fn interval(
         &self,
         clock: &mut Clock,
-        (reference, slots): (&mut Runner, &mut [Runner; 2]),
+        (reference, slots, scene_runs): (&mut Runner, &mut [Runner; 2], &mut [SceneRun]),
         inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
         (interval, record): (u32, bool),
         measured: &mut Measured,
@@ -285,7 +416,7 @@ impl Schedule<'_> {
         let (time, _, _) = timed(
             clock,
             &mut slots[later],
-            &self.iframe_inputs(inputs_of, end)?,
+            &self.twinned_inputs(inputs_of, [end, start, end + n])?,
             "iframe",
         )
         .map_err(fail)?;
@@ -313,17 +444,7 @@ impl Schedule<'_> {
         );
         for &method in self.methods {
             for k in 1..n {
-                let alpha = f64::from(k) / f64::from(n);
-                let params = BFrameParams {
-                    viewport: [width as f32, height as f32],
-                    alpha: alpha as f32,
-                    iterations: self.options.iterations,
-                    screen_epsilon: self.options.screen_epsilon,
-                    depth_epsilon: self.options.depth_epsilon,
-                    far_depth: self.far_depth,
-                    dual_init: self.options.dual_init,
-                    min_cosine: self.options.min_cosine,
-                };
+                let params = self.params(k);
                 let (time, _, _) = timed_recording(clock, "bframe", |profiler| {
                     self.bframes.render(
                         self.gpu,
@@ -335,42 +456,104 @@ impl Schedule<'_> {
                 })
                 .map_err(fail)?;
                 progress.step(method.name());
-                if !record {
-                    continue;
+                if record {
+                    let frame = read_linear(self.gpu, self.bframes.color()).map_err(fail)?;
+                    let decisions =
+                        crate::runtime::read_texture(self.gpu, self.bframes.decisions(), 4)
+                            .map_err(fail)?;
+                    let sample = BFrameSample {
+                        displayed: start + k,
+                        alpha: f64::from(params.alpha),
+                        time,
+                        frame,
+                        decisions,
+                    };
+                    self.keep(measured, method, sample, &pictures[k as usize - 1]);
                 }
-                let frame = read_linear(self.gpu, self.bframes.color()).map_err(fail)?;
-                let decisions = crate::runtime::read_texture(self.gpu, self.bframes.decisions(), 4)
-                    .map_err(fail)?;
-                let reference_picture = &pictures[k as usize - 1];
-                let error = metrics::compare(
-                    reference_picture,
-                    &frame,
-                    &covered,
-                    width,
-                    height,
-                    THRESHOLD,
-                );
-                let entry = measured.methods.entry(method).or_default();
-                entry.times.push(time);
-                for word in decisions.chunks_exact(4) {
-                    let code = u32::from_le_bytes([word[0], word[1], word[2], word[3]]) as usize;
-                    if let Some(count) = entry.decisions.get_mut(code) {
-                        *count += 1;
-                    }
+            }
+        }
+        for scene_run in scene_runs.iter_mut() {
+            for k in 1..n {
+                let params = self.params(k);
+                scene_run.bind(self.gpu, &textures, &params)?;
+                let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
+                let (time, _, _) =
+                    timed(clock, &mut scene_run.runner, &inputs, "bframe").map_err(fail)?;
+                progress.step(scene_run.method.name());
+                if record {
+                    let [color, decision] = self.instrumented.scene_locations;
+                    let target = |location| {
+                        scene_run.runner.color_at(location).ok_or_else(|| {
+                            fail(format!(
+                                "internal error: the scene-assisted pass has no target at {location}"
+                            ))
+                        })
+                    };
+                    let frame = read_linear(self.gpu, target(color)?).map_err(fail)?;
+                    let decisions = crate::runtime::read_texture(self.gpu, target(decision)?, 4)
+                        .map_err(fail)?;
+                    let sample = BFrameSample {
+                        displayed: start + k,
+                        alpha: f64::from(params.alpha),
+                        time,
+                        frame,
+                        decisions,
+                    };
+                    self.keep(
+                        measured,
+                        scene_run.method,
+                        sample,
+                        &pictures[k as usize - 1],
+                    );
                 }
-                let displayed = start + k;
-                if entry.worst.as_ref().is_none_or(|w| error.ssim < w.0) {
-                    entry.worst = Some((
-                        error.ssim,
-                        displayed,
-                        metrics::rgba8(reference_picture),
-                        metrics::rgba8(&frame),
-                    ));
-                }
-                entry.frames.push((displayed, alpha, error));
             }
         }
         Ok(())
+    }
+
+    /// The B-frame parameters of the `k`-th frame of an interval.
+    fn params(&self, k: u32) -> BFrameParams {
+        BFrameParams {
+            viewport: [self.size[0] as f32, self.size[1] as f32],
+            alpha: k as f32 / self.options.frames_per_interval as f32,
+            iterations: self.options.iterations,
+            screen_epsilon: self.options.screen_epsilon,
+            depth_epsilon: self.options.depth_epsilon,
+            far_depth: self.far_depth,
+            dual_init: self.options.dual_init,
+            min_cosine: self.options.min_cosine,
+        }
+    }
+
+    /// Keeps a measured B-frame of `method`, compared with the reference
+    /// picture of its time.
+    fn keep(
+        &self,
+        measured: &mut Measured,
+        method: Method,
+        sample: BFrameSample,
+        reference: &[f32],
+    ) {
+        let [width, height] = self.size;
+        let covered = vec![255u8; (width * height * 4) as usize];
+        let error = metrics::compare(reference, &sample.frame, &covered, width, height, THRESHOLD);
+        let entry = measured.methods.entry(method).or_default();
+        entry.times.push(sample.time);
+        for word in sample.decisions.chunks_exact(4) {
+            let code = u32::from_le_bytes([word[0], word[1], word[2], word[3]]) as usize;
+            if let Some(count) = entry.decisions.get_mut(code) {
+                *count += 1;
+            }
+        }
+        if entry.worst.as_ref().is_none_or(|w| error.ssim < w.0) {
+            entry.worst = Some((
+                error.ssim,
+                sample.displayed,
+                metrics::rgba8(reference),
+                metrics::rgba8(&sample.frame),
+            ));
+        }
+        entry.frames.push((sample.displayed, sample.alpha, error));
     }
 
     fn report(
@@ -380,6 +563,7 @@ impl Schedule<'_> {
         clock: &Clock,
         measured: Measured,
         intervals: u32,
+        mut notes: Vec<String>,
     ) -> (Report, Pictures) {
         let n = self.options.frames_per_interval;
         let reference_ms = metrics::median(&measured.reference_times);
@@ -449,9 +633,7 @@ impl Schedule<'_> {
             });
         }
         let frames = displayed_frames(&self.options.methods, &measured, n);
-        let mut notes = vec![
-            "one I-frame pass writes both flows: the paper renders the forward flow in a geometry pass of its own, so its I-frames cost more than these".to_string(),
-        ];
+        notes.push("one I-frame pass writes both flows: the paper renders the forward flow in a geometry pass of its own, so its I-frames cost more than these".to_string());
         if !self.options.methods.contains(&Method::Reference) {
             notes.push("the reference is rendered every frame all the same: the errors and ratios are against it".into());
         }

@@ -36,6 +36,24 @@ impl Bench<'_> {
         sources: &HashMap<String, String>,
         classify: bool,
     ) -> Result<Runner, String> {
+        self.runner_with(
+            plan,
+            sources,
+            RunOptions {
+                classify,
+                ..RunOptions::default()
+            },
+        )
+    }
+
+    /// A runner as [`Bench::runner`], with `options` (the scene's culling
+    /// whatever they say).
+    pub fn runner_with(
+        &self,
+        plan: &Plan,
+        sources: &HashMap<String, String>,
+        options: RunOptions,
+    ) -> Result<Runner, String> {
         Runner::new(
             self.gpu,
             plan,
@@ -44,11 +62,11 @@ impl Bench<'_> {
             &self.inputs.textures,
             (self.size[0], self.size[1]),
             RunOptions {
-                classify,
                 pipelines: PipelineOptions {
                     cull_back_faces: self.cull_back_faces,
-                    ..PipelineOptions::default()
+                    ..options.pipelines
                 },
+                ..options
             },
         )
     }

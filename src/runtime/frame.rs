@@ -27,6 +27,10 @@ pub struct RunOptions {
     /// Draw the plan's `classify` pass after each frame (see
     /// [`Runner::classes`]).
     pub classify: bool,
+    /// A bind group of the plan's the caller binds itself (textures other
+    /// runs rendered): the runner makes its layout, not its contents
+    /// ([`Runner::set_external_bind_group`]).
+    pub external_group: Option<u32>,
 }
 
 /// The frame the runner draws, as an application would describe its own:
@@ -191,6 +195,7 @@ pub fn build_passes(
     let options = RunOptions {
         pipelines: options,
         classify: true,
+        external_group: None,
     };
     let (cached, _) = cached_shader(gpu, plan, shader, (1, 1), options)?;
     Ok(cached.plan().passes.len() + usize::from(cached.plan().classify.is_some()))

@@ -90,6 +90,8 @@ pub struct Runner {
     layouts: BTreeMap<u32, wgpu::BindGroupLayout>,
     views: HashMap<[u32; 2], wgpu::TextureView>,
     samplers: HashMap<[u32; 2], wgpu::Sampler>,
+    /// The group the caller binds, and what it bound.
+    external: Option<(u32, Option<wgpu::BindGroup>)>,
 }
 
 impl std::fmt::Debug for Runner {
@@ -179,7 +181,7 @@ impl Runner {
                 (*group, layout)
             })
             .collect();
-        let (views, samplers) = scene_textures(gpu, plan, textures)?;
+        let (views, samplers) = scene_textures(gpu, plan, textures, options.external_group)?;
         Ok(Runner {
             cached,
             color,
@@ -190,7 +192,21 @@ impl Runner {
             layouts,
             views,
             samplers,
+            external: options.external_group.map(|group| (group, None)),
         })
+    }
+
+    /// The layout of the group the caller binds (`RunOptions::external_group`).
+    pub fn external_layout(&self) -> Option<&wgpu::BindGroupLayout> {
+        self.layouts.get(&self.external.as_ref()?.0)
+    }
+
+    /// Binds `bind_group` at the caller's group in every pass from the
+    /// next frame on.
+    pub fn set_external_bind_group(&mut self, bind_group: wgpu::BindGroup) {
+        if let Some((_, bound)) = self.external.as_mut() {
+            *bound = Some(bind_group);
+        }
     }
 
     /// Sets the frame counter c (see [`CachedShader::set_frame_counter`]).
@@ -269,7 +285,16 @@ impl Runner {
                 a: clear[3],
             }),
         };
+        if let Some((group, None)) = &self.external {
+            return Err(format!(
+                "nothing bound at group {group}, which the caller binds"
+            ));
+        }
         let (objects, meshes) = (&self.objects, &self.meshes);
+        let external = self
+            .external
+            .as_ref()
+            .and_then(|(group, bound)| Some((*group, bound.as_ref()?)));
         let draw = |pass: &mut Draw<'_, '_>| {
             for (object, draw) in objects.iter().zip(&inputs.objects) {
                 let mesh = &meshes[draw.mesh];
@@ -277,6 +302,9 @@ impl Runner {
                 let render = pass.render_pass();
                 for (group, bind_group) in &object.bind_groups {
                     render.set_bind_group(*group, bind_group, &[]);
+                }
+                if let Some((group, bind_group)) = external {
+                    render.set_bind_group(group, bind_group, &[]);
                 }
                 render.set_vertex_buffer(0, mesh.vertices.slice(..));
                 if let Some(instances) = &object.instances {
@@ -346,7 +374,11 @@ impl Runner {
     fn make_object(&mut self, gpu: &Gpu, draw: &ObjectInputs) -> Result<Object, String> {
         let plan = self.cached.plan();
         let mut buffers = HashMap::new();
+        let external_group = self.external.as_ref().map(|(group, _)| *group);
         for resource in &plan.bindings.original {
+            if Some(resource.group) == external_group {
+                continue;
+            }
             let key = [resource.group, resource.binding];
             let usage = match resource.kind {
                 ResourceKind::Uniform => wgpu::BufferUsages::UNIFORM,
@@ -384,7 +416,7 @@ impl Runner {
         for (&group, layout) in self
             .layouts
             .iter()
-            .filter(|(g, _)| Some(**g) != cache_group)
+            .filter(|(g, _)| Some(**g) != cache_group && Some(**g) != external_group)
         {
             let mut entries = Vec::new();
             for resource in plan.bindings.original.iter().filter(|r| r.group == group) {

@@ -20,6 +20,7 @@ pub(super) fn scene_textures(
     gpu: &Gpu,
     plan: &Plan,
     textures: &HashMap<[u32; 2], Texels>,
+    external_group: Option<u32>,
 ) -> Result<
     (
         HashMap<[u32; 2], wgpu::TextureView>,
@@ -30,6 +31,9 @@ pub(super) fn scene_textures(
     let mut views = HashMap::new();
     let mut samplers = HashMap::new();
     for resource in &plan.bindings.original {
+        if Some(resource.group) == external_group {
+            continue;
+        }
         let key = [resource.group, resource.binding];
         if let Some((depth, shape)) = sampled_shape(resource.kind) {
             let view = if depth {

@@ -190,6 +190,7 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
                 cull_back_faces: false,
             },
             classify: true,
+            external_group: None,
         },
     )
     .unwrap();

@@ -18,6 +18,9 @@ pub enum MethodArg {
     LinearBlend,
     ImageBased,
     HalfVelocity,
+    SceneAssisted,
+    SceneAssistedShadeOnMiss,
+    ReverseReprojection,
 }
 
 impl MethodArg {
@@ -31,6 +34,9 @@ impl MethodArg {
                 MethodArg::LinearBlend => vec![Method::LinearBlend],
                 MethodArg::ImageBased => vec![Method::ImageBased],
                 MethodArg::HalfVelocity => vec![Method::HalfVelocity],
+                MethodArg::SceneAssisted => vec![Method::SceneAssisted],
+                MethodArg::SceneAssistedShadeOnMiss => vec![Method::SceneAssistedShadeOnMiss],
+                MethodArg::ReverseReprojection => vec![Method::ReverseReprojection],
             })
             .collect();
         methods.sort();
