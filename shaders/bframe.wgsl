@@ -96,8 +96,33 @@ fn depth_at(t: texture_depth_2d, p: vec2<f32>) -> f32 {
     return textureLoad(t, texel(p), 0);
 }
 
+// How much the depth buffer changes from one pixel to the next around
+// `p`: per axis the smaller of the two one-sided differences (so that a
+// silhouette beside the pixel does not count), the larger axis.
+fn depth_slope(t: texture_depth_2d, p: vec2<f32>) -> f32 {
+    let at = texel(p);
+    let last = vec2<i32>(params.viewport) - vec2<i32>(1);
+    let z = textureLoad(t, at, 0);
+    let left = textureLoad(t, max(at - vec2<i32>(1, 0), vec2<i32>(0)), 0);
+    let right = textureLoad(t, min(at + vec2<i32>(1, 0), last), 0);
+    let up = textureLoad(t, max(at - vec2<i32>(0, 1), vec2<i32>(0)), 0);
+    let down = textureLoad(t, min(at + vec2<i32>(0, 1), last), 0);
+    let x = min(abs(right - z), abs(z - left));
+    let y = min(abs(down - z), abs(z - up));
+    return max(x, y);
+}
+
+// The cache's relative depth test.
 fn depths_agree(a: f32, b: f32) -> bool {
     return abs(a - b) < params.depth_epsilon * abs(b - params.far_depth);
+}
+
+// ε2: two depths of the B-frame's time agree within the relative ε (the
+// cache's test) plus twice the depth buffer's slope where they were read:
+// a point is found to a fraction of a pixel, where the depth changes by up
+// to a pixel's slope (design note, Part E).
+fn depths_agree_sloped(a: f32, b: f32, slope: f32) -> bool {
+    return (a == b) | depths_agree(a, b) | (abs(a - b) < 2.0 * slope);
 }
 
 // Whether depth a is nearer the camera than b.
@@ -153,7 +178,8 @@ fn from_frame_0(q: vec2<f32>) -> vec4<f32> {
     let v = flow_at(flow_next_0, q);
     let there = q + v.xy;
     let expected = depth_at(depth_0, q) + v.z;
-    if (v.w > 0.5) & on_screen(there) & depths_agree(depth_at(depth_1, there), expected) {
+    let agree = depths_agree_sloped(depth_at(depth_1, there), expected, depth_slope(depth_1, there));
+    if (v.w > 0.5) & on_screen(there) & agree {
         return mix(c0, bilinear(color_1, there), params.alpha);
     }
     return c0;
@@ -165,7 +191,8 @@ fn from_frame_1(q: vec2<f32>) -> vec4<f32> {
     let v = flow_at(flow_previous_1, q);
     let there = q + v.xy;
     let expected = depth_at(depth_1, q) + v.z;
-    if (v.w > 0.5) & on_screen(there) & depths_agree(depth_at(depth_0, there), expected) {
+    let agree = depths_agree_sloped(depth_at(depth_0, there), expected, depth_slope(depth_0, there));
+    if (v.w > 0.5) & on_screen(there) & agree {
         return mix(bilinear(color_0, there), c1, params.alpha);
     }
     return c1;
@@ -186,7 +213,8 @@ fn fs_image_based(@builtin(position) frag_coord: vec4<f32>) -> BFrame {
     var use_forward = forward.error < backward.error;
     var decision = SAME_SURFACE;
     if ok_forward & ok_backward {
-        if !depths_agree(forward.depth, backward.depth) {
+        let slope = max(depth_slope(depth_0, forward.point), depth_slope(depth_1, backward.point));
+        if !depths_agree_sloped(forward.depth, backward.depth, slope) {
             // Different surfaces: the nearer occludes the other.
             use_forward = nearer(forward.depth, backward.depth);
             decision = NEARER_SURFACE;

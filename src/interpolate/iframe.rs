@@ -643,6 +643,9 @@ fn plan(
     bindings.sort();
     bindings.dedup();
     plan.bindings.original = original;
+    // Where nothing is drawn the flows must read invalid (w = 0): every
+    // target clears to zero, the colour's alpha too.
+    plan.clear.color = [0.0; 4];
     let pass = &mut plan.passes[0];
     pass.name = "iframe".into();
     pass.role = "the shader as written, plus the flows to the previous and the next I-frame".into();

@@ -203,6 +203,12 @@ pub struct Options {
     pub frames: Option<u32>,
     pub entry: Option<String>,
     pub vertex_entry: Option<String>,
+    /// Keep every measured B-frame whole ([`report::Pictures::kept`]).
+    pub keep_frames: bool,
+    /// A differential check: in each measured interval, also build each
+    /// method's B-frames at α = 0 and α = 1 (the I-frames' own times),
+    /// kept whole and not counted in the report's figures.
+    pub endpoints: bool,
 }
 
 impl Default for Options {
@@ -219,6 +225,8 @@ impl Default for Options {
             frames: None,
             entry: None,
             vertex_entry: None,
+            keep_frames: false,
+            endpoints: false,
         }
     }
 }

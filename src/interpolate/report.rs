@@ -105,10 +105,25 @@ pub struct DisplayedFrame {
 }
 
 /// Each method's worst B-frame: (method, the reference, the B-frame), as
-/// RGBA8.
+/// RGBA8; and the B-frames kept whole.
 #[derive(Clone, Debug, Default)]
 pub struct Pictures {
     pub worst: Vec<(Method, Vec<u8>, Vec<u8>)>,
+    pub kept: Vec<KeptFrame>,
+}
+
+/// A B-frame kept whole, with the reference of its time.
+#[derive(Clone, Debug)]
+pub struct KeptFrame {
+    pub method: Method,
+    /// Its displayed frame.
+    pub frame: u32,
+    pub alpha: f64,
+    pub error: crate::profile::metrics::FrameError,
+    pub reference: Vec<f32>,
+    pub result: Vec<f32>,
+    /// Each pixel's decision (`bframe::Decision` codes).
+    pub decisions: Vec<u32>,
 }
 
 /// The answer: the cheapest method (amortised) whose mean SSIM is at

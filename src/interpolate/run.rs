@@ -7,7 +7,7 @@ use std::path::Path;
 
 use super::bframe::{BFrameParams, BFrames, Decision, IFrameTextures};
 use super::iframe::{self, IFrameShader};
-use super::report::{self, DisplayedFrame, MethodReport, Parameters, Pictures, Report};
+use super::report::{self, DisplayedFrame, KeptFrame, MethodReport, Parameters, Pictures, Report};
 use super::{Method, Options};
 use crate::diagnostic::Error;
 use crate::front::Shader;
@@ -123,6 +123,12 @@ pub(super) fn run(
     };
     let mut slots = [iframe_runner()?, iframe_runner()?];
     let mut notes = Vec::new();
+    if scene.effects.is_empty() {
+        notes.push(
+            "the scene declares no motion (`effects` is empty): every B-frame should equal its I-frames"
+                .to_string(),
+        );
+    }
     let mut scene_runs = Vec::new();
     for &method in &options.methods {
         let Some(mode) = method.scene_mode() else {
@@ -300,6 +306,11 @@ impl SceneRun {
 /// What the run keeps of the measured intervals.
 #[derive(Default)]
 struct Measured {
+    /// The reference at the last interval's end: the next one's start.
+    previous_end: Option<LinearFrame>,
+    /// B-frames kept whole ([`Options::keep_frames`], and the end points
+    /// of [`Options::endpoints`]).
+    kept: Vec<KeptFrame>,
     reference_times: Vec<f64>,
     iframe_times: Vec<f64>,
     /// The I-frames against the reference at the same time.
@@ -443,7 +454,7 @@ impl Schedule<'_> {
             self.textures(&slots[later])?,
         );
         for &method in self.methods {
-            for k in 1..n {
+            for k in self.frames_of_interval(record, measured) {
                 let params = self.params(k);
                 let (time, _, _) = timed_recording(clock, "bframe", |profiler| {
                     self.bframes.render(
@@ -468,12 +479,13 @@ impl Schedule<'_> {
                         frame,
                         decisions,
                     };
-                    self.keep(measured, method, sample, &pictures[k as usize - 1]);
+                    let reference = self.reference_at(k, &pictures, measured)?;
+                    self.keep(measured, method, sample, &reference);
                 }
             }
         }
         for scene_run in scene_runs.iter_mut() {
-            for k in 1..n {
+            for k in self.frames_of_interval(record, measured) {
                 let params = self.params(k);
                 scene_run.bind(self.gpu, &textures, &params)?;
                 let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
@@ -503,12 +515,44 @@ impl Schedule<'_> {
                         measured,
                         scene_run.method,
                         sample,
-                        &pictures[k as usize - 1],
+                        &self.reference_at(k, &pictures, measured)?,
                     );
                 }
             }
         }
+        measured.previous_end = pictures.pop();
         Ok(())
+    }
+
+    /// The frames of an interval each method builds: 1 to n − 1; with
+    /// [`Options::endpoints`], in a recorded interval, also 0 and n (the
+    /// I-frames' own times: a differential check).
+    fn frames_of_interval(&self, record: bool, measured: &Measured) -> Vec<u32> {
+        let n = self.options.frames_per_interval;
+        if self.options.endpoints && record && measured.previous_end.is_some() {
+            (0..=n).collect()
+        } else {
+            (1..n).collect()
+        }
+    }
+
+    /// The reference picture at the `k`-th frame of the interval whose
+    /// later frames are `pictures`.
+    fn reference_at(
+        &self,
+        k: u32,
+        pictures: &[LinearFrame],
+        measured: &Measured,
+    ) -> Result<LinearFrame, Error> {
+        let picture = match k {
+            0 => measured.previous_end.as_ref(),
+            k => pictures.get(k as usize - 1),
+        };
+        picture.cloned().ok_or_else(|| {
+            fail(format!(
+                "internal error: no reference picture at frame {k} of the interval"
+            ))
+        })
     }
 
     /// The B-frame parameters of the `k`-th frame of an interval.
@@ -537,6 +581,25 @@ impl Schedule<'_> {
         let [width, height] = self.size;
         let covered = vec![255u8; (width * height * 4) as usize];
         let error = metrics::compare(reference, &sample.frame, &covered, width, height, THRESHOLD);
+        let endpoint = sample.alpha == 0.0 || sample.alpha == 1.0;
+        if endpoint || self.options.keep_frames {
+            measured.kept.push(KeptFrame {
+                method,
+                frame: sample.displayed,
+                alpha: sample.alpha,
+                error,
+                reference: reference.to_vec(),
+                result: sample.frame.clone(),
+                decisions: sample
+                    .decisions
+                    .chunks_exact(4)
+                    .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+                    .collect(),
+            });
+        }
+        if endpoint {
+            return;
+        }
         let entry = measured.methods.entry(method).or_default();
         entry.times.push(sample.time);
         for word in sample.decisions.chunks_exact(4) {
@@ -674,6 +737,7 @@ impl Schedule<'_> {
             notes,
             answer,
         };
+        pictures.kept = measured.kept;
         (report, pictures)
     }
 }

@@ -16,6 +16,7 @@ mod gpu;
 mod hard_cases;
 mod hard_runs;
 mod instanced;
+mod interpolate;
 mod profile;
 mod real_shaders;
 mod rewrite;

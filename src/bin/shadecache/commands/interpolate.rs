@@ -145,6 +145,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         frames: args.frames,
         entry: args.stages.entry.clone(),
         vertex_entry: args.stages.vertex_entry.clone(),
+        ..Options::default()
     };
     let mut bar = Bar {
         bar: None,
