@@ -81,6 +81,7 @@ pub mod bframe;
 pub mod iframe;
 pub mod report;
 pub(crate) mod run;
+pub mod search;
 
 use std::path::Path;
 
