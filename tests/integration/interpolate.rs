@@ -366,3 +366,98 @@ fn reversed_z_interpolation() {
         misses(&standard)
     );
 }
+
+/// Every corpus shader's I-frame module (the I-frame pass, the
+/// scene-assisted pass and the original fragment stage for its
+/// shade-on-miss pass) and the fullscreen B-frame passes: valid under
+/// naga with every flag (the instrumenting validates it) and Tint, no
+/// derivative after a `discard` (naga writes it as a termination), and a
+/// wgpu pipeline per pass of every plan.
+#[test]
+fn every_interpolation_pass_is_valid_and_builds() {
+    let Some(gpu) = crate::gpu::gpu() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = vec![root().join("shaders/bframe.wgsl")];
+    let mut built = 0;
+    for path in crate::util::corpus() {
+        let text = std::fs::read_to_string(root().join(&path)).unwrap();
+        let (shader, analysis) = crate::util::analyzed(&path.display().to_string(), &text);
+        let instrumented = match interpolate::iframe::instrument(
+            &shader,
+            &analysis,
+            &shadecache::rewrite::Options::default(),
+        ) {
+            Ok(instrumented) => instrumented,
+            Err(refusal) => {
+                assert!(
+                    !refusal.is_internal(),
+                    "{}: {}",
+                    path.display(),
+                    refusal.reason
+                );
+                eprintln!("{}: refused: {}", path.display(), refusal.reason);
+                continue;
+            }
+        };
+        shadecache::rewrite::uniformity::check_kills(&instrumented.module)
+            .unwrap_or_else(|err| panic!("{}: {err:?}", path.display()));
+        let file = dir.path().join(format!(
+            "{}.wgsl",
+            path.file_stem().unwrap().to_string_lossy()
+        ));
+        std::fs::write(&file, &instrumented.text).unwrap();
+        files.push(file);
+        let mut plans = vec![instrumented.plan.clone()];
+        for mode in [
+            interpolate::iframe::SceneMode::ClosestOnMiss,
+            interpolate::iframe::SceneMode::ShadeOnMiss,
+        ] {
+            match instrumented.scene_plan(mode) {
+                Ok(plan) => plans.push(plan),
+                Err(reason) => eprintln!("{}: no scene-assisted pass: {reason}", path.display()),
+            }
+        }
+        for plan in plans {
+            plan.check()
+                .unwrap_or_else(|err| panic!("{}: {err}", path.display()));
+            built += shadecache::runtime::build_passes(
+                &gpu,
+                &plan,
+                |_| Some(instrumented.text.clone()),
+                shadecache::runtime::PipelineOptions::default(),
+            )
+            .unwrap_or_else(|err| panic!("{}: {err}", path.display()));
+        }
+    }
+    for result in crate::util::tint_validate(&files) {
+        assert!(result.ok, "{}: {:?}", result.file, result.messages);
+    }
+    interpolate::bframe::BFrames::new(&gpu, (16, 16), &Method::ALL)
+        .unwrap_or_else(|err| panic!("{err}"));
+    assert!(built >= 30, "{built} pipelines");
+}
+
+/// Bad knobs and methods get a clear error and exit 1, before anything is
+/// written.
+#[test]
+fn interpolate_bad_input_is_an_error() {
+    let out = tempfile::tempdir().unwrap();
+    let out_dir = out.path().join("report");
+    let marble = "corpus/noise_marble.wgsl";
+    let scene = "corpus/scenes/marble_sphere.toml";
+    let out_arg = out_dir.display().to_string();
+    for (args, says) in [
+        (vec!["--frames-per-interval", "1"], "frames-per-interval"),
+        (vec!["--iterations", "0"], "iterations"),
+        (vec!["--method", "optical-flow"], "optical-flow"),
+        (vec!["--screen-epsilon=-1"], "screen-epsilon"),
+    ] {
+        let mut full = vec!["interpolate", marble, "--scene", scene, "--out", &out_arg];
+        full.extend(args.iter().copied());
+        let output = crate::util::shadecache(&full);
+        assert_eq!(output.status.code(), Some(1), "{args:?}");
+        let err = crate::util::stderr(&output);
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(!out_dir.exists(), "{args:?} wrote a report");
+    }
+}
