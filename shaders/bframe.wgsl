@@ -118,11 +118,16 @@ fn depths_agree(a: f32, b: f32) -> bool {
 }
 
 // ε2: two depths of the B-frame's time agree within the relative ε (the
-// cache's test) plus twice the depth buffer's slope where they were read:
-// a point is found to a fraction of a pixel, where the depth changes by up
-// to a pixel's slope (design note, Part E).
-fn depths_agree_sloped(a: f32, b: f32, slope: f32) -> bool {
-    return (a == b) | depths_agree(a, b) | (abs(a - b) < 2.0 * slope);
+// cache's test), or else within twice the slope of the depth buffers
+// where they were read (`t_a` at `p_a`, `t_b` at `p_b`): a point is found
+// to a fraction of a pixel, where the depth changes by up to a pixel's
+// slope (design note, Part E). The slope is read only when the first
+// test fails.
+fn depths_agree_sloped(a: f32, b: f32, t_a: texture_depth_2d, p_a: vec2<f32>, t_b: texture_depth_2d, p_b: vec2<f32>) -> bool {
+    if (a == b) | depths_agree(a, b) {
+        return true;
+    }
+    return abs(a - b) < 2.0 * max(depth_slope(t_a, p_a), depth_slope(t_b, p_b));
 }
 
 // Whether depth a is nearer the camera than b.
@@ -156,11 +161,17 @@ fn search(flow: texture_2d<f32>, depth: texture_depth_2d, p: vec2<f32>, start: v
     return Found(q, select(NO_ERROR_BOUND, error, valid), depth_at(depth, q) + s * v.z);
 }
 
+// A residual below this (pixels) is a converged search: another start
+// cannot do measurably better.
+const CONVERGED: f32 = 0.01;
+
 // The better of the default start (p itself) and, with dual
-// initialisation, `dual`: the smaller error.
+// initialisation, `dual`: the smaller error. The second search is skipped
+// where the first converged (the paper runs both; the result is the same
+// to CONVERGED, and most pixels of a frame converge from p).
 fn best_search(flow: texture_2d<f32>, depth: texture_depth_2d, p: vec2<f32>, dual: vec2<f32>, s: f32) -> Found {
     let plain = search(flow, depth, p, p, s);
-    if (params.flags & DUAL_INIT) == 0u {
+    if ((params.flags & DUAL_INIT) == 0u) | (plain.error < CONVERGED) {
         return plain;
     }
     let other = search(flow, depth, p, dual, s);
@@ -178,7 +189,7 @@ fn from_frame_0(q: vec2<f32>) -> vec4<f32> {
     let v = flow_at(flow_next_0, q);
     let there = q + v.xy;
     let expected = depth_at(depth_0, q) + v.z;
-    let agree = depths_agree_sloped(depth_at(depth_1, there), expected, depth_slope(depth_1, there));
+    let agree = depths_agree_sloped(depth_at(depth_1, there), expected, depth_1, there, depth_0, q);
     if (v.w > 0.5) & on_screen(there) & agree {
         return mix(c0, bilinear(color_1, there), params.alpha);
     }
@@ -191,7 +202,7 @@ fn from_frame_1(q: vec2<f32>) -> vec4<f32> {
     let v = flow_at(flow_previous_1, q);
     let there = q + v.xy;
     let expected = depth_at(depth_1, q) + v.z;
-    let agree = depths_agree_sloped(depth_at(depth_0, there), expected, depth_slope(depth_0, there));
+    let agree = depths_agree_sloped(depth_at(depth_0, there), expected, depth_0, there, depth_1, q);
     if (v.w > 0.5) & on_screen(there) & agree {
         return mix(bilinear(color_0, there), c1, params.alpha);
     }
@@ -213,8 +224,7 @@ fn fs_image_based(@builtin(position) frag_coord: vec4<f32>) -> BFrame {
     var use_forward = forward.error < backward.error;
     var decision = SAME_SURFACE;
     if ok_forward & ok_backward {
-        let slope = max(depth_slope(depth_0, forward.point), depth_slope(depth_1, backward.point));
-        if !depths_agree_sloped(forward.depth, backward.depth, slope) {
+        if !depths_agree_sloped(forward.depth, backward.depth, depth_0, forward.point, depth_1, backward.point) {
             // Different surfaces: the nearer occludes the other.
             use_forward = nearer(forward.depth, backward.depth);
             decision = NEARER_SURFACE;
