@@ -25,6 +25,8 @@ struct BFrameParams {
     // The depth buffer's far value: 1, or 0 with reversed Z.
     far_depth: f32,
     // Bit 0: dual initialisation (seed 000 eqs. 16–17) besides the default.
+    // Bit 1: half-velocity merges the earlier frame's velocity into the
+    // tails (else the later frame's velocity alone).
     flags: u32,
     // Half-velocity's direction test: the previous velocity is used for a
     // tail only when its cosine with the current one is at least this.
@@ -47,6 +49,7 @@ struct BFrameParams {
 @group(0) @binding(8) var flow_previous_1: texture_2d<f32>;
 
 const DUAL_INIT: u32 = 1u;
+const VELOCITY_MERGE: u32 = 2u;
 // A search that found nothing has this error.
 const NO_ERROR_BOUND: f32 = 1e30;
 
@@ -263,7 +266,8 @@ fn fs_half_velocity(@builtin(position) frag_coord: vec4<f32>) -> BFrame {
     let z0 = textureLoad(depth_0, at, 0);
     var v = select(vec2<f32>(0.0), now.xy, now.w > 0.5);
     var decision = SAME_SURFACE;
-    if (before.w > 0.5) & nearer(z0, z1) & !depths_agree(z0, z1) {
+    let merge = (params.flags & VELOCITY_MERGE) != 0u;
+    if merge & (before.w > 0.5) & nearer(z0, z1) & !depths_agree(z0, z1) {
         v = before.xy;
         decision = NEARER_SURFACE;
         let moving = (length(now.xy) > 0.5) & (length(before.xy) > 0.5) & (now.w > 0.5);

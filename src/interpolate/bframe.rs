@@ -47,6 +47,7 @@ pub struct BFrameParams {
     pub depth_epsilon: f32,
     pub far_depth: f32,
     pub dual_init: bool,
+    pub velocity_merge: bool,
     pub min_cosine: f32,
 }
 
@@ -62,7 +63,7 @@ impl BFrameParams {
             self.screen_epsilon.to_bits(),
             self.depth_epsilon.to_bits(),
             self.far_depth.to_bits(),
-            u32::from(self.dual_init),
+            u32::from(self.dual_init) | (u32::from(self.velocity_merge) << 1),
             self.min_cosine.to_bits(),
             0,
             0,

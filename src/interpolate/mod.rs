@@ -197,6 +197,9 @@ pub struct Options {
     pub depth_epsilon: f32,
     /// Dual initialisation (000 eqs. 16–17) besides the default start.
     pub dual_init: bool,
+    /// Half-velocity's velocity merging (003 slide 31): the earlier
+    /// frame's velocity for the tails; else the later frame's alone.
+    pub velocity_merge: bool,
     /// Half-velocity's direction test.
     pub min_cosine: f32,
     pub size: Option<[u32; 2]>,
@@ -221,6 +224,7 @@ impl Default for Options {
             screen_epsilon: 1.0,
             depth_epsilon: crate::rewrite::DEFAULT_DEPTH_EPSILON,
             dual_init: true,
+            velocity_merge: true,
             min_cosine: 0.5,
             size: None,
             frames: None,

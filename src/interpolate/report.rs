@@ -59,6 +59,8 @@ pub struct Parameters {
     pub depth_epsilon: f32,
     pub dual_init: bool,
     pub latest_frame_init: bool,
+    /// Half-velocity's velocity merging.
+    pub velocity_merge: bool,
     /// Half-velocity's direction test.
     pub min_cosine: f32,
     pub flow_format: String,
@@ -110,6 +112,23 @@ pub struct DisplayedFrame {
 pub struct Pictures {
     pub worst: Vec<(Method, Vec<u8>, Vec<u8>)>,
     pub kept: Vec<KeptFrame>,
+    /// With `keep_frames`, every measured I-frame.
+    pub iframes: Vec<KeptIFrame>,
+}
+
+/// An I-frame read back: its colour, depth buffer and flows, row-major.
+#[derive(Clone, Debug)]
+pub struct KeptIFrame {
+    /// Its displayed frame.
+    pub frame: u32,
+    /// RGBA.
+    pub color: Vec<f32>,
+    pub depth: Vec<f32>,
+    /// RGBA per pixel: Δx, Δy (pixels), Δz, valid; to the previous
+    /// I-frame.
+    pub flow_previous: Vec<f32>,
+    /// The same to the next I-frame.
+    pub flow_next: Vec<f32>,
 }
 
 /// A B-frame kept whole, with the reference of its time.

@@ -7,7 +7,9 @@ use std::path::Path;
 
 use super::bframe::{BFrameParams, BFrames, Decision, IFrameTextures};
 use super::iframe::{self, IFrameShader};
-use super::report::{self, DisplayedFrame, KeptFrame, MethodReport, Parameters, Pictures, Report};
+use super::report::{
+    self, DisplayedFrame, KeptFrame, KeptIFrame, MethodReport, Parameters, Pictures, Report,
+};
 use super::{Method, Options};
 use crate::diagnostic::Error;
 use crate::front::Shader;
@@ -311,6 +313,7 @@ struct Measured {
     /// B-frames kept whole ([`Options::keep_frames`], and the end points
     /// of [`Options::endpoints`]).
     kept: Vec<KeptFrame>,
+    iframes: Vec<KeptIFrame>,
     reference_times: Vec<f64>,
     iframe_times: Vec<f64>,
     /// The I-frames against the reference at the same time.
@@ -447,6 +450,21 @@ impl Schedule<'_> {
                 THRESHOLD,
             );
             measured.iframe_errors.push((end, error));
+            if self.options.keep_frames {
+                let textures = self.textures(&slots[later])?;
+                let depth = crate::runtime::read_texture(self.gpu, textures.depth, 4)
+                    .map_err(fail)?
+                    .chunks_exact(4)
+                    .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                    .collect();
+                measured.iframes.push(KeptIFrame {
+                    frame: end,
+                    color: frame,
+                    depth,
+                    flow_previous: read_linear(self.gpu, textures.flow_previous).map_err(fail)?,
+                    flow_next: read_linear(self.gpu, textures.flow_next).map_err(fail)?,
+                });
+            }
         }
 
         let textures = (
@@ -565,6 +583,7 @@ impl Schedule<'_> {
             depth_epsilon: self.options.depth_epsilon,
             far_depth: self.far_depth,
             dual_init: self.options.dual_init,
+            velocity_merge: self.options.velocity_merge,
             min_cosine: self.options.min_cosine,
         }
     }
@@ -721,6 +740,7 @@ impl Schedule<'_> {
                 depth_epsilon: self.options.depth_epsilon,
                 dual_init: self.options.dual_init,
                 latest_frame_init: false,
+                velocity_merge: self.options.velocity_merge,
                 min_cosine: self.options.min_cosine,
                 flow_format: "rgba16float".into(),
                 flows: "both flows from the I-frame pass (next- and previous-I-frame twins)".into(),
@@ -738,6 +758,7 @@ impl Schedule<'_> {
             answer,
         };
         pictures.kept = measured.kept;
+        pictures.iframes = measured.iframes;
         (report, pictures)
     }
 }

@@ -83,6 +83,11 @@ pub struct Args {
     #[arg(long)]
     pub no_dual_init: bool,
 
+    /// Half-velocity with the later frame's velocity alone (no merging of
+    /// the earlier frame's into the tails).
+    #[arg(long)]
+    pub no_velocity_merge: bool,
+
     /// Half-velocity's direction test: the cosine below which a tail's
     /// velocity is dropped.
     #[arg(
@@ -140,6 +145,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         screen_epsilon: args.screen_epsilon,
         depth_epsilon: args.depth_epsilon,
         dual_init: !args.no_dual_init,
+        velocity_merge: !args.no_velocity_merge,
         min_cosine: args.min_cosine,
         size: args.size,
         frames: args.frames,
