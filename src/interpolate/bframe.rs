@@ -42,7 +42,6 @@ pub enum Decision {
 pub struct BFrameParams {
     pub viewport: [f32; 2],
     pub alpha: f32,
-    pub iterations: u32,
     pub screen_epsilon: f32,
     pub depth_epsilon: f32,
     pub far_depth: f32,
@@ -52,19 +51,19 @@ pub struct BFrameParams {
 }
 
 impl BFrameParams {
-    /// The uniform's bytes (`BFrameParams` in `shaders/bframe.wgsl`: nine
+    /// The uniform's bytes (`BFrameParams` in `shaders/bframe.wgsl`: eight
     /// 4-byte fields in order, padded to 48).
     fn bytes(&self) -> Vec<u8> {
         let words: [u32; 12] = [
             self.viewport[0].to_bits(),
             self.viewport[1].to_bits(),
             self.alpha.to_bits(),
-            self.iterations,
             self.screen_epsilon.to_bits(),
             self.depth_epsilon.to_bits(),
             self.far_depth.to_bits(),
             u32::from(self.dual_init) | (u32::from(self.velocity_merge) << 1),
             self.min_cosine.to_bits(),
+            0,
             0,
             0,
             0,
@@ -110,8 +109,13 @@ fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::Bi
 
 impl BFrames {
     /// Builds the passes of `methods` (those that are B-frame passes) for
-    /// frames of `size`.
-    pub fn new(gpu: &Gpu, size: (u32, u32), methods: &[Method]) -> Result<BFrames, String> {
+    /// frames of `size`, the image-based search taking `iterations` steps.
+    pub fn new(
+        gpu: &Gpu,
+        size: (u32, u32),
+        methods: &[Method],
+        iterations: u32,
+    ) -> Result<BFrames, String> {
         let device = &gpu.device;
         let float = wgpu::TextureSampleType::Float { filterable: true };
         let entries = [
@@ -170,7 +174,10 @@ impl BFrames {
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
                     entry_point: Some(entry),
-                    compilation_options: Default::default(),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &[("search_iterations", f64::from(iterations))],
+                        ..Default::default()
+                    },
                     targets: &[Some(COLOR_FORMAT.into()), Some(DECISION_FORMAT.into())],
                 }),
                 primitive: wgpu::PrimitiveState::default(),

@@ -153,7 +153,13 @@ pub(super) fn run(
             Err(reason) => notes.push(format!("{} refused: {reason}", method.name())),
         }
     }
-    let bframes = BFrames::new(&gpu, (size[0], size[1]), &options.methods).map_err(fail)?;
+    let bframes = BFrames::new(
+        &gpu,
+        (size[0], size[1]),
+        &options.methods,
+        options.iterations,
+    )
+    .map_err(fail)?;
     let b_methods: Vec<Method> = options
         .methods
         .iter()
@@ -578,7 +584,6 @@ impl Schedule<'_> {
         BFrameParams {
             viewport: [self.size[0] as f32, self.size[1] as f32],
             alpha: k as f32 / self.options.frames_per_interval as f32,
-            iterations: self.options.iterations,
             screen_epsilon: self.options.screen_epsilon,
             depth_epsilon: self.options.depth_epsilon,
             far_depth: self.far_depth,

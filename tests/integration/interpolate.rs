@@ -61,7 +61,7 @@ light_color = [1.0, 1.0, 1.0]
     )
 }
 
-fn method<'a>(report: &'a Report, method: Method) -> &'a interpolate::report::MethodReport {
+fn method(report: &Report, method: Method) -> &interpolate::report::MethodReport {
     report
         .methods
         .iter()
@@ -432,7 +432,7 @@ fn every_interpolation_pass_is_valid_and_builds() {
     for result in crate::util::tint_validate(&files) {
         assert!(result.ok, "{}: {:?}", result.file, result.messages);
     }
-    interpolate::bframe::BFrames::new(&gpu, (16, 16), &Method::ALL)
+    interpolate::bframe::BFrames::new(&gpu, (16, 16), &Method::ALL, 3)
         .unwrap_or_else(|err| panic!("{err}"));
     assert!(built >= 30, "{built} pipelines");
 }
