@@ -29,6 +29,9 @@ struct BFrameParams {
     // Half-velocity's direction test: the previous velocity is used for a
     // tail only when its cosine with the current one is at least this.
     min_cosine: f32,
+    // α' of the B-frame before this one in the interval, whose offsets
+    // seed latest-frame initialisation; 0 for an interval's first.
+    previous_alpha: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: BFrameParams;
@@ -50,9 +53,19 @@ override search_iterations: u32 = 3u;
 @group(0) @binding(7) var depth_1: texture_depth_2d;
 // I-frame 1's flow to I-frame 0 (Vb_{t+1}).
 @group(0) @binding(8) var flow_previous_1: texture_2d<f32>;
+// The previous image-based B-frame's offsets (p - q into I-frame 0, p - q
+// into I-frame 1) and the depth it chose, for latest-frame
+// initialisation.
+@group(0) @binding(9) var previous_offsets: texture_2d<f32>;
+@group(0) @binding(10) var previous_depths: texture_2d<f32>;
 
 const DUAL_INIT: u32 = 1u;
 const VELOCITY_MERGE: u32 = 2u;
+
+// Latest-frame initialisation (seed 000 eqs. 18–19), set when the
+// pipeline is made: its code compiled into the pass even behind a false
+// uniform flag made the pass half as costly again on lavapipe.
+override latest_init: bool = false;
 // A search that found nothing has this error.
 const NO_ERROR_BOUND: f32 = 1e30;
 
@@ -187,15 +200,83 @@ fn from_frame_1(q: vec2<f32>) -> vec4<f32> {
     return c1;
 }
 
+// What the image-based pass writes: besides the colour and decision, the
+// offsets it found and the depth it chose, for the next B-frame's
+// latest-frame initialisation.
+struct ImageBased {
+    @location(0) color: vec4<f32>,
+    @location(1) decision: u32,
+    @location(2) offsets: vec4<f32>,
+    @location(3) depth: f32,
+}
+
+// The diagonal neighbours of latest-frame initialisation's neighbourhood
+// (the centre and these: the design note's 5 taps; the paper leaves its
+// size open).
+const LATEST_TAPS: array<vec2<i32>, 4> = array<vec2<i32>, 4>(
+    vec2<i32>(-1, -1), vec2<i32>(1, -1), vec2<i32>(-1, 1), vec2<i32>(1, 1),
+);
+
+// Eqs. 18–19: the start offsets from the previous B-frame's, rescaled to
+// this α (forward by α/α', backward by (1 - α)/(1 - α')): of the taps
+// around p, the one whose chosen surface was the nearest (§5.3: "whichever
+// has the smallest depth").
+fn latest_offsets(p: vec2<f32>) -> vec4<f32> {
+    let at = texel(p);
+    let last = vec2<i32>(params.viewport) - vec2<i32>(1);
+    var best = textureLoad(previous_offsets, at, 0);
+    var best_depth = textureLoad(previous_depths, at, 0).x;
+    for (var i = 0; i < 4; i++) {
+        let tap = clamp(at + LATEST_TAPS[i], vec2<i32>(0), last);
+        let depth = textureLoad(previous_depths, tap, 0).x;
+        if nearer(depth, best_depth) {
+            best = textureLoad(previous_offsets, tap, 0);
+            best_depth = depth;
+        }
+    }
+    let forward = params.alpha / params.previous_alpha;
+    let backward = (1.0 - params.alpha) / (1.0 - params.previous_alpha);
+    return vec4<f32>(best.xy * forward, best.zw * backward);
+}
+
 // Seed 000 §5: image-based bidirectional reprojection.
 @fragment
 fn fs_image_based(@builtin(position) frag_coord: vec4<f32>) -> BFrame {
-    let p = frag_coord.xy;
+    let found = image_based(frag_coord.xy);
+    return BFrame(found.color, found.decision);
+}
+
+// The same, writing its offsets and chosen depth for the next B-frame's
+// latest-frame initialisation (two more targets: measured on lavapipe,
+// half as costly again, so only the pass that initialises from them
+// writes them).
+@fragment
+fn fs_image_based_latest(@builtin(position) frag_coord: vec4<f32>) -> ImageBased {
+    return image_based(frag_coord.xy);
+}
+
+fn image_based(p: vec2<f32>) -> ImageBased {
     let a = params.alpha;
     // Eqs. 16–17: each direction may also start from the velocity the
     // other I-frame stored at p.
-    let forward = best_search(flow_next_0, depth_0, p, p + a * flow_at(flow_previous_1, p).xy, a);
-    let backward = best_search(flow_previous_1, depth_1, p, p + (1.0 - a) * flow_at(flow_next_0, p).xy, 1.0 - a);
+    var forward = best_search(flow_next_0, depth_0, p, p + a * flow_at(flow_previous_1, p).xy, a);
+    var backward = best_search(flow_previous_1, depth_1, p, p + (1.0 - a) * flow_at(flow_next_0, p).xy, 1.0 - a);
+    // Eqs. 18–19, in addition: the smaller residual wins.
+    if latest_init && (params.previous_alpha > 0.0) {
+        let start = latest_offsets(p);
+        if forward.error >= CONVERGED {
+            let latest = search(flow_next_0, depth_0, p, p - start.xy, a);
+            if latest.error < forward.error {
+                forward = latest;
+            }
+        }
+        if backward.error >= CONVERGED {
+            let latest = search(flow_previous_1, depth_1, p, p - start.zw, 1.0 - a);
+            if latest.error < backward.error {
+                backward = latest;
+            }
+        }
+    }
     let ok_forward = forward.error < params.screen_epsilon;
     let ok_backward = backward.error < params.screen_epsilon;
     // Ties take eq. 15 (eb <= ef).
@@ -215,12 +296,15 @@ fn fs_image_based(@builtin(position) frag_coord: vec4<f32>) -> BFrame {
         decision = select(BACKGROUND, DOUBLE_MISS, geometry);
     }
     var color: vec4<f32>;
+    var depth: f32;
     if use_forward {
         color = from_frame_0(forward.point);
+        depth = forward.depth;
     } else {
         color = from_frame_1(backward.point);
+        depth = backward.depth;
     }
-    return BFrame(color, decision);
+    return ImageBased(color, decision, vec4<f32>(p - forward.point, p - backward.point), depth);
 }
 
 // Seed 003: the earlier I-frame sampled back along the velocity,

@@ -18,6 +18,13 @@ pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// `SAME_SURFACE`...).
 pub const DECISION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
+/// The image-based pass's offsets (p − q into each I-frame), read by the
+/// next B-frame's latest-frame initialisation.
+pub const OFFSETS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// The depth the image-based pass chose, beside its offsets.
+pub const CHOSEN_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+
 /// What each B-frame pixel decided, as the shader codes it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u32)]
@@ -48,6 +55,10 @@ pub struct BFrameParams {
     pub dual_init: bool,
     pub velocity_merge: bool,
     pub min_cosine: f32,
+    /// α' of the image-based B-frame before this one in the interval:
+    /// latest-frame initialisation from its offsets (000 eqs. 18–19).
+    /// `None` for the first B-frame of an interval, or to turn it off.
+    pub previous_alpha: Option<f32>,
 }
 
 impl BFrameParams {
@@ -63,7 +74,7 @@ impl BFrameParams {
             self.far_depth.to_bits(),
             u32::from(self.dual_init) | (u32::from(self.velocity_merge) << 1),
             self.min_cosine.to_bits(),
-            0,
+            self.previous_alpha.unwrap_or(0.0).to_bits(),
             0,
             0,
             0,
@@ -92,6 +103,13 @@ pub struct BFrames {
     sampler: wgpu::Sampler,
     color: wgpu::Texture,
     decisions: wgpu::Texture,
+    /// The image-based pass's offsets and chosen depths, in turn written
+    /// and read by consecutive B-frames ([`BFrames::render`] alternates).
+    offsets: [(wgpu::Texture, wgpu::Texture); 2],
+    /// Which of `offsets` the next image-based B-frame writes.
+    turn: std::cell::Cell<usize>,
+    /// Whether the image-based pass writes `offsets`.
+    latest: bool,
 }
 
 fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
@@ -107,14 +125,26 @@ fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::Bi
     }
 }
 
+/// A method's colour targets: the B-frame and its decisions; for
+/// image-based with latest-frame initialisation also its offsets and
+/// chosen depths.
+fn targets(method: Method, latest: bool) -> Vec<Option<wgpu::ColorTargetState>> {
+    let mut formats = vec![COLOR_FORMAT, DECISION_FORMAT];
+    if method == Method::ImageBased && latest {
+        formats.extend([OFFSETS_FORMAT, CHOSEN_DEPTH_FORMAT]);
+    }
+    formats.into_iter().map(|f| Some(f.into())).collect()
+}
+
 impl BFrames {
     /// Builds the passes of `methods` (those that are B-frame passes) for
-    /// frames of `size`, the image-based search taking `iterations` steps.
+    /// frames of `size`, the image-based search taking `iterations` steps,
+    /// with latest-frame initialisation when `latest`.
     pub fn new(
         gpu: &Gpu,
         size: (u32, u32),
         methods: &[Method],
-        iterations: u32,
+        (iterations, latest): (u32, bool),
     ) -> Result<BFrames, String> {
         let device = &gpu.device;
         let float = wgpu::TextureSampleType::Float { filterable: true };
@@ -142,6 +172,8 @@ impl BFrames {
             texture_entry(6, float),
             texture_entry(7, wgpu::TextureSampleType::Depth),
             texture_entry(8, float),
+            texture_entry(9, float),
+            texture_entry(10, wgpu::TextureSampleType::Float { filterable: false }),
         ];
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("B-frame"),
@@ -162,6 +194,18 @@ impl BFrames {
             let Some(entry) = method.fragment_entry() else {
                 continue;
             };
+            let latest_pass = method == Method::ImageBased && latest;
+            let entry = if latest_pass {
+                "fs_image_based_latest"
+            } else {
+                entry
+            };
+            let iterations = ("search_iterations", f64::from(iterations));
+            let constants: Vec<(&str, f64)> = if latest_pass {
+                vec![iterations, ("latest_init", 1.0)]
+            } else {
+                vec![iterations]
+            };
             let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(method.name()),
                 layout: Some(&pipeline_layout),
@@ -175,10 +219,10 @@ impl BFrames {
                     module: &module,
                     entry_point: Some(entry),
                     compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &[("search_iterations", f64::from(iterations))],
+                        constants: &constants,
                         ..Default::default()
                     },
-                    targets: &[Some(COLOR_FORMAT.into()), Some(DECISION_FORMAT.into())],
+                    targets: &targets(method, latest),
                 }),
                 primitive: wgpu::PrimitiveState::default(),
                 depth_stencil: None,
@@ -211,6 +255,14 @@ impl BFrames {
             sampler,
             color: target("B-frame", COLOR_FORMAT),
             decisions: target("B-frame decisions", DECISION_FORMAT),
+            offsets: [0, 1].map(|_| {
+                (
+                    target("image-based offsets", OFFSETS_FORMAT),
+                    target("image-based chosen depths", CHOSEN_DEPTH_FORMAT),
+                )
+            }),
+            turn: std::cell::Cell::new(0),
+            latest,
         })
     }
 
@@ -246,6 +298,7 @@ impl BFrames {
                 ..wgpu::TextureViewDescriptor::default()
             })
         };
+        let (write, read) = (self.turn.get(), 1 - self.turn.get());
         let views = [
             view(earlier.color),
             depth(earlier.depth),
@@ -254,6 +307,8 @@ impl BFrames {
             view(later.color),
             depth(later.depth),
             view(later.flow_previous),
+            view(&self.offsets[read].0),
+            view(&self.offsets[read].1),
         ];
         let mut entries = vec![
             wgpu::BindGroupEntry {
@@ -279,7 +334,11 @@ impl BFrames {
             layout: &self.layout,
             entries: &entries,
         });
-        let (color, decisions) = (view(&self.color), view(&self.decisions));
+        let mut outputs = vec![view(&self.color), view(&self.decisions)];
+        if method == Method::ImageBased && self.latest {
+            outputs.extend([view(&self.offsets[write].0), view(&self.offsets[write].1)]);
+            self.turn.set(read);
+        }
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
@@ -288,20 +347,23 @@ impl BFrames {
             profiler.begin_pass_query(format!("{label}/{}", method.name()), &mut encoder)
         });
         {
-            let attachment = |view| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
+            let attachments: Vec<_> = outputs
+                .iter()
+                .map(|view| {
+                    Some(wgpu::RenderPassColorAttachment {
+                        view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })
                 })
-            };
+                .collect();
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(method.name()),
-                color_attachments: &[attachment(&color), attachment(&decisions)],
+                color_attachments: &attachments,
                 depth_stencil_attachment: None,
                 timestamp_writes: query
                     .as_ref()

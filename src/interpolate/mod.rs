@@ -38,7 +38,12 @@
 //!   What the paper leaves open is decided as the design note proposes:
 //!   ε1 = 1 px; ε2 and the visibility test are the cache's relative depth
 //!   test; "exactly one under ε1" is treated as case 2; case 3 uses eqs.
-//!   14–15. Latest-frame initialisation (eqs. 18–19) is not built yet.
+//!   14–15. With latest-frame initialisation (eqs. 18–19), every B-frame
+//!   of an interval but the first also starts each search from the
+//!   offsets the B-frame before found, rescaled to its α, taken from the
+//!   nearest-depth tap of a 5-tap neighbourhood (the centre and its
+//!   diagonals; the paper leaves the size open), and the pass writes its
+//!   own offsets and chosen depth for the next.
 //! - `half-velocity` (003): I-frame 0 sampled back along the velocity, α
 //!   of the way (half-way at n = 2): p + α·Vb₁(p), Vb₁ being I-frame 1's
 //!   flow to I-frame 0 (the current velocity, negated). Velocity merging:
@@ -197,6 +202,10 @@ pub struct Options {
     pub depth_epsilon: f32,
     /// Dual initialisation (000 eqs. 16–17) besides the default start.
     pub dual_init: bool,
+    /// Latest-frame initialisation (000 eqs. 18–19): every image-based
+    /// B-frame but an interval's first also starts from the offsets of
+    /// the B-frame before it.
+    pub latest_frame_init: bool,
     /// Half-velocity's velocity merging (003 slide 31): the earlier
     /// frame's velocity for the tails; else the later frame's alone.
     pub velocity_merge: bool,
@@ -224,6 +233,7 @@ impl Default for Options {
             screen_epsilon: 1.0,
             depth_epsilon: crate::rewrite::DEFAULT_DEPTH_EPSILON,
             dual_init: true,
+            latest_frame_init: false,
             velocity_merge: true,
             min_cosine: 0.5,
             size: None,

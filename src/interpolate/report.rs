@@ -58,6 +58,7 @@ pub struct Parameters {
     /// ε2 and the visibility test: relative depth tolerance.
     pub depth_epsilon: f32,
     pub dual_init: bool,
+    /// Latest-frame initialisation (000 eqs. 18–19).
     pub latest_frame_init: bool,
     /// Half-velocity's velocity merging.
     pub velocity_merge: bool,

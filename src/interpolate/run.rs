@@ -157,7 +157,7 @@ pub(super) fn run(
         &gpu,
         (size[0], size[1]),
         &options.methods,
-        options.iterations,
+        (options.iterations, options.latest_frame_init),
     )
     .map_err(fail)?;
     let b_methods: Vec<Method> = options
@@ -590,6 +590,11 @@ impl Schedule<'_> {
             dual_init: self.options.dual_init,
             velocity_merge: self.options.velocity_merge,
             min_cosine: self.options.min_cosine,
+            // The B-frame before in the same interval (k − 1 ≥ 1: the
+            // first B-frame of an interval does not read the last
+            // interval's offsets, which belong to other I-frames).
+            previous_alpha: (self.options.latest_frame_init && k >= 2)
+                .then(|| (k - 1) as f32 / self.options.frames_per_interval as f32),
         }
     }
 
@@ -744,7 +749,7 @@ impl Schedule<'_> {
                 screen_epsilon: self.options.screen_epsilon,
                 depth_epsilon: self.options.depth_epsilon,
                 dual_init: self.options.dual_init,
-                latest_frame_init: false,
+                latest_frame_init: self.options.latest_frame_init,
                 velocity_merge: self.options.velocity_merge,
                 min_cosine: self.options.min_cosine,
                 flow_format: "rgba16float".into(),

@@ -79,17 +79,25 @@ fn kept(pictures: &Pictures, method: Method) -> Vec<&KeptFrame> {
 
 /// Without motion every method's B-frames are the I-frames (up to one
 /// rounding of the blend), the I-frames the reference, and the report says
-/// the scene has none.
+/// the scene has none; with latest-frame initialisation too.
 #[test]
 fn static_scene_b_frames_equal_i_frames() {
+    for latest_frame_init in [false, true] {
+        static_scene_with(latest_frame_init);
+    }
+}
+
+fn static_scene_with(latest_frame_init: bool) {
     let scene = sphere_over_floor("", "", "");
     let options = Options {
         frames: Some(4),
+        latest_frame_init,
         ..Options::default()
     };
     let Some((report, _, _)) = run_interpolation(&marble(), &scene, options) else {
         return;
     };
+    assert_eq!(report.parameters.latest_frame_init, latest_frame_init);
     assert!(
         report.notes.iter().any(|n| n.contains("no motion")),
         "{:?}",
@@ -432,8 +440,10 @@ fn every_interpolation_pass_is_valid_and_builds() {
     for result in crate::util::tint_validate(&files) {
         assert!(result.ok, "{}: {:?}", result.file, result.messages);
     }
-    interpolate::bframe::BFrames::new(&gpu, (16, 16), &Method::ALL, 3)
-        .unwrap_or_else(|err| panic!("{err}"));
+    for latest in [false, true] {
+        interpolate::bframe::BFrames::new(&gpu, (16, 16), &Method::ALL, (3, latest))
+            .unwrap_or_else(|err| panic!("{err}"));
+    }
     assert!(built >= 30, "{built} pipelines");
 }
 

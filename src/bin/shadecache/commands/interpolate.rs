@@ -83,6 +83,13 @@ pub struct Args {
     #[arg(long)]
     pub no_dual_init: bool,
 
+    /// Also start the image-based search from the previous B-frame's
+    /// offsets (latest-frame initialisation, seed 000 eqs. 18–19; off by
+    /// default: measured worse and dearer on the bundled scenes, see
+    /// docs/results-interpolation.md).
+    #[arg(long)]
+    pub latest_init: bool,
+
     /// Half-velocity with the later frame's velocity alone (no merging of
     /// the earlier frame's into the tails).
     #[arg(long)]
@@ -145,6 +152,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         screen_epsilon: args.screen_epsilon,
         depth_epsilon: args.depth_epsilon,
         dual_init: !args.no_dual_init,
+        latest_frame_init: args.latest_init,
         velocity_merge: !args.no_velocity_merge,
         min_cosine: args.min_cosine,
         size: args.size,
