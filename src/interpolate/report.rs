@@ -188,35 +188,18 @@ pub fn write_images(
         .map_err(|e| format!("cannot create `{}`: {e}", images.display()))?;
     let mut written = Vec::new();
     for (method, reference, result) in &pictures.worst {
-        let difference: Vec<u8> = reference
-            .iter()
-            .zip(result)
-            .map(|(&a, &b)| {
-                (i32::from(a) - i32::from(b))
-                    .unsigned_abs()
-                    .saturating_mul(4)
-                    .min(255) as u8
-            })
-            .collect();
+        let difference = crate::report::images::amplified_difference(reference, result);
         for (what, rgba) in [
             ("reference", reference),
             ("result", result),
             ("difference", &difference),
         ] {
-            let opaque: Vec<u8> = rgba
-                .chunks_exact(4)
-                .flat_map(|p| [p[0], p[1], p[2], 255])
-                .collect();
             let path = images.join(format!("{}-{what}.png", method.name()));
-            image::save_buffer(
-                &path,
-                &opaque,
-                width,
-                height,
-                image::ExtendedColorType::Rgba8,
-            )
-            .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
-            written.push(path);
+            written.push(crate::report::images::save_opaque(
+                path,
+                rgba,
+                [width, height],
+            )?);
         }
     }
     Ok(written)

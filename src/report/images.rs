@@ -27,6 +27,32 @@ use super::Report;
 /// Writes `maps/<rank>-<node>-<variant>-dn<Δn>-k<k>.png` for every result,
 /// and `reference.png`, `best.png` and `difference.png` (×4 amplified)
 /// into `dir/images/`. Returns the files written.
+/// The difference of two RGBA8 pictures, ×4 so that small errors show.
+pub fn amplified_difference(a: &[u8], b: &[u8]) -> Vec<u8> {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| a.abs_diff(*b).saturating_mul(4))
+        .collect()
+}
+
+/// Writes an RGBA8 picture of `size` to `path` as a PNG, opaque (the
+/// frames' alpha says nothing a viewer should show).
+pub fn save_opaque(path: PathBuf, rgba: &[u8], size: [u32; 2]) -> Result<PathBuf, String> {
+    let opaque: Vec<u8> = rgba
+        .chunks_exact(4)
+        .flat_map(|p| [p[0], p[1], p[2], 255])
+        .collect();
+    image::save_buffer(
+        &path,
+        &opaque,
+        size[0],
+        size[1],
+        image::ExtendedColorType::Rgba8,
+    )
+    .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
+    Ok(path)
+}
+
 pub fn write_images(
     dir: &Path,
     report: &Report,
@@ -39,21 +65,7 @@ pub fn write_images(
         .map_err(|e| format!("cannot create `{}`: {e}", maps.display()))?;
     std::fs::create_dir_all(&images)
         .map_err(|e| format!("cannot create `{}`: {e}", images.display()))?;
-    let save = |path: PathBuf, rgba: &[u8]| -> Result<PathBuf, String> {
-        let opaque: Vec<u8> = rgba
-            .chunks_exact(4)
-            .flat_map(|p| [p[0], p[1], p[2], 255])
-            .collect();
-        image::save_buffer(
-            &path,
-            &opaque,
-            width,
-            height,
-            image::ExtendedColorType::Rgba8,
-        )
-        .map_err(|e| format!("cannot write `{}`: {e}", path.display()))?;
-        Ok(path)
-    };
+    let save = |path: PathBuf, rgba: &[u8]| save_opaque(path, rgba, [width, height]);
     let mut written = Vec::new();
     for (rank, (row, (_, classes))) in report.results.iter().zip(&pictures.results).enumerate() {
         if classes.is_empty() {
@@ -67,12 +79,7 @@ pub fn write_images(
         if let Some((color, _)) = pictures.results.first() {
             if !color.is_empty() {
                 written.push(save(images.join("best.png"), color)?);
-                let difference: Vec<u8> = pictures
-                    .reference
-                    .iter()
-                    .zip(color)
-                    .map(|(a, b)| a.abs_diff(*b).saturating_mul(4))
-                    .collect();
+                let difference = amplified_difference(&pictures.reference, color);
                 written.push(save(images.join("difference.png"), &difference)?);
             }
         }

@@ -3,7 +3,7 @@
 //! SVG plots, and as PNG maps of the cache's decisions.
 
 mod html;
-mod images;
+pub(crate) mod images;
 pub(crate) mod plots;
 
 pub use images::{Picture, Pictures};

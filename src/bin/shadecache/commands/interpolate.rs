@@ -6,7 +6,6 @@ use std::path::PathBuf;
 
 use shadecache::diagnostic::{Color, Diagnostic, Error};
 use shadecache::interpolate::{self, report, Method, Options};
-use shadecache::scene::Scene;
 
 use super::profile::{parse_size, Bar};
 
@@ -134,17 +133,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         ))));
     }
     let shader = args.stages.load(&args.shader)?;
-    let (scene, scene_path) = match &args.scene {
-        Some(path) => (Scene::load(path)?, path.clone()),
-        None => (
-            Scene::default_for(
-                &shader,
-                args.stages.entry.as_deref(),
-                args.stages.vertex_entry.as_deref(),
-            )?,
-            PathBuf::from("default scene"),
-        ),
-    };
+    let (scene, scene_path) = args.stages.scene(&shader, args.scene.as_deref())?;
     let options = Options {
         methods: MethodArg::methods(&args.method),
         frames_per_interval: args.frames_per_interval,

@@ -118,6 +118,26 @@ pub struct StageArgs {
 impl StageArgs {
     /// Loads `shader`: composed from modules where it imports them, given
     /// the vertex stage of `--vertex` where it has none.
+    /// The scene at `path`, with the path; without one, the default
+    /// scene for `shader` (what `shadecache scene init` writes).
+    pub fn scene(
+        &self,
+        shader: &Shader,
+        path: Option<&Path>,
+    ) -> Result<(shadecache::scene::Scene, PathBuf), Error> {
+        Ok(match path {
+            Some(path) => (shadecache::scene::Scene::load(path)?, path.to_path_buf()),
+            None => (
+                shadecache::scene::Scene::default_for(
+                    shader,
+                    self.entry.as_deref(),
+                    self.vertex_entry.as_deref(),
+                )?,
+                PathBuf::from("default scene"),
+            ),
+        })
+    }
+
     pub fn load(&self, shader: &Path) -> Result<Shader, Error> {
         front::load_with(
             shader,

@@ -7,7 +7,6 @@ use shadecache::back::{self, Language};
 use shadecache::diagnostic::{Color, Diagnostic, Error};
 use shadecache::profile::{self, Budget, Nodes, Options, Progress};
 use shadecache::report;
-use shadecache::scene::Scene;
 
 use super::rewrite::{CacheFormatArg, ReconstructionArg, VariantArg};
 
@@ -178,17 +177,7 @@ impl Progress for Bar {
 
 pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     let shader = args.stages.load(&args.shader)?;
-    let (scene, scene_path) = match &args.scene {
-        Some(path) => (Scene::load(path)?, path.clone()),
-        None => (
-            Scene::default_for(
-                &shader,
-                args.stages.entry.as_deref(),
-                args.stages.vertex_entry.as_deref(),
-            )?,
-            PathBuf::from("default scene"),
-        ),
-    };
+    let (scene, scene_path) = args.stages.scene(&shader, args.scene.as_deref())?;
     let defaults = if args.sweep {
         Options::default().sweep()
     } else {
