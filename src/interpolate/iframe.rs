@@ -82,9 +82,9 @@ pub struct IFrameShader {
     /// (original, next I-frame's twin) `[group, binding]`s.
     pub next: Vec<([u32; 2], [u32; 2])>,
     /// The bind group of the scene-assisted pass's I-frame textures
-    /// (`shaders/bframe_scene.wgsl`'s resources, from binding 0), or why
-    /// the module has no scene-assisted pass.
-    pub scene_group: Result<u32, String>,
+    /// (`shaders/bframe_scene.wgsl`'s resources, from binding 0): the one
+    /// after the twins', the fifth when the shader uses four.
+    pub scene_group: u32,
     /// The scene-assisted pass's outputs: colour at the user's first
     /// colour location, decisions after the user's outputs.
     pub scene_locations: [u32; 2],
@@ -118,9 +118,6 @@ fn scene_helpers() -> Result<&'static Module, Refusal> {
     static HELPERS: OnceLock<Result<Module, String>> = OnceLock::new();
     helpers(&HELPERS, "shaders/bframe_scene.wgsl", BFRAME_SCENE_WGSL)
 }
-
-/// WebGPU's default limit on bind groups.
-const MAX_BIND_GROUPS: u32 = 4;
 
 /// Instruments `shader`'s fragment entry point (the analysis's) and the
 /// vertex entry point that draws with it into the I-frame pass.
@@ -195,28 +192,22 @@ pub fn instrument(
     )?;
 
     // The scene-assisted pass, and the original fragment stage for its
-    // shade-on-miss pass, where a bind group is left for the I-frames'
-    // textures.
+    // shade-on-miss pass. The I-frames' textures take the group after the
+    // twins': past WebGPU's default four when the shader uses them all
+    // (engines do), which needs an adapter that grants more (the
+    // interpolation runtime asks for what the adapter grants).
     let color_location = rewrite::fragment::output_locations(original, &result)
         .first()
         .copied()
         .unwrap_or(0);
     let scene_locations = [color_location, flow_locations[0]];
     let original_entry = format!("{}_original", entry.name);
-    let scene_group = if slot.group + 1 < MAX_BIND_GROUPS {
-        let group = slot.group + 1;
-        scene_entry(&mut module, locations, scene_locations, group)?;
-        module.entry_points.push(naga::EntryPoint {
-            name: original_entry.clone(),
-            ..entry.clone()
-        });
-        Ok(group)
-    } else {
-        Err(format!(
-            "the shader leaves no bind group free for the I-frames' textures after the twins' (group {})",
-            slot.group
-        ))
-    };
+    let scene_group = slot.group + 1;
+    scene_entry(&mut module, locations, scene_locations, scene_group)?;
+    module.entry_points.push(naga::EntryPoint {
+        name: original_entry.clone(),
+        ..entry.clone()
+    });
 
     let info = crate::front::validate(&module)
         .map_err(|err| Refusal::internal(format!("the I-frame pass does not validate: {err}")))?;
@@ -563,7 +554,7 @@ impl IFrameShader {
     /// fragment stage over what the first discarded (its depth test keeps
     /// to the pixels no earlier fragment covered).
     pub fn scene_plan(&self, mode: SceneMode) -> Result<Plan, String> {
-        let group = self.scene_group.clone()?;
+        let group = self.scene_group;
         let mut plan = self.plan.clone();
         plan.bindings.original = self.scene_bindings.clone();
         let iframe = &self.plan.passes[0];

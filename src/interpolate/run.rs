@@ -136,18 +136,25 @@ pub(super) fn run(
         let Some(mode) = method.scene_mode() else {
             continue;
         };
-        let made = instrumented.scene_group.clone().and_then(|group| {
-            let plan = instrumented.scene_plan(mode)?;
-            let runner = bench.runner_with(
-                &plan,
-                &sources,
-                RunOptions {
-                    external_group: Some(group),
-                    ..RunOptions::default()
-                },
-            )?;
-            Ok(SceneRun::new(&gpu, method, runner))
-        });
+        let group = instrumented.scene_group;
+        let granted = gpu.device.limits().max_bind_groups;
+        let made = if group >= granted {
+            Err(format!(
+                "its I-frame textures take bind group {group} (the shader and the twins use the groups before), and the adapter grants {granted}"
+            ))
+        } else {
+            instrumented.scene_plan(mode).and_then(|plan| {
+                let runner = bench.runner_with(
+                    &plan,
+                    &sources,
+                    RunOptions {
+                        external_group: Some(group),
+                        ..RunOptions::default()
+                    },
+                )?;
+                Ok(SceneRun::new(&gpu, method, runner))
+            })
+        };
         match made {
             Ok(run) => scene_runs.push(run),
             Err(reason) => notes.push(format!("{} refused: {reason}", method.name())),
@@ -663,7 +670,15 @@ impl Schedule<'_> {
         let latency = f64::from(n - 1);
         let mut methods = Vec::new();
         let mut pictures = Pictures::default();
-        for &method in &self.options.methods {
+        // The methods that ran: the refused ones are in the notes.
+        let shown: Vec<Method> = self
+            .options
+            .methods
+            .iter()
+            .copied()
+            .filter(|m| *m == Method::Reference || measured.methods.contains_key(m))
+            .collect();
+        for &method in &shown {
             let run = measured.methods.get(&method);
             let b_ms = run.map_or(0.0, |r| metrics::median(&r.times));
             let i_ms = if method.reads_flows() {
@@ -724,7 +739,7 @@ impl Schedule<'_> {
                 worst_frame: run.and_then(|r| r.worst.as_ref().map(|w| w.1)),
             });
         }
-        let frames = displayed_frames(&self.options.methods, &measured, n);
+        let frames = displayed_frames(&shown, &measured, n);
         notes.push("one I-frame pass writes both flows: the paper renders the forward flow in a geometry pass of its own, so its I-frames cost more than these".to_string());
         if !self.options.methods.contains(&Method::Reference) {
             notes.push("the reference is rendered every frame all the same: the errors and ratios are against it".into());

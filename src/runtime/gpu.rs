@@ -35,6 +35,9 @@ impl Gpu {
         let limits = wgpu::Limits {
             max_color_attachments: granted.max_color_attachments,
             max_color_attachment_bytes_per_sample: granted.max_color_attachment_bytes_per_sample,
+            // The scene-assisted B-frame binds the I-frames in the group
+            // after the twins': a fifth for shaders that use all four.
+            max_bind_groups: granted.max_bind_groups.min(8),
             ..wgpu::Limits::default()
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
