@@ -68,6 +68,11 @@
 //! metrics. Two I-frame runners alternate, so I-frame 0 and I-frame 1
 //! stay alive side by side without copies.
 //!
+//! With `--motion-blur`, each method's displayed frames within n/2 of an
+//! I-frame are also averaged into a motion-blurred frame (000 §9: ten
+//! B-frames per I-frame at n = 10) and compared with the same composite
+//! of the reference frames ([`blur`]).
+//!
 //! # What is measured ([`report`])
 //!
 //! Per method: the I-frame's time over a reference frame (1 for the
@@ -83,6 +88,7 @@
 //! which the report says.
 
 pub mod bframe;
+mod blur;
 pub mod iframe;
 pub mod report;
 pub(crate) mod run;
@@ -218,6 +224,9 @@ pub struct Options {
     pub vertex_entry: Option<String>,
     /// Keep every measured B-frame whole ([`report::Pictures::kept`]).
     pub keep_frames: bool,
+    /// Also composite each method's frames around every I-frame into a
+    /// motion-blurred frame (000 §9) and compare it with the reference's.
+    pub motion_blur: bool,
     /// A differential check: in each measured interval, also build each
     /// method's B-frames at α = 0 and α = 1 (the I-frames' own times),
     /// kept whole and not counted in the report's figures.
@@ -241,6 +250,7 @@ impl Default for Options {
             entry: None,
             vertex_entry: None,
             keep_frames: false,
+            motion_blur: false,
             endpoints: false,
         }
     }

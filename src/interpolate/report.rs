@@ -93,6 +93,12 @@ pub struct MethodReport {
     /// Latency it adds, in displayed frames: the B-frames of an interval
     /// wait for its closing I-frame when the method reads it.
     pub added_latency_frames: f64,
+    /// With `--motion-blur`: the motion-blurred composites around each
+    /// I-frame against the reference's, mean SSIM and PSNR.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motion_blur_ssim: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motion_blur_psnr: Option<f64>,
     /// The displayed frame of its worst B-frame (lowest SSIM).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub worst_frame: Option<u32>,

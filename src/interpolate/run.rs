@@ -187,7 +187,12 @@ pub(super) fn run(
     let total = u64::from(WARMUP_INTERVALS + intervals)
         * u64::from(n + 1 + (b_methods.len() + scene_runs.len()) as u32 * (n - 1));
     progress.start(total);
-    let mut measured = Measured::default();
+    let mut measured = Measured {
+        blur: options
+            .motion_blur
+            .then(|| super::blur::MotionBlur::new(n, size)),
+        ..Measured::default()
+    };
     // The first I-frame: the one the first interval opens with.
     timed(
         &mut clock,
@@ -321,6 +326,8 @@ impl SceneRun {
 /// What the run keeps of the measured intervals.
 #[derive(Default)]
 struct Measured {
+    /// With `motion_blur`, the composites around each I-frame.
+    blur: Option<super::blur::MotionBlur>,
     /// The reference at the last interval's end: the next one's start.
     previous_end: Option<LinearFrame>,
     /// B-frames kept whole ([`Options::keep_frames`], and the end points
@@ -434,6 +441,9 @@ impl Schedule<'_> {
             pictures.push(read_linear(self.gpu, color).map_err(fail)?);
             if record {
                 measured.reference_times.push(time);
+                if let (Some(blur), Some(picture)) = (measured.blur.as_mut(), pictures.last()) {
+                    blur.add(None, start + k, picture);
+                }
             }
         }
 
@@ -463,6 +473,16 @@ impl Schedule<'_> {
                 THRESHOLD,
             );
             measured.iframe_errors.push((end, error));
+            if let Some(blur) = measured.blur.as_mut() {
+                // Every method shows the I-frame.
+                let shown = self
+                    .methods
+                    .iter()
+                    .chain(scene_runs.iter().map(|r| &r.method));
+                for &method in shown {
+                    blur.add(Some(method), end, &frame);
+                }
+            }
             if self.options.keep_frames {
                 let textures = self.textures(&slots[later])?;
                 let depth = crate::runtime::read_texture(self.gpu, textures.depth, 4)
@@ -636,6 +656,9 @@ impl Schedule<'_> {
         if endpoint {
             return;
         }
+        if let Some(blur) = measured.blur.as_mut() {
+            blur.add(Some(method), sample.displayed, &sample.frame);
+        }
         let entry = measured.methods.entry(method).or_default();
         entry.times.push(sample.time);
         for word in sample.decisions.chunks_exact(4) {
@@ -680,6 +703,10 @@ impl Schedule<'_> {
             .collect();
         for &method in &shown {
             let run = measured.methods.get(&method);
+            let blur = measured.blur.as_ref().and_then(|b| match method {
+                Method::Reference => Some((1.0, metrics::PSNR_CAP)),
+                _ => b.of(method),
+            });
             let b_ms = run.map_or(0.0, |r| metrics::median(&r.times));
             let i_ms = if method.reads_flows() {
                 iframe_ms
@@ -737,6 +764,8 @@ impl Schedule<'_> {
                     0.0
                 },
                 worst_frame: run.and_then(|r| r.worst.as_ref().map(|w| w.1)),
+                motion_blur_ssim: blur.map(|b| b.0),
+                motion_blur_psnr: blur.map(|b| b.1),
             });
         }
         let frames = displayed_frames(&shown, &measured, n);

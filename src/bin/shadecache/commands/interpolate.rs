@@ -104,6 +104,12 @@ pub struct Args {
     )]
     pub min_cosine: f32,
 
+    /// Also average each method's frames around every I-frame into a
+    /// motion-blurred frame (seed 000 §9) and compare it with the
+    /// reference's; use with a large n (the paper: 10).
+    #[arg(long)]
+    pub motion_blur: bool,
+
     /// Frame size (default: the scene's).
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<[u32; 2]>,
@@ -142,6 +148,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         depth_epsilon: args.depth_epsilon,
         dual_init: !args.no_dual_init,
         latest_frame_init: args.latest_init,
+        motion_blur: args.motion_blur,
         velocity_merge: !args.no_velocity_merge,
         min_cosine: args.min_cosine,
         size: args.size,
@@ -194,6 +201,11 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
             m.double_miss_rate
                 .map_or(String::new(), |r| format!(", double misses {:.2}%", r * 100.0))
         ));
+        if let (Some(ssim), Some(psnr)) = (m.motion_blur_ssim, m.motion_blur_psnr) {
+            summary.push_str(&format!(
+                "                   motion blur around each I-frame: SSIM {ssim:.4}, PSNR {psnr:.1} dB\n"
+            ));
+        }
     }
     for note in &report.notes {
         summary.push_str(&format!("  note: {note}\n"));
