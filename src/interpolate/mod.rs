@@ -24,12 +24,14 @@
 //!
 //! # The B-frame methods ([`bframe`], `shaders/bframe.wgsl`)
 //!
-//! Each is a fullscreen pass over the two I-frames' textures:
+//! Most are a fullscreen pass over the two I-frames' textures:
 //! - `image-based` (000 §5): for each B-frame pixel p a fixed-point search
 //!   q ← p − α·Vf(q) into I-frame 0 and q ← p − (1 − α)·Vb(q) into I-frame
 //!   1, m iterations each without early exit (eqs. 3–12); with dual
 //!   initialisation each also starts from the other frame's velocity at p
-//!   (eqs. 16–17) and keeps the smaller residual. §5.2 decides: both
+//!   (eqs. 16–17) and keeps the smaller residual (the second start is
+//!   skipped where the first converged; m is a pipeline constant, so the
+//!   loop unrolls). §5.2 decides: both
 //!   residuals under ε1 and depths agreeing, the smaller residual; depths
 //!   disagreeing, the nearer surface; only one under ε1, that one; neither
 //!   (a double miss), the smaller residual. The point found is carried to
@@ -43,7 +45,9 @@
 //!   offsets the B-frame before found, rescaled to its α, taken from the
 //!   nearest-depth tap of a 5-tap neighbourhood (the centre and its
 //!   diagonals; the paper leaves the size open), and the pass writes its
-//!   own offsets and chosen depth for the next.
+//!   own offsets and chosen depth for the next. It is off by default
+//!   (`--latest-init`): measured on the bundled scenes it lowered SSIM
+//!   and made the pass half as costly again.
 //! - `half-velocity` (003): I-frame 0 sampled back along the velocity, α
 //!   of the way (half-way at n = 2): p + α·Vb₁(p), Vb₁ being I-frame 1's
 //!   flow to I-frame 0 (the current velocity, negated). Velocity merging:
@@ -56,6 +60,20 @@
 //! - Baselines, in the same run: `reference` (every frame rendered),
 //!   `sample-and-hold` (I-frame 0 shown again) and `linear-blend` (the two
 //!   I-frames cross-faded at the same pixel).
+//!
+//! The scene-assisted ones (000 §4, `shaders/bframe_scene.wgsl`, imported
+//! into the I-frame module as `fs_scene_assisted`) rasterise the geometry
+//! at the B-frame's time with its position at both I-frames (the same
+//! twins, bound to the I-frames' times) and take each fragment's colour
+//! from the I-frames where its point is visible there, blended by α where
+//! it is in both: `scene-assisted` fills a double miss with the I-frame
+//! whose depth at the reprojected point is the nearer (closest-on-miss,
+//! the paper's choice); `scene-assisted-shade-on-miss` discards it and a
+//! second pass of the original fragment stage shades it (its depth test
+//! keeps it to those pixels); `reverse-reprojection` reads I-frame 0 alone
+//! and never reshades (a baseline). The I-frames' textures are bound in
+//! the group after the twins', which the runner leaves to its caller
+//! (`RunOptions::external_group`).
 //!
 //! # The run ([`run`])
 //!
