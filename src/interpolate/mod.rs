@@ -75,13 +75,13 @@
 //! the group after the twins', which the runner leaves to its caller
 //! (`RunOptions::external_group`).
 //!
-//! # The run ([`run`])
+//! # The run (`run.rs`)
 //!
 //! Displayed frame by displayed frame the reference is rendered and read
 //! back; at each interval's end the I-frame, then every method's B-frames
 //! of the interval, each compared with the reference of its own time. The
 //! frames are timed with GPU timestamps through the profiler's clock
-//! ([`crate::profile::run::timed`]), drawn through the same runtime and
+//! (`profile::run::timed`), drawn through the same runtime and
 //! host crate, fed by the same scene inputs, and compared by the same
 //! metrics. Two I-frame runners alternate, so I-frame 0 and I-frame 1
 //! stay alive side by side without copies.
@@ -89,7 +89,7 @@
 //! With `--motion-blur`, each method's displayed frames within n/2 of an
 //! I-frame are also averaged into a motion-blurred frame (000 §9: ten
 //! B-frames per I-frame at n = 10) and compared with the same composite
-//! of the reference frames ([`blur`]).
+//! of the reference frames (`blur.rs`).
 //!
 //! # What is measured ([`report`])
 //!
