@@ -17,7 +17,9 @@ struct SceneParams {
     // 0: closest-on-miss (the paper's choice); 1: shade-on-miss, whose
     // double misses are discarded here and shaded by the next pass;
     // 2: single-direction reverse reprojection from I-frame 0, no
-    // reshading (a baseline).
+    // reshading (a baseline); 3: not a B-frame but each pixel's exact
+    // correspondence in I-frame 0, (p - p0, seen there, 1), against which
+    // the image-based search is measured.
     mode: u32,
 }
 
@@ -32,6 +34,7 @@ struct SceneParams {
 const CLOSEST_ON_MISS: u32 = 0u;
 const SHADE_ON_MISS: u32 = 1u;
 const REVERSE_REPROJECTION: u32 = 2u;
+const CORRESPONDENCE: u32 = 3u;
 
 // As `shaders/bframe.wgsl`'s decisions.
 const SAME_SURFACE: u32 = 0u;
@@ -85,7 +88,7 @@ fn scene_nearer(a: f32, b: f32) -> bool {
 // neither (a double miss), the I-frame whose depth at the reprojected
 // position is the nearer (closest-on-miss), or nothing (shade-on-miss:
 // discarded for the shading pass).
-fn scene_assisted(previous_clip: vec4<f32>, next_clip: vec4<f32>) -> SceneAssisted {
+fn scene_assisted(frag_coord: vec4<f32>, previous_clip: vec4<f32>, next_clip: vec4<f32>) -> SceneAssisted {
     let p0 = scene_reproject(previous_clip);
     let p1 = scene_reproject(next_clip);
     let uv0 = p0.pixel / scene_params.viewport;
@@ -96,6 +99,10 @@ fn scene_assisted(previous_clip: vec4<f32>, next_clip: vec4<f32>) -> SceneAssist
     let c1 = textureSampleLevel(scene_color_1, scene_sampler, uv1, 0.0);
     let seen_0 = p0.inside & scene_agrees(z0, p0.depth);
     let seen_1 = p1.inside & scene_agrees(z1, p1.depth);
+    if scene_params.mode == CORRESPONDENCE {
+        let offset = frag_coord.xy - p0.pixel;
+        return SceneAssisted(vec4<f32>(offset, select(0.0, 1.0, seen_0), 1.0), SAME_SURFACE);
+    }
     if scene_params.mode == REVERSE_REPROJECTION {
         return SceneAssisted(c0, select(DOUBLE_MISS, SAME_SURFACE, seen_0));
     }

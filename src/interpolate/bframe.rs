@@ -271,6 +271,13 @@ impl BFrames {
         &self.color
     }
 
+    /// The offsets (p − q into I-frame 0, p − q into I-frame 1) the last
+    /// image-based B-frame wrote, when made with latest-frame
+    /// initialisation.
+    pub fn written_offsets(&self) -> &wgpu::Texture {
+        &self.offsets[1 - self.turn.get()].0
+    }
+
     /// The last B-frame's decisions ([`Decision`] per pixel).
     pub fn decisions(&self) -> &wgpu::Texture {
         &self.decisions

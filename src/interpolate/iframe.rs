@@ -61,6 +61,10 @@ pub enum SceneMode {
     /// A baseline: I-frame 0 alone, its colour kept even where the point
     /// is not visible there (no reshading).
     ReverseReprojection = 2,
+    /// A measurement, not a method: each pixel's exact correspondence in
+    /// I-frame 0, as (p − p₀, seen there, 1) in the colour output, for
+    /// the image-based search's correspondence error.
+    Correspondence = 3,
 }
 
 /// The I-frame pass's module, its WGSL and its plan, and which bindings
@@ -507,15 +511,21 @@ fn scene_entry(
         },
         naga::Span::UNDEFINED,
     );
-    let arguments = ["previous_clip_position", "next_clip_position"]
-        .into_iter()
-        .zip(clip_locations)
-        .map(|(name, location)| naga::FunctionArgument {
-            name: Some(name.into()),
-            ty: vec4,
-            binding: Some(located(location)),
-        })
-        .collect();
+    let mut arguments = vec![naga::FunctionArgument {
+        name: Some("frag_coord".into()),
+        ty: vec4,
+        binding: Some(Binding::BuiltIn(BuiltIn::Position { invariant: true })),
+    }];
+    arguments.extend(
+        ["previous_clip_position", "next_clip_position"]
+            .into_iter()
+            .zip(clip_locations)
+            .map(|(name, location)| naga::FunctionArgument {
+                name: Some(name.into()),
+                ty: vec4,
+                binding: Some(located(location)),
+            }),
+    );
     let mut b = Builder::new(Function {
         name: Some(SCENE_ASSISTED_ENTRY.into()),
         arguments,
@@ -525,8 +535,8 @@ fn scene_entry(
         }),
         ..Function::default()
     });
-    let (previous, next) = (b.argument(0), b.argument(1));
-    let found = b.call(helper, vec![previous, next]);
+    let (frag_coord, previous, next) = (b.argument(0), b.argument(1), b.argument(2));
+    let found = b.call(helper, vec![frag_coord, previous, next]);
     let components = vec![b.member(found, 0), b.member(found, 1)];
     let value = b.expr(Expression::Compose {
         ty: output,

@@ -90,6 +90,10 @@ pub struct MethodReport {
     /// neither search found (image-based only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub double_miss_rate: Option<f64>,
+    /// Image-based only: how far (pixels) its forward search's point in
+    /// I-frame 0 is from the exact one the scene-assisted pass computes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub correspondence_error_px: Option<CorrespondenceError>,
     /// Latency it adds, in displayed frames: the B-frames of an interval
     /// wait for its closing I-frame when the method reads it.
     pub added_latency_frames: f64,
@@ -102,6 +106,16 @@ pub struct MethodReport {
     /// The displayed frame of its worst B-frame (lowest SSIM).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub worst_frame: Option<u32>,
+}
+
+/// 000 Fig. 11's correspondence error, mean pixels over the B-frames.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct CorrespondenceError {
+    /// Over every pixel the geometry covers (E_total^all).
+    pub all: f64,
+    /// Over those whose point I-frame 0 shows: where a correspondence
+    /// exists (E_total^hit).
+    pub hit: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]

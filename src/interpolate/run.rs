@@ -6,7 +6,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
 use super::bframe::{BFrameParams, BFrames, Decision, IFrameTextures};
-use super::iframe::{self, IFrameShader};
+use super::iframe::{self, IFrameShader, SceneMode};
 use super::report::{
     self, DisplayedFrame, KeptFrame, KeptIFrame, MethodReport, Parameters, Pictures, Report,
 };
@@ -131,33 +131,55 @@ pub(super) fn run(
                 .to_string(),
         );
     }
+    // The geometry at each B-frame's time, through the host, binding the
+    // I-frames in the group after the twins'.
+    let scene_run = |method: Method, mode: SceneMode| -> Result<SceneRun, String> {
+        let group = instrumented.scene_group;
+        let granted = gpu.device.limits().max_bind_groups;
+        if group >= granted {
+            return Err(format!(
+                "its I-frame textures take bind group {group} (the shader and the twins use the groups before), and the adapter grants {granted}"
+            ));
+        }
+        let plan = instrumented.scene_plan(mode)?;
+        let runner = bench.runner_with(
+            &plan,
+            &sources,
+            RunOptions {
+                external_group: Some(group),
+                ..RunOptions::default()
+            },
+        )?;
+        Ok(SceneRun::new(&gpu, method, mode, runner))
+    };
     let mut scene_runs = Vec::new();
     for &method in &options.methods {
         let Some(mode) = method.scene_mode() else {
             continue;
         };
-        let group = instrumented.scene_group;
-        let granted = gpu.device.limits().max_bind_groups;
-        let made = if group >= granted {
-            Err(format!(
-                "its I-frame textures take bind group {group} (the shader and the twins use the groups before), and the adapter grants {granted}"
-            ))
-        } else {
-            instrumented.scene_plan(mode).and_then(|plan| {
-                let runner = bench.runner_with(
-                    &plan,
-                    &sources,
-                    RunOptions {
-                        external_group: Some(group),
-                        ..RunOptions::default()
-                    },
-                )?;
-                Ok(SceneRun::new(&gpu, method, runner))
-            })
-        };
-        match made {
+        match scene_run(method, mode) {
             Ok(run) => scene_runs.push(run),
             Err(reason) => notes.push(format!("{} refused: {reason}", method.name())),
+        }
+    }
+    // Image-based's correspondences against the exact ones (000 Fig. 11),
+    // drawn untimed beside the measured B-frames.
+    let mut correspondence = None;
+    if options.methods.contains(&Method::ImageBased) {
+        let made = scene_run(Method::ImageBased, SceneMode::Correspondence).and_then(|exact| {
+            let search = BFrames::new(
+                &gpu,
+                (size[0], size[1]),
+                &[Method::ImageBased],
+                (options.iterations, true),
+            )?;
+            Ok(Correspondence { exact, search })
+        });
+        match made {
+            Ok(made) => correspondence = Some(made),
+            Err(reason) => notes.push(format!(
+                "image-based's correspondence error is not measured: {reason}"
+            )),
         }
     }
     let bframes = BFrames::new(
@@ -205,7 +227,12 @@ pub(super) fn run(
         let record = interval >= WARMUP_INTERVALS;
         run.interval(
             &mut clock,
-            (&mut reference, &mut slots, &mut scene_runs),
+            (
+                &mut reference,
+                &mut slots,
+                &mut scene_runs,
+                correspondence.as_mut(),
+            ),
             &inputs_of,
             (interval, record),
             &mut measured,
@@ -230,15 +257,17 @@ struct BFrameSample {
 /// time, through the host) and what it binds of the I-frames.
 struct SceneRun {
     method: Method,
+    mode: SceneMode,
     runner: Runner,
     params: wgpu::Buffer,
     sampler: wgpu::Sampler,
 }
 
 impl SceneRun {
-    fn new(gpu: &Gpu, method: Method, runner: Runner) -> SceneRun {
+    fn new(gpu: &Gpu, method: Method, mode: SceneMode, runner: Runner) -> SceneRun {
         SceneRun {
             method,
+            mode,
             runner,
             params: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("scene-assisted parameters"),
@@ -263,7 +292,7 @@ impl SceneRun {
         (earlier, later): &(IFrameTextures, IFrameTextures),
         params: &BFrameParams,
     ) -> Result<(), Error> {
-        let mode = self.method.scene_mode().map_or(0, |m| m as u32);
+        let mode = self.mode as u32;
         let words = [
             params.viewport[0].to_bits(),
             params.viewport[1].to_bits(),
@@ -323,9 +352,70 @@ impl SceneRun {
     }
 }
 
+/// Image-based's correspondences against the exact ones: the
+/// scene-assisted pass in [`SceneMode::Correspondence`] and a second
+/// image-based pass that writes what its search found.
+struct Correspondence {
+    exact: SceneRun,
+    search: BFrames,
+}
+
+impl Correspondence {
+    /// The distances (pixels) between where image-based's forward search
+    /// found each covered pixel's point in I-frame 0 and where it is:
+    /// mean over every covered pixel, and over those whose point I-frame 0
+    /// shows (000 Fig. 11's E_total^all and E_total^hit).
+    fn measure(
+        &mut self,
+        schedule: &Schedule,
+        textures: &(IFrameTextures, IFrameTextures),
+        params: &BFrameParams,
+        inputs: &FrameInputs,
+    ) -> Result<(f64, f64), Error> {
+        let gpu = schedule.gpu;
+        self.search
+            .render(
+                gpu,
+                Method::ImageBased,
+                (&textures.0, &textures.1),
+                params,
+                None,
+            )
+            .map_err(fail)?;
+        let found = read_linear(gpu, self.search.written_offsets()).map_err(fail)?;
+        self.exact.bind(gpu, textures, params)?;
+        self.exact.runner.frame(gpu, inputs, None).map_err(fail)?;
+        let target = self
+            .exact
+            .runner
+            .color_at(schedule.instrumented.scene_locations[0])
+            .ok_or_else(|| fail("internal error: the correspondence pass has no colour".into()))?;
+        let exact = read_linear(gpu, target).map_err(fail)?;
+        let (mut all, mut hit, mut covered, mut seen) = (0.0f64, 0.0f64, 0usize, 0usize);
+        for (e, f) in exact.chunks_exact(4).zip(found.chunks_exact(4)) {
+            if e[3] < 0.5 {
+                continue;
+            }
+            let distance = f64::from((e[0] - f[0]).hypot(e[1] - f[1]));
+            if !distance.is_finite() {
+                continue;
+            }
+            all += distance;
+            covered += 1;
+            if e[2] > 0.5 {
+                hit += distance;
+                seen += 1;
+            }
+        }
+        Ok((all / covered.max(1) as f64, hit / seen.max(1) as f64))
+    }
+}
+
 /// What the run keeps of the measured intervals.
 #[derive(Default)]
 struct Measured {
+    /// Image-based's correspondence errors (all, hit), per B-frame.
+    correspondence: Vec<(f64, f64)>,
     /// With `motion_blur`, the composites around each I-frame.
     blur: Option<super::blur::MotionBlur>,
     /// The reference at the last interval's end: the next one's start.
@@ -417,7 +507,12 @@ impl Schedule<'_> {
     fn interval(
         &self,
         clock: &mut Clock,
-        (reference, slots, scene_runs): (&mut Runner, &mut [Runner; 2], &mut [SceneRun]),
+        (reference, slots, scene_runs, mut correspondence): (
+            &mut Runner,
+            &mut [Runner; 2],
+            &mut [SceneRun],
+            Option<&mut Correspondence>,
+        ),
         inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
         (interval, record): (u32, bool),
         measured: &mut Measured,
@@ -532,6 +627,14 @@ impl Schedule<'_> {
                     };
                     let reference = self.reference_at(k, &pictures, measured)?;
                     self.keep(measured, method, sample, &reference);
+                    let interior = k >= 1 && k < n;
+                    if let (Method::ImageBased, Some(c), true) =
+                        (method, correspondence.as_deref_mut(), interior)
+                    {
+                        let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
+                        let errors = c.measure(self, &textures, &params, &inputs)?;
+                        measured.correspondence.push(errors);
+                    }
                 }
             }
         }
@@ -758,6 +861,16 @@ impl Schedule<'_> {
                     metrics::mean(&psnrs)
                 },
                 double_miss_rate,
+                correspondence_error_px: (method == Method::ImageBased
+                    && !measured.correspondence.is_empty())
+                .then(|| {
+                    let all: Vec<f64> = measured.correspondence.iter().map(|c| c.0).collect();
+                    let hit: Vec<f64> = measured.correspondence.iter().map(|c| c.1).collect();
+                    report::CorrespondenceError {
+                        all: metrics::mean(&all),
+                        hit: metrics::mean(&hit),
+                    }
+                }),
                 added_latency_frames: if method.reads_later_frame() {
                     latency
                 } else {

@@ -915,3 +915,39 @@ fn motion_blur_composites_b_frames_around_each_i_frame() {
     }
     assert_eq!(blur(Method::Reference), 1.0);
 }
+
+/// 000 Fig. 11: image-based's correspondences against the exact ones the
+/// scene-assisted pass computes. For a square sliding at constant speed
+/// (a translation: the search converges in one step) they are the exact
+/// ones up to the flows' precision wherever I-frame 0 shows the point;
+/// for the turning, moving globe they are pixels off (the silhouettes).
+#[test]
+fn correspondence_error_is_measured_against_scene_assisted() {
+    let run = |shader: &str, scene: &str| {
+        let options = Options {
+            methods: vec![Method::ImageBased],
+            size: Some([96, 96]),
+            frames: Some(8),
+            ..Options::default()
+        };
+        run_interpolation(shader, scene, options).map(|(report, _, _)| {
+            method(&report, Method::ImageBased)
+                .correspondence_error_px
+                .expect("measured")
+        })
+    };
+    let Some(sliding) = run(SLIDING_SHADED, &sliding_square(0.04)) else {
+        return;
+    };
+    let globe = std::fs::read_to_string(root().join("corpus/scenes/globe.toml")).unwrap();
+    let Some(turning) = run(&marble(), &globe) else {
+        return;
+    };
+    eprintln!("sliding {sliding:?}, globe {turning:?}");
+    assert!(sliding.hit < 0.1, "{sliding:?}");
+    assert!(sliding.hit <= sliding.all);
+    assert!(
+        turning.all > 10.0 * sliding.hit,
+        "{turning:?} against {sliding:?}"
+    );
+}

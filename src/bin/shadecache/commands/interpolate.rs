@@ -201,6 +201,12 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
             m.double_miss_rate
                 .map_or(String::new(), |r| format!(", double misses {:.2}%", r * 100.0))
         ));
+        if let Some(error) = m.correspondence_error_px {
+            summary.push_str(&format!(
+                "                   correspondences {:.3} px from the exact ones ({:.3} px where I-frame 0 shows the point)\n",
+                error.all, error.hit
+            ));
+        }
         if let (Some(ssim), Some(psnr)) = (m.motion_blur_ssim, m.motion_blur_psnr) {
             summary.push_str(&format!(
                 "                   motion blur around each I-frame: SSIM {ssim:.4}, PSNR {psnr:.1} dB\n"
