@@ -164,17 +164,9 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     let (report, pictures) =
         interpolate::interpolate(&shader, &scene, &scene_path, &options, &mut bar)?;
 
-    let io = |what: &str, err: String| {
-        Error::plain(Diagnostic::error(format!("cannot write {what}: {err}")))
-    };
-    std::fs::create_dir_all(&args.out).map_err(|e| io("the report folder", e.to_string()))?;
-    report::write_images(&args.out, &report, &pictures).map_err(|e| io("the pictures", e))?;
-    let json =
-        serde_json::to_string_pretty(&report).map_err(|e| io("report.json", e.to_string()))?;
-    std::fs::write(args.out.join("report.json"), json + "\n")
-        .map_err(|e| io("report.json", e.to_string()))?;
-    std::fs::write(args.out.join("report.html"), report::html(&report))
-        .map_err(|e| io("report.html", e.to_string()))?;
+    super::write_report(&args.out, &report, report::html(&report), || {
+        report::write_images(&args.out, &report, &pictures)
+    })?;
 
     let mut summary = format!(
         "{} on {} ({}×{}, n = {}, {} interval(s) measured, {}): reference {:.3} ms, I-frame with flows {:.3} ms\n",

@@ -215,20 +215,12 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     };
     let (report, pictures) = profile::profile(&shader, &scene, &scene_path, &options, &mut bar)?;
 
+    super::write_report(&args.out, &report, report::html(&report, &args.out), || {
+        report::write_images(&args.out, &report, &pictures)
+    })?;
     let io = |what: &str, err: String| {
         Error::plain(Diagnostic::error(format!("cannot write {what}: {err}")))
     };
-    std::fs::create_dir_all(&args.out).map_err(|e| io("the report folder", e.to_string()))?;
-    report::write_images(&args.out, &report, &pictures).map_err(|e| io("the pictures", e))?;
-    let json =
-        serde_json::to_string_pretty(&report).map_err(|e| io("report.json", e.to_string()))?;
-    std::fs::write(args.out.join("report.json"), json + "\n")
-        .map_err(|e| io("report.json", e.to_string()))?;
-    std::fs::write(
-        args.out.join("report.html"),
-        report::html(&report, &args.out),
-    )
-    .map_err(|e| io("report.html", e.to_string()))?;
     // The last frame's GPU scopes, for chrome://tracing or Perfetto.
     wgpu_profiler::chrometrace::write_chrometrace(&args.out.join("trace.json"), &pictures.trace)
         .map_err(|e| io("trace.json", e.to_string()))?;
