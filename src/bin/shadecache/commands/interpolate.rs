@@ -164,9 +164,12 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     let (report, pictures) =
         interpolate::interpolate(&shader, &scene, &scene_path, &options, &mut bar)?;
 
-    super::write_report(&args.out, &report, report::html(&report), || {
-        report::write_images(&args.out, &report, &pictures)
-    })?;
+    super::write_report(
+        &args.out,
+        &report,
+        || report::write_images(&args.out, &report, &pictures),
+        || report::html(&report),
+    )?;
 
     let mut summary = format!(
         "{} on {} ({}×{}, n = {}, {} interval(s) measured, {}): reference {:.3} ms, I-frame with flows {:.3} ms\n",

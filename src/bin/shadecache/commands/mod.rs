@@ -67,14 +67,15 @@ pub fn write_stdout(text: &str) -> Result<(), Error> {
     }
 }
 
-/// Writes a report into `out`: its pictures (`images` writes them),
-/// `report.json` and `report.html`. What cannot be written is an error
+/// Writes a report into `out`: its pictures (`images` writes them), then
+/// `report.json` and `report.html` (`html` renders it after the pictures
+/// exist: the profile's embeds them). What cannot be written is an error
 /// naming it.
 pub fn write_report(
     out: &Path,
     json: &impl serde::Serialize,
-    html: String,
     images: impl FnOnce() -> Result<Vec<PathBuf>, String>,
+    html: impl FnOnce() -> String,
 ) -> Result<(), Error> {
     let io = |what: &str, err: String| {
         Error::plain(shadecache::diagnostic::Diagnostic::error(format!(
@@ -86,7 +87,7 @@ pub fn write_report(
     let json = serde_json::to_string_pretty(json).map_err(|e| io("report.json", e.to_string()))?;
     std::fs::write(out.join("report.json"), json + "\n")
         .map_err(|e| io("report.json", e.to_string()))?;
-    std::fs::write(out.join("report.html"), html).map_err(|e| io("report.html", e.to_string()))
+    std::fs::write(out.join("report.html"), html()).map_err(|e| io("report.html", e.to_string()))
 }
 
 /// How to put a shader together from modules: naga_oil's `#import`s and

@@ -215,9 +215,12 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     };
     let (report, pictures) = profile::profile(&shader, &scene, &scene_path, &options, &mut bar)?;
 
-    super::write_report(&args.out, &report, report::html(&report, &args.out), || {
-        report::write_images(&args.out, &report, &pictures)
-    })?;
+    super::write_report(
+        &args.out,
+        &report,
+        || report::write_images(&args.out, &report, &pictures),
+        || report::html(&report, &args.out),
+    )?;
     let io = |what: &str, err: String| {
         Error::plain(Diagnostic::error(format!("cannot write {what}: {err}")))
     };
