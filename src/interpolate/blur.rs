@@ -72,8 +72,7 @@ impl MotionBlur {
             return;
         };
         let [width, height] = self.size;
-        let covered = vec![255u8; (width * height * 4) as usize];
-        let error = metrics::compare(reference, &composite, &covered, width, height, 1.0 / 255.0);
+        let error = metrics::compare_frames(reference, &composite, width, height, 1.0 / 255.0);
         self.errors.entry(method).or_default().push(error);
     }
 

@@ -98,29 +98,16 @@ pub struct IFrameShader {
     original_entry: String,
 }
 
-/// A helper module of the stage parsed, once per process.
-fn helpers(
-    cell: &'static OnceLock<Result<Module, String>>,
-    name: &str,
-    text: &str,
-) -> Result<&'static Module, Refusal> {
-    cell.get_or_init(|| {
-        crate::front::parse(crate::diagnostic::SourceFile::new(name, text))
-            .map(|shader| shader.module)
-            .map_err(|err| err.render())
-    })
-    .as_ref()
-    .map_err(|err| Refusal::internal(format!("`{name}` does not parse: {err}")))
-}
-
+/// `shaders/iframe.wgsl` parsed, once per process.
 fn iframe_helpers() -> Result<&'static Module, Refusal> {
     static HELPERS: OnceLock<Result<Module, String>> = OnceLock::new();
-    helpers(&HELPERS, "shaders/iframe.wgsl", IFRAME_WGSL)
+    rewrite::toolchain_module(&HELPERS, "shaders/iframe.wgsl", IFRAME_WGSL)
 }
 
+/// `shaders/bframe_scene.wgsl` parsed, once per process.
 fn scene_helpers() -> Result<&'static Module, Refusal> {
     static HELPERS: OnceLock<Result<Module, String>> = OnceLock::new();
-    helpers(&HELPERS, "shaders/bframe_scene.wgsl", BFRAME_SCENE_WGSL)
+    rewrite::toolchain_module(&HELPERS, "shaders/bframe_scene.wgsl", BFRAME_SCENE_WGSL)
 }
 
 /// Instruments `shader`'s fragment entry point (the analysis's) and the

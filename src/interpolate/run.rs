@@ -131,57 +131,8 @@ pub(super) fn run(
                 .to_string(),
         );
     }
-    // The geometry at each B-frame's time, through the host, binding the
-    // I-frames in the group after the twins'.
-    let scene_run = |method: Method, mode: SceneMode| -> Result<SceneRun, String> {
-        let group = instrumented.scene_group;
-        let granted = gpu.device.limits().max_bind_groups;
-        if group >= granted {
-            return Err(format!(
-                "its I-frame textures take bind group {group} (the shader and the twins use the groups before), and the adapter grants {granted}"
-            ));
-        }
-        let plan = instrumented.scene_plan(mode)?;
-        let runner = bench.runner_with(
-            &plan,
-            &sources,
-            RunOptions {
-                external_group: Some(group),
-                ..RunOptions::default()
-            },
-        )?;
-        Ok(SceneRun::new(&gpu, method, mode, runner))
-    };
-    let mut scene_runs = Vec::new();
-    for &method in &options.methods {
-        let Some(mode) = method.scene_mode() else {
-            continue;
-        };
-        match scene_run(method, mode) {
-            Ok(run) => scene_runs.push(run),
-            Err(reason) => notes.push(format!("{} refused: {reason}", method.name())),
-        }
-    }
-    // Image-based's correspondences against the exact ones (000 Fig. 11),
-    // drawn untimed beside the measured B-frames.
-    let mut correspondence = None;
-    if options.methods.contains(&Method::ImageBased) {
-        let made = scene_run(Method::ImageBased, SceneMode::Correspondence).and_then(|exact| {
-            let search = BFrames::new(
-                &gpu,
-                (size[0], size[1]),
-                &[Method::ImageBased],
-                (options.iterations, true),
-            )?;
-            Ok(Correspondence { exact, search })
-        });
-        match made {
-            Ok(made) => correspondence = Some(made),
-            Err(reason) => notes.push(format!(
-                "image-based's correspondence error is not measured: {reason}"
-            )),
-        }
-    }
+    let (mut scene_runs, mut correspondence) =
+        geometry_runs(&bench, &instrumented, &sources, options, &mut notes);
     let bframes = BFrames::new(
         &gpu,
         (size[0], size[1]),
@@ -243,6 +194,69 @@ pub(super) fn run(
     Ok(run.report(shader, scene_path, &clock, measured, intervals, notes))
 }
 
+/// The runs that rasterise the geometry at each B-frame's time, through
+/// the host, binding the I-frames in the group after the twins': one per
+/// scene-assisted method, and with image-based the exact correspondences
+/// its search is measured against (000 Fig. 11, drawn untimed). What
+/// cannot be made is said in `notes`.
+fn geometry_runs(
+    bench: &Bench,
+    instrumented: &IFrameShader,
+    sources: &HashMap<String, String>,
+    options: &Options,
+    notes: &mut Vec<String>,
+) -> (Vec<SceneRun>, Option<Correspondence>) {
+    let gpu = bench.gpu;
+    let scene_run = |method: Method, mode: SceneMode| -> Result<SceneRun, String> {
+        let group = instrumented.scene_group;
+        let granted = gpu.device.limits().max_bind_groups;
+        if group >= granted {
+            return Err(format!(
+                "its I-frame textures take bind group {group} (the shader and the twins use the groups before), and the adapter grants {granted}"
+            ));
+        }
+        let plan = instrumented.scene_plan(mode)?;
+        let runner = bench.runner_with(
+            &plan,
+            sources,
+            RunOptions {
+                external_group: Some(group),
+                ..RunOptions::default()
+            },
+        )?;
+        Ok(SceneRun::new(gpu, method, mode, runner))
+    };
+    let mut scene_runs = Vec::new();
+    for &method in &options.methods {
+        let Some(mode) = method.scene_mode() else {
+            continue;
+        };
+        match scene_run(method, mode) {
+            Ok(run) => scene_runs.push(run),
+            Err(reason) => notes.push(format!("{} refused: {reason}", method.name())),
+        }
+    }
+    let mut correspondence = None;
+    if options.methods.contains(&Method::ImageBased) {
+        let made = scene_run(Method::ImageBased, SceneMode::Correspondence).and_then(|exact| {
+            let search = BFrames::new(
+                gpu,
+                (bench.size[0], bench.size[1]),
+                &[Method::ImageBased],
+                (options.iterations, true),
+            )?;
+            Ok(Correspondence { exact, search })
+        });
+        match made {
+            Ok(made) => correspondence = Some(made),
+            Err(reason) => notes.push(format!(
+                "image-based's correspondence error is not measured: {reason}"
+            )),
+        }
+    }
+    (scene_runs, correspondence)
+}
+
 /// A B-frame read back: when it is, its time (ms), its colour and its
 /// decisions.
 struct BFrameSample {
@@ -250,7 +264,8 @@ struct BFrameSample {
     alpha: f64,
     time: f64,
     frame: LinearFrame,
-    decisions: Vec<u8>,
+    /// Each pixel's [`Decision`] code.
+    decisions: Vec<u32>,
 }
 
 /// A scene-assisted method: its runner (the geometry at each B-frame's
@@ -520,80 +535,44 @@ impl Schedule<'_> {
     ) -> Result<(), Error> {
         let n = self.options.frames_per_interval;
         let start = interval * n;
-        let (width, height) = (self.size[0], self.size[1]);
-        let covered = vec![255u8; (width * height * 4) as usize];
+        let end = start + n;
+        // Every frame the interval draws or twins (its own, and the next
+        // I-frame's for the closing I-frame's twins), simulated once.
+        let frames: BTreeMap<u32, FrameInputs> = (start..=end + n)
+            .map(|frame| Ok((frame, inputs_of(frame)?)))
+            .collect::<Result<_, Error>>()?;
+        let inputs_of = |frame: u32| {
+            frames.get(&frame).cloned().ok_or_else(|| {
+                fail(format!(
+                    "internal error: frame {frame} is outside interval {interval}"
+                ))
+            })
+        };
+        let inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error> = &inputs_of;
 
         // The reference at every displayed frame of the interval, the
         // closing I-frame's time included.
-        let mut pictures: Vec<LinearFrame> = Vec::new();
-        for k in 1..=n {
-            let (time, _, _) =
-                timed(clock, reference, &inputs_of(start + k)?, "reference").map_err(fail)?;
-            progress.step("reference");
-            let color = reference
-                .color()
-                .ok_or_else(|| fail("the reference draws no colour".into()))?;
-            pictures.push(read_linear(self.gpu, color).map_err(fail)?);
-            if record {
-                measured.reference_times.push(time);
-                if let (Some(blur), Some(picture)) = (measured.blur.as_mut(), pictures.last()) {
-                    blur.add(None, start + k, picture);
-                }
-            }
-        }
+        let mut pictures = self.references(
+            clock,
+            reference,
+            inputs_of,
+            (start, record),
+            measured,
+            progress,
+        )?;
 
         // The closing I-frame, into the slot the opening one is not in.
         let (earlier, later) = ((interval % 2) as usize, ((interval + 1) % 2) as usize);
-        let end = start + n;
-        let (time, _, _) = timed(
+        let scene_methods: Vec<Method> = scene_runs.iter().map(|r| r.method).collect();
+        self.closing_iframe(
             clock,
             &mut slots[later],
-            &self.twinned_inputs(inputs_of, [end, start, end + n])?,
-            "iframe",
-        )
-        .map_err(fail)?;
-        progress.step("iframe");
-        if record {
-            measured.iframe_times.push(time);
-            let color = slots[later]
-                .color()
-                .ok_or_else(|| fail("the I-frame draws no colour".into()))?;
-            let frame = read_linear(self.gpu, color).map_err(fail)?;
-            let error = metrics::compare(
-                &pictures[n as usize - 1],
-                &frame,
-                &covered,
-                width,
-                height,
-                THRESHOLD,
-            );
-            measured.iframe_errors.push((end, error));
-            if let Some(blur) = measured.blur.as_mut() {
-                // Every method shows the I-frame.
-                let shown = self
-                    .methods
-                    .iter()
-                    .chain(scene_runs.iter().map(|r| &r.method));
-                for &method in shown {
-                    blur.add(Some(method), end, &frame);
-                }
-            }
-            if self.options.keep_frames {
-                let textures = self.textures(&slots[later])?;
-                let depth = crate::runtime::read_texture(self.gpu, textures.depth, 4)
-                    .map_err(fail)?
-                    .chunks_exact(4)
-                    .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                    .collect();
-                measured.iframes.push(KeptIFrame {
-                    frame: end,
-                    color: frame,
-                    depth,
-                    flow_previous: read_linear(self.gpu, textures.flow_previous).map_err(fail)?,
-                    flow_next: read_linear(self.gpu, textures.flow_next).map_err(fail)?,
-                });
-            }
-        }
+            inputs_of,
+            (start, record, &pictures[n as usize - 1]),
+            &scene_methods,
+            measured,
+            progress,
+        )?;
 
         let textures = (
             self.textures(&slots[earlier])?,
@@ -614,17 +593,11 @@ impl Schedule<'_> {
                 .map_err(fail)?;
                 progress.step(method.name());
                 if record {
-                    let frame = read_linear(self.gpu, self.bframes.color()).map_err(fail)?;
-                    let decisions =
-                        crate::runtime::read_texture(self.gpu, self.bframes.decisions(), 4)
-                            .map_err(fail)?;
-                    let sample = BFrameSample {
-                        displayed: start + k,
-                        alpha: f64::from(params.alpha),
-                        time,
-                        frame,
-                        decisions,
-                    };
+                    let sample = self.sample(
+                        (start + k, &params, time),
+                        self.bframes.color(),
+                        self.bframes.decisions(),
+                    )?;
                     let reference = self.reference_at(k, &pictures, measured)?;
                     self.keep(measured, method, sample, &reference);
                     let interior = k >= 1 && k < n;
@@ -655,16 +628,11 @@ impl Schedule<'_> {
                             ))
                         })
                     };
-                    let frame = read_linear(self.gpu, target(color)?).map_err(fail)?;
-                    let decisions = crate::runtime::read_texture(self.gpu, target(decision)?, 4)
-                        .map_err(fail)?;
-                    let sample = BFrameSample {
-                        displayed: start + k,
-                        alpha: f64::from(params.alpha),
-                        time,
-                        frame,
-                        decisions,
-                    };
+                    let sample = self.sample(
+                        (start + k, &params, time),
+                        target(color)?,
+                        target(decision)?,
+                    )?;
                     self.keep(
                         measured,
                         scene_run.method,
@@ -676,6 +644,117 @@ impl Schedule<'_> {
         }
         measured.previous_end = pictures.pop();
         Ok(())
+    }
+
+    /// The reference at each displayed frame after `start` up to the next
+    /// I-frame's, timed and read back (kept when `record`).
+    fn references(
+        &self,
+        clock: &mut Clock,
+        reference: &mut Runner,
+        inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
+        (start, record): (u32, bool),
+        measured: &mut Measured,
+        progress: &mut dyn Progress,
+    ) -> Result<Vec<LinearFrame>, Error> {
+        let mut pictures: Vec<LinearFrame> = Vec::new();
+        for k in 1..=self.options.frames_per_interval {
+            let (time, _, _) =
+                timed(clock, reference, &inputs_of(start + k)?, "reference").map_err(fail)?;
+            progress.step("reference");
+            let color = reference
+                .color()
+                .ok_or_else(|| fail("the reference draws no colour".into()))?;
+            pictures.push(read_linear(self.gpu, color).map_err(fail)?);
+            if record {
+                measured.reference_times.push(time);
+                if let (Some(blur), Some(picture)) = (measured.blur.as_mut(), pictures.last()) {
+                    blur.add(None, start + k, picture);
+                }
+            }
+        }
+        Ok(pictures)
+    }
+
+    /// The I-frame closing the interval from `start`, into `slot`; when
+    /// `record`, compared with the reference of its time (`reference`),
+    /// added to the motion-blur composites of every method (the fullscreen
+    /// ones and `scene_methods`), and kept whole with `keep_frames`.
+    #[allow(clippy::too_many_arguments)]
+    fn closing_iframe(
+        &self,
+        clock: &mut Clock,
+        slot: &mut Runner,
+        inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
+        (start, record, reference): (u32, bool, &[f32]),
+        scene_methods: &[Method],
+        measured: &mut Measured,
+        progress: &mut dyn Progress,
+    ) -> Result<(), Error> {
+        let n = self.options.frames_per_interval;
+        let end = start + n;
+        let [width, height] = self.size;
+        let (time, _, _) = timed(
+            clock,
+            slot,
+            &self.twinned_inputs(inputs_of, [end, start, end + n])?,
+            "iframe",
+        )
+        .map_err(fail)?;
+        progress.step("iframe");
+        if record {
+            measured.iframe_times.push(time);
+            let color = slot
+                .color()
+                .ok_or_else(|| fail("the I-frame draws no colour".into()))?;
+            let frame = read_linear(self.gpu, color).map_err(fail)?;
+            let error = metrics::compare_frames(reference, &frame, width, height, THRESHOLD);
+            measured.iframe_errors.push((end, error));
+            if let Some(blur) = measured.blur.as_mut() {
+                // Every method shows the I-frame.
+                let shown = self.methods.iter().chain(scene_methods);
+                for &method in shown {
+                    blur.add(Some(method), end, &frame);
+                }
+            }
+            if self.options.keep_frames {
+                let textures = self.textures(slot)?;
+                let depth = crate::runtime::read_texture(self.gpu, textures.depth, 4)
+                    .map_err(fail)?
+                    .chunks_exact(4)
+                    .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                    .collect();
+                measured.iframes.push(KeptIFrame {
+                    frame: end,
+                    color: frame,
+                    depth,
+                    flow_previous: read_linear(self.gpu, textures.flow_previous).map_err(fail)?,
+                    flow_next: read_linear(self.gpu, textures.flow_next).map_err(fail)?,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// A B-frame read back from its colour and decision targets.
+    fn sample(
+        &self,
+        (displayed, params, time): (u32, &BFrameParams, f64),
+        color: &wgpu::Texture,
+        decisions: &wgpu::Texture,
+    ) -> Result<BFrameSample, Error> {
+        let decisions = crate::runtime::read_texture(self.gpu, decisions, 4)
+            .map_err(fail)?
+            .chunks_exact(4)
+            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+            .collect();
+        Ok(BFrameSample {
+            displayed,
+            alpha: f64::from(params.alpha),
+            time,
+            frame: read_linear(self.gpu, color).map_err(fail)?,
+            decisions,
+        })
     }
 
     /// The frames of an interval each method builds: 1 to n − 1; with
@@ -738,8 +817,7 @@ impl Schedule<'_> {
         reference: &[f32],
     ) {
         let [width, height] = self.size;
-        let covered = vec![255u8; (width * height * 4) as usize];
-        let error = metrics::compare(reference, &sample.frame, &covered, width, height, THRESHOLD);
+        let error = metrics::compare_frames(reference, &sample.frame, width, height, THRESHOLD);
         let endpoint = sample.alpha == 0.0 || sample.alpha == 1.0;
         if endpoint || self.options.keep_frames {
             measured.kept.push(KeptFrame {
@@ -749,11 +827,7 @@ impl Schedule<'_> {
                 error,
                 reference: reference.to_vec(),
                 result: sample.frame.clone(),
-                decisions: sample
-                    .decisions
-                    .chunks_exact(4)
-                    .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
-                    .collect(),
+                decisions: sample.decisions.clone(),
             });
         }
         if endpoint {
@@ -764,9 +838,8 @@ impl Schedule<'_> {
         }
         let entry = measured.methods.entry(method).or_default();
         entry.times.push(sample.time);
-        for word in sample.decisions.chunks_exact(4) {
-            let code = u32::from_le_bytes([word[0], word[1], word[2], word[3]]) as usize;
-            if let Some(count) = entry.decisions.get_mut(code) {
+        for &code in &sample.decisions {
+            if let Some(count) = entry.decisions.get_mut(code as usize) {
                 *count += 1;
             }
         }
@@ -781,6 +854,88 @@ impl Schedule<'_> {
         entry.frames.push((sample.displayed, sample.alpha, error));
     }
 
+    /// What `method` measured, as the report says it.
+    fn method_report(
+        &self,
+        method: Method,
+        measured: &Measured,
+        (reference_ms, iframe_ms): (f64, f64),
+    ) -> MethodReport {
+        let n = self.options.frames_per_interval;
+        let run = measured.methods.get(&method);
+        let blur = measured.blur.as_ref().and_then(|b| match method {
+            Method::Reference => Some((1.0, metrics::PSNR_CAP)),
+            _ => b.of(method),
+        });
+        let b_ms = run.map_or(0.0, |r| metrics::median(&r.times));
+        let i_ms = if method.reads_flows() {
+            iframe_ms
+        } else {
+            reference_ms
+        };
+        let (i_ratio, b_ratio, amortized) = if method == Method::Reference {
+            (1.0, 1.0, 1.0)
+        } else {
+            (
+                i_ms / reference_ms,
+                b_ms / reference_ms,
+                (i_ms + f64::from(n - 1) * b_ms) / (f64::from(n) * reference_ms),
+            )
+        };
+        let errors: Vec<&FrameError> = run
+            .map(|r| r.frames.iter().map(|(_, _, e)| e).collect())
+            .unwrap_or_default();
+        let ssims: Vec<f64> = errors.iter().map(|e| e.ssim).collect();
+        let psnrs: Vec<f64> = errors.iter().map(|e| e.psnr_frame).collect();
+        let double_miss_rate = (method == Method::ImageBased).then(|| {
+            let d = run.map_or([0; 5], |r| r.decisions);
+            let with_geometry: u64 = d.iter().sum::<u64>() - d[Decision::Background as usize];
+            if with_geometry == 0 {
+                0.0
+            } else {
+                d[Decision::DoubleMiss as usize] as f64 / with_geometry as f64
+            }
+        });
+        MethodReport {
+            method,
+            frames_per_interval: n,
+            i_frame_time_ratio: i_ratio,
+            b_frame_time_ratio: b_ratio,
+            amortized_time_ratio: amortized,
+            b_frame_ms: b_ms,
+            ssim_mean: if method == Method::Reference {
+                1.0
+            } else {
+                metrics::mean(&ssims)
+            },
+            ssim_min: ssims.iter().copied().fold(1.0, f64::min),
+            psnr_mean: if method == Method::Reference {
+                metrics::PSNR_CAP
+            } else {
+                metrics::mean(&psnrs)
+            },
+            double_miss_rate,
+            correspondence_error_px: (method == Method::ImageBased
+                && !measured.correspondence.is_empty())
+            .then(|| {
+                let all: Vec<f64> = measured.correspondence.iter().map(|c| c.0).collect();
+                let hit: Vec<f64> = measured.correspondence.iter().map(|c| c.1).collect();
+                report::CorrespondenceError {
+                    all: metrics::mean(&all),
+                    hit: metrics::mean(&hit),
+                }
+            }),
+            added_latency_frames: if method.reads_later_frame() {
+                f64::from(n - 1)
+            } else {
+                0.0
+            },
+            worst_frame: run.and_then(|r| r.worst.as_ref().map(|w| w.1)),
+            motion_blur_ssim: blur.map(|b| b.0),
+            motion_blur_psnr: blur.map(|b| b.1),
+        }
+    }
+
     fn report(
         &self,
         shader: &Shader,
@@ -793,7 +948,6 @@ impl Schedule<'_> {
         let n = self.options.frames_per_interval;
         let reference_ms = metrics::median(&measured.reference_times);
         let iframe_ms = metrics::median(&measured.iframe_times);
-        let latency = f64::from(n - 1);
         let mut methods = Vec::new();
         let mut pictures = Pictures::default();
         // The methods that ran: the refused ones are in the notes.
@@ -806,82 +960,12 @@ impl Schedule<'_> {
             .collect();
         for &method in &shown {
             let run = measured.methods.get(&method);
-            let blur = measured.blur.as_ref().and_then(|b| match method {
-                Method::Reference => Some((1.0, metrics::PSNR_CAP)),
-                _ => b.of(method),
-            });
-            let b_ms = run.map_or(0.0, |r| metrics::median(&r.times));
-            let i_ms = if method.reads_flows() {
-                iframe_ms
-            } else {
-                reference_ms
-            };
-            let (i_ratio, b_ratio, amortized) = if method == Method::Reference {
-                (1.0, 1.0, 1.0)
-            } else {
-                (
-                    i_ms / reference_ms,
-                    b_ms / reference_ms,
-                    (i_ms + f64::from(n - 1) * b_ms) / (f64::from(n) * reference_ms),
-                )
-            };
-            let errors: Vec<&FrameError> = run
-                .map(|r| r.frames.iter().map(|(_, _, e)| e).collect())
-                .unwrap_or_default();
-            let ssims: Vec<f64> = errors.iter().map(|e| e.ssim).collect();
-            let psnrs: Vec<f64> = errors.iter().map(|e| e.psnr_frame).collect();
-            let double_miss_rate = (method == Method::ImageBased).then(|| {
-                let d = run.map_or([0; 5], |r| r.decisions);
-                let with_geometry: u64 = d.iter().sum::<u64>() - d[Decision::Background as usize];
-                if with_geometry == 0 {
-                    0.0
-                } else {
-                    d[Decision::DoubleMiss as usize] as f64 / with_geometry as f64
-                }
-            });
             if let Some((_, _, reference, result)) = run.and_then(|r| r.worst.clone()) {
                 pictures.worst.push((method, reference, result));
             }
-            methods.push(MethodReport {
-                method,
-                frames_per_interval: n,
-                i_frame_time_ratio: i_ratio,
-                b_frame_time_ratio: b_ratio,
-                amortized_time_ratio: amortized,
-                b_frame_ms: b_ms,
-                ssim_mean: if method == Method::Reference {
-                    1.0
-                } else {
-                    metrics::mean(&ssims)
-                },
-                ssim_min: ssims.iter().copied().fold(1.0, f64::min),
-                psnr_mean: if method == Method::Reference {
-                    metrics::PSNR_CAP
-                } else {
-                    metrics::mean(&psnrs)
-                },
-                double_miss_rate,
-                correspondence_error_px: (method == Method::ImageBased
-                    && !measured.correspondence.is_empty())
-                .then(|| {
-                    let all: Vec<f64> = measured.correspondence.iter().map(|c| c.0).collect();
-                    let hit: Vec<f64> = measured.correspondence.iter().map(|c| c.1).collect();
-                    report::CorrespondenceError {
-                        all: metrics::mean(&all),
-                        hit: metrics::mean(&hit),
-                    }
-                }),
-                added_latency_frames: if method.reads_later_frame() {
-                    latency
-                } else {
-                    0.0
-                },
-                worst_frame: run.and_then(|r| r.worst.as_ref().map(|w| w.1)),
-                motion_blur_ssim: blur.map(|b| b.0),
-                motion_blur_psnr: blur.map(|b| b.1),
-            });
+            methods.push(self.method_report(method, &measured, (reference_ms, iframe_ms)));
         }
-        let frames = displayed_frames(&shown, &measured, n);
+        let frames = displayed_frames(&shown, &measured);
         notes.push("one I-frame pass writes both flows: the paper renders the forward flow in a geometry pass of its own, so its I-frames cost more than these".to_string());
         if !self.options.methods.contains(&Method::Reference) {
             notes.push("the reference is rendered every frame all the same: the errors and ratios are against it".into());
@@ -933,7 +1017,7 @@ impl Schedule<'_> {
 /// SSIM of every displayed frame measured, per method: an I-frame's is
 /// the I-frame's against the reference (every method shows it), a
 /// B-frame's the method's; the reference's is 1.
-fn displayed_frames(methods: &[Method], measured: &Measured, n: u32) -> Vec<DisplayedFrame> {
+fn displayed_frames(methods: &[Method], measured: &Measured) -> Vec<DisplayedFrame> {
     let mut frames: BTreeMap<u32, DisplayedFrame> = BTreeMap::new();
     for &(frame, ref error) in &measured.iframe_errors {
         frames.insert(
@@ -967,8 +1051,5 @@ fn displayed_frames(methods: &[Method], measured: &Measured, n: u32) -> Vec<Disp
             entry.ssim[i] = error.ssim;
         }
     }
-    // The first measured interval opens with the warm-up's I-frame, which
-    // is not compared: its frames start after it.
-    let _ = n;
     frames.into_values().collect()
 }

@@ -101,6 +101,35 @@ pub fn compare(
     height: u32,
     threshold: f64,
 ) -> FrameError {
+    compare_where(
+        reference,
+        frame,
+        |p| covered(classes, p),
+        [width, height],
+        threshold,
+    )
+}
+
+/// [`compare`] with every pixel counted as covered: whole frames (the
+/// interpolation stage's), where the background is part of what is
+/// reconstructed.
+pub fn compare_frames(
+    reference: &[f32],
+    frame: &[f32],
+    width: u32,
+    height: u32,
+    threshold: f64,
+) -> FrameError {
+    compare_where(reference, frame, |_| true, [width, height], threshold)
+}
+
+fn compare_where(
+    reference: &[f32],
+    frame: &[f32],
+    covered: impl Fn(usize) -> bool,
+    [width, height]: [u32; 2],
+    threshold: f64,
+) -> FrameError {
     let pixels = (width * height) as usize;
     let (mut squared, mut squared_covered, mut count) = (0.0f64, 0.0f64, 0usize);
     let mut max = 0.0f64;
@@ -115,7 +144,7 @@ pub fn compare(
         }
         squared += sum;
         max = max.max(worst);
-        if covered(classes, p) {
+        if covered(p) {
             squared_covered += sum;
             count += 1;
             if worst > threshold {

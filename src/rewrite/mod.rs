@@ -237,20 +237,26 @@ impl CacheSlot {
     }
 }
 
+/// One of the toolchain's own modules (`shaders/NAME`, its `text`)
+/// parsed and validated, once per process (`cell` keeps it).
+pub(crate) fn toolchain_module(
+    cell: &'static std::sync::OnceLock<Result<naga::Module, String>>,
+    name: &str,
+    text: &str,
+) -> Result<&'static naga::Module, Refusal> {
+    cell.get_or_init(|| {
+        crate::front::parse(crate::diagnostic::SourceFile::new(name, text))
+            .map(|shader| shader.module)
+            .map_err(|err| err.render())
+    })
+    .as_ref()
+    .map_err(|err| Refusal::internal(format!("`{name}` does not parse: {err}")))
+}
+
 /// `shaders/cache.wgsl` parsed and validated, once per process.
 pub(crate) fn cache_helpers() -> Result<&'static naga::Module, Refusal> {
     static HELPERS: std::sync::OnceLock<Result<naga::Module, String>> = std::sync::OnceLock::new();
-    HELPERS
-        .get_or_init(|| {
-            crate::front::parse(crate::diagnostic::SourceFile::new(
-                "shaders/cache.wgsl",
-                CACHE_WGSL,
-            ))
-            .map(|shader| shader.module)
-            .map_err(|err| err.render())
-        })
-        .as_ref()
-        .map_err(|err| Refusal::internal(format!("the cache helpers do not parse: {err}")))
+    toolchain_module(&HELPERS, "shaders/cache.wgsl", CACHE_WGSL)
 }
 
 /// The first binding after the cache's own (`shaders/cache.wgsl`'s, from
