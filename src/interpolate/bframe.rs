@@ -94,6 +94,30 @@ pub struct IFrameTextures<'a> {
     pub flow_next: &'a wgpu::Texture,
 }
 
+/// The sampler every B-frame pass reads colour and flows with: linear
+/// filtering, clamped to the edge.
+pub(super) fn linear_clamp(device: &wgpu::Device) -> wgpu::Sampler {
+    device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("linear clamp"),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..wgpu::SamplerDescriptor::default()
+    })
+}
+
+/// A whole texture's view.
+pub(super) fn view(texture: &wgpu::Texture) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor::default())
+}
+
+/// A depth buffer's depth, as a `texture_depth_2d` reads it.
+pub(super) fn depth_view(texture: &wgpu::Texture) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        aspect: wgpu::TextureAspect::DepthOnly,
+        ..wgpu::TextureViewDescriptor::default()
+    })
+}
+
 /// The B-frame pipelines of the methods asked for, and their targets.
 #[derive(Debug)]
 pub struct BFrames {
@@ -241,12 +265,7 @@ impl BFrames {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("linear clamp"),
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..wgpu::SamplerDescriptor::default()
-        });
+        let sampler = linear_clamp(device);
         let target = |label, format| shadecache_host::render_target(device, label, size, format);
         Ok(BFrames {
             pipelines,
@@ -298,13 +317,7 @@ impl BFrames {
             .get(&method)
             .ok_or_else(|| format!("{} has no B-frame pass", method.name()))?;
         gpu.queue.write_buffer(&self.params, 0, &params.bytes());
-        let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
-        let depth = |t: &wgpu::Texture| {
-            t.create_view(&wgpu::TextureViewDescriptor {
-                aspect: wgpu::TextureAspect::DepthOnly,
-                ..wgpu::TextureViewDescriptor::default()
-            })
-        };
+        let depth = depth_view;
         let (write, read) = (self.turn.get(), 1 - self.turn.get());
         let views = [
             view(earlier.color),

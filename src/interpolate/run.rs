@@ -290,12 +290,7 @@ impl SceneRun {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
-            sampler: gpu.device.create_sampler(&wgpu::SamplerDescriptor {
-                label: Some("linear clamp"),
-                mag_filter: wgpu::FilterMode::Linear,
-                min_filter: wgpu::FilterMode::Linear,
-                ..wgpu::SamplerDescriptor::default()
-            }),
+            sampler: super::bframe::linear_clamp(&gpu.device),
         }
     }
 
@@ -323,13 +318,7 @@ impl SceneRun {
         let layout = self.runner.external_layout().ok_or_else(|| {
             fail("internal error: the scene-assisted plan has no I-frame group".into())
         })?;
-        let color = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
-        let depth = |t: &wgpu::Texture| {
-            t.create_view(&wgpu::TextureViewDescriptor {
-                aspect: wgpu::TextureAspect::DepthOnly,
-                ..wgpu::TextureViewDescriptor::default()
-            })
-        };
+        let (color, depth) = (super::bframe::view, super::bframe::depth_view);
         let views = [
             color(earlier.color),
             depth(earlier.depth),
