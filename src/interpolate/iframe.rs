@@ -28,7 +28,7 @@ use crate::analysis::graph::ExprSet;
 use crate::analysis::Analysis;
 use crate::front::Shader;
 use crate::plan::{ColorTarget, LoadOp, Plan, TargetKind, TextureFormat};
-use crate::rewrite::builder::Builder;
+use crate::rewrite::builder::{self, Builder};
 use crate::rewrite::copy::FunctionCopy;
 use crate::rewrite::vertex::{self, TwinTime};
 use crate::rewrite::{self, CacheSlot, Options, Refusal};
@@ -279,29 +279,6 @@ fn frag_coord(module: &Module, function: &Function) -> FragCoord {
     FragCoord::Added
 }
 
-fn vec4_type(module: &mut Module) -> Handle<naga::Type> {
-    module.types.insert(
-        naga::Type {
-            name: None,
-            inner: TypeInner::Vector {
-                size: naga::VectorSize::Quad,
-                scalar: naga::Scalar::F32,
-            },
-        },
-        naga::Span::UNDEFINED,
-    )
-}
-
-fn located(location: u32) -> Binding {
-    Binding::Location {
-        location,
-        interpolation: Some(naga::Interpolation::Perspective),
-        sampling: Some(naga::Sampling::Center),
-        blend_src: None,
-        per_primitive: false,
-    }
-}
-
 /// Replaces the fragment entry point with one that calls the original as
 /// `<entry>_shade` and adds the two flows to its outputs; returns their
 /// locations. `clip_locations` are where the vertex stage outputs the
@@ -333,7 +310,7 @@ fn flow_entry(
     )
     .run();
     let shade = module.functions.append(shade, naga::Span::UNDEFINED);
-    let vec4 = vec4_type(module);
+    let vec4 = builder::vec4_type(module);
 
     // The output: the user's members (or its one output), then the flows.
     let (mut members, span, is_struct) = match module.types[result.ty].inner {
@@ -364,13 +341,7 @@ fn flow_entry(
         members.push(naga::StructMember {
             name: Some(name.into()),
             ty: vec4,
-            binding: Some(Binding::Location {
-                location,
-                interpolation: None,
-                sampling: None,
-                blend_src: None,
-                per_primitive: false,
-            }),
+            binding: Some(builder::location(location)),
             offset,
         });
         offset += 16;
@@ -402,7 +373,7 @@ fn flow_entry(
         arguments.push(naga::FunctionArgument {
             name: Some(name.into()),
             ty: vec4,
-            binding: Some(located(location)),
+            binding: Some(builder::perspective_location(location)),
         });
     }
     let count = function.arguments.len() as u32;
@@ -458,23 +429,8 @@ fn scene_entry(
     let helper = *imported.functions.get("scene_assisted").ok_or_else(|| {
         Refusal::internal("`scene_assisted` missing from the scene-assisted helpers")
     })?;
-    let vec4 = vec4_type(module);
-    let u32_ty = module.types.insert(
-        naga::Type {
-            name: None,
-            inner: TypeInner::Scalar(naga::Scalar::U32),
-        },
-        naga::Span::UNDEFINED,
-    );
-    let output_binding = |location| {
-        Some(Binding::Location {
-            location,
-            interpolation: None,
-            sampling: None,
-            blend_src: None,
-            per_primitive: false,
-        })
-    };
+    let vec4 = builder::vec4_type(module);
+    let u32_ty = builder::scalar_type(module, naga::Scalar::U32);
     let output = module.types.insert(
         naga::Type {
             name: Some("SceneAssistedOutput".into()),
@@ -483,13 +439,13 @@ fn scene_entry(
                     naga::StructMember {
                         name: Some("color".into()),
                         ty: vec4,
-                        binding: output_binding(locations[0]),
+                        binding: Some(builder::location(locations[0])),
                         offset: 0,
                     },
                     naga::StructMember {
                         name: Some("decision".into()),
                         ty: u32_ty,
-                        binding: output_binding(locations[1]),
+                        binding: Some(builder::location(locations[1])),
                         offset: 16,
                     },
                 ],
@@ -510,7 +466,7 @@ fn scene_entry(
             .map(|(name, location)| naga::FunctionArgument {
                 name: Some(name.into()),
                 ty: vec4,
-                binding: Some(located(location)),
+                binding: Some(builder::perspective_location(location)),
             }),
     );
     let mut b = Builder::new(Function {

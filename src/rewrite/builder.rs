@@ -88,3 +88,60 @@ impl Builder {
         self.function
     }
 }
+
+/// The scalar type `scalar`, added to `module` if it is not there.
+pub fn scalar_type(module: &mut naga::Module, scalar: naga::Scalar) -> Handle<naga::Type> {
+    module.types.insert(
+        naga::Type {
+            name: None,
+            inner: naga::TypeInner::Scalar(scalar),
+        },
+        Span::UNDEFINED,
+    )
+}
+
+/// The vector type of `size` × `scalar`, added to `module` if it is not
+/// there.
+pub fn vector_type(
+    module: &mut naga::Module,
+    size: naga::VectorSize,
+    scalar: naga::Scalar,
+) -> Handle<naga::Type> {
+    module.types.insert(
+        naga::Type {
+            name: None,
+            inner: naga::TypeInner::Vector { size, scalar },
+        },
+        Span::UNDEFINED,
+    )
+}
+
+/// `vec4<f32>`: clip positions, payloads, flows.
+pub fn vec4_type(module: &mut naga::Module) -> Handle<naga::Type> {
+    vector_type(module, naga::VectorSize::Quad, naga::Scalar::F32)
+}
+
+/// `@location(location)` with no interpolation given: a fragment output,
+/// or a flat or default-interpolated input.
+pub fn location(location: u32) -> naga::Binding {
+    naga::Binding::Location {
+        location,
+        interpolation: None,
+        sampling: None,
+        blend_src: None,
+        per_primitive: false,
+    }
+}
+
+/// `@location(location)` interpolated perspective-correctly at the pixel
+/// centre: the clip positions at other times, as the rasteriser
+/// interpolates the position itself.
+pub fn perspective_location(location: u32) -> naga::Binding {
+    naga::Binding::Location {
+        location,
+        interpolation: Some(naga::Interpolation::Perspective),
+        sampling: Some(naga::Sampling::Center),
+        blend_src: None,
+        per_primitive: false,
+    }
+}

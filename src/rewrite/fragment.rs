@@ -16,7 +16,7 @@
 
 use naga::{Binding, Expression, Function, Handle, Module, Statement, TypeInner};
 
-use super::builder::Builder;
+use super::builder::{location, Builder};
 use super::Refusal;
 
 /// The pieces every fragment entry point is built from.
@@ -466,16 +466,6 @@ fn f32_type(module: &mut Module) -> Handle<naga::Type> {
 
 fn is_struct(module: &Module, ty: Handle<naga::Type>) -> bool {
     matches!(module.types[ty].inner, TypeInner::Struct { .. })
-}
-
-fn location(location: u32) -> Binding {
-    Binding::Location {
-        location,
-        interpolation: None,
-        sampling: None,
-        blend_src: None,
-        per_primitive: false,
-    }
 }
 
 /// The result type of a pass, and for colour + cache the number of

@@ -39,7 +39,7 @@ use naga::{
     VectorSize,
 };
 
-use super::builder::Builder;
+use super::builder::{scalar_type, vector_type, Builder};
 use super::fragment::{self, Fragment, Pieces};
 use super::Refusal;
 use crate::plan::TextureFormat;
@@ -510,13 +510,7 @@ impl GBuffer {
                 naga::StructMember {
                     name: Some(format!("g{t}")),
                     ty,
-                    binding: Some(Binding::Location {
-                        location: t as u32,
-                        interpolation: None,
-                        sampling: None,
-                        blend_src: None,
-                        per_primitive: false,
-                    }),
+                    binding: Some(super::builder::location(t as u32)),
                     offset: t as u32 * 16,
                 }
             })
@@ -852,24 +846,4 @@ fn vector_size(count: u32) -> VectorSize {
         3 => VectorSize::Tri,
         _ => VectorSize::Quad,
     }
-}
-
-fn scalar_type(module: &mut Module, scalar: Scalar) -> Handle<naga::Type> {
-    module.types.insert(
-        naga::Type {
-            name: None,
-            inner: TypeInner::Scalar(scalar),
-        },
-        naga::Span::UNDEFINED,
-    )
-}
-
-fn vector_type(module: &mut Module, size: VectorSize, scalar: Scalar) -> Handle<naga::Type> {
-    module.types.insert(
-        naga::Type {
-            name: None,
-            inner: TypeInner::Vector { size, scalar },
-        },
-        naga::Span::UNDEFINED,
-    )
 }

@@ -68,16 +68,7 @@ impl CacheHelpers {
         } else {
             None
         };
-        let vec4 = module.types.insert(
-            naga::Type {
-                name: None,
-                inner: naga::TypeInner::Vector {
-                    size: naga::VectorSize::Quad,
-                    scalar: naga::Scalar::F32,
-                },
-            },
-            naga::Span::UNDEFINED,
-        );
+        let vec4 = super::builder::vec4_type(module);
         Ok(CacheHelpers {
             lookup: helper(lookup)?,
             refresh: helper("cache_refresh")?,

@@ -479,16 +479,7 @@ impl PositionHelpers {
             },
         )
         .run();
-        let vec4 = module.types.insert(
-            naga::Type {
-                name: None,
-                inner: TypeInner::Vector {
-                    size: naga::VectorSize::Quad,
-                    scalar: naga::Scalar::F32,
-                },
-            },
-            naga::Span::UNDEFINED,
-        );
+        let vec4 = super::builder::vec4_type(module);
         let current = module.functions.append(current, naga::Span::UNDEFINED);
         let mut others = Vec::new();
         for (time, twin_map, function_twins) in times {
@@ -572,13 +563,7 @@ fn timed_output(
         new_members.push(naga::StructMember {
             name: Some(format!("{time}_clip_position")),
             ty: vec4,
-            binding: Some(Binding::Location {
-                location,
-                interpolation: Some(naga::Interpolation::Perspective),
-                sampling: Some(naga::Sampling::Center),
-                blend_src: None,
-                per_primitive: false,
-            }),
+            binding: Some(super::builder::perspective_location(location)),
             offset,
         });
         offset += 16;
@@ -676,13 +661,7 @@ fn twin_arguments(
             naga::FunctionArgument {
                 name: Some(format!("previous_{}", name.unwrap_or_default())),
                 ty: input.ty,
-                binding: Some(Binding::Location {
-                    location,
-                    interpolation: None,
-                    sampling: None,
-                    blend_src: None,
-                    per_primitive: false,
-                }),
+                binding: Some(super::builder::location(location)),
             }
         })
         .collect()
