@@ -27,27 +27,42 @@
 //! Most are a fullscreen pass over the two I-frames' textures:
 //! - `image-based` (000 §5): for each B-frame pixel p a fixed-point search
 //!   q ← p − α·Vf(q) into I-frame 0 and q ← p − (1 − α)·Vb(q) into I-frame
-//!   1, m iterations each without early exit (eqs. 3–12); with dual
-//!   initialisation each also starts from the other frame's velocity at p
-//!   (eqs. 16–17) and keeps the smaller residual (the second start is
-//!   skipped where the first converged; m is a pipeline constant, so the
-//!   loop unrolls). §5.2 decides: both
-//!   residuals under ε1 and depths agreeing, the smaller residual; depths
-//!   disagreeing, the nearer surface; only one under ε1, that one; neither
-//!   (a double miss), the smaller residual. The point found is carried to
-//!   the other I-frame by its exact flow and the two colours blended by α
-//!   where it is visible there (eqs. 14–15), else its own colour is shown.
-//!   What the paper leaves open is decided as the design note proposes:
-//!   ε1 = 1 px; ε2 and the visibility test are the cache's relative depth
-//!   test; "exactly one under ε1" is treated as case 2; case 3 uses eqs.
-//!   14–15. With latest-frame initialisation (eqs. 18–19), every B-frame
-//!   of an interval but the first also starts each search from the
-//!   offsets the B-frame before found, rescaled to its α, taken from the
-//!   nearest-depth tap of a 5-tap neighbourhood (the centre and its
-//!   diagonals; the paper leaves the size open), and the pass writes its
-//!   own offsets and chosen depth for the next. It is off by default
-//!   (`--latest-init`): measured on the bundled scenes it lowered SSIM
-//!   and made the pass half as costly again.
+//!   1, m iterations each (eqs. 3–12); with dual initialisation each also
+//!   starts from the other frame's velocity at p (eqs. 16–17). The flows
+//!   are read per texel, unfiltered: a filtered flow mixes an object's
+//!   motion with the floor's along its silhouette and sends the search to
+//!   a point on neither, where unfiltered it converges onto one of the two
+//!   surfaces and the decisions choose (measured on the walking scene: the
+//!   pass a third cheaper, SSIM the same). Per-texel flows also make the
+//!   paper's "no early exit" free to drop: a step that stays in its texel
+//!   reads the same flow again and lands on the same point for every step
+//!   after, so the search stops there with the result of all m steps
+//!   (`search.rs` states it as a property). Of the two starts of one
+//!   direction, where both converge (under ε1) on different surfaces the
+//!   nearer is kept: both are fixed points, and the farther is what the
+//!   nearer hides at the B-frame's time (the floor behind a moving
+//!   sphere's rim, which the start at p converges onto; the smaller
+//!   residual, the paper's rule for the starts, picked it and shrank every
+//!   moving object by a pixel: walking scene SSIM 0.967 against 0.980);
+//!   else the smaller residual. The second start is skipped where it lies
+//!   within ε1 of where the first ended, which it would converge to. m is
+//!   a pipeline constant, so the loop unrolls. §5.2 decides between the
+//!   directions: both residuals under ε1 and depths agreeing, the smaller
+//!   residual; depths disagreeing, the nearer surface; only one under ε1,
+//!   that one; neither (a double miss), the smaller residual. The point
+//!   found is carried to the other I-frame by its exact flow and the two
+//!   colours blended by α where it is visible there (eqs. 14–15), else
+//!   its own colour is shown. What the paper leaves open is decided as the
+//!   design note proposes: ε1 = 1 px; ε2 and the visibility test are the
+//!   cache's relative depth test; "exactly one under ε1" is treated as
+//!   case 2; case 3 uses eqs. 14–15. With latest-frame initialisation
+//!   (eqs. 18–19), every B-frame of an interval but the first also starts
+//!   each search from the offsets the B-frame before found, rescaled to
+//!   its α, taken from the nearest-depth tap of a 5-tap neighbourhood (the
+//!   centre and its diagonals; the paper leaves the size open), and the
+//!   pass writes its own offsets and chosen depth for the next. It is off
+//!   by default (`--latest-init`): measured on the bundled scenes it
+//!   lowered SSIM and made the pass half as costly again.
 //! - `half-velocity` (003): I-frame 0 sampled back along the velocity, α
 //!   of the way (half-way at n = 2): p + α·Vb₁(p), Vb₁ being I-frame 1's
 //!   flow to I-frame 0 (the current velocity, negated). Velocity merging:
