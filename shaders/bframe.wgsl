@@ -24,7 +24,8 @@ struct BFrameParams {
     far_depth: f32,
     // Bit 0: dual initialisation (seed 000 eqs. 16–17) besides the default.
     // Bit 1: half-velocity merges the earlier frame's velocity into the
-    // tails (else the later frame's velocity alone).
+    // tails (else the later frame's velocity alone). Bit 2: half-velocity
+    // has its moving objects drawn and removed.
     flags: u32,
     // Half-velocity's direction test: the previous velocity is used for a
     // tail only when its cosine with the current one is at least this.
@@ -32,6 +33,8 @@ struct BFrameParams {
     // α' of the B-frame before this one in the interval, whose offsets
     // seed latest-frame initialisation; 0 for an interval's first.
     previous_alpha: f32,
+    // Character removal's neighbour distance, in pixels (`fs_inpaint`).
+    inpaint_delta: i32,
 }
 
 @group(0) @binding(0) var<uniform> params: BFrameParams;
@@ -59,8 +62,20 @@ override search_iterations: u32 = 3u;
 @group(0) @binding(9) var previous_offsets: texture_2d<f32>;
 @group(0) @binding(10) var previous_depths: texture_2d<f32>;
 
+// Half-velocity's moving objects (seed 003's dynamic objects, slides
+// 33–47), drawn by the scene-assisted pass in its moving-objects mode;
+// zero where there are none, or when the method leaves them out.
+// The moving objects at the B-frame's time: (p - p0, 0, 1), p0 where the
+// pixel's point is in I-frame 0; w is the mask.
+@group(0) @binding(11) var moving_now: texture_2d<f32>;
+// I-frame 0 with the moving objects it shows wiped out (`fs_inpaint`), at
+// quarter resolution.
+@group(0) @binding(12) var removed_0: texture_2d<f32>;
+
 const DUAL_INIT: u32 = 1u;
 const VELOCITY_MERGE: u32 = 2u;
+// Bit 2: half-velocity has its moving objects (`moving_now`, `removed_0`).
+const MOVING_OBJECTS: u32 = 4u;
 
 // Latest-frame initialisation (seed 000 eqs. 18–19), set when the
 // pipeline is made: its code compiled into the pass even behind a false
@@ -333,17 +348,25 @@ fn image_based(p: vec2<f32>) -> ImageBased {
 }
 
 // Seed 003: the earlier I-frame sampled back along the velocity,
-// alpha of the way (half-way at n = 2). The velocity is the later
-// I-frame's (its flow to the earlier one) where that frame's surface is
-// the nearer or the same; where the earlier frame's surface is nearer (a
-// moving object's tail, gone by the later frame) it is the earlier
-// frame's own velocity, extrapolated, unless its direction disagrees with
-// the later one's, where the pixel is held (no worse than sample and
-// hold).
+// alpha of the way (half-way at n = 2). A moving object's pixel at the
+// B-frame's time is taken from where its point is in I-frame 0, exactly
+// (the moving-objects pass rasterised it there). Elsewhere the velocity
+// is the later I-frame's (its flow to the earlier one) where that frame's
+// surface is the nearer or the same; where the earlier frame's surface is
+// nearer (a moving object's tail, gone by the later frame) it is the
+// earlier frame's own velocity, extrapolated, unless its direction
+// disagrees with the later one's, where the pixel is held (no worse than
+// sample and hold). Where the point sampled showed a moving object in
+// I-frame 0 that is not at the pixel now, the frame with the objects
+// wiped out is shown instead (slide 47).
 @fragment
 fn fs_half_velocity(@builtin(position) frag_coord: vec4<f32>) -> BFrame {
     let p = frag_coord.xy;
     let at = texel(p);
+    let moving = textureLoad(moving_now, at, 0);
+    if moving.w > 0.5 {
+        return BFrame(bilinear(color_0, p - moving.xy), SAME_SURFACE);
+    }
     let now = textureLoad(flow_previous_1, at, 0);
     let before = textureLoad(flow_previous_0, at, 0);
     let z1 = textureLoad(depth_1, at, 0);
@@ -360,7 +383,81 @@ fn fs_half_velocity(@builtin(position) frag_coord: vec4<f32>) -> BFrame {
             decision = ONE_DIRECTION;
         }
     }
-    return BFrame(bilinear(color_0, p + params.alpha * v), decision);
+    let q = p + params.alpha * v;
+    let color = bilinear(color_0, q);
+    // Whether I-frame 0 shows a moving object at q, from its flow at full
+    // resolution (the removal's own mask is at quarter resolution); then
+    // the removal's colour, filtered.
+    let removal = (params.flags & MOVING_OBJECTS) != 0u;
+    if removal && (textureLoad(flow_next_0, texel(q), 0).w > 1.5) {
+        let uv = q / (2.0 * vec2<f32>(removal_size()));
+        let removed = textureSampleLevel(removed_0, linear_clamp, uv, 0.0);
+        return BFrame(vec4<f32>(removed.rgb, color.a), decision);
+    }
+    return BFrame(color, decision);
+}
+
+// Character removal (seed 003, slides 39–46), one pass at quarter
+// resolution (half the width and height, as the paper's): a masked pixel
+// takes the mean of the unmasked ones among its four neighbours
+// `inpaint_delta` pixels away (left, right, up, down) and is unmasked for
+// the next pass, so the fill grows in from the mask's edge; one with no
+// unmasked neighbour is left as it is, still masked. The first pass
+// (`fs_inpaint_first`) reads I-frame 0's colour and its flow, whose w is
+// 2 on a moving object, at full resolution, one pixel of every four; the
+// next ones the pass before's result, whose w says what became of each
+// pixel: 0 never masked, 0.5 filled, 1 still masked. Andreev's
+// refinements (horizontal patches move only horizontally, the interior
+// blurred) are left out.
+@group(0) @binding(14) var inpaint_color: texture_2d<f32>;
+@group(0) @binding(15) var inpaint_mask: texture_2d<f32>;
+
+const INPAINT_NEIGHBOURS: array<vec2<i32>, 4> = array<vec2<i32>, 4>(
+    vec2<i32>(-1, 0), vec2<i32>(1, 0), vec2<i32>(0, -1), vec2<i32>(0, 1),
+);
+
+// The size of character removal's frames: half the B-frame's, rounded up.
+fn removal_size() -> vec2<i32> {
+    return (vec2<i32>(params.viewport) + vec2<i32>(1)) / 2;
+}
+
+@fragment
+fn fs_inpaint_first(@builtin(position) frag_coord: vec4<f32>) -> @location(0) vec4<f32> {
+    return inpaint(vec2<i32>(frag_coord.xy), 2, 1.5);
+}
+
+@fragment
+fn fs_inpaint(@builtin(position) frag_coord: vec4<f32>) -> @location(0) vec4<f32> {
+    return inpaint(vec2<i32>(frag_coord.xy), 1, 0.75);
+}
+
+// Removal pixel `at`, reading the inputs every `step` texels, a pixel
+// masked where the mask's w is at least `masked`.
+fn inpaint(at: vec2<i32>, step: i32, masked: f32) -> vec4<f32> {
+    let size = removal_size();
+    let last = vec2<i32>(textureDimensions(inpaint_color)) - vec2<i32>(1);
+    let own = textureLoad(inpaint_color, min(at * step, last), 0).rgb;
+    let mask = textureLoad(inpaint_mask, min(at * step, last), 0).w;
+    if mask < masked {
+        // Never masked (0, or a still object's flow), or filled by an
+        // earlier pass (0.5).
+        return vec4<f32>(own, select(0.0, 0.5, (mask > 0.25) & (mask < 0.75)));
+    }
+    var sum = vec3<f32>(0.0);
+    var count = 0.0;
+    for (var i = 0; i < 4; i++) {
+        let tap = at + params.inpaint_delta * INPAINT_NEIGHBOURS[i];
+        let inside = all(tap >= vec2<i32>(0)) & all(tap < size);
+        let tap_at = clamp(tap * step, vec2<i32>(0), last);
+        if inside & (textureLoad(inpaint_mask, tap_at, 0).w < masked) {
+            sum += textureLoad(inpaint_color, tap_at, 0).rgb;
+            count += 1.0;
+        }
+    }
+    if count > 0.0 {
+        return vec4<f32>(sum / count, 0.5);
+    }
+    return vec4<f32>(own, 1.0);
 }
 
 // Baseline: the earlier I-frame shown again.

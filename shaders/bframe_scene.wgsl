@@ -19,7 +19,10 @@ struct SceneParams {
     // 2: single-direction reverse reprojection from I-frame 0, no
     // reshading (a baseline); 3: not a B-frame but each pixel's exact
     // correspondence in I-frame 0, (p - p0, seen there, 1), against which
-    // the image-based search is measured.
+    // the image-based search is measured; 4: not a B-frame but the moving
+    // objects alone (the host draws no other), each fragment's offset from
+    // I-frame 0, (p - p0, 0, 1), where nothing still hides it (seed 003's
+    // dynamic-object velocity and mask).
     mode: u32,
 }
 
@@ -35,6 +38,7 @@ const CLOSEST_ON_MISS: u32 = 0u;
 const SHADE_ON_MISS: u32 = 1u;
 const REVERSE_REPROJECTION: u32 = 2u;
 const CORRESPONDENCE: u32 = 3u;
+const MOVING_OBJECTS: u32 = 4u;
 
 // As `shaders/bframe.wgsl`'s decisions.
 const SAME_SURFACE: u32 = 0u;
@@ -102,6 +106,21 @@ fn scene_assisted(frag_coord: vec4<f32>, previous_clip: vec4<f32>, next_clip: ve
     if scene_params.mode == CORRESPONDENCE {
         let offset = frag_coord.xy - p0.pixel;
         return SceneAssisted(vec4<f32>(offset, select(0.0, 1.0, seen_0), 1.0), SAME_SURFACE);
+    }
+    if scene_params.mode == MOVING_OBJECTS {
+        // The still geometry is not drawn: a fragment is hidden where both
+        // I-frames show a nearer surface at its pixel (I-frame 0 alone at
+        // I-frame 0's own time, where that is exact).
+        let here = scene_texel(frag_coord.xy);
+        let z = frag_coord.z;
+        let here_0 = textureLoad(scene_depth_0, here, 0);
+        let here_1 = textureLoad(scene_depth_1, here, 0);
+        let hidden_0 = scene_nearer(here_0, z) & !scene_agrees(here_0, z);
+        let hidden_1 = scene_nearer(here_1, z) & !scene_agrees(here_1, z);
+        if hidden_0 & (hidden_1 | (scene_params.alpha == 0.0)) {
+            discard;
+        }
+        return SceneAssisted(vec4<f32>(frag_coord.xy - p0.pixel, 0.0, 1.0), SAME_SURFACE);
     }
     if scene_params.mode == REVERSE_REPROJECTION {
         return SceneAssisted(c0, select(DOUBLE_MISS, SAME_SURFACE, seen_0));

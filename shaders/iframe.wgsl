@@ -6,15 +6,18 @@
 //
 // A flow is stored per pixel of the I-frame: where the surface point seen
 // at this pixel is at another time, relative to here. x and y are in
-// pixels (x right, y down), z in NDC depth; w is 1 where the flow is valid
-// (the other clip position in front of the camera and every component
-// finite) and 0 elsewhere, with x, y, z zero.
+// pixels (x right, y down), z in NDC depth; w is 0 where the flow is not
+// valid (the other clip position behind the camera or a component not
+// finite), with x, y, z zero, and else 1 on a still object and 2 on one
+// that moves (seed 003's dynamic-object mask).
 
 struct FlowParams {
     // The frame's size in pixels.
     viewport: vec2<f32>,
+    // 1 when the object drawn moves in the world, 0 when it is still.
+    moving: f32,
     // Keeps the struct 16 bytes.
-    padding: vec2<f32>,
+    padding: f32,
 }
 
 @group(1) @binding(0) var<uniform> flow_params: FlowParams;
@@ -41,7 +44,7 @@ fn flow_to(frag_coord: vec4<f32>, other: vec4<f32>) -> vec4<f32> {
         (ndc.x * 0.5 + 0.5) * flow_params.viewport.x,
         (0.5 - 0.5 * ndc.y) * flow_params.viewport.y,
     );
-    let flow = vec4<f32>(pixel - frag_coord.xy, ndc.z - frag_coord.z, 1.0);
+    let flow = vec4<f32>(pixel - frag_coord.xy, ndc.z - frag_coord.z, 1.0 + flow_params.moving);
     let valid = (other.w > 1e-6) & flow_finite(other) & flow_finite(flow)
         & all(abs(flow.xyz) < vec3<f32>(FLOW_LIMIT));
     return select(vec4<f32>(0.0), flow, valid);

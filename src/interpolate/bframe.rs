@@ -25,6 +25,10 @@ pub const OFFSETS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float
 /// The depth the image-based pass chose, beside its offsets.
 pub const CHOSEN_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 
+/// I-frame 0 with its moving objects wiped out, at half its width and
+/// height, and what became of each pixel in alpha (`fs_inpaint`).
+pub const REMOVED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
 /// What each B-frame pixel decided, as the shader codes it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u32)]
@@ -54,15 +58,20 @@ pub struct BFrameParams {
     pub far_depth: f32,
     pub dual_init: bool,
     pub velocity_merge: bool,
+    /// Half-velocity's moving objects are bound ([`BFrames::render`] sets
+    /// it).
+    pub moving_objects: bool,
     pub min_cosine: f32,
     /// α' of the image-based B-frame before this one in the interval:
     /// latest-frame initialisation from its offsets (000 eqs. 18–19).
     /// `None` for the first B-frame of an interval, or to turn it off.
     pub previous_alpha: Option<f32>,
+    /// Character removal's neighbour distance, in pixels.
+    pub inpaint_delta: u32,
 }
 
 impl BFrameParams {
-    /// The uniform's bytes (`BFrameParams` in `shaders/bframe.wgsl`: eight
+    /// The uniform's bytes (`BFrameParams` in `shaders/bframe.wgsl`: ten
     /// 4-byte fields in order, padded to 48).
     fn bytes(&self) -> Vec<u8> {
         let words: [u32; 12] = [
@@ -72,10 +81,12 @@ impl BFrameParams {
             self.screen_epsilon.to_bits(),
             self.depth_epsilon.to_bits(),
             self.far_depth.to_bits(),
-            u32::from(self.dual_init) | (u32::from(self.velocity_merge) << 1),
+            u32::from(self.dual_init)
+                | (u32::from(self.velocity_merge) << 1)
+                | (u32::from(self.moving_objects) << 2),
             self.min_cosine.to_bits(),
             self.previous_alpha.unwrap_or(0.0).to_bits(),
-            0,
+            self.inpaint_delta,
             0,
             0,
         ];
@@ -134,6 +145,25 @@ pub struct BFrames {
     turn: std::cell::Cell<usize>,
     /// Whether the image-based pass writes `offsets`.
     latest: bool,
+    /// Character removal (`fs_inpaint`): its pipeline and layout, and the
+    /// two targets its passes write in turn.
+    inpaint: [wgpu::RenderPipeline; 2],
+    inpaint_layout: wgpu::BindGroupLayout,
+    removed: [wgpu::Texture; 2],
+    /// Which of `removed` holds the last removal's result.
+    removed_last: std::cell::Cell<usize>,
+    /// Zeros, bound where half-velocity has no moving objects and for the
+    /// other methods.
+    no_moving: wgpu::Texture,
+}
+
+/// Half-velocity's moving objects for one B-frame: the moving-objects
+/// pass at its time, and I-frame 0 with them wiped out
+/// ([`BFrames::remove_moving_objects`]).
+#[derive(Clone, Copy, Debug)]
+pub struct MovingObjects<'a> {
+    pub now: &'a wgpu::Texture,
+    pub removed: &'a wgpu::Texture,
 }
 
 fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
@@ -158,6 +188,42 @@ fn targets(method: Method, latest: bool) -> Vec<Option<wgpu::ColorTargetState>> 
         formats.extend([OFFSETS_FORMAT, CHOSEN_DEPTH_FORMAT]);
     }
     formats.into_iter().map(|f| Some(f.into())).collect()
+}
+
+/// A pipeline drawing `entry` of `shaders/bframe.wgsl` over the frame.
+fn fullscreen_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    entry: &str,
+    constants: &[(&str, f64)],
+    targets: &[Option<wgpu::ColorTargetState>],
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_fullscreen"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
+            targets,
+        }),
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState::default(),
+        multiview_mask: None,
+        cache: None,
+    })
 }
 
 impl BFrames {
@@ -198,6 +264,8 @@ impl BFrames {
             texture_entry(8, float),
             texture_entry(9, float),
             texture_entry(10, wgpu::TextureSampleType::Float { filterable: false }),
+            texture_entry(11, float),
+            texture_entry(12, float),
         ];
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("B-frame"),
@@ -230,32 +298,42 @@ impl BFrames {
             } else {
                 vec![iterations]
             };
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(method.name()),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_fullscreen"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some(entry),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        ..Default::default()
-                    },
-                    targets: &targets(method, latest),
-                }),
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: None,
-                multisample: wgpu::MultisampleState::default(),
-                multiview_mask: None,
-                cache: None,
-            });
-            pipelines.insert(method, pipeline);
+            let made = fullscreen_pipeline(
+                device,
+                &module,
+                method.name(),
+                &pipeline_layout,
+                entry,
+                &constants,
+                &targets(method, latest),
+            );
+            pipelines.insert(method, made);
         }
+        let inpaint_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("character removal"),
+            entries: &[
+                entries[0],
+                texture_entry(14, float),
+                texture_entry(15, float),
+            ],
+        });
+        let inpaint_pipeline_layout =
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("character removal"),
+                bind_group_layouts: &[Some(&inpaint_layout)],
+                immediate_size: 0,
+            });
+        let inpaint = ["fs_inpaint_first", "fs_inpaint"].map(|entry| {
+            fullscreen_pipeline(
+                device,
+                &module,
+                "character removal",
+                &inpaint_pipeline_layout,
+                entry,
+                &[],
+                &[Some(REMOVED_FORMAT.into())],
+            )
+        });
         if let Some(err) = pollster::block_on(scope.pop()) {
             return Err(format!("the B-frame passes do not build: {err}"));
         }
@@ -282,6 +360,18 @@ impl BFrames {
             }),
             turn: std::cell::Cell::new(0),
             latest,
+            inpaint,
+            inpaint_layout,
+            removed: [0, 1].map(|_| {
+                shadecache_host::render_target(
+                    device,
+                    "I-frame 0, moving objects removed",
+                    (size.0.div_ceil(2), size.1.div_ceil(2)),
+                    REMOVED_FORMAT,
+                )
+            }),
+            removed_last: std::cell::Cell::new(0),
+            no_moving: target("no moving objects", REMOVED_FORMAT),
         })
     }
 
@@ -302,20 +392,87 @@ impl BFrames {
         &self.decisions
     }
 
+    /// I-frame 0 with its moving objects wiped out (003 slides 39–46):
+    /// `passes` passes of `fs_inpaint` from its colour and a flow of it
+    /// (w = 2 on a moving object), each timed as `<label>/character
+    /// removal` when a profiler is given. The result is what
+    /// [`BFrames::removed`] returns.
+    pub fn remove_moving_objects(
+        &self,
+        gpu: &Gpu,
+        (color, mask): (&wgpu::Texture, &wgpu::Texture),
+        params: &BFrameParams,
+        passes: u32,
+        mut profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+    ) {
+        gpu.queue.write_buffer(&self.params, 0, &params.bytes());
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        for pass in 0..passes {
+            let out = (pass % 2) as usize;
+            let (color, mask) = if pass == 0 {
+                (view(color), view(mask))
+            } else {
+                let previous = view(&self.removed[1 - out]);
+                (previous.clone(), previous)
+            };
+            let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("character removal"),
+                layout: &self.inpaint_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: self.params.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 14,
+                        resource: wgpu::BindingResource::TextureView(&color),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 15,
+                        resource: wgpu::BindingResource::TextureView(&mask),
+                    },
+                ],
+            });
+            fullscreen_pass(
+                &mut encoder,
+                &mut profiler,
+                "character removal",
+                (&self.inpaint[usize::from(pass > 0)], &bind_group),
+                &[view(&self.removed[out])],
+            );
+            self.removed_last.set(out);
+        }
+        gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// I-frame 0 with its moving objects wiped out, as the last
+    /// [`BFrames::remove_moving_objects`] left it.
+    pub fn removed(&self) -> &wgpu::Texture {
+        &self.removed[self.removed_last.get()]
+    }
+
     /// Renders the B-frame of `method` between `earlier` and `later`, its
-    /// pass timed as `<label>/<method>` when a profiler is given.
+    /// pass timed as `<label>/<method>` when a profiler is given;
+    /// half-velocity with `moving` objects, when the scene has some.
     pub fn render(
         &self,
         gpu: &Gpu,
         method: Method,
         (earlier, later): (&IFrameTextures, &IFrameTextures),
         params: &BFrameParams,
+        moving: Option<MovingObjects>,
         profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
     ) -> Result<(), String> {
         let pipeline = self
             .pipelines
             .get(&method)
             .ok_or_else(|| format!("{} has no B-frame pass", method.name()))?;
+        let params = BFrameParams {
+            moving_objects: moving.is_some(),
+            ..*params
+        };
         gpu.queue.write_buffer(&self.params, 0, &params.bytes());
         let depth = depth_view;
         let (write, read) = (self.turn.get(), 1 - self.turn.get());
@@ -329,6 +486,8 @@ impl BFrames {
             view(later.flow_previous),
             view(&self.offsets[read].0),
             view(&self.offsets[read].1),
+            view(moving.map_or(&self.no_moving, |m| m.now)),
+            view(moving.map_or(&self.no_moving, |m| m.removed)),
         ];
         let mut entries = vec![
             wgpu::BindGroupEntry {
@@ -363,43 +522,61 @@ impl BFrames {
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         let mut profiler = profiler;
-        let query = profiler.as_mut().map(|(profiler, label)| {
-            profiler.begin_pass_query(format!("{label}/{}", method.name()), &mut encoder)
-        });
-        {
-            let attachments: Vec<_> = outputs
-                .iter()
-                .map(|view| {
-                    Some(wgpu::RenderPassColorAttachment {
-                        view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })
-                })
-                .collect();
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(method.name()),
-                color_attachments: &attachments,
-                depth_stencil_attachment: None,
-                timestamp_writes: query
-                    .as_ref()
-                    .and_then(|q| q.render_pass_timestamp_writes()),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &bind_group, &[]);
-            pass.draw(0..3, 0..1);
-        }
-        if let (Some((profiler, _)), Some(query)) = (profiler.as_mut(), query) {
-            profiler.end_query(&mut encoder, query);
-            profiler.resolve_queries(&mut encoder);
-        }
+        fullscreen_pass(
+            &mut encoder,
+            &mut profiler,
+            method.name(),
+            (pipeline, &bind_group),
+            &outputs,
+        );
         gpu.queue.submit([encoder.finish()]);
         Ok(())
+    }
+}
+
+/// Records one fullscreen pass of `pipeline` into `outputs` (cleared),
+/// timed as `<label>/<name>` when a profiler is given.
+fn fullscreen_pass(
+    encoder: &mut wgpu::CommandEncoder,
+    profiler: &mut Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+    name: &str,
+    (pipeline, bind_group): (&wgpu::RenderPipeline, &wgpu::BindGroup),
+    outputs: &[wgpu::TextureView],
+) {
+    let query = profiler
+        .as_mut()
+        .map(|(profiler, label)| profiler.begin_pass_query(format!("{label}/{name}"), encoder));
+    {
+        let attachments: Vec<_> = outputs
+            .iter()
+            .map(|view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect();
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(name),
+            color_attachments: &attachments,
+            depth_stencil_attachment: None,
+            timestamp_writes: query
+                .as_ref()
+                .and_then(|q| q.render_pass_timestamp_writes()),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+    if let (Some((profiler, _)), Some(query)) = (profiler.as_mut(), query) {
+        profiler.end_query(encoder, query);
+        profiler.resolve_queries(encoder);
     }
 }

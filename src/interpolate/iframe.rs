@@ -65,6 +65,19 @@ pub enum SceneMode {
     /// I-frame 0, as (p − p₀, seen there, 1) in the colour output, for
     /// the image-based search's correspondence error.
     Correspondence = 3,
+    /// Not a B-frame: the moving objects alone (the host draws no other)
+    /// at the B-frame's time, each pixel's offset from I-frame 0 as
+    /// (p − p₀, 0, 1) where no still surface hides it, 0 elsewhere: seed
+    /// 003's dynamic-object velocity, its w the dynamic-object mask.
+    MovingObjects = 4,
+}
+
+impl SceneMode {
+    /// Whether the pass writes offsets, not colours (its colour target is
+    /// then `rgba16float`, whatever the user's colour format).
+    fn writes_offsets(self) -> bool {
+        matches!(self, SceneMode::Correspondence | SceneMode::MovingObjects)
+    }
 }
 
 /// The I-frame pass's module, its WGSL and its plan, and which bindings
@@ -514,7 +527,7 @@ impl IFrameShader {
         let color_format = iframe
             .color_targets
             .iter()
-            .find(|t| t.location == self.scene_locations[0])
+            .find(|t| t.location == self.scene_locations[0] && !mode.writes_offsets())
             .map_or(TextureFormat::Rgba16Float, |t| t.format);
         let pass_bindings = |group_too: bool| -> Vec<[u32; 2]> {
             let mut keys: Vec<[u32; 2]> = self
@@ -545,7 +558,7 @@ impl IFrameShader {
                     load: LoadOp::Clear,
                 },
             ],
-            discards: mode == SceneMode::ShadeOnMiss,
+            discards: matches!(mode, SceneMode::ShadeOnMiss | SceneMode::MovingObjects),
             bindings: pass_bindings(true),
             ..iframe.clone()
         }];

@@ -71,7 +71,22 @@
 //!   instead, extrapolated, unless its direction differs from the current
 //!   one's by more than `min_cosine`, where the pixel is held ("no worse
 //!   than 30 fps"). It reads no colour of I-frame 1: no extra latency.
-//!   Andreev's dynamic-object mask and inpainting are not built yet.
+//!   Moving objects (003's dynamic objects, slides 33–47; on unless
+//!   `--no-moving-objects`): the objects the scene moves in the world
+//!   ([`Scene::moves`]) are drawn alone at the B-frame's time by the
+//!   scene-assisted pass in its moving-objects mode, which writes each
+//!   pixel's exact offset from I-frame 0 and so the mask; a still surface
+//!   hides a fragment where both I-frames show a nearer one at its pixel.
+//!   Those pixels take I-frame 0's colour where their point is. The
+//!   I-frame pass marks moving objects in its flows (w = 2, from a
+//!   per-object flag the host sets), and character removal wipes them out
+//!   of I-frame 0 once an interval: `--inpaint-passes` passes (3) at
+//!   quarter resolution, as the paper's, each filling a masked pixel with
+//!   the mean of its unmasked neighbours `--inpaint-delta` pixels away (2)
+//!   and unmasking it for the next (the paper's horizontal/vertical and
+//!   blur refinements are left out). Where the point sampled showed a
+//!   moving object that is not at the pixel now, the removed frame is
+//!   shown (slide 47). These passes count in half-velocity's B-frame time.
 //! - Baselines, in the same run: `reference` (every frame rendered),
 //!   `sample-and-hold` (I-frame 0 shown again) and `linear-blend` (the two
 //!   I-frames cross-faded at the same pixel).
@@ -250,6 +265,15 @@ pub struct Options {
     pub velocity_merge: bool,
     /// Half-velocity's direction test.
     pub min_cosine: f32,
+    /// Half-velocity's moving objects (003 slides 33–47): drawn at each
+    /// B-frame's time for their exact offsets and mask, and wiped out of
+    /// the earlier I-frame where they have left. Else every pixel follows
+    /// the merged velocity.
+    pub moving_objects: bool,
+    /// Character removal's passes over the earlier I-frame.
+    pub inpaint_passes: u32,
+    /// Character removal's neighbour distance, in pixels.
+    pub inpaint_delta: u32,
     pub size: Option<[u32; 2]>,
     /// Displayed frames measured (rounded up to whole intervals).
     pub frames: Option<u32>,
@@ -278,6 +302,9 @@ impl Default for Options {
             latest_frame_init: false,
             velocity_merge: true,
             min_cosine: 0.5,
+            moving_objects: true,
+            inpaint_passes: 3,
+            inpaint_delta: 2,
             size: None,
             frames: None,
             entry: None,

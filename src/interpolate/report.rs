@@ -62,6 +62,13 @@ pub struct Parameters {
     pub latest_frame_init: bool,
     /// Half-velocity's velocity merging.
     pub velocity_merge: bool,
+    /// Half-velocity's moving objects drawn at each B-frame's time and
+    /// removed from the earlier I-frame (003 slides 33–47).
+    pub moving_objects: bool,
+    /// Character removal's passes and neighbour distance (pixels, at
+    /// quarter resolution).
+    pub inpaint_passes: u32,
+    pub inpaint_delta: u32,
     /// Half-velocity's direction test.
     pub min_cosine: f32,
     pub flow_format: String,

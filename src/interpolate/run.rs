@@ -5,7 +5,7 @@
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
-use super::bframe::{BFrameParams, BFrames, Decision, IFrameTextures};
+use super::bframe::{BFrameParams, BFrames, Decision, IFrameTextures, MovingObjects};
 use super::iframe::{self, IFrameShader, SceneMode};
 use super::report::{
     self, DisplayedFrame, KeptFrame, KeptIFrame, MethodReport, Parameters, Pictures, Report,
@@ -56,6 +56,12 @@ fn check(options: &Options) -> Result<(), Error> {
     }
     if options.methods.is_empty() {
         return Err(fail("no method to run".into()));
+    }
+    if options.inpaint_passes == 0 || options.inpaint_delta == 0 {
+        return Err(fail(format!(
+            "--inpaint-passes and --inpaint-delta must be at least 1, not {} and {}",
+            options.inpaint_passes, options.inpaint_delta
+        )));
     }
     Ok(())
 }
@@ -131,8 +137,19 @@ pub(super) fn run(
                 .to_string(),
         );
     }
-    let (mut scene_runs, mut correspondence) =
-        geometry_runs(&bench, &instrumented, &sources, options, &mut notes);
+    let moving: Vec<bool> = (0..scene.objects.len()).map(|i| scene.moves(i)).collect();
+    let GeometryRuns {
+        scene: mut scene_runs,
+        mut correspondence,
+        moving: mut moving_runs,
+    } = geometry_runs(
+        &bench,
+        &instrumented,
+        &sources,
+        options,
+        &moving,
+        &mut notes,
+    );
     let bframes = BFrames::new(
         &gpu,
         (size[0], size[1]),
@@ -156,6 +173,7 @@ pub(super) fn run(
         options,
         size,
         far_depth: scene.camera.depth.far_depth(),
+        moving: &moving,
     };
     let total = u64::from(WARMUP_INTERVALS + intervals)
         * u64::from(n + 1 + (b_methods.len() + scene_runs.len()) as u32 * (n - 1));
@@ -183,6 +201,7 @@ pub(super) fn run(
                 &mut slots,
                 &mut scene_runs,
                 correspondence.as_mut(),
+                moving_runs.as_mut(),
             ),
             &inputs_of,
             (interval, record),
@@ -194,18 +213,31 @@ pub(super) fn run(
     Ok(run.report(shader, scene_path, &clock, measured, intervals, notes))
 }
 
+/// The runs that rasterise the geometry at B-frame times.
+struct GeometryRuns {
+    /// One per scene-assisted method.
+    scene: Vec<SceneRun>,
+    /// With image-based, the exact correspondences its search is measured
+    /// against.
+    correspondence: Option<Correspondence>,
+    /// With half-velocity, its moving objects.
+    moving: Option<MovingRuns>,
+}
+
 /// The runs that rasterise the geometry at each B-frame's time, through
 /// the host, binding the I-frames in the group after the twins': one per
-/// scene-assisted method, and with image-based the exact correspondences
-/// its search is measured against (000 Fig. 11, drawn untimed). What
-/// cannot be made is said in `notes`.
+/// scene-assisted method, with image-based the exact correspondences its
+/// search is measured against (000 Fig. 11, drawn untimed), and with
+/// half-velocity its moving objects (`moving`: which of the scene's
+/// objects move). What cannot be made is said in `notes`.
 fn geometry_runs(
     bench: &Bench,
     instrumented: &IFrameShader,
     sources: &HashMap<String, String>,
     options: &Options,
+    moving: &[bool],
     notes: &mut Vec<String>,
-) -> (Vec<SceneRun>, Option<Correspondence>) {
+) -> GeometryRuns {
     let gpu = bench.gpu;
     let scene_run = |method: Method, mode: SceneMode| -> Result<SceneRun, String> {
         let group = instrumented.scene_group;
@@ -254,7 +286,55 @@ fn geometry_runs(
             )),
         }
     }
-    (scene_runs, correspondence)
+    let mut moving_runs = None;
+    let half_velocity = options.methods.contains(&Method::HalfVelocity);
+    if half_velocity && options.moving_objects && moving.contains(&true) {
+        match scene_run(Method::HalfVelocity, SceneMode::MovingObjects) {
+            Ok(now) => {
+                moving_runs = Some(MovingRuns {
+                    now,
+                    moving: moving.to_vec(),
+                })
+            }
+            Err(reason) => notes.push(format!(
+                "half-velocity treats moving objects as the rest (no exact offsets, no removal): {reason}"
+            )),
+        }
+    }
+    GeometryRuns {
+        scene: scene_runs,
+        correspondence,
+        moving: moving_runs,
+    }
+}
+
+/// Half-velocity's moving objects (003 slides 33–47): the scene-assisted
+/// pass in its moving-objects mode, drawing only the objects that move at
+/// each B-frame's time (their exact offsets and mask). Where I-frame 0
+/// shows one, its flows say so (w = 2), which character removal reads.
+struct MovingRuns {
+    now: SceneRun,
+    /// Which of the scene's objects move.
+    moving: Vec<bool>,
+}
+
+impl MovingRuns {
+    /// `inputs` with only the moving objects drawn.
+    fn only_moving(&self, mut inputs: FrameInputs) -> FrameInputs {
+        for (object, moves) in inputs.objects.iter_mut().zip(&self.moving) {
+            if !moves {
+                object.instances = 0;
+            }
+        }
+        inputs
+    }
+}
+
+/// The profiler of a timed recording, lent to one of its passes.
+fn reborrow<'a>(
+    profiler: &'a mut Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+) -> Option<(&'a mut wgpu_profiler::GpuProfiler, &'a str)> {
+    profiler.as_mut().map(|(p, label)| (&mut **p, *label))
 }
 
 /// A B-frame read back: when it is, its time (ms), its colour and its
@@ -292,6 +372,13 @@ impl SceneRun {
             }),
             sampler: super::bframe::linear_clamp(&gpu.device),
         }
+    }
+
+    /// Its pass's target at output `location`.
+    fn output(&self, location: u32) -> Result<&wgpu::Texture, String> {
+        self.runner.color_at(location).ok_or_else(|| {
+            format!("internal error: the scene-assisted pass has no target at {location}")
+        })
     }
 
     /// Binds the two I-frames and this B-frame's parameters
@@ -384,6 +471,7 @@ impl Correspondence {
                 (&textures.0, &textures.1),
                 params,
                 None,
+                None,
             )
             .map_err(fail)?;
         let found = read_linear(gpu, self.search.written_offsets()).map_err(fail)?;
@@ -445,6 +533,8 @@ struct Schedule<'a> {
     options: &'a Options,
     size: [u32; 2],
     far_depth: f32,
+    /// Which of the scene's objects move ([`Scene::moves`]).
+    moving: &'a [bool],
 }
 
 impl Schedule<'_> {
@@ -461,11 +551,17 @@ impl Schedule<'_> {
         let mut now = inputs_of(frame)?;
         let before = inputs_of(previous)?;
         let after = inputs_of(next)?;
-        let params: Vec<u8> = [self.size[0] as f32, self.size[1] as f32, 0.0, 0.0]
+        for (index, object) in now.objects.iter_mut().enumerate() {
+            let moving = self.moving.get(index).copied().unwrap_or(false);
+            let params: Vec<u8> = [
+                self.size[0] as f32,
+                self.size[1] as f32,
+                f32::from(u8::from(moving)),
+                0.0,
+            ]
             .iter()
             .flat_map(|v| v.to_le_bytes())
             .collect();
-        for (index, object) in now.objects.iter_mut().enumerate() {
             for (twins, other) in [
                 (&self.instrumented.previous, &before),
                 (&self.instrumented.next, &after),
@@ -484,9 +580,7 @@ impl Schedule<'_> {
                     object.buffers.insert(*twin, bytes.clone());
                 }
             }
-            object
-                .buffers
-                .insert(self.instrumented.params, params.clone());
+            object.buffers.insert(self.instrumented.params, params);
         }
         Ok(now)
     }
@@ -511,11 +605,12 @@ impl Schedule<'_> {
     fn interval(
         &self,
         clock: &mut Clock,
-        (reference, slots, scene_runs, mut correspondence): (
+        (reference, slots, scene_runs, mut correspondence, mut moving): (
             &mut Runner,
             &mut [Runner; 2],
             &mut [SceneRun],
             Option<&mut Correspondence>,
+            Option<&mut MovingRuns>,
         ),
         inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
         (interval, record): (u32, bool),
@@ -568,14 +663,49 @@ impl Schedule<'_> {
             self.textures(&slots[later])?,
         );
         for &method in self.methods {
+            // Half-velocity's moving objects: wiped out of I-frame 0 once
+            // an interval, timed with its first B-frame.
+            let mut moving = moving
+                .as_deref_mut()
+                .filter(|_| method == Method::HalfVelocity);
+            let mut removal = moving.is_some();
             for k in self.frames_of_interval(record, measured) {
                 let params = self.params(k);
-                let (time, _, _) = timed_recording(clock, "bframe", |profiler| {
+                let now_inputs = match moving.as_deref_mut() {
+                    Some(runs) => {
+                        runs.now.bind(self.gpu, &textures, &params)?;
+                        let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
+                        Some(runs.only_moving(inputs))
+                    }
+                    None => None,
+                };
+                let (time, _, _) = timed_recording(clock, "bframe", |mut profiler| {
+                    let mut objects = None;
+                    if let (Some(runs), Some(now_inputs)) = (moving.as_deref_mut(), &now_inputs) {
+                        let location = self.instrumented.scene_locations[0];
+                        if std::mem::take(&mut removal) {
+                            self.bframes.remove_moving_objects(
+                                self.gpu,
+                                (textures.0.color, textures.0.flow_next),
+                                &params,
+                                self.options.inpaint_passes,
+                                reborrow(&mut profiler),
+                            );
+                        }
+                        runs.now
+                            .runner
+                            .frame(self.gpu, now_inputs, reborrow(&mut profiler))?;
+                        objects = Some(MovingObjects {
+                            now: runs.now.output(location)?,
+                            removed: self.bframes.removed(),
+                        });
+                    }
                     self.bframes.render(
                         self.gpu,
                         method,
                         (&textures.0, &textures.1),
                         &params,
+                        objects,
                         profiler,
                     )
                 })
@@ -610,17 +740,10 @@ impl Schedule<'_> {
                 progress.step(scene_run.method.name());
                 if record {
                     let [color, decision] = self.instrumented.scene_locations;
-                    let target = |location| {
-                        scene_run.runner.color_at(location).ok_or_else(|| {
-                            fail(format!(
-                                "internal error: the scene-assisted pass has no target at {location}"
-                            ))
-                        })
-                    };
                     let sample = self.sample(
                         (start + k, &params, time),
-                        target(color)?,
-                        target(decision)?,
+                        scene_run.output(color).map_err(fail)?,
+                        scene_run.output(decision).map_err(fail)?,
                     )?;
                     self.keep(
                         measured,
@@ -787,12 +910,14 @@ impl Schedule<'_> {
             far_depth: self.far_depth,
             dual_init: self.options.dual_init,
             velocity_merge: self.options.velocity_merge,
+            moving_objects: false,
             min_cosine: self.options.min_cosine,
             // The B-frame before in the same interval (k − 1 ≥ 1: the
             // first B-frame of an interval does not read the last
             // interval's offsets, which belong to other I-frames).
             previous_alpha: (self.options.latest_frame_init && k >= 2)
                 .then(|| (k - 1) as f32 / self.options.frames_per_interval as f32),
+            inpaint_delta: self.options.inpaint_delta,
         }
     }
 
@@ -981,6 +1106,9 @@ impl Schedule<'_> {
                 dual_init: self.options.dual_init,
                 latest_frame_init: self.options.latest_frame_init,
                 velocity_merge: self.options.velocity_merge,
+                moving_objects: self.options.moving_objects,
+                inpaint_passes: self.options.inpaint_passes,
+                inpaint_delta: self.options.inpaint_delta,
                 min_cosine: self.options.min_cosine,
                 flow_format: "rgba16float".into(),
                 flows: "both flows from the I-frame pass (next- and previous-I-frame twins)".into(),

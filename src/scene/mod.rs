@@ -508,6 +508,27 @@ impl Scene {
         self.effects.contains(&effect)
     }
 
+    /// Whether object `index` moves in the world: it turns, travels or
+    /// deforms (its instances spin or orbit) under the declared effects. A
+    /// still object still moves on screen when the camera does; this is
+    /// the "dynamic" of seed 003, whose motion the camera's does not give.
+    pub fn moves(&self, index: usize) -> bool {
+        let Some(object) = self.objects.get(index) else {
+            return false;
+        };
+        let deforms = object.deformation.is_some() && self.has(Effect::Deformation);
+        let nonzero = |v: &[f32]| v.iter().any(|x| *x != 0.0);
+        let travels = nonzero(&object.rotation_degrees_per_frame)
+            || nonzero(&object.translation_per_frame)
+            || object.instances.as_ref().is_some_and(|i| {
+                i.spin_degrees_per_frame
+                    .iter()
+                    .any(|s| *s != glam::Vec3::ZERO)
+                    || nonzero(&i.orbit_degrees_per_frame)
+            });
+        deforms || (travels && self.has(Effect::ObjectMotion))
+    }
+
     /// Object `index`'s mesh as frame `n` deforms it, when the scene
     /// declares `deformation` and the object has one; `None` when its mesh
     /// does not change.

@@ -475,6 +475,10 @@ fn every_interpolation_pass_is_valid_and_builds() {
         for mode in [
             interpolate::iframe::SceneMode::ClosestOnMiss,
             interpolate::iframe::SceneMode::ShadeOnMiss,
+            // Offsets into an rgba16float target, whatever the user's
+            // colour format.
+            interpolate::iframe::SceneMode::Correspondence,
+            interpolate::iframe::SceneMode::MovingObjects,
         ] {
             match instrumented.scene_plan(mode) {
                 Ok(plan) => plans.push(plan),
@@ -517,6 +521,7 @@ fn interpolate_bad_input_is_an_error() {
         (vec!["--iterations", "0"], "iterations"),
         (vec!["--method", "optical-flow"], "optical-flow"),
         (vec!["--screen-epsilon=-1"], "screen-epsilon"),
+        (vec!["--inpaint-passes", "0"], "inpaint-passes"),
     ] {
         let mut full = vec!["interpolate", marble, "--scene", scene, "--out", &out_arg];
         full.extend(args.iter().copied());
@@ -640,7 +645,15 @@ fn flows_match_cpu_projection() {
                         moved.z - z,
                     );
                     let got = glam::Vec3::new(flow[p * 4], flow[p * 4 + 1], flow[p * 4 + 2]);
-                    assert_eq!(flow[p * 4 + 3], 1.0, "pixel {p} of frame {}", iframe.frame);
+                    // Valid, and 2 on what moves in the world (the
+                    // sphere), 1 on what is still (the floor).
+                    let valid = if scene.moves(object) { 2.0 } else { 1.0 };
+                    assert_eq!(
+                        flow[p * 4 + 3],
+                        valid,
+                        "pixel {p} of frame {}",
+                        iframe.frame
+                    );
                     let off = (got - expected).abs();
                     assert!(
                         off.x <= 0.02 + 2e-3 * expected.x.abs()
@@ -728,13 +741,24 @@ fn square_speed(pixels: f32) -> f32 {
 }
 
 /// Half-velocity's B-frames of the sliding square (n = 2, α = ½) moving
-/// `pixels` a frame, with velocity merging or without, and the scene.
+/// `pixels` a frame, with velocity merging or without, and the scene. The
+/// square is treated as the rest of the scene (no moving-object offsets
+/// or removal): what is checked is the velocity alone.
 fn half_velocity_frames(velocity_merge: bool, pixels: f32) -> Option<(Pictures, Scene)> {
+    half_velocity_frames_with(velocity_merge, false, pixels)
+}
+
+fn half_velocity_frames_with(
+    velocity_merge: bool,
+    moving_objects: bool,
+    pixels: f32,
+) -> Option<(Pictures, Scene)> {
     let options = Options {
         methods: vec![Method::HalfVelocity],
         frames_per_interval: 2,
         frames: Some(6),
         velocity_merge,
+        moving_objects,
         keep_frames: true,
         ..Options::default()
     };
@@ -1048,4 +1072,209 @@ fn converged_starts_on_two_surfaces_keep_the_nearer() {
         far_off * 100 <= outline * 6,
         "{far_off} of {outline} outline pixels far off: the sphere lost its rim"
     );
+}
+
+/// Two squares crossing before a wall in opposite directions, the camera
+/// still, `speed` world units a frame each.
+fn crossing_squares(speed: f32) -> String {
+    format!(
+        r#"
+size = [96, 96]
+frames = 8
+effects = ["object-motion"]
+[camera]
+eye = [0.0, 0.0, 3.0]
+target = [0.0, 0.0, 0.0]
+[light]
+position = [0.0, 0.0, 10.0]
+[[objects]]
+mesh = {{ kind = "plane", size = 6.0, subdivisions = 2 }}
+position = [0.0, 0.0, -1.0]
+rotation_degrees = [90.0, 0.0, 0.0]
+[[objects]]
+mesh = {{ kind = "plane", size = 0.5, subdivisions = 2 }}
+position = [-0.6, 0.4, 0.0]
+rotation_degrees = [90.0, 0.0, 0.0]
+translation_per_frame = [{speed}, 0.0, 0.0]
+[[objects]]
+mesh = {{ kind = "plane", size = 0.5, subdivisions = 2 }}
+position = [0.6, -0.4, 0.0]
+rotation_degrees = [90.0, 0.0, 0.0]
+translation_per_frame = [-{speed}, 0.0, 0.0]
+"#
+    )
+}
+
+/// Seed 003's moving objects (slides 33–47): drawn at the B-frame's time
+/// they are where they are, and where they have left the earlier frame
+/// shows the wall synthesised around them, not the objects again. With
+/// the later frame's velocity alone (no merging, which hides the tails
+/// another way) and without the moving objects, each square leaves a
+/// ghost half its displacement wide; with them, none.
+#[test]
+fn moving_objects_leave_no_tail() {
+    let run = |moving_objects: bool| {
+        let options = Options {
+            methods: vec![Method::HalfVelocity],
+            frames_per_interval: 2,
+            frames: Some(6),
+            velocity_merge: false,
+            moving_objects,
+            keep_frames: true,
+            ..Options::default()
+        };
+        run_interpolation(
+            SLIDING_SHADED,
+            &crossing_squares(square_speed(4.0)),
+            options,
+        )
+    };
+    let (Some((_, with, scene)), Some((_, without, _))) = (run(true), run(false)) else {
+        return;
+    };
+    // Pixels showing a square where the reference shows the wall, and
+    // the squares' pixels more than a resampling error off, away from
+    // the squares' outlines at the three times.
+    let count = |pictures: &Pictures| -> (usize, usize) {
+        let (mut ghosts, mut off) = (0, 0);
+        for frame in kept(pictures, Method::HalfVelocity) {
+            let times = [frame.frame - 1, frame.frame, frame.frame + 1];
+            let masks: Vec<Vec<bool>> = [1, 2]
+                .iter()
+                .flat_map(|&o| times.map(|f| crate::util::silhouette(&scene, o, f, 96, 96)))
+                .collect();
+            let outline = |p: usize| {
+                masks
+                    .iter()
+                    .any(|m| crate::util::near(m, 96, p) && !crate::util::interior(m, 96)[p])
+            };
+            for p in (0..96 * 96).filter(|&p| !outline(p)) {
+                if frame.result[p * 4] > SQUARE && frame.reference[p * 4] < SQUARE {
+                    ghosts += 1;
+                }
+                if frame.reference[p * 4] > SQUARE && error_at(frame, p) > 0.02 {
+                    off += 1;
+                }
+            }
+        }
+        (ghosts, off)
+    };
+    let ((ghosts, off), (ghosts_without, _)) = (count(&with), count(&without));
+    assert!(
+        ghosts_without >= 40,
+        "{ghosts_without} ghost pixels without the moving objects"
+    );
+    assert_eq!(ghosts, 0, "ghost pixels with the moving objects");
+    assert_eq!(off, 0, "square pixels off with the moving objects");
+}
+
+/// Character removal's rules (003 slide 46), on a synthetic mask: a
+/// masked pixel with an unmasked neighbour `delta` away takes their mean;
+/// one with none is left as it was, still masked; each pass reaches
+/// `delta` further in, so the fill grows from the mask's edge.
+#[test]
+fn character_removal_fills_from_unmasked_neighbours() {
+    use shadecache::interpolate::bframe::{BFrameParams, BFrames};
+    use wgpu::util::DeviceExt;
+    let Some(gpu) = crate::gpu::gpu() else {
+        return;
+    };
+    // 32 × 32: colour x/32 in red, y/32 in green; a moving object (flow w
+    // = 2) over columns 8–23 of every row.
+    let (w, h) = (32u32, 32u32);
+    let texture = |label, format, bytes: &[u8]| {
+        gpu.device.create_texture_with_data(
+            &gpu.queue,
+            &wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytes,
+        )
+    };
+    let half = |v: f32| half::f16::from_f32(v).to_le_bytes();
+    let masked = |x: u32| (8..24).contains(&x);
+    let mut color = Vec::new();
+    let mut flow = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            for v in [x as f32 / 32.0, y as f32 / 32.0, 0.0, 1.0] {
+                color.extend(half(v));
+            }
+            let valid = if masked(x) { 2.0 } else { 1.0 };
+            for v in [0.0, 0.0, 0.0, valid] {
+                flow.extend(half(v));
+            }
+        }
+    }
+    let color = texture("colour", wgpu::TextureFormat::Rgba16Float, &color);
+    let flow = texture("flow", wgpu::TextureFormat::Rgba16Float, &flow);
+    let bframes = BFrames::new(&gpu, (w, h), &[Method::HalfVelocity], (3, false)).unwrap();
+    let params = BFrameParams {
+        viewport: [w as f32, h as f32],
+        alpha: 0.5,
+        screen_epsilon: 1.0,
+        depth_epsilon: 0.01,
+        far_depth: 1.0,
+        dual_init: true,
+        velocity_merge: true,
+        moving_objects: true,
+        min_cosine: 0.5,
+        previous_alpha: None,
+        inpaint_delta: 1,
+    };
+    // At quarter resolution (16 × 16, pixel i reading column 2i): columns
+    // 4–11 masked. One pass fills 4 and 11 from 3 and 12.
+    let removal = |passes: u32| -> Vec<f32> {
+        bframes.remove_moving_objects(&gpu, (&color, &flow), &params, passes, None);
+        let bytes = shadecache::runtime::read_texture(&gpu, bframes.removed(), 8).unwrap();
+        shadecache::profile::metrics::linear_from_f16(&bytes)
+    };
+    let at = |pixels: &[f32], x: usize, y: usize| -> [f32; 4] {
+        let i = (y * 16 + x) * 4;
+        [pixels[i], pixels[i + 1], pixels[i + 2], pixels[i + 3]]
+    };
+    let close = |a: f32, b: f32| (a - b).abs() < 2e-3;
+    let one = removal(1);
+    let y = 5;
+    let row = 2.0 * y as f32 / 32.0;
+    for x in 0..16 {
+        let [r, g, _, state] = at(&one, x, y);
+        let source = 2.0 * x as f32 / 32.0;
+        match x {
+            // Unmasked: unchanged, never masked.
+            0..=3 | 12..=15 => assert!(close(r, source) && state == 0.0, "x {x}: {r} {state}"),
+            // The edge: the mean of the unmasked neighbours, left and
+            // right of it (3 and 12 in the full frame's 6 and 24) and
+            // above and below (masked too).
+            4 => assert!(
+                close(r, 6.0 / 32.0) && close(g, row) && state == 0.5,
+                "x 4: {r} {g} {state}"
+            ),
+            11 => assert!(close(r, 24.0 / 32.0) && state == 0.5, "x 11: {r} {state}"),
+            // Inside: no unmasked neighbour, left as it was, still masked.
+            _ => assert!(close(r, source) && state == 1.0, "x {x}: {r} {state}"),
+        }
+    }
+    // Three passes: columns 4–6 and 9–11 filled, each from the one
+    // filled before; 7 and 8 still masked.
+    let three = removal(3);
+    for x in [4, 5, 6, 9, 10, 11] {
+        assert_eq!(at(&three, x, y)[3], 0.5, "x {x} after three passes");
+    }
+    assert!(close(at(&three, 5, y)[0], 6.0 / 32.0), "x 5 takes 4's fill");
+    for x in [7, 8] {
+        assert_eq!(at(&three, x, y)[3], 1.0, "x {x} after three passes");
+    }
 }

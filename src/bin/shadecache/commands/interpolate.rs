@@ -104,6 +104,22 @@ pub struct Args {
     )]
     pub min_cosine: f32,
 
+    /// Half-velocity without its moving-object handling (seed 003 slides
+    /// 33–47): the objects that move are then not drawn at each B-frame's
+    /// time for their exact offsets, nor wiped out of the earlier frame
+    /// where they have left.
+    #[arg(long)]
+    pub no_moving_objects: bool,
+
+    /// Character removal's passes: each fills the masked pixels next to
+    /// unmasked ones.
+    #[arg(long, value_name = "N", default_value_t = 3)]
+    pub inpaint_passes: u32,
+
+    /// Character removal's neighbour distance, in pixels.
+    #[arg(long, value_name = "PX", default_value_t = 2)]
+    pub inpaint_delta: u32,
+
     /// Also average each method's frames around every I-frame into a
     /// motion-blurred frame (seed 000 §9) and compare it with the
     /// reference's; use with a large n (the paper: 10).
@@ -151,6 +167,9 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         motion_blur: args.motion_blur,
         velocity_merge: !args.no_velocity_merge,
         min_cosine: args.min_cosine,
+        moving_objects: !args.no_moving_objects,
+        inpaint_passes: args.inpaint_passes,
+        inpaint_delta: args.inpaint_delta,
         size: args.size,
         frames: args.frames,
         entry: args.stages.entry.clone(),
