@@ -220,28 +220,18 @@ fn better(a: Found, b: Found) -> Found {
     return a;
 }
 
-// Eq. 14: the colour of a point found in I-frame 0, blended with the same
-// point in I-frame 1 (carried there by the exact flow) where it is visible
-// there; else I-frame 0's alone (§5.2's fallback).
-fn from_frame_0(found: Found) -> vec4<f32> {
-    let c0 = bilinear(color_0, found.point);
+// Eqs. 14–15: the colour of a point found in one I-frame (`own`),
+// blended with the same point in the other (carried there by the exact
+// flow, weighted `other_weight`) where it is visible there; else its own
+// I-frame's alone (§5.2's fallback).
+fn carried(found: Found, own: texture_2d<f32>, other: texture_2d<f32>, other_depth: texture_depth_2d, other_weight: f32) -> vec4<f32> {
+    let color = bilinear(own, found.point);
     let there = found.point + found.flow.xy;
-    let agree = depths_agree(depth_at(depth_1, there), found.own_depth + found.flow.z);
+    let agree = depths_agree(depth_at(other_depth, there), found.own_depth + found.flow.z);
     if (found.flow.w > 0.5) & on_screen(there) & agree {
-        return mix(c0, bilinear(color_1, there), params.alpha);
+        return mix(color, bilinear(other, there), other_weight);
     }
-    return c0;
-}
-
-// Eq. 15: the same from a point found in I-frame 1.
-fn from_frame_1(found: Found) -> vec4<f32> {
-    let c1 = bilinear(color_1, found.point);
-    let there = found.point + found.flow.xy;
-    let agree = depths_agree(depth_at(depth_0, there), found.own_depth + found.flow.z);
-    if (found.flow.w > 0.5) & on_screen(there) & agree {
-        return mix(bilinear(color_0, there), c1, params.alpha);
-    }
-    return c1;
+    return color;
 }
 
 // What the image-based pass writes: besides the colour and decision, the
@@ -338,10 +328,10 @@ fn image_based(p: vec2<f32>) -> ImageBased {
     var color: vec4<f32>;
     var depth: f32;
     if use_forward {
-        color = from_frame_0(forward);
+        color = carried(forward, color_0, color_1, depth_1, params.alpha);
         depth = forward.depth;
     } else {
-        color = from_frame_1(backward);
+        color = carried(backward, color_1, color_0, depth_0, 1.0 - params.alpha);
         depth = backward.depth;
     }
     return ImageBased(color, decision, vec4<f32>(p - forward.point, p - backward.point), depth);

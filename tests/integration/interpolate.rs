@@ -708,10 +708,10 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
 /// Brightness of [`SLIDING_SHADED`] above which a pixel shows the square.
 const SQUARE: f32 = 0.4;
 
-/// A square sliding to the right before a wall, the camera still, `speed`
-/// world units a frame: a constant velocity.
-fn sliding_square(speed: f32) -> String {
-    format!(
+/// Squares before a wall, the camera still: each `(size, [x, y], speed)`,
+/// moving `speed` world units a frame along x, the wall `wall_speed`.
+fn squares_before_wall(wall_speed: f32, squares: &[(f32, [f32; 2], f32)]) -> String {
+    let mut scene = format!(
         r#"
 size = [96, 96]
 frames = 8
@@ -725,13 +725,26 @@ position = [0.0, 0.0, 10.0]
 mesh = {{ kind = "plane", size = 6.0, subdivisions = 2 }}
 position = [0.0, 0.0, -1.0]
 rotation_degrees = [90.0, 0.0, 0.0]
-[[objects]]
-mesh = {{ kind = "plane", size = 0.8, subdivisions = 2 }}
-position = [-0.6, 0.0, 0.0]
+translation_per_frame = [{wall_speed}, 0.0, 0.0]
+"#
+    );
+    for (size, [x, y], speed) in squares {
+        scene += &format!(
+            r#"[[objects]]
+mesh = {{ kind = "plane", size = {size}, subdivisions = 2 }}
+position = [{x}, {y}, 0.0]
 rotation_degrees = [90.0, 0.0, 0.0]
 translation_per_frame = [{speed}, 0.0, 0.0]
 "#
-    )
+        );
+    }
+    scene
+}
+
+/// A square sliding to the right before a wall, the camera still, `speed`
+/// world units a frame: a constant velocity.
+fn sliding_square(speed: f32) -> String {
+    squares_before_wall(0.0, &[(0.8, [-0.6, 0.0], speed)])
 }
 
 /// World units a frame that move the sliding square `pixels` pixels at
@@ -1077,31 +1090,9 @@ fn converged_starts_on_two_surfaces_keep_the_nearer() {
 /// Two squares crossing before a wall in opposite directions, the camera
 /// still, `speed` world units a frame each.
 fn crossing_squares(speed: f32) -> String {
-    format!(
-        r#"
-size = [96, 96]
-frames = 8
-effects = ["object-motion"]
-[camera]
-eye = [0.0, 0.0, 3.0]
-target = [0.0, 0.0, 0.0]
-[light]
-position = [0.0, 0.0, 10.0]
-[[objects]]
-mesh = {{ kind = "plane", size = 6.0, subdivisions = 2 }}
-position = [0.0, 0.0, -1.0]
-rotation_degrees = [90.0, 0.0, 0.0]
-[[objects]]
-mesh = {{ kind = "plane", size = 0.5, subdivisions = 2 }}
-position = [-0.6, 0.4, 0.0]
-rotation_degrees = [90.0, 0.0, 0.0]
-translation_per_frame = [{speed}, 0.0, 0.0]
-[[objects]]
-mesh = {{ kind = "plane", size = 0.5, subdivisions = 2 }}
-position = [0.6, -0.4, 0.0]
-rotation_degrees = [90.0, 0.0, 0.0]
-translation_per_frame = [-{speed}, 0.0, 0.0]
-"#
+    squares_before_wall(
+        0.0,
+        &[(0.5, [-0.6, 0.4], speed), (0.5, [0.6, -0.4], -speed)],
     )
 }
 
@@ -1292,30 +1283,10 @@ fn character_removal_fills_from_unmasked_neighbours() {
 /// average, which is why it is off by default.
 #[test]
 fn latest_frame_init_helps_at_discontinuities() {
-    let scene_text = format!(
-        r#"
-size = [96, 96]
-frames = 8
-effects = ["object-motion"]
-[camera]
-eye = [0.0, 0.0, 3.0]
-target = [0.0, 0.0, 0.0]
-[light]
-position = [0.0, 0.0, 10.0]
-[[objects]]
-mesh = {{ kind = "plane", size = 6.0, subdivisions = 2 }}
-position = [0.0, 0.0, -1.0]
-rotation_degrees = [90.0, 0.0, 0.0]
-translation_per_frame = [-{wall}, 0.0, 0.0]
-[[objects]]
-mesh = {{ kind = "plane", size = 0.4, subdivisions = 2 }}
-position = [-0.6, 0.0, 0.0]
-rotation_degrees = [90.0, 0.0, 0.0]
-translation_per_frame = [{square}, 0.0, 0.0]
-"#,
-        // The wall is 4 units from the camera, the square 3.
-        wall = square_speed(3.0) * 4.0 / 3.0,
-        square = square_speed(5.0)
+    // The wall is 4 units from the camera, the square 3.
+    let scene_text = squares_before_wall(
+        -square_speed(3.0) * 4.0 / 3.0,
+        &[(0.4, [-0.6, 0.0], square_speed(5.0))],
     );
     let run = |latest_frame_init: bool| {
         let options = Options {
