@@ -150,6 +150,12 @@ pub(super) fn run(
         &moving,
         &mut notes,
     );
+    if moving_runs.is_some() {
+        let count = moving.iter().filter(|m| **m).count();
+        notes.push(format!(
+            "half-velocity draws the {count} moving object(s) at each B-frame's time and wipes them out of the earlier I-frame (seed 003 slides 33–47): both count in its B-frame time (--no-moving-objects leaves them to the velocity)"
+        ));
+    }
     let bframes = BFrames::new(
         &gpu,
         (size[0], size[1]),
