@@ -244,12 +244,13 @@ struct ImageBased {
     @location(3) depth: f32,
 }
 
-// The diagonal neighbours of latest-frame initialisation's neighbourhood
-// (the centre and these: the design note's 5 taps; the paper leaves its
-// size open).
+// The diagonal neighbours of latest-frame initialisation's neighbourhood,
+// `latest_radius` pixels away (the centre and these: the design note's 5
+// taps; the paper leaves the neighbourhood's size open).
 const LATEST_TAPS: array<vec2<i32>, 4> = array<vec2<i32>, 4>(
     vec2<i32>(-1, -1), vec2<i32>(1, -1), vec2<i32>(-1, 1), vec2<i32>(1, 1),
 );
+override latest_radius: i32 = 1;
 
 // Eqs. 18–19: the start offsets from the previous B-frame's, rescaled to
 // this α (forward by α/α', backward by (1 - α)/(1 - α')): of the taps
@@ -261,7 +262,7 @@ fn latest_offsets(p: vec2<f32>) -> vec4<f32> {
     var best = textureLoad(previous_offsets, at, 0);
     var best_depth = textureLoad(previous_depths, at, 0).x;
     for (var i = 0; i < 4; i++) {
-        let tap = clamp(at + LATEST_TAPS[i], vec2<i32>(0), last);
+        let tap = clamp(at + latest_radius * LATEST_TAPS[i], vec2<i32>(0), last);
         let depth = textureLoad(previous_depths, tap, 0).x;
         if nearer(depth, best_depth) {
             best = textureLoad(previous_offsets, tap, 0);

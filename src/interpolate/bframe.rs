@@ -229,13 +229,15 @@ fn fullscreen_pipeline(
 impl BFrames {
     /// Builds the passes of `methods` (those that are B-frame passes) for
     /// frames of `size`, the image-based search taking `iterations` steps,
-    /// with latest-frame initialisation when `latest`.
+    /// with latest-frame initialisation over taps `latest_radius` pixels
+    /// away when it is given.
     pub fn new(
         gpu: &Gpu,
         size: (u32, u32),
         methods: &[Method],
-        (iterations, latest): (u32, bool),
+        (iterations, latest_radius): (u32, Option<u32>),
     ) -> Result<BFrames, String> {
+        let latest = latest_radius.is_some();
         let device = &gpu.device;
         let float = wgpu::TextureSampleType::Float { filterable: true };
         let entries = [
@@ -294,7 +296,11 @@ impl BFrames {
             };
             let iterations = ("search_iterations", f64::from(iterations));
             let constants: Vec<(&str, f64)> = if latest_pass {
-                vec![iterations, ("latest_init", 1.0)]
+                vec![
+                    iterations,
+                    ("latest_init", 1.0),
+                    ("latest_radius", f64::from(latest_radius.unwrap_or(1))),
+                ]
             } else {
                 vec![iterations]
             };

@@ -59,7 +59,8 @@
 //!   (eqs. 18–19), every B-frame of an interval but the first also starts
 //!   each search from the offsets the B-frame before found, rescaled to
 //!   its α, taken from the nearest-depth tap of a 5-tap neighbourhood (the
-//!   centre and its diagonals; the paper leaves the size open), and the
+//!   centre and its diagonals `--latest-radius` pixels away, 1 by default;
+//!   the paper leaves the size open), and the
 //!   pass writes its own offsets and chosen depth for the next. It is off
 //!   by default (`--latest-init`): measured on the bundled scenes it
 //!   lowered SSIM and made the pass half as costly again.
@@ -260,6 +261,9 @@ pub struct Options {
     /// B-frame but an interval's first also starts from the offsets of
     /// the B-frame before it.
     pub latest_frame_init: bool,
+    /// How far, in pixels, latest-frame initialisation's diagonal taps are
+    /// from the pixel (the neighbourhood: the centre and four taps).
+    pub latest_radius: u32,
     /// Half-velocity's velocity merging (003 slide 31): the earlier
     /// frame's velocity for the tails; else the later frame's alone.
     pub velocity_merge: bool,
@@ -300,6 +304,7 @@ impl Default for Options {
             depth_epsilon: crate::rewrite::DEFAULT_DEPTH_EPSILON,
             dual_init: true,
             latest_frame_init: false,
+            latest_radius: 1,
             velocity_merge: true,
             min_cosine: 0.5,
             moving_objects: true,

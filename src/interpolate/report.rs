@@ -60,6 +60,9 @@ pub struct Parameters {
     pub dual_init: bool,
     /// Latest-frame initialisation (000 eqs. 18–19).
     pub latest_frame_init: bool,
+    /// Its neighbourhood: the centre and the four diagonal taps this many
+    /// pixels away.
+    pub latest_radius: u32,
     /// Half-velocity's velocity merging.
     pub velocity_merge: bool,
     /// Half-velocity's moving objects drawn at each B-frame's time and

@@ -57,6 +57,11 @@ fn check(options: &Options) -> Result<(), Error> {
     if options.methods.is_empty() {
         return Err(fail("no method to run".into()));
     }
+    if options.latest_radius == 0 {
+        return Err(fail(
+            "--latest-radius must be at least 1: its taps are the pixel's diagonal neighbours that far away".into(),
+        ));
+    }
     if options.inpaint_passes == 0 || options.inpaint_delta == 0 {
         return Err(fail(format!(
             "--inpaint-passes and --inpaint-delta must be at least 1, not {} and {}",
@@ -160,7 +165,10 @@ pub(super) fn run(
         &gpu,
         (size[0], size[1]),
         &options.methods,
-        (options.iterations, options.latest_frame_init),
+        (
+            options.iterations,
+            options.latest_frame_init.then_some(options.latest_radius),
+        ),
     )
     .map_err(fail)?;
     let b_methods: Vec<Method> = options
@@ -281,7 +289,7 @@ fn geometry_runs(
                 gpu,
                 (bench.size[0], bench.size[1]),
                 &[Method::ImageBased],
-                (options.iterations, true),
+                (options.iterations, Some(options.latest_radius)),
             )?;
             Ok(Correspondence { exact, search })
         });
@@ -1111,6 +1119,7 @@ impl Schedule<'_> {
                 depth_epsilon: self.options.depth_epsilon,
                 dual_init: self.options.dual_init,
                 latest_frame_init: self.options.latest_frame_init,
+                latest_radius: self.options.latest_radius,
                 velocity_merge: self.options.velocity_merge,
                 moving_objects: self.options.moving_objects,
                 inpaint_passes: self.options.inpaint_passes,

@@ -500,7 +500,7 @@ fn every_interpolation_pass_is_valid_and_builds() {
     for result in crate::util::tint_validate(&files) {
         assert!(result.ok, "{}: {:?}", result.file, result.messages);
     }
-    for latest in [false, true] {
+    for latest in [None, Some(1), Some(4)] {
         interpolate::bframe::BFrames::new(&gpu, (16, 16), &Method::ALL, (3, latest))
             .unwrap_or_else(|err| panic!("{err}"));
     }
@@ -522,6 +522,7 @@ fn interpolate_bad_input_is_an_error() {
         (vec!["--method", "optical-flow"], "optical-flow"),
         (vec!["--screen-epsilon=-1"], "screen-epsilon"),
         (vec!["--inpaint-passes", "0"], "inpaint-passes"),
+        (vec!["--latest-radius", "0"], "latest-radius"),
     ] {
         let mut full = vec!["interpolate", marble, "--scene", scene, "--out", &out_arg];
         full.extend(args.iter().copied());
@@ -1211,7 +1212,7 @@ fn character_removal_fills_from_unmasked_neighbours() {
     }
     let color = texture("colour", wgpu::TextureFormat::Rgba16Float, &color);
     let flow = texture("flow", wgpu::TextureFormat::Rgba16Float, &flow);
-    let bframes = BFrames::new(&gpu, (w, h), &[Method::HalfVelocity], (3, false)).unwrap();
+    let bframes = BFrames::new(&gpu, (w, h), &[Method::HalfVelocity], (3, None)).unwrap();
     let params = BFrameParams {
         viewport: [w as f32, h as f32],
         alpha: 0.5,

@@ -89,6 +89,12 @@ pub struct Args {
     #[arg(long)]
     pub latest_init: bool,
 
+    /// Latest-frame initialisation's neighbourhood: the pixel and its four
+    /// diagonal neighbours this many pixels away, of which the nearest
+    /// surface's offsets start the search.
+    #[arg(long, value_name = "PX", default_value_t = 1)]
+    pub latest_radius: u32,
+
     /// Half-velocity with the later frame's velocity alone (no merging of
     /// the earlier frame's into the tails).
     #[arg(long)]
@@ -164,6 +170,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         depth_epsilon: args.depth_epsilon,
         dual_init: !args.no_dual_init,
         latest_frame_init: args.latest_init,
+        latest_radius: args.latest_radius,
         motion_blur: args.motion_blur,
         velocity_merge: !args.no_velocity_merge,
         min_cosine: args.min_cosine,
