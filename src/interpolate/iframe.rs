@@ -6,7 +6,11 @@
 //!   code ([`crate::rewrite::vertex::instrument_times`]): now, with the
 //!   *previous* I-frame's resources, and with the *next* I-frame's. Every
 //!   uniform and read-only storage buffer the position reads gets a twin
-//!   per time; the host fills them with that time's contents.
+//!   per time; the host fills them with that time's contents. So does
+//!   every per-instance vertex input it reads: a twin input per time (the
+//!   plan lists them as inputs like the others, `previous_<input>` and
+//!   `next_<input>`), which the run packs with that time's instance
+//!   transforms.
 //! - The fragment stage runs the original fragment function as a helper
 //!   (its outputs, discards and derivatives unchanged) and then writes
 //!   `flow_previous` (Vb: to the previous I-frame) and `flow_next` (Vf: to
@@ -98,6 +102,10 @@ pub struct IFrameShader {
     pub previous: Vec<([u32; 2], [u32; 2])>,
     /// (original, next I-frame's twin) `[group, binding]`s.
     pub next: Vec<([u32; 2], [u32; 2])>,
+    /// The per-instance vertex inputs the position reads, twinned for the
+    /// previous and the next I-frame: inputs of the plan's vertex layout
+    /// like the others, which the host fills with those times' values.
+    pub instance_twins: Vec<InstanceTwin>,
     /// The bind group of the scene-assisted pass's I-frame textures
     /// (`shaders/bframe_scene.wgsl`'s resources, from binding 0): the one
     /// after the twins', the fifth when the shader uses four.
@@ -109,6 +117,17 @@ pub struct IFrameShader {
     /// entry point (`<entry>_original`), with the vertex stage's.
     scene_bindings: Vec<crate::plan::Resource>,
     original_entry: String,
+}
+
+/// A per-instance vertex input's twin at another I-frame's time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct InstanceTwin {
+    /// 0 for the previous I-frame, 1 for the next.
+    pub time: usize,
+    /// The location of the input it twins.
+    pub of: u32,
+    /// Its own location.
+    pub location: u32,
 }
 
 /// `shaders/iframe.wgsl` parsed, once per process.
@@ -124,11 +143,15 @@ fn scene_helpers() -> Result<&'static Module, Refusal> {
 }
 
 /// Instruments `shader`'s fragment entry point (the analysis's) and the
-/// vertex entry point that draws with it into the I-frame pass.
+/// vertex entry point that draws with it into the I-frame pass. The
+/// per-instance vertex inputs the position reads get a twin input per
+/// other I-frame, which must fit in `max_vertex_attributes` (the device's)
+/// with the shader's own.
 pub fn instrument(
     shader: &Shader,
     analysis: &Analysis,
     options: &Options,
+    max_vertex_attributes: u32,
 ) -> Result<IFrameShader, Refusal> {
     let original = &shader.module;
     let entry_index = analysis.entry_index;
@@ -183,7 +206,22 @@ pub fn instrument(
             first_binding: first + twinned,
         },
     ];
-    let stage = vertex::instrument_times(&mut module, vertex_index, &times, false)?;
+    let stage = vertex::instrument_times(
+        &mut module,
+        vertex_index,
+        &times,
+        (true, max_vertex_attributes),
+    )?;
+    let instance_twins: Vec<InstanceTwin> = stage
+        .instance_twins
+        .iter()
+        .enumerate()
+        .flat_map(|(time, twins)| {
+            twins
+                .iter()
+                .map(move |&(of, location)| InstanceTwin { time, of, location })
+        })
+        .collect();
     rewrite::mark_positions_invariant(&mut module);
     let locations = [stage.times[0].location, stage.times[1].location];
     let flow_locations = flow_entry(
@@ -223,6 +261,7 @@ pub fn instrument(
         &module,
         (entry_index, vertex_index),
         flow_locations,
+        (&instance_twins, &times),
     )
     .map_err(Refusal::internal)?;
     let scene_bindings = {
@@ -257,6 +296,7 @@ pub fn instrument(
         params: key(params_global),
         previous: pairs(0),
         next: pairs(1),
+        instance_twins,
         plan,
         flow_locations,
         text,
@@ -593,8 +633,26 @@ fn plan(
     module: &Module,
     (fragment, vertex): (usize, usize),
     flow_locations: [u32; 2],
+    (instance_twins, times): (&[InstanceTwin], &[TwinTime]),
 ) -> Result<Plan, String> {
     let mut plan = rewrite::plan::reference(shader, analysis, options)?;
+    // The per-instance inputs' twins: inputs like the others (not the
+    // host's copies of last frame's), which the run fills with the other
+    // I-frames' values.
+    for twin in instance_twins {
+        let input = plan
+            .vertex_layout
+            .iter()
+            .find(|a| a.location == twin.of)
+            .cloned()
+            .ok_or_else(|| format!("no vertex input at @location({}) to twin", twin.of))?;
+        plan.vertex_layout.push(crate::plan::VertexAttribute {
+            location: twin.location,
+            name: format!("{}_{}", times[twin.time].name, input.name),
+            ..input
+        });
+    }
+    plan.vertex_layout.sort_by_key(|a| a.location);
     let original = rewrite::plan::entry_resources(module, &[fragment, vertex]);
     let mut bindings: Vec<[u32; 2]> = original.iter().map(|r| [r.group, r.binding]).collect();
     bindings.sort();
@@ -626,7 +684,7 @@ mod tests {
         let shader = crate::front::parse(crate::diagnostic::SourceFile::new("test.wgsl", source))
             .expect("parses");
         let analysis = crate::analysis::analyze(&shader, &Default::default()).expect("analyses");
-        instrument(&shader, &analysis, &Options::default()).expect("instruments")
+        instrument(&shader, &analysis, &Options::default(), 16).expect("instruments")
     }
 
     #[test]

@@ -19,8 +19,13 @@
 //! adds two flows to its outputs, Vb (to the previous I-frame) and Vf (to
 //! the next): Δx, Δy in pixels and Δz in depth, `rgba16float`. That is
 //! everything the B-frame methods read: colour, depth, Vb, Vf. Nothing
-//! about the user's matrices is assumed; a shader whose position cannot be
-//! twinned (per-instance inputs, none at all) is refused with the reason.
+//! about the user's matrices is assumed. Per-instance vertex inputs the
+//! position reads (the wgpu tutorial's model-matrix columns) get a twin
+//! input per other I-frame, which the run fills with that I-frame's
+//! instance transforms; they take as many vertex attributes as the device
+//! grants (the tutorial's 11 inputs and 8 twins need 19, past WebGPU's
+//! default 16). A shader whose position cannot be twinned (no vertex
+//! stage, too many inputs) is refused with the reason.
 //!
 //! # The B-frame methods ([`bframe`], `shaders/bframe.wgsl`)
 //!

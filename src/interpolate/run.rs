@@ -99,13 +99,24 @@ pub(super) fn run(
     let reference_plan =
         crate::rewrite::plan::reference(shader, &bindings.analysis, &rewrite_options)
             .map_err(fail)?;
-    let instrumented =
-        iframe::instrument(shader, &bindings.analysis, &rewrite_options).map_err(|refusal| {
-            fail(format!(
-                "the I-frame pass cannot be made: {}",
-                refusal.reason
-            ))
-        })?;
+    let gpu = Gpu::new().map_err(fail)?.ok_or_else(|| {
+        fail("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers gives lavapipe)".into())
+    })?;
+    // The twins of per-instance inputs take vertex attributes beside the
+    // shader's, as many as the device grants.
+    let max_vertex_attributes = gpu.device.limits().max_vertex_attributes;
+    let instrumented = iframe::instrument(
+        shader,
+        &bindings.analysis,
+        &rewrite_options,
+        max_vertex_attributes,
+    )
+    .map_err(|refusal| {
+        fail(format!(
+            "the I-frame pass cannot be made: {}",
+            refusal.reason
+        ))
+    })?;
     crate::scene::storage::check(&bindings.storage, scene)?;
     crate::profile::check_instancing(shader, scene, &reference_plan.vertex_layout)?;
     let inputs = SceneInputs::new(
@@ -117,9 +128,6 @@ pub(super) fn run(
         (&bindings.uniforms, &bindings.storage),
         bindings.aspect,
     )?;
-    let gpu = Gpu::new().map_err(fail)?.ok_or_else(|| {
-        fail("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers gives lavapipe)".into())
-    })?;
     let mut clock = Clock::new(&gpu)?;
     let bench = Bench {
         gpu: &gpu,
@@ -188,6 +196,8 @@ pub(super) fn run(
         size,
         far_depth: scene.camera.depth.far_depth(),
         moving: &moving,
+        scene,
+        aspect: bindings.aspect,
     };
     let total = u64::from(WARMUP_INTERVALS + intervals)
         * u64::from(n + 1 + (b_methods.len() + scene_runs.len()) as u32 * (n - 1));
@@ -549,6 +559,10 @@ struct Schedule<'a> {
     far_depth: f32,
     /// Which of the scene's objects move ([`Scene::moves`]).
     moving: &'a [bool],
+    /// The scene and its aspect ratio, for the per-instance inputs'
+    /// values at other times.
+    scene: &'a Scene,
+    aspect: f32,
 }
 
 impl Schedule<'_> {
@@ -596,7 +610,38 @@ impl Schedule<'_> {
             }
             object.buffers.insert(self.instrumented.params, params);
         }
+        if !self.instrumented.instance_twins.is_empty() {
+            self.twin_instance_inputs(&mut now, [frame, previous, next])?;
+        }
         Ok(now)
+    }
+
+    /// Each object's per-instance input records for the instrumented
+    /// layout: the inputs at `frame`'s values, their twins at `previous`'s
+    /// and `next`'s.
+    fn twin_instance_inputs(
+        &self,
+        inputs: &mut FrameInputs,
+        [frame, previous, next]: [u32; 3],
+    ) -> Result<(), Error> {
+        let states = [frame, previous, next].map(|f| self.scene.frame(f, self.aspect));
+        let layout = &self.instrumented.plan.vertex_layout;
+        for (index, object) in inputs.objects.iter_mut().enumerate() {
+            let worlds = states.each_ref().map(|state| state.instance_worlds(index));
+            let worlds_of = |location: u32| -> &[glam::Mat4] {
+                let time = self
+                    .instrumented
+                    .instance_twins
+                    .iter()
+                    .find(|t| t.location == location)
+                    .map_or(0, |t| t.time + 1);
+                &worlds[time]
+            };
+            object.instance_inputs =
+                crate::scene::instance_inputs::instance_inputs_at(layout, worlds_of)
+                    .map_err(fail)?;
+        }
+        Ok(())
     }
 
     fn textures<'r>(&self, runner: &'r Runner) -> Result<IFrameTextures<'r>, Error> {

@@ -175,10 +175,7 @@ impl<'a> SceneInputs<'a> {
                 .map(|m| m.vertex_bytes(layout, &scene.vertex_inputs))
                 .transpose()
                 .map_err(fail)?;
-            let worlds: Vec<glam::Mat4> = state.instances[object]
-                .iter()
-                .map(|&instance| state.objects[object] * instance)
-                .collect();
+            let worlds = state.instance_worlds(object);
             let instance_inputs =
                 scene::instance_inputs::instance_inputs(layout, &worlds).map_err(fail)?;
             inputs.objects.push(ObjectInputs {

@@ -168,7 +168,12 @@ pub fn instrument(
         group,
         first_binding,
     };
-    let mut stage = instrument_times(module, entry_index, &[previous], true)?;
+    let mut stage = instrument_times(
+        module,
+        entry_index,
+        &[previous],
+        (true, MAX_VERTEX_ATTRIBUTES),
+    )?;
     let TimedPosition {
         location, twins, ..
     } = stage.times.remove(0);
@@ -176,7 +181,7 @@ pub fn instrument(
         entry_index: Some(entry_index),
         previous_location: location,
         twins,
-        instance_twins: stage.instance_twins,
+        instance_twins: stage.instance_twins.remove(0),
         plain: Some(stage.plain),
     })
 }
@@ -206,21 +211,24 @@ pub struct TimedPosition {
 pub struct TimedVertexStage {
     /// One per time asked for, in order, at consecutive locations.
     pub times: Vec<TimedPosition>,
-    /// As [`VertexStage::instance_twins`] (the first time's only).
-    pub instance_twins: Vec<(u32, u32)>,
+    /// As [`VertexStage::instance_twins`], one list per time asked for
+    /// (with `instance_twins`; else empty).
+    pub instance_twins: Vec<Vec<(u32, u32)>>,
     /// As [`VertexStage::plain`].
     pub plain: Function,
 }
 
 /// Adds the clip position at each of `times` to the vertex entry point at
-/// `entry_index`. Per-instance vertex inputs the position reads get twin
-/// inputs for the first time only, and only with `instance_twins`; else
-/// they are refused (nothing supplies their values at other times).
+/// `entry_index`. Per-instance vertex inputs the position reads get a twin
+/// input per time with `instance_twins` (`<time>_<input>`, at free
+/// locations below `max_vertex_attributes`, which the host fills with that
+/// time's values); without, they are refused (nothing supplies their
+/// values at other times).
 pub fn instrument_times(
     module: &mut Module,
     entry_index: usize,
     times: &[TwinTime],
-    instance_twins: bool,
+    (instance_twins, max_vertex_attributes): (bool, u32),
 ) -> Result<TimedVertexStage, Refusal> {
     let entry = module.entry_points[entry_index].clone();
     let function = &entry.function;
@@ -244,7 +252,13 @@ pub fn instrument_times(
             instance_inputs.len()
         )));
     }
-    let instance_twins = twin_locations(module, function, &instance_inputs)?;
+    let instance_twins = twin_locations(
+        module,
+        function,
+        &instance_inputs,
+        times.len(),
+        max_vertex_attributes,
+    )?;
 
     let mut twins_per_time = Vec::new();
     let mut twin_maps = Vec::new();
@@ -269,12 +283,14 @@ pub fn instrument_times(
     // The new entry point: call the current and each other time's,
     // forward every member, add the other positions.
     let mut entry_arguments = function.arguments.clone();
-    entry_arguments.extend(twin_arguments(
-        module,
-        function,
-        &instance_inputs,
-        &instance_twins,
-    ));
+    for (time, twins) in times.iter().zip(&instance_twins) {
+        entry_arguments.extend(twin_arguments(
+            module,
+            function,
+            &instance_inputs,
+            (time.name, twins),
+        ));
+    }
     let mut b = Builder::new(Function {
         name: function.name.clone(),
         arguments: entry_arguments,
@@ -290,17 +306,16 @@ pub fn instrument_times(
     let now = b.call(helpers.current, arguments.clone());
     let mut others = Vec::new();
     for (i, &helper) in helpers.others.iter().enumerate() {
-        let other_arguments = if i == 0 {
-            last_frame_arguments(
-                module,
-                function,
-                &mut b,
-                arguments.clone(),
-                &instance_inputs,
-            )
-        } else {
-            arguments.clone()
-        };
+        // The entry point's arguments after the original ones: each
+        // time's twins in turn.
+        let first_twin = (function.arguments.len() + i * instance_inputs.len()) as u32;
+        let other_arguments = other_time_arguments(
+            module,
+            function,
+            &mut b,
+            arguments.clone(),
+            (&instance_inputs, first_twin),
+        );
         others.push(b.call(helper, other_arguments));
     }
     let mut components: Vec<_> = match position_member {
@@ -613,41 +628,67 @@ fn plain_entry(function: &Function, current: Handle<Function>) -> Function {
     b.finish()
 }
 
-/// Free input locations for the twins of `inputs`, lowest first, as
-/// (input's location, twin's location); a refusal when the inputs and
-/// their twins do not fit in WebGPU's 16 vertex attributes.
+/// Free input locations for the twins of `inputs` at each of `times`
+/// other times, lowest first, as (input's location, twin's location) per
+/// time; a refusal when the inputs and their twins do not fit in `limit`
+/// vertex attributes.
 fn twin_locations(
     module: &Module,
     function: &Function,
     inputs: &[InstanceInput],
-) -> Result<Vec<(u32, u32)>, Refusal> {
+    times: usize,
+    limit: u32,
+) -> Result<Vec<Vec<(u32, u32)>>, Refusal> {
     let used: BTreeSet<u32> = function
         .arguments
         .iter()
         .flat_map(|a| crate::proc::located(module, &a.binding, a.ty))
         .map(|(location, _)| location)
         .collect();
-    let free: Vec<u32> = (0..MAX_VERTEX_ATTRIBUTES)
+    let wanted = inputs.len() * times;
+    let free: Vec<u32> = (0..limit)
         .filter(|l| !used.contains(l))
-        .take(inputs.len())
+        .take(wanted)
         .collect();
-    if free.len() < inputs.len() {
+    if free.len() < wanted {
+        let whose = if times == 1 {
+            "whose last-frame twins".to_string()
+        } else {
+            format!("whose twins at {times} other times")
+        };
+        let limit_name = if limit == MAX_VERTEX_ATTRIBUTES {
+            format!("WebGPU's {limit}")
+        } else {
+            format!("the device's {limit}")
+        };
         return Err(Refusal::new(format!(
-            "the position reads {} per-instance vertex input(s), whose last-frame twins do not fit beside the shader's {} inputs in WebGPU's {MAX_VERTEX_ATTRIBUTES} vertex attributes",
+            "the position reads {} per-instance vertex input(s), {whose} do not fit beside the shader's {} inputs in {limit_name} vertex attributes",
             inputs.len(),
             used.len()
         )));
     }
-    Ok(inputs.iter().map(|i| i.location).zip(free).collect())
+    if inputs.is_empty() {
+        return Ok(vec![Vec::new(); times]);
+    }
+    Ok(free
+        .chunks(inputs.len())
+        .map(|chunk| {
+            inputs
+                .iter()
+                .map(|i| i.location)
+                .zip(chunk.iter().copied())
+                .collect()
+        })
+        .collect())
 }
 
-/// The new entry point's extra arguments: each twinned input's twin,
-/// `previous_<name>` at its twin location, in `inputs`' order.
+/// The new entry point's extra arguments for one other time: each twinned
+/// input's twin, `<time>_<name>` at its twin location, in `inputs`' order.
 fn twin_arguments(
     module: &Module,
     function: &Function,
     inputs: &[InstanceInput],
-    twins: &[(u32, u32)],
+    (time, twins): (&str, &[(u32, u32)]),
 ) -> Vec<naga::FunctionArgument> {
     inputs
         .iter()
@@ -659,7 +700,7 @@ fn twin_arguments(
                 _ => argument.name.clone(),
             };
             naga::FunctionArgument {
-                name: Some(format!("previous_{}", name.unwrap_or_default())),
+                name: Some(format!("{time}_{}", name.unwrap_or_default())),
                 ty: input.ty,
                 binding: Some(super::builder::location(location)),
             }
@@ -667,19 +708,18 @@ fn twin_arguments(
         .collect()
 }
 
-/// The arguments of the previous-frame copy of the vertex function: the
+/// The arguments of another time's copy of the vertex function: the
 /// entry point's own `arguments`, with each per-instance input of `inputs`
-/// taken from its twin (the entry point's arguments after the original
-/// ones, in `inputs`' order). A struct argument with twinned members is
-/// composed again from its members and the twins.
-fn last_frame_arguments(
+/// taken from its twin (that time's twins are the entry point's arguments
+/// from `first_twin` on, in `inputs`' order). A struct argument with
+/// twinned members is composed again from its members and the twins.
+fn other_time_arguments(
     module: &Module,
     function: &Function,
     b: &mut Builder,
     mut arguments: Vec<Handle<Expression>>,
-    inputs: &[InstanceInput],
+    (inputs, first_twin): (&[InstanceInput], u32),
 ) -> Vec<Handle<Expression>> {
-    let first_twin = function.arguments.len() as u32;
     for (i, argument) in function.arguments.iter().enumerate() {
         let twins: Vec<(Option<u32>, u32)> = inputs
             .iter()

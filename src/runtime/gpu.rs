@@ -38,6 +38,10 @@ impl Gpu {
             // The scene-assisted B-frame binds the I-frames in the group
             // after the twins': a fifth for shaders that use all four.
             max_bind_groups: granted.max_bind_groups.min(8),
+            // The I-frame twins the per-instance inputs its position
+            // reads, once per other I-frame: the wgpu tutorial's 11
+            // inputs and 4 model-matrix columns twice take 19.
+            max_vertex_attributes: granted.max_vertex_attributes,
             ..wgpu::Limits::default()
         };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {

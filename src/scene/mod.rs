@@ -387,6 +387,17 @@ pub struct FrameState {
     pub instances: Vec<Vec<Mat4>>,
 }
 
+impl FrameState {
+    /// Object `object`'s instances' whole world transforms: its placement
+    /// times each instance's within it.
+    pub fn instance_worlds(&self, object: usize) -> Vec<Mat4> {
+        self.instances[object]
+            .iter()
+            .map(|&instance| self.objects[object] * instance)
+            .collect()
+    }
+}
+
 /// A vertex input's constant: one value for every component, or one per
 /// component.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
