@@ -554,6 +554,50 @@ fn scene_entry(
 }
 
 impl IFrameShader {
+    /// One object's per-instance records for the I-frame's vertex layout,
+    /// from its records as the layout without twins packs them at three
+    /// times (`records`: now, the previous I-frame, the next): each input
+    /// now, each twin its input's value at its time. No instance is
+    /// simulated again; the twins' bytes are the other times' own.
+    pub fn instance_records(&self, records: [&[u8]; 3]) -> Result<Vec<u8>, String> {
+        let size = |a: &crate::plan::VertexAttribute| {
+            shadecache_host::vertex_format(a.format).size() as usize
+        };
+        let packed: Vec<&crate::plan::VertexAttribute> = self
+            .plan
+            .vertex_layout
+            .iter()
+            .filter(|a| a.step == crate::plan::StepMode::Instance && a.previous_of.is_none())
+            .collect();
+        let twin = |location: u32| self.instance_twins.iter().find(|t| t.location == location);
+        // Where each input is in a record without the twins.
+        let mut offsets = std::collections::HashMap::new();
+        let mut stride = 0;
+        for a in packed.iter().filter(|a| twin(a.location).is_none()) {
+            offsets.insert(a.location, stride);
+            stride += size(a);
+        }
+        if stride == 0 {
+            return Ok(records[0].to_vec());
+        }
+        let count = records[0].len() / stride;
+        if records.iter().any(|r| r.len() != count * stride) {
+            return Err(format!(
+                "internal error: per-instance records of {} bytes at the three times, not {count} of {stride}",
+                records.map(<[u8]>::len).map(|n| n.to_string()).join(", ")
+            ));
+        }
+        let mut out = Vec::new();
+        for instance in 0..count {
+            for a in &packed {
+                let (time, of) = twin(a.location).map_or((0, a.location), |t| (t.time + 1, t.of));
+                let start = instance * stride + offsets[&of];
+                out.extend_from_slice(&records[time][start..start + size(a)]);
+            }
+        }
+        Ok(out)
+    }
+
     /// The scene-assisted B-frame's plan in `mode`: the geometry at the
     /// B-frame's time reprojected into both I-frames (its colour and
     /// decisions), and for shade-on-miss a second pass of the original

@@ -160,7 +160,7 @@ pub(super) fn run(
         &instrumented,
         &sources,
         options,
-        &moving,
+        moving.contains(&true),
         &mut notes,
     );
     if moving_runs.is_some() {
@@ -196,8 +196,6 @@ pub(super) fn run(
         size,
         far_depth: scene.camera.depth.far_depth(),
         moving: &moving,
-        scene,
-        aspect: bindings.aspect,
     };
     let total = u64::from(WARMUP_INTERVALS + intervals)
         * u64::from(n + 1 + (b_methods.len() + scene_runs.len()) as u32 * (n - 1));
@@ -244,22 +242,26 @@ struct GeometryRuns {
     /// With image-based, the exact correspondences its search is measured
     /// against.
     correspondence: Option<Correspondence>,
-    /// With half-velocity, its moving objects.
-    moving: Option<MovingRuns>,
+    /// With half-velocity, its moving objects (003 slides 33–47): the
+    /// scene-assisted pass in its moving-objects mode, drawing only the
+    /// objects that move at each B-frame's time (their exact offsets and
+    /// mask). Where I-frame 0 shows one, its flows say so (w = 2), which
+    /// character removal reads.
+    moving: Option<SceneRun>,
 }
 
 /// The runs that rasterise the geometry at each B-frame's time, through
 /// the host, binding the I-frames in the group after the twins': one per
 /// scene-assisted method, with image-based the exact correspondences its
 /// search is measured against (000 Fig. 11, drawn untimed), and with
-/// half-velocity its moving objects (`moving`: which of the scene's
-/// objects move). What cannot be made is said in `notes`.
+/// half-velocity its moving objects, when the scene has `any_moving`.
+/// What cannot be made is said in `notes`.
 fn geometry_runs(
     bench: &Bench,
     instrumented: &IFrameShader,
     sources: &HashMap<String, String>,
     options: &Options,
-    moving: &[bool],
+    any_moving: bool,
     notes: &mut Vec<String>,
 ) -> GeometryRuns {
     let gpu = bench.gpu;
@@ -312,14 +314,9 @@ fn geometry_runs(
     }
     let mut moving_runs = None;
     let half_velocity = options.methods.contains(&Method::HalfVelocity);
-    if half_velocity && options.moving_objects && moving.contains(&true) {
+    if half_velocity && options.moving_objects && any_moving {
         match scene_run(Method::HalfVelocity, SceneMode::MovingObjects) {
-            Ok(now) => {
-                moving_runs = Some(MovingRuns {
-                    now,
-                    moving: moving.to_vec(),
-                })
-            }
+            Ok(run) => moving_runs = Some(run),
             Err(reason) => notes.push(format!(
                 "half-velocity treats moving objects as the rest (no exact offsets, no removal): {reason}"
             )),
@@ -332,26 +329,12 @@ fn geometry_runs(
     }
 }
 
-/// Half-velocity's moving objects (003 slides 33–47): the scene-assisted
-/// pass in its moving-objects mode, drawing only the objects that move at
-/// each B-frame's time (their exact offsets and mask). Where I-frame 0
-/// shows one, its flows say so (w = 2), which character removal reads.
-struct MovingRuns {
-    now: SceneRun,
-    /// Which of the scene's objects move.
-    moving: Vec<bool>,
-}
-
-impl MovingRuns {
-    /// `inputs` with only the moving objects drawn.
-    fn only_moving(&self, mut inputs: FrameInputs) -> FrameInputs {
-        for (object, moves) in inputs.objects.iter_mut().zip(&self.moving) {
-            if !moves {
-                object.instances = 0;
-            }
-        }
-        inputs
-    }
+/// Object `index`'s per-instance input records in `inputs`.
+fn instance_records(inputs: &FrameInputs, index: usize) -> &[u8] {
+    inputs
+        .objects
+        .get(index)
+        .map_or(&[][..], |o| o.instance_inputs.as_slice())
 }
 
 /// The profiler of a timed recording, lent to one of its passes.
@@ -559,10 +542,6 @@ struct Schedule<'a> {
     far_depth: f32,
     /// Which of the scene's objects move ([`Scene::moves`]).
     moving: &'a [bool],
-    /// The scene and its aspect ratio, for the per-instance inputs'
-    /// values at other times.
-    scene: &'a Scene,
-    aspect: f32,
 }
 
 impl Schedule<'_> {
@@ -609,39 +588,28 @@ impl Schedule<'_> {
                 }
             }
             object.buffers.insert(self.instrumented.params, params);
-        }
-        if !self.instrumented.instance_twins.is_empty() {
-            self.twin_instance_inputs(&mut now, [frame, previous, next])?;
+            if !self.instrumented.instance_twins.is_empty() {
+                object.instance_inputs = self
+                    .instrumented
+                    .instance_records([
+                        &object.instance_inputs,
+                        instance_records(&before, index),
+                        instance_records(&after, index),
+                    ])
+                    .map_err(fail)?;
+            }
         }
         Ok(now)
     }
 
-    /// Each object's per-instance input records for the instrumented
-    /// layout: the inputs at `frame`'s values, their twins at `previous`'s
-    /// and `next`'s.
-    fn twin_instance_inputs(
-        &self,
-        inputs: &mut FrameInputs,
-        [frame, previous, next]: [u32; 3],
-    ) -> Result<(), Error> {
-        let states = [frame, previous, next].map(|f| self.scene.frame(f, self.aspect));
-        let layout = &self.instrumented.plan.vertex_layout;
-        for (index, object) in inputs.objects.iter_mut().enumerate() {
-            let worlds = states.each_ref().map(|state| state.instance_worlds(index));
-            let worlds_of = |location: u32| -> &[glam::Mat4] {
-                let time = self
-                    .instrumented
-                    .instance_twins
-                    .iter()
-                    .find(|t| t.location == location)
-                    .map_or(0, |t| t.time + 1);
-                &worlds[time]
-            };
-            object.instance_inputs =
-                crate::scene::instance_inputs::instance_inputs_at(layout, worlds_of)
-                    .map_err(fail)?;
+    /// `inputs` with only the moving objects drawn.
+    fn only_moving(&self, mut inputs: FrameInputs) -> FrameInputs {
+        for (object, moves) in inputs.objects.iter_mut().zip(self.moving) {
+            if !moves {
+                object.instances = 0;
+            }
         }
-        Ok(())
+        inputs
     }
 
     fn textures<'r>(&self, runner: &'r Runner) -> Result<IFrameTextures<'r>, Error> {
@@ -669,7 +637,7 @@ impl Schedule<'_> {
             &mut [Runner; 2],
             &mut [SceneRun],
             Option<&mut Correspondence>,
-            Option<&mut MovingRuns>,
+            Option<&mut SceneRun>,
         ),
         inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
         (interval, record): (u32, bool),
@@ -730,18 +698,17 @@ impl Schedule<'_> {
             let mut removal = moving.is_some();
             for k in self.frames_of_interval(record, measured) {
                 let params = self.params(k);
-                let now_inputs = match moving.as_deref_mut() {
-                    Some(runs) => {
-                        runs.now.bind(self.gpu, &textures, &params)?;
+                let mut moving_now = match moving.as_deref_mut() {
+                    Some(run) => {
+                        run.bind(self.gpu, &textures, &params)?;
                         let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
-                        Some(runs.only_moving(inputs))
+                        Some((run, self.only_moving(inputs)))
                     }
                     None => None,
                 };
                 let (time, _, _) = timed_recording(clock, "bframe", |mut profiler| {
                     let mut objects = None;
-                    if let (Some(runs), Some(now_inputs)) = (moving.as_deref_mut(), &now_inputs) {
-                        let location = self.instrumented.scene_locations[0];
+                    if let Some((run, inputs)) = moving_now.as_mut() {
                         if std::mem::take(&mut removal) {
                             self.bframes.remove_moving_objects(
                                 self.gpu,
@@ -751,11 +718,10 @@ impl Schedule<'_> {
                                 reborrow(&mut profiler),
                             );
                         }
-                        runs.now
-                            .runner
-                            .frame(self.gpu, now_inputs, reborrow(&mut profiler))?;
+                        run.runner
+                            .frame(self.gpu, inputs, reborrow(&mut profiler))?;
                         objects = Some(MovingObjects {
-                            now: runs.now.output(location)?,
+                            now: run.output(self.instrumented.scene_locations[0])?,
                             removed: self.bframes.removed(),
                         });
                     }

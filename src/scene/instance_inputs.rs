@@ -156,32 +156,22 @@ impl InstanceSource {
 /// inputs that are not twins, packed in order. Empty when the layout has
 /// none.
 pub fn instance_inputs(layout: &[VertexAttribute], worlds: &[Mat4]) -> Result<Vec<u8>, String> {
-    instance_inputs_at(layout, |_| worlds)
-}
-
-/// [`instance_inputs`] with each input fed from the world transforms
-/// `worlds_of` gives for its location: the inputs that twin others at
-/// other times (whole-frame reuse's I-frames) read those times'.
-pub fn instance_inputs_at<'w>(
-    layout: &[VertexAttribute],
-    worlds_of: impl Fn(u32) -> &'w [Mat4],
-) -> Result<Vec<u8>, String> {
-    let inputs: Vec<(InstanceSource, usize, bool, &[Mat4])> = layout
+    let inputs: Vec<(InstanceSource, usize, bool)> = layout
         .iter()
         .filter(|a| a.step == StepMode::Instance && a.previous_of.is_none())
         .map(|a| {
             let float = a.format.is_float32();
             let width = a.format.components() as usize;
-            Ok((InstanceSource::of(a)?, width, float, worlds_of(a.location)))
+            Ok((InstanceSource::of(a)?, width, float))
         })
         .collect::<Result<_, String>>()?;
     let mut bytes = Vec::new();
-    let Some(count) = inputs.iter().map(|i| i.3.len()).min() else {
+    if inputs.is_empty() {
         return Ok(bytes);
-    };
-    for instance in 0..count {
-        for &(source, width, float, worlds) in &inputs {
-            for &v in &source.value(worlds[instance])[..width] {
+    }
+    for &world in worlds {
+        for &(source, width, float) in &inputs {
+            for &v in &source.value(world)[..width] {
                 if float {
                     bytes.extend(v.to_le_bytes());
                 } else {
