@@ -206,12 +206,7 @@ pub fn instrument(
             first_binding: first + twinned,
         },
     ];
-    let stage = vertex::instrument_times(
-        &mut module,
-        vertex_index,
-        &times,
-        (true, max_vertex_attributes),
-    )?;
+    let stage = vertex::instrument_times(&mut module, vertex_index, &times, max_vertex_attributes)?;
     let instance_twins: Vec<InstanceTwin> = stage
         .instance_twins
         .iter()
@@ -539,17 +534,11 @@ fn scene_entry(
         components,
     });
     b.push(Statement::Return { value: Some(value) });
-    module.entry_points.push(naga::EntryPoint {
-        name: SCENE_ASSISTED_ENTRY.into(),
-        stage: naga::ShaderStage::Fragment,
-        early_depth_test: None,
-        workgroup_size: [0; 3],
-        workgroup_size_overrides: None,
-        function: b.finish(),
-        mesh_info: None,
-        task_payload: None,
-        incoming_ray_payload: None,
-    });
+    module.entry_points.push(builder::entry_point(
+        SCENE_ASSISTED_ENTRY,
+        naga::ShaderStage::Fragment,
+        b.finish(),
+    ));
     Ok(())
 }
 

@@ -248,11 +248,16 @@ impl Method {
     }
 }
 
-/// What to run and with which knobs; `None` takes the scene's.
-#[derive(Clone, Debug)]
+/// What to run and with which knobs; `None` takes the scene's. The knobs
+/// the B-frame passes use are what the report records as its
+/// `parameters` (serialised here; what the report states elsewhere, or
+/// says nothing of the passes, is skipped).
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct Options {
+    #[serde(skip)]
     pub methods: Vec<Method>,
     /// n: displayed frames per I-frame interval (at least 2).
+    #[serde(skip)]
     pub frames_per_interval: u32,
     /// m: search iterations (at least 1).
     pub iterations: u32,
@@ -283,19 +288,26 @@ pub struct Options {
     pub inpaint_passes: u32,
     /// Character removal's neighbour distance, in pixels.
     pub inpaint_delta: u32,
+    #[serde(skip)]
     pub size: Option<[u32; 2]>,
     /// Displayed frames measured (rounded up to whole intervals).
+    #[serde(skip)]
     pub frames: Option<u32>,
+    #[serde(skip)]
     pub entry: Option<String>,
+    #[serde(skip)]
     pub vertex_entry: Option<String>,
     /// Keep every measured B-frame whole ([`report::Pictures::kept`]).
+    #[serde(skip)]
     pub keep_frames: bool,
     /// Also composite each method's frames around every I-frame into a
     /// motion-blurred frame (000 §9) and compare it with the reference's.
+    #[serde(skip)]
     pub motion_blur: bool,
     /// A differential check: in each measured interval, also build each
     /// method's B-frames at α = 0 and α = 1 (the I-frames' own times),
     /// kept whole and not counted in the report's figures.
+    #[serde(skip)]
     pub endpoints: bool,
 }
 

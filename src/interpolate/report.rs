@@ -51,29 +51,9 @@ pub struct Report {
 /// The knobs of the run, as the B-frame passes used them.
 #[derive(Clone, Debug, Serialize)]
 pub struct Parameters {
-    /// m.
-    pub iterations: u32,
-    /// ε1, pixels.
-    pub screen_epsilon: f32,
-    /// ε2 and the visibility test: relative depth tolerance.
-    pub depth_epsilon: f32,
-    pub dual_init: bool,
-    /// Latest-frame initialisation (000 eqs. 18–19).
-    pub latest_frame_init: bool,
-    /// Its neighbourhood: the centre and the four diagonal taps this many
-    /// pixels away.
-    pub latest_radius: u32,
-    /// Half-velocity's velocity merging.
-    pub velocity_merge: bool,
-    /// Half-velocity's moving objects drawn at each B-frame's time and
-    /// removed from the earlier I-frame (003 slides 33–47).
-    pub moving_objects: bool,
-    /// Character removal's passes and neighbour distance (pixels, at
-    /// quarter resolution).
-    pub inpaint_passes: u32,
-    pub inpaint_delta: u32,
-    /// Half-velocity's direction test.
-    pub min_cosine: f32,
+    /// m, ε1, ε2, the initialisations, half-velocity's knobs.
+    #[serde(flatten)]
+    pub options: super::Options,
     pub flow_format: String,
     /// How the flows were rendered.
     pub flows: String,
@@ -212,25 +192,18 @@ pub fn write_images(
     report: &Report,
     pictures: &Pictures,
 ) -> Result<Vec<PathBuf>, String> {
-    let [width, height] = report.size;
     let images = dir.join("images");
-    std::fs::create_dir_all(&images)
-        .map_err(|e| format!("cannot create `{}`: {e}", images.display()))?;
+    crate::report::images::create_dir(&images)?;
     let mut written = Vec::new();
     for (method, reference, result) in &pictures.worst {
-        let difference = crate::report::images::amplified_difference(reference, result);
-        for (what, rgba) in [
-            ("reference", reference),
-            ("result", result),
-            ("difference", &difference),
-        ] {
-            let path = images.join(format!("{}-{what}.png", method.name()));
-            written.push(crate::report::images::save_opaque(
-                path,
-                rgba,
-                [width, height],
-            )?);
-        }
+        let names = ["reference", "result", "difference"]
+            .map(|what| format!("{}-{what}.png", method.name()));
+        written.extend(crate::report::images::save_comparison(
+            &images,
+            names.each_ref().map(String::as_str),
+            (reference, result),
+            report.size,
+        )?);
     }
     Ok(written)
 }

@@ -99,9 +99,7 @@ pub(super) fn run(
     let reference_plan =
         crate::rewrite::plan::reference(shader, &bindings.analysis, &rewrite_options)
             .map_err(fail)?;
-    let gpu = Gpu::new().map_err(fail)?.ok_or_else(|| {
-        fail("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers gives lavapipe)".into())
-    })?;
+    let gpu = crate::profile::open_gpu()?;
     // The twins of per-instance inputs take vertex attributes beside the
     // shader's, as many as the device grants.
     let max_vertex_attributes = gpu.device.limits().max_vertex_attributes;
@@ -1125,17 +1123,7 @@ impl Schedule<'_> {
             frames_per_interval: n,
             intervals,
             parameters: Parameters {
-                iterations: self.options.iterations,
-                screen_epsilon: self.options.screen_epsilon,
-                depth_epsilon: self.options.depth_epsilon,
-                dual_init: self.options.dual_init,
-                latest_frame_init: self.options.latest_frame_init,
-                latest_radius: self.options.latest_radius,
-                velocity_merge: self.options.velocity_merge,
-                moving_objects: self.options.moving_objects,
-                inpaint_passes: self.options.inpaint_passes,
-                inpaint_delta: self.options.inpaint_delta,
-                min_cosine: self.options.min_cosine,
+                options: self.options.clone(),
                 flow_format: "rgba16float".into(),
                 flows: "both flows from the I-frame pass (next- and previous-I-frame twins)".into(),
             },

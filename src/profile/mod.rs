@@ -325,6 +325,14 @@ pub(crate) fn fail(message: String) -> Error {
     Error::plain(Diagnostic::error(message))
 }
 
+/// The device the measured runs draw on, or the error saying how to get
+/// one.
+pub(crate) fn open_gpu() -> Result<Gpu, Error> {
+    Gpu::new().map_err(fail)?.ok_or_else(|| {
+        fail("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers gives lavapipe)".into())
+    })
+}
+
 /// Profiles `shader` on `scene`. `scene_path` names the scene file (its
 /// folder resolves relative files).
 pub fn profile(
@@ -354,9 +362,7 @@ pub fn profile(
     )?;
     let inputs_of = |scene: &Scene, frame: u32| scene_inputs.frame(scene, frame);
 
-    let gpu = Gpu::new().map_err(fail)?.ok_or_else(|| {
-        fail("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers gives lavapipe)".into())
-    })?;
+    let gpu = open_gpu()?;
     let mut clock = Clock::new(&gpu)?;
     let bench = bench::Bench {
         gpu: &gpu,

@@ -24,9 +24,6 @@ pub type Picture = (Vec<u8>, Vec<u8>);
 
 use super::Report;
 
-/// Writes `maps/<rank>-<node>-<variant>-dn<Δn>-k<k>.png` for every result,
-/// and `reference.png`, `best.png` and `difference.png` (×4 amplified)
-/// into `dir/images/`. Returns the files written.
 /// The difference of two RGBA8 pictures, ×4 so that small errors show.
 pub fn amplified_difference(a: &[u8], b: &[u8]) -> Vec<u8> {
     a.iter()
@@ -53,6 +50,30 @@ pub fn save_opaque(path: PathBuf, rgba: &[u8], size: [u32; 2]) -> Result<PathBuf
     Ok(path)
 }
 
+/// Creates `dir` (and its parents) for pictures.
+pub fn create_dir(dir: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create `{}`: {e}", dir.display()))
+}
+
+/// Writes a reference, a result and their difference (×4) as the PNGs
+/// `names` in `dir`; returns their paths.
+pub fn save_comparison(
+    dir: &Path,
+    names: [&str; 3],
+    (reference, result): (&[u8], &[u8]),
+    size: [u32; 2],
+) -> Result<Vec<PathBuf>, String> {
+    let difference = amplified_difference(reference, result);
+    names
+        .into_iter()
+        .zip([reference, result, &difference])
+        .map(|(name, rgba)| save_opaque(dir.join(name), rgba, size))
+        .collect()
+}
+
+/// Writes `maps/<rank>-<node>-<variant>-dn<Δn>-k<k>.png` for every result,
+/// and `reference.png`, `best.png` and `difference.png` (×4 amplified)
+/// into `dir/images/`. Returns the files written.
 pub fn write_images(
     dir: &Path,
     report: &Report,
@@ -61,10 +82,8 @@ pub fn write_images(
     let [width, height] = report.size;
     let maps = dir.join("maps");
     let images = dir.join("images");
-    std::fs::create_dir_all(&maps)
-        .map_err(|e| format!("cannot create `{}`: {e}", maps.display()))?;
-    std::fs::create_dir_all(&images)
-        .map_err(|e| format!("cannot create `{}`: {e}", images.display()))?;
+    create_dir(&maps)?;
+    create_dir(&images)?;
     let save = |path: PathBuf, rgba: &[u8]| save_opaque(path, rgba, [width, height]);
     let mut written = Vec::new();
     for (rank, (row, (_, classes))) in report.results.iter().zip(&pictures.results).enumerate() {
@@ -75,13 +94,18 @@ pub fn write_images(
         written.push(save(maps.join(name), classes)?);
     }
     if !pictures.reference.is_empty() {
-        written.push(save(images.join("reference.png"), &pictures.reference)?);
-        if let Some((color, _)) = pictures.results.first() {
-            if !color.is_empty() {
-                written.push(save(images.join("best.png"), color)?);
-                let difference = amplified_difference(&pictures.reference, color);
-                written.push(save(images.join("difference.png"), &difference)?);
-            }
+        match pictures
+            .results
+            .first()
+            .filter(|(color, _)| !color.is_empty())
+        {
+            Some((color, _)) => written.extend(save_comparison(
+                &images,
+                ["reference.png", "best.png", "difference.png"],
+                (&pictures.reference, color),
+                [width, height],
+            )?),
+            None => written.push(save(images.join("reference.png"), &pictures.reference)?),
         }
     }
     Ok(written)

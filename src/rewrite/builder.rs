@@ -121,6 +121,26 @@ pub fn vec4_type(module: &mut naga::Module) -> Handle<naga::Type> {
     vector_type(module, naga::VectorSize::Quad, naga::Scalar::F32)
 }
 
+/// A vertex or fragment entry point `name` running `function`, with
+/// nothing of the compute, mesh and ray stages.
+pub fn entry_point(
+    name: impl Into<String>,
+    stage: naga::ShaderStage,
+    function: naga::Function,
+) -> naga::EntryPoint {
+    naga::EntryPoint {
+        name: name.into(),
+        stage,
+        early_depth_test: None,
+        workgroup_size: [0; 3],
+        workgroup_size_overrides: None,
+        function,
+        mesh_info: None,
+        task_payload: None,
+        incoming_ray_payload: None,
+    }
+}
+
 /// `@location(location)` with no interpolation given: a fragment output,
 /// or a flat or default-interpolated input.
 pub fn location(location: u32) -> naga::Binding {

@@ -794,17 +794,11 @@ fn fullscreen_entry(module: &mut Module, vec4: Handle<naga::Type>) -> naga::Entr
         components: vec![position],
     });
     b.push(Statement::Return { value: Some(value) });
-    naga::EntryPoint {
-        name: "shadecache_fullscreen".into(),
-        stage: naga::ShaderStage::Vertex,
-        early_depth_test: None,
-        workgroup_size: [0; 3],
-        workgroup_size_overrides: None,
-        function: b.finish(),
-        mesh_info: None,
-        task_payload: None,
-        incoming_ray_payload: None,
-    }
+    super::builder::entry_point(
+        "shadecache_fullscreen",
+        naga::ShaderStage::Vertex,
+        b.finish(),
+    )
 }
 
 /// The name of G-buffer texture `index`: `gbuffer_a`, `gbuffer_b`... (a

@@ -168,12 +168,7 @@ pub fn instrument(
         group,
         first_binding,
     };
-    let mut stage = instrument_times(
-        module,
-        entry_index,
-        &[previous],
-        (true, MAX_VERTEX_ATTRIBUTES),
-    )?;
+    let mut stage = instrument_times(module, entry_index, &[previous], MAX_VERTEX_ATTRIBUTES)?;
     let TimedPosition {
         location, twins, ..
     } = stage.times.remove(0);
@@ -211,8 +206,7 @@ pub struct TimedPosition {
 pub struct TimedVertexStage {
     /// One per time asked for, in order, at consecutive locations.
     pub times: Vec<TimedPosition>,
-    /// As [`VertexStage::instance_twins`], one list per time asked for
-    /// (with `instance_twins`; else empty).
+    /// As [`VertexStage::instance_twins`], one list per time asked for.
     pub instance_twins: Vec<Vec<(u32, u32)>>,
     /// As [`VertexStage::plain`].
     pub plain: Function,
@@ -220,15 +214,14 @@ pub struct TimedVertexStage {
 
 /// Adds the clip position at each of `times` to the vertex entry point at
 /// `entry_index`. Per-instance vertex inputs the position reads get a twin
-/// input per time with `instance_twins` (`<time>_<input>`, at free
-/// locations below `max_vertex_attributes`, which the host fills with that
-/// time's values); without, they are refused (nothing supplies their
-/// values at other times).
+/// input per time (`<time>_<input>`, at free locations below
+/// `max_vertex_attributes`), which the host fills with that time's values;
+/// a refusal when they do not fit.
 pub fn instrument_times(
     module: &mut Module,
     entry_index: usize,
     times: &[TwinTime],
-    (instance_twins, max_vertex_attributes): (bool, u32),
+    max_vertex_attributes: u32,
 ) -> Result<TimedVertexStage, Refusal> {
     let entry = module.entry_points[entry_index].clone();
     let function = &entry.function;
@@ -246,12 +239,6 @@ pub fn instrument_times(
     // Per-instance inputs the position reads, each with a twin input at a
     // free location that carries last frame's value.
     let instance_inputs = instance_inputs_of_position(module, function, position_member);
-    if !instance_twins && !instance_inputs.is_empty() {
-        return Err(Refusal::new(format!(
-            "the position reads {} per-instance vertex input(s), whose values at other times are not supplied here",
-            instance_inputs.len()
-        )));
-    }
     let instance_twins = twin_locations(
         module,
         function,

@@ -77,8 +77,6 @@ struct Object {
 /// per-object buffers, and the variant.
 pub struct Runner {
     cached: CachedShader,
-    /// The frame's first colour output, which the profile reads back.
-    color: Option<wgpu::Texture>,
     /// Every colour target, by output location.
     colors: Vec<Option<wgpu::Texture>>,
     /// The frame's colour targets by output location, each in the plan's
@@ -147,9 +145,6 @@ impl Runner {
             .color_formats()
             .map(|format| format.map(|format| render_target(device, "color", size, format)))
             .collect();
-        // What the profile reads back: the first output (none for a plan
-        // that writes only the cache, such as a payload pass alone).
-        let color = colors.iter().flatten().next().cloned();
         let color_views = colors
             .iter()
             .map(|texture| {
@@ -184,7 +179,6 @@ impl Runner {
         let (views, samplers) = scene_textures(gpu, plan, textures, options.external_group)?;
         Ok(Runner {
             cached,
-            color,
             colors,
             color_views,
             meshes,
@@ -223,10 +217,10 @@ impl Runner {
         self.cached.plan()
     }
 
-    /// The frame's first colour target; `None` for a plan that writes only
-    /// the cache.
+    /// The frame's first colour target, which the profile reads back;
+    /// `None` for a plan that writes only the cache (a payload pass alone).
     pub fn color(&self) -> Option<&wgpu::Texture> {
-        self.color.as_ref()
+        self.colors.iter().flatten().next()
     }
 
     /// The frame's colour target at output `location`, if it has one.

@@ -46,28 +46,11 @@ fn run_tinted(
 /// groups would show; `effects`, `camera` and `sphere` (TOML lines) set
 /// the motion.
 fn sphere_over_floor(effects: &str, camera: &str, sphere: &str) -> String {
-    format!(
-        r#"
-size = [128, 128]
-frames = 3
-warmup = 1
-effects = [{effects}]
-[camera]
-eye = [0.0, 1.2, 3.4]
-target = [0.0, -0.3, 0.0]
-{camera}
-[[objects]]
-mesh = {{ kind = "plane", size = 6.0, subdivisions = 4 }}
-position = [0.0, -1.0, 0.0]
-[[objects]]
-mesh = {{ kind = "sphere", rings = 24, segments = 32 }}
-scale = 0.8
-{sphere}
-[uniforms]
-marble_frequency = 4.0
-turbulence_amount = 6.0
-light_color = [1.0, 1.0, 1.0]
-"#
+    crate::util::sphere_over_floor(
+        "size = [128, 128]\nframes = 3\nwarmup = 1",
+        effects,
+        camera,
+        sphere,
     )
 }
 

@@ -37,28 +37,7 @@ fn marble() -> String {
 /// A marble sphere over a marble floor; `effects`, `camera` and `sphere`
 /// (TOML lines) set the motion.
 fn sphere_over_floor(effects: &str, camera: &str, sphere: &str) -> String {
-    format!(
-        r#"
-size = [96, 96]
-frames = 8
-effects = [{effects}]
-[camera]
-eye = [0.0, 1.2, 3.4]
-target = [0.0, -0.3, 0.0]
-{camera}
-[[objects]]
-mesh = {{ kind = "plane", size = 6.0, subdivisions = 4 }}
-position = [0.0, -1.0, 0.0]
-[[objects]]
-mesh = {{ kind = "sphere", rings = 24, segments = 32 }}
-scale = 0.8
-{sphere}
-[uniforms]
-marble_frequency = 4.0
-turbulence_amount = 6.0
-light_color = [1.0, 1.0, 1.0]
-"#
-    )
+    crate::util::sphere_over_floor("size = [96, 96]\nframes = 8", effects, camera, sphere)
 }
 
 fn method(report: &Report, method: Method) -> &interpolate::report::MethodReport {
@@ -97,7 +76,10 @@ fn static_scene_with(latest_frame_init: bool) {
     let Some((report, _, _)) = run_interpolation(&marble(), &scene, options) else {
         return;
     };
-    assert_eq!(report.parameters.latest_frame_init, latest_frame_init);
+    assert_eq!(
+        report.parameters.options.latest_frame_init,
+        latest_frame_init
+    );
     assert!(
         report.notes.iter().any(|n| n.contains("no motion")),
         "{:?}",
@@ -187,10 +169,13 @@ fn alpha_zero_and_one_are_the_i_frames() {
     }
 }
 
-/// Flat shading by height above the backdrop, so that what a pixel shows
-/// says which surface it is: the windmill's blades (z = 0.5) are bright,
-/// the backdrop (z = −1) dark, striped so that it has detail.
-const DEPTH_SHADED: &str = r#"
+/// A module whose vertex stage draws each object with the scene's camera
+/// and model matrices and passes its world and local positions on, with
+/// `$fragment` after it.
+macro_rules! with_frame_vertex {
+    ($fragment:literal) => {
+        concat!(
+            r#"
 struct Frame {
     clip_from_world: mat4x4<f32>,
     world_from_local: mat4x4<f32>,
@@ -201,6 +186,7 @@ struct Frame {
 struct VertexOutput {
     @builtin(position) clip_position: vec4<f32>,
     @location(0) world_position: vec3<f32>,
+    @location(1) local_position: vec3<f32>,
 }
 
 @vertex
@@ -209,15 +195,27 @@ fn vs_main(@location(0) position: vec3<f32>) -> VertexOutput {
     var out: VertexOutput;
     out.clip_position = frame.clip_from_world * world;
     out.world_position = world.xyz;
+    out.local_position = position;
     return out;
 }
+"#,
+            $fragment
+        )
+    };
+}
 
+/// Flat shading by height above the backdrop, so that what a pixel shows
+/// says which surface it is: the windmill's blades (z = 0.5) are bright,
+/// the backdrop (z = −1) dark, striped so that it has detail.
+const DEPTH_SHADED: &str = with_frame_vertex!(
+    r#"
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
     let stripes = 0.1 * step(0.5, fract(in.world_position.x * 4.0));
     return vec4<f32>(vec3<f32>(0.1 + 0.5 * (in.world_position.z + 1.0) + stripes), 1.0);
 }
-"#;
+"#
+);
 
 /// Brightness of [`DEPTH_SHADED`] above which a pixel shows a blade.
 const BLADE: f32 = 0.8;
@@ -675,37 +673,16 @@ fn flows_match_cpu_projection() {
 /// Flat shading by height, like [`DEPTH_SHADED`], with stripes in the
 /// object's own space on what stands in front of the wall only: the wall
 /// is one flat colour, the square (bright) carries its stripes along.
-const SLIDING_SHADED: &str = r#"
-struct Frame {
-    clip_from_world: mat4x4<f32>,
-    world_from_local: mat4x4<f32>,
-}
-
-@group(0) @binding(0) var<uniform> frame: Frame;
-
-struct VertexOutput {
-    @builtin(position) clip_position: vec4<f32>,
-    @location(0) world_position: vec3<f32>,
-    @location(1) local_position: vec3<f32>,
-}
-
-@vertex
-fn vs_main(@location(0) position: vec3<f32>) -> VertexOutput {
-    let world = frame.world_from_local * vec4<f32>(position, 1.0);
-    var out: VertexOutput;
-    out.clip_position = frame.clip_from_world * world;
-    out.world_position = world.xyz;
-    out.local_position = position;
-    return out;
-}
-
+const SLIDING_SHADED: &str = with_frame_vertex!(
+    r#"
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
     let stripes = 0.2 * step(0.5, fract(in.local_position.x * 6.0));
     let front = in.world_position.z > -0.5;
     return vec4<f32>(vec3<f32>(select(0.1, 0.6 + stripes, front)), 1.0);
 }
-"#;
+"#
+);
 
 /// Brightness of [`SLIDING_SHADED`] above which a pixel shows the square.
 const SQUARE: f32 = 0.4;

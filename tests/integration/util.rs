@@ -265,3 +265,30 @@ pub fn profile_error(shader: &str, scene_text: &str) -> String {
     assert_eq!(output.status.code(), Some(1), "{err}");
     err
 }
+
+/// A marble sphere over a marble floor, for `corpus/noise_marble.wgsl`:
+/// `settings` (TOML lines: size, frames, warm-up), `effects`, `camera`
+/// and `sphere` (TOML lines) set the run and the motion.
+pub fn sphere_over_floor(settings: &str, effects: &str, camera: &str, sphere: &str) -> String {
+    format!(
+        r#"
+{settings}
+effects = [{effects}]
+[camera]
+eye = [0.0, 1.2, 3.4]
+target = [0.0, -0.3, 0.0]
+{camera}
+[[objects]]
+mesh = {{ kind = "plane", size = 6.0, subdivisions = 4 }}
+position = [0.0, -1.0, 0.0]
+[[objects]]
+mesh = {{ kind = "sphere", rings = 24, segments = 32 }}
+scale = 0.8
+{sphere}
+[uniforms]
+marble_frequency = 4.0
+turbulence_amount = 6.0
+light_color = [1.0, 1.0, 1.0]
+"#
+    )
+}

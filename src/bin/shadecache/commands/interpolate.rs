@@ -9,17 +9,30 @@ use shadecache::interpolate::{self, report, Method, Options};
 
 use super::profile::{parse_size, Bar};
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+/// A `--method` value: `all`, or one method by its name
+/// ([`Method::name`], the one list of them).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MethodArg {
     All,
-    Reference,
-    SampleAndHold,
-    LinearBlend,
-    ImageBased,
-    HalfVelocity,
-    SceneAssisted,
-    SceneAssistedShadeOnMiss,
-    ReverseReprojection,
+    One(Method),
+}
+
+impl clap::ValueEnum for MethodArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        static VARIANTS: std::sync::OnceLock<Vec<MethodArg>> = std::sync::OnceLock::new();
+        VARIANTS.get_or_init(|| {
+            std::iter::once(MethodArg::All)
+                .chain(Method::ALL.map(MethodArg::One))
+                .collect()
+        })
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(match self {
+            MethodArg::All => "all",
+            MethodArg::One(method) => method.name(),
+        }))
+    }
 }
 
 impl MethodArg {
@@ -28,14 +41,7 @@ impl MethodArg {
             .iter()
             .flat_map(|arg| match arg {
                 MethodArg::All => Method::ALL.to_vec(),
-                MethodArg::Reference => vec![Method::Reference],
-                MethodArg::SampleAndHold => vec![Method::SampleAndHold],
-                MethodArg::LinearBlend => vec![Method::LinearBlend],
-                MethodArg::ImageBased => vec![Method::ImageBased],
-                MethodArg::HalfVelocity => vec![Method::HalfVelocity],
-                MethodArg::SceneAssisted => vec![Method::SceneAssisted],
-                MethodArg::SceneAssistedShadeOnMiss => vec![Method::SceneAssistedShadeOnMiss],
-                MethodArg::ReverseReprojection => vec![Method::ReverseReprojection],
+                MethodArg::One(method) => vec![*method],
             })
             .collect();
         methods.sort();
