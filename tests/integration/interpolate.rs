@@ -226,26 +226,18 @@ const BLADE: f32 = 0.8;
 /// (seed 000 §6's double misses). `depth` is the camera's convention.
 fn windmill(depth: &str) -> String {
     let mesh = root().join("corpus/scenes/meshes/windmill.obj");
-    format!(
-        r#"
-size = [96, 96]
-frames = 8
-effects = ["object-motion"]
-[camera]
-eye = [0.0, 0.0, 3.0]
-target = [0.0, 0.0, 0.0]
-depth = "{depth}"
-[[objects]]
-mesh = {{ kind = "plane", size = 6.0, subdivisions = 2 }}
-position = [0.0, 0.0, -1.0]
-rotation_degrees = [90.0, 0.0, 0.0]
-[[objects]]
+    before_wall(
+        depth,
+        0.0,
+        &format!(
+            r#"[[objects]]
 mesh = {{ kind = "obj", file = "{}" }}
 position = [0.0, 0.0, 0.5]
 rotation_degrees = [0.0, 0.0, 10.0]
 rotation_degrees_per_frame = [0.0, 0.0, 45.0]
 "#,
-        mesh.display()
+            mesh.display()
+        ),
     )
 }
 
@@ -278,20 +270,11 @@ fn double_misses(frame: &KeptFrame) -> Vec<usize> {
 fn two_windmills(depth: &str) -> String {
     let mesh = root().join("corpus/scenes/meshes/windmill.obj");
     let mesh = mesh.display();
-    format!(
-        r#"
-size = [96, 96]
-frames = 8
-effects = ["object-motion"]
-[camera]
-eye = [0.0, 0.0, 3.0]
-target = [0.0, 0.0, 0.0]
-depth = "{depth}"
-[[objects]]
-mesh = {{ kind = "plane", size = 6.0, subdivisions = 2 }}
-position = [0.0, 0.0, -1.0]
-rotation_degrees = [90.0, 0.0, 0.0]
-[[objects]]
+    before_wall(
+        depth,
+        0.0,
+        &format!(
+            r#"[[objects]]
 mesh = {{ kind = "obj", file = "{mesh}" }}
 position = [0.0, 0.0, 0.5]
 rotation_degrees_per_frame = [0.0, 0.0, 45.0]
@@ -301,6 +284,7 @@ position = [0.0, 0.0, 0.8]
 rotation_degrees = [0.0, 0.0, 90.0]
 rotation_degrees_per_frame = [0.0, 0.0, 22.5]
 "#
+        ),
     )
 }
 
@@ -690,7 +674,27 @@ const SQUARE: f32 = 0.4;
 /// Squares before a wall, the camera still: each `(size, [x, y], speed)`,
 /// moving `speed` world units a frame along x, the wall `wall_speed`.
 fn squares_before_wall(wall_speed: f32, squares: &[(f32, [f32; 2], f32)]) -> String {
-    let mut scene = format!(
+    let objects: String = squares
+        .iter()
+        .map(|(size, [x, y], speed)| {
+            format!(
+                r#"[[objects]]
+mesh = {{ kind = "plane", size = {size}, subdivisions = 2 }}
+position = [{x}, {y}, 0.0]
+rotation_degrees = [90.0, 0.0, 0.0]
+translation_per_frame = [{speed}, 0.0, 0.0]
+"#
+            )
+        })
+        .collect();
+    before_wall("standard", wall_speed, &objects)
+}
+
+/// A 96² scene of `objects` (TOML) before a wall one unit behind the
+/// origin moving `wall_speed` world units a frame along x, the camera
+/// still three units in front with depth convention `depth`.
+fn before_wall(depth: &str, wall_speed: f32, objects: &str) -> String {
+    format!(
         r#"
 size = [96, 96]
 frames = 8
@@ -698,6 +702,7 @@ effects = ["object-motion"]
 [camera]
 eye = [0.0, 0.0, 3.0]
 target = [0.0, 0.0, 0.0]
+depth = "{depth}"
 [light]
 position = [0.0, 0.0, 10.0]
 [[objects]]
@@ -705,19 +710,8 @@ mesh = {{ kind = "plane", size = 6.0, subdivisions = 2 }}
 position = [0.0, 0.0, -1.0]
 rotation_degrees = [90.0, 0.0, 0.0]
 translation_per_frame = [{wall_speed}, 0.0, 0.0]
-"#
-    );
-    for (size, [x, y], speed) in squares {
-        scene += &format!(
-            r#"[[objects]]
-mesh = {{ kind = "plane", size = {size}, subdivisions = 2 }}
-position = [{x}, {y}, 0.0]
-rotation_degrees = [90.0, 0.0, 0.0]
-translation_per_frame = [{speed}, 0.0, 0.0]
-"#
-        );
-    }
-    scene
+{objects}"#
+    )
 }
 
 /// A square sliding to the right before a wall, the camera still, `speed`
