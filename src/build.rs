@@ -395,6 +395,9 @@ impl Build {
                 ..analysis::Options::default()
             },
         )?;
+        if let Some(name) = &job.vertex_entry {
+            analysis.check_vertex_entry(&shader, name)?;
+        }
         let stem = job_name(job);
         let explicit = matches!(job.nodes, Nodes::Ids(_));
         for candidate in analysis.select(&shader.file, &job.nodes)? {

@@ -54,7 +54,7 @@ pub use entry::{fragment_entry, stage_name};
 pub use id::node_id;
 
 use crate::cost::{CostModel, Weights};
-use crate::diagnostic::Error;
+use crate::diagnostic::{Diagnostic, Error};
 use crate::front::Shader;
 
 /// What to analyse and how to cost it.
@@ -232,6 +232,16 @@ pub enum Nodes {
 }
 
 impl Analysis {
+    /// Checks that the vertex entry point `wanted` (or, without a name, the
+    /// one inferred) draws with the analysed fragment entry point: a
+    /// wrong `--vertex-entry` is one error before any node is rewritten,
+    /// not the same refusal for every node and variant.
+    pub fn check_vertex_entry(&self, shader: &Shader, wanted: &str) -> Result<(), Error> {
+        crate::proc::vertex_entry(&shader.module, self.entry_index, Some(wanted))
+            .map(|_| ())
+            .map_err(|reason| Error::plain(Diagnostic::error(format!("--vertex-entry: {reason}"))))
+    }
+
     /// Bounds every candidate's value again, knowing the uniform values
     /// `uniforms` take (the profiler knows them from its scene): a node
     /// that reads a uniform is unbounded to the shader alone, and may fit

@@ -56,9 +56,44 @@ impl Default for Weights {
     }
 }
 
+/// The largest weight: a thousand texture samples' worth by default. A
+/// weight beyond it (or an infinite one) makes every cost infinite and
+/// every ratio undefined.
+pub const MAX_WEIGHT: f64 = 1.0e6;
+
 impl Weights {
     /// Reads weights from JSON; missing fields keep their defaults.
     pub fn from_json(text: &str) -> Result<Self, serde_json::Error> {
         serde_json::from_str(text)
+    }
+
+    /// Every weight by its JSON name.
+    pub fn named(&self) -> [(&'static str, f64); 11] {
+        [
+            ("arithmetic", self.arithmetic),
+            ("division", self.division),
+            ("simple_math", self.simple_math),
+            ("transcendental", self.transcendental),
+            ("texture_sample", self.texture_sample),
+            ("texture_load", self.texture_load),
+            ("texture_query", self.texture_query),
+            ("derivative", self.derivative),
+            ("load", self.load),
+            ("call", self.call),
+            ("default_loop_trips", self.default_loop_trips),
+        ]
+    }
+
+    /// The first weight outside `0..=MAX_WEIGHT`, by name, with why: a
+    /// negative cost would rank a node by what it saves below nothing.
+    pub fn out_of_bounds(&self) -> Option<(&'static str, String)> {
+        self.named().into_iter().find_map(|(name, value)| {
+            (!(0.0..=MAX_WEIGHT).contains(&value)).then(|| {
+                (
+                    name,
+                    format!("weight `{name}` is {value}: weights go from 0 to {MAX_WEIGHT:e}"),
+                )
+            })
+        })
     }
 }

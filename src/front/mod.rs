@@ -40,11 +40,47 @@ pub fn load(path: &Path) -> Result<Shader, Error> {
 
 /// Reads a WGSL file as UTF-8 text.
 pub fn read_source(path: &Path) -> Result<SourceFile, Error> {
+    read_text(path, TextKind::Wgsl)
+}
+
+/// What a text file read by [`read_text`] is, for its messages.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextKind {
+    /// A WGSL shader or module.
+    Wgsl,
+    /// A scene (TOML).
+    Scene,
+    /// Cost weights (JSON).
+    Weights,
+}
+
+impl TextKind {
+    fn what(self) -> &'static str {
+        match self {
+            TextKind::Wgsl => "the shader",
+            TextKind::Scene => "the scene",
+            TextKind::Weights => "the cost weights file",
+        }
+    }
+
+    fn expected(self) -> &'static str {
+        match self {
+            TextKind::Wgsl => "a .wgsl file",
+            TextKind::Scene => "a scene's .toml file",
+            TextKind::Weights => "a .json file of cost weights",
+        }
+    }
+}
+
+/// Reads a text file of kind `kind` as UTF-8. A leading byte-order mark
+/// (editors on Windows write one) is dropped: it is no part of the text,
+/// and WGSL, TOML and JSON parsers take it for a stray character.
+pub fn read_text(path: &Path, kind: TextKind) -> Result<SourceFile, Error> {
     let shown = path.display().to_string();
     if path.is_dir() {
         return Err(Error::plain(
-            Diagnostic::error(format!("`{shown}` is a directory, not a WGSL file"))
-                .with_note("give the path of a .wgsl file"),
+            Diagnostic::error(format!("`{shown}` is a directory, not {}", kind.expected()))
+                .with_note(format!("give the path of {}", kind.expected())),
         ));
     }
     let bytes = std::fs::read(path).map_err(|err| {
@@ -57,6 +93,10 @@ pub fn read_source(path: &Path) -> Result<SourceFile, Error> {
             "cannot read `{shown}`: {reason}"
         )))
     })?;
+    let bytes = match bytes.strip_prefix(b"\xEF\xBB\xBF") {
+        Some(rest) => rest.to_vec(),
+        None => bytes,
+    };
     match String::from_utf8(bytes) {
         Ok(text) => Ok(SourceFile::new(shown, text)),
         Err(err) => {
@@ -69,9 +109,13 @@ pub fn read_source(path: &Path) -> Result<SourceFile, Error> {
             let range = valid_up_to..valid_up_to + "\u{FFFD}".len();
             Err(Error::in_file(
                 file,
-                Diagnostic::error("the shader is not valid UTF-8")
+                Diagnostic::error(format!("{} is not valid UTF-8 text", kind.what()))
                     .with_label(range, format!("{bad_len} byte(s) that are not UTF-8"))
-                    .with_note("WGSL source must be UTF-8 text"),
+                    .with_note(format!(
+                        "{} must be UTF-8 text: is this {}?",
+                        kind.what(),
+                        kind.expected()
+                    )),
             ))
         }
     }
@@ -83,7 +127,7 @@ pub fn parse(file: SourceFile) -> Result<Shader, Error> {
     let text = file.text.as_str();
     let outcome = catch_unwind(AssertUnwindSafe(|| {
         naga::front::wgsl::parse_str(text)
-            .map_err(|err| Diagnostic::from_parse_error(&err))
+            .map_err(|err| too_deep(Diagnostic::from_parse_error(&err), text))
             .and_then(|module| {
                 validate(&module)
                     .map(|info| (module, info))
@@ -103,6 +147,37 @@ pub fn parse(file: SourceFile) -> Result<Shader, Error> {
             Diagnostic::error("naga could not process this shader (it panicked)")
                 .with_note("this input exposes a bug in naga; please report it with the shader"),
         )),
+    }
+}
+
+/// naga's parser stops at a fixed nesting depth with an error that has no
+/// span ("Parser recursion limit exceeded"); point it at the deepest
+/// bracket of the text, which is where the limit was reached.
+fn too_deep(mut diagnostic: Diagnostic, text: &str) -> Diagnostic {
+    if !diagnostic.labels.is_empty() {
+        return diagnostic;
+    }
+    let (mut depth, mut deepest, mut at) = (0usize, 0usize, 0usize);
+    for (offset, c) in text.char_indices() {
+        match c {
+            '(' | '[' | '{' => {
+                depth += 1;
+                if depth > deepest {
+                    (deepest, at) = (depth, offset);
+                }
+            }
+            ')' | ']' | '}' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    let limit = |s: &String| s.contains("recursion limit");
+    if (limit(&diagnostic.message) || diagnostic.notes.iter().any(limit)) && deepest > 0 {
+        diagnostic.message = "this shader nests deeper than naga's WGSL parser allows".into();
+        diagnostic
+            .with_label(at..at + 1, format!("nested {deepest} deep here"))
+            .with_note("naga's WGSL parser takes expressions nested only so deep: split this one with `let`s")
+    } else {
+        diagnostic.with_label(0..0, "while parsing this module")
     }
 }
 

@@ -57,6 +57,12 @@ fn check(options: &Options) -> Result<(), Error> {
     if options.methods.is_empty() {
         return Err(fail("no method to run".into()));
     }
+    if !(-1.0..=1.0).contains(&options.min_cosine) {
+        return Err(fail(format!(
+            "the half-velocity direction test's cosine must be from -1 to 1, not {}",
+            options.min_cosine
+        )));
+    }
     if options.latest_radius == 0 {
         return Err(fail(
             "--latest-radius must be at least 1: its taps are the pixel's diagonal neighbours that far away".into(),
@@ -81,7 +87,9 @@ pub(super) fn run(
     check(options)?;
     let n = options.frames_per_interval;
     let size = options.size.unwrap_or(scene.size);
-    let intervals = options.frames.unwrap_or(scene.frames).max(1).div_ceil(n);
+    let frames = options.frames.unwrap_or(scene.frames);
+    crate::profile::setup::check_counts(size, frames, 0)?;
+    let intervals = frames.div_ceil(n);
     let last_frame = (WARMUP_INTERVALS + intervals + 1) * n;
     let bindings = crate::profile::setup::scene_bindings(
         shader,

@@ -84,6 +84,7 @@ pub(crate) fn scene_bindings(
     uniforms.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
     let mut storage = scene::storage::buffers(&shader.module);
     storage.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
+    scene.check_names(&shader.module)?;
     scene::roles::check(&uniforms, &storage, scene)?;
     scene::uniforms::check(&uniforms, scene).map_err(fail)?;
     let mut analysis = analysis::analyze(
@@ -115,10 +116,11 @@ pub(super) fn prepare(
 ) -> Result<Prepared, Error> {
     let size = options.size.unwrap_or(scene.size);
     let longest_period = options.axes().refresh_periods.iter().copied().max();
-    let frames = options.frames.unwrap_or(scene.frames).max(1);
+    let frames = options.frames.unwrap_or(scene.frames);
     let warmup = options
         .warmup
         .unwrap_or_else(|| scene.warmup.max(longest_period.unwrap_or(0)));
+    check_counts(size, frames, options.warmup.unwrap_or(0))?;
     let SceneBindings {
         aspect,
         used,
@@ -175,4 +177,28 @@ pub(super) fn prepare(
         defaults,
         analysis,
     })
+}
+
+/// The frame size and counts asked of a run, within the bounds a scene's
+/// own keep ([`scene::bounds`]): a library caller's options are checked as
+/// the command line's are.
+pub(crate) fn check_counts(size: [u32; 2], frames: u32, warmup: u32) -> Result<(), Error> {
+    use scene::bounds::{MAX_FRAMES, MAX_SIZE};
+    if size.iter().any(|&side| side == 0 || side > MAX_SIZE) {
+        return Err(fail(format!(
+            "size {}×{} is not between 1 and {MAX_SIZE} pixels a side",
+            size[0], size[1]
+        )));
+    }
+    if frames == 0 || frames > MAX_FRAMES {
+        return Err(fail(format!(
+            "{frames} frames: a run measures 1 to {MAX_FRAMES}"
+        )));
+    }
+    if warmup > MAX_FRAMES {
+        return Err(fail(format!(
+            "{warmup} warm-up frames: at most {MAX_FRAMES}"
+        )));
+    }
+    Ok(())
 }

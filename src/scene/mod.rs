@@ -22,6 +22,7 @@
 //! transform and the scene's `[storage.<binding>]` tables. [`layout`]
 //! writes values at naga's offsets for both kinds of buffer.
 
+pub mod bounds;
 pub mod init;
 pub mod instance_inputs;
 pub mod instances;
@@ -426,7 +427,10 @@ impl VertexConstant {
 impl Scene {
     /// Reads and checks a scene file. Errors point into the file.
     pub fn load(path: &Path) -> Result<Scene, Error> {
-        let file = Arc::new(crate::front::read_source(path)?);
+        let file = Arc::new(crate::front::read_text(
+            path,
+            crate::front::TextKind::Scene,
+        )?);
         Scene::parse(file)
     }
 
@@ -456,40 +460,65 @@ impl Scene {
                     .with_label(range, "here"),
             )
         })?;
-        let fail = |message: String| Err(Error::in_file(file.clone(), Diagnostic::error(message)));
-        if scene.objects.is_empty() {
-            return fail(
-                "the scene has no objects: add at least one [[objects]] with a mesh".into(),
-            );
-        }
-        if scene.size[0] == 0 || scene.size[1] == 0 || scene.size[0] > 8192 || scene.size[1] > 8192
-        {
-            return fail(format!(
-                "size {:?} is not between 1 and 8192 pixels",
-                scene.size
-            ));
-        }
-        if scene.frames == 0 {
-            return fail("frames must be at least 1".into());
-        }
-        let far_ok = match scene.camera.far {
-            Far::Distance(far) => far > scene.camera.near && far.is_finite(),
-            Far::Infinity => true,
-        };
-        if !(scene.camera.near > 0.0 && scene.camera.near.is_finite() && far_ok) {
-            return fail("the camera needs 0 < near < far (far may be \"infinity\")".into());
-        }
-        let camera = &scene.camera;
-        let motion_ok = camera.zoom_per_frame > 0.0
-            && camera.zoom_per_frame.is_finite()
-            && camera.roll_degrees_per_frame.is_finite();
-        if !motion_ok {
-            return fail(
-                "the camera's zoom_per_frame must be above 0 (1 keeps the field of view) and its roll_degrees_per_frame finite".into(),
-            );
-        }
+        bounds::check(&scene, &file)?;
         scene.file = Some(file);
         Ok(scene)
+    }
+
+    /// Where the value at `path` (table keys, and decimal indices into
+    /// arrays: `["objects", "0", "mesh"]`) sits in the scene's file.
+    pub fn span(&self, path: &[&str]) -> Option<Range<usize>> {
+        bounds::span_in(&self.file.as_ref()?.text, path)
+    }
+
+    /// Checks that every `[uniforms]` key names a uniform member of
+    /// `module` and every `[textures]` key a texture it declares: a
+    /// misspelt name would otherwise leave the shader's own value to a
+    /// default and the scene's unused, without a word.
+    pub fn check_names(&self, module: &naga::Module) -> Result<(), Error> {
+        let buffers = uniforms::buffers(module);
+        for name in self.uniforms.keys() {
+            if !uniforms::has_member(&buffers, name) {
+                let mut known: Vec<String> = buffers
+                    .iter()
+                    .flat_map(|b| b.members.iter())
+                    .filter(|m| !layout::is_padding(&m.name))
+                    .map(|m| format!("`{}`", m.name))
+                    .collect();
+                known.sort();
+                known.dedup();
+                let listing = if known.is_empty() {
+                    "it has no uniform buffer".to_string()
+                } else {
+                    format!("its uniform members are {}", known.join(", "))
+                };
+                return Err(self.error(
+                    format!("[uniforms] sets `{name}`, which the shader does not have: {listing}"),
+                    self.span(&["uniforms", name]),
+                ));
+            }
+        }
+        let textures: Vec<String> = module
+            .global_variables
+            .iter()
+            .filter(|(_, g)| matches!(module.types[g.ty].inner, naga::TypeInner::Image { .. }))
+            .filter_map(|(_, g)| g.name.clone())
+            .collect();
+        for name in self.textures.keys() {
+            if !textures.contains(name) {
+                let listing = if textures.is_empty() {
+                    "it binds no texture".to_string()
+                } else {
+                    let names: Vec<String> = textures.iter().map(|t| format!("`{t}`")).collect();
+                    format!("its textures are {}", names.join(", "))
+                };
+                return Err(self.error(
+                    format!("[textures.{name}] names a texture the shader does not bind: {listing}"),
+                    self.span(&["textures", name]),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// An error about the scene, pointing at `span` of its file when the

@@ -6,7 +6,7 @@ use serde::Deserialize;
 
 /// Where a texture's texels come from.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(untagged, deny_unknown_fields)]
+#[serde(try_from = "RawSource")]
 pub enum TextureSource {
     /// A PNG file, relative to the scene file.
     File { file: String },
@@ -20,6 +20,45 @@ pub enum TextureSource {
 
 fn default_size() -> u32 {
     256
+}
+
+/// A `[textures.NAME]` table as written, before it is one source or the
+/// other: read this way so that a table that is neither says so in the
+/// scene's words, not serde's.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSource {
+    file: Option<String>,
+    generate: Option<Pattern>,
+    size: Option<u32>,
+}
+
+/// The largest generated texture's side.
+pub const MAX_GENERATED_SIZE: u32 = 4096;
+
+impl TryFrom<RawSource> for TextureSource {
+    type Error = String;
+
+    fn try_from(raw: RawSource) -> Result<TextureSource, String> {
+        match (raw.file, raw.generate, raw.size) {
+            (Some(file), None, None) => Ok(TextureSource::File { file }),
+            (Some(_), _, _) => Err(
+                "a texture is either `file = \"PATH.png\"` or `generate = \"PATTERN\"` (with an optional `size`), not both".into(),
+            ),
+            (None, Some(generate), size) => {
+                let size = size.unwrap_or_else(default_size);
+                if size == 0 || size > MAX_GENERATED_SIZE {
+                    return Err(format!(
+                        "a generated texture's size is 1 to {MAX_GENERATED_SIZE} texels, not {size}"
+                    ));
+                }
+                Ok(TextureSource::Generate { generate, size })
+            }
+            (None, None, _) => Err(
+                "a texture needs `file = \"PATH.png\"` (relative to the scene) or `generate = \"checker\"` (checker, noise, flat-normal, sky or far)".into(),
+            ),
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
@@ -65,7 +104,7 @@ impl TextureSource {
                 })
             }
             TextureSource::Generate { generate, size } => {
-                Ok(generate_pattern(generate, size.clamp(1, 4096)))
+                Ok(generate_pattern(generate, size))
             }
         }
     }

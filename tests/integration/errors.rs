@@ -239,3 +239,293 @@ fn a_refresh_period_beyond_the_largest_is_refused() {
     }
     assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0);
 }
+
+/// A scene for the marble shader, with `edit` applied to its text: a
+/// `(find, replace)` pair, or appended when `find` is empty.
+fn marble_scene(edit: (&str, &str)) -> String {
+    let base = "size = [64, 64]\nframes = 2\nwarmup = 0\n\n[camera]\neye = [0.0, 0.3, 2.6]\ntarget = [0.0, 0.0, 0.0]\nfov_degrees = 45.0\n\n[light]\nposition = [3.0, 4.0, 2.5]\n\n[[objects]]\nmesh = { kind = \"sphere\", radius = 1.0, rings = 8, segments = 8 }\nscale = 1.0\n\n[uniforms]\nmarble_frequency = 4.0\nturbulence_amount = 6.0\nlight_color = [1.0, 0.97, 0.92]\n";
+    let (find, replace) = edit;
+    if find.is_empty() {
+        return format!("{base}{replace}");
+    }
+    assert!(base.contains(find), "the base scene has `{find}`");
+    base.replacen(find, replace, 1)
+}
+
+/// Runs `profile` on the marble shader with `scene` (and `extra`
+/// arguments): it must fail with exit 1 before writing anything, and
+/// name `at` (`scene.toml:LINE:COLUMN`) and `says`.
+fn scene_fails(case: &str, scene: &str, extra: &[&str], says: &str, at: &str) {
+    let (dir, path) = temp_file("scene.toml", scene.as_bytes());
+    let out = dir.path().join("report");
+    let mut args = vec![
+        "profile".to_string(),
+        "corpus/noise_marble.wgsl".into(),
+        "--scene".into(),
+        path.display().to_string(),
+        "--out".into(),
+        out.display().to_string(),
+        "--quiet".into(),
+    ];
+    args.extend(extra.iter().map(|s| s.to_string()));
+    let output = shadecache(&args);
+    let err = stderr(&output).replace(&path.display().to_string(), "scene.toml");
+    assert_eq!(output.status.code(), Some(1), "{case}: {err}");
+    assert!(err.contains(says), "{case}: expected `{says}` in\n{err}");
+    assert!(err.contains(at), "{case}: expected `{at}` in\n{err}");
+    assert!(!err.contains("panicked"), "{case}: {err}");
+    assert!(!out.exists(), "{case}: nothing is written");
+}
+
+/// Each value a scene could give that renders nothing, garbage, or never
+/// ends is an error at the value, with exit 1 and nothing written
+/// (docs/scene-toml.md states the bounds).
+#[test]
+fn scene_values_are_bounded_and_finite() {
+    let cases: &[(&str, (&str, &str), &str, &str)] = &[
+        (
+            "nan_camera",
+            ("eye = [0.0, 0.3, 2.6]", "eye = [0.0, nan, 2.6]"),
+            "`nan` is not a finite number",
+            "scene.toml:6:13",
+        ),
+        (
+            "infinite_light",
+            ("position = [3.0, 4.0, 2.5]", "position = [inf, 4.0, 2.5]"),
+            "`inf` is not a finite number",
+            "scene.toml:11:13",
+        ),
+        (
+            "beyond_f32_mesh_radius",
+            ("radius = 1.0", "radius = 1e39"),
+            "`1e39` is not a finite number",
+            "scene.toml:14:36",
+        ),
+        (
+            "nan_uniform",
+            ("marble_frequency = 4.0", "marble_frequency = -nan"),
+            "`-nan` is not a finite number",
+            "scene.toml:18:20",
+        ),
+        (
+            "zero_field_of_view",
+            ("fov_degrees = 45.0", "fov_degrees = 0.0"),
+            "strictly between 0 and 180",
+            "scene.toml:8:15",
+        ),
+        (
+            "half_turn_field_of_view",
+            ("fov_degrees = 45.0", "fov_degrees = 180.0"),
+            "strictly between 0 and 180",
+            "scene.toml:8:15",
+        ),
+        (
+            "eye_at_target",
+            ("eye = [0.0, 0.3, 2.6]", "eye = [0.0, 0.0, 0.0]"),
+            "eye is at its target",
+            "scene.toml:6:7",
+        ),
+        (
+            "eye_straight_above",
+            ("eye = [0.0, 0.3, 2.6]", "eye = [0.0, 3.0, 0.0]"),
+            "straight up or down",
+            "scene.toml:6:7",
+        ),
+        (
+            "huge_sphere",
+            (
+                "rings = 8, segments = 8",
+                "rings = 100000, segments = 100000",
+            ),
+            "10000000000 quads",
+            "scene.toml:14:8",
+        ),
+        (
+            "huge_warmup",
+            ("warmup = 0", "warmup = 4000000000"),
+            "warmup = 4000000000 is above 10000",
+            "scene.toml:3:10",
+        ),
+        (
+            "zero_frames",
+            ("frames = 2", "frames = 0"),
+            "frames = 0 is not between 1 and 10000",
+            "scene.toml:2:10",
+        ),
+        (
+            "three_element_size",
+            ("size = [64, 64]", "size = [64, 64, 3]"),
+            "two numbers of pixels",
+            "scene.toml:1:8",
+        ),
+        (
+            "zero_scale",
+            ("scale = 1.0", "scale = 0.0"),
+            "scale is 0",
+            "scene.toml:15:9",
+        ),
+        (
+            "negative_radius",
+            ("radius = 1.0", "radius = -1.0"),
+            "`radius` is -1",
+            "scene.toml:14:8",
+        ),
+        (
+            "texture_source_neither_file_nor_pattern",
+            ("", "\n[textures.albedo]\nsize = 64\n"),
+            "a texture needs `file",
+            "scene.toml:22:",
+        ),
+    ];
+    for (case, edit, says, at) in cases {
+        scene_fails(case, &marble_scene(*edit), &[], says, at);
+    }
+    // The bad value reported is TOML's own spelling, not serde's enum.
+    let (dir, path) = temp_file("scene.toml", marble_scene(("", "\n[textures.x]\ngenerate = 3\n")).as_bytes());
+    let output = shadecache([
+        "profile",
+        "corpus/noise_marble.wgsl",
+        "--scene",
+        path.to_str().unwrap(),
+        "--out",
+        dir.path().join("r").to_str().unwrap(),
+    ]);
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{err}");
+    assert!(!err.contains("untagged"), "{err}");
+}
+
+/// The command line's counts are bounded as a scene's are: no silent
+/// change of 0 to 1, no hang on four billion frames, no cosine of 5.
+#[test]
+fn command_line_counts_are_bounded() {
+    let out = tempfile::tempdir().unwrap();
+    let report = out.path().join("r");
+    let report = report.to_str().unwrap();
+    for (args, says) in [
+        (
+            vec!["profile", "corpus/noise_marble.wgsl", "--frames", "0"],
+            "from 1 to 10000",
+        ),
+        (
+            vec!["profile", "corpus/noise_marble.wgsl", "--frames", "4000000000"],
+            "from 1 to 10000",
+        ),
+        (
+            vec!["profile", "corpus/noise_marble.wgsl", "--warmup", "4000000000"],
+            "from 0 to 10000",
+        ),
+        (
+            vec!["interpolate", "corpus/noise_marble.wgsl", "--frames", "0"],
+            "from 1 to 10000",
+        ),
+        (
+            vec!["interpolate", "corpus/noise_marble.wgsl", "--min-cosine", "5"],
+            "from -1 to 1",
+        ),
+    ] {
+        let mut args = args.clone();
+        args.extend(["--out", report]);
+        let output = shadecache(&args);
+        let err = stderr(&output);
+        assert_eq!(output.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+    assert!(!Path::new(report).exists());
+}
+
+/// A `[uniforms]` key or a `[textures]` table the shader does not have is
+/// a misspelling until shown otherwise: an error at the key that lists
+/// what the shader has.
+#[test]
+fn unknown_uniform_or_texture_key_is_an_error() {
+    scene_fails(
+        "misspelt_uniform",
+        &marble_scene(("marble_frequency = 4.0", "marble_freqency = 4.0")),
+        &[],
+        "[uniforms] sets `marble_freqency`, which the shader does not have",
+        "scene.toml:18:19",
+    );
+    scene_fails(
+        "unbound_texture",
+        &marble_scene(("", "\n[textures.albedo]\ngenerate = \"checker\"\n")),
+        &[],
+        "[textures.albedo] names a texture the shader does not bind",
+        "scene.toml:22:1",
+    );
+}
+
+/// A `--vertex-entry` that names nothing is one error before anything is
+/// rewritten, not the same refusal for each of the shader's nodes and
+/// variants (1,836 on the marble shader) and exit 0.
+#[test]
+fn one_bad_flag_is_one_error_not_a_thousand_refusals() {
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("variants");
+    let output = shadecache([
+        "rewrite",
+        "corpus/noise_marble.wgsl",
+        "--all-nodes",
+        "--vertex-entry",
+        "nope",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{err}");
+    assert_eq!(err.matches("error").count(), 1, "{err}");
+    assert!(!err.contains("refused"), "{err}");
+    assert!(err.contains("no entry point named `nope`"), "{err}");
+    assert!(!dir.exists());
+}
+
+/// Files of the wrong kind are named for what they were meant to be; a
+/// byte-order mark is no part of the text; a too-deep expression is
+/// located.
+#[test]
+fn wrong_files_are_named_for_their_role() {
+    let binary: Vec<u8> = (0..64u8).map(|b| b.wrapping_mul(37) | 0x80).collect();
+    let (dir, scene) = temp_file("scene.toml", &binary);
+    let output = shadecache([
+        "profile",
+        "corpus/noise_marble.wgsl",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--out",
+        dir.path().join("r").to_str().unwrap(),
+    ]);
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{err}");
+    assert!(err.contains("the scene is not valid UTF-8"), "{err}");
+    let weights = dir.path().join("weights.json");
+    std::fs::write(&weights, &binary).unwrap();
+    let err = fails_cleanly(
+        Path::new("corpus/noise_marble.wgsl"),
+        &["--weights", weights.to_str().unwrap()],
+    );
+    assert!(err.contains("the cost weights file is not valid UTF-8"), "{err}");
+    for weight in ["-1", "1e300"] {
+        std::fs::write(&weights, format!("{{\"texture_sample\": {weight}}}")).unwrap();
+        let err = fails_cleanly(
+            Path::new("corpus/noise_marble.wgsl"),
+            &["--weights", weights.to_str().unwrap()],
+        );
+        assert!(err.contains("weights go from 0 to"), "{err}");
+        assert!(err.contains("weights.json:1:2"), "{err}");
+    }
+
+    let mut bom = b"\xEF\xBB\xBF".to_vec();
+    bom.extend(std::fs::read(crate::util::root().join("corpus/noise_marble.wgsl")).unwrap());
+    let (_bom_dir, path) = temp_file("bom.wgsl", &bom);
+    let output = shadecache(["analyze", path.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", stderr(&output));
+
+    let source = format!(
+        "@fragment fn f() -> @location(0) vec4<f32> {{\n    let x = {}1.0{};\n    return vec4<f32>(x);\n}}\n",
+        "(".repeat(500),
+        ")".repeat(500)
+    );
+    let err = fails_on("nested.wgsl", source.as_bytes());
+    assert!(err.contains("nests deeper than naga's WGSL parser allows"), "{err}");
+    assert!(err.contains("nested.wgsl:2:"), "{err}");
+}

@@ -29,6 +29,20 @@ struct Cli {
     color: commands::ColorArg,
 }
 
+/// Mesa's device-select Vulkan layer connects to a Wayland display to
+/// order the GPUs. Without `XDG_RUNTIME_DIR` (a headless machine, CI, ssh)
+/// libwayland cannot connect and prints "error: XDG_RUNTIME_DIR is invalid
+/// or not set in the environment.", which reads as a failure of ours. An
+/// absolute `WAYLAND_DISPLAY` naming no socket fails the same attempt
+/// without a word; with either variable set nothing changes. Called before
+/// any other thread exists.
+fn quiet_headless_wayland() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none()
+    {
+        std::env::set_var("WAYLAND_DISPLAY", "/nonexistent/shadecache-headless");
+    }
+}
+
 /// Stack size of the thread that does the work.
 const WORKER_STACK: usize = 256 * 1024 * 1024;
 
@@ -43,6 +57,7 @@ fn main() -> ExitCode {
         }
     };
     let color = cli.color.into();
+    quiet_headless_wayland();
     // naga's parser and lowering recurse over the expression tree; a long
     // chain like `x + x + ... + x` is valid WGSL but deeper than the main
     // thread's stack in an unoptimised build. Run the work on a thread with

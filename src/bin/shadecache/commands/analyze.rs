@@ -71,14 +71,27 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
 }
 
 fn read_weights(path: &std::path::Path) -> Result<Weights, Error> {
-    let file = Arc::new(front::read_source(path)?);
-    Weights::from_json(&file.text).map_err(|err| {
+    let file = Arc::new(front::read_text(path, front::TextKind::Weights)?);
+    let weights = Weights::from_json(&file.text).map_err(|err| {
         let offset = offset_of(&file, err.line(), err.column());
         Error::in_file(
             file.clone(),
             Diagnostic::error("invalid cost weights").with_label(offset..offset, err.to_string()),
         )
-    })
+    })?;
+    if let Some((name, why)) = weights.out_of_bounds() {
+        // serde_json keeps no spans: the key's first quoted occurrence
+        // places the label.
+        let at = file
+            .text
+            .find(&format!("\"{name}\""))
+            .map_or(0..0, |at| at..at + name.len() + 2);
+        return Err(Error::in_file(
+            file.clone(),
+            Diagnostic::error(why).with_label(at, "this weight"),
+        ));
+    }
+    Ok(weights)
 }
 
 /// The byte offset of a 1-based line and column as serde_json reports them.

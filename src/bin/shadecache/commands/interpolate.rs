@@ -112,7 +112,8 @@ pub struct Args {
         long,
         value_name = "C",
         default_value_t = 0.5,
-        allow_negative_numbers = true
+        allow_negative_numbers = true,
+        value_parser = cosine
     )]
     pub min_cosine: f32,
 
@@ -144,7 +145,7 @@ pub struct Args {
 
     /// Displayed frames to measure, rounded up to whole intervals
     /// (default: the scene's frames).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = super::profile::frame_count)]
     pub frames: Option<u32>,
 
     /// Where to write report.json, report.html and the pictures.
@@ -249,4 +250,12 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         args.out.join("report.html").display()
     ));
     super::write_stdout(&summary)
+}
+
+/// A cosine: a number from −1 to 1.
+fn cosine(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(c) if (-1.0..=1.0).contains(&c) => Ok(c),
+        _ => Err("a cosine is a number from -1 to 1".into()),
+    }
 }

@@ -70,14 +70,14 @@ pub struct Args {
     #[arg(long, value_name = "psnr:DB|ssim:S", value_parser = clap::value_parser!(Budget))]
     pub max_error: Option<Budget>,
 
-    /// Frames to measure (default: the scene's).
-    #[arg(long, value_name = "N")]
+    /// Frames to measure, 1 to 10000 (default: the scene's).
+    #[arg(long, value_name = "N", value_parser = frame_count)]
     pub frames: Option<u32>,
 
     /// Warm-up frames, not measured (default: the scene's, and at least
     /// the longest refresh period, so that errors are measured in the
-    /// cache's steady state).
-    #[arg(long, value_name = "N")]
+    /// cache's steady state); at most 10000.
+    #[arg(long, value_name = "N", value_parser = warmup_count)]
     pub warmup: Option<u32>,
 
     /// Frame size (default: the scene's).
@@ -94,6 +94,24 @@ pub struct Args {
 
     #[command(flatten)]
     pub stages: super::StageArgs,
+}
+
+/// A count of measured frames: 1 to [`MAX_FRAMES`](shadecache::scene::bounds::MAX_FRAMES).
+pub(super) fn frame_count(text: &str) -> Result<u32, String> {
+    let max = shadecache::scene::bounds::MAX_FRAMES;
+    match text.trim().parse::<u32>() {
+        Ok(n) if (1..=max).contains(&n) => Ok(n),
+        _ => Err(format!("a frame count is a whole number from 1 to {max}")),
+    }
+}
+
+/// A count of warm-up frames: 0 to [`MAX_FRAMES`](shadecache::scene::bounds::MAX_FRAMES).
+fn warmup_count(text: &str) -> Result<u32, String> {
+    let max = shadecache::scene::bounds::MAX_FRAMES;
+    match text.trim().parse::<u32>() {
+        Ok(n) if n <= max => Ok(n),
+        _ => Err(format!("a warm-up is a whole number of frames from 0 to {max}")),
+    }
 }
 
 pub(super) fn parse_size(text: &str) -> Result<[u32; 2], String> {

@@ -172,6 +172,9 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
             ..AnalysisOptions::default()
         },
     )?;
+    if let Some(name) = &args.stages.vertex_entry {
+        analysis.check_vertex_entry(&shader, name)?;
+    }
     let options = Options {
         refresh_period: args.refresh_period,
         refresh_quad: args.refresh_quad,
