@@ -54,6 +54,17 @@ impl Report {
             confirmation: None,
             reason: String::new(),
         };
+        // Nothing measured on a reference that shows nothing is an answer.
+        if let Some(check) = self.reference_check.as_ref().filter(|c| c.degenerate()) {
+            let findings: Vec<&str> = check.problems.iter().map(|p| p.finding.as_str()).collect();
+            choice.result = None;
+            choice.closest = None;
+            choice.reason = format!(
+                "no answer: the reference is degenerate ({}), so every configuration's error is measured against frames that show nothing of the shader; fix the scene (see the reference check) and profile again",
+                findings.join("; ")
+            );
+            return choice;
+        }
         if let Some(i) = winner {
             choice.reason = format!(
                 "the fastest of the {} configurations within {budget} whose speed-up interval lies above 1×: {}",
@@ -242,6 +253,7 @@ mod tests {
             miss_causes: Vec::new(),
             warnings: Vec::new(),
             grid: None,
+            reference_check: None,
             choice: None,
         }
     }

@@ -28,6 +28,7 @@ mod choice;
 pub mod grid;
 pub(crate) mod inputs;
 pub mod metrics;
+pub(crate) mod reference_check;
 pub(crate) mod run;
 pub(crate) mod setup;
 
@@ -41,7 +42,7 @@ use crate::front::Shader;
 use crate::plan::{self, Plan};
 use crate::report::{
     Confirmation, Device, FrameStats, GridReport, MissCause, NodeReport, PassTime, Reference,
-    Report, ResultRow,
+    ReferenceCheck, Report, ResultRow,
 };
 use crate::rewrite::{self, CacheFormat, Options as RewriteOptions, Reconstruction, Variant};
 use crate::runtime::{self, FrameInputs, Gpu, Runner};
@@ -440,6 +441,7 @@ pub fn profile(
     };
     let report = run.report(Findings {
         warnings: view_warnings(scene, prepared.aspect, warmup, &results),
+        reference_check: reference_run.stats.check(scene, &scene_inputs.defaulted),
         defaulted: scene_inputs.defaulted.clone(),
         nodes: node_reports,
         results,
@@ -527,6 +529,7 @@ struct Findings {
     miss_causes: Vec<MissCause>,
     warnings: Vec<String>,
     defaulted: Vec<String>,
+    reference_check: ReferenceCheck,
 }
 
 impl RunContext<'_> {
@@ -584,6 +587,7 @@ impl RunContext<'_> {
             results: findings.results,
             warnings: findings.warnings,
             miss_causes: findings.miss_causes,
+            reference_check: Some(findings.reference_check),
             choice: None,
         }
     }

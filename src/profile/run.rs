@@ -53,6 +53,8 @@ pub(super) struct ReferenceRun {
     pub now: LinearFrame,
     /// The measured frame before's (empty on the first).
     pub before: LinearFrame,
+    /// What every measured frame shows, for the reference check.
+    pub stats: super::reference_check::ReferenceStats,
 }
 
 /// A node's payload over every pixel, for its P/T.
@@ -110,6 +112,8 @@ pub(super) fn measured_run(
                 .ok_or_else(|| fail("the reference draws no colour".into()))?;
             let now = read_linear(clock.gpu, color).map_err(fail)?;
             run.before = std::mem::replace(&mut run.now, now);
+            run.stats
+                .add(&run.now, &run.before, reference.plan().clear.color);
         }
         for item in measured.iter_mut() {
             if frame < item.first_frame(warmup) {

@@ -54,6 +54,8 @@ pub fn html(report: &Report, dir: &Path) -> String {
         );
     }
 
+    page.push_str(&reference_box(report, dir));
+
     for warning in &report.warnings {
         let _ = write!(
             page,
@@ -252,6 +254,67 @@ pub fn html(report: &Report, dir: &Path) -> String {
     }
     page.push_str("</div></body></html>\n");
     page
+}
+
+/// What every figure below is measured against: the reference's last
+/// measured frame (a thumbnail), its check, and the inputs nothing said
+/// the value of. A degenerate reference is said here, before the answer.
+fn reference_box(report: &Report, dir: &Path) -> String {
+    let mut out = String::new();
+    let degenerate = report
+        .reference_check
+        .as_ref()
+        .is_some_and(|c| c.degenerate());
+    let _ = write!(
+        out,
+        "<div class=\"{}\"><div class=\"pictures\">",
+        if degenerate {
+            "reference degenerate"
+        } else {
+            "reference"
+        }
+    );
+    embed(
+        &mut out,
+        "reference, last measured frame",
+        &dir.join("images/reference.png"),
+    );
+    out.push_str("<div>");
+    if let Some(check) = &report.reference_check {
+        let _ = write!(
+            out,
+            "<p><b>Reference check</b> ({} measured frames): {}.</p>",
+            check.frames,
+            escape(&check.summary())
+        );
+        for problem in &check.problems {
+            let _ = write!(
+                out,
+                "<p><b>Degenerate reference:</b> {}. <i>Likely cause:</i> {}</p>",
+                escape(&problem.finding),
+                escape(&problem.cause)
+            );
+        }
+        if degenerate {
+            out.push_str("<p>No configuration is recommended on this reference: its errors compare frames that show nothing of the shader.</p>");
+        }
+    }
+    if report.defaulted.is_empty() {
+        out.push_str("<p>Every input the shader reads came from the scene.</p>");
+    } else {
+        let _ = write!(
+            out,
+            "<details{}><summary>Filled-in inputs ({}): nothing said what they are; <code>shadecache scene init</code> writes them out to edit</summary><ul>",
+            if degenerate { " open" } else { "" },
+            report.defaulted.len()
+        );
+        for line in &report.defaulted {
+            let _ = write!(out, "<li><code>{}</code></li>", escape(line));
+        }
+        out.push_str("</ul></details>");
+    }
+    out.push_str("</div></div></div>");
+    out
 }
 
 fn embed(page: &mut String, caption: &str, path: &Path) {
@@ -578,4 +641,4 @@ fn grid_section(report: &Report) -> String {
     page
 }
 
-const STYLE: &str = "body{font-family:sans-serif;margin:2em;max-width:1200px}table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:3px 6px;text-align:right}th{background:#eee}tr.reference{background:#f6f6f6}code{background:#f3f3f3;padding:0 3px}pre{background:#f8f8f8;padding:8px;overflow-x:auto}mark{background:#ffe08a}.answer{font-size:15px;background:#eef7ee;padding:10px;border-left:4px solid #2a2}.meta{color:#555}.pictures{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}figure img{image-rendering:pixelated;width:256px;border:1px solid #ccc}svg{display:block;margin:12px 0}";
+const STYLE: &str = "body{font-family:sans-serif;margin:2em;max-width:1200px}table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:3px 6px;text-align:right}th{background:#eee}tr.reference{background:#f6f6f6}code{background:#f3f3f3;padding:0 3px}pre{background:#f8f8f8;padding:8px;overflow-x:auto}mark{background:#ffe08a}.answer{font-size:15px;background:#eef7ee;padding:10px;border-left:4px solid #2a2}.meta{color:#555}.pictures{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}figure img{image-rendering:pixelated;width:256px;border:1px solid #ccc}svg{display:block;margin:12px 0}.reference{background:#f4f6fb;border-left:4px solid #58a;padding:10px;margin:12px 0}.degenerate{background:#fdf0ee;border-left-color:#c33}";

@@ -63,12 +63,83 @@ pub struct Report {
     /// from where it starts.
     #[serde(default)]
     pub warnings: Vec<String>,
+    /// What the reference's measured frames show, checked before anything
+    /// is ranked (`profile::reference_check`): a degenerate reference is
+    /// said first and nothing is recommended on it.
+    #[serde(default)]
+    pub reference_check: Option<ReferenceCheck>,
     /// The grid of knobs measured, and what was pruned from it.
     #[serde(default)]
     pub grid: Option<GridReport>,
     /// The configuration picked for an error budget (`--max-error`).
     #[serde(default)]
     pub choice: Option<Choice>,
+}
+
+/// The reference's measured frames, looked at.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct ReferenceCheck {
+    /// Measured frames looked at.
+    pub frames: u32,
+    /// Share of the pixels the draw changed from the clear colour, over
+    /// every measured frame.
+    pub coverage: f64,
+    /// Mean Rec. 709 luminance (linear) of the drawn pixels.
+    pub mean_luminance: f64,
+    /// Share of the drawn pixels brighter than luminance 0.025.
+    pub bright_share: f64,
+    /// Standard deviation of the drawn pixels' luminance.
+    pub luminance_spread: f64,
+    /// The largest range of any RGB channel over the drawn pixels.
+    pub channel_range: f64,
+    /// Share of the drawn pixels with a NaN or infinite channel.
+    pub non_finite_share: f64,
+    /// Share of the pixels that differ between consecutive measured
+    /// frames; `None` with one measured frame.
+    pub changed_share: Option<f64>,
+    /// What makes the figures meaningless; empty when the reference
+    /// passes.
+    pub problems: Vec<ReferenceProblem>,
+}
+
+impl ReferenceCheck {
+    /// Whether the reference shows nothing a cache's figures can be
+    /// measured on.
+    pub fn degenerate(&self) -> bool {
+        !self.problems.is_empty()
+    }
+
+    /// The check in one line: its figures, and its verdict.
+    pub fn summary(&self) -> String {
+        let figures = format!(
+            "{:.1}% of pixels drawn, mean luminance {:.3} (spread {:.3}), {:.1}% bright, {:.2}% NaN/∞, {} between frames",
+            self.coverage * 100.0,
+            self.mean_luminance,
+            self.luminance_spread,
+            self.bright_share * 100.0,
+            self.non_finite_share * 100.0,
+            self.changed_share.map_or("no change measured (one frame)".into(), |c| {
+                format!("{:.1}% of pixels change", c * 100.0)
+            })
+        );
+        if self.degenerate() {
+            let kinds: Vec<&str> = self.problems.iter().map(|p| p.kind.as_str()).collect();
+            format!("DEGENERATE ({}): {figures}", kinds.join(", "))
+        } else {
+            format!("passes: {figures}")
+        }
+    }
+}
+
+/// One reason a reference says nothing about the shader.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ReferenceProblem {
+    /// `empty`, `non-finite`, `nearly-black`, `constant` or `still`.
+    pub kind: String,
+    /// What was measured.
+    pub finding: String,
+    /// What likely caused it, and what to look at.
+    pub cause: String,
 }
 
 /// Which configurations were measured (see `profile::grid`).

@@ -114,7 +114,10 @@ pub(super) fn check(scene: &Scene, file: &Arc<SourceFile>) -> Result<(), Error> 
             );
         }
         if let Some(message) = mesh(&object.mesh) {
-            return fail(format!("object {index}'s mesh: {message}"), &["objects", &at, "mesh"]);
+            return fail(
+                format!("object {index}'s mesh: {message}"),
+                &["objects", &at, "mesh"],
+            );
         }
     }
     Ok(())
@@ -155,7 +158,7 @@ fn camera(
     }
     // The view's up is +y; orbits turn about the target's y axis and pans
     // keep the offset, so a line of sight along y stays along it.
-    if sight.normalize().cross(Vec3::Y).length() < 1e-4 {
+    if sight.normalize().cross(Vec3::Y).length() < 1e-7 {
         return fail(
             "the camera looks straight up or down: its up direction (+y) is along the line of sight, so the view is undefined; move the eye off the target's vertical".into(),
             &["camera", "eye"],
@@ -178,7 +181,9 @@ fn mesh(source: &MeshSource) -> Option<String> {
     let quads = |what: &str, a: u32, b: u32| {
         let quads = u64::from(a) * u64::from(b);
         (quads > MAX_QUADS).then(|| {
-            format!("{what} make {quads} quads, more than the {MAX_QUADS} a procedural mesh may have")
+            format!(
+                "{what} make {quads} quads, more than the {MAX_QUADS} a procedural mesh may have"
+            )
         })
     };
     match *source {
@@ -195,10 +200,10 @@ fn mesh(source: &MeshSource) -> Option<String> {
         } => positive("radius", radius)
             .or_else(|| positive("tube", tube))
             .or_else(|| quads("rings × segments", rings, segments)),
-        MeshSource::Plane { size, subdivisions } | MeshSource::Terrain {
+        MeshSource::Plane { size, subdivisions }
+        | MeshSource::Terrain {
             size, subdivisions, ..
-        } => positive("size", size)
-            .or_else(|| quads("subdivisions²", subdivisions, subdivisions)),
+        } => positive("size", size).or_else(|| quads("subdivisions²", subdivisions, subdivisions)),
         MeshSource::Cube { size } => positive("size", size),
         MeshSource::Obj { .. } | MeshSource::Gltf { .. } => None,
     }

@@ -32,7 +32,7 @@ pub struct SceneInit {
     /// The scene as TOML, with comments.
     pub text: String,
     /// What the shader binds that the scene sets to a neutral value:
-    /// `uniform `material.roughness` = 0.75`, one line each.
+    /// `uniform `material.roughness` = 0.5 (why)`, one line each.
     pub defaulted: Vec<String>,
     /// The roles inferred from the IR.
     pub roles: Vec<Inferred>,
@@ -124,13 +124,13 @@ pub fn default_scene(
             if is_padding(&member.name) || role_of(binding, &member.name).is_some() {
                 return false;
             }
-            let Some(value) = neutral(member) else {
+            let Some((value, why)) = neutral(member) else {
                 return false;
             };
-            let _ = writeln!(section, "# defaulted: {}{note}", what(member));
+            let _ = writeln!(section, "# defaulted: {why}{note}");
             let _ = writeln!(section, "{} = {value}", quoted(&member.name));
             defaulted.push(format!(
-                "{kind} `{}` = {value}",
+                "{kind} `{}` = {value} ({why})",
                 roles::key(binding, &member.name)
             ));
             true
@@ -272,28 +272,124 @@ fn quoted(key: &str) -> String {
     }
 }
 
-/// What a defaulted member is, for the comment above it.
-fn what(member: &Member) -> String {
-    format!("a {}", roles::shape_name(member.shape))
+/// A scalar's default by what its name says it is: the value and why.
+/// Counts and steps are whole numbers of a sensible size (a loop bound of
+/// 0.75 would run once, or never); factors that weigh a term are in
+/// [0, 1]; scales and intensities are 1. `None`: nothing in the name.
+fn scalar_by_name(words: &[String], integer: bool) -> Option<(f64, &'static str)> {
+    let has = |list: &[&str]| words.iter().any(|w| list.contains(&w.as_str()));
+    Some(
+        if has(&["step", "iteration", "sample", "tap", "march", "bounce"]) {
+            (16.0, "a step or sample count, by its name: 16")
+        } else if has(&["octave", "layer", "cascade", "level", "lod"]) {
+            (4.0, "a count of octaves or levels, by its name: 4")
+        } else if has(&["count", "num", "len", "length"]) {
+            (1.0, "a count, by its name: 1")
+        } else if integer {
+            if has(&[
+                "flag", "flags", "mode", "index", "id", "kind", "type", "bit", "mask",
+            ]) {
+                (0.0, "a flag, mode or index, by its name: 0 (the first)")
+            } else if has(&["size", "width", "height"]) {
+                (256.0, "a size in pixels, by its name: the frame's 256")
+            } else {
+                return None;
+            }
+        } else if has(&["rough", "roughness"]) {
+            (0.5, "a roughness, by its name: 0.5, in [0, 1]")
+        } else if has(&["metal", "metallic", "metalness"]) {
+            (0.0, "a metalness, by its name: 0 (a dielectric), in [0, 1]")
+        } else if has(&["opacity", "alpha", "coverage", "visibility"]) {
+            (1.0, "an opacity, by its name: 1 (opaque)")
+        } else if has(&["ior"]) {
+            (1.5, "an index of refraction, by its name: 1.5 (glass)")
+        // `name_words` drops a plural s: `bias` reads as `bia`.
+        } else if has(&["bias", "bia"]) {
+            (0.005, "a bias, by its name: 0.005")
+        } else if has(&["threshold", "cutoff", "epsilon", "eps"]) {
+            (0.5, "a threshold, by its name: 0.5")
+        } else if has(&["near"]) {
+            (0.1, "a near plane, by its name: 0.1")
+        } else if has(&["far"]) {
+            (100.0, "a far plane, by its name: 100")
+        } else if has(&[
+            "exposure",
+            "intensity",
+            "power",
+            "brightness",
+            "scale",
+            "frequency",
+            "radius",
+            "distance",
+            "range",
+            "gamma",
+            "speed",
+        ]) {
+            (1.0, "a scale, intensity or distance, by its name: 1")
+        } else if has(&[
+            "factor",
+            "amount",
+            "strength",
+            "weight",
+            "mix",
+            "blend",
+            "occlusion",
+            "ao",
+            "specular",
+            "shininess",
+            "reflectance",
+            "fresnel",
+        ]) {
+            (
+                0.75,
+                "a factor that weighs a term, by its name: 0.75, in [0, 1]",
+            )
+        } else {
+            return None;
+        },
+    )
 }
 
-/// A neutral value for a member: factors 0.75, colours 0.8 grey (alpha 1),
-/// directions normalised, matrices the identity, integers 0 and counts 1.
-/// `None` for a shape a scene cannot write.
-fn neutral(member: &Member) -> Option<String> {
+/// A neutral value for a member, and why: scalars by their name
+/// ([`scalar_by_name`]; else 0.75 for a float, 0 for an integer), colours
+/// 0.8 grey (alpha 1), directions normalised, resolutions the frame's,
+/// matrices the identity. `None` for a shape a scene cannot write.
+fn neutral(member: &Member) -> Option<(String, String)> {
     let words = crate::analysis::name_words(&member.name);
     let has = |list: &[&str]| words.iter().any(|w| list.contains(&w.as_str()));
-    let count = has(&["count", "num", "len", "length", "size"]);
     let direction = has(&["dir", "direction", "normal", "axis"]);
     let resolution = has(&["resolution", "viewport", "screen"]);
     let list = |values: Vec<String>| format!("[{}]", values.join(", "));
+    let shape = roles::shape_name(member.shape);
+    let scalar = |integer: bool| {
+        let (value, why) = scalar_by_name(&words, integer).unwrap_or(if integer {
+            (0.0, "an integer its name says nothing of: 0")
+        } else {
+            (0.75, "a factor its name says nothing of: 0.75")
+        });
+        (value, format!("a {shape}, {why}"))
+    };
     Some(match member.shape {
-        Shape::F32(1) => "0.75".into(),
+        Shape::F32(1) => {
+            let (value, why) = scalar(false);
+            (format!("{value:?}"), why)
+        }
+        Shape::U32(1) | Shape::I32(1) => {
+            let (value, why) = scalar(true);
+            (format!("{}", value as i64), why)
+        }
         // The default frame size: a scene with another size should say so.
-        Shape::F32(2) if resolution => "[256.0, 256.0]".into(),
+        Shape::F32(2) if resolution => (
+            "[256.0, 256.0]".into(),
+            format!("a {shape}, a resolution by its name: the frame's 256×256"),
+        ),
+        Shape::U32(2) | Shape::I32(2) if resolution => (
+            "[256, 256]".into(),
+            format!("a {shape}, a resolution by its name: the frame's 256×256"),
+        ),
         Shape::F32(n) if direction => {
             let c = 1.0 / (n.min(3) as f32).sqrt();
-            list(
+            let value = list(
                 (0..n)
                     .map(|i| {
                         if i < 3 {
@@ -303,24 +399,40 @@ fn neutral(member: &Member) -> Option<String> {
                         }
                     })
                     .collect(),
+            );
+            (
+                value,
+                format!("a {shape}, a direction by its name: normalised"),
             )
         }
-        Shape::F32(4) => "[0.8, 0.8, 0.8, 1.0]".into(),
-        Shape::F32(n) => list(vec!["0.8".into(); n as usize]),
-        Shape::U32(1) | Shape::I32(1) => (if count { "1" } else { "0" }).into(),
+        Shape::F32(4) => (
+            "[0.8, 0.8, 0.8, 1.0]".into(),
+            format!("a {shape}: a light grey, opaque"),
+        ),
+        Shape::F32(n) => (
+            list(vec!["0.8".into(); n as usize]),
+            format!("a {shape}: 0.8 each"),
+        ),
         Shape::U32(n) | Shape::I32(n) => {
-            list(vec![(if count { "1" } else { "0" }).into(); n as usize])
+            let (value, why) = scalar(true);
+            (
+                list(vec![format!("{}", value as i64); n as usize]),
+                format!("{why}, each component"),
+            )
         }
-        Shape::Matrix(columns, rows) => list(
-            (0..columns)
-                .map(|c| {
-                    list(
-                        (0..rows)
-                            .map(|r| if r == c { "1.0".into() } else { "0.0".into() })
-                            .collect(),
-                    )
-                })
-                .collect(),
+        Shape::Matrix(columns, rows) => (
+            list(
+                (0..columns)
+                    .map(|c| {
+                        list(
+                            (0..rows)
+                                .map(|r| if r == c { "1.0".into() } else { "0.0".into() })
+                                .collect(),
+                        )
+                    })
+                    .collect(),
+            ),
+            format!("a {shape}: the identity"),
         ),
         Shape::Other => return None,
     })
@@ -359,6 +471,116 @@ fn texture_pattern(name: &str, dim: ImageDimension, class: ImageClass) -> (&'sta
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A vec3 named only `eye` is the camera's position: the default
+    /// scene gives it that role, so it follows the orbiting camera every
+    /// frame instead of staying at a default while the view turns (which
+    /// makes view-dependent values look stabler than they are).
+    #[test]
+    fn eye_uniform_follows_the_orbiting_camera() {
+        let module = module(
+            "struct Uniforms { view_proj: mat4x4<f32>, eye: vec3<f32> }
+             @group(0) @binding(0) var<uniform> u: Uniforms;
+             struct Out { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32> }
+             @vertex fn vs(@location(0) p: vec3<f32>) -> Out {
+                 return Out(u.view_proj * vec4<f32>(p, 1.0), p);
+             }
+             @fragment fn fs(in: Out) -> @location(0) vec4<f32> {
+                 return vec4<f32>(normalize(u.eye - in.world), 1.0);
+             }",
+        );
+        let init = default_scene(&module, "eye.wgsl", 1, Some(0));
+        assert!(
+            init.roles
+                .iter()
+                .any(|r| r.key == "u.eye" && r.role == "camera_position"),
+            "{:?}",
+            init.roles
+        );
+        let file = std::sync::Arc::new(crate::diagnostic::SourceFile::new("e.toml", init.text));
+        let scene = crate::scene::Scene::parse(file).unwrap();
+        let buffers = uniforms::buffers(&module);
+        let eye_at = |frame: u32| {
+            let state = scene.frame(frame, 1.0);
+            let bytes = uniforms::fill(&buffers[0], &scene, &state, 0).unwrap();
+            let member = buffers[0].members.iter().find(|m| m.name == "eye").unwrap();
+            let eye: Vec<f32> = super::super::layout::read_numbers(&bytes, 0, member)
+                .iter()
+                .map(|&v| v as f32)
+                .collect();
+            (glam::Vec3::from_slice(&eye), state.camera_position)
+        };
+        let (first, camera_first) = eye_at(0);
+        let (later, camera_later) = eye_at(40);
+        assert!((first - camera_first).length() < 1e-5);
+        assert!((later - camera_later).length() < 1e-5);
+        assert!((first - later).length() > 0.05, "{first} {later}");
+    }
+
+    /// Scalars the default scene fills take values their names and types
+    /// suggest, each with its reason: a step count is a whole number of
+    /// sensible size (16, not 0.75 or 0), a roughness lies in [0, 1], a
+    /// flag is 0, a scalar whose name says nothing keeps the old neutral
+    /// value.
+    #[test]
+    fn scalar_defaults_by_name_and_type() {
+        let module = module(
+            "struct Material {
+                 max_steps: u32, march_steps: f32, octaves: i32, light_count: u32,
+                 roughness: f32, metallic: f32, opacity: f32, shadow_bias: f32,
+                 exposure: f32, flags: u32, resolution: vec2<f32>, wobble: f32, seed: u32,
+             }
+             @group(0) @binding(0) var<uniform> material: Material;
+             @fragment fn fs() -> @location(0) vec4<f32> {
+                 let m = material;
+                 return vec4<f32>(f32(m.max_steps) + m.march_steps + f32(m.octaves) + f32(m.light_count)
+                     + m.roughness + m.metallic + m.opacity + m.shadow_bias + m.exposure
+                     + f32(m.flags) + m.resolution.x + m.wobble + f32(m.seed));
+             }",
+        );
+        let init = default_scene(&module, "m.wgsl", 0, None);
+        let value = |member: &str| -> (String, String) {
+            let line = init
+                .defaulted
+                .iter()
+                .find(|d| d.starts_with(&format!("uniform `material.{member}` = ")))
+                .unwrap_or_else(|| panic!("{member} in {:?}", init.defaulted));
+            let rest = line.split_once(" = ").unwrap().1;
+            let (value, why) = rest.split_once(" (").unwrap();
+            (value.to_string(), why.trim_end_matches(')').to_string())
+        };
+        for (member, expected, reason) in [
+            ("max_steps", "16", "step or sample count"),
+            ("march_steps", "16.0", "step or sample count"),
+            ("octaves", "4", "octaves"),
+            ("light_count", "1", "a count"),
+            ("roughness", "0.5", "roughness"),
+            ("metallic", "0.0", "metalness"),
+            ("opacity", "1.0", "opacity"),
+            ("shadow_bias", "0.005", "bias"),
+            ("exposure", "1.0", "intensity"),
+            ("flags", "0", "flag"),
+            ("resolution", "[256.0, 256.0]", "resolution"),
+            ("wobble", "0.75", "says nothing"),
+            ("seed", "0", "says nothing"),
+        ] {
+            let (value, why) = value(member);
+            assert_eq!(value, expected, "{member}: {why}");
+            assert!(why.contains(reason), "{member}: {why}");
+        }
+        // The text says the same, and parses with those values.
+        assert!(
+            init.text.contains(
+                "# defaulted: a u32, a step or sample count, by its name: 16\nmax_steps = 16\n"
+            ),
+            "{}",
+            init.text
+        );
+        let file = std::sync::Arc::new(crate::diagnostic::SourceFile::new("m.toml", init.text));
+        let scene = crate::scene::Scene::parse(file).unwrap();
+        assert_eq!(scene.uniforms["max_steps"].as_integer(), Some(16));
+        assert_eq!(scene.uniforms["roughness"].as_float(), Some(0.5));
+    }
 
     fn module(source: &str) -> Module {
         naga::front::wgsl::parse_str(source).unwrap()
@@ -419,8 +641,8 @@ struct Out { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32> }
         assert_eq!(
             init.defaulted,
             [
-                "uniform `model.tint` = [0.8, 0.8, 0.8, 1.0]",
-                "uniform `model.light_count` = 1",
+                "uniform `model.tint` = [0.8, 0.8, 0.8, 1.0] (a vec4<f32>: a light grey, opaque)",
+                "uniform `model.light_count` = 1 (a u32, a count, by its name: 1)",
                 "texture `albedo` = generated \"checker\"",
                 "texture `normal_map` = generated \"flat-normal\"",
             ]

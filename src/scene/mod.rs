@@ -513,7 +513,9 @@ impl Scene {
                     format!("its textures are {}", names.join(", "))
                 };
                 return Err(self.error(
-                    format!("[textures.{name}] names a texture the shader does not bind: {listing}"),
+                    format!(
+                        "[textures.{name}] names a texture the shader does not bind: {listing}"
+                    ),
                     self.span(&["textures", name]),
                 ));
             }

@@ -219,7 +219,7 @@ fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
     let member = key.rsplit('.').next().unwrap_or(key).to_ascii_lowercase();
     let whole = key.to_ascii_lowercase();
     let name = if shape == Shape::Matrix(4, 4) {
-        member
+        member.clone()
     } else {
         whole.clone()
     };
@@ -245,7 +245,9 @@ fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
         }
     } else if has(&["light"]) && has(&["pos", "dir"]) {
         "light_position"
-    } else if has(&["camera", "cam", "eye", "view"]) && has(&["pos", "origin", "world"]) {
+    } else if (has(&["camera", "cam", "eye", "view"]) && has(&["pos", "origin", "world"]))
+        || viewer_alone(key.rsplit('.').next().unwrap_or(key))
+    {
         "camera_position"
     } else if has(&["time", "elapsed"]) {
         "time"
@@ -253,6 +255,18 @@ fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
         return None;
     };
     fits_role(role, shape).then_some(role)
+}
+
+/// Whether a member is named for the viewer alone (`eye`, `u_eye`,
+/// `camera`, `viewer`): a point, when its type fits, is where it stands.
+fn viewer_alone(member: &str) -> bool {
+    let words = crate::analysis::name_words(member);
+    let words: Vec<&str> = words
+        .iter()
+        .map(String::as_str)
+        .filter(|w| !matches!(*w, "u" | "i" | "m" | "g"))
+        .collect();
+    matches!(words[..], ["eye" | "camera" | "cam" | "viewer"])
 }
 
 /// The matrices applied to the vertex position on its way to

@@ -103,9 +103,7 @@ impl TextureSource {
                     rgba: rgba.into_raw(),
                 })
             }
-            TextureSource::Generate { generate, size } => {
-                Ok(generate_pattern(generate, size))
-            }
+            TextureSource::Generate { generate, size } => Ok(generate_pattern(generate, size)),
         }
     }
 }

@@ -56,7 +56,9 @@ fn profile_without_a_scene_infers_roles_and_lists_defaults() {
         .map(|v| v.as_str().unwrap())
         .collect();
     assert!(
-        defaulted.contains(&"uniform `light.intensity` = 0.75")
+        defaulted.contains(
+            &"uniform `light.intensity` = 1.0 (a f32, a scale, intensity or distance, by its name: 1)"
+        )
             && defaulted.contains(&"texture `t_normal` = generated \"flat-normal\""),
         "{defaulted:?}"
     );
@@ -348,5 +350,105 @@ fn a_long_uniform_array_is_zero_and_listed_as_defaulted() {
     assert!(
         text.contains("uniform `point_lights.data` = zero"),
         "{text}"
+    );
+}
+
+/// A shader whose expensive value is scaled to nearly nothing draws a
+/// black sphere: every variant matches it (SSIM 1.0000), which says
+/// nothing about the shader. The reference check says so first, in the
+/// terminal and the report, and the answer recommends nothing on it,
+/// though variants within the budget were measured.
+#[test]
+fn degenerate_reference_is_reported_and_never_recommended() {
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let source = "struct Frame { clip_from_world: mat4x4<f32>, world_from_local: mat4x4<f32> }
+@group(0) @binding(0) var<uniform> frame: Frame;
+struct VertexOut { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32> }
+@vertex
+fn vs_main(@location(0) position: vec3<f32>) -> VertexOut {
+    let world = frame.world_from_local * vec4<f32>(position, 1.0);
+    return VertexOut(frame.clip_from_world * world, world.xyz);
+}
+fn wave(p: vec3<f32>) -> f32 {
+    return sin(p.x * 7.0) * cos(p.y * 5.0) + sin(p.y * 13.0 + p.z * 3.0) * 0.5;
+}
+@fragment
+fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
+    let shade = vec3<f32>(wave(in.world), wave(in.world.yzx), wave(in.world.zxy)) * 0.5 + 0.5;
+    return vec4<f32>(shade * 0.001, 1.0);
+}
+";
+    let (dir, shader) = temp_file("black.wgsl", source.as_bytes());
+    let out = dir.path().join("report");
+    let output = shadecache([
+        "profile".as_ref(),
+        shader.as_os_str(),
+        "--variant".as_ref(),
+        "one-pass".as_ref(),
+        "--nodes".as_ref(),
+        "top:1".as_ref(),
+        "--frames".as_ref(),
+        "3".as_ref(),
+        "--size".as_ref(),
+        "48x48".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--quiet".as_ref(),
+    ] as [&OsStr; 13]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let summary = stdout(&output);
+    // Said first: right after the run's line, before any figure.
+    let lines: Vec<&str> = summary.lines().collect();
+    assert!(
+        lines[1].contains("reference check: DEGENERATE (nearly-black)"),
+        "{summary}"
+    );
+    assert!(
+        lines[2].contains("Likely cause: an unlit input"),
+        "{summary}"
+    );
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let check = &report["reference_check"];
+    assert_eq!(check["problems"][0]["kind"], "nearly-black", "{check}");
+    assert!(check["coverage"].as_f64().unwrap() > 0.2, "{check}");
+    // The variant matched the black frames, and is not recommended.
+    assert!(report["results"][0]["ssim"].as_f64().unwrap() > 0.99);
+    assert!(report["choice"]["result"].is_null(), "{}", report["choice"]);
+    assert!(report["choice"]["closest"].is_null());
+    let reason = report["choice"]["reason"].as_str().unwrap();
+    assert!(reason.contains("the reference is degenerate"), "{reason}");
+    assert!(!out.join("choice").exists());
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    let top = html
+        .find("Degenerate reference")
+        .expect("the report says so");
+    assert!(top < html.find("Which value to cache").unwrap());
+
+    // The same shader, lit, passes its check.
+    let lit = source.replace("shade * 0.001", "shade");
+    std::fs::write(&shader, lit).unwrap();
+    let output = shadecache([
+        "profile".as_ref(),
+        shader.as_os_str(),
+        "--variant".as_ref(),
+        "one-pass".as_ref(),
+        "--nodes".as_ref(),
+        "top:1".as_ref(),
+        "--frames".as_ref(),
+        "3".as_ref(),
+        "--size".as_ref(),
+        "48x48".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--quiet".as_ref(),
+    ] as [&OsStr; 13]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stdout(&output).contains("reference check: passes"),
+        "{}",
+        stdout(&output)
     );
 }

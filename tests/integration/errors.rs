@@ -381,7 +381,10 @@ fn scene_values_are_bounded_and_finite() {
         scene_fails(case, &marble_scene(*edit), &[], says, at);
     }
     // The bad value reported is TOML's own spelling, not serde's enum.
-    let (dir, path) = temp_file("scene.toml", marble_scene(("", "\n[textures.x]\ngenerate = 3\n")).as_bytes());
+    let (dir, path) = temp_file(
+        "scene.toml",
+        marble_scene(("", "\n[textures.x]\ngenerate = 3\n")).as_bytes(),
+    );
     let output = shadecache([
         "profile",
         "corpus/noise_marble.wgsl",
@@ -408,11 +411,21 @@ fn command_line_counts_are_bounded() {
             "from 1 to 10000",
         ),
         (
-            vec!["profile", "corpus/noise_marble.wgsl", "--frames", "4000000000"],
+            vec![
+                "profile",
+                "corpus/noise_marble.wgsl",
+                "--frames",
+                "4000000000",
+            ],
             "from 1 to 10000",
         ),
         (
-            vec!["profile", "corpus/noise_marble.wgsl", "--warmup", "4000000000"],
+            vec![
+                "profile",
+                "corpus/noise_marble.wgsl",
+                "--warmup",
+                "4000000000",
+            ],
             "from 0 to 10000",
         ),
         (
@@ -420,7 +433,12 @@ fn command_line_counts_are_bounded() {
             "from 1 to 10000",
         ),
         (
-            vec!["interpolate", "corpus/noise_marble.wgsl", "--min-cosine", "5"],
+            vec![
+                "interpolate",
+                "corpus/noise_marble.wgsl",
+                "--min-cosine",
+                "5",
+            ],
             "from -1 to 1",
         ),
     ] {
@@ -503,7 +521,10 @@ fn wrong_files_are_named_for_their_role() {
         Path::new("corpus/noise_marble.wgsl"),
         &["--weights", weights.to_str().unwrap()],
     );
-    assert!(err.contains("the cost weights file is not valid UTF-8"), "{err}");
+    assert!(
+        err.contains("the cost weights file is not valid UTF-8"),
+        "{err}"
+    );
     for weight in ["-1", "1e300"] {
         std::fs::write(&weights, format!("{{\"texture_sample\": {weight}}}")).unwrap();
         let err = fails_cleanly(
@@ -526,6 +547,9 @@ fn wrong_files_are_named_for_their_role() {
         ")".repeat(500)
     );
     let err = fails_on("nested.wgsl", source.as_bytes());
-    assert!(err.contains("nests deeper than naga's WGSL parser allows"), "{err}");
+    assert!(
+        err.contains("nests deeper than naga's WGSL parser allows"),
+        "{err}"
+    );
     assert!(err.contains("nested.wgsl:2:"), "{err}");
 }

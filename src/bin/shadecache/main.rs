@@ -37,7 +37,8 @@ struct Cli {
 /// without a word; with either variable set nothing changes. Called before
 /// any other thread exists.
 fn quiet_headless_wayland() {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none()
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none()
+        && std::env::var_os("WAYLAND_DISPLAY").is_none()
     {
         std::env::set_var("WAYLAND_DISPLAY", "/nonexistent/shadecache-headless");
     }

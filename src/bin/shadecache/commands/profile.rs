@@ -110,7 +110,9 @@ fn warmup_count(text: &str) -> Result<u32, String> {
     let max = shadecache::scene::bounds::MAX_FRAMES;
     match text.trim().parse::<u32>() {
         Ok(n) if n <= max => Ok(n),
-        _ => Err(format!("a warm-up is a whole number of frames from 0 to {max}")),
+        _ => Err(format!(
+            "a warm-up is a whole number of frames from 0 to {max}"
+        )),
     }
 }
 
@@ -259,6 +261,15 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         report.reference.spread_ms[0],
         report.reference.spread_ms[1]
     );
+    if let Some(check) = &report.reference_check {
+        summary.push_str(&format!("  reference check: {}\n", check.summary()));
+        for problem in &check.problems {
+            summary.push_str(&format!(
+                "  warning: degenerate reference: {}. Likely cause: {}\n",
+                problem.finding, problem.cause
+            ));
+        }
+    }
     for warning in &report.warnings {
         summary.push_str(&format!("  warning: {warning}\n"));
     }
