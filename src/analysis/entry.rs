@@ -68,6 +68,30 @@ pub fn fragment_entry(shader: &Shader, wanted: Option<&str>) -> Result<usize, Er
     }
 }
 
+/// The fragment entry points a command takes in turn: the one named
+/// `wanted` (checked by [`fragment_entry`] when it is used), else every
+/// fragment entry point of the module, in order. `None` stands for "the
+/// module's only one" and is the whole list when the module has at most
+/// one, so a module without a fragment entry point still gets
+/// [`fragment_entry`]'s error.
+pub fn fragment_entries_to_take(shader: &Shader, wanted: Option<&str>) -> Vec<Option<String>> {
+    if let Some(name) = wanted {
+        return vec![Some(name.to_string())];
+    }
+    let names: Vec<String> = shader
+        .module
+        .entry_points
+        .iter()
+        .filter(|ep| ep.stage == naga::ShaderStage::Fragment)
+        .map(|ep| ep.name.clone())
+        .collect();
+    if names.len() <= 1 {
+        vec![None]
+    } else {
+        names.into_iter().map(Some).collect()
+    }
+}
+
 pub fn stage_name(stage: naga::ShaderStage) -> &'static str {
     match stage {
         naga::ShaderStage::Vertex => "vertex",

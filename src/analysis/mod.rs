@@ -50,7 +50,7 @@ use serde::Serialize;
 pub use calls::CallStep;
 pub(crate) use candidates::type_name;
 pub use candidates::{name_words, RejectReason};
-pub use entry::{fragment_entry, stage_name};
+pub use entry::{fragment_entries_to_take, fragment_entry, stage_name};
 pub use id::node_id;
 
 use crate::cost::{CostModel, Weights};

@@ -57,7 +57,7 @@ impl<'a> SceneInputs<'a> {
                 continue;
             }
             match resource.kind {
-                kind if kind.sampled().is_some() => {
+                kind if kind.sampled().is_some() || kind == plan::ResourceKind::UintTexture => {
                     let source = scene.textures.get(&resource.name).ok_or_else(|| {
                         fail(format!(
                             "the shader binds texture `{}` (group {}, binding {}) and the scene does not provide it: add [textures.{}]",

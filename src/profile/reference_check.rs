@@ -14,9 +14,9 @@
 //!   share of drawn pixels above [`DARK`], and its spread (standard
 //!   deviation);
 //! - **non-finite** channel values (NaN, ±∞);
-//! - **change**: the share of pixels that differ at all between
-//!   consecutive measured frames (a dim frame changes by little, but
-//!   changes).
+//! - **change**: the share of pixels that differ at all between the first
+//!   measured frame and each later one, the largest (a dim or flat frame
+//!   changes by little, but changes; a still one not by a bit).
 //!
 //! A finding that makes the figures meaningless is a [`Problem`], said
 //! first in the terminal and at the top of the report, with what likely
@@ -39,10 +39,6 @@ const NEARLY_BLACK: f64 = 0.01;
 const FLAT_SPREAD: f64 = 1.0e-3;
 const FLAT_RANGE: f64 = 4.0 / 255.0;
 
-/// Below this share of pixels changed between consecutive frames, the
-/// frames are still (a thousandth: a few pixels of noise).
-const STILL: f64 = 1.0e-3;
-
 /// Running sums over the reference's measured frames.
 #[derive(Debug, Default)]
 pub(crate) struct ReferenceStats {
@@ -55,8 +51,8 @@ pub(crate) struct ReferenceStats {
     luminance_squares: f64,
     channel_min: [f64; 3],
     channel_max: [f64; 3],
-    changed: u64,
-    compared: u64,
+    first: Vec<f32>,
+    changed: Option<f64>,
 }
 
 /// Rec. 709 luminance of linear RGB.
@@ -65,10 +61,9 @@ fn luminance(rgb: [f64; 3]) -> f64 {
 }
 
 impl ReferenceStats {
-    /// Adds one measured frame (`now`, RGBA linear float) and, when there
-    /// was one, the measured frame `before` it; `clear` is the colour the
-    /// frame starts from.
-    pub fn add(&mut self, now: &[f32], before: &[f32], clear: [f64; 4]) {
+    /// Adds one measured frame (`now`, RGBA linear float); `clear` is the
+    /// colour the frame starts from.
+    pub fn add(&mut self, now: &[f32], clear: [f64; 4]) {
         if self.frames == 0 {
             self.channel_min = [f64::INFINITY; 3];
             self.channel_max = [f64::NEG_INFINITY; 3];
@@ -97,11 +92,17 @@ impl ReferenceStats {
                 self.channel_max[c] = self.channel_max[c].max(rgb[c]);
             }
         }
-        if before.len() == now.len() && !before.is_empty() {
-            for (a, b) in now.chunks_exact(4).zip(before.chunks_exact(4)) {
-                self.compared += 1;
-                self.changed += u64::from(a.iter().zip(b).any(|(x, y)| x.to_bits() != y.to_bits()));
-            }
+        if self.first.is_empty() {
+            self.first = now.to_vec();
+        } else if self.first.len() == now.len() {
+            let pixels = now.len() / 4;
+            let changed = now
+                .chunks_exact(4)
+                .zip(self.first.chunks_exact(4))
+                .filter(|(a, b)| a.iter().zip(*b).any(|(x, y)| x.to_bits() != y.to_bits()))
+                .count();
+            let share = changed as f64 / pixels.max(1) as f64;
+            self.changed = Some(self.changed.map_or(share, |c: f64| c.max(share)));
         }
     }
 
@@ -137,7 +138,7 @@ impl ReferenceStats {
             luminance_spread: spread,
             channel_range: range,
             non_finite_share: share(self.non_finite, self.drawn),
-            changed_share: (self.compared > 0).then(|| share(self.changed, self.compared)),
+            changed_share: self.changed,
             problems: Vec::new(),
         };
         check.problems = problems(&check, scene, defaulted);
@@ -223,13 +224,10 @@ fn problems(check: &ReferenceCheck, scene: &Scene, defaulted: &[String]) -> Vec<
             ),
         );
     }
-    if let Some(changed) = check.changed_share.filter(|&c| c < STILL) {
+    if check.changed_share == Some(0.0) {
         add(
             "still",
-            format!(
-                "the frames do not change: {:.3}% of the pixels differ between consecutive measured frames",
-                changed * 100.0
-            ),
+            "the frames do not change: every measured frame is the first to the bit".into(),
             if scene.effects.is_empty() {
                 "the scene declares no effect (`effects`), so nothing moves: a cache never misses and its error is that of a still picture".into()
             } else {
@@ -264,10 +262,8 @@ mod tests {
 
     fn kinds(frames: &[Vec<f32>]) -> Vec<String> {
         let mut stats = ReferenceStats::default();
-        let mut before = Vec::new();
         for now in frames {
-            stats.add(now, &before, [0.0; 4]);
-            before = now.clone();
+            stats.add(now, [0.0; 4]);
         }
         stats
             .check(&scene(), &[])

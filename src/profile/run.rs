@@ -112,8 +112,7 @@ pub(super) fn measured_run(
                 .ok_or_else(|| fail("the reference draws no colour".into()))?;
             let now = read_linear(clock.gpu, color).map_err(fail)?;
             run.before = std::mem::replace(&mut run.now, now);
-            run.stats
-                .add(&run.now, &run.before, reference.plan().clear.color);
+            run.stats.add(&run.now, reference.plan().clear.color);
         }
         for item in measured.iter_mut() {
             if frame < item.first_frame(warmup) {

@@ -4,6 +4,7 @@
 
 mod html;
 pub(crate) mod images;
+mod index;
 pub(crate) mod plots;
 
 pub use images::{Picture, Pictures};
@@ -15,6 +16,7 @@ use crate::scene::Effect;
 
 pub use html::html;
 pub use images::write_images;
+pub use index::{write_entry_index, EntrySection};
 
 /// Everything a profile measured.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -94,8 +96,9 @@ pub struct ReferenceCheck {
     pub channel_range: f64,
     /// Share of the drawn pixels with a NaN or infinite channel.
     pub non_finite_share: f64,
-    /// Share of the pixels that differ between consecutive measured
-    /// frames; `None` with one measured frame.
+    /// The largest share of the pixels that differ (by any bit) between
+    /// the first measured frame and a later one; `None` with one measured
+    /// frame.
     pub changed_share: Option<f64>,
     /// What makes the figures meaningless; empty when the reference
     /// passes.
@@ -119,7 +122,7 @@ impl ReferenceCheck {
             self.bright_share * 100.0,
             self.non_finite_share * 100.0,
             self.changed_share.map_or("no change measured (one frame)".into(), |c| {
-                format!("{:.1}% of pixels change", c * 100.0)
+                format!("{:.2}% of pixels change", c * 100.0)
             })
         );
         if self.degenerate() {

@@ -47,7 +47,7 @@ pub(super) fn scene_textures(
                 let texels = textures
                     .get(&key)
                     .ok_or_else(|| format!("no texels for texture `{}`", resource.name))?;
-                upload(gpu, texels, shape)
+                upload(gpu, texels, shape, wgpu::TextureFormat::Rgba8Unorm)
             };
             views.insert(key, view);
             continue;
@@ -68,6 +68,22 @@ pub(super) fn scene_textures(
                         compare: compare.then_some(wgpu::CompareFunction::LessEqual),
                         ..wgpu::SamplerDescriptor::default()
                     }),
+                );
+            }
+            // A `texture_2d<u32>` (an iteration count, a material id)
+            // read with `textureLoad`: the scene's texels as whole numbers
+            // 0 to 255 per channel.
+            ResourceKind::UintTexture => {
+                let texels = textures
+                    .get(&key)
+                    .ok_or_else(|| format!("no texels for texture `{}`", resource.name))?;
+                let shape = SampledShape {
+                    dimension: wgpu::TextureViewDimension::D2,
+                    layers: 1,
+                };
+                views.insert(
+                    key,
+                    upload(gpu, texels, shape, wgpu::TextureFormat::Rgba8Uint),
                 );
             }
             ResourceKind::Uniform | ResourceKind::Storage | ResourceKind::StorageReadWrite => {}
@@ -152,8 +168,14 @@ fn far_depth(
 }
 
 /// Uploads RGBA8 texels into every layer of a texture of `shape` (a 2D
-/// texture, the six faces of a cube, an array of either).
-fn upload(gpu: &Gpu, texels: &Texels, shape: SampledShape) -> wgpu::TextureView {
+/// texture, the six faces of a cube, an array of either) of `format`, one
+/// with four 8-bit channels (normalised, or whole numbers).
+fn upload(
+    gpu: &Gpu,
+    texels: &Texels,
+    shape: SampledShape,
+    format: wgpu::TextureFormat,
+) -> wgpu::TextureView {
     let layers = shape.layers;
     let size = wgpu::Extent3d {
         width: texels.width,
@@ -166,7 +188,7 @@ fn upload(gpu: &Gpu, texels: &Texels, shape: SampledShape) -> wgpu::TextureView 
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8Unorm,
+        format,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });

@@ -446,6 +446,17 @@ fn texture_pattern(name: &str, dim: ImageDimension, class: ImageClass) -> (&'sta
             "far",
             "a depth texture: every texel at the far plane (nothing shadowed)".into(),
         )
+    } else if matches!(
+        class,
+        ImageClass::Sampled {
+            kind: naga::ScalarKind::Uint | naga::ScalarKind::Sint,
+            ..
+        }
+    ) {
+        (
+            "cells",
+            "an integer texture: 8×8 cells of whole numbers 0 to 7".into(),
+        )
     } else if dim == ImageDimension::Cube {
         ("sky", "a cube texture: a sky gradient on every face".into())
     } else if lower.contains("normal") {

@@ -55,7 +55,7 @@ impl TryFrom<RawSource> for TextureSource {
                 Ok(TextureSource::Generate { generate, size })
             }
             (None, None, _) => Err(
-                "a texture needs `file = \"PATH.png\"` (relative to the scene) or `generate = \"checker\"` (checker, noise, flat-normal, sky or far)".into(),
+                "a texture needs `file = \"PATH.png\"` (relative to the scene) or `generate = \"checker\"` (checker, noise, flat-normal, sky, far or cells)".into(),
             ),
         }
     }
@@ -74,6 +74,9 @@ pub enum Pattern {
     Sky,
     /// For depth textures (shadow maps): every texel at the far plane, 1.0.
     Far,
+    /// For integer textures (`texture_2d<u32>`: counts, ids): 8×8 cells of
+    /// small whole numbers, 0 to 7 in each channel, alpha 1.
+    Cells,
 }
 
 pub use crate::runtime::Texels;
@@ -145,6 +148,11 @@ fn generate_pattern(pattern: Pattern, size: u32) -> Texels {
                 Pattern::FlatNormal => [0.5, 0.5, 1.0, 1.0],
                 Pattern::Sky => [0.3 + 0.4 * v, 0.5 + 0.3 * v, 0.9, 1.0],
                 Pattern::Far => [1.0, 1.0, 1.0, 1.0],
+                Pattern::Cells => {
+                    let (cx, cy) = (x * 8 / size, y * 8 / size);
+                    let whole = |c: u32| (hash(cx, cy, c) * 8.0).floor().min(7.0) / 255.0;
+                    [whole(0), whole(1), whole(2), 1.0 / 255.0]
+                }
             };
             rgba.extend(texel.map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8));
         }

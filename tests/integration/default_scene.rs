@@ -452,3 +452,69 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
         stdout(&output)
     );
 }
+
+/// wgpu's cube example reads a `texture_2d<u32>` with `textureLoad`: the
+/// runtime makes it an `rgba8uint` texture of the scene's texels, the
+/// default scene fills it with small whole numbers (the example divides
+/// them by 255 and scales them up), and the profile runs on a reference
+/// that passes its check. It stopped at "uint-texture bindings are not
+/// supported".
+#[test]
+fn uint_texture_binding_profiles() {
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let source = "struct VertexOutput { @location(0) tex_coord: vec2<f32>, @builtin(position) position: vec4<f32> };
+@group(0) @binding(0) var<uniform> transform: mat4x4<f32>;
+@vertex
+fn vs_main(@location(0) position: vec4<f32>, @location(1) tex_coord: vec2<f32>) -> VertexOutput {
+    var result: VertexOutput;
+    result.tex_coord = tex_coord;
+    result.position = transform * position;
+    return result;
+}
+@group(0) @binding(1) var r_color: texture_2d<u32>;
+@fragment
+fn fs_main(vertex: VertexOutput) -> @location(0) vec4<f32> {
+    let tex = textureLoad(r_color, vec2<i32>(vertex.tex_coord * 256.0), 0);
+    let v = f32(tex.x) / 255.0;
+    return vec4<f32>(1.0 - (v * 5.0), 1.0 - (v * 15.0), 1.0 - (v * 50.0), 1.0);
+}
+";
+    let (dir, shader) = temp_file("cube.wgsl", source.as_bytes());
+    let out = dir.path().join("report");
+    let output = shadecache([
+        "profile".as_ref(),
+        shader.as_os_str(),
+        "--variant".as_ref(),
+        "one-pass".as_ref(),
+        "--nodes".as_ref(),
+        "top:1".as_ref(),
+        "--frames".as_ref(),
+        "2".as_ref(),
+        "--size".as_ref(),
+        "48x48".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--quiet".as_ref(),
+    ] as [&OsStr; 13]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let report: Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert!(
+        report["defaulted"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|d| d == "texture `r_color` = generated \"cells\""),
+        "{}",
+        report["defaulted"]
+    );
+    let check = &report["reference_check"];
+    assert!(check["problems"].as_array().unwrap().is_empty(), "{check}");
+    // The cells vary the colour over the surface.
+    assert!(
+        check["luminance_spread"].as_f64().unwrap() > 0.01,
+        "{check}"
+    );
+}

@@ -121,14 +121,41 @@ fn no_fragment_entry_point_lists_the_entry_points() {
 
 const TWO_FRAGMENTS: &str = "@fragment fn first(@location(0) x: f32) -> @location(0) vec4<f32> { return vec4<f32>(sin(x)); }\n@fragment fn second(@location(0) x: f32) -> @location(0) vec4<f32> { return vec4<f32>(cos(x)); }\n@vertex fn vs() -> @builtin(position) vec4<f32> { return vec4<f32>(0.0); }\n";
 
+/// Without `--entry`, `analyze` takes every fragment entry point in turn
+/// (it used to stop and ask for one).
 #[test]
-fn two_fragment_entry_points_need_entry() {
-    let err = fails_on("two.wgsl", TWO_FRAGMENTS.as_bytes());
-    assert!(
-        err.contains("2 fragment entry points: `first`, `second`"),
-        "{err}"
-    );
-    assert!(err.contains("--entry"), "{err}");
+fn two_fragment_entry_points_are_analysed_in_turn() {
+    let (_dir, path) = temp_file("two.wgsl", TWO_FRAGMENTS.as_bytes());
+    let output = shadecache(["analyze", path.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = crate::util::stdout(&output);
+    let first = text
+        .find("entry point `first`:")
+        .expect("a section for `first`");
+    let second = text
+        .find("entry point `second`:")
+        .expect("a section for `second`");
+    assert!(first < second, "{text}");
+    let output = shadecache(["analyze", path.to_str().unwrap(), "--format", "json"]);
+    let json: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let entries: Vec<&str> = json
+        .as_array()
+        .expect("an array, one analysis per entry point")
+        .iter()
+        .map(|a| a["entry"].as_str().unwrap())
+        .collect();
+    assert_eq!(entries, ["first", "second"]);
+    // `--entry` still narrows it to one, as one object.
+    let output = shadecache([
+        "analyze",
+        path.to_str().unwrap(),
+        "--format",
+        "json",
+        "--entry",
+        "second",
+    ]);
+    let json: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(json["entry"], "second");
 }
 
 #[test]

@@ -1084,3 +1084,93 @@ fn hdr_values_above_one_are_measured() {
         );
     }
 }
+
+/// A module with two fragment entry points (a lit pass and a wave pass
+/// over one vertex stage), with no `--entry`: `profile` takes each in
+/// turn into `OUT/<entry>/` and writes an index with a section per entry
+/// point; `rewrite` writes each into `OUT/<entry>/`. Both used to stop and
+/// ask for `--entry`.
+#[test]
+fn every_fragment_entry_point_is_profiled() {
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let source = "struct Frame { clip_from_world: mat4x4<f32>, world_from_local: mat4x4<f32>, light_position: vec3<f32> }
+@group(0) @binding(0) var<uniform> frame: Frame;
+struct VertexOut { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32>, @location(1) normal: vec3<f32> }
+@vertex
+fn vs_main(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) -> VertexOut {
+    let world = frame.world_from_local * vec4<f32>(position, 1.0);
+    return VertexOut(frame.clip_from_world * world, world.xyz, normal);
+}
+@fragment
+fn fs_lit(in: VertexOut) -> @location(0) vec4<f32> {
+    let l = normalize(frame.light_position - in.world);
+    let diffuse = max(dot(normalize(in.normal), l), 0.0);
+    let bands = 0.5 + 0.5 * sin(in.world * 9.0);
+    return vec4<f32>(bands * diffuse + 0.1, 1.0);
+}
+@fragment
+fn fs_waves(in: VertexOut) -> @location(0) vec4<f32> {
+    let w = sin(in.world.x * 11.0) * cos(in.world.y * 7.0) + sin(in.world.z * 13.0);
+    return vec4<f32>(vec3<f32>(0.5 + 0.25 * w), 1.0);
+}
+";
+    let (dir, shader) = temp_file("two_passes.wgsl", source.as_bytes());
+    let out = dir.path().join("report");
+    let output = shadecache([
+        "profile",
+        shader.to_str().unwrap(),
+        "--variant",
+        "one-pass",
+        "--nodes",
+        "top:1",
+        "--frames",
+        "2",
+        "--size",
+        "48x48",
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let summary = stdout(&output);
+    for entry in ["fs_lit", "fs_waves"] {
+        assert!(
+            summary.contains(&format!("entry point `{entry}`:")),
+            "{summary}"
+        );
+        let report: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join(entry).join("report.json")).unwrap())
+                .unwrap();
+        assert_eq!(report["entry"], entry);
+        assert!(!report["results"].as_array().unwrap().is_empty());
+    }
+    let index: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    let listed: Vec<&str> = index["entries"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["entry"].as_str().unwrap())
+        .collect();
+    assert_eq!(listed, ["fs_lit", "fs_waves"]);
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(
+        html.contains("href=\"fs_lit/report.html\"")
+            && html.contains("href=\"fs_waves/report.html\"")
+    );
+
+    let variants = dir.path().join("variants");
+    let output = shadecache([
+        "rewrite",
+        shader.to_str().unwrap(),
+        "--all-nodes",
+        "--variant",
+        "one-pass",
+        "--out",
+        variants.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(variants.join("fs_lit").is_dir() && variants.join("fs_waves").is_dir());
+}

@@ -48,24 +48,44 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         None => Weights::default(),
     };
     let shader = front::load_with(&args.shader, &args.compose.composition(), None, None)?;
-    let options = Options {
-        entry: args.entry,
-        weights,
-    };
-    let analysis = analysis::analyze(&shader, &options)?;
+    // Every fragment entry point in turn, unless `--entry` names one.
+    let entries = analysis::fragment_entries_to_take(&shader, args.entry.as_deref());
+    let analyses = entries
+        .iter()
+        .map(|entry| {
+            analysis::analyze(
+                &shader,
+                &Options {
+                    entry: entry.clone(),
+                    weights: weights.clone(),
+                },
+            )
+        })
+        .collect::<Result<Vec<_>, Error>>()?;
     match args.format {
         Format::Json => {
-            let mut json = serde_json::to_string_pretty(&analysis).map_err(|err| {
+            // One entry point: its analysis; several: an array of them.
+            let json = match &analyses[..] {
+                [one] => serde_json::to_string_pretty(one),
+                several => serde_json::to_string_pretty(several),
+            };
+            let mut json = json.map_err(|err| {
                 Error::plain(Diagnostic::error(format!("cannot write JSON: {err}")))
             })?;
             json.push('\n');
             write_stdout(&json)
         }
         Format::Text => {
-            for note in text::notes(&analysis, args.all) {
-                diagnostic::emit_to_stdout(Some(&shader.file), &note, color);
+            for analysis in &analyses {
+                if analyses.len() > 1 {
+                    write_stdout(&format!("entry point `{}`:\n", analysis.entry))?;
+                }
+                for note in text::notes(analysis, args.all) {
+                    diagnostic::emit_to_stdout(Some(&shader.file), &note, color);
+                }
+                write_stdout(&format!("{}\n", text::summary(analysis, args.all)))?;
             }
-            write_stdout(&format!("{}\n", text::summary(&analysis, args.all)))
+            Ok(())
         }
     }
 }

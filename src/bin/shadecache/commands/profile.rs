@@ -195,31 +195,124 @@ impl Progress for Bar {
     }
 }
 
-pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
+pub fn exec(args: Args, color: Color) -> Result<(), Error> {
     let shader = args.stages.load(&args.shader)?;
-    let (scene, scene_path) = args.stages.scene(&shader, args.scene.as_deref())?;
+    // Every fragment entry point in turn, unless `--entry` names one:
+    // each into `OUT/<entry>/`, with an index in OUT.
+    let entries =
+        shadecache::analysis::fragment_entries_to_take(&shader, args.stages.entry.as_deref());
+    let several: Vec<String> = entries.iter().flatten().cloned().collect();
+    if several.len() <= 1 || args.stages.entry.is_some() {
+        let (_, summary) = profile_entry(&args, &shader, &args.stages, &args.out)?;
+        return super::write_stdout(&summary);
+    }
+    let mut sections = Vec::new();
+    let mut failed = Vec::new();
+    for entry in &several {
+        let stages = super::StageArgs {
+            entry: Some(entry.clone()),
+            ..args.stages.clone()
+        };
+        let out = args.out.join(entry);
+        super::write_stdout(&format!("entry point `{entry}`:\n"))?;
+        // An entry point with nothing to cache (a flat-colour wireframe
+        // pass) is an answer, not a failure.
+        let analysis = shadecache::analysis::analyze(
+            &shader,
+            &shadecache::analysis::Options {
+                entry: Some(entry.clone()),
+                ..Default::default()
+            },
+        )?;
+        if analysis.candidates.is_empty() {
+            let why = "no cache candidates: it computes nothing a cache could keep (see `shadecache analyze --all`)".to_string();
+            super::write_stdout(&format!("  {why}\n"))?;
+            sections.push(report::EntrySection {
+                entry: entry.clone(),
+                outcome: Err(why),
+            });
+            continue;
+        }
+        match profile_entry(&args, &shader, &stages, &out) {
+            Ok((report, summary)) => {
+                super::write_stdout(&summary)?;
+                sections.push(report::EntrySection {
+                    entry: entry.clone(),
+                    outcome: Ok(*report),
+                });
+            }
+            Err(err) => {
+                err.emit_to_stderr(color);
+                failed.push(format!("`{entry}`"));
+                sections.push(report::EntrySection {
+                    entry: entry.clone(),
+                    outcome: Err(err.render()),
+                });
+            }
+        }
+    }
+    report::write_entry_index(&args.out, &shader.file.path, &sections).map_err(|err| {
+        Error::plain(Diagnostic::error(format!(
+            "cannot write the report index: {err}"
+        )))
+    })?;
+    super::write_stdout(&format!(
+        "report: {} (one section per entry point)\n",
+        args.out.join("report.html").display()
+    ))?;
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::plain(Diagnostic::error(format!(
+            "{} of {} fragment entry points could not be profiled: {} (see above)",
+            failed.len(),
+            several.len(),
+            failed.join(", ")
+        ))))
+    }
+}
+
+/// Profiles the fragment entry point `stages` names (or the module's only
+/// one) into `out`: the report, and the summary for the terminal.
+fn profile_entry(
+    args: &Args,
+    shader: &shadecache::front::Shader,
+    stages: &super::StageArgs,
+    out: &std::path::Path,
+) -> Result<(Box<report::Report>, String), Error> {
+    let shader = shader;
+    let (scene, scene_path) = stages.scene(shader, args.scene.as_deref())?;
     let defaults = if args.sweep {
         Options::default().sweep()
     } else {
         Options::default()
     };
     let options = Options {
-        entry: args.stages.entry.clone(),
-        vertex_entry: args.stages.vertex_entry.clone(),
+        entry: stages.entry.clone(),
+        vertex_entry: stages.vertex_entry.clone(),
         nodes: parse_nodes(&args.nodes)?,
         variants: VariantArg::variants(&args.variant),
-        refresh_periods: args.refresh_period.unwrap_or(defaults.refresh_periods),
+        refresh_periods: args
+            .refresh_period
+            .clone()
+            .unwrap_or(defaults.refresh_periods),
         refresh_quads: args
             .refresh_quad
+            .as_ref()
             .map(|quads| quads.iter().map(|&k| k.max(1)).collect())
             .unwrap_or(defaults.refresh_quads),
         cache_formats: args
             .cache_format
+            .as_ref()
             .map(|formats| formats.iter().map(|&f| f.into()).collect())
             .unwrap_or(defaults.cache_formats),
-        depth_epsilons: args.depth_epsilon.unwrap_or(defaults.depth_epsilons),
+        depth_epsilons: args
+            .depth_epsilon
+            .clone()
+            .unwrap_or(defaults.depth_epsilons),
         reconstructions: args
             .reconstruction
+            .as_ref()
             .map(|r| r.iter().map(|&r| r.into()).collect())
             .unwrap_or(defaults.reconstructions),
         max_error: args.max_error,
@@ -233,19 +326,19 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         bar: None,
         quiet: args.quiet,
     };
-    let (report, pictures) = profile::profile(&shader, &scene, &scene_path, &options, &mut bar)?;
+    let (report, pictures) = profile::profile(shader, &scene, &scene_path, &options, &mut bar)?;
 
     super::write_report(
-        &args.out,
+        out,
         &report,
-        || report::write_images(&args.out, &report, &pictures),
-        || report::html(&report, &args.out),
+        || report::write_images(out, &report, &pictures),
+        || report::html(&report, out),
     )?;
     let io = |what: &str, err: String| {
         Error::plain(Diagnostic::error(format!("cannot write {what}: {err}")))
     };
     // The last frame's GPU scopes, for chrome://tracing or Perfetto.
-    wgpu_profiler::chrometrace::write_chrometrace(&args.out.join("trace.json"), &pictures.trace)
+    wgpu_profiler::chrometrace::write_chrometrace(&out.join("trace.json"), &pictures.trace)
         .map_err(|e| io("trace.json", e.to_string()))?;
 
     let mut summary = format!(
@@ -341,7 +434,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         };
         match (choice.result, &pictures.chosen) {
             (Some(_), Some(rewritten)) => {
-                let dir = args.out.join("choice");
+                let dir = out.join("choice");
                 back::write_variant(&dir, rewritten, Language::Wgsl)?;
                 summary.push_str(&format!(
                     "  answer {budget}: {}\n  wrote its shaders and plan to {}\n",
@@ -352,9 +445,6 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
             _ => summary.push_str(&format!("  answer {budget}: {}\n", choice.reason)),
         }
     }
-    summary.push_str(&format!(
-        "report: {}\n",
-        args.out.join("report.html").display()
-    ));
-    super::write_stdout(&summary)
+    summary.push_str(&format!("report: {}\n", out.join("report.html").display()));
+    Ok((Box::new(report), summary))
 }

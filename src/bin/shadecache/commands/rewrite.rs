@@ -165,16 +165,99 @@ pub enum EmitArg {
 
 pub fn exec(args: Args, color: Color) -> Result<(), Error> {
     let shader = args.stages.load(&args.shader)?;
-    let analysis = analysis::analyze(
-        &shader,
-        &AnalysisOptions {
-            entry: args.stages.entry.clone(),
-            ..AnalysisOptions::default()
-        },
-    )?;
-    if let Some(name) = &args.stages.vertex_entry {
-        analysis.check_vertex_entry(&shader, name)?;
+    // Every fragment entry point in turn (into `OUT/<entry>`), unless
+    // `--entry` names one; with `--node`, the one that has the node.
+    let entries = analysis::fragment_entries_to_take(&shader, args.stages.entry.as_deref());
+    let mut analyses = entries
+        .iter()
+        .map(|entry| {
+            analysis::analyze(
+                &shader,
+                &AnalysisOptions {
+                    entry: entry.clone(),
+                    ..AnalysisOptions::default()
+                },
+            )
+        })
+        .collect::<Result<Vec<_>, Error>>()?;
+    if let Some(id) = &args.node {
+        if analyses.len() > 1
+            && analyses
+                .iter()
+                .any(|a| a.candidates.iter().any(|c| &c.node.id == id))
+        {
+            analyses.retain(|a| a.candidates.iter().any(|c| &c.node.id == id));
+        }
     }
+    let several = analyses.len() > 1;
+    for analysis in &analyses {
+        if let Some(name) = &args.stages.vertex_entry {
+            analysis.check_vertex_entry(&shader, name)?;
+        }
+    }
+    let mut totals = Totals::default();
+    for analysis in &analyses {
+        if several && analysis.candidates.is_empty() {
+            diagnostic::emit_to_stderr(
+                None,
+                &Diagnostic::new(
+                    Severity::Note,
+                    format!("entry point `{}` has no cache candidates", analysis.entry),
+                ),
+                color,
+            );
+            continue;
+        }
+        let out = if several {
+            args.out.join(&analysis.entry)
+        } else {
+            args.out.clone()
+        };
+        rewrite_entry(&args, &shader, analysis, &out, color, &mut totals)?;
+    }
+    let Totals {
+        written,
+        refused,
+        internal,
+    } = totals;
+    super::write_stdout(&format!(
+        "wrote {written} variant{} to {}, refused {refused}\n",
+        if written == 1 { "" } else { "s" },
+        args.out.display()
+    ))?;
+    if internal > 0 {
+        return Err(Error::internal(Diagnostic::error(format!(
+            "{internal} variant{} failed inside the rewrite (see the warnings above): this is a bug in shadecache, please report it with the shader",
+            if internal == 1 { "" } else { "s" }
+        ))));
+    }
+    if refused > 0 && args.node.is_some() {
+        return Err(Error::plain(Diagnostic::error(format!(
+            "{refused} variant{} of node {} refused",
+            if refused == 1 { "" } else { "s" },
+            args.node.as_deref().unwrap_or_default()
+        ))));
+    }
+    Ok(())
+}
+
+/// Variants written, refused, and refused by a failure inside the rewrite.
+#[derive(Default)]
+struct Totals {
+    written: usize,
+    refused: usize,
+    internal: usize,
+}
+
+/// Writes the variants of one fragment entry point's nodes into `out`.
+fn rewrite_entry(
+    args: &Args,
+    shader: &shadecache::front::Shader,
+    analysis: &analysis::Analysis,
+    out: &std::path::Path,
+    color: Color,
+    totals: &mut Totals,
+) -> Result<(), Error> {
     let options = Options {
         refresh_period: args.refresh_period,
         refresh_quad: args.refresh_quad,
@@ -204,24 +287,21 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
             None => analysis::Nodes::All,
         },
     )?;
-    let mut refused = 0;
-    let mut internal = 0;
-    let mut written = 0;
     for candidate in &nodes {
         for &variant in &variants {
             let dir = match (args.all_nodes, variants.len()) {
-                (true, _) => args.out.join(&candidate.node.id).join(variant.as_str()),
-                (false, 1) => args.out.clone(),
-                (false, _) => args.out.join(variant.as_str()),
+                (true, _) => out.join(&candidate.node.id).join(variant.as_str()),
+                (false, 1) => out.to_path_buf(),
+                (false, _) => out.join(variant.as_str()),
             };
-            match rewrite::rewrite(&shader, &analysis, candidate, variant, &options) {
+            match rewrite::rewrite(shader, analysis, candidate, variant, &options) {
                 Ok(rewritten) => {
                     back::write_variant(&dir, &rewritten, language)?;
-                    written += 1;
+                    totals.written += 1;
                 }
                 Err(refusal) => {
-                    refused += 1;
-                    internal += usize::from(refusal.is_internal());
+                    totals.refused += 1;
+                    totals.internal += usize::from(refusal.is_internal());
                     diagnostic::emit_to_stderr(
                         None,
                         &Diagnostic::new(
@@ -236,24 +316,6 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
                 }
             }
         }
-    }
-    super::write_stdout(&format!(
-        "wrote {written} variant{} to {}, refused {refused}\n",
-        if written == 1 { "" } else { "s" },
-        args.out.display()
-    ))?;
-    if internal > 0 {
-        return Err(Error::internal(Diagnostic::error(format!(
-            "{internal} variant{} failed inside the rewrite (see the warnings above): this is a bug in shadecache, please report it with the shader",
-            if internal == 1 { "" } else { "s" }
-        ))));
-    }
-    if refused > 0 && args.node.is_some() {
-        return Err(Error::plain(Diagnostic::error(format!(
-            "{refused} variant{} of node {} refused",
-            if refused == 1 { "" } else { "s" },
-            args.node.as_deref().unwrap_or_default()
-        ))));
     }
     Ok(())
 }
