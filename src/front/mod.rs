@@ -12,6 +12,7 @@
 //! parse error or a validation error (pointing at naga's spans).
 
 pub mod compose;
+pub mod vertex;
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
@@ -30,6 +31,18 @@ pub struct Shader {
     /// The separate module the vertex stage came from
     /// ([`with_vertex_module`]); `None` when `file` has the whole module.
     pub vertex_file: Option<Arc<SourceFile>>,
+}
+
+impl Shader {
+    /// A copy: the same file, module and validation.
+    pub fn clone_parts(&self) -> Shader {
+        Shader {
+            file: self.file.clone(),
+            module: self.module.clone(),
+            info: self.info.clone(),
+            vertex_file: self.vertex_file.clone(),
+        }
+    }
 }
 
 /// Reads, parses and validates the shader at `path`.

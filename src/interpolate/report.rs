@@ -21,6 +21,8 @@ pub struct Report {
     pub format: u32,
     pub shader: String,
     pub scene: String,
+    /// What the scene is and how it moves, as the scene says.
+    pub scene_description: String,
     /// The adapter the run drew on.
     pub adapter: String,
     /// `gpu-timestamps`, or `cpu` where the device has no timestamp
@@ -218,10 +220,15 @@ pub fn html(report: &Report) -> String {
         out,
         "<!doctype html><meta charset=utf-8><title>shadecache interpolate: {}</title>\
          <style>body{{font-family:sans-serif;max-width:960px;margin:2em auto}}table{{border-collapse:collapse}}td,th{{padding:2px 8px;border-bottom:1px solid #ddd;text-align:right}}th:first-child,td:first-child{{text-align:left}}img{{image-rendering:pixelated;width:256px}}</style>\
-         <h1>{} on {}</h1><p>{}×{}, n = {}, {} interval(s) measured, {} ({}).</p><p><b>Answer:</b> {}</p>",
+         <h1>{} on {}</h1><p>{}{}×{}, n = {}, {} interval(s) measured, {} ({}).</p><p><b>Answer:</b> {}</p>",
         esc(&report.shader),
         esc(&report.shader),
         esc(&report.scene),
+        if report.scene_description.is_empty() {
+            String::new()
+        } else {
+            format!("{}. ", esc(&report.scene_description))
+        },
         report.size[0],
         report.size[1],
         report.frames_per_interval,

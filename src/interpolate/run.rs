@@ -238,7 +238,14 @@ pub(super) fn run(
         )?;
     }
     progress.finish();
-    Ok(run.report(shader, scene_path, &clock, measured, intervals, notes))
+    Ok(run.report(
+        shader,
+        (scene_path, &scene.description),
+        &clock,
+        measured,
+        intervals,
+        notes,
+    ))
 }
 
 /// The runs that rasterise the geometry at B-frame times.
@@ -1084,7 +1091,7 @@ impl Schedule<'_> {
     fn report(
         &self,
         shader: &Shader,
-        scene_path: &Path,
+        (scene_path, scene_description): (&Path, &str),
         clock: &Clock,
         measured: Measured,
         intervals: u32,
@@ -1120,6 +1127,7 @@ impl Schedule<'_> {
             format: report::FORMAT,
             shader: shader.file.path.clone(),
             scene: scene_path.display().to_string(),
+            scene_description: scene_description.to_string(),
             adapter: format!("{} ({:?})", self.gpu.adapter.name, self.gpu.adapter.backend),
             timing: if clock.timestamps {
                 "gpu-timestamps"

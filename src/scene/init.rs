@@ -281,7 +281,7 @@ fn scalar_by_name(words: &[String], integer: bool) -> Option<(f64, &'static str)
     Some(
         if has(&["step", "iteration", "sample", "tap", "march", "bounce"]) {
             (16.0, "a step or sample count, by its name: 16")
-        } else if has(&["octave", "layer", "cascade", "level", "lod"]) {
+        } else if has(&["octave", "layer", "cascade", "level", "lod", "band"]) {
             (4.0, "a count of octaves or levels, by its name: 4")
         } else if has(&["count", "num", "len", "length"]) {
             (1.0, "a count, by its name: 1")

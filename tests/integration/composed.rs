@@ -222,16 +222,76 @@ fn a_binding_the_two_modules_declare_differently_is_an_error() {
     assert!(err.contains("mesh.wgsl:1:1"), "{err}");
 }
 
+/// A fragment-only module profiled with no `--vertex` file is drawn by a
+/// vertex stage made from its inputs' names and types (the world position,
+/// the normal and the uv from the mesh), said in the report's filled-in
+/// inputs; it used to be refused. `--vertex` still gives the real one.
 #[test]
-fn profiling_a_fragment_only_module_without_its_vertex_module_is_an_error() {
-    let output = shadecache(["profile", FRAGMENT, "--quiet"]);
-    let err = stderr(&output);
-    assert_eq!(output.status.code(), Some(1), "{err}");
-    assert!(
-        err.contains("has no vertex stage, and drawing it needs one"),
-        "{err}"
-    );
-    assert!(err.contains("--vertex FILE"), "{err}");
+fn fragment_only_module_gets_a_generated_vertex_stage() {
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let out = tempfile::tempdir().unwrap();
+    let run = |extra: &[&str], dir: &str| {
+        let report = out.path().join(dir);
+        let mut args = vec![
+            "profile",
+            FRAGMENT,
+            "--quiet",
+            "--nodes",
+            "top:1",
+            "--variant",
+            "one-pass",
+            "--frames",
+            "2",
+            "--size",
+            "48x48",
+            "--out",
+            report.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let output = shadecache(&args);
+        assert!(output.status.success(), "{}", stderr(&output));
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(report.join("report.json")).unwrap()).unwrap();
+        json
+    };
+    let generated = run(&[], "generated");
+    let defaulted: Vec<&str> = generated["defaulted"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d.as_str().unwrap())
+        .collect();
+    for line in [
+        "vertex stage generated: @location(0) `world_position` = the world position",
+        "vertex stage generated: @location(1) `world_normal` = the mesh's normal in world space",
+        "vertex stage generated: @location(2) `uv` = the mesh's texture coordinate",
+    ] {
+        assert!(defaulted.contains(&line), "{defaulted:?}");
+    }
+    let check = &generated["reference_check"];
+    assert!(check["problems"].as_array().unwrap().is_empty(), "{check}");
+    // Camera and object motion reach it: the generated stage reads the
+    // simulated matrices.
+    assert!(check["changed_share"].as_f64().unwrap() > 0.05, "{check}");
+
+    // The joined module is valid WGSL to Tint as well as naga.
+    let shader = front::load(&root().join(FRAGMENT)).unwrap();
+    let fragment = analysis::fragment_entry(&shader, None).unwrap();
+    let (joined, _) = front::vertex::generate(&shader, fragment).unwrap();
+    let text = shadecache::back::wgsl_text(&joined.module, &joined.info).unwrap();
+    let (_dir, path) = temp_file("joined.wgsl", text.as_bytes());
+    for result in tint_validate(&[path]) {
+        assert!(result.ok, "{result:?}\n{text}");
+    }
+
+    let given = run(&["--vertex", VERTEX], "given");
+    assert!(given["defaulted"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|d| !d.as_str().unwrap().starts_with("vertex stage generated")));
 }
 
 const COMPOSED: &str = "corpus/composed/ripple_material.wgsl";

@@ -168,7 +168,11 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         ))));
     }
     let shader = args.stages.load(&args.shader)?;
-    let (scene, scene_path) = args.stages.scene(&shader, args.scene.as_deref())?;
+    // With no scene, the default one with a game's motion: the profile's
+    // barely moves, and every method would tie with sample-and-hold.
+    let (shader, scene, scene_path) =
+        args.stages
+            .drawn_with(shader, args.scene.as_deref(), true)?;
     let options = Options {
         methods: MethodArg::methods(&args.method),
         frames_per_interval: args.frames_per_interval,
@@ -216,6 +220,9 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         report.reference_ms,
         report.i_frame_ms
     );
+    if !report.scene_description.is_empty() {
+        summary.push_str(&format!("  scene: {}\n", report.scene_description));
+    }
     for m in &report.methods {
         summary.push_str(&format!(
             "  {:<16} amortised {:.2}× (I-frame {:.2}×, B-frame {:.3}×), B-frames SSIM {:.4} (worst {:.4}), PSNR {:.1} dB{}\n",

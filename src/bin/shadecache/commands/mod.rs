@@ -161,6 +161,41 @@ impl StageArgs {
         })
     }
 
+    /// The shader and scene a run draws: `shader` itself, or, for a
+    /// fragment-only module given no `--vertex`, the module joined to a
+    /// vertex stage made from its inputs' names and types (what feeds each
+    /// input is listed with the scene's defaulted values); and the scene
+    /// at `path` or the default one for it.
+    pub fn drawn(
+        &self,
+        shader: Shader,
+        path: Option<&Path>,
+    ) -> Result<(Shader, shadecache::scene::Scene, PathBuf), Error> {
+        self.drawn_with(shader, path, false)
+    }
+
+    /// [`drawn`](Self::drawn); with `game_motion`, a default scene has the
+    /// motion of a game ([`Scene::with_game_motion`](shadecache::scene::Scene::with_game_motion)).
+    pub fn drawn_with(
+        &self,
+        shader: Shader,
+        path: Option<&Path>,
+        game_motion: bool,
+    ) -> Result<(Shader, shadecache::scene::Scene, PathBuf), Error> {
+        let (shader, generated) = if shadecache::rewrite::vertex::is_fragment_only(&shader.module) {
+            let fragment = shadecache::analysis::fragment_entry(&shader, self.entry.as_deref())?;
+            front::vertex::generate(&shader, fragment)?
+        } else {
+            (shader, Vec::new())
+        };
+        let (mut scene, scene_path) = self.scene(&shader, path)?;
+        if game_motion && path.is_none() {
+            scene = scene.with_game_motion();
+        }
+        scene.defaulted.extend(generated);
+        Ok((shader, scene, scene_path))
+    }
+
     pub fn load(&self, shader: &Path) -> Result<Shader, Error> {
         front::load_with(
             shader,

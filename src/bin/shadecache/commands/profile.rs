@@ -280,8 +280,9 @@ fn profile_entry(
     stages: &super::StageArgs,
     out: &std::path::Path,
 ) -> Result<(Box<report::Report>, String), Error> {
-    let shader = shader;
-    let (scene, scene_path) = stages.scene(shader, args.scene.as_deref())?;
+    let drawn = shader.clone_parts();
+    let (shader, scene, scene_path) = stages.drawn(drawn, args.scene.as_deref())?;
+    let shader = &shader;
     let defaults = if args.sweep {
         Options::default().sweep()
     } else {
