@@ -216,7 +216,7 @@ fn located(
 
 /// The byte range of `name` in the first `fn name` of the source. Only
 /// reads the text, to place a label.
-fn find_function_name(text: &str, name: &str) -> Option<std::ops::Range<usize>> {
+pub(crate) fn find_function_name(text: &str, name: &str) -> Option<std::ops::Range<usize>> {
     let mut from = 0;
     while let Some(at) = text[from..].find("fn") {
         let start = from + at;

@@ -345,6 +345,7 @@ pub fn profile(
 ) -> Result<(Report, Pictures), Error> {
     refuse_fragment_only(shader)?;
     let prepared = setup::prepare(shader, scene, options)?;
+    rewrite::check_entry_point(shader, &prepared.analysis)?;
     let nodes = prepared.nodes();
     let (size, warmup, frames) = (prepared.size, prepared.warmup, prepared.frames);
     let reference_plan =

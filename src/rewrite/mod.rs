@@ -355,10 +355,8 @@ fn rewrite_at(
     let Some(result) = function.result.clone() else {
         return Err(Refusal::new("the fragment entry point returns nothing"));
     };
-    if writes_frag_depth(original, &result) {
-        return Err(Refusal::new(
-            "the fragment stage writes @builtin(frag_depth); the cache's depth test needs rasterised depth",
-        ));
+    if let Some(refusal) = refuse_entry_point(shader, analysis) {
+        return Err(refusal);
     }
     // Trip counts do not matter here, only where expressions run.
     let layout = crate::proc::layout(
@@ -587,6 +585,40 @@ pub fn free_function(function: &mut naga::Function) {
         )
     });
     function.body = naga::Block::from_vec(vec![naga::Statement::Return { value }]);
+}
+
+/// Why no node of the analysed fragment entry point can be cached,
+/// whichever node and variant: said once for the shader rather than once
+/// per node and variant (a grid shader that writes its depth was 380
+/// identical refusals).
+pub fn refuse_entry_point(shader: &Shader, analysis: &Analysis) -> Option<Refusal> {
+    let function = &shader.module.entry_points[analysis.entry_index].function;
+    let result = function.result.as_ref()?;
+    writes_frag_depth(&shader.module, result).then(|| {
+        Refusal::new(
+            "the fragment stage writes @builtin(frag_depth), so the depth of each pixel is the shader's and not the rasterised one: the cache reprojects a pixel from its rasterised position and tests the rasterised depth against the cached one, and a surface the shader moves in depth (an infinite grid, an impostor, a ray-marched object) would reuse values where it no longer is, and miss where it is. Nothing of this entry point can be cached as it is: to measure what caching its colour would save, profile a copy whose fragment stage returns the colour alone",
+        )
+    })
+}
+
+/// [`refuse_entry_point`] as an error at the entry point's name: what a
+/// command says before trying any node.
+pub fn check_entry_point(
+    shader: &Shader,
+    analysis: &Analysis,
+) -> Result<(), crate::diagnostic::Error> {
+    let Some(refusal) = refuse_entry_point(shader, analysis) else {
+        return Ok(());
+    };
+    let at = crate::front::find_function_name(&shader.file.text, &analysis.entry).unwrap_or(0..0);
+    Err(crate::diagnostic::Error::in_file(
+        shader.file.clone(),
+        crate::diagnostic::Diagnostic::error(format!(
+            "entry point `{}` cannot be cached: {}",
+            analysis.entry, refusal.reason
+        ))
+        .with_label(at, "this entry point"),
+    ))
 }
 
 /// Whether the fragment result writes `@builtin(frag_depth)`.

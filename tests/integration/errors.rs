@@ -580,3 +580,57 @@ fn wrong_files_are_named_for_their_role() {
     );
     assert!(err.contains("nested.wgsl:2:"), "{err}");
 }
+
+/// A fragment stage that writes `@builtin(frag_depth)` (an infinite grid
+/// placing its lines itself) cannot be cached: the cache tests rasterised
+/// depth. `rewrite` and `profile` say so once, at the entry point, with
+/// why and what the user can do, before any node is tried: it was one
+/// refusal per node and variant (380 on bevy_infinite_grid's grid) and
+/// exit 0.
+#[test]
+fn frag_depth_writer_cached_or_refused_with_reason() {
+    let source = "struct View { clip_from_world: mat4x4<f32>, camera_position: vec3<f32> }
+@group(0) @binding(0) var<uniform> view: View;
+struct Out { @builtin(position) clip: vec4<f32>, @location(0) world: vec3<f32> }
+@vertex fn vs(@location(0) p: vec3<f32>) -> Out { return Out(view.clip_from_world * vec4<f32>(p, 1.0), p); }
+struct FragOut { @location(0) color: vec4<f32>, @builtin(frag_depth) depth: f32 }
+@fragment fn fs(in: Out) -> FragOut {
+    let cell = abs(fract(in.world.xz * 4.0) - 0.5);
+    let line = smoothstep(0.45, 0.5, max(cell.x, cell.y)) * exp(-length(in.world - view.camera_position) * 0.1);
+    let clip = view.clip_from_world * vec4<f32>(in.world, 1.0);
+    return FragOut(vec4<f32>(vec3<f32>(line), 1.0), clip.z / clip.w);
+}
+";
+    let (dir, path) = temp_file("grid.wgsl", source.as_bytes());
+    let out = dir.path().join("out");
+    for command in ["rewrite", "profile"] {
+        let mut args = vec![
+            command,
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        if command == "rewrite" {
+            args.push("--all-nodes");
+        } else {
+            args.push("--quiet");
+        }
+        let output = shadecache(&args);
+        let err = stderr(&output).replace(path.to_str().unwrap(), "grid.wgsl");
+        assert_eq!(output.status.code(), Some(1), "{command}: {err}");
+        assert_eq!(err.matches("error").count(), 1, "{command}: {err}");
+        assert!(!err.contains("refused: node"), "{command}: {err}");
+        assert!(
+            err.contains(
+                "entry point `fs` cannot be cached: the fragment stage writes @builtin(frag_depth)"
+            ),
+            "{command}: {err}"
+        );
+        assert!(
+            err.contains("profile a copy whose fragment stage returns the colour alone"),
+            "{command}: {err}"
+        );
+        assert!(err.contains("grid.wgsl:6:14"), "{command}: {err}");
+        assert!(!out.exists(), "{command}");
+    }
+}

@@ -194,6 +194,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         if let Some(name) = &args.stages.vertex_entry {
             analysis.check_vertex_entry(&shader, name)?;
         }
+        rewrite::check_entry_point(&shader, analysis)?;
     }
     let mut totals = Totals::default();
     for analysis in &analyses {
