@@ -30,6 +30,9 @@ pub(crate) struct SceneInputs<'a> {
     /// vertex inputs fed a constant.
     pub defaulted: Vec<String>,
     scene_meshes: Vec<scene::Mesh>,
+    /// The 2D depth textures that get a shadow map rendered from the
+    /// light each frame.
+    shadow_maps: Vec<[u32; 2]>,
     uniforms: &'a [UniformBuffer],
     storage: &'a [StorageBuffer],
     layout: &'a [VertexAttribute],
@@ -52,6 +55,7 @@ impl<'a> SceneInputs<'a> {
     ) -> Result<SceneInputs<'a>, Error> {
         let dir = scene_path.parent().unwrap_or(Path::new("."));
         let mut textures = HashMap::new();
+        let mut shadow_maps = Vec::new();
         for resource in &reference_plan.bindings.original {
             if !used.contains(&(resource.name.clone(), [resource.group, resource.binding])) {
                 continue;
@@ -64,13 +68,26 @@ impl<'a> SceneInputs<'a> {
                             resource.name, resource.group, resource.binding, resource.name
                         ))
                     })?;
-                    // A depth texture (a shadow map) is made by the runtime,
-                    // every texel at the far plane; RGBA texels cannot fill it.
-                    if kind.sampled().is_some_and(|t| t.depth) && !source.is_far() {
+                    // A depth texture is made by the runtime, every texel at
+                    // the far plane, and a 2D one can take a shadow map
+                    // rendered from the light; RGBA texels cannot fill it.
+                    let depth = kind.sampled().filter(|t| t.depth);
+                    let flat = depth.is_some_and(|t| !t.cube && !t.arrayed);
+                    if depth.is_some() && !(source.is_far() || (flat && source.is_shadow_map())) {
                         return Err(fail(format!(
-                            "texture `{}` is a depth texture: the scene can only give it as `generate = \"far\"`",
+                            "texture `{}` is a depth texture: the scene can only give it as `generate = \"far\"`{}",
+                            resource.name,
+                            if flat { " or `generate = \"shadow-map\"`" } else { " (shadow maps are rendered for 2D depth textures)" }
+                        )));
+                    }
+                    if source.is_shadow_map() && !flat {
+                        return Err(fail(format!(
+                            "texture `{}` is not a 2D depth texture: `generate = \"shadow-map\"` is for one (a `texture_depth_2d`)",
                             resource.name
                         )));
+                    }
+                    if source.is_shadow_map() {
+                        shadow_maps.push([resource.group, resource.binding]);
                     }
                     textures.insert(
                         [resource.group, resource.binding],
@@ -144,6 +161,7 @@ impl<'a> SceneInputs<'a> {
             meshes,
             defaulted,
             scene_meshes,
+            shadow_maps,
             uniforms,
             storage,
             layout,
@@ -160,6 +178,20 @@ impl<'a> SceneInputs<'a> {
 
         let state = scene.frame(frame, aspect);
         let mut inputs = FrameInputs::default();
+        if !self.shadow_maps.is_empty() {
+            let deformed: Vec<Option<scene::Mesh>> = (0..scene_meshes.len())
+                .map(|i| scene.deformed(i, &scene_meshes[i], frame))
+                .collect();
+            let casters: Vec<&scene::Mesh> = scene_meshes
+                .iter()
+                .zip(&deformed)
+                .map(|(mesh, deformed)| deformed.as_ref().unwrap_or(mesh))
+                .collect();
+            let map = std::sync::Arc::new(scene::shadow::render(&state, &casters));
+            for &key in &self.shadow_maps {
+                inputs.depth_maps.insert(key, map.clone());
+            }
+        }
         for (object, mesh) in scene_meshes.iter().enumerate() {
             let mut buffers = HashMap::new();
             for buffer in uniforms {

@@ -57,6 +57,11 @@ impl Default for ObjectInputs {
 #[derive(Clone, Debug, Default)]
 pub struct FrameInputs {
     pub objects: Vec<ObjectInputs>,
+    /// This frame's contents of 2D depth textures by `[group, binding]`
+    /// (a shadow map rendered from the light), written before its passes;
+    /// a depth texture not listed keeps what it had (at first the far
+    /// plane).
+    pub depth_maps: HashMap<[u32; 2], std::sync::Arc<super::DepthTexels>>,
 }
 
 struct GpuMesh {
@@ -88,6 +93,8 @@ pub struct Runner {
     layouts: BTreeMap<u32, wgpu::BindGroupLayout>,
     views: HashMap<[u32; 2], wgpu::TextureView>,
     samplers: HashMap<[u32; 2], wgpu::Sampler>,
+    /// The 2D depth textures a frame can write a shadow map into.
+    depth_maps: HashMap<[u32; 2], wgpu::Texture>,
     /// The group the caller binds, and what it bound.
     external: Option<(u32, Option<wgpu::BindGroup>)>,
 }
@@ -176,7 +183,8 @@ impl Runner {
                 (*group, layout)
             })
             .collect();
-        let (views, samplers) = scene_textures(gpu, plan, textures, options.external_group)?;
+        let (views, samplers, depth_maps) =
+            scene_textures(gpu, plan, textures, options.external_group)?;
         Ok(Runner {
             cached,
             colors,
@@ -186,6 +194,7 @@ impl Runner {
             layouts,
             views,
             samplers,
+            depth_maps,
             external: options.external_group.map(|group| (group, None)),
         })
     }
@@ -263,6 +272,13 @@ impl Runner {
         }
         for (index, draw) in inputs.objects.iter().enumerate() {
             self.write_object(gpu, index, draw)?;
+        }
+        // A plan whose passes do not read a depth texture (a payload
+        // pass alone) has none to write.
+        for (key, texels) in &inputs.depth_maps {
+            if let Some(texture) = self.depth_maps.get(key) {
+                super::textures::write_depth(gpu, texture, texels)?;
+            }
         }
         let mut encoder = gpu
             .device

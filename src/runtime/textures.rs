@@ -13,8 +13,56 @@ pub struct Texels {
     pub rgba: Vec<u8>,
 }
 
+/// A depth texture's texels: `size`² 16-bit unorm depths, row-major (a
+/// shadow map the scene renders from its light each frame).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthTexels {
+    pub size: u32,
+    pub depth: Vec<u16>,
+}
+
+/// The side of the 2D depth textures the runtime makes: what a frame's
+/// [`DepthTexels`] for them must have.
+pub const DEPTH_MAP_SIZE: u32 = 512;
+
+/// Writes `texels` into the 2D depth texture `texture` (made by
+/// [`scene_textures`]).
+pub(super) fn write_depth(
+    gpu: &Gpu,
+    texture: &wgpu::Texture,
+    texels: &DepthTexels,
+) -> Result<(), String> {
+    if texels.size != texture.width() || texels.depth.len() != (texels.size * texels.size) as usize
+    {
+        return Err(format!(
+            "a depth map of {}² texels for a {}² depth texture",
+            texels.size,
+            texture.width()
+        ));
+    }
+    let bytes: Vec<u8> = texels.depth.iter().flat_map(|d| d.to_le_bytes()).collect();
+    gpu.queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::DepthOnly,
+        },
+        &bytes,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(texels.size * 2),
+            rows_per_image: Some(texels.size),
+        },
+        texture.size(),
+    );
+    Ok(())
+}
+
 /// The scene's textures and samplers for the plan's bindings: texels
-/// uploaded, depth textures at the far plane.
+/// uploaded, depth textures at the far plane (a 2D one in `depth16unorm`,
+/// [`DEPTH_MAP_SIZE`]², so that a frame can write a shadow map into it),
+/// and those 2D depth textures by binding.
 #[allow(clippy::type_complexity)]
 pub(super) fn scene_textures(
     gpu: &Gpu,
@@ -25,24 +73,41 @@ pub(super) fn scene_textures(
     (
         HashMap<[u32; 2], wgpu::TextureView>,
         HashMap<[u32; 2], wgpu::Sampler>,
+        HashMap<[u32; 2], wgpu::Texture>,
     ),
     String,
 > {
     let mut views = HashMap::new();
     let mut samplers = HashMap::new();
+    let mut depth_maps = HashMap::new();
     for resource in &plan.bindings.original {
         if Some(resource.group) == external_group {
             continue;
         }
         let key = [resource.group, resource.binding];
         if let Some((depth, shape)) = sampled_shape(resource.kind) {
-            let view = if depth {
+            let view = if depth
+                && shape.layers == 1
+                && shape.dimension == wgpu::TextureViewDimension::D2
+            {
+                let (texture, view) = far_depth(
+                    gpu,
+                    &resource.name,
+                    wgpu::TextureFormat::Depth16Unorm,
+                    shape,
+                    DEPTH_MAP_SIZE,
+                );
+                depth_maps.insert(key, texture);
+                view
+            } else if depth {
                 far_depth(
                     gpu,
                     &resource.name,
                     wgpu::TextureFormat::Depth32Float,
                     shape,
+                    64,
                 )
+                .1
             } else {
                 let texels = textures
                     .get(&key)
@@ -95,7 +160,7 @@ pub(super) fn scene_textures(
             }
         }
     }
-    Ok((views, samplers))
+    Ok((views, samplers, depth_maps))
 }
 
 /// How a texture the shader samples is made: its view's dimension and how
@@ -126,26 +191,29 @@ fn sampled_shape(kind: ResourceKind) -> Option<(bool, SampledShape)> {
     Some((texture.depth, SampledShape { dimension, layers }))
 }
 
-/// A depth texture of `shape` with every texel at the far plane (a shadow
-/// map that shadows nothing).
+/// A `side`² depth texture of `shape` with every texel at the far plane
+/// (a shadow map that shadows nothing), and its view.
 fn far_depth(
     gpu: &Gpu,
     label: &str,
     format: wgpu::TextureFormat,
     shape: SampledShape,
-) -> wgpu::TextureView {
+    side: u32,
+) -> (wgpu::Texture, wgpu::TextureView) {
     let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
-            width: 64,
-            height: 64,
+            width: side,
+            height: side,
             depth_or_array_layers: shape.layers,
         },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
     let mut encoder = gpu
@@ -161,10 +229,11 @@ fn far_depth(
         shadecache_host::clear_depth(&mut encoder, &view, 1.0);
     }
     gpu.queue.submit([encoder.finish()]);
-    texture.create_view(&wgpu::TextureViewDescriptor {
+    let view = texture.create_view(&wgpu::TextureViewDescriptor {
         dimension: Some(shape.dimension),
         ..wgpu::TextureViewDescriptor::default()
-    })
+    });
+    (texture, view)
 }
 
 /// Uploads RGBA8 texels into every layer of a texture of `shape` (a 2D

@@ -165,8 +165,14 @@ pub fn default_scene(
         }
     }
 
+    let mut shadow_map = false;
     for (_, global) in module.global_variables.iter() {
-        let TypeInner::Image { dim, class, .. } = module.types[global.ty].inner else {
+        let TypeInner::Image {
+            dim,
+            arrayed,
+            class,
+        } = module.types[global.ty].inner
+        else {
             continue;
         };
         let name = global.name.clone().unwrap_or_default();
@@ -176,16 +182,21 @@ pub fn default_scene(
         if !drawn || matches!(class, ImageClass::Storage { .. }) {
             continue;
         }
-        let (pattern, why) = texture_pattern(&name, dim, class);
+        let (pattern, why) = texture_pattern(&name, dim, arrayed, class);
         let _ = write!(
             text,
             "\n# defaulted: {why}\n[textures.{}]\ngenerate = \"{pattern}\"\n",
             quoted(&name)
         );
-        if pattern != "far" {
+        if pattern != "far" && pattern != "shadow-map" {
             text.push_str("size = 256\n");
         }
+        shadow_map |= pattern == "shadow-map";
         defaulted.push(format!("texture `{name}` = generated \"{pattern}\""));
+    }
+    if shadow_map {
+        // Something for the sphere to cast its shadow on.
+        text.push_str(FLOOR);
     }
     SceneInit {
         text,
@@ -193,6 +204,15 @@ pub fn default_scene(
         roles: inferred,
     }
 }
+
+/// A floor under the sphere, for a shader with a shadow map: the sphere
+/// casts its shadow on it (alone, a sphere shadows only its unlit side).
+const FLOOR: &str = r#"
+# A floor to cast the sphere's shadow on: the shader reads a shadow map.
+[[objects]]
+mesh = { kind = "plane", size = 6.0, subdivisions = 8 }
+position = [0.0, -1.1, 0.0]
+"#;
 
 /// A comment listing the vertex entry point's per-instance inputs and
 /// what feeds each (nothing to write: they are fed by name); empty when
@@ -439,12 +459,22 @@ fn neutral(member: &Member) -> Option<(String, String)> {
 }
 
 /// The generated pattern for a texture, and why.
-fn texture_pattern(name: &str, dim: ImageDimension, class: ImageClass) -> (&'static str, String) {
+fn texture_pattern(
+    name: &str,
+    dim: ImageDimension,
+    arrayed: bool,
+    class: ImageClass,
+) -> (&'static str, String) {
     let lower = name.to_ascii_lowercase();
-    if matches!(class, ImageClass::Depth { .. }) {
+    if matches!(class, ImageClass::Depth { .. }) && dim == ImageDimension::D2 && !arrayed {
+        (
+            "shadow-map",
+            "a depth texture: a shadow map rendered from the scene's light every frame".into(),
+        )
+    } else if matches!(class, ImageClass::Depth { .. }) {
         (
             "far",
-            "a depth texture: every texel at the far plane (nothing shadowed)".into(),
+            "a depth array or cube: every texel at the far plane (nothing shadowed; shadow maps are rendered for one 2D depth texture)".into(),
         )
     } else if matches!(
         class,

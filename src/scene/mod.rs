@@ -29,6 +29,7 @@ pub mod instances;
 pub mod layout;
 pub mod mesh;
 pub mod roles;
+pub mod shadow;
 pub mod storage;
 pub mod textures;
 pub mod uniforms;

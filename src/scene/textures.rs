@@ -55,7 +55,7 @@ impl TryFrom<RawSource> for TextureSource {
                 Ok(TextureSource::Generate { generate, size })
             }
             (None, None, _) => Err(
-                "a texture needs `file = \"PATH.png\"` (relative to the scene) or `generate = \"checker\"` (checker, noise, flat-normal, sky, far or cells)".into(),
+                "a texture needs `file = \"PATH.png\"` (relative to the scene) or `generate = \"checker\"` (checker, noise, flat-normal, sky, far, shadow-map or cells)".into(),
             ),
         }
     }
@@ -74,6 +74,9 @@ pub enum Pattern {
     Sky,
     /// For depth textures (shadow maps): every texel at the far plane, 1.0.
     Far,
+    /// For a 2D depth texture read with a comparison sampler: a shadow map
+    /// rendered from the scene's light every frame ([`super::shadow`]).
+    ShadowMap,
     /// For integer textures (`texture_2d<u32>`: counts, ids): 8×8 cells of
     /// small whole numbers, 0 to 7 in each channel, alpha 1.
     Cells,
@@ -88,6 +91,17 @@ impl TextureSource {
             self,
             TextureSource::Generate {
                 generate: Pattern::Far,
+                ..
+            }
+        )
+    }
+
+    /// Whether this is a shadow map rendered from the light.
+    pub fn is_shadow_map(&self) -> bool {
+        matches!(
+            self,
+            TextureSource::Generate {
+                generate: Pattern::ShadowMap,
                 ..
             }
         )
@@ -147,7 +161,7 @@ fn generate_pattern(pattern: Pattern, size: u32) -> Texels {
                 }
                 Pattern::FlatNormal => [0.5, 0.5, 1.0, 1.0],
                 Pattern::Sky => [0.3 + 0.4 * v, 0.5 + 0.3 * v, 0.9, 1.0],
-                Pattern::Far => [1.0, 1.0, 1.0, 1.0],
+                Pattern::Far | Pattern::ShadowMap => [1.0, 1.0, 1.0, 1.0],
                 Pattern::Cells => {
                     let (cx, cy) = (x * 8 / size, y * 8 / size);
                     let whole = |c: u32| (hash(cx, cy, c) * 8.0).floor().min(7.0) / 255.0;

@@ -215,6 +215,7 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
                 buffers: HashMap::from([([0, 0], uniform)]),
                 ..runtime::ObjectInputs::default()
             }],
+            ..runtime::FrameInputs::default()
         };
         runner.frame(&gpu, &inputs, None).unwrap();
 

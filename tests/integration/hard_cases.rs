@@ -1525,6 +1525,7 @@ fn refresh_maps(gpu: &Gpu, period: u32, quad: u32, start: u64, frames: usize) ->
             buffers: HashMap::from([([0, 0], identity)]),
             ..runtime::ObjectInputs::default()
         }],
+        ..runtime::FrameInputs::default()
     };
     let mut maps = Vec::new();
     for frame in 0..frames {

@@ -1174,3 +1174,79 @@ fn fs_waves(in: VertexOut) -> @location(0) vec4<f32> {
     assert!(output.status.success(), "{}", stderr(&output));
     assert!(variants.join("fs_lit").is_dir() && variants.join("fs_waves").is_dir());
 }
+
+/// A PCF shadow shader's depth texture gets a shadow map rendered from the
+/// scene's light each frame: under a sphere lit from above, the floor is
+/// in shadow, and beside it lit. With the far-plane map (`generate =
+/// "far"`, what every depth texture got before) the same point is lit,
+/// and the shader's shadows were never measured.
+#[test]
+fn shadow_map_is_rendered_from_the_light() {
+    let shader = std::fs::read_to_string(root().join("corpus/shadow_pcf.wgsl")).unwrap();
+    let scene = |pattern: &str| {
+        format!(
+            r#"
+size = [96, 96]
+frames = 1
+warmup = 0
+[camera]
+eye = [0.0, 3.0, 3.0]
+target = [0.0, 0.0, 0.0]
+[light]
+position = [0.0, 6.0, 0.1]
+[[objects]]
+mesh = {{ kind = "sphere", radius = 0.5 }}
+position = [0.0, 1.0, 0.0]
+[[objects]]
+mesh = {{ kind = "plane", size = 4.0, subdivisions = 4 }}
+[uniforms]
+shadow_bias = 0.002
+pcf_spread = 1.0
+albedo = [0.8, 0.8, 0.8]
+ambient = 0.05
+light_color = [1.0, 1.0, 1.0]
+[textures.shadow_map]
+generate = "{pattern}"
+"#
+        )
+    };
+    let options = || Options {
+        nodes: Nodes::Top(1),
+        variants: vec![Variant::OnePass],
+        refresh_periods: vec![8],
+        ..Options::default()
+    };
+    let Some((shadowed, _, scene_read)) = run_shader(&shader, &scene("shadow-map"), options())
+    else {
+        return;
+    };
+    let Some((unshadowed, _, _)) = run_shader(&shader, &scene("far"), options()) else {
+        return;
+    };
+    let state = scene_read.frame(0, 1.0);
+    let luminance = |picture: &[u8], world: glam::Vec3| {
+        let clip = state.clip_from_world * world.extend(1.0);
+        let ndc = clip.truncate() / clip.w;
+        let x = ((ndc.x * 0.5 + 0.5) * 96.0) as usize;
+        let y = ((0.5 - ndc.y * 0.5) * 96.0) as usize;
+        let at = (y * 96 + x) * 4;
+        picture[at..at + 3]
+            .iter()
+            .map(|&c| f64::from(c))
+            .sum::<f64>()
+            / 3.0
+    };
+    let under = glam::Vec3::new(0.0, 0.0, 0.0);
+    let beside = glam::Vec3::new(1.2, 0.0, -0.5);
+    let (dark, lit) = (
+        luminance(&shadowed.reference, under),
+        luminance(&shadowed.reference, beside),
+    );
+    assert!(lit > 60.0, "the floor beside the sphere is lit: {lit}");
+    assert!(dark < 0.5 * lit, "under the sphere {dark}, beside it {lit}");
+    let far = luminance(&unshadowed.reference, under);
+    assert!(
+        far > 0.9 * lit,
+        "with the far-plane map it is lit: {far} against {lit}"
+    );
+}
