@@ -126,57 +126,7 @@ pub fn html(report: &Report, dir: &Path) -> String {
         None => page.push_str("<p>No configuration could be measured.</p>"),
     }
 
-    // All results.
-    page.push_str("<h2>Results</h2><table><tr><th>#</th><th>node</th><th>variant</th><th>Δn</th><th>k</th><th>recon.</th><th>format</th><th>ε</th><th>time ms</th><th>passes ms</th><th>speed-up [95% interval]</th><th>ideal</th><th>bound with fixed costs (fixed ms per pass)</th><th>share</th><th>P/T</th><th>hit</th><th>miss (off-screen / disoccluded)</th><th>refresh</th><th>PSNR dB, covered pixels (worst frame, whole frame)</th><th>SSIM</th><th>flicker</th><th>max err</th><th>map</th></tr>");
-    let _ = write!(
-        page,
-        "<tr class=\"reference\"><td></td><td colspan=\"7\">reference (unmodified shader)</td><td>{:.3} (frames {:.3}–{:.3})</td><td colspan=\"13\"></td></tr>",
-        report.reference.time_ms,
-        report.reference.spread_ms[0],
-        report.reference.spread_ms[1]
-    );
-    for (rank, row) in report.results.iter().enumerate() {
-        let passes: Vec<String> = row
-            .passes
-            .iter()
-            .map(|p| format!("{} {:.3}", p.name, p.time_ms))
-            .collect();
-        let _ = write!(
-            page,
-            "<tr><td>{}</td>{}<td>{:.3}</td><td>{}</td><td>{:.2}× [{:.2}, {:.2}]</td><td>{:.2}×</td><td>{:.2}× ({})</td><td>{:.0}%</td><td>{:.2}</td><td>{:.1}%</td><td>{:.1}% ({:.1} / {:.1})</td><td>{:.1}%</td><td>{:.1} ({:.1}, {:.1})</td><td>{:.4}</td><td>{:.4}</td><td>{:.3}</td><td><a href=\"maps/{}\">png</a></td></tr>",
-            rank + 1,
-            configuration_cells(row),
-            row.time_ms,
-            escape(&passes.join(", ")),
-            row.speedup,
-            row.speedup_ci[0],
-            row.speedup_ci[1],
-            row.ideal_speedup,
-            row.bound_with_fixed_costs,
-            escape(
-                &row.fixed_cost_ms
-                    .iter()
-                    .map(|p| format!("{} {:.3}", p.name, p.time_ms))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-            row.share_of_ideal * 100.0,
-            row.p_over_t,
-            row.hit_rate * 100.0,
-            row.miss_rate * 100.0,
-            row.offscreen_rate * 100.0,
-            row.disocclusion_rate * 100.0,
-            row.refresh_rate * 100.0,
-            row.psnr,
-            row.worst_psnr,
-            row.psnr_frame,
-            row.ssim,
-            row.flicker,
-            row.max_abs_error,
-            images::map_name(rank, row),
-        );
-    }
-    page.push_str("</table>");
+    page.push_str(&results_tables(report));
 
     if !report.miss_causes.is_empty() {
         page.push_str("<h2>What causes the misses</h2><p>The fastest configuration again, with one declared effect at a time (refreshes come from the refresh pattern alone).</p><table><tr><th>effect</th><th>miss</th><th>off-screen</th><th>disoccluded</th></tr>");
@@ -558,9 +508,18 @@ fn point_title(index: usize, row: &ResultRow, metric: &str) -> String {
 /// reconstruction, cache format, ε.
 fn configuration_cells(row: &ResultRow) -> String {
     format!(
-        "<td><code>{}</code></td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+        "<td><code>{}</code></td><td>{}</td><td>{}</td>",
         escape(&row.node),
         row.variant,
+        knobs(row)
+    )
+}
+
+/// A configuration's knobs in one cell: Δn, k, reconstruction, cache
+/// format, ε.
+fn knobs(row: &ResultRow) -> String {
+    format!(
+        "Δn {} · k {} · {} · {} · ε {}",
         row.refresh_period,
         row.refresh_quad,
         row.reconstruction.as_str(),
@@ -569,9 +528,75 @@ fn configuration_cells(row: &ResultRow) -> String {
     )
 }
 
+/// Every configuration measured: a table that fits a laptop's screen (the
+/// figures a choice rests on), the rest in a second one on demand, and
+/// what the figures that can pass their natural range mean.
+fn results_tables(report: &Report) -> String {
+    let mut page = String::from("<h2>Results</h2><div class=\"wide\"><table><tr><th>#</th><th>node</th><th>variant</th><th>knobs</th><th>time ms</th><th>speed-up [95%]</th><th>ideal</th><th title=\"measured speed-up over the ideal\">share of ideal</th><th>P/T</th><th>hit / miss / refresh</th><th>PSNR dB</th><th>SSIM</th><th>map</th></tr>");
+    let _ = write!(
+        page,
+        "<tr class=\"reference\"><td></td><td colspan=\"3\">reference (unmodified shader)</td><td>{:.3}</td><td colspan=\"7\">frames {:.3}–{:.3} ms</td><td></td></tr>",
+        report.reference.time_ms,
+        report.reference.spread_ms[0],
+        report.reference.spread_ms[1]
+    );
+    for (rank, row) in report.results.iter().enumerate() {
+        let _ = write!(
+            page,
+            "<tr><td>{}</td>{}<td>{:.3}</td><td>{:.2}× [{:.2}, {:.2}]</td><td>{:.2}×</td><td>{:.0}%</td><td>{:.2}</td><td>{:.0}% / {:.1}% / {:.0}%</td><td>{:.1}</td><td>{:.4}</td><td><a href=\"maps/{}\">png</a></td></tr>",
+            rank + 1,
+            configuration_cells(row),
+            row.time_ms,
+            row.speedup,
+            row.speedup_ci[0],
+            row.speedup_ci[1],
+            row.ideal_speedup,
+            row.share_of_ideal * 100.0,
+            row.p_over_t,
+            row.hit_rate * 100.0,
+            row.miss_rate * 100.0,
+            row.refresh_rate * 100.0,
+            row.psnr,
+            row.ssim,
+            images::map_name(rank, row),
+        );
+    }
+    page.push_str("</table></div>");
+    page.push_str("<p class=\"meta\"><b>ideal</b>: the most caching could give, 1 / (1 − ρ·P/T), with ρ the share of pixels reused (hits not refreshed). <b>share of ideal</b>: the measured speed-up over that. It passes 100% when a variant saves more than its payload's measured cost — the payload pass is timed alone and net of its fixed cost, so work the variant also skips, or the noise of a ratio of two short times, puts it above. <b>P/T</b>: the payload pass's time, net of its fixed cost, over the original's; it passes 1 when computing the payload alone costs more than the whole original (writing it to a target, overhead the fixed-cost probe does not catch). PSNR is over the pixels the shader draws.</p>");
+    page.push_str("<details><summary>More per configuration: pass times, bounds with fixed costs, misses by cause, worst-frame and whole-frame PSNR, flicker, largest error</summary><div class=\"wide\"><table><tr><th>#</th><th>passes ms</th><th>bound with fixed costs (fixed ms per pass)</th><th>miss off-screen / disoccluded</th><th>PSNR worst frame, whole frame</th><th>flicker</th><th>max err</th></tr>");
+    for (rank, row) in report.results.iter().enumerate() {
+        let passes: Vec<String> = row
+            .passes
+            .iter()
+            .map(|p| format!("{} {:.3}", p.name, p.time_ms))
+            .collect();
+        let fixed: Vec<String> = row
+            .fixed_cost_ms
+            .iter()
+            .map(|p| format!("{} {:.3}", p.name, p.time_ms))
+            .collect();
+        let _ = write!(
+            page,
+            "<tr><td>{}</td><td>{}</td><td>{:.2}× ({})</td><td>{:.1}% / {:.1}%</td><td>{:.1}, {:.1}</td><td>{:.4}</td><td>{:.3}</td></tr>",
+            rank + 1,
+            escape(&passes.join(", ")),
+            row.bound_with_fixed_costs,
+            escape(&fixed.join(", ")),
+            row.offscreen_rate * 100.0,
+            row.disocclusion_rate * 100.0,
+            row.worst_psnr,
+            row.psnr_frame,
+            row.flicker,
+            row.max_abs_error,
+        );
+    }
+    page.push_str("</table></div></details>");
+    page
+}
+
 /// The Pareto front of time against PSNR as a table, fastest first.
 fn pareto_table(report: &Report) -> String {
-    let mut page = String::from("<h2>Pareto front</h2><p>The configurations no other beats on time without losing PSNR (the unmodified shader counts as exact at its own time, so nothing slower than it is on the front). <b>S</b> marks those also on the SSIM front.</p><table><tr><th>#</th><th>node</th><th>variant</th><th>Δn</th><th>k</th><th>recon.</th><th>format</th><th>ε</th><th>time ms</th><th>speed-up</th><th>PSNR dB</th><th>SSIM</th><th>SSIM front</th></tr>");
+    let mut page = String::from("<h2>Pareto front</h2><p>The configurations no other beats on time without losing PSNR (the unmodified shader counts as exact at its own time, so nothing slower than it is on the front). <b>S</b> marks those also on the SSIM front.</p><table><tr><th>#</th><th>node</th><th>variant</th><th>knobs</th><th>time ms</th><th>speed-up</th><th>PSNR dB</th><th>SSIM</th><th>SSIM front</th></tr>");
     let mut rows: Vec<(usize, &ResultRow)> = report
         .results
         .iter()
@@ -579,6 +604,9 @@ fn pareto_table(report: &Report) -> String {
         .filter(|(_, r)| r.pareto_psnr)
         .collect();
     rows.sort_by(|a, b| a.1.time_ms.total_cmp(&b.1.time_ms));
+    if rows.is_empty() {
+        return "<h2>Pareto front</h2><p>Empty: every configuration measured is slower than the unmodified shader, which is exact at its own time.</p>".into();
+    }
     for (rank, row) in rows {
         let _ = write!(
             page,
@@ -641,4 +669,4 @@ fn grid_section(report: &Report) -> String {
     page
 }
 
-const STYLE: &str = "body{font-family:sans-serif;margin:2em;max-width:1200px}table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:3px 6px;text-align:right}th{background:#eee}tr.reference{background:#f6f6f6}code{background:#f3f3f3;padding:0 3px}pre{background:#f8f8f8;padding:8px;overflow-x:auto}mark{background:#ffe08a}.answer{font-size:15px;background:#eef7ee;padding:10px;border-left:4px solid #2a2}.meta{color:#555}.pictures{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}figure img{image-rendering:pixelated;width:256px;border:1px solid #ccc}svg{display:block;margin:12px 0}.reference{background:#f4f6fb;border-left:4px solid #58a;padding:10px;margin:12px 0}.degenerate{background:#fdf0ee;border-left-color:#c33}";
+const STYLE: &str = "body{font-family:sans-serif;margin:2em;max-width:1200px}table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:3px 6px;text-align:right}th{background:#eee}tr.reference{background:#f6f6f6}code{background:#f3f3f3;padding:0 3px}pre{background:#f8f8f8;padding:8px;overflow-x:auto}mark{background:#ffe08a}.answer{font-size:15px;background:#eef7ee;padding:10px;border-left:4px solid #2a2}.meta{color:#555}.pictures{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}figure img{image-rendering:pixelated;width:256px;border:1px solid #ccc}svg{display:block;margin:12px 0}.reference{background:#f4f6fb;border-left:4px solid #58a;padding:10px;margin:12px 0}.degenerate{background:#fdf0ee;border-left-color:#c33}.wide{max-width:100%;overflow-x:auto}td:nth-child(4){white-space:nowrap}svg{max-width:100%;height:auto}";

@@ -115,14 +115,14 @@ impl ReferenceCheck {
     /// The check in one line: its figures, and its verdict.
     pub fn summary(&self) -> String {
         let figures = format!(
-            "{:.1}% of pixels drawn, mean luminance {:.3} (spread {:.3}), {:.1}% bright, {:.2}% NaN/∞, {} between frames",
+            "{:.1}% of pixels drawn, mean luminance {:.3} (spread {:.3}), {:.1}% bright, {:.2}% NaN/∞, {}",
             self.coverage * 100.0,
             self.mean_luminance,
             self.luminance_spread,
             self.bright_share * 100.0,
             self.non_finite_share * 100.0,
             self.changed_share.map_or("no change measured (one frame)".into(), |c| {
-                format!("{:.2}% of pixels change", c * 100.0)
+                format!("{:.2}% of pixels change from the first measured frame", c * 100.0)
             })
         );
         if self.degenerate() {

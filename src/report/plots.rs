@@ -38,9 +38,34 @@ pub fn informative(series: &[Series]) -> bool {
     })
 }
 
-const COLORS: [&str; 6] = [
-    "#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#666666",
+/// Twelve colours told apart by eye (ColorBrewer's Paired, reordered so
+/// that neighbours differ in hue first): a chart with up to twelve series
+/// never repeats one in its legend.
+const COLORS: [&str; 12] = [
+    "#1f78b4", "#e31a1c", "#33a02c", "#ff7f00", "#6a3d9a", "#b15928", "#a6cee3", "#fb9a99",
+    "#b2df8a", "#fdbf6f", "#cab2d6", "#4d4d4d",
 ];
+
+/// Longest categorical label drawn in full; longer ones are shortened
+/// with "…" and said whole when hovered.
+const LABEL_CHARS: usize = 28;
+
+/// The vertical range a chart shows for data from `min` to `max`: the data
+/// with a twentieth of their range either side, from 0 only when the data
+/// come near it (so SSIMs from 0.95 to 0.99 fill the chart instead of its
+/// top twentieth).
+fn fitted_range(min: f64, max: f64) -> (f64, f64) {
+    if !(min.is_finite() && max.is_finite()) || min > max {
+        return (0.0, 1.0);
+    }
+    let span = (max - min).max(max.abs() * 1e-3).max(1e-9);
+    let (low, high) = (min - span * 0.05, max + span * 0.05);
+    if min >= 0.0 && min < span * 0.5 {
+        (0.0, high)
+    } else {
+        (low, high)
+    }
+}
 
 /// An SVG chart of `series` with axis labels; `x_labels` names integer x
 /// positions when given (a categorical axis).
@@ -51,35 +76,55 @@ pub fn chart(
     series: &[Series],
     x_labels: Option<&[String]>,
 ) -> String {
-    // The legend has a margin of its own, right of the plot, so that it
-    // never covers a point.
+    // The legend has a margin of its own, right of the plot, as wide as
+    // its longest name, so that it never covers a point nor is cut off;
+    // rotated categorical labels get as much room below as they need.
     let (width, height) = (800.0, 360.0);
+    let longest_name = series
+        .iter()
+        .map(|s| s.name.chars().count())
+        .max()
+        .unwrap_or(0);
+    let longest_label = x_labels
+        .map(|labels| {
+            labels
+                .iter()
+                .map(|l| l.chars().count().min(LABEL_CHARS + 1))
+                .max()
+                .unwrap_or(0)
+        })
+        .unwrap_or(0);
     let (left, right, top, bottom) = (
-        64.0,
-        176.0,
+        // The first rotated label reaches left of its category by about
+        // cos 40° of its length.
+        72f64.max(12.0 + 6.0 * 0.77 * longest_label as f64),
+        (40.0 + 6.5 * longest_name as f64).clamp(80.0, 260.0),
         32.0,
-        if x_labels.is_some() { 96.0 } else { 48.0 },
+        if x_labels.is_some() {
+            // 6 px a character at 40°: sin 40° ≈ 0.64 of it below the axis.
+            40.0 + 6.0 * 0.64 * longest_label as f64
+        } else {
+            48.0
+        },
     );
+    let height = height + bottom - 48.0;
     let points = series.iter().flat_map(|s| &s.points);
-    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, 0.0f64, f64::MIN);
+    let (mut x0, mut x1, mut y_min, mut y_max) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for &(x, y) in points {
         if x.is_finite() && y.is_finite() {
             x0 = x0.min(x);
             x1 = x1.max(x);
-            y0 = y0.min(y);
-            y1 = y1.max(y);
+            y_min = y_min.min(y);
+            y_max = y_max.max(y);
         }
     }
     if x0 > x1 {
-        (x0, x1, y1) = (0.0, 1.0, 1.0);
+        (x0, x1) = (0.0, 1.0);
     }
     if x1 - x0 < 1e-9 {
         x1 = x0 + 1.0;
     }
-    if y1 - y0 < 1e-9 {
-        y1 = y0 + 1.0;
-    }
-    y1 *= 1.05;
+    let (y0, y1) = fitted_range(y_min, y_max);
     let sx = |x: f64| left + (x - x0) / (x1 - x0) * (width - left - right);
     let sy = |y: f64| height - bottom - (y - y0) / (y1 - y0) * (height - top - bottom);
     let mut svg = String::new();
@@ -102,15 +147,16 @@ pub fn chart(
         height - bottom,
         height - bottom
     );
+    let y_step = (y1 - y0) / 5.0;
     for i in 0..=5 {
-        let y = y0 + (y1 - y0) * f64::from(i) / 5.0;
+        let y = y0 + y_step * f64::from(i);
         let _ = write!(
             svg,
-            r##"<line x1="{left}" y1="{py}" x2="{}" y2="{py}" stroke="#ddd"/><text x="{}" y="{}" text-anchor="end">{}</text>"##,
+            r##"<line x1="{left}" y1="{py}" x2="{}" y2="{py}" stroke="#ddd"/><text class="y-tick" x="{}" y="{}" text-anchor="end">{}</text>"##,
             width - right,
             left - 4.0,
             sy(y) + 4.0,
-            number(y),
+            tick(y, y_step),
             py = sy(y)
         );
     }
@@ -118,12 +164,18 @@ pub fn chart(
         Some(labels) => {
             for (i, label) in labels.iter().enumerate() {
                 let x = sx(i as f64);
+                let shown: String = if label.chars().count() > LABEL_CHARS {
+                    label.chars().take(LABEL_CHARS).chain(['…']).collect()
+                } else {
+                    label.clone()
+                };
                 let _ = write!(
                     svg,
-                    r#"<text x="{x}" y="{}" text-anchor="end" transform="rotate(-40 {x} {})">{}</text>"#,
+                    r#"<text x="{x}" y="{}" text-anchor="end" transform="rotate(-40 {x} {})"><title>{}</title>{}</text>"#,
                     height - bottom + 14.0,
                     height - bottom + 14.0,
-                    escape(label)
+                    escape(label),
+                    escape(&shown)
                 );
             }
         }
@@ -213,6 +265,17 @@ pub fn chart(
     }
     svg.push_str("</svg>");
     svg
+}
+
+/// A tick's value with as many decimals as ticks `step` apart need to
+/// differ (SSIM ticks 0.002 apart read 0.9950, 0.9970, not 0.995 twice).
+fn tick(v: f64, step: f64) -> String {
+    let decimals = if step > 0.0 && step.is_finite() {
+        (1.0 - step.log10().floor()).clamp(0.0, 6.0) as usize
+    } else {
+        2
+    };
+    format!("{v:.decimals$}")
 }
 
 fn number(v: f64) -> String {

@@ -19,5 +19,6 @@ mod instanced;
 mod interpolate;
 mod profile;
 mod real_shaders;
+mod report_page;
 mod rewrite;
 mod util;
