@@ -300,6 +300,22 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_vertical_range_fits_the_data() {
+        // SSIMs near 1 fill the chart instead of its top twentieth.
+        let (low, high) = fitted_range(0.95, 0.99);
+        assert!(
+            low > 0.94 && low < 0.95 && high > 0.99 && high < 1.0,
+            "{low} {high}"
+        );
+        // Data that come near 0 start at 0.
+        assert_eq!(fitted_range(0.1, 10.0).0, 0.0);
+        // Negative data keep their sign.
+        assert!(fitted_range(-2.0, 3.0).0 < -2.0);
+        // Ticks say apart what they are apart.
+        assert_ne!(tick(0.9950, 0.002), tick(0.9970, 0.002));
+    }
+
+    #[test]
     fn a_knob_at_one_value_is_not_informative() {
         let one = Series {
             name: "k = 4".into(),
@@ -332,11 +348,12 @@ mod tests {
             "{svg}"
         );
         assert!(svg.contains(">#1</text>"));
-        // The legend's swatch lies right of the plot area's right edge.
+        // The legend's swatch lies right of the plot area's right edge
+        // (12 px right of it; the margin is as wide as the names).
         let swatch = svg.find("<rect x=\"").unwrap() + "<rect x=\"".len();
         let x: f64 = svg[swatch..].split('"').next().unwrap().parse().unwrap();
-        let plot_right = 800.0 - 176.0;
-        assert!(x > plot_right, "{x}");
+        let plot_right = x - 12.0;
+        assert!(plot_right > 600.0, "{x}");
         // No point is drawn right of the plot area.
         for cx in svg.split("<circle cx=\"").skip(1) {
             let cx: f64 = cx.split('"').next().unwrap().parse().unwrap();

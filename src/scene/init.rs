@@ -332,6 +332,15 @@ fn scalar_by_name(words: &[String], integer: bool) -> Option<(f64, &'static str)
             (0.1, "a near plane, by its name: 0.1")
         } else if has(&["far"]) {
             (100.0, "a far plane, by its name: 100")
+        } else if has(&["range"]) || (has(&["light"]) && has(&["radius"])) {
+            (
+                20.0,
+                "a light's range, by its name: 20, past the default scene's extent",
+            )
+        } else if has(&["ambient"]) {
+            (0.1, "an ambient term, by its name: 0.1")
+        } else if has(&["spread", "softness", "blur"]) {
+            (1.0, "a spread, by its name: 1")
         } else if has(&[
             "exposure",
             "intensity",
@@ -425,6 +434,16 @@ fn neutral(member: &Member) -> Option<(String, String)> {
                 format!("a {shape}, a direction by its name: normalised"),
             )
         }
+        // What a surface gives off by itself is nothing by default: a grey
+        // emission would cover the lighting.
+        Shape::F32(n @ (3 | 4)) if has(&["emissive", "emission", "emit", "glow"]) => (
+            if n == 4 {
+                "[0.0, 0.0, 0.0, 1.0]".into()
+            } else {
+                "[0.0, 0.0, 0.0]".into()
+            },
+            format!("a {shape}, an emission by its name: black (none)"),
+        ),
         Shape::F32(4) => (
             "[0.8, 0.8, 0.8, 1.0]".into(),
             format!("a {shape}: a light grey, opaque"),
@@ -570,13 +589,15 @@ mod tests {
                  max_steps: u32, march_steps: f32, octaves: i32, light_count: u32,
                  roughness: f32, metallic: f32, opacity: f32, shadow_bias: f32,
                  exposure: f32, flags: u32, resolution: vec2<f32>, wobble: f32, seed: u32,
+                 light_radius: f32, ambient: f32, emissive: vec3<f32>,
              }
              @group(0) @binding(0) var<uniform> material: Material;
              @fragment fn fs() -> @location(0) vec4<f32> {
                  let m = material;
                  return vec4<f32>(f32(m.max_steps) + m.march_steps + f32(m.octaves) + f32(m.light_count)
                      + m.roughness + m.metallic + m.opacity + m.shadow_bias + m.exposure
-                     + f32(m.flags) + m.resolution.x + m.wobble + f32(m.seed));
+                     + f32(m.flags) + m.resolution.x + m.wobble + f32(m.seed)
+                     + m.light_radius + m.ambient + m.emissive.x);
              }",
         );
         let init = default_scene(&module, "m.wgsl", 0, None);
@@ -604,6 +625,9 @@ mod tests {
             ("resolution", "[256.0, 256.0]", "resolution"),
             ("wobble", "0.75", "says nothing"),
             ("seed", "0", "says nothing"),
+            ("light_radius", "20.0", "a light's range"),
+            ("ambient", "0.1", "ambient"),
+            ("emissive", "[0.0, 0.0, 0.0]", "emission"),
         ] {
             let (value, why) = value(member);
             assert_eq!(value, expected, "{member}: {why}");
