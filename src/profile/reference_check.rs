@@ -231,7 +231,7 @@ fn problems(check: &ReferenceCheck, scene: &Scene, defaulted: &[String]) -> Vec<
             if scene.effects.is_empty() {
                 "the scene declares no effect (`effects`), so nothing moves: a cache never misses and its error is that of a still picture".into()
             } else {
-                "the scene's motion does not reach the shader: its matrices and positions are not filled by the simulation (see `[roles]`), so the draw is the same every frame".into()
+                "the scene's motion does not reach the shader: its matrices and positions are not filled by the simulation (see `[roles]`), or it draws a fullscreen pass or a 2D image that no camera or object motion moves; its picture changes only with its own inputs (a `time` uniform), so the draw is the same every frame".into()
             },
         );
     }

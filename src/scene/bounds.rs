@@ -205,7 +205,7 @@ fn mesh(source: &MeshSource) -> Option<String> {
             size, subdivisions, ..
         } => positive("size", size).or_else(|| quads("subdivisions²", subdivisions, subdivisions)),
         MeshSource::Cube { size } => positive("size", size),
-        MeshSource::Obj { .. } | MeshSource::Gltf { .. } => None,
+        MeshSource::Fullscreen | MeshSource::Obj { .. } | MeshSource::Gltf { .. } => None,
     }
 }
 

@@ -38,14 +38,13 @@ pub struct SceneInit {
     pub roles: Vec<Inferred>,
 }
 
-/// The geometry, camera and light every default scene has.
-const STAGE: &str = r#"description = "default scene: a lit sphere turning under a slowly orbiting camera and light"
-size = [256, 256]
+/// The camera and light every default scene has, after its description
+/// and culling.
+const STAGE: &str = r#"size = [256, 256]
 frames = 32
 warmup = 8
 effects = ["camera-motion", "object-motion", "light-motion", "time"]
 seconds_per_frame = 0.016666668
-cull_back_faces = true
 
 [camera]
 eye = [0.0, 0.6, 3.0]
@@ -59,12 +58,23 @@ orbit_degrees_per_frame = 0.25
 [light]
 position = [2.0, 3.0, 2.5]
 orbit_degrees_per_frame = 0.5
+"#;
 
+/// What the default scene draws: a lit sphere turning.
+const SPHERE: &str = r#"
 [[objects]]
 mesh = { kind = "sphere", radius = 1.0, rings = 48, segments = 96 }
 position = [0.0, 0.0, 0.0]
 scale = 1.0
 rotation_degrees_per_frame = [0.0, 0.4, 0.0]
+"#;
+
+/// What it draws for a vertex stage that places its vertices by
+/// `@builtin(vertex_index)` alone (a fullscreen pass): one triangle whose
+/// vertex data the shader does not read.
+const FULLSCREEN: &str = r#"
+[[objects]]
+mesh = { kind = "fullscreen" }
 "#;
 
 /// Writes the default scene for `module`, drawn with its vertex entry
@@ -88,9 +98,24 @@ pub fn default_scene(
     storage_buffers.retain(|b| binds(&b.name, b.group, b.binding));
     let inferred = roles::infer(module, vertex, &uniform_buffers, &storage_buffers);
     let mut defaulted = Vec::new();
+    let fullscreen = vertex.is_some_and(|v| places_by_index(module, v));
+    let (description, culling, object) = if fullscreen {
+        (
+            "default scene: a fullscreen pass (the vertex stage places its vertices by vertex_index) under a slowly orbiting camera and light",
+            "false",
+            FULLSCREEN,
+        )
+    } else {
+        (
+            "default scene: a lit sphere turning under a slowly orbiting camera and light",
+            "true",
+            SPHERE,
+        )
+    };
     let mut text = format!(
         "# The default scene for {shader_name}, from `shadecache scene init`.\n\
-         # Every value is spelled out: edit any of them (docs/scene-toml.md).\n\n{STAGE}"
+         # Every value is spelled out: edit any of them (docs/scene-toml.md).\n\n\
+         description = {description:?}\ncull_back_faces = {culling}\n{STAGE}{object}"
     );
     let role_of = |binding: &str, member: &str| -> Option<&'static str> {
         let key = roles::key(binding, member);
@@ -213,6 +238,30 @@ const FLOOR: &str = r#"
 mesh = { kind = "plane", size = 6.0, subdivisions = 8 }
 position = [0.0, -1.1, 0.0]
 "#;
+
+/// Whether vertex entry point `vertex` places its vertices from
+/// `@builtin(vertex_index)` alone: it takes no `@location` input.
+fn places_by_index(module: &Module, vertex: usize) -> bool {
+    let function = &module.entry_points[vertex].function;
+    let mut locations = false;
+    let mut index = false;
+    let mut look = |binding: &Option<naga::Binding>| match binding {
+        Some(naga::Binding::Location { .. }) => locations = true,
+        Some(naga::Binding::BuiltIn(naga::BuiltIn::VertexIndex)) => index = true,
+        _ => {}
+    };
+    for argument in &function.arguments {
+        match module.types[argument.ty].inner {
+            TypeInner::Struct { ref members, .. } => {
+                for member in members {
+                    look(&member.binding);
+                }
+            }
+            _ => look(&argument.binding),
+        }
+    }
+    index && !locations
+}
 
 /// A comment listing the vertex entry point's per-instance inputs and
 /// what feeds each (nothing to write: they are fed by name); empty when
@@ -531,6 +580,37 @@ fn texture_pattern(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A vertex stage that places its vertices by `vertex_index` alone (a
+    /// fullscreen pass: a blit, a sky, a Mandelbrot) is drawn one
+    /// triangle with back faces kept; a sphere's thousands of indices
+    /// drew nothing of it (wgpu's `uniform_values` was an empty frame).
+    #[test]
+    fn a_vertex_stage_placing_by_index_draws_a_fullscreen_pass() {
+        let module = module(
+            "@vertex fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+                 let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+                 return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+             }
+             @fragment fn fs(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
+                 return vec4<f32>(sin(p.x * 0.1), cos(p.y * 0.1), 0.5, 1.0);
+             }",
+        );
+        let init = default_scene(&module, "blit.wgsl", 1, Some(0));
+        let file = std::sync::Arc::new(crate::diagnostic::SourceFile::new("b.toml", init.text));
+        let scene = crate::scene::Scene::parse(file).unwrap();
+        assert_eq!(scene.objects.len(), 1);
+        assert_eq!(scene.objects[0].mesh, crate::scene::MeshSource::Fullscreen);
+        assert!(!scene.cull_back_faces);
+        let mesh = scene.objects[0]
+            .mesh
+            .build(std::path::Path::new("."))
+            .unwrap();
+        assert_eq!(mesh.indices, [0, 1, 2]);
+        // A stage with vertex inputs still draws the sphere.
+        let lit = default_scene(&super::tests::module(OWN_NAMES), "own.wgsl", 1, Some(0));
+        assert!(lit.text.contains("kind = \"sphere\""));
+    }
 
     /// A vec3 named only `eye` is the camera's position: the default
     /// scene gives it that role, so it follows the orbiting camera every

@@ -57,6 +57,11 @@ pub enum MeshSource {
         #[serde(default = "one")]
         size: f32,
     },
+    /// One triangle, for a vertex stage that places its vertices from
+    /// `@builtin(vertex_index)` (a fullscreen pass): indices 0, 1, 2; its
+    /// vertex data are a triangle covering the view in clip space, which
+    /// such a shader does not read.
+    Fullscreen,
     /// A Wavefront OBJ file, relative to the scene file.
     Obj { file: String },
     /// A glTF 2.0 file (`.gltf` with its buffers, or `.glb`), relative to
@@ -137,6 +142,20 @@ impl MeshSource {
                 })
             }
             MeshSource::Cube { size } => cube(size),
+            MeshSource::Fullscreen => Mesh {
+                positions: vec![
+                    Vec3::new(-1.0, -1.0, 0.0),
+                    Vec3::new(3.0, -1.0, 0.0),
+                    Vec3::new(-1.0, 3.0, 0.0),
+                ],
+                normals: vec![Vec3::Z; 3],
+                uvs: vec![
+                    Vec2::new(0.0, 1.0),
+                    Vec2::new(2.0, 1.0),
+                    Vec2::new(0.0, -1.0),
+                ],
+                indices: vec![0, 1, 2],
+            },
             MeshSource::Obj { ref file } => obj(&dir.join(file))?,
             MeshSource::Gltf { ref file } => gltf(&dir.join(file))?,
         })
