@@ -132,7 +132,7 @@ pub(super) fn run(
         &reference_plan,
         &bindings.used,
         (&bindings.uniforms, &bindings.storage),
-        bindings.aspect,
+        size,
     )?;
     let mut clock = Clock::new(&gpu)?;
     let bench = Bench {

@@ -36,7 +36,7 @@ pub(crate) struct SceneInputs<'a> {
     uniforms: &'a [UniformBuffer],
     storage: &'a [StorageBuffer],
     layout: &'a [VertexAttribute],
-    aspect: f32,
+    size: [u32; 2],
 }
 
 impl<'a> SceneInputs<'a> {
@@ -51,7 +51,7 @@ impl<'a> SceneInputs<'a> {
         reference_plan: &'a Plan,
         used: &HashSet<(String, [u32; 2])>,
         (uniforms, storage): (&'a [UniformBuffer], &'a [StorageBuffer]),
-        aspect: f32,
+        size: [u32; 2],
     ) -> Result<SceneInputs<'a>, Error> {
         let dir = scene_path.parent().unwrap_or(Path::new("."));
         let mut textures = HashMap::new();
@@ -165,7 +165,7 @@ impl<'a> SceneInputs<'a> {
             uniforms,
             storage,
             layout,
-            aspect,
+            size,
         })
     }
 
@@ -173,10 +173,9 @@ impl<'a> SceneInputs<'a> {
     /// scene itself, or one with a single effect, for the miss causes).
     pub fn frame(&self, scene: &Scene, frame: u32) -> Result<FrameInputs, Error> {
         let (uniforms, storage, layout) = (self.uniforms, self.storage, self.layout);
-        let aspect = self.aspect;
         let scene_meshes = &self.scene_meshes;
 
-        let state = scene.frame(frame, aspect);
+        let state = scene.frame_sized(frame, self.size);
         let mut inputs = FrameInputs::default();
         if !self.shadow_maps.is_empty() {
             let deformed: Vec<Option<scene::Mesh>> = (0..scene_meshes.len())

@@ -360,7 +360,7 @@ pub fn profile(
         &reference_plan,
         &prepared.used,
         (&prepared.uniforms, &prepared.storage),
-        prepared.aspect,
+        prepared.size,
     )?;
     let inputs_of = |scene: &Scene, frame: u32| scene_inputs.frame(scene, frame);
 

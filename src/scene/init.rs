@@ -702,7 +702,6 @@ mod tests {
             ("shadow_bias", "0.005", "bias"),
             ("exposure", "1.0", "intensity"),
             ("flags", "0", "flag"),
-            ("resolution", "[256.0, 256.0]", "resolution"),
             ("wobble", "0.75", "says nothing"),
             ("seed", "0", "says nothing"),
             ("light_radius", "20.0", "a light's range"),
@@ -713,6 +712,25 @@ mod tests {
             assert_eq!(value, expected, "{member}: {why}");
             assert!(why.contains(reason), "{member}: {why}");
         }
+        // A resolution is no default: the simulation fills it with the
+        // frame's size, whatever size the run has.
+        let parsed = crate::scene::Scene::parse(std::sync::Arc::new(
+            crate::diagnostic::SourceFile::new("m.toml", init.text.clone()),
+        ))
+        .unwrap();
+        assert_eq!(parsed.role("material", "resolution"), Some("resolution"));
+        let buffers = uniforms::buffers(&module);
+        let state = parsed.frame_sized(0, [320, 180]);
+        let bytes = uniforms::fill(&buffers[0], &parsed, &state, 0).unwrap();
+        let member = buffers[0]
+            .members
+            .iter()
+            .find(|m| m.name == "resolution")
+            .unwrap();
+        assert_eq!(
+            super::super::layout::read_numbers(&bytes, 0, member),
+            [320.0, 180.0]
+        );
         // The text says the same, and parses with those values.
         assert!(
             init.text.contains(

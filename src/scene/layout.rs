@@ -17,6 +17,7 @@ pub const SIMULATED: &[&str] = &[
     "light_position",
     "light_clip_from_world",
     "time",
+    "resolution",
 ];
 
 /// What the simulation can fill: each role with the shapes of member it
@@ -56,6 +57,7 @@ pub const ROLES: &[(&str, &str)] = &[
         "the light's world position (vec3<f32> or vec4<f32>, w = 1)",
     ),
     ("time", "seconds since the first frame (f32)"),
+    ("resolution", "the frame's size in pixels (vec2<f32>)"),
 ];
 
 /// The role a member takes by its own name (the last part of a flattened
@@ -70,6 +72,7 @@ pub fn fits_role(role: &str, shape: Shape) -> bool {
     match role {
         "camera_position" | "light_position" => matches!(shape, Shape::F32(3 | 4)),
         "time" => shape == Shape::F32(1),
+        "resolution" => shape == Shape::F32(2),
         _ => shape == Shape::Matrix(4, 4),
     }
 }
@@ -195,6 +198,7 @@ pub fn simulated(name: &str, state: &FrameState, world_from_local: Mat4) -> Opti
         "camera_position" => state.camera_position.extend(1.0).to_array().to_vec(),
         "light_position" => state.light_position.extend(1.0).to_array().to_vec(),
         "time" => vec![state.time],
+        "resolution" => state.resolution.to_array().to_vec(),
         _ => return None,
     })
 }

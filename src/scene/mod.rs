@@ -382,6 +382,9 @@ pub struct FrameState {
     pub light_position: Vec3,
     pub light_clip_from_world: Mat4,
     pub time: f32,
+    /// The frame's size in pixels (the scene's, or the run's with
+    /// [`Scene::frame_sized`]).
+    pub resolution: glam::Vec2,
     /// Each object's `world_from_local`.
     pub objects: Vec<Mat4>,
     /// Each object's instances' transforms in the object's space (one
@@ -613,6 +616,14 @@ impl Scene {
         Some(out)
     }
 
+    /// The state of frame `n` of a run at `size` pixels (which may not be
+    /// the scene's own).
+    pub fn frame_sized(&self, n: u32, size: [u32; 2]) -> FrameState {
+        let mut state = self.frame(n, size[0] as f32 / size[1].max(1) as f32);
+        state.resolution = glam::Vec2::new(size[0] as f32, size[1] as f32);
+        state
+    }
+
     /// The state of frame `n` (0-based, warm-up included), simulating only
     /// the declared effects.
     pub fn frame(&self, n: u32, aspect: f32) -> FrameState {
@@ -693,6 +704,7 @@ impl Scene {
             } else {
                 0.0
             },
+            resolution: glam::Vec2::new(self.size[0] as f32, self.size[1] as f32),
             objects,
             instances,
         }

@@ -251,6 +251,8 @@ fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
         "camera_position"
     } else if has(&["time", "elapsed"]) {
         "time"
+    } else if has(&["resolution", "viewport", "screen_size", "screensize"]) {
+        "resolution"
     } else {
         return None;
     };
