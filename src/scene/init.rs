@@ -127,10 +127,9 @@ pub fn default_scene(
     };
 
     if let Some(vertex) = vertex {
-        text.push_str(&instance_inputs_note(
-            module,
-            &module.entry_points[vertex].function,
-        ));
+        let function = &module.entry_points[vertex].function;
+        text.push_str(&instance_inputs_note(module, function));
+        text.push_str(&vertex_constants(module, function));
     }
 
     if !inferred.is_empty() {
@@ -261,6 +260,63 @@ fn places_by_index(module: &Module, vertex: usize) -> bool {
         }
     }
     index && !locations
+}
+
+/// `[vertex_inputs]` for the vertex entry point's per-vertex float inputs
+/// the mesh has nothing for (a text renderer's per-glyph `depth`): each a
+/// constant 0.5 (the run lists the inputs it feeds a constant). Empty when
+/// the mesh feeds them all.
+fn vertex_constants(module: &Module, function: &naga::Function) -> String {
+    let per_instance = crate::proc::instance_locations(module, function);
+    let mut section = String::new();
+    let mut add = |name: Option<&String>,
+                   ty: naga::Handle<naga::Type>,
+                   binding: &Option<naga::Binding>| {
+        let Some(naga::Binding::Location { location, .. }) = *binding else {
+            return;
+        };
+        let float = match module.types[ty].inner {
+            TypeInner::Scalar(s) | TypeInner::Vector { scalar: s, .. } => {
+                s.kind == naga::ScalarKind::Float && s.width == 4
+            }
+            _ => false,
+        };
+        if per_instance.contains(&location) || !float {
+            return;
+        }
+        let name = name.cloned().unwrap_or_default();
+        let attribute = crate::plan::VertexAttribute {
+            location,
+            name: name.clone(),
+            // Only the name, the location and that it is a float matter.
+            format: crate::plan::VertexFormat::Float32x4,
+            step: crate::plan::StepMode::Vertex,
+            previous_of: None,
+        };
+        if super::mesh::VertexSource::of(&attribute, &Default::default()).is_ok() {
+            return;
+        }
+        let _ = writeln!(
+            section,
+            "# defaulted: vertex input @location({location}), which the mesh has nothing for: a constant\n{} = 0.5",
+            quoted(&name)
+        );
+    };
+    for argument in &function.arguments {
+        match module.types[argument.ty].inner {
+            TypeInner::Struct { ref members, .. } => {
+                for member in members {
+                    add(member.name.as_ref(), member.ty, &member.binding);
+                }
+            }
+            _ => add(argument.name.as_ref(), argument.ty, &argument.binding),
+        }
+    }
+    if section.is_empty() {
+        section
+    } else {
+        format!("\n[vertex_inputs]\n{section}")
+    }
 }
 
 /// A comment listing the vertex entry point's per-instance inputs and
@@ -610,6 +666,27 @@ mod tests {
         // A stage with vertex inputs still draws the sphere.
         let lit = default_scene(&super::tests::module(OWN_NAMES), "own.wgsl", 1, Some(0));
         assert!(lit.text.contains("kind = \"sphere\""));
+    }
+
+    /// A float vertex input the mesh has nothing for (glyphon's per-glyph
+    /// `depth` at location 5) gets a constant in the default scene, which
+    /// then profiles; it stopped with "give it a constant in the scene".
+    #[test]
+    fn an_input_the_mesh_cannot_feed_gets_a_constant() {
+        let module = module(
+            "struct In { @location(0) pos: vec2<f32>, @location(5) depth: f32, @location(6) id: u32 }
+             struct Out { @builtin(position) p: vec4<f32>, @location(0) @interpolate(flat) id: u32 }
+             @vertex fn vs(in: In) -> Out { return Out(vec4<f32>(in.pos, in.depth, 1.0), in.id); }
+             @fragment fn fs(o: Out) -> @location(0) vec4<f32> { return vec4<f32>(f32(o.id)); }",
+        );
+        let init = default_scene(&module, "glyphs.wgsl", 1, Some(0));
+        let file = std::sync::Arc::new(crate::diagnostic::SourceFile::new("g.toml", init.text));
+        let scene = crate::scene::Scene::parse(file).unwrap();
+        assert_eq!(
+            scene.vertex_inputs.keys().collect::<Vec<_>>(),
+            ["depth"],
+            "the position is the mesh's, the integer id fed as integers"
+        );
     }
 
     /// A vec3 named only `eye` is the camera's position: the default
