@@ -86,15 +86,8 @@ fn vertex_source(module: &Module, fragment: usize) -> Result<(String, Vec<String
         inputs.push((name, wgsl, attribute, location));
         Ok(())
     };
-    for argument in &function.arguments {
-        match module.types[argument.ty].inner {
-            TypeInner::Struct { ref members, .. } => {
-                for member in members {
-                    add(member.name.as_ref(), member.ty, &member.binding)?;
-                }
-            }
-            _ => add(argument.name.as_ref(), argument.ty, &argument.binding)?,
-        }
+    for input in crate::proc::inputs(module, function) {
+        add(input.name, input.ty, input.binding)?;
     }
     let group = module
         .global_variables

@@ -28,7 +28,9 @@ pub use placement::{
     FunctionLayout, LoopBound, Placement, Store,
 };
 pub use reaching::{reaching_definitions, Definition};
-pub use stages::{instance_locations, located, location_of, output_values, vertex_entry};
+pub use stages::{
+    inputs, instance_locations, located, location_of, output_values, vertex_entry, Input,
+};
 
 /// Whether a value with `binding` and type `ty` — an entry point's argument
 /// or result — carries a binding that `wanted` accepts, on itself or on one

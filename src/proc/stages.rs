@@ -85,6 +85,36 @@ fn feeds(module: &Module, vertex: &Function, fragment: &Function) -> bool {
         .all(|input| outputs.contains(&input))
 }
 
+/// One value an entry point takes: an argument, or a member of an
+/// argument's struct.
+#[derive(Clone, Copy, Debug)]
+pub struct Input<'a> {
+    pub name: Option<&'a String>,
+    pub ty: Handle<naga::Type>,
+    pub binding: &'a Option<Binding>,
+}
+
+/// Every value `function` takes, arguments' struct members in place of
+/// the struct, in order.
+pub fn inputs<'a>(module: &'a Module, function: &'a Function) -> Vec<Input<'a>> {
+    let mut out = Vec::new();
+    for argument in &function.arguments {
+        match module.types[argument.ty].inner {
+            TypeInner::Struct { ref members, .. } => out.extend(members.iter().map(|m| Input {
+                name: m.name.as_ref(),
+                ty: m.ty,
+                binding: &m.binding,
+            })),
+            _ => out.push(Input {
+                name: argument.name.as_ref(),
+                ty: argument.ty,
+                binding: &argument.binding,
+            }),
+        }
+    }
+    out
+}
+
 /// The `(location, type)` pairs a value with `binding` and type `ty`
 /// carries, on itself or on its struct's members.
 pub fn located(

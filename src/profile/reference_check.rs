@@ -87,9 +87,14 @@ impl ReferenceStats {
             self.luminance_sum += y;
             self.luminance_squares += y * y;
             self.bright += u64::from(y > DARK);
-            for c in 0..3 {
-                self.channel_min[c] = self.channel_min[c].min(rgb[c]);
-                self.channel_max[c] = self.channel_max[c].max(rgb[c]);
+            for ((low, high), value) in self
+                .channel_min
+                .iter_mut()
+                .zip(&mut self.channel_max)
+                .zip(rgb)
+            {
+                *low = low.min(value);
+                *high = high.max(value);
             }
         }
         if self.first.is_empty() {

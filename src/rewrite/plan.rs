@@ -561,15 +561,8 @@ fn vertex_layout(
         }
         Ok::<(), String>(())
     };
-    for argument in &function.arguments {
-        match module.types[argument.ty].inner {
-            TypeInner::Struct { ref members, .. } => {
-                for member in members {
-                    add(member.name.as_ref(), member.ty, &member.binding)?;
-                }
-            }
-            _ => add(argument.name.as_ref(), argument.ty, &argument.binding)?,
-        }
+    for input in crate::proc::inputs(module, function) {
+        add(input.name, input.ty, input.binding)?;
     }
     out.sort_by_key(|a| a.location);
     let twinned: Vec<VertexAttribute> = twins

@@ -743,17 +743,10 @@ fn other_time_arguments(
 /// every one the fragment entry point `fragment` reads.
 pub fn fragment_only(module: &Module, fragment: usize) -> VertexStage {
     let function = &module.entry_points[fragment].function;
-    let mut locations = Vec::new();
-    for argument in &function.arguments {
-        match module.types[argument.ty].inner {
-            TypeInner::Struct { ref members, .. } => locations.extend(
-                members
-                    .iter()
-                    .filter_map(|m| crate::proc::location_of(&m.binding)),
-            ),
-            _ => locations.extend(crate::proc::location_of(&argument.binding)),
-        }
-    }
+    let locations: Vec<u32> = crate::proc::inputs(module, function)
+        .iter()
+        .filter_map(|input| crate::proc::location_of(input.binding))
+        .collect();
     VertexStage {
         entry_index: None,
         previous_location: locations.iter().map(|l| l + 1).max().unwrap_or(0),

@@ -164,7 +164,7 @@ fn camera(
             &["camera", "eye"],
         );
     }
-    if !(camera.zoom_per_frame > 0.0) {
+    if camera.zoom_per_frame <= 0.0 {
         return fail(
             "the camera's zoom_per_frame must be above 0 (1 keeps the field of view)".into(),
             &["camera", "zoom_per_frame"],

@@ -249,17 +249,22 @@ fn places_by_index(module: &Module, vertex: usize) -> bool {
         Some(naga::Binding::BuiltIn(naga::BuiltIn::VertexIndex)) => index = true,
         _ => {}
     };
-    for argument in &function.arguments {
-        match module.types[argument.ty].inner {
-            TypeInner::Struct { ref members, .. } => {
-                for member in members {
-                    look(&member.binding);
-                }
-            }
-            _ => look(&argument.binding),
-        }
+    for input in crate::proc::inputs(module, function) {
+        look(input.binding);
     }
     index && !locations
+}
+
+/// A vertex input as the mesh's and instances' feeds look at it: only its
+/// name, its location and that it is a float matter to them.
+fn probe(location: u32, name: &str, step: crate::plan::StepMode) -> crate::plan::VertexAttribute {
+    crate::plan::VertexAttribute {
+        location,
+        name: name.to_string(),
+        format: crate::plan::VertexFormat::Float32x4,
+        step,
+        previous_of: None,
+    }
 }
 
 /// `[vertex_inputs]` for the vertex entry point's per-vertex float inputs
@@ -285,14 +290,7 @@ fn vertex_constants(module: &Module, function: &naga::Function) -> String {
             return;
         }
         let name = name.cloned().unwrap_or_default();
-        let attribute = crate::plan::VertexAttribute {
-            location,
-            name: name.clone(),
-            // Only the name, the location and that it is a float matter.
-            format: crate::plan::VertexFormat::Float32x4,
-            step: crate::plan::StepMode::Vertex,
-            previous_of: None,
-        };
+        let attribute = probe(location, &name, crate::plan::StepMode::Vertex);
         if super::mesh::VertexSource::of(&attribute, &Default::default()).is_ok() {
             return;
         }
@@ -302,15 +300,8 @@ fn vertex_constants(module: &Module, function: &naga::Function) -> String {
             quoted(&name)
         );
     };
-    for argument in &function.arguments {
-        match module.types[argument.ty].inner {
-            TypeInner::Struct { ref members, .. } => {
-                for member in members {
-                    add(member.name.as_ref(), member.ty, &member.binding);
-                }
-            }
-            _ => add(argument.name.as_ref(), argument.ty, &argument.binding),
-        }
+    for input in crate::proc::inputs(module, function) {
+        add(input.name, input.ty, input.binding);
     }
     if section.is_empty() {
         section
@@ -325,37 +316,20 @@ fn vertex_constants(module: &Module, function: &naga::Function) -> String {
 fn instance_inputs_note(module: &Module, function: &naga::Function) -> String {
     let per_instance = crate::proc::instance_locations(module, function);
     let mut note = String::new();
-    for argument in &function.arguments {
-        let mut add = |name: Option<&String>, binding: &Option<naga::Binding>| {
-            let Some(naga::Binding::Location { location, .. }) = *binding else {
-                return;
-            };
-            if !per_instance.contains(&location) {
-                return;
-            }
-            let name = name.cloned().unwrap_or_default();
-            let attribute = crate::plan::VertexAttribute {
-                location,
-                name: name.clone(),
-                // Only the name and the width matter here.
-                format: crate::plan::VertexFormat::Float32x4,
-                step: crate::plan::StepMode::Instance,
-                previous_of: None,
-            };
-            let what = match super::instance_inputs::InstanceSource::of(&attribute) {
-                Ok(source) => source.describe(),
-                Err(err) => format!("cannot be fed: {err}"),
-            };
-            let _ = writeln!(note, "#   @location({location}) {name}: {what}");
+    for input in crate::proc::inputs(module, function) {
+        let Some(location) = crate::proc::location_of(input.binding) else {
+            continue;
         };
-        match module.types[argument.ty].inner {
-            TypeInner::Struct { ref members, .. } => {
-                for member in members {
-                    add(member.name.as_ref(), &member.binding);
-                }
-            }
-            _ => add(argument.name.as_ref(), &argument.binding),
+        if !per_instance.contains(&location) {
+            continue;
         }
+        let name = input.name.cloned().unwrap_or_default();
+        let attribute = probe(location, &name, crate::plan::StepMode::Instance);
+        let what = match super::instance_inputs::InstanceSource::of(&attribute) {
+            Ok(source) => source.describe(),
+            Err(err) => format!("cannot be fed: {err}"),
+        };
+        let _ = writeln!(note, "#   @location({location}) {name}: {what}");
     }
     if note.is_empty() {
         return note;
@@ -763,7 +737,7 @@ mod tests {
                 .defaulted
                 .iter()
                 .find(|d| d.starts_with(&format!("uniform `material.{member}` = ")))
-                .unwrap_or_else(|| panic!("{member} in {:?}", init.defaulted));
+                .expect("every member is listed as defaulted");
             let rest = line.split_once(" = ").unwrap().1;
             let (value, why) = rest.split_once(" (").unwrap();
             (value.to_string(), why.trim_end_matches(')').to_string())
