@@ -416,6 +416,9 @@ fn scalar_by_name(words: &[String], integer: bool) -> Option<(f64, &'static str)
                 20.0,
                 "a light's range, by its name: 20, past the default scene's extent",
             )
+        } else if has(&["shininess", "exponent"]) || (has(&["specular", "spec"]) && has(&["power"]))
+        {
+            (32.0, "a specular exponent, by its name: 32")
         } else if has(&["ambient"]) {
             (0.1, "an ambient term, by its name: 0.1")
         } else if has(&["spread", "softness", "blur"]) {
@@ -444,7 +447,6 @@ fn scalar_by_name(words: &[String], integer: bool) -> Option<(f64, &'static str)
             "occlusion",
             "ao",
             "specular",
-            "shininess",
             "reflectance",
             "fresnel",
         ]) {
@@ -720,7 +722,7 @@ mod tests {
                  max_steps: u32, march_steps: f32, octaves: i32, light_count: u32,
                  roughness: f32, metallic: f32, opacity: f32, shadow_bias: f32,
                  exposure: f32, flags: u32, resolution: vec2<f32>, wobble: f32, seed: u32,
-                 light_radius: f32, ambient: f32, emissive: vec3<f32>,
+                 light_radius: f32, ambient: f32, emissive: vec3<f32>, shininess: f32,
              }
              @group(0) @binding(0) var<uniform> material: Material;
              @fragment fn fs() -> @location(0) vec4<f32> {
@@ -728,7 +730,7 @@ mod tests {
                  return vec4<f32>(f32(m.max_steps) + m.march_steps + f32(m.octaves) + f32(m.light_count)
                      + m.roughness + m.metallic + m.opacity + m.shadow_bias + m.exposure
                      + f32(m.flags) + m.resolution.x + m.wobble + f32(m.seed)
-                     + m.light_radius + m.ambient + m.emissive.x);
+                     + m.light_radius + m.ambient + m.emissive.x + m.shininess);
              }",
         );
         let init = default_scene(&module, "m.wgsl", 0, None);
@@ -758,6 +760,7 @@ mod tests {
             ("light_radius", "20.0", "a light's range"),
             ("ambient", "0.1", "ambient"),
             ("emissive", "[0.0, 0.0, 0.0]", "emission"),
+            ("shininess", "32.0", "specular exponent"),
         ] {
             let (value, why) = value(member);
             assert_eq!(value, expected, "{member}: {why}");
