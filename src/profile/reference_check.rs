@@ -8,8 +8,9 @@
 //! frame scores SSIM 1.0). So the reference is looked at before anything
 //! is ranked, over every measured frame:
 //!
-//! - **coverage**: the share of pixels the draw changed from the clear
-//!   colour;
+//! - **coverage**: the share of pixels the draw reached: its depth
+//!   buffer no longer at the clear depth (an opaque black pixel is drawn,
+//!   though it shows the clear colour);
 //! - **luminance** (Rec. 709, linear) of the drawn pixels: its mean, the
 //!   share of drawn pixels above [`DARK`], and its spread (standard
 //!   deviation);
@@ -61,23 +62,29 @@ fn luminance(rgb: [f64; 3]) -> f64 {
 }
 
 impl ReferenceStats {
-    /// Adds one measured frame (`now`, RGBA linear float); `clear` is the
-    /// colour the frame starts from.
-    pub fn add(&mut self, now: &[f32], clear: [f64; 4]) {
+    /// Adds one measured frame: `now`, RGBA linear float, and `depth`, its
+    /// depth buffer (empty: a pixel is drawn where its colour is not the
+    /// `clear` one); `clear` is the colour and depth the frame starts from.
+    pub fn add(&mut self, now: &[f32], depth: &[f32], clear: ([f64; 4], f64)) {
+        let (clear, clear_depth) = clear;
         if self.frames == 0 {
             self.channel_min = [f64::INFINITY; 3];
             self.channel_max = [f64::NEG_INFINITY; 3];
         }
         self.frames += 1;
-        for pixel in now.chunks_exact(4) {
+        for (index, pixel) in now.chunks_exact(4).enumerate() {
             self.pixels += 1;
+            let reached = depth
+                .get(index)
+                .map(|&d| (f64::from(d) - clear_depth).abs() > 1e-7);
             if pixel.iter().any(|v| !v.is_finite()) {
                 self.non_finite += 1;
                 self.drawn += 1;
                 continue;
             }
             let value = [0, 1, 2, 3].map(|c| f64::from(pixel[c]));
-            let drawn = value.iter().zip(clear).any(|(v, c)| (v - c).abs() > 1.0e-6);
+            let drawn = reached
+                .unwrap_or_else(|| value.iter().zip(clear).any(|(v, c)| (v - c).abs() > 1.0e-6));
             if !drawn {
                 continue;
             }
@@ -268,7 +275,7 @@ mod tests {
     fn kinds(frames: &[Vec<f32>]) -> Vec<String> {
         let mut stats = ReferenceStats::default();
         for now in frames {
-            stats.add(now, [0.0; 4]);
+            stats.add(now, &[], ([0.0; 4], 1.0));
         }
         stats
             .check(&scene(), &[])
@@ -276,6 +283,20 @@ mod tests {
             .into_iter()
             .map(|p| p.kind)
             .collect()
+    }
+
+    /// An opaque black pixel on an opaque black clear is drawn when the
+    /// depth buffer says it was: a black frame is "nearly black", not an
+    /// empty view.
+    #[test]
+    fn black_on_black_is_drawn_by_its_depth() {
+        let black = frame(4, [0.0, 0.0, 0.0, 1.0], 0);
+        let mut stats = ReferenceStats::default();
+        stats.add(&black, &[0.5, 0.5, 1.0, 1.0], ([0.0, 0.0, 0.0, 1.0], 1.0));
+        let check = stats.check(&scene(), &[]);
+        assert_eq!(check.coverage, 0.5);
+        let kinds: Vec<&str> = check.problems.iter().map(|p| p.kind.as_str()).collect();
+        assert_eq!(kinds, ["nearly-black"]);
     }
 
     #[test]

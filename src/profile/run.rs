@@ -112,7 +112,9 @@ pub(super) fn measured_run(
                 .ok_or_else(|| fail("the reference draws no colour".into()))?;
             let now = read_linear(clock.gpu, color).map_err(fail)?;
             run.before = std::mem::replace(&mut run.now, now);
-            run.stats.add(&run.now, reference.plan().clear.color);
+            let depth = crate::runtime::read_depth(clock.gpu, reference.depth()).map_err(fail)?;
+            let clear = &reference.plan().clear;
+            run.stats.add(&run.now, &depth, (clear.color, clear.depth));
         }
         for item in measured.iter_mut() {
             if frame < item.first_frame(warmup) {

@@ -297,6 +297,27 @@ pub fn read_texture(
     texture: &wgpu::Texture,
     bytes_per_texel: u32,
 ) -> Result<Vec<u8>, String> {
+    read_aspect(gpu, texture, bytes_per_texel, wgpu::TextureAspect::All)
+}
+
+/// The depth of every texel of a depth texture (`depth32float`, or the
+/// depth of `depth32float-stencil8`), row-major.
+pub fn read_depth(gpu: &Gpu, texture: &wgpu::Texture) -> Result<Vec<f32>, String> {
+    Ok(
+        read_aspect(gpu, texture, 4, wgpu::TextureAspect::DepthOnly)?
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect(),
+    )
+}
+
+/// Reads `aspect` of a texture back, `bytes_per_texel` a texel.
+fn read_aspect(
+    gpu: &Gpu,
+    texture: &wgpu::Texture,
+    bytes_per_texel: u32,
+    aspect: wgpu::TextureAspect,
+) -> Result<Vec<u8>, String> {
     let (width, height) = (texture.width(), texture.height());
     let row = width * bytes_per_texel;
     let padded =
@@ -315,7 +336,7 @@ pub fn read_texture(
             texture,
             mip_level: 0,
             origin: wgpu::Origin3d::ZERO,
-            aspect: wgpu::TextureAspect::All,
+            aspect,
         },
         wgpu::TexelCopyBufferInfo {
             buffer: &buffer,

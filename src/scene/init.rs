@@ -148,7 +148,7 @@ pub fn default_scene(
             if is_padding(&member.name) || role_of(binding, &member.name).is_some() {
                 return false;
             }
-            let Some((value, why)) = neutral(member) else {
+            let Some((value, why)) = neutral(binding, member) else {
                 return false;
             };
             let _ = writeln!(section, "# defaulted: {why}{note}");
@@ -464,8 +464,9 @@ fn scalar_by_name(words: &[String], integer: bool) -> Option<(f64, &'static str)
 /// ([`scalar_by_name`]; else 0.75 for a float, 0 for an integer), colours
 /// 0.8 grey (alpha 1), directions normalised, resolutions the frame's,
 /// matrices the identity. `None` for a shape a scene cannot write.
-fn neutral(member: &Member) -> Option<(String, String)> {
-    let words = crate::analysis::name_words(&member.name);
+fn neutral(binding: &str, member: &Member) -> Option<(String, String)> {
+    // The binding's name counts too: `radius` of `light` is a light's.
+    let words = crate::analysis::name_words(&roles::key(binding, &member.name));
     let has = |list: &[&str]| words.iter().any(|w| list.contains(&w.as_str()));
     let direction = has(&["dir", "direction", "normal", "axis"]);
     let resolution = has(&["resolution", "viewport", "screen"]);
