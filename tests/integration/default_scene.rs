@@ -176,9 +176,18 @@ fn fs(in: V) -> @location(0) vec4<f32> {
     return vec4<f32>(sin(in.weight * 40.0));
 }
 ";
-    let (_dir, path) = temp_file("skinned.wgsl", shader.as_bytes());
-    let output =
-        shadecache(["profile".as_ref(), path.as_os_str(), "--quiet".as_ref()] as [&OsStr; 3]);
+    let (dir, path) = temp_file("skinned.wgsl", shader.as_bytes());
+    // A scene that says nothing of it: an error at the input. (The
+    // default scene gives such an input a constant, listed as defaulted.)
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, "[[objects]]\nmesh = { kind = \"sphere\" }\n").unwrap();
+    let output = shadecache([
+        "profile".as_ref(),
+        path.as_os_str(),
+        "--scene".as_ref(),
+        scene.as_os_str(),
+        "--quiet".as_ref(),
+    ] as [&OsStr; 5]);
     let err = stderr(&output);
     assert_eq!(output.status.code(), Some(1), "{err}");
     assert!(
