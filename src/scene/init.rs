@@ -498,6 +498,16 @@ fn neutral(binding: &str, member: &Member) -> Option<(String, String)> {
             "[256, 256]".into(),
             format!("a {shape}, a resolution by its name: the frame's 256×256"),
         ),
+        // A point no role fills (a fill light's position): beside the
+        // camera, off the sphere, not inside it.
+        Shape::F32(n @ (3 | 4)) if has(&["pos", "position", "origin"]) => (
+            if n == 4 {
+                "[-2.5, 2.0, 2.5, 1.0]".into()
+            } else {
+                "[-2.5, 2.0, 2.5]".into()
+            },
+            format!("a {shape}, a position by its name: up and to the left of the camera, outside the default sphere"),
+        ),
         Shape::F32(n) if direction => {
             let c = 1.0 / (n.min(3) as f32).sqrt();
             let value = list(
@@ -724,6 +734,7 @@ mod tests {
                  roughness: f32, metallic: f32, opacity: f32, shadow_bias: f32,
                  exposure: f32, flags: u32, resolution: vec2<f32>, wobble: f32, seed: u32,
                  light_radius: f32, ambient: f32, emissive: vec3<f32>, shininess: f32,
+                 light_position: vec3<f32>, fill_light_position: vec3<f32>,
              }
              @group(0) @binding(0) var<uniform> material: Material;
              @fragment fn fs() -> @location(0) vec4<f32> {
@@ -731,7 +742,8 @@ mod tests {
                  return vec4<f32>(f32(m.max_steps) + m.march_steps + f32(m.octaves) + f32(m.light_count)
                      + m.roughness + m.metallic + m.opacity + m.shadow_bias + m.exposure
                      + f32(m.flags) + m.resolution.x + m.wobble + f32(m.seed)
-                     + m.light_radius + m.ambient + m.emissive.x + m.shininess);
+                     + m.light_radius + m.ambient + m.emissive.x + m.shininess
+                     + m.light_position.x + m.fill_light_position.x);
              }",
         );
         let init = default_scene(&module, "m.wgsl", 0, None);
@@ -762,6 +774,9 @@ mod tests {
             ("ambient", "0.1", "ambient"),
             ("emissive", "[0.0, 0.0, 0.0]", "emission"),
             ("shininess", "32.0", "specular exponent"),
+            // `light_position` takes the light's role by its own name; a
+            // second light is placed, not put where the first one is.
+            ("fill_light_position", "[-2.5, 2.0, 2.5]", "a position"),
         ] {
             let (value, why) = value(member);
             assert_eq!(value, expected, "{member}: {why}");

@@ -190,14 +190,21 @@ pub fn infer(
                 .iter()
                 .flat_map(|b| b.members.iter().map(move |m| (&b.name, m))),
         );
+    let members: Vec<_> = members.collect();
+    // Roles members take by their own names (`light_position`): taken.
+    let taken: Vec<&str> = members
+        .iter()
+        .filter_map(|(binding, member)| implicit_role(&key(binding, &member.name)))
+        .collect();
     for (binding, member) in members {
         let key = key(binding, &member.name);
         if named_role(&key) || out.iter().any(|i| i.key == key) {
             continue;
         }
         if let Some(role) = role_by_name(&key, member.shape) {
-            // One member per role by name: a second would be a guess.
-            if out.iter().any(|i| i.role == role) {
+            // One member per role by name: a second (a fill light's
+            // position beside `light_position`) would be a guess.
+            if taken.contains(&role) || out.iter().any(|i| i.role == role) {
                 continue;
             }
             out.push(Inferred {
