@@ -74,7 +74,10 @@ pub fn fragment_entry(shader: &Shader, wanted: Option<&str>) -> Result<usize, Er
 /// module's only one" and is the whole list when the module has at most
 /// one, so a module without a fragment entry point still gets
 /// [`fragment_entry`]'s error.
-pub fn fragment_entries_to_take(shader: &Shader, wanted: Option<&str>) -> Vec<Option<String>> {
+pub(super) fn fragment_entries_to_take(
+    shader: &Shader,
+    wanted: Option<&str>,
+) -> Vec<Option<String>> {
     if let Some(name) = wanted {
         return vec![Some(name.to_string())];
     }

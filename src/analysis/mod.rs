@@ -50,7 +50,7 @@ use serde::Serialize;
 pub use calls::CallStep;
 pub(crate) use candidates::type_name;
 pub use candidates::{name_words, RejectReason};
-pub use entry::{fragment_entries_to_take, fragment_entry, stage_name};
+pub use entry::{fragment_entry, stage_name};
 pub use id::node_id;
 
 use crate::cost::{CostModel, Weights};
@@ -167,6 +167,25 @@ pub struct Rejected {
 }
 
 /// Analyses the fragment entry point of a parsed and validated shader.
+/// Analyses every fragment entry point of `shader` in turn, in the
+/// module's order, or only the one `options.entry` names (or the only one
+/// there is): what `analyze`, `rewrite` and `profile` take when no
+/// `--entry` narrows them.
+pub fn analyze_entries(shader: &Shader, options: &Options) -> Result<Vec<Analysis>, Error> {
+    entry::fragment_entries_to_take(shader, options.entry.as_deref())
+        .into_iter()
+        .map(|entry| {
+            analyze(
+                shader,
+                &Options {
+                    entry,
+                    ..options.clone()
+                },
+            )
+        })
+        .collect()
+}
+
 pub fn analyze(shader: &Shader, options: &Options) -> Result<Analysis, Error> {
     let entry_index = fragment_entry(shader, options.entry.as_deref())?;
     let analysed = calls::inline_all(shader, entry_index)?;

@@ -56,9 +56,9 @@ impl Default for Weights {
     }
 }
 
-/// The largest weight: a thousand texture samples' worth by default. A
-/// weight beyond it (or an infinite one) makes every cost infinite and
-/// every ratio undefined.
+/// The largest weight: over sixty thousand texture samples at the
+/// default weights. A weight beyond it (or an infinite one) makes every
+/// cost infinite and every ratio undefined.
 pub const MAX_WEIGHT: f64 = 1.0e6;
 
 impl Weights {
@@ -67,33 +67,40 @@ impl Weights {
         serde_json::from_str(text)
     }
 
-    /// Every weight by its JSON name.
-    pub fn named(&self) -> [(&'static str, f64); 11] {
-        [
-            ("arithmetic", self.arithmetic),
-            ("division", self.division),
-            ("simple_math", self.simple_math),
-            ("transcendental", self.transcendental),
-            ("texture_sample", self.texture_sample),
-            ("texture_load", self.texture_load),
-            ("texture_query", self.texture_query),
-            ("derivative", self.derivative),
-            ("load", self.load),
-            ("call", self.call),
-            ("default_loop_trips", self.default_loop_trips),
-        ]
-    }
-
-    /// The first weight outside `0..=MAX_WEIGHT`, by name, with why: a
-    /// negative cost would rank a node by what it saves below nothing.
-    pub fn out_of_bounds(&self) -> Option<(&'static str, String)> {
-        self.named().into_iter().find_map(|(name, value)| {
+    /// The first weight outside `0..=MAX_WEIGHT`, by its JSON name, with
+    /// why: a negative cost would rank a node by what it saves below
+    /// nothing. The names come from serde, so a new weight is checked
+    /// too.
+    pub fn out_of_bounds(&self) -> Option<(String, String)> {
+        let serde_json::Value::Object(fields) = serde_json::to_value(self).ok()? else {
+            return None;
+        };
+        fields.into_iter().find_map(|(name, value)| {
+            // serde_json writes a non-finite number as null.
+            let value = value.as_f64().unwrap_or(f64::INFINITY);
             (!(0.0..=MAX_WEIGHT).contains(&value)).then(|| {
-                (
-                    name,
-                    format!("weight `{name}` is {value}: weights go from 0 to {MAX_WEIGHT:e}"),
-                )
+                let why =
+                    format!("weight `{name}` is {value}: weights go from 0 to {MAX_WEIGHT:e}");
+                (name, why)
             })
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn weights_out_of_bounds_are_named() {
+        assert_eq!(Weights::default().out_of_bounds(), None);
+        for (json, name) in [
+            (r#"{"division": -1}"#, "division"),
+            (r#"{"default_loop_trips": 1e300}"#, "default_loop_trips"),
+        ] {
+            let weights = Weights::from_json(json).unwrap_or_default();
+            let (found, why) = weights.out_of_bounds().unwrap_or_default();
+            assert_eq!(found, name, "{why}");
+        }
     }
 }

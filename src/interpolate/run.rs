@@ -869,11 +869,7 @@ impl Schedule<'_> {
             }
             if self.options.keep_frames {
                 let textures = self.textures(slot)?;
-                let depth = crate::runtime::read_texture(self.gpu, textures.depth, 4)
-                    .map_err(fail)?
-                    .chunks_exact(4)
-                    .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                    .collect();
+                let depth = crate::runtime::read_depth(self.gpu, textures.depth).map_err(fail)?;
                 measured.iframes.push(KeptIFrame {
                     frame: end,
                     color: frame,

@@ -177,10 +177,14 @@ impl<'a> SceneInputs<'a> {
 
         let state = scene.frame_sized(frame, self.size);
         let mut inputs = FrameInputs::default();
+        // Each mesh as this frame deforms it (`None`: as built), for its
+        // vertices and for the shadow it casts.
+        let deformed: Vec<Option<scene::Mesh>> = scene_meshes
+            .iter()
+            .enumerate()
+            .map(|(object, mesh)| scene.deformed(object, mesh, frame))
+            .collect();
         if !self.shadow_maps.is_empty() {
-            let deformed: Vec<Option<scene::Mesh>> = (0..scene_meshes.len())
-                .map(|i| scene.deformed(i, &scene_meshes[i], frame))
-                .collect();
             let casters: Vec<&scene::Mesh> = scene_meshes
                 .iter()
                 .zip(&deformed)
@@ -191,7 +195,7 @@ impl<'a> SceneInputs<'a> {
                 inputs.depth_maps.insert(key, map.clone());
             }
         }
-        for (object, mesh) in scene_meshes.iter().enumerate() {
+        for (object, deformed) in deformed.iter().enumerate() {
             let mut buffers = HashMap::new();
             for buffer in uniforms {
                 let bytes = scene::uniforms::fill(buffer, scene, &state, object).map_err(fail)?;
@@ -201,8 +205,8 @@ impl<'a> SceneInputs<'a> {
                 let bytes = scene::storage::fill(buffer, scene, &state, object).map_err(fail)?;
                 buffers.insert([buffer.group, buffer.binding], bytes);
             }
-            let vertices = scene
-                .deformed(object, mesh, frame)
+            let vertices = deformed
+                .as_ref()
                 .map(|m| m.vertex_bytes(layout, &scene.vertex_inputs))
                 .transpose()
                 .map_err(fail)?;

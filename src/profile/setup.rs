@@ -202,3 +202,24 @@ pub(crate) fn check_counts(size: [u32; 2], frames: u32, warmup: u32) -> Result<(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A library caller's counts are bounded as the command line's are:
+    /// no frame count of 0 silently made 1, no four billion frames.
+    #[test]
+    fn counts_beyond_the_bounds_are_errors() {
+        assert!(check_counts([64, 64], 1, 0).is_ok());
+        for (size, frames, warmup, says) in [
+            ([64, 64], 0, 0, "1 to 10000"),
+            ([64, 64], 4_000_000_000, 0, "1 to 10000"),
+            ([64, 64], 1, 4_000_000_000, "at most 10000"),
+            ([0, 64], 1, 0, "between 1 and 8192"),
+        ] {
+            let err = check_counts(size, frames, warmup).unwrap_err().render();
+            assert!(err.contains(says), "{err}");
+        }
+    }
+}

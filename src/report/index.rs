@@ -5,7 +5,6 @@
 //! or the error that stopped it.
 
 use std::fmt::Write as _;
-use std::path::Path;
 
 use serde::Serialize;
 
@@ -21,14 +20,14 @@ pub struct EntrySection {
 }
 
 /// `report.json` of an index.
-#[derive(Serialize)]
-struct Index<'a> {
+#[derive(Debug, Serialize)]
+pub struct EntryIndex<'a> {
     format: u32,
     shader: &'a str,
     entries: Vec<IndexEntry<'a>>,
 }
 
-#[derive(Serialize)]
+#[derive(Debug, Serialize)]
 struct IndexEntry<'a> {
     entry: &'a str,
     /// The entry point's own report, relative to the index.
@@ -40,14 +39,9 @@ struct IndexEntry<'a> {
     error: Option<&'a str>,
 }
 
-/// Writes the index of `sections` (profiles of `shader`'s entry points)
-/// into `dir`.
-pub fn write_entry_index(
-    dir: &Path,
-    shader: &str,
-    sections: &[EntrySection],
-) -> Result<(), String> {
-    std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+/// The index of `sections` (profiles of `shader`'s entry points), as
+/// `report.json` holds it.
+pub fn entry_index<'a>(shader: &'a str, sections: &'a [EntrySection]) -> EntryIndex<'a> {
     let entries = sections
         .iter()
         .map(|section| {
@@ -63,17 +57,15 @@ pub fn write_entry_index(
             }
         })
         .collect();
-    let json = serde_json::to_string_pretty(&Index {
+    EntryIndex {
         format: 1,
         shader,
         entries,
-    })
-    .map_err(|e| e.to_string())?;
-    std::fs::write(dir.join("report.json"), json + "\n").map_err(|e| e.to_string())?;
-    std::fs::write(dir.join("report.html"), html(shader, sections)).map_err(|e| e.to_string())
+    }
 }
 
-fn html(shader: &str, sections: &[EntrySection]) -> String {
+/// The index as `report.html`: a section per entry point.
+pub fn entry_index_html(shader: &str, sections: &[EntrySection]) -> String {
     let mut page = format!(
         "<!doctype html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>shadecache profile: {0}</title><style>body{{font-family:sans-serif;margin:2em;max-width:1200px}}section{{border-left:4px solid #58a;padding:4px 12px;margin:16px 0}}section.failed{{border-left-color:#c33}}code{{background:#f3f3f3;padding:0 3px}}pre{{white-space:pre-wrap}}</style></head><body><h1>shadecache profile of <code>{0}</code></h1><p>The shader has {1} fragment entry points; each was profiled on its own (<code>--entry NAME</code> profiles one).</p>",
         escape(shader),

@@ -16,7 +16,7 @@ use crate::scene::Effect;
 
 pub use html::html;
 pub use images::write_images;
-pub use index::{write_entry_index, EntrySection};
+pub use index::{entry_index, entry_index_html, EntryIndex, EntrySection};
 
 /// Everything a profile measured.
 #[derive(Clone, Debug, Serialize, Deserialize)]

@@ -468,14 +468,21 @@ impl Scene {
                 self.effects.push(effect);
             }
         }
-        let walker: Object = toml::from_str(
-            "mesh = { kind = \"sphere\", radius = 0.3, rings = 24, segments = 48 }\n\
-             position = [-1.1, -0.2, 1.3]\n\
-             translation_per_frame = [0.025, 0.0, 0.0]\n\
-             rotation_degrees_per_frame = [0.0, 2.0, 0.0]\n",
-        )
-        .expect("the moving object's TOML is ours and parses");
-        self.objects.push(walker);
+        self.objects.push(Object {
+            mesh: MeshSource::Sphere {
+                radius: 0.3,
+                rings: 24,
+                segments: 48,
+            },
+            position: [-1.1, -0.2, 1.3],
+            rotation_degrees: [0.0; 3],
+            scale: 1.0,
+            rotation_degrees_per_frame: [0.0, 2.0, 0.0],
+            translation_per_frame: [0.025, 0.0, 0.0],
+            deformation: None,
+            instances: None,
+            storage: BTreeMap::new(),
+        });
         self.description = "default scene with a game's motion: the camera orbits at 1° a frame (60°/s at 60 Hz) around a turning sphere, and a small sphere crosses in front of it at 0.025 units a frame (1.5 units/s)".into();
         self
     }

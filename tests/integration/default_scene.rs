@@ -38,6 +38,32 @@ fn profile(scene: Option<&Path>, out: &Path) -> (Value, String) {
     (report, stdout(&output))
 }
 
+/// `shadecache profile SHADER` with no scene: the top node, one `variant`,
+/// `frames` frames at `size`², into `out`.
+fn profile_small(
+    shader: &Path,
+    variant: &str,
+    frames: u32,
+    size: u32,
+    out: &Path,
+) -> std::process::Output {
+    shadecache([
+        OsStr::new("profile"),
+        shader.as_os_str(),
+        OsStr::new("--variant"),
+        OsStr::new(variant),
+        OsStr::new("--nodes"),
+        OsStr::new("top:1"),
+        OsStr::new("--frames"),
+        OsStr::new(&frames.to_string()),
+        OsStr::new("--size"),
+        OsStr::new(&format!("{size}x{size}")),
+        OsStr::new("--quiet"),
+        OsStr::new("--out"),
+        out.as_os_str(),
+    ])
+}
+
 /// The default scene finds the tutorial's `camera.view_proj` and
 /// `object.model` from its vertex stage: camera motion moves what is drawn
 /// (misses; with identity matrices it would move nothing), and every
@@ -339,21 +365,7 @@ fn a_long_uniform_array_is_zero_and_listed_as_defaulted() {
         return;
     }
     let out = tempfile::tempdir().unwrap();
-    let output = shadecache([
-        "profile".as_ref(),
-        shader.as_os_str(),
-        "--variant".as_ref(),
-        "two-pass".as_ref(),
-        "--nodes".as_ref(),
-        "top:1".as_ref(),
-        "--frames".as_ref(),
-        "2".as_ref(),
-        "--size".as_ref(),
-        "32x32".as_ref(),
-        "--quiet".as_ref(),
-        "--out".as_ref(),
-        out.path().as_os_str(),
-    ] as [&OsStr; 13]);
+    let output = profile_small(&shader, "two-pass", 2, 32, out.path());
     assert!(output.status.success(), "{}", stderr(&output));
     let text = stdout(&output);
     assert!(
@@ -391,21 +403,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
 ";
     let (dir, shader) = temp_file("black.wgsl", source.as_bytes());
     let out = dir.path().join("report");
-    let output = shadecache([
-        "profile".as_ref(),
-        shader.as_os_str(),
-        "--variant".as_ref(),
-        "one-pass".as_ref(),
-        "--nodes".as_ref(),
-        "top:1".as_ref(),
-        "--frames".as_ref(),
-        "3".as_ref(),
-        "--size".as_ref(),
-        "48x48".as_ref(),
-        "--out".as_ref(),
-        out.as_os_str(),
-        "--quiet".as_ref(),
-    ] as [&OsStr; 13]);
+    let output = profile_small(&shader, "one-pass", 3, 48, &out);
     assert!(output.status.success(), "{}", stderr(&output));
     let summary = stdout(&output);
     // Said first: right after the run's line, before any figure.
@@ -439,21 +437,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
     // The same shader, lit, passes its check.
     let lit = source.replace("shade * 0.001", "shade");
     std::fs::write(&shader, lit).unwrap();
-    let output = shadecache([
-        "profile".as_ref(),
-        shader.as_os_str(),
-        "--variant".as_ref(),
-        "one-pass".as_ref(),
-        "--nodes".as_ref(),
-        "top:1".as_ref(),
-        "--frames".as_ref(),
-        "3".as_ref(),
-        "--size".as_ref(),
-        "48x48".as_ref(),
-        "--out".as_ref(),
-        out.as_os_str(),
-        "--quiet".as_ref(),
-    ] as [&OsStr; 13]);
+    let output = profile_small(&shader, "one-pass", 3, 48, &out);
     assert!(output.status.success(), "{}", stderr(&output));
     assert!(
         stdout(&output).contains("reference check: passes"),
@@ -492,21 +476,7 @@ fn fs_main(vertex: VertexOutput) -> @location(0) vec4<f32> {
 ";
     let (dir, shader) = temp_file("cube.wgsl", source.as_bytes());
     let out = dir.path().join("report");
-    let output = shadecache([
-        "profile".as_ref(),
-        shader.as_os_str(),
-        "--variant".as_ref(),
-        "one-pass".as_ref(),
-        "--nodes".as_ref(),
-        "top:1".as_ref(),
-        "--frames".as_ref(),
-        "2".as_ref(),
-        "--size".as_ref(),
-        "48x48".as_ref(),
-        "--out".as_ref(),
-        out.as_os_str(),
-        "--quiet".as_ref(),
-    ] as [&OsStr; 13]);
+    let output = profile_small(&shader, "one-pass", 2, 48, &out);
     assert!(output.status.success(), "{}", stderr(&output));
     let report: Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();

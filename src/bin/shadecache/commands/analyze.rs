@@ -49,19 +49,13 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
     };
     let shader = front::load_with(&args.shader, &args.compose.composition(), None, None)?;
     // Every fragment entry point in turn, unless `--entry` names one.
-    let entries = analysis::fragment_entries_to_take(&shader, args.entry.as_deref());
-    let analyses = entries
-        .iter()
-        .map(|entry| {
-            analysis::analyze(
-                &shader,
-                &Options {
-                    entry: entry.clone(),
-                    weights: weights.clone(),
-                },
-            )
-        })
-        .collect::<Result<Vec<_>, Error>>()?;
+    let analyses = analysis::analyze_entries(
+        &shader,
+        &Options {
+            entry: args.entry,
+            weights,
+        },
+    )?;
     match args.format {
         Format::Json => {
             // One entry point: its analysis; several: an array of them.

@@ -170,9 +170,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     let shader = args.stages.load(&args.shader)?;
     // With no scene, the default one with a game's motion: the profile's
     // barely moves, and every method would tie with sample-and-hold.
-    let (shader, scene, scene_path) =
-        args.stages
-            .drawn_with(shader, args.scene.as_deref(), true)?;
+    let (shader, scene, scene_path) = args.stages.drawn(shader, args.scene.as_deref(), true)?;
     let options = Options {
         methods: MethodArg::methods(&args.method),
         frames_per_interval: args.frames_per_interval,

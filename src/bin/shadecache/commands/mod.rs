@@ -165,18 +165,9 @@ impl StageArgs {
     /// fragment-only module given no `--vertex`, the module joined to a
     /// vertex stage made from its inputs' names and types (what feeds each
     /// input is listed with the scene's defaulted values); and the scene
-    /// at `path` or the default one for it.
+    /// at `path` or the default one for it, with the motion of a game
+    /// when `game_motion` ([`Scene::with_game_motion`](shadecache::scene::Scene::with_game_motion)).
     pub fn drawn(
-        &self,
-        shader: Shader,
-        path: Option<&Path>,
-    ) -> Result<(Shader, shadecache::scene::Scene, PathBuf), Error> {
-        self.drawn_with(shader, path, false)
-    }
-
-    /// [`drawn`](Self::drawn); with `game_motion`, a default scene has the
-    /// motion of a game ([`Scene::with_game_motion`](shadecache::scene::Scene::with_game_motion)).
-    pub fn drawn_with(
         &self,
         shader: Shader,
         path: Option<&Path>,

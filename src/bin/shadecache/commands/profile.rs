@@ -199,16 +199,21 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
     let shader = args.stages.load(&args.shader)?;
     // Every fragment entry point in turn, unless `--entry` names one:
     // each into `OUT/<entry>/`, with an index in OUT.
-    let entries =
-        shadecache::analysis::fragment_entries_to_take(&shader, args.stages.entry.as_deref());
-    let several: Vec<String> = entries.iter().flatten().cloned().collect();
-    if several.len() <= 1 || args.stages.entry.is_some() {
+    let analyses = shadecache::analysis::analyze_entries(
+        &shader,
+        &shadecache::analysis::Options {
+            entry: args.stages.entry.clone(),
+            ..Default::default()
+        },
+    )?;
+    if analyses.len() == 1 {
         let (_, summary) = profile_entry(&args, &shader, &args.stages, &args.out)?;
         return super::write_stdout(&summary);
     }
     let mut sections = Vec::new();
     let mut failed = Vec::new();
-    for entry in &several {
+    for analysis in &analyses {
+        let entry = &analysis.entry;
         let stages = super::StageArgs {
             entry: Some(entry.clone()),
             ..args.stages.clone()
@@ -217,13 +222,6 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         super::write_stdout(&format!("entry point `{entry}`:\n"))?;
         // An entry point with nothing to cache (a flat-colour wireframe
         // pass) is an answer, not a failure.
-        let analysis = shadecache::analysis::analyze(
-            &shader,
-            &shadecache::analysis::Options {
-                entry: Some(entry.clone()),
-                ..Default::default()
-            },
-        )?;
         if analysis.candidates.is_empty() {
             let why = "no cache candidates: it computes nothing a cache could keep (see `shadecache analyze --all`)".to_string();
             super::write_stdout(&format!("  {why}\n"))?;
@@ -251,11 +249,12 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
             }
         }
     }
-    report::write_entry_index(&args.out, &shader.file.path, &sections).map_err(|err| {
-        Error::plain(Diagnostic::error(format!(
-            "cannot write the report index: {err}"
-        )))
-    })?;
+    super::write_report(
+        &args.out,
+        &report::entry_index(&shader.file.path, &sections),
+        || Ok(Vec::new()),
+        || report::entry_index_html(&shader.file.path, &sections),
+    )?;
     super::write_stdout(&format!(
         "report: {} (one section per entry point)\n",
         args.out.join("report.html").display()
@@ -266,7 +265,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         Err(Error::plain(Diagnostic::error(format!(
             "{} of {} fragment entry points could not be profiled: {} (see above)",
             failed.len(),
-            several.len(),
+            analyses.len(),
             failed.join(", ")
         ))))
     }
@@ -281,7 +280,7 @@ fn profile_entry(
     out: &std::path::Path,
 ) -> Result<(Box<report::Report>, String), Error> {
     let drawn = shader.clone_parts();
-    let (shader, scene, scene_path) = stages.drawn(drawn, args.scene.as_deref())?;
+    let (shader, scene, scene_path) = stages.drawn(drawn, args.scene.as_deref(), false)?;
     let shader = &shader;
     let defaults = if args.sweep {
         Options::default().sweep()

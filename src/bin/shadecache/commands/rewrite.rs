@@ -167,19 +167,13 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
     let shader = args.stages.load(&args.shader)?;
     // Every fragment entry point in turn (into `OUT/<entry>`), unless
     // `--entry` names one; with `--node`, the one that has the node.
-    let entries = analysis::fragment_entries_to_take(&shader, args.stages.entry.as_deref());
-    let mut analyses = entries
-        .iter()
-        .map(|entry| {
-            analysis::analyze(
-                &shader,
-                &AnalysisOptions {
-                    entry: entry.clone(),
-                    ..AnalysisOptions::default()
-                },
-            )
-        })
-        .collect::<Result<Vec<_>, Error>>()?;
+    let mut analyses = analysis::analyze_entries(
+        &shader,
+        &AnalysisOptions {
+            entry: args.stages.entry.clone(),
+            ..AnalysisOptions::default()
+        },
+    )?;
     if let Some(id) = &args.node {
         if analyses.len() > 1
             && analyses
