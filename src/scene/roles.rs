@@ -231,6 +231,10 @@ fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
         whole.clone()
     };
     let has = |words: &[&str]| words.iter().any(|w| name.contains(w));
+    // Whole words, where a part would mislead: the `dir` of
+    // `directional_lights[0].color` is no direction.
+    let key_words = crate::analysis::name_words(key);
+    let has_word = |words: &[&str]| key_words.iter().any(|w| words.contains(&w.as_str()));
     let role = if shape == Shape::Matrix(4, 4) {
         // A matrix of a light (`s_lights[i].proj`) is the light's.
         if whole.contains("light") {
@@ -250,7 +254,7 @@ fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
         } else {
             return None;
         }
-    } else if has(&["light"]) && has(&["pos", "dir"]) {
+    } else if has(&["light"]) && has_word(&["pos", "position", "dir", "direction"]) {
         "light_position"
     } else if (has(&["camera", "cam", "eye", "view"]) && has(&["pos", "origin", "world"]))
         || viewer_alone(key.rsplit('.').next().unwrap_or(key))
@@ -576,5 +580,29 @@ fn member_key(
             Some(key(&binding, &member))
         }
         _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A light's position or direction is named so by whole words: Bevy's
+    /// `lights.directional_lights[0].color` holds no direction (its `dir`
+    /// is part of `directional`), and took the light's position.
+    #[test]
+    fn a_light_role_by_name_takes_whole_words() {
+        for (key, role) in [
+            ("light.position", Some("light_position")),
+            ("u.light_dir", Some("light_position")),
+            ("u.lightPos", Some("light_position")),
+            (
+                "lights.directional_lights[0].direction_to_light",
+                Some("light_position"),
+            ),
+            ("lights.directional_lights[0].color", None),
+        ] {
+            assert_eq!(role_by_name(key, Shape::F32(3)), role, "{key}");
+        }
     }
 }
