@@ -18,19 +18,32 @@
 //! * [`analysis`]: the expression graph, the candidates and why the others
 //!   are rejected;
 //! * [`rewrite`]: one candidate and one variant into cache passes, on IR,
-//!   and the plan that says how to run them;
+//!   and the plan that says how to run them; `rewrite::reprojection` is the
+//!   cache shader's reprojection arithmetic on the CPU, for tests and
+//!   reasoning (kept in step with `shaders/cache.wgsl`);
 //! * [`plan`]: `plan.json`, how a host runs a variant's passes: the
 //!   `shadecache-plan` crate's definition (serde only), re-exported;
 //! * [`back`]: writing the passes with naga's back ends;
 //! * [`build`]: the same from a build script;
-//! * [`scene`]: what a profile renders, the default scene, roles;
-//! * [`runtime`]: the scene drawn through the host crate
+//! * [`diagnostic`]: the error type and its codespan rendering.
+//!
+//! Those are the default features, all a build script needs: naga and
+//! naga_oil, nothing that runs a GPU. The feature `profile` adds the
+//! stages that measure on a GPU through wgpu:
+//!
+//! * `scene`: what a profile renders, the default scene, roles;
+//! * `runtime`: the scene drawn through the host crate
 //!   (`shadecache-host`), which runs a plan as applications do;
-//! * [`profile`]: measuring variants against the unmodified shader;
-//! * [`report`]: the report's JSON, HTML and pictures;
-//! * [`diagnostic`]: the error type and its codespan rendering;
-//! * [`reprojection`]: the cache shader's reprojection arithmetic on the CPU,
-//!   for tests and reasoning (kept in step with `shaders/cache.wgsl`).
+//! * `profile`: measuring variants against the unmodified shader;
+//! * `report`: the report's JSON, HTML and pictures;
+//!
+//! and the feature `interpolate` whole-frame reuse:
+//!
+//! * `interpolate`: I-frames rendered with their flows and the B-frames
+//!   between them built by bidirectional reprojection (seeds 000 and 003),
+//!   measured against rendering every frame.
+//!
+//! The `shadecache` command (the `shadecache-cli` crate) turns both on.
 
 #![forbid(unsafe_code)]
 #![warn(
@@ -48,12 +61,16 @@ pub mod build;
 pub mod cost;
 pub mod diagnostic;
 pub mod front;
+#[cfg(feature = "interpolate")]
 pub mod interpolate;
 pub mod plan;
 pub mod proc;
+#[cfg(feature = "profile")]
 pub mod profile;
+#[cfg(feature = "profile")]
 pub mod report;
-pub mod reprojection;
 pub mod rewrite;
+#[cfg(feature = "profile")]
 pub mod runtime;
+#[cfg(feature = "profile")]
 pub mod scene;

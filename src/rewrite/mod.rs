@@ -27,6 +27,7 @@ pub mod gradients;
 mod helpers;
 pub mod path;
 pub mod plan;
+pub mod reprojection;
 mod split;
 pub mod uniformity;
 pub mod vertex;

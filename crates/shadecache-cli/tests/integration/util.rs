@@ -8,9 +8,9 @@ use std::process::{Command, Output, Stdio};
 use serde_json::Value;
 use shadecache::scene::Scene;
 
-/// The repository root.
+/// The repository root (this crate is `crates/shadecache-cli`).
 pub fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 /// Every `corpus/*.wgsl`, sorted, as paths relative to the root.

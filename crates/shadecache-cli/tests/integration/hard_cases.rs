@@ -15,7 +15,7 @@ use std::borrow::Cow;
 use std::collections::HashMap;
 
 use glam::{DMat4, DVec2, DVec3, DVec4, IVec2, UVec2, Vec2, Vec4};
-use shadecache::reprojection::{self, PreviousDepth, Status};
+use shadecache::rewrite::reprojection::{self, PreviousDepth, Status};
 use shadecache::rewrite::{self, Options, Variant};
 use shadecache::runtime::{self, Gpu};
 use wgpu::util::DeviceExt;

@@ -191,3 +191,49 @@ fn build_script_example_builds_and_runs() {
     );
     assert!(stdout.contains("last frame's `frame`"), "{stdout}");
 }
+
+/// What a build script compiles: the library's default features (read,
+/// analyse, rewrite, write back) bring naga and naga_oil and nothing that
+/// runs a GPU or serves only the command line; the `profile` feature
+/// brings the GPU stack (so the check can fail).
+#[test]
+fn build_script_feature_set_has_no_gpu_dependencies() {
+    let tree = |features: &[&str]| {
+        let output = Command::new(env!("CARGO"))
+            .args(["tree", "--offline", "--locked", "-p", "shadecache", "-e", "normal"])
+            .args(["--prefix", "none", "--format", "{p}"])
+            .args(features)
+            .current_dir(root())
+            .output()
+            .expect("cargo runs");
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        // "name vX.Y.Z (...)" per line: the names.
+        String::from_utf8_lossy(&output.stdout)
+            .lines()
+            .filter_map(|line| line.split_whitespace().next().map(str::to_owned))
+            .collect::<std::collections::BTreeSet<String>>()
+    };
+    let lean = tree(&["--no-default-features"]);
+    assert_eq!(lean, tree(&[]), "the default features are the build script's");
+    assert!(lean.contains("naga") && lean.contains("naga_oil"), "{lean:?}");
+    for gpu in [
+        "wgpu",
+        "wgpu-core",
+        "wgpu-profiler",
+        "shadecache-host",
+        "clap",
+        "indicatif",
+        "gltf",
+        "tobj",
+        "image",
+        "pollster",
+    ] {
+        assert!(!lean.contains(gpu), "{gpu} in the build script's tree: {lean:?}");
+    }
+    let full = tree(&["--features", "profile"]);
+    assert!(full.contains("wgpu") && full.contains("image"), "{full:?}");
+}
