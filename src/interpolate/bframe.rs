@@ -350,7 +350,7 @@ impl BFrames {
             mapped_at_creation: false,
         });
         let sampler = linear_clamp(device);
-        let target = |label, format| shadecache_host::render_target(device, label, size, format);
+        let target = |label, format| shadecache_host::toolchain::render_target(device, label, size, format);
         Ok(BFrames {
             pipelines,
             layout,
@@ -369,7 +369,7 @@ impl BFrames {
             inpaint,
             inpaint_layout,
             removed: [0, 1].map(|_| {
-                shadecache_host::render_target(
+                shadecache_host::toolchain::render_target(
                     device,
                     "I-frame 0, moving objects removed",
                     (size.0.div_ceil(2), size.1.div_ceil(2)),

@@ -550,7 +550,7 @@ impl IFrameShader {
     /// simulated again; the twins' bytes are the other times' own.
     pub fn instance_records(&self, records: [&[u8]; 3]) -> Result<Vec<u8>, String> {
         let size = |a: &crate::plan::VertexAttribute| {
-            shadecache_host::vertex_format(a.format).size() as usize
+            shadecache_host::toolchain::vertex_format(a.format).size() as usize
         };
         let packed: Vec<&crate::plan::VertexAttribute> = self
             .plan

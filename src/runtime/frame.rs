@@ -54,10 +54,10 @@ impl PlanFrame {
         {
             vertex[slot] = packed(&plan.vertex_layout, step);
         }
-        let groups = shadecache_host::plan_groups(plan)
+        let groups = shadecache_host::toolchain::plan_groups(plan)
             .into_iter()
             .map(|group| {
-                shadecache_host::plan_layout_entries(plan, group)
+                shadecache_host::toolchain::plan_layout_entries(plan, group)
                     .map(|entries| (group, entries))
                     .map_err(|err| err.to_string())
             })
@@ -72,7 +72,7 @@ impl PlanFrame {
                 colors.resize(index + 1, None);
             }
             colors[index] = Some(wgpu::ColorTargetState {
-                format: shadecache_host::texture_format(target.format),
+                format: shadecache_host::toolchain::texture_format(target.format),
                 blend: None,
                 write_mask: wgpu::ColorWrites::ALL,
             });
@@ -132,7 +132,7 @@ fn packed(layout: &[VertexAttribute], step: StepMode) -> Vec<wgpu::VertexAttribu
         .iter()
         .filter(|attribute| attribute.step == step && attribute.previous_of.is_none())
         .map(|attribute| {
-            let format = shadecache_host::vertex_format(attribute.format);
+            let format = shadecache_host::toolchain::vertex_format(attribute.format);
             let out = wgpu::VertexAttribute {
                 format,
                 offset,

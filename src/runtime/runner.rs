@@ -5,7 +5,8 @@
 
 use std::collections::{BTreeMap, HashMap};
 
-use shadecache_host::{render_target, CachedShader, Draw, PassTimer, Targets, TwinSources, Twins};
+use shadecache_host::toolchain::render_target;
+use shadecache_host::{CachedShader, Draw, PassTimer, Targets, TwinSources, Twins};
 
 use super::frame::{cached_shader, RunOptions};
 use super::gpu::Gpu;
@@ -308,20 +309,18 @@ impl Runner {
         let draw = |pass: &mut Draw<'_, '_>| {
             for (object, draw) in objects.iter().zip(&inputs.objects) {
                 let mesh = &meshes[draw.mesh];
-                pass.bind(&object.twins);
-                let render = pass.render_pass();
                 for (group, bind_group) in &object.bind_groups {
-                    render.set_bind_group(*group, bind_group, &[]);
+                    pass.set_bind_group(*group, bind_group, &[]);
                 }
                 if let Some((group, bind_group)) = external {
-                    render.set_bind_group(group, bind_group, &[]);
+                    pass.set_bind_group(group, bind_group, &[]);
                 }
-                render.set_vertex_buffer(0, mesh.vertices.slice(..));
+                pass.set_vertex_buffer(0, mesh.vertices.slice(..));
                 if let Some(instances) = &object.instances {
-                    render.set_vertex_buffer(1, instances.slice(..));
+                    pass.set_vertex_buffer(1, instances.slice(..));
                 }
-                render.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..mesh.count, 0, 0..draw.instances);
+                pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(&object.twins, 0..mesh.count, 0, 0..draw.instances);
             }
         };
         let recorded = match profiler {

@@ -226,7 +226,7 @@ fn far_depth(
             array_layer_count: Some(1),
             ..wgpu::TextureViewDescriptor::default()
         });
-        shadecache_host::clear_depth(&mut encoder, &view, 1.0);
+        shadecache_host::toolchain::clear_depth(&mut encoder, &view, 1.0);
     }
     gpu.queue.submit([encoder.finish()]);
     let view = texture.create_view(&wgpu::TextureViewDescriptor {

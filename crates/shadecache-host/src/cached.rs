@@ -2,6 +2,7 @@
 
 use std::cell::RefCell;
 use std::collections::{BTreeMap, HashMap};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, Weak};
 
 use shadecache_plan::{DrawKind, LoadOp, Pass, Plan, ResourceKind, TargetKind, MAX_STENCIL_DRAWS};
@@ -75,10 +76,11 @@ pub struct CachedShader {
     generation: u64,
     params: wgpu::Buffer,
     sampler: wgpu::Sampler,
-    /// The cache group's bind groups when nothing of a draw's is in it
-    /// (no twins, no resource of the application's): bound by the host at
-    /// the start of each pass.
-    shared: Option<Twins>,
+    /// This shader's number among the process's, which its twins carry.
+    id: u64,
+    /// The application's vertex buffer slots (the host's twins follow).
+    vertex_slots: u32,
+    max_bind_groups: u32,
     current: usize,
     frame: u64,
     phase: u32,
@@ -103,8 +105,10 @@ impl std::fmt::Debug for CachedShader {
 impl CachedShader {
     /// Makes every pass's pipeline on `device` from the plan, the pass
     /// shaders (`shader` gives a file's WGSL by the name the plan uses)
-    /// and the application's frame, and the cache's targets at `size`.
-    /// Errors name what does not match, or what the variant refuses.
+    /// and the application's frame, and the cache's targets at `size`,
+    /// waiting for wgpu's verdict on each: see [`CachedShader::new_async`].
+    /// Behind the default feature `blocking` (it blocks on pollster).
+    #[cfg(feature = "blocking")]
     pub fn new<'s>(
         device: &wgpu::Device,
         plan: &Plan,
@@ -113,6 +117,26 @@ impl CachedShader {
         size: (u32, u32),
         options: Options,
     ) -> Result<CachedShader, Error> {
+        pollster::block_on(Self::new_async(
+            device, plan, shader, frame, size, options,
+        ))
+    }
+
+    /// Makes every pass's pipeline on `device` from the plan, the pass
+    /// shaders (`shader` gives a file's WGSL by the name the plan uses)
+    /// and the application's frame, and the cache's targets at `size`.
+    /// Errors name what does not match, what the variant refuses, a size
+    /// the device cannot hold, or what wgpu rejected (each pipeline is made
+    /// in an error scope, so nothing reaches wgpu's panicking handler).
+    pub async fn new_async<'s>(
+        device: &wgpu::Device,
+        plan: &Plan,
+        shader: impl Fn(&str) -> Option<&'s str>,
+        frame: &FrameLayout<'_>,
+        size: (u32, u32),
+        options: Options,
+    ) -> Result<CachedShader, Error> {
+        check_size(device, size)?;
         plan.check().map_err(Error::Plan)?;
         frame::check(plan, frame)?;
         let user_groups = layouts::user_groups(plan, frame.bind_group_layouts)?;
@@ -148,7 +172,7 @@ impl CachedShader {
             .map(|l| l.as_ref().map(|l| l.borrowed()))
             .chain(twin_slots.iter().map(|t| Some(t.layout.borrowed())))
             .collect();
-        let build = |index: usize, pass: &Pass| -> Result<Built, Error> {
+        let build = async |index: usize, pass: &Pass| -> Result<Built, Error> {
             let source = shader(&pass.shader).ok_or_else(|| {
                 Error::Mismatch(format!(
                     "{}: no shader `{}` was given",
@@ -176,19 +200,17 @@ impl CachedShader {
             };
             Ok(Built {
                 pass: pass.clone(),
-                pipeline: pipeline(device, pass, source, &inputs)?,
+                pipeline: pipeline(device, pass, source, &inputs).await?,
                 cache_layout,
                 index,
             })
         };
-        let passes = plan
-            .passes
-            .iter()
-            .enumerate()
-            .map(|(index, pass)| build(index, pass))
-            .collect::<Result<_, _>>()?;
+        let mut passes = Vec::with_capacity(plan.passes.len());
+        for (index, pass) in plan.passes.iter().enumerate() {
+            passes.push(build(index, pass).await?);
+        }
         let classify = match (&plan.classify, options.classify) {
-            (Some(pass), true) => Some(build(plan.passes.len(), pass)?),
+            (Some(pass), true) => Some(build(plan.passes.len(), pass).await?),
             _ => None,
         };
         let params = device.create_buffer(&wgpu::BufferDescriptor {
@@ -210,7 +232,7 @@ impl CachedShader {
             min_filter: filter,
             ..wgpu::SamplerDescriptor::default()
         });
-        let mut cached = CachedShader {
+        let cached = CachedShader {
             device: device.clone(),
             targets: CacheTargets::new(device, size, formats, depth_format, &gbuffer_formats),
             plan: plan.clone(),
@@ -226,7 +248,9 @@ impl CachedShader {
             generation: 0,
             params,
             sampler,
-            shared: None,
+            id: NEXT_SHADER.fetch_add(1, Ordering::Relaxed),
+            vertex_slots: frame.vertex_buffers.len() as u32,
+            max_bind_groups: device.limits().max_bind_groups,
             current: 0,
             frame: 0,
             phase: 0,
@@ -234,26 +258,26 @@ impl CachedShader {
             pending: Vec::new(),
             next_twins: 0,
         };
-        // With nothing of the draw's in the cache group, the host binds it
-        // itself.
-        let draws_own = !plan.bindings.previous.is_empty()
-            || !cached.twin_slots.is_empty()
-            || plan
-                .bindings
-                .original
-                .iter()
-                .any(|r| Some(r.group) == cache_group);
-        if !draws_own {
-            cached.shared = Some(cached.twins(&TwinSources::default())?);
-        }
         Ok(cached)
     }
 
-    /// The twins of one draw's buffers (see [`Twins`]): made once per
-    /// draw, bound in the draw callback with [`Draw::bind`]. Errors when a
-    /// buffer the plan keeps last frame's copy of is not among `sources`,
-    /// or cannot be copied.
+    /// The twins of one draw's buffers (see [`Twins`]), waiting for
+    /// wgpu's verdict on their bind groups: see [`CachedShader::twins_async`].
+    /// Behind the default feature `blocking`.
+    #[cfg(feature = "blocking")]
     pub fn twins(&mut self, sources: &TwinSources<'_>) -> Result<Twins, Error> {
+        pollster::block_on(self.twins_async(sources))
+    }
+
+    /// The twins of one draw's buffers (see [`Twins`]): made once per
+    /// draw, passed to every [`Draw::draw`] or [`Draw::draw_indexed`] of
+    /// that draw. Every plan has them (a plan that keeps nothing of the
+    /// draw's gives empty ones). Errors when a buffer the plan keeps last
+    /// frame's copy of is not among `sources` or cannot be copied, or when
+    /// wgpu rejects the bind groups made with them (in an error scope:
+    /// the application's resources in the cache's group are checked here,
+    /// once, not in the frame).
+    pub async fn twins_async(&mut self, sources: &TwinSources<'_>) -> Result<Twins, Error> {
         let mut copies = Vec::new();
         let mut bound = Vec::new();
         for twin in &self.plan.bindings.previous {
@@ -297,15 +321,43 @@ impl CachedShader {
         }
         let inner = Arc::new(TwinsInner {
             id: self.next_twins,
+            owner: self.id,
             copies,
             bound,
             shared,
             vertex,
             bind_groups: Mutex::new(HashMap::new()),
         });
+        self.check_bind_groups(&inner).await?;
         self.next_twins += 1;
         self.pending.push(Arc::downgrade(&inner));
         Ok(Twins { inner })
+    }
+
+    /// Makes the cache group's bind groups of every pass with `twins`, for
+    /// both cache slots, in an error scope, and keeps them. After a resize
+    /// they are made again from the same resources (the host's new targets
+    /// have the old formats), so what wgpu accepted here it accepts then.
+    async fn check_bind_groups(&self, twins: &TwinsInner) -> Result<(), Error> {
+        let Some(group) = self.cache_group else {
+            return Ok(());
+        };
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut made = HashMap::new();
+        for built in self.passes.iter().chain(&self.classify) {
+            if let Some(layout) = &built.cache_layout {
+                let make = |current| self.cache_bind_group(built, layout, twins, current);
+                made.insert(built.index, (self.generation, [make(0)?, make(1)?]));
+            }
+        }
+        if let Some(err) = scope.pop().await {
+            return Err(Error::Wgpu(format!("the cache group (group {group}): {err}")));
+        }
+        *twins
+            .bind_groups
+            .lock()
+            .map_err(|_| Error::Wgpu("a twins' bind groups were poisoned".into()))? = made;
+        Ok(())
     }
 
     /// The application's resources in the cache's group, from `sources`.
@@ -427,17 +479,15 @@ impl CachedShader {
                     binder: &binder,
                     error: None,
                     drawn: 0,
+                    bound: None,
                 };
-                if let Some(shared) = &self.shared {
-                    draws.bind(shared);
-                }
                 draw(&mut draws);
                 if let Some(err) = draws.error.take() {
                     return Err(err);
                 }
                 if built.pass.stencil.is_some() && draws.drawn == 0 {
                     return Err(Error::Mismatch(format!(
-                        "pass `{}` marks each draw's pixels in the stencil: draw through `Draw::draw_indexed` or `Draw::draw`, not the render pass itself",
+                        "pass `{}` marks each draw's pixels in the stencil, and the callback drew nothing in it",
                         built.pass.name
                     )));
                 }
@@ -570,11 +620,13 @@ impl CachedShader {
     }
 
     /// Makes the cache's targets at a new size: the next frame misses
-    /// everywhere, as the first.
-    pub fn resize(&mut self, size: (u32, u32)) {
+    /// everywhere, as the first. A size of zero or past the device's
+    /// largest 2D texture is an error, and the cache keeps its size.
+    pub fn resize(&mut self, size: (u32, u32)) -> Result<(), Error> {
         if size == self.size {
-            return;
+            return Ok(());
         }
+        check_size(&self.device, size)?;
         self.size = size;
         self.targets = CacheTargets::new(
             &self.device,
@@ -585,6 +637,7 @@ impl CachedShader {
         );
         self.generation += 1;
         self.fresh = true;
+        Ok(())
     }
 
     /// Forgets last frame (a camera cut, a teleport): the next frame
@@ -649,6 +702,22 @@ impl CachedShader {
     pub fn classes(&self) -> &wgpu::Texture {
         &self.targets.classes
     }
+}
+
+/// Numbers the shaders of a process, so that a draw can tell its own
+/// shader's twins from another's.
+static NEXT_SHADER: AtomicU64 = AtomicU64::new(0);
+
+/// Whether the device can hold the cache's targets at `size`.
+fn check_size(device: &wgpu::Device, size: (u32, u32)) -> Result<(), Error> {
+    let most = device.limits().max_texture_dimension_2d;
+    if size.0 == 0 || size.1 == 0 || size.0 > most || size.1 > most {
+        return Err(Error::Limits(format!(
+            "the cache's targets cannot be {}×{}: this device's 2D textures are 1 to {most} texels a side",
+            size.0, size.1
+        )));
+    }
+    Ok(())
 }
 
 /// The formats of the G-buffer textures the plan's passes render into,
@@ -781,7 +850,7 @@ impl Binder<'_> {
             .get(&built.index)
             .is_none_or(|(generation, _)| *generation != shader.generation);
         if stale {
-            let make = |current| self.make(built, layout, twins, current);
+            let make = |current| shader.cache_bind_group(built, layout, twins, current);
             let groups = [make(0)?, make(1)?];
             cached.insert(built.index, (shader.generation, groups));
         }
@@ -789,16 +858,18 @@ impl Binder<'_> {
             .get(&built.index)
             .map(|(_, groups)| (group, groups[shader.current].clone())))
     }
+}
 
+impl CachedShader {
     /// The cache group's bind group when `current` is this frame's slot.
-    fn make(
+    fn cache_bind_group(
         &self,
         built: &Built,
         layout: &wgpu::BindGroupLayout,
         twins: &TwinsInner,
         current: usize,
     ) -> Result<wgpu::BindGroup, Error> {
-        let shader = self.shader;
+        let shader = self;
         let t = &shader.targets;
         let previous = 1 - current;
         let bound = |binding: u32| {
@@ -848,24 +919,39 @@ impl Binder<'_> {
                 resource: resource.resource(),
             });
         }
-        let scope = shader
-            .device
-            .push_error_scope(wgpu::ErrorFilter::Validation);
-        let group = shader.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        Ok(shader.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("shadecache cache group"),
             layout,
             entries: &entries,
-        });
-        match pollster::block_on(scope.pop()) {
-            None => Ok(group),
-            Some(err) => Err(Error::Wgpu(format!("the cache group: {err}"))),
-        }
+        }))
     }
 }
 
-/// One pass being recorded. The application sets its bind groups and
-/// buffers on [`Draw::render_pass`] and draws with [`Draw::draw_indexed`]
-/// or [`Draw::draw`], each draw after [`Draw::bind`] of its twins.
+/// One pass being recorded: the application sets its bind groups and
+/// buffers as in its original pass, and draws with [`Draw::draw_indexed`]
+/// or [`Draw::draw`], each with the draw's [`Twins`]. There is no raw
+/// render pass: in a pass that marks each draw's pixels in the stencil the
+/// host sets the reference per draw, and a screen-space pass draws one
+/// triangle over the screen instead of the geometry, so every draw goes
+/// through the host. A misuse (twins of another shader, the cache's bind
+/// group or a twin's vertex slot) is returned from `record` as an
+/// [`Error::Draw`], and the draw is skipped.
+///
+/// A draw without its twins does not compile:
+///
+/// ```compile_fail
+/// fn draw_without_twins(draw: &mut shadecache_host::Draw<'_, '_>) {
+///     draw.draw_indexed(0..6, 0, 0..1);
+/// }
+/// ```
+///
+/// nor does reaching past the host to the render pass:
+///
+/// ```compile_fail
+/// fn draw_past_the_host(draw: &mut shadecache_host::Draw<'_, '_>) {
+///     draw.render_pass().draw(0..3, 0..1);
+/// }
+/// ```
 pub struct Draw<'r, 'e> {
     render: &'r mut wgpu::RenderPass<'e>,
     built: &'r Built,
@@ -873,49 +959,95 @@ pub struct Draw<'r, 'e> {
     error: Option<Error>,
     /// Draws so far in this pass: the next one's stencil ordinal.
     drawn: u32,
+    /// The twins whose cache group is bound now.
+    bound: Option<u64>,
 }
 
-impl<'e> Draw<'_, 'e> {
+impl Draw<'_, '_> {
     /// The plan's pass being recorded (its name and role).
     pub fn pass(&self) -> &Pass {
         &self.built.pass
     }
 
-    /// The render pass, with the pass's pipeline set: set the
-    /// application's bind groups and vertex buffers and draw, as in the
-    /// original pass.
-    pub fn render_pass(&mut self) -> &mut wgpu::RenderPass<'e> {
-        self.render
+    /// Sets one of the application's bind groups, as
+    /// `RenderPass::set_bind_group`. The cache's group is the host's.
+    pub fn set_bind_group(&mut self, index: u32, bind_group: &wgpu::BindGroup, offsets: &[u32]) {
+        let shader = self.binder.shader;
+        if Some(index) == shader.cache_group {
+            self.fail(format!(
+                "group {index} is the cache's, which the host binds: give the resources the application keeps there among the draw's `TwinSources`"
+            ));
+        } else if index >= shader.max_bind_groups {
+            self.fail(format!(
+                "group {index} is past the device's {} bind groups",
+                shader.max_bind_groups
+            ));
+        } else {
+            self.render.set_bind_group(index, bind_group, offsets);
+        }
     }
 
-    /// Draws indexed geometry, as `RenderPass::draw_indexed`. In a pass
-    /// that marks or tests each draw's pixels in the stencil (the deferred
+    /// Sets one of the application's vertex buffers, as
+    /// `RenderPass::set_vertex_buffer`, at a slot of its frame layout.
+    pub fn set_vertex_buffer(&mut self, slot: u32, buffer: wgpu::BufferSlice<'_>) {
+        let slots = self.binder.shader.vertex_slots;
+        if slot >= slots {
+            self.fail(format!(
+                "vertex buffer slot {slot} is not among the frame layout's {slots}: the slots after them hold the host's copies of last frame's"
+            ));
+        } else {
+            self.render.set_vertex_buffer(slot, buffer);
+        }
+    }
+
+    /// Sets the index buffer, as `RenderPass::set_index_buffer`.
+    pub fn set_index_buffer(&mut self, buffer: wgpu::BufferSlice<'_>, format: wgpu::IndexFormat) {
+        self.render.set_index_buffer(buffer, format);
+    }
+
+    /// Draws indexed geometry with `twins` (last frame's copies of this
+    /// draw's buffers), as `RenderPass::draw_indexed`. In a pass that
+    /// marks or tests each draw's pixels in the stencil (the deferred
     /// variant's), the draw's ordinal is the stencil reference, and a
     /// screen-space pass draws one triangle over the screen instead, with
     /// the bind groups set for this draw.
     pub fn draw_indexed(
         &mut self,
+        twins: &Twins,
         indices: std::ops::Range<u32>,
         base_vertex: i32,
         instances: std::ops::Range<u32>,
     ) {
-        if self.next_draw() {
+        if self.next_draw(twins) {
             self.render.draw_indexed(indices, base_vertex, instances);
         }
     }
 
-    /// Draws non-indexed geometry, as `RenderPass::draw`; see
+    /// Draws non-indexed geometry with `twins`, as `RenderPass::draw`; see
     /// [`Draw::draw_indexed`].
-    pub fn draw(&mut self, vertices: std::ops::Range<u32>, instances: std::ops::Range<u32>) {
-        if self.next_draw() {
+    pub fn draw(
+        &mut self,
+        twins: &Twins,
+        vertices: std::ops::Range<u32>,
+        instances: std::ops::Range<u32>,
+    ) {
+        if self.next_draw(twins) {
             self.render.draw(vertices, instances);
         }
     }
 
-    /// Sets the stencil reference of the next draw and draws the screen's
-    /// triangle for a screen-space pass; whether the application's own
-    /// geometry is to be drawn.
-    fn next_draw(&mut self) -> bool {
+    /// Keeps the first misuse, for `record` to return.
+    fn fail(&mut self, text: String) {
+        self.error.get_or_insert(Error::Draw(text));
+    }
+
+    /// Binds `twins`, sets the stencil reference of the next draw and
+    /// draws the screen's triangle for a screen-space pass; whether the
+    /// application's own geometry is to be drawn.
+    fn next_draw(&mut self, twins: &Twins) -> bool {
+        if !self.bind(twins) {
+            return false;
+        }
         self.drawn += 1;
         let pass = &self.built.pass;
         if let Some(stencil) = pass.stencil {
@@ -938,25 +1070,37 @@ impl<'e> Draw<'_, 'e> {
         }
     }
 
-    /// Binds the cache group with `twins` (last frame's copies of this
-    /// draw's buffers) and the vertex twins, for the draws that follow. An
-    /// error is returned from `record`.
-    pub fn bind(&mut self, twins: &Twins) {
-        match self.binder.bind_group(self.built, &twins.inner) {
+    /// Binds the cache group with `twins` and the vertex twins, unless they
+    /// are bound already; whether the draw may go on.
+    fn bind(&mut self, twins: &Twins) -> bool {
+        let inner = &twins.inner;
+        if inner.owner != self.binder.shader.id {
+            self.fail(
+                "these twins were made by another CachedShader: make each draw's with `twins` of the shader that records it"
+                    .into(),
+            );
+            return false;
+        }
+        if self.bound == Some(inner.id) {
+            return true;
+        }
+        match self.binder.bind_group(self.built, inner) {
             Ok(Some((group, bind_group))) => self.render.set_bind_group(group, &bind_group, &[]),
             Ok(None) => {}
             Err(err) => {
                 self.error.get_or_insert(err);
-                return;
+                return false;
             }
         }
-        for (slot, buffer) in &twins.inner.vertex {
+        for (slot, buffer) in &inner.vertex {
             self.render.set_vertex_buffer(*slot, buffer.slice(..));
         }
+        self.bound = Some(inner.id);
         self.binder
             .used
             .borrow_mut()
-            .entry(twins.inner.id)
-            .or_insert_with(|| twins.inner.clone());
+            .entry(inner.id)
+            .or_insert_with(|| inner.clone());
+        true
     }
 }

@@ -20,15 +20,31 @@
 //! not match what the shaders read ([`Error`]). Per draw it makes
 //! [`Twins`] from the draw's buffers. Per frame it writes its buffers as
 //! before and calls [`CachedShader::record`], which records every pass and
-//! calls back once per pass for the draws (the same draws as the original
-//! pass, after [`Draw::bind`], each through [`Draw::draw_indexed`] or
-//! [`Draw::draw`], which the deferred variant's screen-space passes turn
-//! into one triangle over the screen per draw); the host copies the frame's buffers into
-//! their twins after the passes, so they hold last frame's contents
-//! whatever the application writes next. The first frame, a
+//! calls back once per pass for the draws: the same draws as the original
+//! pass, their bind groups and buffers set on the [`Draw`] and each drawn
+//! with its twins through [`Draw::draw_indexed`] or [`Draw::draw`] (the
+//! deferred variant's screen-space passes turn each into one triangle over
+//! the screen). There is no raw render pass and no draw without twins, so
+//! a draw the variant needs cannot be skipped; the host copies the frame's
+//! buffers into their twins after the passes, so they hold last frame's
+//! contents whatever the application writes next. The first frame, a
 //! [`CachedShader::resize`] and a [`CachedShader::reset`] (a camera cut)
 //! miss everywhere. [`Timestamps`] times each pass with plain timestamp
 //! queries; [`PassTimer`] lets another timer do it.
+//!
+//! Every misuse is an [`Error`], never a panic in the application: a size
+//! the device cannot hold (in `new` and `resize`), a draw with another
+//! shader's twins, the cache's bind group set by the application; what
+//! wgpu could reject (pipelines, bind groups) is made in error scopes.
+//!
+//! The API is async at its core ([`CachedShader::new_async`],
+//! [`CachedShader::twins_async`]: wgpu's error scopes resolve as futures),
+//! and the default feature `blocking` adds [`CachedShader::new`] and
+//! [`CachedShader::twins`], which wait on them with pollster. Without it
+//! the crate has no blocking dependency, as the web needs. What was
+//! checked: the crate builds without default features, and the tests run
+//! natively (Vulkan); the `wasm32-unknown-unknown` target itself was not
+//! built.
 //!
 //! The crate depends on wgpu, serde and the plan schema only: an
 //! application links neither naga's front ends nor the toolchain.
@@ -61,11 +77,9 @@
 //! let mut encoder = device.create_command_encoder(&Default::default());
 //! let targets = Targets { color: &[Some(view)], clear: Some(wgpu::Color::BLACK) };
 //! cached.record(queue, &mut encoder, &targets, |draw| {
-//!     draw.bind(&twins);
-//!     let pass = draw.render_pass();
-//!     pass.set_bind_group(0, globals_group, &[]);
-//!     pass.set_vertex_buffer(0, vertices.slice(..));
-//!     draw.draw(0..3, 0..1);
+//!     draw.set_bind_group(0, globals_group, &[]);
+//!     draw.set_vertex_buffer(0, vertices.slice(..));
+//!     draw.draw(&twins, 0..3, 0..1);
 //! })?;
 //! queue.submit([encoder.finish()]);
 //! # Ok(())
@@ -83,12 +97,21 @@ mod timing;
 mod twins;
 mod vertex;
 
-pub use cached::{clear_depth, render_target, CachedShader, Draw, Options};
+pub use cached::{CachedShader, Draw, Options};
 pub use error::Error;
-pub use formats::{cache_format, texture_format, vertex_format};
 pub use frame::{FrameLayout, Targets, Viewport};
-pub use layouts::{entry_for, plan_groups, plan_layout_entries};
 pub use shadecache_plan as plan;
 pub use shadecache_plan::Plan;
 pub use timing::{NoTimer, PassTime, PassTimer, Timestamps};
 pub use twins::{TwinSources, Twins};
+
+/// What the shadecache toolchain shares with the host to draw its scenes:
+/// the plan's formats and layouts in wgpu's terms, the host's render
+/// targets. Not part of the host's API (no stability promise; hidden from
+/// its documentation): an application has its own.
+#[doc(hidden)]
+pub mod toolchain {
+    pub use crate::cached::{clear_depth, render_target};
+    pub use crate::formats::{cache_format, texture_format, vertex_format};
+    pub use crate::layouts::{entry_for, plan_groups, plan_layout_entries};
+}

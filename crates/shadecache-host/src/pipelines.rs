@@ -66,7 +66,7 @@ pub(crate) struct PipelineInputs<'a> {
 }
 
 /// The pass's pipeline; wgpu's validation errors name the pass.
-pub(crate) fn pipeline(
+pub(crate) async fn pipeline(
     device: &wgpu::Device,
     pass: &Pass,
     source: &str,
@@ -111,7 +111,7 @@ pub(crate) fn pipeline(
         multiview_mask: None,
         cache: None,
     });
-    match pollster::block_on(scope.pop()) {
+    match scope.pop().await {
         None => Ok(pipeline),
         Some(err) => Err(Error::Wgpu(format!("{}: {err}", pass.name))),
     }

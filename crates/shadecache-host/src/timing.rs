@@ -36,6 +36,10 @@ pub struct PassTime {
     pub milliseconds: f64,
 }
 
+/// How long a frame's timestamps are waited for unless set: far past a
+/// frame's time, even on a software rasteriser, short of a hang.
+const DEFAULT_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(10);
+
 /// Timestamp queries around each pass of one frame: begin a frame, record
 /// it through this timer, [`Timestamps::resolve`] into the same encoder,
 /// submit, then [`Timestamps::read`].
@@ -47,6 +51,8 @@ pub struct Timestamps {
     capacity: u32,
     period_ns: f32,
     passes: Vec<String>,
+    /// The longest [`Timestamps::read`] waits for the frame.
+    timeout: std::time::Duration,
 }
 
 impl Timestamps {
@@ -79,7 +85,15 @@ impl Timestamps {
             capacity: passes.max(1),
             period_ns: queue.get_timestamp_period(),
             passes: Vec::new(),
+            timeout: DEFAULT_TIMEOUT,
         })
+    }
+
+    /// Sets how long [`Timestamps::read`] waits for the frame before it
+    /// returns [`crate::Error::Timeout`] (10 s unless set).
+    pub fn with_timeout(mut self, timeout: std::time::Duration) -> Timestamps {
+        self.timeout = timeout;
+        self
     }
 
     /// Resolves this frame's queries; record after the passes.
@@ -93,7 +107,8 @@ impl Timestamps {
     }
 
     /// The frame's pass times, once its commands were submitted; starts
-    /// the next frame.
+    /// the next frame. Waits for the GPU at most the timeout (native
+    /// backends; on the web the map resolves from the event loop).
     pub fn read(&mut self, device: &wgpu::Device) -> Result<Vec<PassTime>, crate::Error> {
         let passes = std::mem::take(&mut self.passes);
         if passes.is_empty() {
@@ -102,8 +117,17 @@ impl Timestamps {
         let slice = self.readback.slice(..passes.len() as u64 * 16);
         slice.map_async(wgpu::MapMode::Read, |_| {});
         device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|err| crate::Error::Wgpu(err.to_string()))?;
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: Some(self.timeout),
+            })
+            .map_err(|err| match err {
+                wgpu::PollError::Timeout => crate::Error::Timeout(format!(
+                    "the frame's timestamps were not ready within {:?}",
+                    self.timeout
+                )),
+                err => crate::Error::Wgpu(err.to_string()),
+            })?;
         let ticks: Vec<u64> = {
             let data = slice
                 .get_mapped_range()

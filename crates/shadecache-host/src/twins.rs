@@ -20,8 +20,9 @@ pub struct TwinSources<'a> {
 }
 
 /// The twins of one draw's buffers: buffers the host fills with last
-/// frame's contents of the application's. Bind them with
-/// [`crate::Draw::bind`] before the draw's calls in every pass.
+/// frame's contents of the application's. Every draw takes them
+/// ([`crate::Draw::draw`], [`crate::Draw::draw_indexed`]), so a draw cannot
+/// be recorded without them.
 ///
 /// When they are first used, in a frame, they are filled with that frame's
 /// contents (there is no last frame): before its passes. After each frame's
@@ -36,6 +37,8 @@ pub struct Twins {
 #[derive(Debug)]
 pub(crate) struct TwinsInner {
     pub id: u64,
+    /// The id of the shader that made them.
+    pub owner: u64,
     /// (the application's buffer, its twin) pairs, copied each frame.
     pub copies: Vec<(wgpu::Buffer, wgpu::Buffer)>,
     /// The cache group's twin entries: binding and buffer.

@@ -247,10 +247,14 @@ fn target(gpu: &Gpu, size: u32, format: wgpu::TextureFormat) -> wgpu::Texture {
 /// How the application's draw call is made.
 #[derive(Clone, Copy)]
 enum Drawn {
-    /// Through [`shadecache_host::Draw::draw_indexed`].
+    /// Through [`shadecache_host::Draw::draw_indexed`] with its own twins.
     ThroughHost,
-    /// On the render pass itself, past the host.
-    OnTheRenderPass,
+    /// With the twins of another shader's draw.
+    WithOthersTwins,
+    /// Its object group set at the cache's group too.
+    OnTheCacheGroup,
+    /// Nothing drawn in the frame.
+    Nothing,
 }
 
 impl App {
@@ -363,17 +367,24 @@ impl App {
         };
         let (groups, twins) = (&self.groups, &self.twins);
         let (vertices, indices) = (&self.vertices, &self.indices);
+        let others = match drawn {
+            Drawn::WithOthersTwins => Some(App::new(gpu, "three-pass")),
+            _ => None,
+        };
+        let cache_group = self.cached.cache_group();
         self.cached
             .record(&gpu.queue, &mut encoder, &targets, |draw| {
-                draw.bind(twins);
-                let pass = draw.render_pass();
-                pass.set_bind_group(0, &groups[0], &[]);
-                pass.set_bind_group(1, &groups[1], &[]);
-                pass.set_vertex_buffer(0, vertices.slice(..));
-                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                match drawn {
-                    Drawn::ThroughHost => draw.draw_indexed(0..6, 0, 0..1),
-                    Drawn::OnTheRenderPass => pass.draw_indexed(0..6, 0, 0..1),
+                draw.set_bind_group(0, &groups[0], &[]);
+                draw.set_bind_group(1, &groups[1], &[]);
+                if let (Drawn::OnTheCacheGroup, Some(group)) = (drawn, cache_group) {
+                    draw.set_bind_group(group, &groups[1], &[]);
+                }
+                draw.set_vertex_buffer(0, vertices.slice(..));
+                draw.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                match (drawn, &others) {
+                    (Drawn::Nothing, _) => {}
+                    (_, Some(others)) => draw.draw_indexed(&others.twins, 0..6, 0, 0..1),
+                    _ => draw.draw_indexed(twins, 0..6, 0, 0..1),
                 }
             })?;
         gpu.queue.submit([encoder.finish()]);
@@ -583,7 +594,7 @@ fn resize_and_reset_give_misses_not_stale_reuse() {
     app.frame(&gpu, 0.0);
     assert!(share_at(&app.ages(&gpu), inside(0.0, SIZE), 1.0) > REUSED);
     let small = 48;
-    app.cached.resize((small, small));
+    app.cached.resize((small, small)).expect("48×48 fits");
     app.targets = vec![target(&gpu, small, wgpu::TextureFormat::Rgba8Unorm)];
     app.frame(&gpu, 0.0);
     assert_eq!(
@@ -700,19 +711,101 @@ fn a_deferred_plan_runs_through_the_host() {
     assert!(hits > REUSED, "moving camera: {hits}");
 }
 
-/// A deferred plan's passes mark each draw's pixels in the stencil, which
-/// only a draw made through `Draw` does: a draw made on the render pass
-/// itself is an error that says how to draw, not a blank frame.
+/// A deferred plan's passes mark each draw's pixels in the stencil: a
+/// frame whose callback draws nothing is an error that says so, not a
+/// blank frame.
 #[test]
-fn a_deferred_draw_made_past_the_host_is_an_error() {
+fn a_deferred_frame_without_draws_is_an_error() {
     let Some(gpu) = gpu() else { return };
     let mut app = App::new(&gpu, "deferred");
     let err = app
-        .record(&gpu, 0.0, Drawn::OnTheRenderPass)
+        .record(&gpu, 0.0, Drawn::Nothing)
         .expect_err("the stencil passes saw no draw");
-    assert!(err.to_string().contains("Draw::draw_indexed"), "{err}");
+    assert!(err.to_string().contains("drew nothing"), "{err}");
     let mut three = App::new(&gpu, "three-pass");
     three
-        .record(&gpu, 0.0, Drawn::OnTheRenderPass)
-        .expect("a plan without stencil takes the render pass's own draws");
+        .record(&gpu, 0.0, Drawn::Nothing)
+        .expect("a plan without stencil records an empty frame");
+}
+
+/// A draw cannot be recorded without its twins: `Draw` has no draw call
+/// that does not take them, and no raw render pass (the doctest on
+/// `Draw` that tries fails to compile). Twins of another shader, or the
+/// cache's group set by the application, are errors from `record`, not
+/// wgpu validation errors that its default handler turns into a panic.
+#[test]
+fn host_record_without_twins_is_an_error_or_does_not_compile() {
+    let Some(gpu) = gpu() else { return };
+    let mut app = App::new(&gpu, "three-pass");
+    let err = app
+        .record(&gpu, 0.0, Drawn::WithOthersTwins)
+        .expect_err("another shader's twins");
+    assert!(
+        matches!(&err, Error::Draw(text) if text.contains("another CachedShader")),
+        "{err}"
+    );
+    assert!(app.cached.cache_group().is_some(), "the fixture binds a cache group");
+    let err = app
+        .record(&gpu, 0.0, Drawn::OnTheCacheGroup)
+        .expect_err("the cache's group");
+    assert!(
+        matches!(&err, Error::Draw(text) if text.contains("the cache's")),
+        "{err}"
+    );
+    app.frame(&gpu, 0.0);
+}
+
+/// `new` and `resize` check the size against the device: zero, or past
+/// its largest 2D texture, is [`Error::Limits`] (wgpu would panic in its
+/// default handler), and a refused resize keeps the cache running at its
+/// old size.
+#[test]
+fn host_resize_beyond_limits_is_an_error() {
+    let Some(gpu) = gpu() else { return };
+    let most = gpu.device.limits().max_texture_dimension_2d;
+    let (plan, files) = variant("three-pass");
+    let made = with_frame(
+        |_| {},
+        |frame| {
+            CachedShader::new(
+                &gpu.device,
+                &plan,
+                |file| files.iter().find(|(n, _)| *n == file).map(|(_, t)| *t),
+                frame,
+                (0, SIZE),
+                Options::default(),
+            )
+        },
+    );
+    assert!(matches!(made, Err(Error::Limits(_))), "{made:?}");
+    let mut app = App::new(&gpu, "three-pass");
+    for size in [(most + 1, SIZE), (SIZE, most + 1), (0, 0)] {
+        let err = app.cached.resize(size).expect_err("beyond the limits");
+        assert!(matches!(&err, Error::Limits(text) if text.contains(&most.to_string())), "{err}");
+        assert_eq!(app.cached.size(), (SIZE, SIZE));
+    }
+    app.frame(&gpu, 0.0);
+}
+
+/// Without its default features the host is async only: nothing in its
+/// dependencies blocks (pollster), so it can serve the web.
+#[test]
+fn host_without_default_features_has_no_blocking_dependency() {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let tree = |features: &[&str]| {
+        let out = std::process::Command::new(&cargo)
+            .args(["tree", "--offline", "-p", "shadecache-host", "-e", "normal"])
+            .args(["--prefix", "none", "--format", "{p}"])
+            .args(features)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .expect("cargo runs");
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let lean = tree(&["--no-default-features"]);
+    assert!(lean.contains("wgpu"), "{lean}");
+    assert!(!lean.contains("pollster"), "{lean}");
+    // The check can fail: with the default features it is there.
+    assert!(tree(&[]).contains("pollster"));
 }

@@ -29,7 +29,7 @@ use std::path::PathBuf;
 
 use planet::Planet;
 use shadecache_host::{
-    render_target, CachedShader, FrameLayout, PassTimer, Plan, Targets, Timestamps, TwinSources,
+    CachedShader, FrameLayout, PassTimer, Plan, Targets, Timestamps, TwinSources,
 };
 
 /// The variant the build script wrote, by the plan's file names.
@@ -271,8 +271,8 @@ fn main() -> Result<(), Box<dyn Error>> {
     })?;
     let mut timer = Timestamps::new(&gpu.device, &gpu.queue, 4);
     let targets =
-        ["original", "cached"].map(|label| render_target(&gpu.device, label, size, COLOR_FORMAT));
-    let depth = render_target(&gpu.device, "depth", size, planet::DEPTH_FORMAT);
+        ["original", "cached"].map(|label| texture(&gpu.device, label, size, COLOR_FORMAT));
+    let depth = texture(&gpu.device, "depth", size, planet::DEPTH_FORMAT);
     let views = targets
         .each_ref()
         .map(|t| t.create_view(&wgpu::TextureViewDescriptor::default()));
@@ -309,8 +309,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             clear: Some(wgpu::Color::TRANSPARENT),
         };
         let draw = |draw: &mut shadecache_host::Draw<'_, '_>| {
-            draw.bind(&twins);
-            planet.draw_cached(draw);
+            planet.draw_cached(draw, &twins);
         };
         match timer.as_mut() {
             Some(timer) => {
@@ -490,4 +489,27 @@ fn write_png(
         image::ExtendedColorType::Rgba8,
     )?;
     Ok(())
+}
+
+/// A 2D texture the passes render into and that can be read back.
+fn texture(
+    device: &wgpu::Device,
+    label: &str,
+    size: (u32, u32),
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: size.0,
+            height: size.1,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
 }

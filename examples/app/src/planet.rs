@@ -114,12 +114,19 @@ impl Planet {
         pass.draw_indexed(0..self.index_count, 0, 0..1);
     }
 
-    /// The same draw in a cached variant's pass: the bindings on its
-    /// render pass, the draw call through the host, which in a deferred
-    /// plan's screen-space passes draws the screen's triangle instead.
-    pub fn draw_cached(&self, draw: &mut shadecache_host::Draw<'_, '_>) {
-        self.bind(draw.render_pass());
-        draw.draw_indexed(0..self.index_count, 0, 0..1);
+    /// The same draw in a cached variant's pass, through the host, with the
+    /// draw's twins (in a deferred plan's screen-space passes the host
+    /// draws the screen's triangle instead).
+    pub fn draw_cached(
+        &self,
+        draw: &mut shadecache_host::Draw<'_, '_>,
+        twins: &shadecache_host::Twins,
+    ) {
+        draw.set_bind_group(0, &self.globals_group, &[]);
+        draw.set_bind_group(1, &self.locals_group, &[]);
+        draw.set_vertex_buffer(0, self.vertices.slice(..));
+        draw.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        draw.draw_indexed(twins, 0..self.index_count, 0, 0..1);
     }
 
     fn bind(&self, pass: &mut wgpu::RenderPass<'_>) {

@@ -176,7 +176,7 @@ impl App {
 }
 
 fn depth_view(gpu: &Gpu, width: u32, height: u32) -> wgpu::TextureView {
-    shadecache_host::render_target(&gpu.device, "depth", (width, height), planet::DEPTH_FORMAT)
+    crate::texture(&gpu.device, "depth", (width, height), planet::DEPTH_FORMAT)
         .create_view(&wgpu::TextureViewDescriptor::default())
 }
 
@@ -187,7 +187,11 @@ impl State {
         self.config.height = height;
         self.surface.configure(&self.gpu.device, &self.config);
         self.depth = depth_view(&self.gpu, width, height);
-        self.cached.resize((width, height));
+        // A size past the device's textures keeps the old cache: the
+        // frame's own targets fail the same way, in wgpu, below.
+        if let Err(err) = self.cached.resize((width, height)) {
+            eprintln!("{err}");
+        }
     }
 
     fn draw(&mut self) -> Result<(), Box<dyn Error>> {
@@ -221,8 +225,7 @@ impl State {
             };
             let (planet, twins) = (&self.planet, &self.twins);
             let draw = |draw: &mut shadecache_host::Draw<'_, '_>| {
-                draw.bind(twins);
-                planet.draw_cached(draw);
+                planet.draw_cached(draw, twins);
             };
             match self.timer.as_mut() {
                 Some(timer) => self.cached.record_timed(
