@@ -482,12 +482,12 @@ impl SliceFacts {
                 facts.flags |= flag;
             }
         };
-        set(SliceFacts::COMPUTES, !moves_data_only(expr));
+        set(SliceFacts::COMPUTES, !proc::kind(expr).moves_data_only());
         set(
             SliceFacts::READS_ARGUMENT,
             matches!(expr, Expression::FunctionArgument(_)),
         );
-        set(SliceFacts::DERIVATIVES, takes_derivatives(expr));
+        set(SliceFacts::DERIVATIVES, proc::takes_derivatives(expr));
         let carried = carried_builtin(module, function, exprs, expr);
         set(
             SliceFacts::SAMPLE_INDEX,
@@ -740,37 +740,6 @@ fn depth_only(expr: &Expression) -> bool {
         } => pattern[..size as usize]
             .iter()
             .all(|c| matches!(c, naga::SwizzleComponent::Z | naga::SwizzleComponent::W)),
-        _ => false,
-    }
-}
-
-/// Whether an expression only moves data: no arithmetic, no texture access.
-fn moves_data_only(expr: &Expression) -> bool {
-    matches!(
-        expr,
-        Expression::Literal(_)
-            | Expression::Constant(_)
-            | Expression::Override(_)
-            | Expression::ZeroValue(_)
-            | Expression::FunctionArgument(_)
-            | Expression::GlobalVariable(_)
-            | Expression::LocalVariable(_)
-            | Expression::Load { .. }
-            | Expression::Access { .. }
-            | Expression::AccessIndex { .. }
-            | Expression::Swizzle { .. }
-            | Expression::Splat { .. }
-            | Expression::Compose { .. }
-    )
-}
-
-/// Whether an expression takes implicit derivatives.
-fn takes_derivatives(expr: &Expression) -> bool {
-    match *expr {
-        Expression::Derivative { .. } => true,
-        Expression::ImageSample { level, .. } => {
-            matches!(level, naga::SampleLevel::Auto | naga::SampleLevel::Bias(_))
-        }
         _ => false,
     }
 }

@@ -2,10 +2,10 @@ use std::cell::RefCell;
 use std::collections::HashMap;
 
 use naga::valid::{FunctionInfo, ModuleInfo};
-use naga::{Expression, Function, Handle, MathFunction as M, TypeInner};
+use naga::{BinaryOperator as B, Expression, Function, Handle, MathFunction as M, TypeInner};
 
 use super::Weights;
-use crate::proc::{self, FunctionLayout, PointerRoot};
+use crate::proc::{self, ExpressionKind, FunctionLayout, PointerRoot};
 
 /// Estimates the run-time cost of expressions and functions of one module.
 #[derive(Debug)]
@@ -50,78 +50,53 @@ impl<'m> CostModel<'m> {
         let ty = |h: Handle<Expression>| info[h].ty.inner_with(types);
         let width = |h: Handle<Expression>| proc::components(ty(h)) as f64;
         let n = width(expr);
-        match function.expressions[expr] {
-            Expression::Literal(_)
-            | Expression::Constant(_)
-            | Expression::Override(_)
-            | Expression::ZeroValue(_)
-            | Expression::FunctionArgument(_)
-            | Expression::GlobalVariable(_)
-            | Expression::LocalVariable(_)
-            | Expression::Compose { .. }
-            | Expression::AccessIndex { .. }
-            | Expression::Splat { .. }
-            | Expression::Swizzle { .. } => 0.0,
+        let expression = &function.expressions[expr];
+        match proc::kind(expression) {
+            ExpressionKind::Name | ExpressionKind::Move => 0.0,
             // A dynamic index is an address computation.
-            Expression::Access { .. } => w.arithmetic,
-            Expression::Load { pointer } => match proc::pointer_root(function, pointer) {
-                Some(PointerRoot::Global(global)) => {
-                    match self.module.global_variables[global].space {
-                        naga::AddressSpace::Uniform
-                        | naga::AddressSpace::Storage { .. }
-                        | naga::AddressSpace::Immediate => w.load,
-                        _ => 0.0,
-                    }
+            ExpressionKind::DynamicIndex => w.arithmetic,
+            ExpressionKind::Load => self.load(function, expression),
+            ExpressionKind::Sample => w.texture_sample,
+            ExpressionKind::TexelLoad => w.texture_load,
+            ExpressionKind::Query => w.texture_query,
+            ExpressionKind::Arithmetic => match *expression {
+                Expression::Relational { argument, .. } => w.arithmetic * width(argument),
+                Expression::Binary { op, left, right } => {
+                    let weight = match op {
+                        B::Divide | B::Modulo => w.division,
+                        _ => w.arithmetic,
+                    };
+                    weight * binary_operations(op, ty(left), ty(right), n)
                 }
+                Expression::Math { fun, arg, .. } => self.math(fun, width(arg), n),
+                // Unary operators, `select`, conversions: one operation a
+                // component.
+                _ => w.arithmetic * n,
+            },
+            ExpressionKind::Derivative => w.derivative * n,
+            ExpressionKind::Call => match *expression {
+                Expression::CallResult(callee) => self.function(callee) + w.call,
+                _ => w.call,
+            },
+            // They read memory or other invocations.
+            ExpressionKind::StatementResult => w.load,
+        }
+    }
+
+    /// A load's cost: a memory read from a uniform, storage or immediate
+    /// variable, nothing from a local (a register).
+    fn load(&self, function: &Function, expression: &Expression) -> f64 {
+        let Expression::Load { pointer } = *expression else {
+            return 0.0;
+        };
+        match proc::pointer_root(function, pointer) {
+            Some(PointerRoot::Global(global)) => match self.module.global_variables[global].space {
+                naga::AddressSpace::Uniform
+                | naga::AddressSpace::Storage { .. }
+                | naga::AddressSpace::Immediate => self.weights.load,
                 _ => 0.0,
             },
-            Expression::ImageSample { .. } => w.texture_sample,
-            Expression::ImageLoad { .. } => w.texture_load,
-            Expression::ImageQuery { .. } | Expression::ArrayLength(_) => w.texture_query,
-            Expression::Unary { .. } | Expression::Select { .. } | Expression::As { .. } => {
-                w.arithmetic * n
-            }
-            Expression::Relational { argument, .. } => w.arithmetic * width(argument),
-            Expression::Binary { op, left, right } => {
-                use naga::BinaryOperator as B;
-                let weight = match op {
-                    B::Divide | B::Modulo => w.division,
-                    _ => w.arithmetic,
-                };
-                let ops = match (ty(left), ty(right)) {
-                    // matrix × vector, vector × matrix: one multiply-add per
-                    // matrix element.
-                    (&TypeInner::Matrix { columns, rows, .. }, &TypeInner::Vector { .. })
-                    | (&TypeInner::Vector { .. }, &TypeInner::Matrix { columns, rows, .. })
-                        if op == B::Multiply =>
-                    {
-                        columns as u32 as f64 * rows as u32 as f64
-                    }
-                    // (r × k) · (k × c): r·k·c multiply-adds.
-                    (
-                        &TypeInner::Matrix {
-                            columns: k,
-                            rows: r,
-                            ..
-                        },
-                        &TypeInner::Matrix { columns: c, .. },
-                    ) if op == B::Multiply => r as u32 as f64 * k as u32 as f64 * c as u32 as f64,
-                    _ => n,
-                };
-                weight * ops
-            }
-            Expression::Derivative { .. } => w.derivative * n,
-            Expression::Math { fun, arg, .. } => self.math(fun, width(arg), n),
-            Expression::CallResult(callee) => self.function(callee) + w.call,
-            Expression::AtomicResult { .. }
-            | Expression::WorkGroupUniformLoadResult { .. }
-            | Expression::SubgroupBallotResult
-            | Expression::SubgroupOperationResult { .. }
-            | Expression::RayQueryProceedResult
-            | Expression::RayQueryGetIntersection { .. }
-            | Expression::RayQueryVertexPositions { .. }
-            | Expression::CooperativeLoad { .. }
-            | Expression::CooperativeMultiplyAdd { .. } => w.load,
+            _ => 0.0,
         }
     }
 
@@ -229,5 +204,30 @@ impl<'m> CostModel<'m> {
             })
             .sum();
         expressions + void_calls
+    }
+}
+
+/// The multiply-adds of a binary operation on operands of types `left` and
+/// `right` with a result of `n` components.
+fn binary_operations(op: B, left: &TypeInner, right: &TypeInner, n: f64) -> f64 {
+    match (left, right) {
+        // matrix × vector, vector × matrix: one multiply-add per matrix
+        // element.
+        (&TypeInner::Matrix { columns, rows, .. }, &TypeInner::Vector { .. })
+        | (&TypeInner::Vector { .. }, &TypeInner::Matrix { columns, rows, .. })
+            if op == B::Multiply =>
+        {
+            columns as u32 as f64 * rows as u32 as f64
+        }
+        // (r × k) · (k × c): r·k·c multiply-adds.
+        (
+            &TypeInner::Matrix {
+                columns: k,
+                rows: r,
+                ..
+            },
+            &TypeInner::Matrix { columns: c, .. },
+        ) if op == B::Multiply => r as u32 as f64 * k as u32 as f64 * c as u32 as f64,
+        _ => n,
     }
 }

@@ -9,6 +9,9 @@
 //! which branch conditions govern it, the expression graph needs every value
 //! a statement consumes — so they are computed here once per function.
 //!
+//! [`kind`] says what each naga expression does, in the one exhaustive
+//! match the analysis and the cost model share.
+//!
 //! It also copies IR between modules: [`remap`] maps the handles of one
 //! expression or statement, [`import`] copies a whole module into another
 //! (the cache helpers into a rewrite, a separate vertex module into the
@@ -16,12 +19,14 @@
 
 pub mod import;
 pub mod inline;
+mod kind;
 mod operands;
 mod placement;
 mod reaching;
 pub mod remap;
 mod stages;
 
+pub use kind::{kind, takes_derivatives, ExpressionKind};
 pub use operands::{operands, pointer_root, PointerRoot};
 pub use placement::{
     each_spanned_statement, each_statement, has_effects, layout, CallSite, ExitSite,

@@ -252,27 +252,29 @@ fn derivative_in(module: &Module, function: &Function, statement: &Statement) ->
     }
 }
 
-/// Describes `expr` if it takes implicit derivatives.
+/// Describes `expr` if it takes implicit derivatives (which expressions
+/// do is `proc::takes_derivatives`'s answer; this names them).
 pub fn implicit_derivative(expr: &Expression) -> Option<String> {
-    match *expr {
-        Expression::Derivative { axis, .. } => Some(
-            match axis {
-                naga::DerivativeAxis::X => "dpdx",
-                naga::DerivativeAxis::Y => "dpdy",
-                naga::DerivativeAxis::Width => "fwidth",
-            }
-            .into(),
-        ),
-        Expression::ImageSample {
-            level, depth_ref, ..
-        } => match level {
-            naga::SampleLevel::Auto if depth_ref.is_some() => Some("textureSampleCompare".into()),
-            naga::SampleLevel::Auto => Some("textureSample".into()),
-            naga::SampleLevel::Bias(_) => Some("textureSampleBias".into()),
-            _ => None,
-        },
-        _ => None,
+    if !crate::proc::takes_derivatives(expr) {
+        return None;
     }
+    let name = match *expr {
+        Expression::Derivative { axis, .. } => match axis {
+            naga::DerivativeAxis::X => "dpdx",
+            naga::DerivativeAxis::Y => "dpdy",
+            naga::DerivativeAxis::Width => "fwidth",
+        },
+        Expression::ImageSample {
+            level: naga::SampleLevel::Bias(_),
+            ..
+        } => "textureSampleBias",
+        Expression::ImageSample {
+            depth_ref: Some(_), ..
+        } => "textureSampleCompare",
+        Expression::ImageSample { .. } => "textureSample",
+        _ => "an implicit derivative",
+    };
+    Some(name.into())
 }
 
 /// Whether calling `function` takes implicit derivatives, directly or
