@@ -142,9 +142,24 @@ impl<'a> SceneInputs<'a> {
         let scene_meshes: Vec<scene::Mesh> = scene
             .objects
             .iter()
-            .map(|object| object.mesh.build(dir))
+            .map(|object| Ok(object.mesh.build(dir)?.skinned(object.skin.as_ref())))
             .collect::<Result<_, String>>()
             .map_err(fail)?;
+        let skinned = scene.objects.iter().any(|object| object.skin.is_some());
+        for attribute in &reference_plan.vertex_layout {
+            let source = scene::mesh::VertexSource::of(attribute, &scene.vertex_inputs);
+            let joint_input = matches!(
+                source,
+                Ok(scene::mesh::VertexSource::JointIndices
+                    | scene::mesh::VertexSource::JointWeights)
+            );
+            if joint_input && !skinned {
+                defaulted.push(format!(
+                    "vertex input @location({}) `{}` = joint 0 with weight 1 (no object has a `[objects.skin]`)",
+                    attribute.location, attribute.name
+                ));
+            }
+        }
         let layout = &reference_plan.vertex_layout;
         let meshes: Vec<runtime::Mesh> = scene_meshes
             .iter()
@@ -185,10 +200,19 @@ impl<'a> SceneInputs<'a> {
             .map(|(object, mesh)| scene.deformed(object, mesh, frame))
             .collect();
         if !self.shadow_maps.is_empty() {
+            // Skinned meshes cast the shadow of their pose.
+            let posed: Vec<Option<scene::Mesh>> = scene_meshes
+                .iter()
+                .enumerate()
+                .map(|(object, mesh)| scene.posed(object, mesh, &state))
+                .collect();
             let casters: Vec<&scene::Mesh> = scene_meshes
                 .iter()
                 .zip(&deformed)
-                .map(|(mesh, deformed)| deformed.as_ref().unwrap_or(mesh))
+                .zip(&posed)
+                .map(|((mesh, deformed), posed)| {
+                    posed.as_ref().or(deformed.as_ref()).unwrap_or(mesh)
+                })
                 .collect();
             let map = std::sync::Arc::new(scene::shadow::render(&state, &casters));
             for &key in &self.shadow_maps {

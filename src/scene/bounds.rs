@@ -119,6 +119,12 @@ pub(super) fn check(scene: &Scene, file: &Arc<SourceFile>) -> Result<(), Error> 
                 &["objects", &at, "mesh"],
             );
         }
+        if let Some(Err(message)) = object.skin.as_ref().map(|skin| skin.check()) {
+            return fail(
+                format!("object {index}'s skin: {message}"),
+                &["objects", &at, "skin"],
+            );
+        }
     }
     Ok(())
 }
@@ -205,6 +211,14 @@ fn mesh(source: &MeshSource) -> Option<String> {
             size, subdivisions, ..
         } => positive("size", size).or_else(|| quads("subdivisions²", subdivisions, subdivisions)),
         MeshSource::Cube { size } => positive("size", size),
+        MeshSource::Cylinder {
+            radius,
+            length,
+            rings,
+            segments,
+        } => positive("radius", radius)
+            .or_else(|| positive("length", length))
+            .or_else(|| quads("rings × segments", rings, segments)),
         MeshSource::Fullscreen | MeshSource::Obj { .. } | MeshSource::Gltf { .. } => None,
     }
 }

@@ -58,13 +58,36 @@ pub const ROLES: &[(&str, &str)] = &[
     ),
     ("time", "seconds since the first frame (f32)"),
     ("resolution", "the frame's size in pixels (vec2<f32>)"),
+    (
+        "joint_matrices",
+        "a skinned object's joints' matrices, element i the model matrix times joint i's pose (an array of mat4x4<f32>, uniform or storage)",
+    ),
 ];
+
+/// Names engines give their joint-matrix arrays (Bevy's `joint_matrices`,
+/// others' `joints`, `bones`): they take `joint_matrices` by name.
+const JOINT_ARRAYS: &[&str] = &["joints", "joint_matrices", "bones", "bone_matrices"];
 
 /// The role a member takes by its own name (the last part of a flattened
 /// one: `lights[0].light_position` takes `light_position`).
 pub fn implicit_role(member: &str) -> Option<&'static str> {
     let last = member.rsplit('.').next().unwrap_or(member);
+    // A flattened uniform array's element (`joints[3]`) is the array's.
+    let array = last.split('[').next().unwrap_or(last);
+    if JOINT_ARRAYS.contains(&array) {
+        return Some("joint_matrices");
+    }
     SIMULATED.iter().copied().find(|s| *s == last)
+}
+
+/// The element a flattened member is of its innermost array: 3 for
+/// `skin.joints[3]`, 0 for a member that is not an element.
+pub fn element_index(member: &str) -> usize {
+    member
+        .rsplit_once('[')
+        .and_then(|(_, rest)| rest.strip_suffix(']'))
+        .and_then(|index| index.parse().ok())
+        .unwrap_or(0)
 }
 
 /// Whether a member of `shape` can take `role`.
@@ -180,11 +203,30 @@ fn scalar_shape(scalar: naga::Scalar, n: u32) -> Shape {
     }
 }
 
+/// Where a simulated value is written: the draw's placement, its object,
+/// and which element of an array (a joint's index).
+#[derive(Clone, Copy, Debug)]
+pub struct Placement {
+    pub world_from_local: Mat4,
+    pub object: usize,
+    pub element: usize,
+}
+
 /// The value of a simulated member `name` in frame `state`, for a draw
 /// placed by `world_from_local`; `None` when the simulation does not fill
 /// `name`.
-pub fn simulated(name: &str, state: &FrameState, world_from_local: Mat4) -> Option<Vec<f32>> {
+pub fn simulated(name: &str, state: &FrameState, at: Placement) -> Option<Vec<f32>> {
+    let world_from_local = at.world_from_local;
     Some(match name {
+        "joint_matrices" => {
+            let pose = state
+                .joints
+                .get(at.object)
+                .and_then(|joints| joints.get(at.element))
+                .copied()
+                .unwrap_or(Mat4::IDENTITY);
+            (world_from_local * pose).to_cols_array().to_vec()
+        }
         "clip_from_world" => state.clip_from_world.to_cols_array().to_vec(),
         "clip_from_view" => state.clip_from_view.to_cols_array().to_vec(),
         "view_from_world" => state.view_from_world.to_cols_array().to_vec(),

@@ -6,13 +6,19 @@ use std::path::Path;
 use glam::{Vec2, Vec3};
 use serde::Deserialize;
 
-/// A triangle mesh with per-vertex position, normal and texture coordinate.
+use super::skin::{Influence, Skin};
+
+/// A triangle mesh with per-vertex position, normal and texture coordinate,
+/// and, when skinned, each vertex's joints and weights.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
     pub uvs: Vec<Vec2>,
     pub indices: Vec<u32>,
+    /// Per vertex, for a skinned object ([`super::skin`]); empty: every
+    /// vertex follows joint 0 alone.
+    pub influences: Vec<Influence>,
 }
 
 /// How a scene describes a mesh.
@@ -57,6 +63,19 @@ pub enum MeshSource {
         #[serde(default = "one")]
         size: f32,
     },
+    /// A closed tube along x, centred on the origin: `rings` rings along
+    /// its length (enough for a skin to bend it smoothly), `segments`
+    /// around.
+    Cylinder {
+        #[serde(default = "half")]
+        radius: f32,
+        #[serde(default = "two_units")]
+        length: f32,
+        #[serde(default = "rings")]
+        rings: u32,
+        #[serde(default = "segments")]
+        segments: u32,
+    },
     /// One triangle, for a vertex stage that places its vertices from
     /// `@builtin(vertex_index)` (a fullscreen pass): indices 0, 1, 2; its
     /// vertex data are a triangle covering the view in clip space, which
@@ -75,6 +94,12 @@ fn one() -> f32 {
 }
 fn tube() -> f32 {
     0.35
+}
+fn half() -> f32 {
+    0.5
+}
+fn two_units() -> f32 {
+    2.0
 }
 fn rings() -> u32 {
     48
@@ -142,6 +167,12 @@ impl MeshSource {
                 })
             }
             MeshSource::Cube { size } => cube(size),
+            MeshSource::Cylinder {
+                radius,
+                length,
+                rings,
+                segments,
+            } => cylinder(radius, length, rings.max(1), segments.max(3)),
             MeshSource::Fullscreen => Mesh {
                 positions: vec![
                     Vec3::new(-1.0, -1.0, 0.0),
@@ -155,11 +186,48 @@ impl MeshSource {
                     Vec2::new(0.0, -1.0),
                 ],
                 indices: vec![0, 1, 2],
+                influences: Vec::new(),
             },
             MeshSource::Obj { ref file } => obj(&dir.join(file))?,
             MeshSource::Gltf { ref file } => gltf(&dir.join(file))?,
         })
     }
+}
+
+/// A tube along x with flat caps, each cap its own vertices (a hard edge).
+fn cylinder(radius: f32, length: f32, rings: u32, segments: u32) -> Mesh {
+    let mut mesh = grid(rings, segments, |u, v| {
+        let a = TAU * v;
+        let n = Vec3::new(0.0, a.cos(), a.sin());
+        (Vec3::new((u - 0.5) * length, 0.0, 0.0) + n * radius, n)
+    });
+    for side in [-1.0f32, 1.0] {
+        let x = side * length * 0.5;
+        let normal = Vec3::new(side, 0.0, 0.0);
+        let centre = mesh.positions.len() as u32;
+        mesh.positions.push(Vec3::new(x, 0.0, 0.0));
+        mesh.normals.push(normal);
+        mesh.uvs.push(Vec2::splat(0.5));
+        for k in 0..=segments {
+            let a = TAU * k as f32 / segments as f32;
+            mesh.positions
+                .push(Vec3::new(x, a.cos() * radius, a.sin() * radius));
+            mesh.normals.push(normal);
+            mesh.uvs
+                .push(Vec2::new(0.5 + 0.5 * a.cos(), 0.5 + 0.5 * a.sin()));
+        }
+        for k in 0..segments {
+            let (a, b) = (centre + 1 + k, centre + 2 + k);
+            // Counter-clockwise seen from outside the cap.
+            if side > 0.0 {
+                mesh.indices.extend([centre, a, b]);
+            } else {
+                mesh.indices.extend([centre, b, a]);
+            }
+        }
+    }
+    orient_outwards(&mut mesh);
+    mesh
 }
 
 /// A (rings × segments)-quad grid over (u, v) in [0, 1]², mapped by `at`
@@ -447,6 +515,11 @@ pub enum VertexSource {
     IntegerNormal,
     /// The scene's constant for the input (`[vertex_inputs]`).
     Constant([f32; 4]),
+    /// A skinned vertex's joint indices (integers; joint 0 for a mesh
+    /// without a skin).
+    JointIndices,
+    /// A skinned vertex's joint weights (1, 0, 0, 0 without a skin).
+    JointWeights,
 }
 
 impl VertexSource {
@@ -466,6 +539,14 @@ impl VertexSource {
         }
         let name = attribute.name.to_ascii_lowercase();
         let has = |words: &[&str]| words.iter().any(|w| name.contains(w));
+        // Engines' skinning inputs: Bevy's `joint_indices`, `joint_weights`,
+        // glTF's JOINTS_0, WEIGHTS_0, others' bone indices and weights.
+        if has(&["weight"]) && attribute.format.is_float32() {
+            return Ok(VertexSource::JointWeights);
+        }
+        if has(&["joint", "bone"]) && !attribute.format.is_float() {
+            return Ok(VertexSource::JointIndices);
+        }
         let by_name = if has(&["pos"]) {
             Some(VertexSource::Position)
         } else if has(&["norm"]) {
@@ -546,8 +627,16 @@ impl Mesh {
             .collect::<Result<_, String>>()?;
         let mut bytes = Vec::new();
         for i in 0..self.positions.len() {
+            let influence = self.influences.get(i).copied().unwrap_or(Influence::RIGID);
             for &(source, width, word) in &sources {
                 let values: [f32; 4] = match source {
+                    VertexSource::JointIndices => {
+                        for joint in &influence.joints[..width.min(4)] {
+                            bytes.extend(joint.to_le_bytes());
+                        }
+                        continue;
+                    }
+                    VertexSource::JointWeights => influence.weights,
                     VertexSource::Integer => {
                         for _ in 0..width.min(4) {
                             bytes.extend(word.to_le_bytes());
@@ -590,6 +679,14 @@ impl Mesh {
 
     pub fn triangles(&self) -> usize {
         self.indices.len() / 3
+    }
+
+    /// Paints `skin`'s weights on every vertex, where it lies.
+    pub fn skinned(mut self, skin: Option<&Skin>) -> Mesh {
+        if let Some(skin) = skin {
+            self.influences = self.positions.iter().map(|&p| skin.influence(p)).collect();
+        }
+        self
     }
 }
 

@@ -30,6 +30,7 @@ pub mod layout;
 pub mod mesh;
 pub mod roles;
 pub mod shadow;
+pub mod skin;
 pub mod storage;
 pub mod textures;
 pub mod uniforms;
@@ -329,6 +330,10 @@ pub struct Object {
     /// With `deformation`: a ripple along the normals.
     #[serde(default)]
     pub deformation: Option<Deformation>,
+    /// A chain of joints that bends the mesh on the GPU, as engines skin
+    /// characters (bending with `deformation`).
+    #[serde(default)]
+    pub skin: Option<skin::Skin>,
     /// Draw the mesh this many times in one instanced draw call, placed
     /// and moved per instance.
     #[serde(default)]
@@ -390,6 +395,10 @@ pub struct FrameState {
     /// Each object's instances' transforms in the object's space (one
     /// identity for an object that is not instanced).
     pub instances: Vec<Vec<Mat4>>,
+    /// Each object's joints' poses in its mesh's space (one identity for
+    /// an object without a skin): a skinning matrix is the object's
+    /// `world_from_local` times its joint's pose.
+    pub joints: Vec<Vec<Mat4>>,
 }
 
 impl FrameState {
@@ -480,6 +489,7 @@ impl Scene {
             rotation_degrees_per_frame: [0.0, 2.0, 0.0],
             translation_per_frame: [0.025, 0.0, 0.0],
             deformation: None,
+            skin: None,
             instances: None,
             storage: BTreeMap::new(),
         });
@@ -594,7 +604,11 @@ impl Scene {
         let Some(object) = self.objects.get(index) else {
             return false;
         };
-        let deforms = object.deformation.is_some() && self.has(Effect::Deformation);
+        let bends = object
+            .skin
+            .as_ref()
+            .is_some_and(|skin| skin.bend_degrees_per_frame != 0.0);
+        let deforms = (object.deformation.is_some() || bends) && self.has(Effect::Deformation);
         let nonzero = |v: &[f32]| v.iter().any(|x| *x != 0.0);
         let travels = nonzero(&object.rotation_degrees_per_frame)
             || nonzero(&object.translation_per_frame)
@@ -714,7 +728,32 @@ impl Scene {
             resolution: glam::Vec2::new(self.size[0] as f32, self.size[1] as f32),
             objects,
             instances,
+            joints: self.joint_poses(t),
         }
+    }
+
+    /// Each object's joints' poses at frame `t` (bending only with
+    /// `deformation`).
+    fn joint_poses(&self, t: f32) -> Vec<Vec<Mat4>> {
+        let bending = if self.has(Effect::Deformation) {
+            t
+        } else {
+            0.0
+        };
+        self.objects
+            .iter()
+            .map(|object| match &object.skin {
+                Some(skin) => skin.poses(bending),
+                None => vec![Mat4::IDENTITY],
+            })
+            .collect()
+    }
+
+    /// Object `index`'s mesh in the pose of `state`, for what the CPU
+    /// needs of it (shadow casters, silhouettes); `None` without a skin.
+    pub fn posed(&self, index: usize, mesh: &Mesh, state: &FrameState) -> Option<Mesh> {
+        self.objects.get(index)?.skin.as_ref()?;
+        Some(skin::pose(mesh, state.joints.get(index)?))
     }
 }
 

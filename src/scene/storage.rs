@@ -216,9 +216,23 @@ pub fn check(buffers: &[StorageBuffer], scene: &Scene) -> Result<(), Error> {
         }
         // Per object: its instance count against the array, and every
         // value against its member's shape and that count.
+        let joints = buffer
+            .members
+            .iter()
+            .any(|m| scene.role(name, &m.name) == Some("joint_matrices"));
         for (index, object) in scene.objects.iter().enumerate() {
             let instances = object.instance_count();
-            if let Elements::Fixed(n) = buffer.elements {
+            let skin_joints = object.skin.as_ref().map_or(1, |skin| skin.joints);
+            if let (Elements::Fixed(n), true) = (buffer.elements, joints) {
+                if n < skin_joints {
+                    return Err(scene.error(
+                        format!(
+                            "storage `{name}` holds {n} joint matrices, and object {index}'s skin has {skin_joints} joints"
+                        ),
+                        None,
+                    ));
+                }
+            } else if let Elements::Fixed(n) = buffer.elements {
                 if n != instances {
                     return Err(scene.error(
                         format!(
@@ -320,7 +334,16 @@ pub fn fill(
     object: usize,
 ) -> Result<Vec<u8>, String> {
     let instances = scene.objects.get(object).map_or(1, |o| o.instance_count());
-    let len = buffer.len(instances);
+    let joints = buffer
+        .members
+        .iter()
+        .any(|m| scene.role(&buffer.name, &m.name) == Some("joint_matrices"));
+    // A joint-matrix array holds one element per joint, whatever the
+    // instance count.
+    let len = match (joints, buffer.elements) {
+        (true, Elements::Runtime) => state.joints.get(object).map_or(1, |j| j.len() as u32),
+        _ => buffer.len(instances),
+    };
     let mut bytes = vec![0u8; len as usize * buffer.stride as usize];
     // An element's model matrix is relative to the object's when a uniform
     // carries the object's: by its name, or by a role in `[roles]`.
@@ -353,7 +376,12 @@ pub fn fill(
                 state.objects[object] * instance
             };
             let role = scene.role(&buffer.name, &member.name);
-            if let Some(floats) = role.and_then(|r| layout::simulated(r, state, world_from_local)) {
+            let at = layout::Placement {
+                world_from_local,
+                object,
+                element: element as usize,
+            };
+            if let Some(floats) = role.and_then(|r| layout::simulated(r, state, at)) {
                 layout::write_floats(&mut bytes, base, member, &floats)?;
             } else if let Some(values) = &given {
                 layout::write_numbers(&mut bytes, base, member, &values[element as usize])?;

@@ -121,8 +121,12 @@ pub fn fill(
             continue;
         }
         let role = scene.role(&buffer.name, &member.name);
-        if let Some(floats) = role.and_then(|r| layout::simulated(r, state, state.objects[object]))
-        {
+        let at = layout::Placement {
+            world_from_local: state.objects[object],
+            object,
+            element: layout::element_index(&member.name),
+        };
+        if let Some(floats) = role.and_then(|r| layout::simulated(r, state, at)) {
             layout::write_floats(&mut bytes, 0, member, &floats)?;
             continue;
         }

@@ -200,7 +200,15 @@ fn build_script_example_builds_and_runs() {
 fn build_script_feature_set_has_no_gpu_dependencies() {
     let tree = |features: &[&str]| {
         let output = Command::new(env!("CARGO"))
-            .args(["tree", "--offline", "--locked", "-p", "shadecache", "-e", "normal"])
+            .args([
+                "tree",
+                "--offline",
+                "--locked",
+                "-p",
+                "shadecache",
+                "-e",
+                "normal",
+            ])
             .args(["--prefix", "none", "--format", "{p}"])
             .args(features)
             .current_dir(root())
@@ -218,8 +226,15 @@ fn build_script_feature_set_has_no_gpu_dependencies() {
             .collect::<std::collections::BTreeSet<String>>()
     };
     let lean = tree(&["--no-default-features"]);
-    assert_eq!(lean, tree(&[]), "the default features are the build script's");
-    assert!(lean.contains("naga") && lean.contains("naga_oil"), "{lean:?}");
+    assert_eq!(
+        lean,
+        tree(&[]),
+        "the default features are the build script's"
+    );
+    assert!(
+        lean.contains("naga") && lean.contains("naga_oil"),
+        "{lean:?}"
+    );
     for gpu in [
         "wgpu",
         "wgpu-core",
@@ -232,7 +247,10 @@ fn build_script_feature_set_has_no_gpu_dependencies() {
         "image",
         "pollster",
     ] {
-        assert!(!lean.contains(gpu), "{gpu} in the build script's tree: {lean:?}");
+        assert!(
+            !lean.contains(gpu),
+            "{gpu} in the build script's tree: {lean:?}"
+        );
     }
     let full = tree(&["--features", "profile"]);
     assert!(full.contains("wgpu") && full.contains("image"), "{full:?}");

@@ -21,4 +21,5 @@ mod profile;
 mod real_shaders;
 mod report_page;
 mod rewrite;
+mod skinned;
 mod util;

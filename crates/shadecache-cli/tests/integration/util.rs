@@ -185,8 +185,14 @@ pub fn near(mask: &[bool], w: usize, i: usize) -> bool {
 /// `frame`, rasterised on the CPU at pixel centres with the scene's own
 /// matrices (`w × h`, row-major, y down).
 pub fn silhouette(scene: &Scene, object: usize, frame: u32, w: usize, h: usize) -> Vec<bool> {
-    let mesh = scene.objects[object].mesh.build(Path::new(".")).unwrap();
     let state = scene.frame(frame, w as f32 / h as f32);
+    // A skinned object's outline is its pose's.
+    let rest = scene.objects[object]
+        .mesh
+        .build(Path::new("."))
+        .unwrap()
+        .skinned(scene.objects[object].skin.as_ref());
+    let mesh = scene.posed(object, &rest, &state).unwrap_or(rest);
     let instances: Vec<Vec<glam::Vec2>> = state.instances[object]
         .iter()
         .map(|instance| {
