@@ -350,7 +350,8 @@ impl BFrames {
             mapped_at_creation: false,
         });
         let sampler = linear_clamp(device);
-        let target = |label, format| shadecache_host::toolchain::render_target(device, label, size, format);
+        let target =
+            |label, format| shadecache_host::toolchain::render_target(device, label, size, format);
         Ok(BFrames {
             pipelines,
             layout,

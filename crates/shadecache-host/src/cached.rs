@@ -117,9 +117,7 @@ impl CachedShader {
         size: (u32, u32),
         options: Options,
     ) -> Result<CachedShader, Error> {
-        pollster::block_on(Self::new_async(
-            device, plan, shader, frame, size, options,
-        ))
+        pollster::block_on(Self::new_async(device, plan, shader, frame, size, options))
     }
 
     /// Makes every pass's pipeline on `device` from the plan, the pass
@@ -351,7 +349,9 @@ impl CachedShader {
             }
         }
         if let Some(err) = scope.pop().await {
-            return Err(Error::Wgpu(format!("the cache group (group {group}): {err}")));
+            return Err(Error::Wgpu(format!(
+                "the cache group (group {group}): {err}"
+            )));
         }
         *twins
             .bind_groups

@@ -744,7 +744,10 @@ fn host_record_without_twins_is_an_error_or_does_not_compile() {
         matches!(&err, Error::Draw(text) if text.contains("another CachedShader")),
         "{err}"
     );
-    assert!(app.cached.cache_group().is_some(), "the fixture binds a cache group");
+    assert!(
+        app.cached.cache_group().is_some(),
+        "the fixture binds a cache group"
+    );
     let err = app
         .record(&gpu, 0.0, Drawn::OnTheCacheGroup)
         .expect_err("the cache's group");
@@ -781,7 +784,10 @@ fn host_resize_beyond_limits_is_an_error() {
     let mut app = App::new(&gpu, "three-pass");
     for size in [(most + 1, SIZE), (SIZE, most + 1), (0, 0)] {
         let err = app.cached.resize(size).expect_err("beyond the limits");
-        assert!(matches!(&err, Error::Limits(text) if text.contains(&most.to_string())), "{err}");
+        assert!(
+            matches!(&err, Error::Limits(text) if text.contains(&most.to_string())),
+            "{err}"
+        );
         assert_eq!(app.cached.size(), (SIZE, SIZE));
     }
     app.frame(&gpu, 0.0);
@@ -800,7 +806,11 @@ fn host_without_default_features_has_no_blocking_dependency() {
             .current_dir(env!("CARGO_MANIFEST_DIR"))
             .output()
             .expect("cargo runs");
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         String::from_utf8_lossy(&out.stdout).into_owned()
     };
     let lean = tree(&["--no-default-features"]);
