@@ -41,6 +41,7 @@ struct ShaderJob {
     name: Option<String>,
     entry: Option<String>,
     vertex_entry: Option<String>,
+    deforming_inputs: Vec<String>,
     vertex: Option<PathBuf>,
     composition: front::compose::Composition,
     nodes: Nodes,
@@ -54,6 +55,7 @@ impl ShaderJob {
             name: None,
             entry: None,
             vertex_entry: None,
+            deforming_inputs: Vec::new(),
             vertex: None,
             composition: front::compose::Composition::default(),
             nodes: Nodes::Top(1),
@@ -159,6 +161,15 @@ impl Build {
     /// which one cannot be inferred from what they output.
     pub fn vertex_entry(mut self, name: impl Into<String>) -> Self {
         self.last().vertex_entry = Some(name.into());
+        self
+    }
+
+    /// A per-vertex input of the last shader that the application changes
+    /// every frame (it deforms the mesh on the CPU): the position gets its
+    /// last-frame value from a twin of its vertex buffer, which the host
+    /// fills. Inputs skinned on the GPU need none.
+    pub fn deforming_input(mut self, name: impl Into<String>) -> Self {
+        self.last().deforming_inputs.push(name.into());
         self
     }
 
@@ -404,6 +415,7 @@ impl Build {
             for &variant in &job.variants {
                 let options = Options {
                     vertex_entry: job.vertex_entry.clone(),
+                    deforming_inputs: job.deforming_inputs.clone(),
                     ..self.options.clone()
                 };
                 match rewrite::rewrite(&shader, &analysis, candidate, variant, &options) {

@@ -159,6 +159,11 @@ pub(super) fn prepare(
         depth: scene.camera.depth,
         vertex_entry: options.vertex_entry.clone(),
         color_format: MEASURED_COLOR_FORMAT,
+        deforming_inputs: deforming_inputs(
+            shader,
+            scene,
+            (analysis.entry_index, options.vertex_entry.as_deref()),
+        ),
         ..RewriteOptions::default()
     };
     Ok(Prepared {
@@ -177,6 +182,49 @@ pub(super) fn prepare(
         defaults,
         analysis,
     })
+}
+
+/// The per-vertex inputs the scene's CPU deformation changes: when an
+/// object ripples (`deformation`), those the mesh feeds with its positions,
+/// normals or tangents. Their twins read last frame's vertex buffer. A
+/// fragment-only module has none.
+fn deforming_inputs(
+    shader: &Shader,
+    scene: &Scene,
+    (fragment, vertex_entry): (usize, Option<&str>),
+) -> Vec<String> {
+    let ripples = scene.has(crate::scene::Effect::Deformation)
+        && scene.objects.iter().any(|o| o.deformation.is_some());
+    let module = &shader.module;
+    let Some(vertex) = ripples
+        .then(|| crate::proc::vertex_entry(module, fragment, vertex_entry).ok())
+        .flatten()
+    else {
+        return Vec::new();
+    };
+    let function = &module.entry_points[vertex].function;
+    let per_instance = crate::proc::instance_locations(module, function);
+    crate::proc::inputs(module, function)
+        .into_iter()
+        .filter_map(|input| {
+            let location = crate::proc::location_of(input.binding)?;
+            let name = input.name?.clone();
+            // What feeds it depends on its name and location alone.
+            let attribute = crate::plan::VertexAttribute {
+                location,
+                name: name.clone(),
+                format: crate::plan::VertexFormat::Float32x4,
+                step: crate::plan::StepMode::Vertex,
+                previous_of: None,
+            };
+            use crate::scene::mesh::VertexSource as S;
+            let moved = matches!(
+                S::of(&attribute, &scene.vertex_inputs),
+                Ok(S::Position | S::Normal | S::Tangent)
+            );
+            (moved && !per_instance.contains(&location)).then_some(name)
+        })
+        .collect()
 }
 
 /// The frame size and counts asked of a run, within the bounds a scene's

@@ -108,6 +108,14 @@ pub struct Options {
     /// cache writes — which the profiler measures as its fixed cost. Not a
     /// shader to use.
     pub free_payload: bool,
+    /// The per-vertex inputs (by name) that the application changes from
+    /// frame to frame: vertices it deforms itself (a cloth, a morph target
+    /// blended on the CPU). Those the position reads get a previous-frame
+    /// twin input, which the host fills from last frame's copy of their
+    /// vertex buffer, as per-instance inputs' twins are filled. Inputs
+    /// skinned on the GPU need none: their joint matrices are a buffer,
+    /// which has its twin.
+    pub deforming_inputs: Vec<String>,
 }
 
 impl Default for Options {
@@ -122,6 +130,7 @@ impl Default for Options {
             color_format: crate::plan::TextureFormat::Rgba8Unorm,
             vertex_entry: None,
             free_payload: false,
+            deforming_inputs: Vec::new(),
         }
     }
 }
@@ -385,7 +394,12 @@ fn rewrite_at(
             options.vertex_entry.as_deref(),
         )?;
         let twins = slot.first_binding + first_twin_binding().map_err(Refusal::internal)?;
-        vertex::instrument(&mut module, vertex_index, slot.group, twins)?
+        vertex::instrument(
+            &mut module,
+            vertex_index,
+            (slot.group, twins),
+            &options.deforming_inputs,
+        )?
     };
     mark_positions_invariant(&mut module);
     let functions = split::split(

@@ -32,9 +32,10 @@ pub struct VertexStage {
     pub previous_location: u32,
     /// (original, twin) global variables.
     pub twins: Vec<(Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>)>,
-    /// (input's location, twin's location) of each per-instance vertex
-    /// input the position reads: the new entry point takes last frame's
-    /// value of it at the twin's location.
+    /// (input's location, twin's location) of each vertex input the
+    /// position reads that changes between frames (per-instance inputs,
+    /// and per-vertex ones the application deforms): the new entry point
+    /// takes last frame's value of it at the twin's location.
     pub instance_twins: Vec<(u32, u32)>,
     /// The entry point's function for the passes that do not reproject:
     /// the original inputs and outputs, the same position helper (so
@@ -46,7 +47,8 @@ pub struct VertexStage {
 /// in locations 0 to 15.
 const MAX_VERTEX_ATTRIBUTES: u32 = 16;
 
-/// A per-instance input the position reads: its argument, the member
+/// A vertex input the position reads that changes between frames (per
+/// instance, or deformed by the application): its argument, the member
 /// within it for a struct argument, its location and type.
 #[derive(Clone, Copy, Debug)]
 struct InstanceInput {
@@ -64,8 +66,10 @@ fn instance_inputs_of_position(
     module: &Module,
     function: &Function,
     position_member: Option<u32>,
+    deforming: &[u32],
 ) -> Vec<InstanceInput> {
-    let per_instance = crate::proc::instance_locations(module, function);
+    let mut per_instance = crate::proc::instance_locations(module, function);
+    per_instance.extend(deforming.iter().copied());
     if per_instance.is_empty() {
         return Vec::new();
     }
@@ -157,18 +161,29 @@ pub fn vertex_entry(
 /// Adds the previous clip position to the vertex entry point at
 /// `entry_index`, with twins of its resources in bind group `group` from
 /// binding `first_binding` on.
+///
+/// `deforming` names per-vertex inputs the application changes between
+/// frames: those the position reads get a twin input as per-instance ones
+/// do. A name no input of the entry point has is a refusal.
 pub fn instrument(
     module: &mut Module,
     entry_index: usize,
-    group: u32,
-    first_binding: u32,
+    (group, first_binding): (u32, u32),
+    deforming: &[String],
 ) -> Result<VertexStage, Refusal> {
     let previous = TwinTime {
         name: "previous",
         group,
         first_binding,
     };
-    let mut stage = instrument_times(module, entry_index, &[previous], MAX_VERTEX_ATTRIBUTES)?;
+    let deforming = input_locations(module, entry_index, deforming)?;
+    let mut stage = instrument_times(
+        module,
+        entry_index,
+        &[previous],
+        MAX_VERTEX_ATTRIBUTES,
+        &deforming,
+    )?;
     let TimedPosition {
         location, twins, ..
     } = stage.times.remove(0);
@@ -179,6 +194,37 @@ pub fn instrument(
         instance_twins: stage.instance_twins.remove(0),
         plain: Some(stage.plain),
     })
+}
+
+/// The locations of the vertex entry point's inputs named `names`.
+fn input_locations(
+    module: &Module,
+    entry_index: usize,
+    names: &[String],
+) -> Result<Vec<u32>, Refusal> {
+    let function = &module.entry_points[entry_index].function;
+    let inputs = crate::proc::inputs(module, function);
+    names
+        .iter()
+        .map(|name| {
+            inputs
+                .iter()
+                .find(|input| input.name == Some(name))
+                .and_then(|input| crate::proc::location_of(input.binding))
+                .ok_or_else(|| {
+                    let known: Vec<&str> = inputs
+                        .iter()
+                        .filter(|i| crate::proc::location_of(i.binding).is_some())
+                        .filter_map(|i| i.name.map(String::as_str))
+                        .collect();
+                    Refusal::new(format!(
+                        "no vertex input is named `{name}` (the vertex entry point `{}` has {})",
+                        module.entry_points[entry_index].name,
+                        known.join(", ")
+                    ))
+                })
+        })
+        .collect()
 }
 
 /// One other time the position is computed at: `<name>_clip_position`
@@ -222,6 +268,7 @@ pub fn instrument_times(
     entry_index: usize,
     times: &[TwinTime],
     max_vertex_attributes: u32,
+    deforming: &[u32],
 ) -> Result<TimedVertexStage, Refusal> {
     let entry = module.entry_points[entry_index].clone();
     let function = &entry.function;
@@ -238,7 +285,8 @@ pub fn instrument_times(
 
     // Per-instance inputs the position reads, each with a twin input at a
     // free location that carries last frame's value.
-    let instance_inputs = instance_inputs_of_position(module, function, position_member);
+    let instance_inputs =
+        instance_inputs_of_position(module, function, position_member, deforming);
     let instance_twins = twin_locations(
         module,
         function,
@@ -649,7 +697,7 @@ fn twin_locations(
             format!("the device's {limit}")
         };
         return Err(Refusal::new(format!(
-            "the position reads {} per-instance vertex input(s), {whose} do not fit beside the shader's {} inputs in {limit_name} vertex attributes",
+            "the position reads {} vertex input(s) that change between frames (per instance, or deformed), {whose} do not fit beside the shader's {} inputs in {limit_name} vertex attributes",
             inputs.len(),
             used.len()
         )));

@@ -167,7 +167,14 @@ impl Runner {
                 let index_bytes: Vec<u8> =
                     mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
                 GpuMesh {
-                    vertices: filled(gpu, "vertices", &mesh.vertices, wgpu::BufferUsages::VERTEX),
+                    // Copied into a twin when the plan reads last frame's
+                    // deformed vertices.
+                    vertices: filled(
+                        gpu,
+                        "vertices",
+                        &mesh.vertices,
+                        wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_SRC,
+                    ),
                     indices: filled(gpu, "indices", &index_bytes, wgpu::BufferUsages::INDEX),
                     count: mesh.indices.len() as u32,
                 }
@@ -460,7 +467,15 @@ impl Runner {
         }
         let sources: Vec<([u32; 2], &wgpu::Buffer)> =
             buffers.iter().map(|(key, buffer)| (*key, buffer)).collect();
-        let vertex: Vec<(u32, &wgpu::Buffer)> = instances.iter().map(|b| (1, b)).collect();
+        // Slot 0 holds the mesh's vertices, slot 1 the instance records:
+        // the host twins those the plan reads last frame's values of.
+        let mesh = self
+            .meshes
+            .get(draw.mesh)
+            .ok_or_else(|| format!("no mesh {}", draw.mesh))?;
+        let vertex: Vec<(u32, &wgpu::Buffer)> = std::iter::once((0, &mesh.vertices))
+            .chain(instances.iter().map(|b| (1, b)))
+            .collect();
         let textures: Vec<([u32; 2], &wgpu::TextureView)> =
             self.views.iter().map(|(key, view)| (*key, view)).collect();
         let samplers: Vec<([u32; 2], &wgpu::Sampler)> =

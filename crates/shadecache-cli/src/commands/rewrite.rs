@@ -58,6 +58,13 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = ReconstructionArg::Bilinear)]
     pub reconstruction: ReconstructionArg,
 
+    /// Per-vertex inputs (by name, separated by commas) that the
+    /// application changes every frame, deforming the mesh on the CPU:
+    /// the position gets last frame's value of each from a twin of its
+    /// vertex buffer. Inputs skinned on the GPU need none.
+    #[arg(long, value_name = "NAME", value_delimiter = ',')]
+    pub deforming_input: Vec<String>,
+
     /// Output language (WGSL is what shadecache validates and runs).
     #[arg(long, value_enum, default_value_t = EmitArg::Wgsl)]
     pub emit: EmitArg,
@@ -264,6 +271,7 @@ fn rewrite_entry(
         },
         reconstruction: args.reconstruction.into(),
         vertex_entry: args.stages.vertex_entry.clone(),
+        deforming_inputs: args.deforming_input.clone(),
         ..Options::default()
     };
     let language = match args.emit {
