@@ -163,7 +163,7 @@ impl Paths {
                 .to_range()
                 .filter(|r| r.end <= source.len() && source.is_char_boundary(r.start))
                 .filter(|r| source.is_char_boundary(r.end))
-                .map(|r| super::candidates::call_extent(source, r))
+                .map(|r| super::spans::call_extent(source, r))
                 .unwrap_or(0..0);
             let text = &source[range.clone()];
             let collapsed = text.split_whitespace().collect::<Vec<_>>().join(" ");

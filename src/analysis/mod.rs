@@ -37,6 +37,7 @@ mod candidates;
 mod entry;
 pub mod graph;
 mod id;
+mod per_frame;
 pub mod range;
 mod spans;
 pub mod text;
@@ -49,9 +50,10 @@ use serde::Serialize;
 
 pub use calls::CallStep;
 pub(crate) use candidates::type_name;
-pub use candidates::{name_words, RejectReason};
+pub use candidates::RejectReason;
 pub use entry::{fragment_entry, stage_name};
 pub use id::node_id;
+pub use per_frame::name_words;
 
 use crate::cost::{CostModel, Weights};
 use crate::diagnostic::{Diagnostic, Error};

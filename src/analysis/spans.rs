@@ -173,6 +173,58 @@ fn identifier_occurrences<'a>(
     out.into_iter()
 }
 
+/// naga spans a call of a built-in function (`mix(a, b, t)`, `dpdx(v)`,
+/// `textureSample(...)`) by its name alone; a person expects the whole call.
+/// When `range` covers just an identifier followed by `(` (after optional
+/// template arguments), this extends it to the matching `)`. The source is
+/// only read here, to show and name the node; nothing is rewritten as text.
+pub(super) fn call_extent(source: &str, range: Range<usize>) -> Range<usize> {
+    let name = &source[range.clone()];
+    if !name.chars().all(|c| c.is_alphanumeric() || c == '_') {
+        return range;
+    }
+    let bytes = source.as_bytes();
+    let skip_space = |mut i: usize| {
+        while i < bytes.len() && bytes[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        i
+    };
+    let mut i = skip_space(range.end);
+    if bytes.get(i) == Some(&b'<') {
+        let Some(close) = source[i..].find('>') else {
+            return range;
+        };
+        i = skip_space(i + close + 1);
+    }
+    if bytes.get(i) != Some(&b'(') {
+        return range;
+    }
+    let mut depth = 0usize;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'(' => depth += 1,
+            b')' => {
+                depth -= 1;
+                if depth == 0 {
+                    return range.start..i + 1;
+                }
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                i += source[i..].find('\n').unwrap_or(source.len() - i);
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i += source[i..]
+                    .find("*/")
+                    .map_or(source.len() - i, |end| end + 1);
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    range
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -13,12 +13,12 @@ use std::collections::{BTreeSet, HashMap};
 
 use naga::{Expression, Handle, Module, Statement, TypeInner};
 
-use super::candidates::{loaded_buffer_member, per_frame_slots};
 use super::graph::{ExprGraph, ExprSet};
+use super::per_frame::{loaded_buffer_member, per_frame_slots};
 use crate::proc;
 
 /// For each location the vertex stage drawing with fragment entry point
-/// `fragment` outputs, the [`super::candidates::PER_FRAME_INPUTS`] slots
+/// `fragment` outputs, the [`super::per_frame::PER_FRAME_INPUTS`] slots
 /// its value depends on. Empty when no vertex stage pairs with it.
 pub(super) fn per_frame_varyings(module: &Module, fragment: usize) -> HashMap<u32, Vec<usize>> {
     let mut out = HashMap::new();

@@ -206,8 +206,13 @@ pub fn instrument(
             first_binding: first + twinned,
         },
     ];
-    let stage =
-        vertex::instrument_times(&mut module, vertex_index, &times, max_vertex_attributes, &[])?;
+    let stage = vertex::instrument_times(
+        &mut module,
+        vertex_index,
+        &times,
+        max_vertex_attributes,
+        &[],
+    )?;
     let instance_twins: Vec<InstanceTwin> = stage
         .instance_twins
         .iter()

@@ -157,12 +157,20 @@ pub fn cache_location(module: &Module, result: &naga::FunctionResult) -> u32 {
 
 /// Where a pass's fragment stage reads the original inputs from.
 #[derive(Clone, Copy, Debug)]
-pub enum Inputs<'g> {
+pub(super) enum Inputs<'g> {
     /// Its own arguments: the rasterised varyings of the geometry.
     Varyings,
-    /// This frame's G-buffer at the pixel (the deferred variant's
-    /// screen-space passes).
-    GBuffer(&'g super::gbuffer::GBuffer),
+    /// A screen-space pass's source at the pixel (the deferred variant's
+    /// G-buffer).
+    Screen(&'g dyn ScreenInputs),
+}
+
+/// What a screen-space pass reads the original inputs from, at the pixel
+/// its only argument (the fragment position) is at. The G-buffer
+/// ([`super::gbuffer`]) is one; this module builds the passes on it
+/// without depending on how it is laid out.
+pub(super) trait ScreenInputs: std::fmt::Debug {
+    fn read(&self, b: &mut Builder, module: &mut Module, pieces: &Pieces) -> Fragment;
 }
 
 /// What a fragment entry point works from: the original entry point's
@@ -260,7 +268,7 @@ pub(super) fn read_varyings(b: &mut Builder, at: &VaryingsAt) -> Fragment {
 
 /// Builds the fragment entry point for `stage`, reading the original
 /// inputs from `inputs`.
-pub fn entry_point(
+pub(super) fn entry_point(
     module: &mut Module,
     pieces: &Pieces,
     stage: Stage,
@@ -274,16 +282,16 @@ pub fn entry_point(
     // Where the inputs come from: the arguments made here, or the G-buffer.
     enum Reader<'g> {
         Arguments(VaryingsAt),
-        GBuffer(&'g super::gbuffer::GBuffer),
+        Screen(&'g dyn ScreenInputs),
     }
     let (arguments, reader) = match inputs {
         Inputs::Varyings => {
             let (arguments, at) = varying_arguments(module, pieces, stage.reprojects());
             (arguments, Reader::Arguments(at))
         }
-        Inputs::GBuffer(gbuffer) => (
+        Inputs::Screen(screen) => (
             vec![frag_coord_argument(pieces.vec4)],
-            Reader::GBuffer(gbuffer),
+            Reader::Screen(screen),
         ),
     };
     let (result_ty, cache_member) = output_type(module, pieces, stage.writes());
@@ -303,7 +311,7 @@ pub fn entry_point(
     });
     let fragment = match reader {
         Reader::Arguments(at) => read_varyings(&mut b, &at),
-        Reader::GBuffer(gbuffer) => gbuffer.read(&mut b, module, pieces),
+        Reader::Screen(screen) => screen.read(&mut b, module, pieces),
     };
     let Fragment {
         originals,

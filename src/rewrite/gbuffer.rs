@@ -377,7 +377,7 @@ impl GBuffer {
     /// Rebuilds, in a screen-space pass whose only argument is the
     /// fragment position, what the original fragment stage received at
     /// this pixel, with last frame's clip position.
-    pub(super) fn read(&self, b: &mut Builder, module: &mut Module, pieces: &Pieces) -> Fragment {
+    fn read_inputs(&self, b: &mut Builder, module: &mut Module, pieces: &Pieces) -> Fragment {
         let screen = b.argument(0);
         let xy = leading(b, screen, VectorSize::Bi);
         let texel = b.expr(Expression::As {
@@ -839,5 +839,11 @@ fn vector_size(count: u32) -> VectorSize {
         2 => VectorSize::Bi,
         3 => VectorSize::Tri,
         _ => VectorSize::Quad,
+    }
+}
+
+impl fragment::ScreenInputs for GBuffer {
+    fn read(&self, b: &mut Builder, module: &mut Module, pieces: &Pieces) -> Fragment {
+        self.read_inputs(b, module, pieces)
     }
 }

@@ -538,7 +538,7 @@ fn pass_module(
     let (fragment, screen_vertex) = match (gbuffer, stage) {
         (Some(gbuffer), Stage::GBuffer) => (gbuffer.write_entry(&mut pass, pieces)?, None),
         (Some(gbuffer), _) => (
-            fragment::entry_point(&mut pass, pieces, stage, fragment::Inputs::GBuffer(gbuffer))?,
+            fragment::entry_point(&mut pass, pieces, stage, fragment::Inputs::Screen(gbuffer))?,
             Some(gbuffer.fullscreen.clone()),
         ),
         (None, _) => (

@@ -285,8 +285,7 @@ pub fn instrument_times(
 
     // Per-instance inputs the position reads, each with a twin input at a
     // free location that carries last frame's value.
-    let instance_inputs =
-        instance_inputs_of_position(module, function, position_member, deforming);
+    let instance_inputs = instance_inputs_of_position(module, function, position_member, deforming);
     let instance_twins = twin_locations(
         module,
         function,
