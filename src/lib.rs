@@ -34,6 +34,9 @@
 //! * `scene`: what a profile renders, the default scene, roles;
 //! * `runtime`: the scene drawn through the host crate
 //!   (`shadecache-host`), which runs a plan as applications do;
+//! * `measure`: the measured run both GPU stages stand on: the scene's
+//!   inputs, runners on one device, the clock, the read-back and the
+//!   comparison with the reference;
 //! * `profile`: measuring variants against the unmodified shader;
 //! * `report`: the report's JSON, HTML and pictures;
 //!
@@ -63,6 +66,8 @@ pub mod diagnostic;
 pub mod front;
 #[cfg(feature = "interpolate")]
 pub mod interpolate;
+#[cfg(feature = "profile")]
+pub mod measure;
 pub mod plan;
 pub mod proc;
 #[cfg(feature = "profile")]

@@ -278,71 +278,72 @@ impl BFrames {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("shaders/bframe.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(BFRAME_WGSL.into()),
-        });
-        let mut pipelines = HashMap::new();
-        for &method in methods {
-            let Some(entry) = method.fragment_entry() else {
-                continue;
-            };
-            let latest_pass = method == Method::ImageBased && latest;
-            let entry = if latest_pass {
-                "fs_image_based_latest"
-            } else {
-                entry
-            };
-            let iterations = ("search_iterations", f64::from(iterations));
-            let constants: Vec<(&str, f64)> = if latest_pass {
-                vec![
-                    iterations,
-                    ("latest_init", 1.0),
-                    ("latest_radius", f64::from(latest_radius.unwrap_or(1))),
-                ]
-            } else {
-                vec![iterations]
-            };
-            let made = fullscreen_pipeline(
-                device,
-                &module,
-                method.name(),
-                &pipeline_layout,
-                entry,
-                &constants,
-                &targets(method, latest),
-            );
-            pipelines.insert(method, made);
-        }
-        let inpaint_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("character removal"),
-            entries: &[
-                entries[0],
-                texture_entry(14, float),
-                texture_entry(15, float),
-            ],
-        });
-        let inpaint_pipeline_layout =
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("character removal"),
-                bind_group_layouts: &[Some(&inpaint_layout)],
-                immediate_size: 0,
+        let (pipelines, inpaint_layout, inpaint) = crate::runtime::validated(device, || {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("shaders/bframe.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(BFRAME_WGSL.into()),
             });
-        let inpaint = ["fs_inpaint_first", "fs_inpaint"].map(|entry| {
-            fullscreen_pipeline(
-                device,
-                &module,
-                "character removal",
-                &inpaint_pipeline_layout,
-                entry,
-                &[],
-                &[Some(REMOVED_FORMAT.into())],
-            )
-        });
-        if let Some(err) = pollster::block_on(scope.pop()) {
-            return Err(format!("the B-frame passes do not build: {err}"));
-        }
+            let mut pipelines = HashMap::new();
+            for &method in methods {
+                let Some(entry) = method.fragment_entry() else {
+                    continue;
+                };
+                let latest_pass = method == Method::ImageBased && latest;
+                let entry = if latest_pass {
+                    "fs_image_based_latest"
+                } else {
+                    entry
+                };
+                let iterations = ("search_iterations", f64::from(iterations));
+                let constants: Vec<(&str, f64)> = if latest_pass {
+                    vec![
+                        iterations,
+                        ("latest_init", 1.0),
+                        ("latest_radius", f64::from(latest_radius.unwrap_or(1))),
+                    ]
+                } else {
+                    vec![iterations]
+                };
+                let made = fullscreen_pipeline(
+                    device,
+                    &module,
+                    method.name(),
+                    &pipeline_layout,
+                    entry,
+                    &constants,
+                    &targets(method, latest),
+                );
+                pipelines.insert(method, made);
+            }
+            let inpaint_layout =
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("character removal"),
+                    entries: &[
+                        entries[0],
+                        texture_entry(14, float),
+                        texture_entry(15, float),
+                    ],
+                });
+            let inpaint_pipeline_layout =
+                device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("character removal"),
+                    bind_group_layouts: &[Some(&inpaint_layout)],
+                    immediate_size: 0,
+                });
+            let inpaint = ["fs_inpaint_first", "fs_inpaint"].map(|entry| {
+                fullscreen_pipeline(
+                    device,
+                    &module,
+                    "character removal",
+                    &inpaint_pipeline_layout,
+                    entry,
+                    &[],
+                    &[Some(REMOVED_FORMAT.into())],
+                )
+            });
+            (pipelines, inpaint_layout, inpaint)
+        })
+        .map_err(|err| format!("the B-frame passes do not build: {err}"))?;
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("B-frame parameters"),
             size: 48,

@@ -9,7 +9,7 @@
 use std::collections::BTreeMap;
 
 use super::Method;
-use crate::profile::metrics::{self, FrameError};
+use crate::measure::metrics::{self, FrameError};
 
 /// Running composites, keyed by (method, or `None` for the reference;
 /// the I-frame at their centre).

@@ -117,7 +117,7 @@
 //! back; at each interval's end the I-frame, then every method's B-frames
 //! of the interval, each compared with the reference of its own time. The
 //! frames are timed with GPU timestamps through the profiler's clock
-//! (`profile::run::timed`), drawn through the same runtime and
+//! (`measure::clock::timed`), drawn through the same runtime and
 //! host crate, fed by the same scene inputs, and compared by the same
 //! metrics. Two I-frame runners alternate, so I-frame 0 and I-frame 1
 //! stay alive side by side without copies.
@@ -152,7 +152,7 @@ use std::path::Path;
 
 use crate::diagnostic::Error;
 use crate::front::Shader;
-use crate::profile::Progress;
+use crate::measure::Progress;
 use crate::scene::Scene;
 
 /// A way to show the frames between I-frames.

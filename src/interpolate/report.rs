@@ -151,7 +151,7 @@ pub struct KeptFrame {
     /// Its displayed frame.
     pub frame: u32,
     pub alpha: f64,
-    pub error: crate::profile::metrics::FrameError,
+    pub error: crate::measure::metrics::FrameError,
     pub reference: Vec<f32>,
     pub result: Vec<f32>,
     /// Each pixel's decision (`bframe::Decision` codes).

@@ -13,11 +13,11 @@ use super::report::{
 use super::{Method, Options};
 use crate::diagnostic::Error;
 use crate::front::Shader;
-use crate::profile::bench::{self, Bench};
-use crate::profile::inputs::SceneInputs;
-use crate::profile::metrics::{self, FrameError, LinearFrame};
-use crate::profile::run::{read_linear, timed, timed_recording, Clock};
-use crate::profile::{fail, Progress, MEASURED_COLOR_FORMAT};
+use crate::measure::bench::{self, Bench};
+use crate::measure::clock::{read_linear, timed, timed_recording, Clock};
+use crate::measure::inputs::SceneInputs;
+use crate::measure::metrics::{self, FrameError, LinearFrame};
+use crate::measure::{fail, Progress, MEASURED_COLOR_FORMAT};
 use crate::rewrite::Options as RewriteOptions;
 use crate::runtime::{FrameInputs, Gpu, RunOptions, Runner};
 use crate::scene::Scene;
@@ -88,10 +88,10 @@ pub(super) fn run(
     let n = options.frames_per_interval;
     let size = options.size.unwrap_or(scene.size);
     let frames = options.frames.unwrap_or(scene.frames);
-    crate::profile::setup::check_counts(size, frames, 0)?;
+    crate::measure::setup::check_counts(size, frames, 0)?;
     let intervals = frames.div_ceil(n);
     let last_frame = (WARMUP_INTERVALS + intervals + 1) * n;
-    let bindings = crate::profile::setup::scene_bindings(
+    let bindings = crate::measure::setup::scene_bindings(
         shader,
         scene,
         (options.entry.as_deref(), options.vertex_entry.as_deref()),
@@ -107,7 +107,7 @@ pub(super) fn run(
     let reference_plan =
         crate::rewrite::plan::reference(shader, &bindings.analysis, &rewrite_options)
             .map_err(fail)?;
-    let gpu = crate::profile::open_gpu()?;
+    let gpu = crate::measure::open_gpu()?;
     // The twins of per-instance inputs take vertex attributes beside the
     // shader's, as many as the device grants.
     let max_vertex_attributes = gpu.device.limits().max_vertex_attributes;
@@ -124,7 +124,7 @@ pub(super) fn run(
         ))
     })?;
     crate::scene::storage::check(&bindings.storage, scene)?;
-    crate::profile::check_instancing(shader, scene, &reference_plan.vertex_layout)?;
+    crate::measure::setup::check_instancing(shader, scene, &reference_plan.vertex_layout)?;
     let inputs = SceneInputs::new(
         shader,
         scene,
@@ -449,15 +449,14 @@ impl SceneRun {
             binding: 5,
             resource: wgpu::BindingResource::Sampler(&self.sampler),
         });
-        let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("I-frames"),
-            layout,
-            entries: &entries,
-        });
-        if let Some(err) = pollster::block_on(scope.pop()) {
-            return Err(fail(format!("the I-frames cannot be bound: {err}")));
-        }
+        let bind_group = crate::runtime::validated(&gpu.device, || {
+            gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("I-frames"),
+                layout,
+                entries: &entries,
+            })
+        })
+        .map_err(|err| fail(format!("the I-frames cannot be bound: {err}")))?;
         self.runner.set_external_bind_group(bind_group);
         Ok(())
     }

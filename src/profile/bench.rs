@@ -7,84 +7,18 @@
 
 use std::collections::HashMap;
 
-use super::inputs::SceneInputs;
 use super::run::PayloadRun;
 use super::setup::Prepared;
-use super::{fail, sources_of, Probe, ProbeOf};
+use super::{sources_of, Probe, ProbeOf};
 use crate::analysis::Candidate;
 use crate::back;
 use crate::diagnostic::Error;
 use crate::front::Shader;
+use crate::measure::bench::Bench;
+use crate::measure::fail;
 use crate::plan::{self, Plan};
 use crate::rewrite::{self, Options as RewriteOptions, Variant};
-use crate::runtime::{Gpu, PipelineOptions, RunOptions, Runner};
-
-/// Makes runners that draw the profile's scene.
-pub(crate) struct Bench<'a> {
-    pub gpu: &'a Gpu,
-    pub inputs: &'a SceneInputs<'a>,
-    pub size: [u32; 2],
-    pub cull_back_faces: bool,
-}
-
-impl Bench<'_> {
-    /// A runner for a plan and its shaders by file name; with `classify`,
-    /// it draws the cache's decisions after each frame.
-    pub fn runner(
-        &self,
-        plan: &Plan,
-        sources: &HashMap<String, String>,
-        classify: bool,
-    ) -> Result<Runner, String> {
-        self.runner_with(
-            plan,
-            sources,
-            RunOptions {
-                classify,
-                ..RunOptions::default()
-            },
-        )
-    }
-
-    /// A runner as [`Bench::runner`], with `options` (the scene's culling
-    /// whatever they say).
-    pub fn runner_with(
-        &self,
-        plan: &Plan,
-        sources: &HashMap<String, String>,
-        options: RunOptions,
-    ) -> Result<Runner, String> {
-        Runner::new(
-            self.gpu,
-            plan,
-            |name| sources.get(name).cloned(),
-            &self.inputs.meshes,
-            &self.inputs.textures,
-            (self.size[0], self.size[1]),
-            RunOptions {
-                pipelines: PipelineOptions {
-                    cull_back_faces: self.cull_back_faces,
-                    ..options.pipelines
-                },
-                ..options
-            },
-        )
-    }
-}
-
-/// The reference: the user's source as written (a module given its
-/// vertex stage from another file has no one source, and is written back
-/// by naga).
-pub(crate) fn reference(bench: &Bench, shader: &Shader, plan: &Plan) -> Result<Runner, Error> {
-    let text = match shader.vertex_file {
-        None => shader.file.text.clone(),
-        Some(_) => back::wgsl_text(&shader.module, &shader.info).map_err(fail)?,
-    };
-    let sources = HashMap::from([("reference.wgsl".to_string(), text)]);
-    bench
-        .runner(plan, &sources, false)
-        .map_err(|err| fail(format!("the reference does not run: {err}")))
-}
+use crate::runtime::Runner;
 
 /// Per node, its payload pass over every pixel; and the fixed-cost
 /// probes.

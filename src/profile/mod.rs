@@ -26,8 +26,6 @@
 pub(crate) mod bench;
 mod choice;
 pub mod grid;
-pub(crate) mod inputs;
-pub mod metrics;
 pub(crate) mod reference_check;
 pub(crate) mod run;
 pub(crate) mod setup;
@@ -39,7 +37,11 @@ use crate::analysis::{self, Candidate};
 use crate::back::{self, Language};
 use crate::diagnostic::{Diagnostic, Error};
 use crate::front::Shader;
-use crate::plan::{self, Plan};
+use crate::measure::clock::{read_linear, timed, Clock};
+use crate::measure::inputs::SceneInputs;
+use crate::measure::metrics::{self, Decisions, FrameError};
+use crate::measure::{fail, open_gpu};
+use crate::plan::Plan;
 use crate::report::{
     Confirmation, Device, FrameStats, GridReport, MissCause, NodeReport, PassTime, Reference,
     ReferenceCheck, Report, ResultRow,
@@ -48,8 +50,9 @@ use crate::rewrite::{self, CacheFormat, Options as RewriteOptions, Reconstructio
 use crate::runtime::{self, FrameInputs, Gpu, Runner};
 use crate::scene::{self, Scene};
 use grid::{Axes, Design, Setting};
-use metrics::{Decisions, FrameError};
-use run::{measured_run, read_linear, timed, Clock, Measured, ReferenceRun, Sample};
+use run::{measured_run, Measured, ReferenceRun, Sample};
+
+pub use crate::measure::{Progress, Quiet, MEASURED_COLOR_FORMAT};
 
 pub use crate::analysis::Nodes;
 pub use crate::report::Budget;
@@ -142,28 +145,6 @@ impl Default for Options {
             vertex_entry: None,
         }
     }
-}
-
-/// Progress reports while profiling.
-pub trait Progress {
-    /// `total` frame renders will be made.
-    fn start(&mut self, total: u64);
-    /// One more, of `what`.
-    fn step(&mut self, what: &str);
-    /// A configuration that could not be built, and why.
-    fn refused(&mut self, what: &str, reason: &str);
-    fn finish(&mut self);
-}
-
-/// Progress that says nothing.
-#[derive(Debug, Default)]
-pub struct Quiet;
-
-impl Progress for Quiet {
-    fn start(&mut self, _: u64) {}
-    fn step(&mut self, _: &str) {}
-    fn refused(&mut self, _: &str, _: &str) {}
-    fn finish(&mut self) {}
 }
 
 pub use crate::report::{Picture, Pictures};
@@ -320,20 +301,6 @@ impl Measured for Config {
     }
 }
 
-/// A plain error for what the profile could not do (no position in a
-/// file to point at).
-pub(crate) fn fail(message: String) -> Error {
-    Error::plain(Diagnostic::error(message))
-}
-
-/// The device the measured runs draw on, or the error saying how to get
-/// one.
-pub(crate) fn open_gpu() -> Result<Gpu, Error> {
-    Gpu::new().map_err(fail)?.ok_or_else(|| {
-        fail("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers gives lavapipe)".into())
-    })
-}
-
 /// Profiles `shader` on `scene`. `scene_path` names the scene file (its
 /// folder resolves relative files).
 pub fn profile(
@@ -352,8 +319,8 @@ pub fn profile(
         rewrite::plan::reference(shader, &prepared.analysis, &prepared.base).map_err(fail)?;
     // The scene must provide everything else the shader binds.
     scene::storage::check(&prepared.storage, scene)?;
-    check_instancing(shader, scene, &reference_plan.vertex_layout)?;
-    let scene_inputs = inputs::SceneInputs::new(
+    crate::measure::setup::check_instancing(shader, scene, &reference_plan.vertex_layout)?;
+    let scene_inputs = SceneInputs::new(
         shader,
         scene,
         scene_path,
@@ -366,13 +333,13 @@ pub fn profile(
 
     let gpu = open_gpu()?;
     let mut clock = Clock::new(&gpu)?;
-    let bench = bench::Bench {
+    let bench = crate::measure::bench::Bench {
         gpu: &gpu,
         inputs: &scene_inputs,
         size,
         cull_back_faces: scene.cull_back_faces,
     };
-    let mut reference = bench::reference(&bench, shader, &reference_plan)?;
+    let mut reference = crate::measure::bench::reference(&bench, shader, &reference_plan)?;
     let (mut payloads, mut probes) =
         bench::fixed_cost_runs(&bench, shader, &prepared, &nodes, &options.variants)?;
     let mut configs = configurations(
@@ -598,7 +565,7 @@ impl RunContext<'_> {
 struct Winner<'a> {
     shader: &'a Shader,
     prepared: &'a setup::Prepared,
-    bench: &'a bench::Bench<'a>,
+    bench: &'a crate::measure::bench::Bench<'a>,
     scene: &'a Scene,
 }
 
@@ -643,11 +610,6 @@ impl Winner<'_> {
         Ok((choice, chosen))
     }
 }
-
-/// The colour target of every measured frame, reference and variants
-/// alike: linear float, values above 1 kept.
-pub const MEASURED_COLOR_FORMAT: crate::plan::TextureFormat =
-    crate::plan::TextureFormat::Rgba16Float;
 
 /// Less than this share of the image covered, the figures say little.
 const FEW_PIXELS: f64 = 0.01;
@@ -983,60 +945,6 @@ fn confirm(
         speedup: speedup(reference_ms, time_ms),
         speedup_ci: metrics::speedup_interval(&times[0], &times[1]),
     })
-}
-
-/// The name and (group, binding) of every resource the fragment entry
-/// point chosen by `options` and its vertex entry point use.
-fn used_bindings(
-    shader: &Shader,
-    entry: Option<&str>,
-    vertex_entry: Option<&str>,
-) -> Result<std::collections::HashSet<(String, [u32; 2])>, Error> {
-    let module = &shader.module;
-    let fragment = analysis::fragment_entry(shader, entry)?;
-    let vertex = crate::proc::vertex_entry(module, fragment, vertex_entry).ok();
-    let entries: Vec<usize> = std::iter::once(fragment).chain(vertex).collect();
-    Ok(crate::proc::resources_used_by(module, &entries))
-}
-
-/// An object drawn as several instances needs a shader that tells them
-/// apart: one that reads `@builtin(instance_index)` in its vertex stage,
-/// or takes per-instance vertex inputs. Otherwise every instance would be
-/// drawn at the same place.
-pub(crate) fn check_instancing(
-    shader: &Shader,
-    scene: &Scene,
-    layout: &[plan::VertexAttribute],
-) -> Result<(), Error> {
-    let Some((index, object)) = scene
-        .objects
-        .iter()
-        .enumerate()
-        .find(|(_, o)| o.instance_count() > 1)
-    else {
-        return Ok(());
-    };
-    let module = &shader.module;
-    let reads_instance_index = module
-        .entry_points
-        .iter()
-        .filter(|ep| ep.stage == naga::ShaderStage::Vertex)
-        .flat_map(|ep| &ep.function.arguments)
-        .any(|argument| {
-            crate::proc::has_binding(module, &argument.binding, argument.ty, |b| {
-                matches!(b, naga::Binding::BuiltIn(naga::BuiltIn::InstanceIndex))
-            })
-        });
-    if reads_instance_index || layout.iter().any(|a| a.step == plan::StepMode::Instance) {
-        return Ok(());
-    }
-    Err(scene.error(
-        format!(
-            "object {index} draws {} instances, and the shader's vertex stage neither reads @builtin(instance_index) nor takes per-instance inputs: every instance would be drawn at the same place",
-            object.instance_count()
-        ),
-        None,
-    ))
 }
 
 /// The rewrite a result measured: its node and variant, with its knobs

@@ -6,14 +6,16 @@
 use std::collections::HashSet;
 
 use super::grid::{Grid, Setting};
-use super::{fail, used_bindings, Options, MEASURED_COLOR_FORMAT};
-use crate::analysis::{self, Analysis, Candidate};
+use super::{Options, MEASURED_COLOR_FORMAT};
+use crate::analysis::{Analysis, Candidate};
 use crate::diagnostic::Error;
 use crate::front::Shader;
+use crate::measure::fail;
+use crate::measure::setup::{check_counts, scene_bindings, SceneBindings};
 use crate::rewrite::Options as RewriteOptions;
 use crate::scene::storage::StorageBuffer;
 use crate::scene::uniforms::UniformBuffer;
-use crate::scene::{self, Scene};
+use crate::scene::Scene;
 
 /// A profile's plan of work.
 pub(super) struct Prepared {
@@ -51,61 +53,6 @@ impl Prepared {
             .map(|(candidate, settings)| (candidate, settings.as_slice()))
             .collect()
     }
-}
-
-/// What a shader binds on a scene, checked: the resources its draw binds,
-/// the uniform and storage buffers the scene fills, and the analysis of
-/// its fragment entry point bounded by the scene's values.
-pub(crate) struct SceneBindings {
-    pub aspect: f32,
-    /// The name and (group, binding) of every resource the draw binds.
-    pub used: HashSet<(String, [u32; 2])>,
-    pub uniforms: Vec<UniformBuffer>,
-    pub storage: Vec<StorageBuffer>,
-    pub analysis: Analysis,
-}
-
-/// Checks `scene` against what `shader` reads (its fragment entry point
-/// `entry` and the vertex entry point drawing with it), for `frames`
-/// frames at `size`.
-pub(crate) fn scene_bindings(
-    shader: &Shader,
-    scene: &Scene,
-    (entry, vertex_entry): (Option<&str>, Option<&str>),
-    size: [u32; 2],
-    frames: u32,
-) -> Result<SceneBindings, Error> {
-    // The scene must provide every uniform the shader reads; the values it
-    // gives bound the candidates' values (whether a payload fits f16 here).
-    // What the draw binds: the resources of the fragment entry point and
-    // of the vertex entry point drawing with it (a module may declare more).
-    let used = used_bindings(shader, entry, vertex_entry)?;
-    let mut uniforms = scene::uniforms::buffers(&shader.module);
-    uniforms.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
-    let mut storage = scene::storage::buffers(&shader.module);
-    storage.retain(|b| used.contains(&(b.name.clone(), [b.group, b.binding])));
-    scene.check_names(&shader.module)?;
-    scene::roles::check(&uniforms, &storage, scene)?;
-    scene::uniforms::check(&uniforms, scene).map_err(fail)?;
-    let mut analysis = analysis::analyze(
-        shader,
-        &analysis::Options {
-            entry: entry.map(str::to_string),
-            ..analysis::Options::default()
-        },
-    )?;
-    let aspect = size[0] as f32 / size[1] as f32;
-    analysis.bound_uniforms(
-        shader,
-        &scene::uniforms::bounds(&uniforms, scene, aspect, frames).map_err(fail)?,
-    );
-    Ok(SceneBindings {
-        aspect,
-        used,
-        uniforms,
-        storage,
-        analysis,
-    })
 }
 
 /// Checks the scene against what the shader reads and plans the profile.
@@ -225,30 +172,6 @@ fn deforming_inputs(
             (moved && !per_instance.contains(&location)).then_some(name)
         })
         .collect()
-}
-
-/// The frame size and counts asked of a run, within the bounds a scene's
-/// own keep ([`scene::bounds`]): a library caller's options are checked as
-/// the command line's are.
-pub(crate) fn check_counts(size: [u32; 2], frames: u32, warmup: u32) -> Result<(), Error> {
-    use scene::bounds::{MAX_FRAMES, MAX_SIZE};
-    if size.iter().any(|&side| side == 0 || side > MAX_SIZE) {
-        return Err(fail(format!(
-            "size {}×{} is not between 1 and {MAX_SIZE} pixels a side",
-            size[0], size[1]
-        )));
-    }
-    if frames == 0 || frames > MAX_FRAMES {
-        return Err(fail(format!(
-            "{frames} frames: a run measures 1 to {MAX_FRAMES}"
-        )));
-    }
-    if warmup > MAX_FRAMES {
-        return Err(fail(format!(
-            "{warmup} warm-up frames: at most {MAX_FRAMES}"
-        )));
-    }
-    Ok(())
 }
 
 #[cfg(test)]

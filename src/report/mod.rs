@@ -288,7 +288,7 @@ pub struct ResultRow {
     /// Reference time over this variant's time, from the same run.
     pub speedup: f64,
     /// A 95% interval for `speedup` (a bootstrap over the measured frames
-    /// of both, `profile::metrics::speedup_interval`).
+    /// of both, `measure::metrics::speedup_interval`).
     #[serde(default)]
     pub speedup_ci: [f64; 2],
     /// Means over the measured frames: PSNR over the covered pixels (those
@@ -304,7 +304,7 @@ pub struct ResultRow {
     /// How much each frame's change from the one before differs from the
     /// reference's own change (block popping, visible refreshes), mean
     /// over the covered pixels' channels and the measured frames, in
-    /// [0, 1] (`profile::metrics::flicker`).
+    /// [0, 1] (`measure::metrics::flicker`).
     #[serde(default)]
     pub flicker: f64,
     /// Largest over the measured frames.

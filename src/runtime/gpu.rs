@@ -58,3 +58,16 @@ impl Gpu {
         }))
     }
 }
+
+/// What `make` creates on `device`, or what wgpu's validation said of it:
+/// `make` runs in a validation error scope, so a rejected shader, pipeline
+/// or bind group is an error to report rather than a panic in wgpu's
+/// default handler. Waits for the scope (native backends answer at once).
+pub fn validated<T>(device: &wgpu::Device, make: impl FnOnce() -> T) -> Result<T, String> {
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let made = make();
+    match pollster::block_on(scope.pop()) {
+        None => Ok(made),
+        Some(err) => Err(err.to_string()),
+    }
+}

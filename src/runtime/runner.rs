@@ -454,15 +454,14 @@ impl Runner {
                     resource: bound,
                 });
             }
-            let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-            let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("scene group"),
-                layout,
-                entries: &entries,
-            });
-            if let Some(err) = pollster::block_on(scope.pop()) {
-                return Err(format!("group {group}: {err}"));
-            }
+            let bind_group = super::gpu::validated(&gpu.device, || {
+                gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("scene group"),
+                    layout,
+                    entries: &entries,
+                })
+            })
+            .map_err(|err| format!("group {group}: {err}"))?;
             bind_groups.push((group, bind_group));
         }
         let sources: Vec<([u32; 2], &wgpu::Buffer)> =

@@ -226,7 +226,7 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
         // positions must agree.
         if frame > 0 {
             let classes = runtime::read_texture(&gpu, runner.classes(), 4).unwrap();
-            let decisions = shadecache::profile::metrics::decisions(&classes);
+            let decisions = shadecache::measure::metrics::decisions(&classes);
             assert!(decisions.hit > 0.5, "frame {frame}: {decisions:?}");
         }
         let (mut covered, mut holes, mut doubled) = (0, 0, 0);

@@ -1531,7 +1531,7 @@ fn refresh_maps(gpu: &Gpu, period: u32, quad: u32, start: u64, frames: usize) ->
     for frame in 0..frames {
         runner.frame(gpu, &inputs, None).unwrap();
         let classes = runtime::read_texture(gpu, runner.classes(), 4).unwrap();
-        let decisions = shadecache::profile::metrics::decisions(&classes);
+        let decisions = shadecache::measure::metrics::decisions(&classes);
         assert_eq!(decisions.covered, (size * size) as usize);
         if frame == 0 {
             assert_eq!(
@@ -1548,7 +1548,7 @@ fn refresh_maps(gpu: &Gpu, period: u32, quad: u32, start: u64, frames: usize) ->
         maps.push(
             classes
                 .chunks_exact(4)
-                .map(|c| [c[0], c[1], c[2]] == shadecache::profile::metrics::REFRESH)
+                .map(|c| [c[0], c[1], c[2]] == shadecache::measure::metrics::REFRESH)
                 .collect(),
         );
     }

@@ -281,7 +281,7 @@ fn assert_moving_cubes_reproject(shader: &str, tail: &str) {
     let leading: Vec<bool> = (0..w * h).map(|i| now[i] && !before[i]).collect();
     let inner = crate::util::interior(&crate::util::interior(&leading, w), w);
     let classes = &pictures.results[0].1;
-    let hit = |i: usize| classes[i * 4..i * 4 + 3] == shadecache::profile::metrics::HIT;
+    let hit = |i: usize| classes[i * 4..i * 4 + 3] == shadecache::measure::metrics::HIT;
     let band: Vec<usize> = (0..w * h).filter(|&i| inner[i]).collect();
     assert!(band.len() > 50, "the leading band is {} pixels", band.len());
     let missed = band.iter().filter(|&&i| !hit(i)).count();

@@ -1203,7 +1203,7 @@ fn character_removal_fills_from_unmasked_neighbours() {
     let removal = |passes: u32| -> Vec<f32> {
         bframes.remove_moving_objects(&gpu, (&color, &flow), &params, passes, None);
         let bytes = shadecache::runtime::read_texture(&gpu, bframes.removed(), 8).unwrap();
-        shadecache::profile::metrics::linear_from_f16(&bytes)
+        shadecache::measure::metrics::linear_from_f16(&bytes)
     };
     let at = |pixels: &[f32], x: usize, y: usize| -> [f32; 4] {
         let i = (y * 16 + x) * 4;
