@@ -37,6 +37,9 @@ impl RejectReason {
     }
 }
 
+/// Finds the candidates of fragment entry point `entry_index` (of the
+/// inlined module when `analysed` has one): every node of the source with
+/// its slice's cost and facts, classified, ranked.
 pub(super) fn find(
     shader: &Shader,
     analysed: Option<std::sync::Arc<super::calls::Analysed>>,
@@ -52,78 +55,242 @@ pub(super) fn find(
     let info = module_info.get_entry_point(entry_index);
     let layout = model.layout(function);
     let graph = ExprGraph::new(function, &layout);
+    let costs = SliceCosts::new(module, (entry_index, info), model, &layout, &graph);
     let source = &shader.file.text;
-    // Arena handles cannot be made from an index outside naga, so slices
-    // (bit sets by arena index) are read through this table.
-    let exprs: Vec<&Expression> = function.expressions.iter().map(|(_, e)| e).collect();
+    let lines = LineIndex::new(source);
+    let origins = Origins::new(shader, analysed.as_deref(), &entry.name, &lines);
+    let by_span = nodes_by_span(module, (function, info), source, &origins);
 
-    // What each expression costs per invocation, loops included.
-    let mut weighted = vec![0.0; function.expressions.len()];
-    for (expr, at) in layout.placed() {
-        weighted[expr.index()] = model.expression(function, info, expr) * at.multiplier;
-    }
-    let total_cost = model.body(function, info, &layout);
-    // (fold from +0.0: an empty float `sum()` is -0.0)
-    let cost_of = |set: &ExprSet| -> f64 { set.ones().fold(0.0, |sum, i| sum + weighted[i]) };
-    // What only each expression needs, for every candidate's overlap at once.
-    let private = graph.private();
-    let dominated = private.dominated_sums(&weighted);
-    // Every slice's cost and facts at once; where the slices share too
-    // much for that, each candidate walks its own.
-    let varyings = super::varyings::per_frame_varyings(module, entry_index);
-    let own_facts: Vec<SliceFacts> = (0..exprs.len())
-        .map(|i| SliceFacts::of_expression(module, function, &exprs, &varyings, i))
-        .collect();
-    let summaries = graph.summaries(&weighted, &own_facts);
-    let summary = |expr: Handle<Expression>| -> (f64, SliceFacts) {
-        match &summaries {
-            Some(s) => (s.cost[expr.index()], s.facts[expr.index()].clone()),
-            None => {
-                let slice = graph.slice(expr);
-                let facts = slice.ones().fold(SliceFacts::NONE, |mut facts, i| {
-                    facts.merge(&own_facts[i]);
-                    facts
+    let no_bounds = super::range::UniformBounds::default();
+    let mut ranges = super::NodeRanges::new(shader, analysed.as_deref(), entry_index, &no_bounds);
+    let keys = node_keys(&entry.name, origins.paths.as_ref());
+    let mut naming = NodeNames::new(source, &keys);
+    let mut candidates = Vec::new();
+    let mut rejected = Vec::new();
+    for (&(group, start, end), &expr) in &by_span {
+        let origin = origins.of(expr);
+        let node = Node {
+            id: naming.id(group, start, end),
+            span: SourceSpan {
+                start: lines.line_col(start).into(),
+                end: lines.line_col(end).into(),
+            },
+            ty: type_name(&module.types, info[expr].ty.inner_with(&module.types)),
+            text: id::shown_text(&source[start..end]),
+            function: origins
+                .function_of(origin.call)
+                .unwrap_or_default()
+                .to_string(),
+            call_path: origins.call_path(origin.call),
+            expression: origin.expression.unwrap_or(expr),
+            analysed: expr,
+            range: start..end,
+        };
+        let (cost, facts) = costs.summary(expr);
+        match classify(module, info, &layout, &facts, expr) {
+            Err((reason, detail)) => rejected.push(Rejected {
+                node,
+                reason,
+                detail,
+            }),
+            Ok(components) => {
+                let range = ranges.of(&node);
+                candidates.push(Candidate {
+                    node,
+                    components,
+                    cost,
+                    ratio: if costs.total > 0.0 {
+                        cost / costs.total
+                    } else {
+                        0.0
+                    },
+                    overlap: costs.overlap(expr, cost),
+                    derivatives: facts.has(SliceFacts::DERIVATIVES),
+                    depends_on: facts.per_frame_inputs(),
+                    range: range.ends(),
+                    fits_f16: range.fits_f16(),
                 });
-                (cost_of(&slice), facts)
             }
         }
-    };
+    }
+    rank(&mut candidates);
+    Analysis {
+        shader: shader.file.path.clone(),
+        entry: entry.name.clone(),
+        total_cost: costs.total,
+        candidates,
+        rejected,
+        entry_index,
+        analysed,
+    }
+}
 
-    // Where each expression came from: the entry point's own, or a
-    // helper's at one call site.
-    let lines = LineIndex::new(source);
-    let inlined = analysed.as_ref().map(|a| &a.inlined);
-    let paths = inlined.map(|inlined| {
-        super::calls::Paths::new(&shader.module, inlined, source, &|offset| {
-            lines.line_col(offset)
-        })
-    });
-    let origin_of = |handle: Handle<Expression>| match inlined {
-        Some(inlined) => inlined.origins[handle.index()],
-        None => proc::inline::Origin {
-            call: None,
-            expression: Some(handle),
-        },
-    };
+/// What each expression's slice costs and what is true of it, and what
+/// only each expression needs, computed for every expression at once
+/// where the slices allow (else walked per expression).
+struct SliceCosts<'g> {
+    graph: &'g ExprGraph,
+    /// What each expression costs per invocation, loops included.
+    weighted: Vec<f64>,
+    /// The whole entry point's cost.
+    total: f64,
+    private: super::graph::Private,
+    /// What only each expression needs, summed.
+    dominated: Vec<f64>,
+    own_facts: Vec<SliceFacts>,
+    summaries: Option<super::graph::Summaries<SliceFacts>>,
+}
 
-    // One node per source span and call path: where the front end made
-    // several expressions for one piece of source (a load and its pointer,
-    // a splat and its scalar), the last one, which consumes the others,
-    // stands for it. Loads of local variables have no span of their own;
-    // they are spanned by the variable's name where it is read.
-    let function_of = |call: Option<usize>| match (call, inlined) {
-        (Some(call), Some(inlined)) => shader.module.functions[inlined.calls[call].function]
-            .name
-            .as_deref(),
-        _ => entry.name.as_str().into(),
-    };
+impl<'g> SliceCosts<'g> {
+    fn new(
+        module: &naga::Module,
+        (entry_index, info): (usize, &naga::valid::FunctionInfo),
+        model: &CostModel,
+        layout: &proc::FunctionLayout,
+        graph: &'g ExprGraph,
+    ) -> Self {
+        let function = &module.entry_points[entry_index].function;
+        // Arena handles cannot be made from an index outside naga, so
+        // slices (bit sets by arena index) are read through this table.
+        let exprs: Vec<&Expression> = function.expressions.iter().map(|(_, e)| e).collect();
+        let mut weighted = vec![0.0; function.expressions.len()];
+        for (expr, at) in layout.placed() {
+            weighted[expr.index()] = model.expression(function, info, expr) * at.multiplier;
+        }
+        let total = model.body(function, info, layout);
+        let private = graph.private();
+        let dominated = private.dominated_sums(&weighted);
+        let varyings = super::varyings::per_frame_varyings(module, entry_index);
+        let own_facts: Vec<SliceFacts> = (0..exprs.len())
+            .map(|i| SliceFacts::of_expression(module, function, &exprs, &varyings, i))
+            .collect();
+        let summaries = graph.summaries(&weighted, &own_facts);
+        SliceCosts {
+            graph,
+            weighted,
+            total,
+            private,
+            dominated,
+            own_facts,
+            summaries,
+        }
+    }
+
+    fn cost_of(&self, set: &ExprSet) -> f64 {
+        // (fold from +0.0: an empty float `sum()` is -0.0)
+        set.ones().fold(0.0, |sum, i| sum + self.weighted[i])
+    }
+
+    /// The cost and facts of `expr`'s slice.
+    fn summary(&self, expr: Handle<Expression>) -> (f64, SliceFacts) {
+        match &self.summaries {
+            Some(s) => (s.cost[expr.index()], s.facts[expr.index()].clone()),
+            None => {
+                let slice = self.graph.slice(expr);
+                let facts = slice.ones().fold(SliceFacts::NONE, |mut facts, i| {
+                    facts.merge(&self.own_facts[i]);
+                    facts
+                });
+                (self.cost_of(&slice), facts)
+            }
+        }
+    }
+
+    /// The overlap of `expr`'s slice (costing `cost`): the slice less the
+    /// node and what only it needs (what it dominates). A node nothing
+    /// needs has no dominator; its remainder is walked.
+    fn overlap(&self, expr: Handle<Expression>, cost: f64) -> f64 {
+        if self.private.is_needed(expr) {
+            (cost - self.weighted[expr.index()] - self.dominated[expr.index()]).max(0.0)
+        } else {
+            let mut shared = self.graph.remainder(expr);
+            shared.intersect_with(&self.graph.slice(expr));
+            shared.set(expr.index(), false);
+            self.cost_of(&shared)
+        }
+    }
+}
+
+/// Where each expression of the analysed function came from: the entry
+/// point's own, or a helper's at one call site.
+struct Origins<'a> {
+    shader: &'a Shader,
+    inlined: Option<&'a proc::inline::Inlined>,
+    entry_name: &'a str,
+    paths: Option<super::calls::Paths>,
+}
+
+impl<'a> Origins<'a> {
+    fn new(
+        shader: &'a Shader,
+        analysed: Option<&'a super::calls::Analysed>,
+        entry_name: &'a str,
+        lines: &LineIndex,
+    ) -> Self {
+        let inlined = analysed.map(|a| &a.inlined);
+        let paths = inlined.map(|inlined| {
+            super::calls::Paths::new(&shader.module, inlined, &shader.file.text, &|offset| {
+                lines.line_col(offset)
+            })
+        });
+        Origins {
+            shader,
+            inlined,
+            entry_name,
+            paths,
+        }
+    }
+
+    fn of(&self, handle: Handle<Expression>) -> proc::inline::Origin {
+        match self.inlined {
+            Some(inlined) => inlined.origins[handle.index()],
+            None => proc::inline::Origin {
+                call: None,
+                expression: Some(handle),
+            },
+        }
+    }
+
+    /// The name of the function a call site's expressions come from (the
+    /// entry point's for its own).
+    fn function_of(&self, call: Option<usize>) -> Option<&'a str> {
+        match (call, self.inlined) {
+            (Some(call), Some(inlined)) => self.shader.module.functions
+                [inlined.calls[call].function]
+                .name
+                .as_deref(),
+            _ => Some(self.entry_name),
+        }
+    }
+
+    fn call_path(&self, call: Option<usize>) -> Vec<super::calls::CallStep> {
+        match (call, &self.paths) {
+            (Some(call), Some(paths)) => paths.steps[call].clone(),
+            _ => Vec::new(),
+        }
+    }
+}
+
+/// One node per source span and call path: where the front end made
+/// several expressions for one piece of source (a load and its pointer, a
+/// splat and its scalar), the last one, which consumes the others, stands
+/// for it. Loads of local variables have no span of their own; they are
+/// spanned by the variable's name where it is read. Keyed by (call path
+/// group, start, end): 0 for the entry point's own, call + 1 for a
+/// helper's.
+fn nodes_by_span(
+    module: &naga::Module,
+    (function, info): (&naga::Function, &naga::valid::FunctionInfo),
+    source: &str,
+    origins: &Origins,
+) -> BTreeMap<(usize, usize, usize), Handle<Expression>> {
     let load_spans = super::spans::local_loads(function, source, &|load| {
-        let call = origin_of(load).call;
-        (call.map_or(0, |c| c + 1), function_of(call))
+        let call = origins.of(load).call;
+        (call.map_or(0, |c| c + 1), origins.function_of(call))
     });
-    let mut by_span: BTreeMap<(usize, usize, usize), Handle<Expression>> = BTreeMap::new();
+    let mut by_span = BTreeMap::new();
     for (handle, _) in function.expressions.iter() {
-        let origin = origin_of(handle);
+        let origin = origins.of(handle);
         if origin.expression.is_none() {
             // Made by the inliner: no source of its own.
             continue;
@@ -146,101 +313,64 @@ pub(super) fn find(
         let group = origin.call.map_or(0, |c| c + 1);
         by_span.insert((group, range.start, range.end), handle);
     }
+    by_span
+}
 
-    let no_bounds = super::range::UniformBounds::default();
-    let mut ranges = super::NodeRanges::new(shader, analysed.as_deref(), entry_index, &no_bounds);
+/// Node ids: the occurrence number counts equal texts in source order,
+/// per call path; a helper's nodes hash their call path with the entry
+/// point's name, so the entry point's own ids are as they were. Ask in
+/// the order of [`nodes_by_span`]'s keys.
+struct NodeNames<'a> {
+    source: &'a str,
+    /// The hash key of each call path group ([`node_keys`]).
+    keys: &'a [String],
+    seen: HashMap<u64, usize>,
+    group: usize,
+    hasher: id::PrefixHasher<'a>,
+}
 
-    // Ids: the occurrence number counts equal texts in source order, per
-    // call path; a helper's nodes hash their call path with the entry
-    // point's name, so the entry point's own ids are as they were.
-    let keys: Vec<String> = std::iter::once(entry.name.clone())
+/// The hash key of each call path group: the entry point's name for its
+/// own nodes, with each call path's key for a helper's.
+fn node_keys(entry_name: &str, paths: Option<&super::calls::Paths>) -> Vec<String> {
+    std::iter::once(entry_name.to_string())
         .chain(
             paths
                 .iter()
                 .flat_map(|p| p.keys.iter())
-                .map(|key| format!("{}\0{key}", entry.name)),
+                .map(|key| format!("{entry_name}\0{key}")),
         )
-        .collect();
-    let mut seen: HashMap<u64, usize> = HashMap::new();
-    let mut hasher_group = usize::MAX;
-    let mut hasher = id::PrefixHasher::new(source, &keys[0]);
-    let mut candidates = Vec::new();
-    let mut rejected = Vec::new();
-    for (&(group, start, end), &expr) in &by_span {
-        if group != hasher_group {
-            hasher = id::PrefixHasher::new(source, &keys[group]);
-            hasher_group = group;
-        }
-        let text = &source[start..end];
-        // Spans come in order of start, then end: nested prefixes hash on.
-        let state = hasher.node(start, end);
-        let occurrence = seen.entry(state).or_insert(0);
-        let origin = origin_of(expr);
-        let function_name = function_of(origin.call).unwrap_or_default().to_string();
-        let call_path = match (origin.call, &paths) {
-            (Some(call), Some(paths)) => paths.steps[call].clone(),
-            _ => Vec::new(),
-        };
-        let node = Node {
-            id: id::PrefixHasher::id(state, *occurrence),
-            span: SourceSpan {
-                start: lines.line_col(start).into(),
-                end: lines.line_col(end).into(),
-            },
-            ty: type_name(&module.types, info[expr].ty.inner_with(&module.types)),
-            text: id::shown_text(text),
-            function: function_name,
-            call_path,
-            expression: origin.expression.unwrap_or(expr),
-            analysed: expr,
-            range: start..end,
-        };
-        *occurrence += 1;
+        .collect()
+}
 
-        let (cost, facts) = summary(expr);
-        match classify(module, info, &layout, &facts, expr) {
-            Err((reason, detail)) => rejected.push(Rejected {
-                node,
-                reason,
-                detail,
-            }),
-            Ok(components) => {
-                // The overlap: the slice less the node and what only it
-                // needs (what it dominates). A node nothing needs has no
-                // dominator; its remainder is walked.
-                let overlap = if private.is_needed(expr) {
-                    (cost - weighted[expr.index()] - dominated[expr.index()]).max(0.0)
-                } else {
-                    let mut shared = graph.remainder(expr);
-                    shared.intersect_with(&graph.slice(expr));
-                    shared.set(expr.index(), false);
-                    cost_of(&shared)
-                };
-                let derivatives = facts.has(SliceFacts::DERIVATIVES);
-                let depends_on = facts.per_frame_inputs();
-                let range = ranges.of(&node);
-                candidates.push(Candidate {
-                    node,
-                    components,
-                    cost,
-                    ratio: if total_cost > 0.0 {
-                        cost / total_cost
-                    } else {
-                        0.0
-                    },
-                    overlap,
-                    derivatives,
-                    depends_on,
-                    range: range.ends(),
-                    fits_f16: range.fits_f16(),
-                });
-            }
+impl<'a> NodeNames<'a> {
+    fn new(source: &'a str, keys: &'a [String]) -> Self {
+        NodeNames {
+            source,
+            keys,
+            seen: HashMap::new(),
+            group: usize::MAX,
+            hasher: id::PrefixHasher::new(source, &keys[0]),
         }
     }
 
-    // Highest P/T first; a node that goes stale as the camera, the light
-    // or time moves comes after object-space nodes within
-    // `PER_FRAME_PENALTY` of its P/T.
+    fn id(&mut self, group: usize, start: usize, end: usize) -> String {
+        if group != self.group {
+            self.hasher = id::PrefixHasher::new(self.source, &self.keys[group]);
+            self.group = group;
+        }
+        // Spans come in order of start, then end: nested prefixes hash on.
+        let state = self.hasher.node(start, end);
+        let occurrence = self.seen.entry(state).or_insert(0);
+        let id = id::PrefixHasher::id(state, *occurrence);
+        *occurrence += 1;
+        id
+    }
+}
+
+/// Highest P/T first; a node that goes stale as the camera, the light or
+/// time moves comes after object-space nodes within `PER_FRAME_PENALTY`
+/// of its P/T.
+fn rank(candidates: &mut [Candidate]) {
     let rank = |c: &Candidate| {
         c.ratio
             - if c.depends_on.is_empty() {
@@ -254,15 +384,6 @@ pub(super) fn find(
             .total_cmp(&rank(a))
             .then(a.node.range.start.cmp(&b.node.range.start))
     });
-    Analysis {
-        shader: shader.file.path.clone(),
-        entry: entry.name.clone(),
-        total_cost,
-        candidates,
-        rejected,
-        entry_index,
-        analysed,
-    }
 }
 
 /// Line and column of byte offsets, as [`crate::diagnostic::SourceFile::line_col`]

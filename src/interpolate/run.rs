@@ -85,53 +85,19 @@ pub(super) fn run(
     progress: &mut dyn Progress,
 ) -> Result<(Report, Pictures), Error> {
     check(options)?;
-    let n = options.frames_per_interval;
-    let size = options.size.unwrap_or(scene.size);
-    let frames = options.frames.unwrap_or(scene.frames);
-    crate::measure::setup::check_counts(size, frames, 0)?;
-    let intervals = frames.div_ceil(n);
-    let last_frame = (WARMUP_INTERVALS + intervals + 1) * n;
-    let bindings = crate::measure::setup::scene_bindings(
-        shader,
-        scene,
-        (options.entry.as_deref(), options.vertex_entry.as_deref()),
-        size,
-        last_frame,
-    )?;
-    let rewrite_options = RewriteOptions {
-        depth: scene.camera.depth,
-        vertex_entry: options.vertex_entry.clone(),
-        color_format: MEASURED_COLOR_FORMAT,
-        ..RewriteOptions::default()
-    };
-    let reference_plan =
-        crate::rewrite::plan::reference(shader, &bindings.analysis, &rewrite_options)
-            .map_err(fail)?;
+    let plan = RunPlan::new(shader, scene, options)?;
+    let (n, size) = (plan.n, plan.size);
     let gpu = crate::measure::open_gpu()?;
-    // The twins of per-instance inputs take vertex attributes beside the
-    // shader's, as many as the device grants.
-    let max_vertex_attributes = gpu.device.limits().max_vertex_attributes;
-    let instrumented = iframe::instrument(
-        shader,
-        &bindings.analysis,
-        &rewrite_options,
-        max_vertex_attributes,
-    )
-    .map_err(|refusal| {
-        fail(format!(
-            "the I-frame pass cannot be made: {}",
-            refusal.reason
-        ))
-    })?;
-    crate::scene::storage::check(&bindings.storage, scene)?;
-    crate::measure::setup::check_instancing(shader, scene, &reference_plan.vertex_layout)?;
+    let instrumented = plan.instrument(shader, &gpu)?;
+    crate::scene::storage::check(&plan.bindings.storage, scene)?;
+    crate::measure::setup::check_instancing(shader, scene, &plan.reference.vertex_layout)?;
     let inputs = SceneInputs::new(
         shader,
         scene,
         scene_path,
-        &reference_plan,
-        &bindings.used,
-        (&bindings.uniforms, &bindings.storage),
+        &plan.reference,
+        &plan.bindings.used,
+        (&plan.bindings.uniforms, &plan.bindings.storage),
         size,
     )?;
     let mut clock = Clock::new(&gpu)?;
@@ -141,7 +107,7 @@ pub(super) fn run(
         size,
         cull_back_faces: scene.cull_back_faces,
     };
-    let mut reference = bench::reference(&bench, shader, &reference_plan)?;
+    let mut reference = bench::reference(&bench, shader, &plan.reference)?;
     let sources = HashMap::from([("iframe.wgsl".to_string(), instrumented.text.clone())]);
     let iframe_runner = || {
         bench
@@ -191,8 +157,6 @@ pub(super) fn run(
         .copied()
         .filter(|m| m.fragment_entry().is_some())
         .collect();
-
-    let inputs_of = |frame: u32| inputs.frame(scene, frame);
     let run = Schedule {
         gpu: &gpu,
         instrumented: &instrumented,
@@ -203,49 +167,97 @@ pub(super) fn run(
         far_depth: scene.camera.depth.far_depth(),
         moving: &moving,
     };
-    let total = u64::from(WARMUP_INTERVALS + intervals)
+    let total = u64::from(WARMUP_INTERVALS + plan.intervals)
         * u64::from(n + 1 + (b_methods.len() + scene_runs.len()) as u32 * (n - 1));
     progress.start(total);
-    let mut measured = Measured {
-        blur: options
-            .motion_blur
-            .then(|| super::blur::MotionBlur::new(n, size)),
-        ..Measured::default()
-    };
-    // The first I-frame: the one the first interval opens with.
-    timed(
+    let measured = run.measure(
         &mut clock,
-        &mut slots[0],
-        &run.twinned_inputs(&inputs_of, [0, 0, n])?,
-        "iframe",
-    )
-    .map_err(fail)?;
-    for interval in 0..WARMUP_INTERVALS + intervals {
-        let record = interval >= WARMUP_INTERVALS;
-        run.interval(
-            &mut clock,
-            (
-                &mut reference,
-                &mut slots,
-                &mut scene_runs,
-                correspondence.as_mut(),
-                moving_runs.as_mut(),
-            ),
-            &inputs_of,
-            (interval, record),
-            &mut measured,
-            progress,
-        )?;
-    }
+        (
+            &mut reference,
+            &mut slots,
+            &mut scene_runs,
+            correspondence.as_mut(),
+            moving_runs.as_mut(),
+        ),
+        &|frame: u32| inputs.frame(scene, frame),
+        plan.intervals,
+        progress,
+    )?;
     progress.finish();
     Ok(run.report(
         shader,
         (scene_path, &scene.description),
         &clock,
         measured,
-        intervals,
+        plan.intervals,
         notes,
     ))
+}
+
+/// What a run is, before it touches the GPU: the interval length, the
+/// size, the intervals measured, the scene checked against the shader,
+/// and the reference's plan.
+struct RunPlan {
+    n: u32,
+    size: [u32; 2],
+    intervals: u32,
+    bindings: crate::measure::setup::SceneBindings,
+    rewrite_options: RewriteOptions,
+    reference: crate::plan::Plan,
+}
+
+impl RunPlan {
+    fn new(shader: &Shader, scene: &Scene, options: &Options) -> Result<RunPlan, Error> {
+        let n = options.frames_per_interval;
+        let size = options.size.unwrap_or(scene.size);
+        let frames = options.frames.unwrap_or(scene.frames);
+        crate::measure::setup::check_counts(size, frames, 0)?;
+        let intervals = frames.div_ceil(n);
+        let last_frame = (WARMUP_INTERVALS + intervals + 1) * n;
+        let bindings = crate::measure::setup::scene_bindings(
+            shader,
+            scene,
+            (options.entry.as_deref(), options.vertex_entry.as_deref()),
+            size,
+            last_frame,
+        )?;
+        let rewrite_options = RewriteOptions {
+            depth: scene.camera.depth,
+            vertex_entry: options.vertex_entry.clone(),
+            color_format: MEASURED_COLOR_FORMAT,
+            ..RewriteOptions::default()
+        };
+        let reference =
+            crate::rewrite::plan::reference(shader, &bindings.analysis, &rewrite_options)
+                .map_err(fail)?;
+        Ok(RunPlan {
+            n,
+            size,
+            intervals,
+            bindings,
+            rewrite_options,
+            reference,
+        })
+    }
+
+    /// The I-frame pass: the shader instrumented with the flows. The twins
+    /// of per-instance inputs take vertex attributes beside the shader's,
+    /// as many as the device grants.
+    fn instrument(&self, shader: &Shader, gpu: &Gpu) -> Result<IFrameShader, Error> {
+        let max_vertex_attributes = gpu.device.limits().max_vertex_attributes;
+        iframe::instrument(
+            shader,
+            &self.bindings.analysis,
+            &self.rewrite_options,
+            max_vertex_attributes,
+        )
+        .map_err(|refusal| {
+            fail(format!(
+                "the I-frame pass cannot be made: {}",
+                refusal.reason
+            ))
+        })
+    }
 }
 
 /// The runs that rasterise the geometry at B-frame times.
@@ -542,6 +554,17 @@ struct Measured {
     methods: BTreeMap<Method, MethodRun>,
 }
 
+/// One interval as its B-frame methods see it: its first and closing
+/// I-frames' times, whether it is recorded, the reference at each of its
+/// frames and the two I-frames' textures.
+struct IntervalAt<'a> {
+    start: u32,
+    end: u32,
+    record: bool,
+    pictures: &'a [LinearFrame],
+    textures: &'a (IFrameTextures<'a>, IFrameTextures<'a>),
+}
+
 /// What every interval of the run shares.
 struct Schedule<'a> {
     gpu: &'a Gpu,
@@ -638,6 +661,58 @@ impl Schedule<'_> {
         })
     }
 
+    /// Every interval in turn (the warm-up's unrecorded), after the first
+    /// I-frame: what the run measured.
+    fn measure(
+        &self,
+        clock: &mut Clock,
+        (reference, slots, scene_runs, mut correspondence, mut moving): (
+            &mut Runner,
+            &mut [Runner; 2],
+            &mut [SceneRun],
+            Option<&mut Correspondence>,
+            Option<&mut SceneRun>,
+        ),
+        inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
+        intervals: u32,
+        progress: &mut dyn Progress,
+    ) -> Result<Measured, Error> {
+        let n = self.options.frames_per_interval;
+        let mut measured = Measured {
+            blur: self
+                .options
+                .motion_blur
+                .then(|| super::blur::MotionBlur::new(n, self.size)),
+            ..Measured::default()
+        };
+        // The first I-frame: the one the first interval opens with.
+        timed(
+            clock,
+            &mut slots[0],
+            &self.twinned_inputs(inputs_of, [0, 0, n])?,
+            "iframe",
+        )
+        .map_err(fail)?;
+        for interval in 0..WARMUP_INTERVALS + intervals {
+            let record = interval >= WARMUP_INTERVALS;
+            self.interval(
+                clock,
+                (
+                    &mut *reference,
+                    &mut *slots,
+                    &mut *scene_runs,
+                    correspondence.as_deref_mut(),
+                    moving.as_deref_mut(),
+                ),
+                inputs_of,
+                (interval, record),
+                &mut measured,
+                progress,
+            )?;
+        }
+        Ok(measured)
+    }
+
     /// Draws interval `interval`: the reference at each of its displayed
     /// frames, its closing I-frame, every method's B-frames; keeps the
     /// measurements when `record`.
@@ -701,97 +776,150 @@ impl Schedule<'_> {
             self.textures(&slots[earlier])?,
             self.textures(&slots[later])?,
         );
+        let at = IntervalAt {
+            start,
+            end,
+            record,
+            pictures: &pictures,
+            textures: &textures,
+        };
         for &method in self.methods {
             // Half-velocity's moving objects: wiped out of I-frame 0 once
             // an interval, timed with its first B-frame.
-            let mut moving = moving
+            let moving = moving
                 .as_deref_mut()
                 .filter(|_| method == Method::HalfVelocity);
-            let mut removal = moving.is_some();
-            for k in self.frames_of_interval(record, measured) {
-                let params = self.params(k);
-                let mut moving_now = match moving.as_deref_mut() {
-                    Some(run) => {
-                        run.bind(self.gpu, &textures, &params)?;
-                        let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
-                        Some((run, self.only_moving(inputs)))
-                    }
-                    None => None,
-                };
-                let (time, _, _) = timed_recording(clock, "bframe", |mut profiler| {
-                    let mut objects = None;
-                    if let Some((run, inputs)) = moving_now.as_mut() {
-                        if std::mem::take(&mut removal) {
-                            self.bframes.remove_moving_objects(
-                                self.gpu,
-                                (textures.0.color, textures.0.flow_next),
-                                &params,
-                                self.options.inpaint_passes,
-                                reborrow(&mut profiler),
-                            );
-                        }
-                        run.runner
-                            .frame(self.gpu, inputs, reborrow(&mut profiler))?;
-                        objects = Some(MovingObjects {
-                            now: run.output(self.instrumented.scene_locations[0])?,
-                            removed: self.bframes.removed(),
-                        });
-                    }
-                    self.bframes.render(
-                        self.gpu,
-                        method,
-                        (&textures.0, &textures.1),
-                        &params,
-                        objects,
-                        profiler,
-                    )
-                })
-                .map_err(fail)?;
-                progress.step(method.name());
-                if record {
-                    let sample = self.sample(
-                        (start + k, &params, time),
-                        self.bframes.color(),
-                        self.bframes.decisions(),
-                    )?;
-                    let reference = self.reference_at(k, &pictures, measured)?;
-                    self.keep(measured, method, sample, &reference);
-                    let interior = k >= 1 && k < n;
-                    if let (Method::ImageBased, Some(c), true) =
-                        (method, correspondence.as_deref_mut(), interior)
-                    {
-                        let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
-                        let errors = c.measure(self, &textures, &params, &inputs)?;
-                        measured.correspondence.push(errors);
-                    }
-                }
-            }
+            self.image_method(
+                clock,
+                method,
+                (moving, correspondence.as_deref_mut()),
+                inputs_of,
+                &at,
+                measured,
+                progress,
+            )?;
         }
         for scene_run in scene_runs.iter_mut() {
-            for k in self.frames_of_interval(record, measured) {
-                let params = self.params(k);
-                scene_run.bind(self.gpu, &textures, &params)?;
-                let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
-                let (time, _, _) =
-                    timed(clock, &mut scene_run.runner, &inputs, "bframe").map_err(fail)?;
-                progress.step(scene_run.method.name());
-                if record {
-                    let [color, decision] = self.instrumented.scene_locations;
-                    let sample = self.sample(
-                        (start + k, &params, time),
-                        scene_run.output(color).map_err(fail)?,
-                        scene_run.output(decision).map_err(fail)?,
-                    )?;
-                    self.keep(
-                        measured,
-                        scene_run.method,
-                        sample,
-                        &self.reference_at(k, &pictures, measured)?,
-                    );
+            self.scene_method(clock, scene_run, inputs_of, &at, measured, progress)?;
+        }
+        measured.previous_end = pictures.pop();
+        Ok(())
+    }
+
+    /// One image-space method's B-frames of the interval, timed, and
+    /// compared with the reference when recorded (image-based's searches
+    /// with the exact correspondences too).
+    #[allow(clippy::too_many_arguments)]
+    fn image_method(
+        &self,
+        clock: &mut Clock,
+        method: Method,
+        (mut moving, mut correspondence): (Option<&mut SceneRun>, Option<&mut Correspondence>),
+        inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
+        at: &IntervalAt,
+        measured: &mut Measured,
+        progress: &mut dyn Progress,
+    ) -> Result<(), Error> {
+        let (start, end, record, textures, pictures) =
+            (at.start, at.end, at.record, at.textures, at.pictures);
+        let n = self.options.frames_per_interval;
+        let mut removal = moving.is_some();
+        for k in self.frames_of_interval(record, measured) {
+            let params = self.params(k);
+            let mut moving_now = match moving.as_deref_mut() {
+                Some(run) => {
+                    run.bind(self.gpu, textures, &params)?;
+                    let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
+                    Some((run, self.only_moving(inputs)))
+                }
+                None => None,
+            };
+            let (time, _, _) = timed_recording(clock, "bframe", |mut profiler| {
+                let mut objects = None;
+                if let Some((run, inputs)) = moving_now.as_mut() {
+                    if std::mem::take(&mut removal) {
+                        self.bframes.remove_moving_objects(
+                            self.gpu,
+                            (textures.0.color, textures.0.flow_next),
+                            &params,
+                            self.options.inpaint_passes,
+                            reborrow(&mut profiler),
+                        );
+                    }
+                    run.runner
+                        .frame(self.gpu, inputs, reborrow(&mut profiler))?;
+                    objects = Some(MovingObjects {
+                        now: run.output(self.instrumented.scene_locations[0])?,
+                        removed: self.bframes.removed(),
+                    });
+                }
+                self.bframes.render(
+                    self.gpu,
+                    method,
+                    (&textures.0, &textures.1),
+                    &params,
+                    objects,
+                    profiler,
+                )
+            })
+            .map_err(fail)?;
+            progress.step(method.name());
+            if record {
+                let sample = self.sample(
+                    (start + k, &params, time),
+                    self.bframes.color(),
+                    self.bframes.decisions(),
+                )?;
+                let reference = self.reference_at(k, pictures, measured)?;
+                self.keep(measured, method, sample, &reference);
+                let interior = k >= 1 && k < n;
+                if let (Method::ImageBased, Some(c), true) =
+                    (method, correspondence.as_deref_mut(), interior)
+                {
+                    let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
+                    let errors = c.measure(self, textures, &params, &inputs)?;
+                    measured.correspondence.push(errors);
                 }
             }
         }
-        measured.previous_end = pictures.pop();
+        Ok(())
+    }
+
+    /// One scene-assisted method's B-frames of the interval, rasterised
+    /// at their times, timed, and compared when recorded.
+    fn scene_method(
+        &self,
+        clock: &mut Clock,
+        scene_run: &mut SceneRun,
+        inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
+        at: &IntervalAt,
+        measured: &mut Measured,
+        progress: &mut dyn Progress,
+    ) -> Result<(), Error> {
+        let (start, end, record, textures, pictures) =
+            (at.start, at.end, at.record, at.textures, at.pictures);
+        for k in self.frames_of_interval(record, measured) {
+            let params = self.params(k);
+            scene_run.bind(self.gpu, textures, &params)?;
+            let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
+            let (time, _, _) =
+                timed(clock, &mut scene_run.runner, &inputs, "bframe").map_err(fail)?;
+            progress.step(scene_run.method.name());
+            if record {
+                let [color, decision] = self.instrumented.scene_locations;
+                let sample = self.sample(
+                    (start + k, &params, time),
+                    scene_run.output(color).map_err(fail)?,
+                    scene_run.output(decision).map_err(fail)?,
+                )?;
+                self.keep(
+                    measured,
+                    scene_run.method,
+                    sample,
+                    &self.reference_at(k, pictures, measured)?,
+                );
+            }
+        }
         Ok(())
     }
 

@@ -183,20 +183,7 @@ impl Walker<'_> {
                 ref body,
                 ref continuing,
                 break_if,
-            } => {
-                let trips = loop_trips(self.module, self.function, before, body, continuing);
-                let assumed = trips.map_or(self.default_trips, |n| n as f64);
-                self.out.loops.push(LoopBound { trips, assumed });
-                let mut inner = at.clone();
-                inner.multiplier *= assumed;
-                inner.loop_depth += 1;
-                collect_conditions(body, &mut inner.controls);
-                collect_conditions(continuing, &mut inner.controls);
-                inner.controls.extend(break_if);
-                self.out.roots.extend(break_if);
-                self.block(body, &inner);
-                self.block(continuing, &inner);
-            }
+            } => self.loop_statement((body, continuing, break_if), before, at),
             Statement::Return { value } => {
                 self.out.roots.extend(value);
                 self.out.returns.push(ExitSite {
@@ -227,23 +214,76 @@ impl Walker<'_> {
                 function,
                 ref arguments,
                 result,
-            } => {
-                // A call whose value is unused, or whose callee writes
-                // memory or discards, needs its arguments for its effects;
-                // otherwise they are needed only through its result.
-                if result.is_none() || has_effects(self.module, function) {
-                    self.out.roots.extend(arguments.iter().copied());
-                }
-                if let Some(result) = result {
-                    self.place(result, at);
-                }
-                self.out.calls.push(CallSite {
-                    function,
-                    arguments: arguments.clone(),
-                    result,
-                    placement: at.clone(),
-                });
-            }
+            } => self.call_statement(function, arguments, result, at),
+            Statement::ImageStore { .. }
+            | Statement::Atomic { .. }
+            | Statement::ImageAtomic { .. }
+            | Statement::WorkGroupUniformLoad { .. }
+            | Statement::SubgroupBallot { .. }
+            | Statement::SubgroupGather { .. }
+            | Statement::SubgroupCollectiveOperation { .. }
+            | Statement::RayQuery { .. }
+            | Statement::RayPipelineFunction(_)
+            | Statement::CooperativeStore { .. } => self.memory_statement(statement, at),
+            Statement::Break
+            | Statement::Continue
+            | Statement::ControlBarrier(_)
+            | Statement::MemoryBarrier(_) => {}
+        }
+    }
+
+    /// A loop: its trip count (from the statements `before` it), its body
+    /// and continuing block placed that many times over, under the
+    /// conditions that leave it.
+    fn loop_statement(
+        &mut self,
+        (body, continuing, break_if): (&Block, &Block, Option<Handle<Expression>>),
+        before: &[Statement],
+        at: &Placement,
+    ) {
+        let trips = loop_trips(self.module, self.function, before, body, continuing);
+        let assumed = trips.map_or(self.default_trips, |n| n as f64);
+        self.out.loops.push(LoopBound { trips, assumed });
+        let mut inner = at.clone();
+        inner.multiplier *= assumed;
+        inner.loop_depth += 1;
+        collect_conditions(body, &mut inner.controls);
+        collect_conditions(continuing, &mut inner.controls);
+        inner.controls.extend(break_if);
+        self.out.roots.extend(break_if);
+        self.block(body, &inner);
+        self.block(continuing, &inner);
+    }
+
+    fn call_statement(
+        &mut self,
+        function: Handle<naga::Function>,
+        arguments: &[Handle<Expression>],
+        result: Option<Handle<Expression>>,
+        at: &Placement,
+    ) {
+        // A call whose value is unused, or whose callee writes
+        // memory or discards, needs its arguments for its effects;
+        // otherwise they are needed only through its result.
+        if result.is_none() || has_effects(self.module, function) {
+            self.out.roots.extend(arguments.iter().copied());
+        }
+        if let Some(result) = result {
+            self.place(result, at);
+        }
+        self.out.calls.push(CallSite {
+            function,
+            arguments: arguments.to_vec(),
+            result,
+            placement: at.clone(),
+        });
+    }
+
+    /// A statement that writes memory, reads other invocations or traces
+    /// rays: what it reads is needed for its effect; what it returns is
+    /// placed here.
+    fn memory_statement(&mut self, statement: &Statement, at: &Placement) {
+        match *statement {
             Statement::ImageStore {
                 image,
                 coordinate,
@@ -323,10 +363,8 @@ impl Walker<'_> {
             Statement::CooperativeStore { target, ref data } => {
                 self.out.roots.extend([target, data.pointer, data.stride])
             }
-            Statement::Break
-            | Statement::Continue
-            | Statement::ControlBarrier(_)
-            | Statement::MemoryBarrier(_) => {}
+            // The control flow and plain stores are `statement`'s.
+            _ => {}
         }
     }
 }

@@ -14,6 +14,29 @@ use crate::plan::Variant;
 /// Renders `report`; PNGs under `dir` (from [`super::write_images`]) are
 /// embedded.
 pub fn html(report: &Report, dir: &Path) -> String {
+    let mut page = header(report);
+    page.push_str(&reference_box(report, dir));
+    for warning in &report.warnings {
+        let _ = write!(
+            page,
+            "<p class=\"answer\"><b>Warning:</b> {}.</p>",
+            escape(warning)
+        );
+    }
+    page.push_str(&answer(report));
+    page.push_str(&results_tables(report));
+    page.push_str(&miss_causes(report));
+    page.push_str(&nodes(report));
+    page.push_str(&charts(report));
+    page.push_str(&pareto_table(report));
+    page.push_str(&grid_section(report));
+    page.push_str(&pictures(report, dir));
+    page.push_str("</div></body></html>\n");
+    page
+}
+
+/// The page's head, title, what was run, and the warm-up's caveat.
+fn header(report: &Report) -> String {
     let mut page = String::new();
     let _ = write!(
         page,
@@ -53,19 +76,13 @@ pub fn html(report: &Report, dir: &Path) -> String {
             report.warmup
         );
     }
+    page
+}
 
-    page.push_str(&reference_box(report, dir));
-
-    for warning in &report.warnings {
-        let _ = write!(
-            page,
-            "<p class=\"answer\"><b>Warning:</b> {}.</p>",
-            escape(warning)
-        );
-    }
-
-    // The answer: the choice (the same sentence stdout gives), then the
-    // fastest configuration measured, whatever its error.
+/// The answer: the choice (the same sentence stdout gives), then the
+/// fastest configuration measured, whatever its error.
+fn answer(report: &Report) -> String {
+    let mut page = String::new();
     page.push_str("<h2>Which value to cache</h2>");
     if let Some(choice) = &report.choice {
         let budget = if choice.budget_given {
@@ -125,9 +142,12 @@ pub fn html(report: &Report, dir: &Path) -> String {
         }
         None => page.push_str("<p>No configuration could be measured.</p>"),
     }
+    page
+}
 
-    page.push_str(&results_tables(report));
-
+/// What each declared effect causes alone.
+fn miss_causes(report: &Report) -> String {
+    let mut page = String::new();
     if !report.miss_causes.is_empty() {
         page.push_str("<h2>What causes the misses</h2><p>The fastest configuration again, with one declared effect at a time (refreshes come from the refresh pattern alone).</p><table><tr><th>effect</th><th>miss</th><th>off-screen</th><th>disoccluded</th></tr>");
         for cause in &report.miss_causes {
@@ -142,8 +162,12 @@ pub fn html(report: &Report, dir: &Path) -> String {
         }
         page.push_str("</table>");
     }
+    page
+}
 
-    // The nodes in their source.
+/// The nodes in their source.
+fn nodes(report: &Report) -> String {
+    let mut page = String::new();
     page.push_str("<h2>Nodes</h2>");
     for node in &report.nodes {
         let _ = write!(
@@ -165,10 +189,13 @@ pub fn html(report: &Report, dir: &Path) -> String {
             highlight(&node.source, node.start, node.end)
         );
     }
+    page
+}
 
-    // Charts.
-    // Only those with something to show: a knob measured at one value, a
-    // single node or a single configuration draws nothing.
+/// The charts with something to show: a knob measured at one value, a
+/// single node or a single configuration draws nothing.
+fn charts(report: &Report) -> String {
+    let mut page = String::new();
     page.push_str("<h2>Charts</h2>");
     let charts = [
         time_per_node(report),
@@ -182,10 +209,13 @@ pub fn html(report: &Report, dir: &Path) -> String {
     for chart in charts {
         page.push_str(&chart);
     }
-    page.push_str(&pareto_table(report));
-    page.push_str(&grid_section(report));
+    page
+}
 
-    // Pictures.
+/// The reference, the best result, their difference and the maps of
+/// the cache's decisions (the page's last section, its `div` left open).
+fn pictures(report: &Report, dir: &Path) -> String {
+    let mut page = String::new();
     page.push_str("<h2>Pictures</h2><p>Maps of the cache's decisions: <span style=\"color:#0a0\">hit</span>, <span style=\"color:#00f\">refresh</span>, <span style=\"color:#f00\">miss (disoccluded)</span>, <span style=\"color:#f80\">miss (off-screen)</span>.</p><div class=\"pictures\">");
     for (caption, path) in [
         ("reference", dir.join("images/reference.png")),
@@ -202,7 +232,6 @@ pub fn html(report: &Report, dir: &Path) -> String {
             &dir.join("maps").join(name),
         );
     }
-    page.push_str("</div></body></html>\n");
     page
 }
 

@@ -76,57 +76,8 @@ pub fn chart(
     series: &[Series],
     x_labels: Option<&[String]>,
 ) -> String {
-    // The legend has a margin of its own, right of the plot, as wide as
-    // its longest name, so that it never covers a point nor is cut off;
-    // rotated categorical labels get as much room below as they need.
-    let (width, height) = (800.0, 360.0);
-    let longest_name = series
-        .iter()
-        .map(|s| s.name.chars().count())
-        .max()
-        .unwrap_or(0);
-    let longest_label = x_labels
-        .map(|labels| {
-            labels
-                .iter()
-                .map(|l| l.chars().count().min(LABEL_CHARS + 1))
-                .max()
-                .unwrap_or(0)
-        })
-        .unwrap_or(0);
-    let (left, right, top, bottom) = (
-        // The first rotated label reaches left of its category by about
-        // cos 40° of its length.
-        72f64.max(12.0 + 6.0 * 0.77 * longest_label as f64),
-        (40.0 + 6.5 * longest_name as f64).clamp(80.0, 260.0),
-        32.0,
-        if x_labels.is_some() {
-            // 6 px a character at 40°: sin 40° ≈ 0.64 of it below the axis.
-            40.0 + 6.0 * 0.64 * longest_label as f64
-        } else {
-            48.0
-        },
-    );
-    let height = height + bottom - 48.0;
-    let points = series.iter().flat_map(|s| &s.points);
-    let (mut x0, mut x1, mut y_min, mut y_max) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-    for &(x, y) in points {
-        if x.is_finite() && y.is_finite() {
-            x0 = x0.min(x);
-            x1 = x1.max(x);
-            y_min = y_min.min(y);
-            y_max = y_max.max(y);
-        }
-    }
-    if x0 > x1 {
-        (x0, x1) = (0.0, 1.0);
-    }
-    if x1 - x0 < 1e-9 {
-        x1 = x0 + 1.0;
-    }
-    let (y0, y1) = fitted_range(y_min, y_max);
-    let sx = |x: f64| left + (x - x0) / (x1 - x0) * (width - left - right);
-    let sy = |y: f64| height - bottom - (y - y0) / (y1 - y0) * (height - top - bottom);
+    let plot = Plot::new(series, x_labels);
+    let (width, height) = (plot.width, plot.height);
     let mut svg = String::new();
     let _ = write!(
         svg,
@@ -138,77 +89,190 @@ pub fn chart(
         width / 2.0,
         escape(title)
     );
-    // Axes and ticks.
-    let _ = write!(
-        svg,
-        r##"<line x1="{left}" y1="{}" x2="{}" y2="{}" stroke="#333"/><line x1="{left}" y1="{top}" x2="{left}" y2="{}" stroke="#333"/>"##,
-        height - bottom,
-        width - right,
-        height - bottom,
-        height - bottom
-    );
-    let y_step = (y1 - y0) / 5.0;
-    for i in 0..=5 {
-        let y = y0 + y_step * f64::from(i);
+    plot.axes(&mut svg, x_labels);
+    plot.axis_titles(&mut svg, x_label, y_label);
+    for (i, s) in series.iter().enumerate() {
+        plot.series(&mut svg, s, COLORS[i % COLORS.len()], i);
+    }
+    svg.push_str("</svg>");
+    svg
+}
+
+/// A chart's geometry: its size, the plot's margins (the legend's on the
+/// right) and the data ranges the axes span.
+struct Plot {
+    width: f64,
+    height: f64,
+    left: f64,
+    right: f64,
+    top: f64,
+    bottom: f64,
+    x: (f64, f64),
+    y: (f64, f64),
+}
+
+impl Plot {
+    fn new(series: &[Series], x_labels: Option<&[String]>) -> Plot {
+        // The legend has a margin of its own, right of the plot, as wide
+        // as its longest name, so that it never covers a point nor is cut
+        // off; rotated categorical labels get as much room below as they
+        // need.
+        let width = 800.0;
+        let longest_name = series
+            .iter()
+            .map(|s| s.name.chars().count())
+            .max()
+            .unwrap_or(0);
+        let longest_label = x_labels
+            .map(|labels| {
+                labels
+                    .iter()
+                    .map(|l| l.chars().count().min(LABEL_CHARS + 1))
+                    .max()
+                    .unwrap_or(0)
+            })
+            .unwrap_or(0);
+        let (left, right, top, bottom) = (
+            // The first rotated label reaches left of its category by
+            // about cos 40° of its length.
+            72f64.max(12.0 + 6.0 * 0.77 * longest_label as f64),
+            (40.0 + 6.5 * longest_name as f64).clamp(80.0, 260.0),
+            32.0,
+            if x_labels.is_some() {
+                // 6 px a character at 40°: sin 40° ≈ 0.64 of it below the
+                // axis.
+                40.0 + 6.0 * 0.64 * longest_label as f64
+            } else {
+                48.0
+            },
+        );
+        let height = 360.0 + bottom - 48.0;
+        let points = series.iter().flat_map(|s| &s.points);
+        let (mut x0, mut x1, mut y_min, mut y_max) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for &(x, y) in points {
+            if x.is_finite() && y.is_finite() {
+                x0 = x0.min(x);
+                x1 = x1.max(x);
+                y_min = y_min.min(y);
+                y_max = y_max.max(y);
+            }
+        }
+        if x0 > x1 {
+            (x0, x1) = (0.0, 1.0);
+        }
+        if x1 - x0 < 1e-9 {
+            x1 = x0 + 1.0;
+        }
+        Plot {
+            width,
+            height,
+            left,
+            right,
+            top,
+            bottom,
+            x: (x0, x1),
+            y: fitted_range(y_min, y_max),
+        }
+    }
+
+    fn sx(&self, x: f64) -> f64 {
+        let (x0, x1) = self.x;
+        self.left + (x - x0) / (x1 - x0) * (self.width - self.left - self.right)
+    }
+
+    fn sy(&self, y: f64) -> f64 {
+        let (y0, y1) = self.y;
+        self.height - self.bottom - (y - y0) / (y1 - y0) * (self.height - self.top - self.bottom)
+    }
+
+    /// The axes, the y grid and ticks, and the x ticks or category labels.
+    fn axes(&self, svg: &mut String, x_labels: Option<&[String]>) {
+        let (width, height, left, right, top, bottom) = (
+            self.width,
+            self.height,
+            self.left,
+            self.right,
+            self.top,
+            self.bottom,
+        );
         let _ = write!(
             svg,
-            r##"<line x1="{left}" y1="{py}" x2="{}" y2="{py}" stroke="#ddd"/><text class="y-tick" x="{}" y="{}" text-anchor="end">{}</text>"##,
+            r##"<line x1="{left}" y1="{}" x2="{}" y2="{}" stroke="#333"/><line x1="{left}" y1="{top}" x2="{left}" y2="{}" stroke="#333"/>"##,
+            height - bottom,
             width - right,
-            left - 4.0,
-            sy(y) + 4.0,
-            tick(y, y_step),
-            py = sy(y)
+            height - bottom,
+            height - bottom
+        );
+        let (y0, y1) = self.y;
+        let y_step = (y1 - y0) / 5.0;
+        for i in 0..=5 {
+            let y = y0 + y_step * f64::from(i);
+            let _ = write!(
+                svg,
+                r##"<line x1="{left}" y1="{py}" x2="{}" y2="{py}" stroke="#ddd"/><text class="y-tick" x="{}" y="{}" text-anchor="end">{}</text>"##,
+                width - right,
+                left - 4.0,
+                self.sy(y) + 4.0,
+                tick(y, y_step),
+                py = self.sy(y)
+            );
+        }
+        match x_labels {
+            Some(labels) => {
+                for (i, label) in labels.iter().enumerate() {
+                    let x = self.sx(i as f64);
+                    let shown: String = if label.chars().count() > LABEL_CHARS {
+                        label.chars().take(LABEL_CHARS).chain(['…']).collect()
+                    } else {
+                        label.clone()
+                    };
+                    let _ = write!(
+                        svg,
+                        r#"<text x="{x}" y="{}" text-anchor="end" transform="rotate(-40 {x} {})"><title>{}</title>{}</text>"#,
+                        height - bottom + 14.0,
+                        height - bottom + 14.0,
+                        escape(label),
+                        escape(&shown)
+                    );
+                }
+            }
+            None => {
+                let (x0, x1) = self.x;
+                for i in 0..=5 {
+                    let x = x0 + (x1 - x0) * f64::from(i) / 5.0;
+                    let _ = write!(
+                        svg,
+                        r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
+                        self.sx(x),
+                        height - bottom + 14.0,
+                        number(x)
+                    );
+                }
+            }
+        }
+    }
+
+    fn axis_titles(&self, svg: &mut String, x_label: &str, y_label: &str) {
+        let (height, top, bottom) = (self.height, self.top, self.bottom);
+        let _ = write!(
+            svg,
+            r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
+            (self.left + self.width - self.right) / 2.0,
+            height - 6.0,
+            escape(x_label)
+        );
+        let _ = write!(
+            svg,
+            r#"<text x="14" y="{}" text-anchor="middle" transform="rotate(-90 14 {})">{}</text>"#,
+            (top + height - bottom) / 2.0,
+            (top + height - bottom) / 2.0,
+            escape(y_label)
         );
     }
-    match x_labels {
-        Some(labels) => {
-            for (i, label) in labels.iter().enumerate() {
-                let x = sx(i as f64);
-                let shown: String = if label.chars().count() > LABEL_CHARS {
-                    label.chars().take(LABEL_CHARS).chain(['…']).collect()
-                } else {
-                    label.clone()
-                };
-                let _ = write!(
-                    svg,
-                    r#"<text x="{x}" y="{}" text-anchor="end" transform="rotate(-40 {x} {})"><title>{}</title>{}</text>"#,
-                    height - bottom + 14.0,
-                    height - bottom + 14.0,
-                    escape(label),
-                    escape(&shown)
-                );
-            }
-        }
-        None => {
-            for i in 0..=5 {
-                let x = x0 + (x1 - x0) * f64::from(i) / 5.0;
-                let _ = write!(
-                    svg,
-                    r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
-                    sx(x),
-                    height - bottom + 14.0,
-                    number(x)
-                );
-            }
-        }
-    }
-    let _ = write!(
-        svg,
-        r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#,
-        (left + width - right) / 2.0,
-        height - 6.0,
-        escape(x_label)
-    );
-    let _ = write!(
-        svg,
-        r#"<text x="14" y="{}" text-anchor="middle" transform="rotate(-90 14 {})">{}</text>"#,
-        (top + height - bottom) / 2.0,
-        (top + height - bottom) / 2.0,
-        escape(y_label)
-    );
-    // Series and legend.
-    for (i, s) in series.iter().enumerate() {
-        let color = COLORS[i % COLORS.len()];
+
+    /// Series `s` (the `index`th) in `color`: its line, its points with
+    /// their titles and marks, and its legend entry.
+    fn series(&self, svg: &mut String, s: &Series, color: &str, index: usize) {
         let finite: Vec<(f64, f64)> = s
             .points
             .iter()
@@ -218,7 +282,7 @@ pub fn chart(
         if s.line && finite.len() > 1 {
             let path: Vec<String> = finite
                 .iter()
-                .map(|&(x, y)| format!("{:.1},{:.1}", sx(x), sy(y)))
+                .map(|&(x, y)| format!("{:.1},{:.1}", self.sx(x), self.sy(y)))
                 .collect();
             let _ = write!(
                 svg,
@@ -238,33 +302,31 @@ pub fn chart(
             let _ = write!(
                 svg,
                 r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{color}"><title>{}</title></circle>"#,
-                sx(x),
-                sy(y),
+                self.sx(x),
+                self.sy(y),
                 escape(&title)
             );
             if let Some(mark) = s.marks.get(j).filter(|m| !m.is_empty()) {
                 let _ = write!(
                     svg,
                     r#"<text x="{:.1}" y="{:.1}" font-size="9" fill="{color}">{}</text>"#,
-                    sx(x) + 5.0,
-                    sy(y) - 5.0,
+                    self.sx(x) + 5.0,
+                    self.sy(y) - 5.0,
                     escape(mark)
                 );
             }
         }
-        let ly = top + 4.0 + 14.0 * i as f64;
+        let ly = self.top + 4.0 + 14.0 * index as f64;
         let _ = write!(
             svg,
             r#"<rect x="{}" y="{}" width="10" height="10" fill="{color}"/><text x="{}" y="{}">{}</text>"#,
-            width - right + 12.0,
+            self.width - self.right + 12.0,
             ly,
-            width - right + 26.0,
+            self.width - self.right + 26.0,
             ly + 9.0,
             escape(&s.name)
         );
     }
-    svg.push_str("</svg>");
-    svg
 }
 
 /// A tick's value with as many decimals as ticks `step` apart need to

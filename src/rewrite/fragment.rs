@@ -323,101 +323,202 @@ pub(super) fn entry_point(
         .ok_or_else(|| Refusal::internal(format!("{stage:?} reads no previous clip position")));
 
     if stage == Stage::Classify {
-        let lookup = b.call(pieces.lookup, vec![previous?]);
-        let status = b.member(lookup, 2);
-        let age = b.member(lookup, 3);
-        let mut classes = b.call(pieces.classify, vec![status, frag_coord, age]);
-        if let Some((presence, absent)) = pieces.presence {
-            let present = b.call(presence, originals.clone());
-            classes = b.call(absent, vec![present, classes]);
-        }
-        b.push(Statement::Return {
-            value: Some(classes),
-        });
+        classify_return(&mut b, pieces, (previous?, frag_coord), &originals);
         return Ok(b.finish());
     }
+    let at = Fragment {
+        originals,
+        previous: previous.ok(),
+        frag_coord,
+    };
+    let payload = payload_of(&mut b, module, pieces, stage, &at)?;
+    let age = match payload.age {
+        Some(age) => age,
+        None => b.literal_f32(0.0),
+    };
+    let output = Output {
+        ty: result_ty,
+        cache_member,
+    };
+    let value = output_value(
+        &mut b,
+        module,
+        pieces,
+        stage,
+        &at,
+        (payload.value, age),
+        output,
+    )?;
+    if let Some(reuse) = payload.deferred_kill {
+        kill_unless(&mut b, reuse);
+    }
+    b.push(Statement::Return { value: Some(value) });
+    Ok(b.finish())
+}
 
-    // The payload to shade with, and the age to write beside it: the
-    // lookup's where the cached value is reused, 0 where it is computed.
-    let mut deferred_kill = None;
-    let mut age = None;
-    let payload = match stage {
+/// The classification pass's body: the lookup's status, made `absent`
+/// where the original value is not there.
+fn classify_return(
+    b: &mut Builder,
+    pieces: &Pieces,
+    (previous, frag_coord): (Handle<Expression>, Handle<Expression>),
+    originals: &[Handle<Expression>],
+) {
+    let lookup = b.call(pieces.lookup, vec![previous]);
+    let status = b.member(lookup, 2);
+    let age = b.member(lookup, 3);
+    let mut classes = b.call(pieces.classify, vec![status, frag_coord, age]);
+    if let Some((presence, absent)) = pieces.presence {
+        let present = b.call(presence, originals.to_vec());
+        classes = b.call(absent, vec![present, classes]);
+    }
+    b.push(Statement::Return {
+        value: Some(classes),
+    });
+}
+
+/// Ends the invocation where `reuse` is false.
+fn kill_unless(b: &mut Builder, reuse: Handle<Expression>) {
+    let kill = b.nested(|b| b.push(Statement::Kill));
+    b.push(Statement::If {
+        condition: reuse,
+        accept: naga::Block::new(),
+        reject: kill,
+    });
+}
+
+/// The payload a pass shades with, the age to write beside it (the
+/// lookup's where the cached value is reused, 0 where it is computed:
+/// `None`), and the reuse condition whose misses are discarded at the end
+/// (when the shade takes derivatives).
+struct PassPayload {
+    value: Handle<Expression>,
+    age: Option<Handle<Expression>>,
+    deferred_kill: Option<Handle<Expression>>,
+}
+
+fn payload_of(
+    b: &mut Builder,
+    module: &Module,
+    pieces: &Pieces,
+    stage: Stage,
+    at: &Fragment,
+) -> Result<PassPayload, Refusal> {
+    let previous = || {
+        at.previous
+            .ok_or_else(|| Refusal::internal(format!("{stage:?} reads no previous clip position")))
+    };
+    let plain = |value| PassPayload {
+        value,
+        age: None,
+        deferred_kill: None,
+    };
+    Ok(match stage {
         Stage::OnePass => {
-            let (lookup, reuse) = reuse_condition(&mut b, pieces, previous?, frag_coord);
-            age = Some(b.call(pieces.age_written, vec![lookup, reuse]));
-            let mut payload_arguments = originals.clone();
-            if let Some(gradients) = pieces.gradients {
-                let value = b.call(gradients, originals.clone());
-                b.name(value, "gradients");
-                payload_arguments.push(value);
+            let (lookup, reuse) = reuse_condition(b, pieces, previous()?, at.frag_coord);
+            let age = b.call(pieces.age_written, vec![lookup, reuse]);
+            PassPayload {
+                value: one_pass_payload(b, pieces, (lookup, reuse), &at.originals),
+                age: Some(age),
+                deferred_kill: None,
             }
-            let local = b.function.local_variables.append(
-                naga::LocalVariable {
-                    name: Some("payload".into()),
-                    ty: pieces.payload_ty,
-                    init: None,
-                },
-                naga::Span::UNDEFINED,
-            );
-            let pointer = b.expr(Expression::LocalVariable(local));
-            let accept = b.nested(|b| {
-                let cached = b.member(lookup, 0);
-                let value = from_vec4(b, cached, pieces.components);
-                b.push(Statement::Store { pointer, value });
-            });
-            let reject = b.nested(|b| {
-                let value = b.call(pieces.payload, payload_arguments);
-                b.push(Statement::Store { pointer, value });
-            });
-            b.push(Statement::If {
-                condition: reuse,
-                accept,
-                reject,
-            });
-            b.expr(Expression::Load { pointer })
         }
         Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard => {
-            let (lookup, reuse) = reuse_condition(&mut b, pieces, previous?, frag_coord);
-            age = Some(b.call(pieces.age_written, vec![lookup, reuse]));
+            let (lookup, reuse) = reuse_condition(b, pieces, previous()?, at.frag_coord);
+            let age = b.call(pieces.age_written, vec![lookup, reuse]);
             // naga writes `discard` as OpKill, which ends the invocation:
             // a derivative after it is undefined in every quad a missed
             // lane leaves. When the shade takes derivatives, every lane
             // shades first and the misses are discarded at the end.
             let shade_derives = stage.writes() != Writes::Cache
                 && super::uniformity::needs_derivatives(module, pieces.shade);
-            if shade_derives {
-                deferred_kill = Some(reuse);
-            } else {
-                let kill = b.nested(|b| b.push(Statement::Kill));
-                b.push(Statement::If {
-                    condition: reuse,
-                    accept: naga::Block::new(),
-                    reject: kill,
-                });
+            if !shade_derives {
+                kill_unless(b, reuse);
             }
             let cached = b.member(lookup, 0);
-            from_vec4(&mut b, cached, pieces.components)
+            PassPayload {
+                value: from_vec4(b, cached, pieces.components),
+                age: Some(age),
+                deferred_kill: shade_derives.then_some(reuse),
+            }
         }
-        Stage::Full | Stage::Payload => b.call(pieces.payload, originals.clone()),
+        Stage::Full | Stage::Payload => plain(b.call(pieces.payload, at.originals.clone())),
         Stage::ShadeFromCache => {
-            let cached = b.call(pieces.current, vec![frag_coord]);
-            from_vec4(&mut b, cached, pieces.components)
+            let cached = b.call(pieces.current, vec![at.frag_coord]);
+            plain(from_vec4(b, cached, pieces.components))
         }
         Stage::Classify | Stage::GBuffer => {
             return Err(Refusal::internal(format!("{stage:?} has no payload")))
         }
-    };
+    })
+}
 
-    let age = match age {
-        Some(age) => age,
-        None => b.literal_f32(0.0),
-    };
-    let value = match stage.writes() {
+/// One-pass's payload: the cached value where `reuse` holds, else the
+/// payload computed (with the gradients hoisted before the branch).
+fn one_pass_payload(
+    b: &mut Builder,
+    pieces: &Pieces,
+    (lookup, reuse): (Handle<Expression>, Handle<Expression>),
+    originals: &[Handle<Expression>],
+) -> Handle<Expression> {
+    let mut payload_arguments = originals.to_vec();
+    if let Some(gradients) = pieces.gradients {
+        let value = b.call(gradients, originals.to_vec());
+        b.name(value, "gradients");
+        payload_arguments.push(value);
+    }
+    let local = b.function.local_variables.append(
+        naga::LocalVariable {
+            name: Some("payload".into()),
+            ty: pieces.payload_ty,
+            init: None,
+        },
+        naga::Span::UNDEFINED,
+    );
+    let pointer = b.expr(Expression::LocalVariable(local));
+    let accept = b.nested(|b| {
+        let cached = b.member(lookup, 0);
+        let value = from_vec4(b, cached, pieces.components);
+        b.push(Statement::Store { pointer, value });
+    });
+    let reject = b.nested(|b| {
+        let value = b.call(pieces.payload, payload_arguments);
+        b.push(Statement::Store { pointer, value });
+    });
+    b.push(Statement::If {
+        condition: reuse,
+        accept,
+        reject,
+    });
+    b.expr(Expression::Load { pointer })
+}
+
+/// A pass's result type and, for colour + cache, the number of original
+/// members before the cache member ([`output_type`]).
+#[derive(Clone, Copy)]
+struct Output {
+    ty: Handle<naga::Type>,
+    cache_member: Option<u32>,
+}
+
+/// What a pass returns from its payload and age: the cache texel, the
+/// shaded colour, or both.
+fn output_value(
+    b: &mut Builder,
+    module: &Module,
+    pieces: &Pieces,
+    stage: Stage,
+    at: &Fragment,
+    (payload, age): (Handle<Expression>, Handle<Expression>),
+    output: Output,
+) -> Result<Handle<Expression>, Refusal> {
+    let frag_coord = at.frag_coord;
+    Ok(match stage.writes() {
         Writes::Cache => {
-            let cache = cache_texel(&mut b, pieces, payload, frag_coord);
+            let cache = cache_texel(b, pieces, payload, frag_coord);
             let cache = b.call(pieces.encode, vec![cache]);
             b.expr(Expression::Compose {
-                ty: result_ty,
+                ty: output.ty,
                 components: vec![cache, age],
             })
         }
@@ -425,18 +526,18 @@ pub(super) fn entry_point(
             return Err(Refusal::internal(format!("{stage:?} writes no payload")))
         }
         Writes::Color => {
-            let mut arguments = originals.clone();
+            let mut arguments = at.originals.clone();
             arguments.push(payload);
             b.call(pieces.shade, arguments)
         }
         Writes::ColorAndCache => {
-            let mut arguments = originals.clone();
+            let mut arguments = at.originals.clone();
             arguments.push(payload);
             let color = b.call(pieces.shade, arguments);
             b.name(color, "color");
-            let cache = cache_texel(&mut b, pieces, payload, frag_coord);
+            let cache = cache_texel(b, pieces, payload, frag_coord);
             let cache = b.call(pieces.encode, vec![cache]);
-            let mut components: Vec<_> = match cache_member {
+            let mut components: Vec<_> = match output.cache_member {
                 Some(count) if count > 0 && is_struct(module, pieces.result.ty) => {
                     (0..count).map(|i| b.member(color, i)).collect()
                 }
@@ -445,21 +546,11 @@ pub(super) fn entry_point(
             components.push(cache);
             components.push(age);
             b.expr(Expression::Compose {
-                ty: result_ty,
+                ty: output.ty,
                 components,
             })
         }
-    };
-    if let Some(reuse) = deferred_kill {
-        let kill = b.nested(|b| b.push(Statement::Kill));
-        b.push(Statement::If {
-            condition: reuse,
-            accept: naga::Block::new(),
-            reject: kill,
-        });
-    }
-    b.push(Statement::Return { value: Some(value) });
-    Ok(b.finish())
+    })
 }
 
 fn f32_type(module: &mut Module) -> Handle<naga::Type> {

@@ -49,30 +49,65 @@ pub struct Hoisted {
     pub payload: Handle<Function>,
 }
 
-/// Builds the gradients function and a payload function taking its result,
-/// for the payload computing `node` with `live` of `function`. `arguments`
-/// are the entry point's arguments without bindings; `result` the payload
-/// type.
-#[allow(clippy::too_many_arguments)]
-pub fn hoist(
+/// What the payload is computed from: the original entry point's
+/// function, its info and expression graph, and the expressions the
+/// payload keeps (`live`).
+#[derive(Debug)]
+pub(crate) struct Source<'a> {
+    pub original: &'a Module,
+    pub function: &'a Function,
+    pub info: &'a naga::valid::FunctionInfo,
+    pub graph: &'a ExprGraph,
+    pub live: &'a ExprSet,
+}
+
+/// The payload function to build: the value it returns (`node`), the
+/// entry point's arguments without bindings, the payload type, the entry
+/// point's name, the presence function of a value that may be absent, and
+/// the payload's components.
+#[derive(Debug)]
+pub(crate) struct PayloadShape<'a> {
+    pub node: Handle<Expression>,
+    pub arguments: &'a [naga::FunctionArgument],
+    pub result: Handle<naga::Type>,
+    pub name: &'a str,
+    pub absent: Handle<Function>,
+    pub components: u32,
+}
+
+/// The payload's implicit derivatives: each site, the types of the values
+/// hoisted for them in order, and the expressions those values need.
+struct Sites {
+    sites: Vec<Site>,
+    members: Vec<Handle<naga::Type>>,
+    needed: ExprSet,
+}
+
+/// Builds the gradients function and a payload function taking its result.
+pub(crate) fn hoist(
     module: &mut Module,
-    original: &Module,
-    function: &Function,
-    info: &naga::valid::FunctionInfo,
-    graph: &ExprGraph,
-    live: &ExprSet,
-    node: Handle<Expression>,
-    arguments: &[naga::FunctionArgument],
-    result: Handle<naga::Type>,
-    name: &str,
-    absent: Handle<Function>,
-    payload_components: u32,
+    source: &Source,
+    shape: &PayloadShape,
 ) -> Result<Hoisted, Refusal> {
+    let sites = find_sites(module, source);
+    let struct_ty = gradients_struct(module, &sites.members, shape.name)?;
+    let gradients_fn = gradients_function(source, &sites, shape, struct_ty);
+    let payload_fn = payload_function(source, sites.sites, shape, struct_ty);
+    Ok(Hoisted {
+        gradients: module.functions.append(gradients_fn, naga::Span::UNDEFINED),
+        payload: module.functions.append(payload_fn, naga::Span::UNDEFINED),
+    })
+}
+
+/// Every sample with an implicit level and every derivative among the
+/// payload's expressions, with the values to hoist for each.
+fn find_sites(module: &mut Module, source: &Source) -> Sites {
+    let (function, info, graph) = (source.function, source.info, source.graph);
     let exprs: Vec<(Handle<Expression>, &Expression)> = function.expressions.iter().collect();
     let mut sites = Vec::new();
     let mut members: Vec<Handle<naga::Type>> = Vec::new();
     let mut needed = ExprSet::with_capacity(function.expressions.len());
-    for index in live.ones() {
+    for index in source.live.ones() {
         let (handle, expr) = exprs[index];
         match *expr {
             Expression::ImageSample {
@@ -109,8 +144,19 @@ pub fn hoist(
             _ => {}
         }
     }
+    Sites {
+        sites,
+        members,
+        needed,
+    }
+}
 
-    // The struct carrying the hoisted values.
+/// The struct carrying the hoisted values, laid out as WGSL lays it out.
+fn gradients_struct(
+    module: &mut Module,
+    members: &[Handle<naga::Type>],
+    name: &str,
+) -> Result<Handle<naga::Type>, Refusal> {
     let mut offset: u32 = 0;
     let mut struct_members = Vec::new();
     for (i, &ty) in members.iter().enumerate() {
@@ -126,7 +172,7 @@ pub fn hoist(
         });
         offset += size;
     }
-    let struct_ty = module.types.insert(
+    Ok(module.types.insert(
         naga::Type {
             name: Some(format!("{}Gradients", super::vertex::pascal(name))),
             inner: TypeInner::Struct {
@@ -135,16 +181,24 @@ pub fn hoist(
             },
         },
         naga::Span::UNDEFINED,
-    );
+    ))
+}
 
-    // The gradients function: the needed slices, then the derivatives.
+/// The gradients function: the needed slices, then the derivatives.
+fn gradients_function(
+    source: &Source,
+    sites: &Sites,
+    shape: &PayloadShape,
+    struct_ty: Handle<naga::Type>,
+) -> Function {
+    let function = source.function;
     let mut copy = FunctionCopy::new(
-        original,
+        source.original,
         function,
-        &needed,
+        &sites.needed,
         Function {
-            name: Some(format!("{name}_gradients")),
-            arguments: arguments.to_vec(),
+            name: Some(format!("{}_gradients", shape.name)),
+            arguments: shape.arguments.to_vec(),
             result: Some(naga::FunctionResult {
                 ty: struct_ty,
                 binding: None,
@@ -155,7 +209,7 @@ pub fn hoist(
     copy.drop_returns();
     let body = copy.copy_body();
     let mut components = Vec::new();
-    for site in &sites {
+    for site in &sites.sites {
         match *site {
             Site::Sample { expr, .. } => {
                 let Expression::ImageSample {
@@ -164,35 +218,7 @@ pub fn hoist(
                 else {
                     continue;
                 };
-                let coordinate = copy.expression(coordinate);
-                let scale = match level {
-                    naga::SampleLevel::Bias(bias) => {
-                        let bias = copy.expression(bias);
-                        Some(copy.add(Expression::Math {
-                            fun: naga::MathFunction::Exp2,
-                            arg: bias,
-                            arg1: None,
-                            arg2: None,
-                            arg3: None,
-                        }))
-                    }
-                    _ => None,
-                };
-                for axis in [naga::DerivativeAxis::X, naga::DerivativeAxis::Y] {
-                    let mut d = copy.add(Expression::Derivative {
-                        axis,
-                        ctrl: naga::DerivativeControl::None,
-                        expr: coordinate,
-                    });
-                    if let Some(scale) = scale {
-                        d = copy.add(Expression::Binary {
-                            op: naga::BinaryOperator::Multiply,
-                            left: d,
-                            right: scale,
-                        });
-                    }
-                    components.push(d);
-                }
+                components.extend(sample_gradients(&mut copy, coordinate, level));
             }
             Site::Derivative { expr, .. } => {
                 let Expression::Derivative {
@@ -217,10 +243,57 @@ pub fn hoist(
         ty: struct_ty,
         components,
     });
-    let gradients_fn = copy.finish(body, Statement::Return { value: Some(value) });
+    copy.finish(body, Statement::Return { value: Some(value) })
+}
 
-    // The payload function, reading the hoisted values.
-    let mut payload_arguments = arguments.to_vec();
+/// A sample's two gradients in the copy: of its coordinate along x and y,
+/// scaled by 2^bias for a biased sample.
+fn sample_gradients(
+    copy: &mut FunctionCopy,
+    coordinate: Handle<Expression>,
+    level: naga::SampleLevel,
+) -> [Handle<Expression>; 2] {
+    let coordinate = copy.expression(coordinate);
+    let scale = match level {
+        naga::SampleLevel::Bias(bias) => {
+            let bias = copy.expression(bias);
+            Some(copy.add(Expression::Math {
+                fun: naga::MathFunction::Exp2,
+                arg: bias,
+                arg1: None,
+                arg2: None,
+                arg3: None,
+            }))
+        }
+        _ => None,
+    };
+    [naga::DerivativeAxis::X, naga::DerivativeAxis::Y].map(|axis| {
+        let d = copy.add(Expression::Derivative {
+            axis,
+            ctrl: naga::DerivativeControl::None,
+            expr: coordinate,
+        });
+        match scale {
+            Some(scale) => copy.add(Expression::Binary {
+                op: naga::BinaryOperator::Multiply,
+                left: d,
+                right: scale,
+            }),
+            None => d,
+        }
+    })
+}
+
+/// The payload function, reading the hoisted values from its last
+/// argument.
+fn payload_function(
+    source: &Source,
+    sites: Vec<Site>,
+    shape: &PayloadShape,
+    struct_ty: Handle<naga::Type>,
+) -> Function {
+    let function = source.function;
+    let mut payload_arguments = shape.arguments.to_vec();
     payload_arguments.push(naga::FunctionArgument {
         name: Some("gradients".into()),
         ty: struct_ty,
@@ -228,20 +301,20 @@ pub fn hoist(
     });
     let gradients_arg = payload_arguments.len() as u32 - 1;
     let mut payload = FunctionCopy::new(
-        original,
+        source.original,
         function,
-        live,
+        source.live,
         Function {
-            name: Some(format!("{name}_payload")),
+            name: Some(format!("{}_payload", shape.name)),
             arguments: payload_arguments,
             result: Some(naga::FunctionResult {
-                ty: result,
+                ty: shape.result,
                 binding: None,
             }),
             ..Function::default()
         },
     );
-    payload.return_at(node);
+    payload.return_at(shape.node);
     for site in sites {
         match site {
             Site::Sample { expr, member } => payload.rebuild(
@@ -285,11 +358,7 @@ pub fn hoist(
             ),
         }
     }
-    let payload_fn = super::path::finish_payload(payload, absent, payload_components);
-    Ok(Hoisted {
-        gradients: module.functions.append(gradients_fn, naga::Span::UNDEFINED),
-        payload: module.functions.append(payload_fn, naga::Span::UNDEFINED),
-    })
+    super::path::finish_payload(payload, shape.absent, shape.components)
 }
 
 /// 0 → `a`, 25 → `z`, 26 → `ba`...

@@ -152,17 +152,21 @@ pub(super) fn split(
     let (payload, gradients) = if slice.hoist_derivatives {
         let hoisted = gradients::hoist(
             module,
-            original,
-            function,
-            info,
-            graph,
-            &slice.live,
-            node,
-            &stripped,
-            payload_ty,
-            &entry.name,
-            absent,
-            candidate.components,
+            &gradients::Source {
+                original,
+                function,
+                info,
+                graph,
+                live: &slice.live,
+            },
+            &gradients::PayloadShape {
+                node,
+                arguments: &stripped,
+                result: payload_ty,
+                name: &entry.name,
+                absent,
+                components: candidate.components,
+            },
         )?;
         (hoisted.payload, Some(hoisted.gradients))
     } else {
