@@ -226,6 +226,41 @@ fn fullscreen_pipeline(
     })
 }
 
+/// The B-frame passes' bindings: the parameters, the sampler, and both
+/// I-frames' colour, depth, flows and the image-based search's textures.
+fn layout_entries() -> [wgpu::BindGroupLayoutEntry; 13] {
+    let float = wgpu::TextureSampleType::Float { filterable: true };
+    [
+        wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        },
+        wgpu::BindGroupLayoutEntry {
+            binding: 1,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+            count: None,
+        },
+        texture_entry(2, float),
+        texture_entry(3, wgpu::TextureSampleType::Depth),
+        texture_entry(4, float),
+        texture_entry(5, float),
+        texture_entry(6, float),
+        texture_entry(7, wgpu::TextureSampleType::Depth),
+        texture_entry(8, float),
+        texture_entry(9, float),
+        texture_entry(10, wgpu::TextureSampleType::Float { filterable: false }),
+        texture_entry(11, float),
+        texture_entry(12, float),
+    ]
+}
+
 impl BFrames {
     /// Builds the passes of `methods` (those that are B-frame passes) for
     /// frames of `size`, the image-based search taking `iterations` steps,
@@ -240,35 +275,7 @@ impl BFrames {
         let latest = latest_radius.is_some();
         let device = &gpu.device;
         let float = wgpu::TextureSampleType::Float { filterable: true };
-        let entries = [
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                count: None,
-            },
-            texture_entry(2, float),
-            texture_entry(3, wgpu::TextureSampleType::Depth),
-            texture_entry(4, float),
-            texture_entry(5, float),
-            texture_entry(6, float),
-            texture_entry(7, wgpu::TextureSampleType::Depth),
-            texture_entry(8, float),
-            texture_entry(9, float),
-            texture_entry(10, wgpu::TextureSampleType::Float { filterable: false }),
-            texture_entry(11, float),
-            texture_entry(12, float),
-        ];
+        let entries = layout_entries();
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("B-frame"),
             entries: &entries,

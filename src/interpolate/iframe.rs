@@ -156,39 +156,10 @@ pub fn instrument(
     let original = &shader.module;
     let entry_index = analysis.entry_index;
     let entry = original.entry_points[entry_index].clone();
-    let Some(result) = entry.function.result.clone() else {
-        return Err(Refusal::new("the fragment entry point returns nothing"));
-    };
-    if rewrite::writes_frag_depth(original, &result) {
-        return Err(Refusal::new(
-            "the fragment stage writes @builtin(frag_depth); the flows are taken at the rasterised depth",
-        ));
-    }
-    if vertex::is_fragment_only(original) && options.vertex_entry.is_none() {
-        return Err(Refusal::new(
-            "the module has no vertex stage whose position could be computed at the previous and next I-frames; give it with --vertex",
-        ));
-    }
-    let vertex_index =
-        vertex::vertex_entry(original, entry_index, options.vertex_entry.as_deref())?;
-
+    let (result, vertex_index) = instrumentable(original, &entry, entry_index, options)?;
     let slot = CacheSlot::for_module(original);
     let mut module = original.clone();
-    let imported = crate::proc::import::import(
-        &mut module,
-        iframe_helpers()?,
-        slot.group,
-        slot.first_binding,
-    )
-    .map_err(|err| Refusal::internal(format!("importing the I-frame helpers: {err}")))?;
-    let flow_to = *imported
-        .functions
-        .get("flow_to")
-        .ok_or_else(|| Refusal::internal("`flow_to` missing from the I-frame helpers"))?;
-    let params_global = *imported
-        .globals
-        .get("flow_params")
-        .ok_or_else(|| Refusal::internal("`flow_params` missing from the I-frame helpers"))?;
+    let (flow_to, params_global) = import_helpers(&mut module, slot)?;
 
     // The twins follow the flow parameters: the previous I-frame's, then
     // the next one's.
@@ -276,17 +247,11 @@ pub fn instrument(
             .collect();
         rewrite::plan::entry_resources(&module, &entries)
     };
-    let key = |g: Handle<naga::GlobalVariable>| {
-        let binding = module.global_variables[g]
-            .binding
-            .expect("twins and the resources they shadow are bound");
-        [binding.group, binding.binding]
-    };
-    let pairs = |i: usize| -> Vec<([u32; 2], [u32; 2])> {
+    let pairs = |i: usize| -> Result<Vec<TwinPair>, Refusal> {
         stage.times[i]
             .twins
             .iter()
-            .map(|&(from, to)| (key(from), key(to)))
+            .map(|&(from, to)| Ok((binding_key(&module, from)?, binding_key(&module, to)?)))
             .collect()
     };
     Ok(IFrameShader {
@@ -294,9 +259,9 @@ pub fn instrument(
         scene_locations,
         scene_bindings,
         original_entry,
-        params: key(params_global),
-        previous: pairs(0),
-        next: pairs(1),
+        params: binding_key(&module, params_global)?,
+        previous: pairs(0)?,
+        next: pairs(1)?,
         instance_twins,
         plan,
         flow_locations,
@@ -304,6 +269,68 @@ pub fn instrument(
         info,
         module,
     })
+}
+
+/// A twin's (group, binding) and the (group, binding) of what it shadows.
+type TwinPair = ([u32; 2], [u32; 2]);
+
+/// The fragment entry point's result and the vertex entry point drawing
+/// with it, or why the I-frame pass cannot be made of them.
+fn instrumentable(
+    original: &naga::Module,
+    entry: &naga::EntryPoint,
+    entry_index: usize,
+    options: &Options,
+) -> Result<(naga::FunctionResult, usize), Refusal> {
+    let Some(result) = entry.function.result.clone() else {
+        return Err(Refusal::new("the fragment entry point returns nothing"));
+    };
+    if rewrite::writes_frag_depth(original, &result) {
+        return Err(Refusal::new(
+            "the fragment stage writes @builtin(frag_depth); the flows are taken at the rasterised depth",
+        ));
+    }
+    if vertex::is_fragment_only(original) && options.vertex_entry.is_none() {
+        return Err(Refusal::new(
+            "the module has no vertex stage whose position could be computed at the previous and next I-frames; give it with --vertex",
+        ));
+    }
+    let vertex_index =
+        vertex::vertex_entry(original, entry_index, options.vertex_entry.as_deref())?;
+    Ok((result, vertex_index))
+}
+
+/// Imports the I-frame helpers (`shaders/iframe.wgsl`) into `module` at
+/// `slot`: the flow function and the flow parameters' global.
+fn import_helpers(
+    module: &mut naga::Module,
+    slot: CacheSlot,
+) -> Result<(Handle<naga::Function>, Handle<naga::GlobalVariable>), Refusal> {
+    let imported =
+        crate::proc::import::import(module, iframe_helpers()?, slot.group, slot.first_binding)
+            .map_err(|err| Refusal::internal(format!("importing the I-frame helpers: {err}")))?;
+    let flow_to = *imported
+        .functions
+        .get("flow_to")
+        .ok_or_else(|| Refusal::internal("`flow_to` missing from the I-frame helpers"))?;
+    let params_global = *imported
+        .globals
+        .get("flow_params")
+        .ok_or_else(|| Refusal::internal("`flow_params` missing from the I-frame helpers"))?;
+    Ok((flow_to, params_global))
+}
+
+/// The (group, binding) of a global the pass binds: a twin, what it
+/// shadows, or the flow parameters.
+fn binding_key(
+    module: &naga::Module,
+    global: Handle<naga::GlobalVariable>,
+) -> Result<[u32; 2], Refusal> {
+    let binding = module.global_variables[global]
+        .binding
+        .as_ref()
+        .ok_or_else(|| Refusal::internal("a twin or the resource it shadows is not bound"))?;
+    Ok([binding.group, binding.binding])
 }
 
 /// Where the fragment entry point reads `@builtin(position)`.

@@ -75,6 +75,56 @@ pub fn expression(expr: &Expression, m: &mut impl Mapper) -> Expression {
         E::Load { pointer } => E::Load {
             pointer: m.expression(pointer),
         },
+        E::ImageSample { .. } | E::ImageLoad { .. } | E::ImageQuery { .. } => image(expr, m),
+        E::Unary { .. }
+        | E::Binary { .. }
+        | E::Select { .. }
+        | E::Derivative { .. }
+        | E::Relational { .. }
+        | E::Math { .. }
+        | E::As { .. } => arithmetic(expr, m),
+        E::CallResult(f) => E::CallResult(m.function(f)),
+        E::AtomicResult { ty, comparison } => E::AtomicResult {
+            ty: m.ty(ty),
+            comparison,
+        },
+        E::WorkGroupUniformLoadResult { ty } => E::WorkGroupUniformLoadResult { ty: m.ty(ty) },
+        E::ArrayLength(h) => E::ArrayLength(m.expression(h)),
+        E::RayQueryVertexPositions { query, committed } => E::RayQueryVertexPositions {
+            query: m.expression(query),
+            committed,
+        },
+        E::RayQueryProceedResult => E::RayQueryProceedResult,
+        E::RayQueryGetIntersection { query, committed } => E::RayQueryGetIntersection {
+            query: m.expression(query),
+            committed,
+        },
+        E::SubgroupBallotResult => E::SubgroupBallotResult,
+        E::SubgroupOperationResult { ty } => E::SubgroupOperationResult { ty: m.ty(ty) },
+        E::CooperativeLoad {
+            columns,
+            rows,
+            role,
+            ref data,
+        } => E::CooperativeLoad {
+            columns,
+            rows,
+            role,
+            data: cooperative_data(data, m),
+        },
+        E::CooperativeMultiplyAdd { a, b, c } => E::CooperativeMultiplyAdd {
+            a: m.expression(a),
+            b: m.expression(b),
+            c: m.expression(c),
+        },
+    }
+}
+
+/// An image expression with its handles mapped; [`expression`] calls it
+/// for those alone (anything else comes back as it is).
+fn image(expr: &Expression, m: &mut impl Mapper) -> Expression {
+    use Expression as E;
+    match *expr {
         E::ImageSample {
             image,
             sampler,
@@ -118,6 +168,15 @@ pub fn expression(expr: &Expression, m: &mut impl Mapper) -> Expression {
                 other => other,
             },
         },
+        ref other => other.clone(),
+    }
+}
+
+/// An arithmetic expression with its handles mapped; [`expression`]
+/// calls it for those alone (anything else comes back as it is).
+fn arithmetic(expr: &Expression, m: &mut impl Mapper) -> Expression {
+    use Expression as E;
+    match *expr {
         E::Unary { op, expr } => E::Unary {
             op,
             expr: m.expression(expr),
@@ -167,40 +226,7 @@ pub fn expression(expr: &Expression, m: &mut impl Mapper) -> Expression {
             kind,
             convert,
         },
-        E::CallResult(f) => E::CallResult(m.function(f)),
-        E::AtomicResult { ty, comparison } => E::AtomicResult {
-            ty: m.ty(ty),
-            comparison,
-        },
-        E::WorkGroupUniformLoadResult { ty } => E::WorkGroupUniformLoadResult { ty: m.ty(ty) },
-        E::ArrayLength(h) => E::ArrayLength(m.expression(h)),
-        E::RayQueryVertexPositions { query, committed } => E::RayQueryVertexPositions {
-            query: m.expression(query),
-            committed,
-        },
-        E::RayQueryProceedResult => E::RayQueryProceedResult,
-        E::RayQueryGetIntersection { query, committed } => E::RayQueryGetIntersection {
-            query: m.expression(query),
-            committed,
-        },
-        E::SubgroupBallotResult => E::SubgroupBallotResult,
-        E::SubgroupOperationResult { ty } => E::SubgroupOperationResult { ty: m.ty(ty) },
-        E::CooperativeLoad {
-            columns,
-            rows,
-            role,
-            ref data,
-        } => E::CooperativeLoad {
-            columns,
-            rows,
-            role,
-            data: cooperative_data(data, m),
-        },
-        E::CooperativeMultiplyAdd { a, b, c } => E::CooperativeMultiplyAdd {
-            a: m.expression(a),
-            b: m.expression(b),
-            c: m.expression(c),
-        },
+        ref other => other.clone(),
     }
 }
 

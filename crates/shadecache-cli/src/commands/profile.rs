@@ -271,23 +271,15 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
     }
 }
 
-/// Profiles the fragment entry point `stages` names (or the module's only
-/// one) into `out`: the report, and the summary for the terminal.
-fn profile_entry(
-    args: &Args,
-    shader: &shadecache::front::Shader,
-    stages: &super::StageArgs,
-    out: &std::path::Path,
-) -> Result<(Box<report::Report>, String), Error> {
-    let drawn = shader.clone_parts();
-    let (shader, scene, scene_path) = stages.drawn(drawn, args.scene.as_deref(), false)?;
-    let shader = &shader;
+/// The profile's options from the command line (a sweep's grid under
+/// what was given).
+fn options(args: &Args, stages: &super::StageArgs) -> Result<Options, Error> {
     let defaults = if args.sweep {
         Options::default().sweep()
     } else {
         Options::default()
     };
-    let options = Options {
+    Ok(Options {
         entry: stages.entry.clone(),
         vertex_entry: stages.vertex_entry.clone(),
         nodes: parse_nodes(&args.nodes)?,
@@ -321,26 +313,13 @@ fn profile_entry(
         size: args.size,
         command: std::env::args().collect::<Vec<_>>().join(" "),
         ..defaults
-    };
-    let mut bar = Bar {
-        bar: None,
-        quiet: args.quiet,
-    };
-    let (report, pictures) = profile::profile(shader, &scene, &scene_path, &options, &mut bar)?;
+    })
+}
 
-    super::write_report(
-        out,
-        &report,
-        || report::write_images(out, &report, &pictures),
-        || report::html(&report, out),
-    )?;
-    let io = |what: &str, err: String| {
-        Error::plain(Diagnostic::error(format!("cannot write {what}: {err}")))
-    };
-    // The last frame's GPU scopes, for chrome://tracing or Perfetto.
-    wgpu_profiler::chrometrace::write_chrometrace(&out.join("trace.json"), &pictures.trace)
-        .map_err(|e| io("trace.json", e.to_string()))?;
-
+/// What the terminal says of a profile: the reference, its check, the
+/// warnings, the best of each variant, the defaults, the miss causes and
+/// what the grid left out.
+fn summary(report: &report::Report) -> String {
     let mut summary = format!(
         "{} on {} ({}×{}, {} frames after {} warm-up, {}): reference {:.3} ms (frames {:.3}–{:.3})\n",
         report.shader,
@@ -423,27 +402,75 @@ fn profile_entry(
             ));
         }
     }
-    if let Some(choice) = &report.choice {
-        let budget = if choice.budget_given {
-            format!("within {}", choice.budget)
-        } else {
+    summary
+}
+
+/// The answer's line, and the chosen variant's files written to
+/// `out/choice/`.
+fn answer(
+    report: &report::Report,
+    pictures: &profile::Pictures,
+    out: &std::path::Path,
+) -> Result<Option<String>, Error> {
+    let Some(choice) = &report.choice else {
+        return Ok(None);
+    };
+    let budget = if choice.budget_given {
+        format!("within {}", choice.budget)
+    } else {
+        format!(
+            "within {} (the default; --max-error sets it)",
+            choice.budget
+        )
+    };
+    Ok(Some(match (choice.result, &pictures.chosen) {
+        (Some(_), Some(rewritten)) => {
+            let dir = out.join("choice");
+            back::write_variant(&dir, rewritten, Language::Wgsl)?;
             format!(
-                "within {} (the default; --max-error sets it)",
-                choice.budget
+                "  answer {budget}: {}\n  wrote its shaders and plan to {}\n",
+                choice.reason,
+                dir.display()
             )
-        };
-        match (choice.result, &pictures.chosen) {
-            (Some(_), Some(rewritten)) => {
-                let dir = out.join("choice");
-                back::write_variant(&dir, rewritten, Language::Wgsl)?;
-                summary.push_str(&format!(
-                    "  answer {budget}: {}\n  wrote its shaders and plan to {}\n",
-                    choice.reason,
-                    dir.display()
-                ));
-            }
-            _ => summary.push_str(&format!("  answer {budget}: {}\n", choice.reason)),
         }
+        _ => format!("  answer {budget}: {}\n", choice.reason),
+    }))
+}
+
+/// Profiles the fragment entry point `stages` names (or the module's only
+/// one) into `out`: the report, and the summary for the terminal.
+fn profile_entry(
+    args: &Args,
+    shader: &shadecache::front::Shader,
+    stages: &super::StageArgs,
+    out: &std::path::Path,
+) -> Result<(Box<report::Report>, String), Error> {
+    let drawn = shader.clone_parts();
+    let (shader, scene, scene_path) = stages.drawn(drawn, args.scene.as_deref(), false)?;
+    let shader = &shader;
+    let options = options(args, stages)?;
+    let mut bar = Bar {
+        bar: None,
+        quiet: args.quiet,
+    };
+    let (report, pictures) = profile::profile(shader, &scene, &scene_path, &options, &mut bar)?;
+
+    super::write_report(
+        out,
+        &report,
+        || report::write_images(out, &report, &pictures),
+        || report::html(&report, out),
+    )?;
+    let io = |what: &str, err: String| {
+        Error::plain(Diagnostic::error(format!("cannot write {what}: {err}")))
+    };
+    // The last frame's GPU scopes, for chrome://tracing or Perfetto.
+    wgpu_profiler::chrometrace::write_chrometrace(&out.join("trace.json"), &pictures.trace)
+        .map_err(|e| io("trace.json", e.to_string()))?;
+
+    let mut summary = summary(&report);
+    if let Some(answer) = answer(&report, &pictures, out)? {
+        summary.push_str(&answer);
     }
     summary.push_str(&format!("report: {}\n", out.join("report.html").display()));
     Ok((Box::new(report), summary))

@@ -249,24 +249,6 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
         height: cache.size.y,
         depth_or_array_layers: 1,
     };
-    let texture = |label: &str, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: usage | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        })
-    };
-    let module = |label: &str, source: &str| {
-        device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(label),
-            source: wgpu::ShaderSource::Wgsl(Cow::Owned(source.to_string())),
-        })
-    };
     let storage = |label: &str, bytes: &[u8], usage: wgpu::BufferUsages| {
         device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
@@ -277,12 +259,258 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
 
     // Last frame's depth buffer, drawn texel by texel.
-    let depth = texture(
-        "previous depth",
-        wgpu::TextureFormat::Depth32Float,
+    let depth = harness_texture(
+        device,
+        size,
+        ("previous depth", wgpu::TextureFormat::Depth32Float),
         wgpu::TextureUsages::RENDER_ATTACHMENT,
     );
-    let writer = module("depth writer", DEPTH_WRITER);
+    let (writer, writer_group) = depth_writer(device, cache);
+    // Last frame's payload, rgba16float as the bilinear lookup needs.
+    let payload = previous_payload(gpu, cache, size, packed);
+    // The lookups, a case a 2×2 block of the target.
+    let pipeline = lookup_pipeline(device, packed);
+    let columns = 32u32.min(cases.len() as u32).max(1);
+    let rows = (cases.len() as u32).div_ceil(columns).max(1);
+    let target = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("harness target"),
+        size: wgpu::Extent3d {
+            width: columns * 2,
+            height: rows * 2,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8Unorm,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let case_texture = cases_texture(gpu, cases, (columns, rows));
+    let case_view = case_texture.create_view(&wgpu::TextureViewDescriptor::default());
+    let outcome_size = (columns * 2 * rows * 2 * 80) as u64;
+    let outcomes = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("outcomes"),
+        size: outcome_size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("outcomes readback"),
+        size: outcome_size,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let harness: Vec<u8> = [columns, cases.len() as u32, 0, 0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let harness = storage("harness", &harness, wgpu::BufferUsages::UNIFORM);
+    let params = storage(
+        "cache params",
+        &cache_params(cache),
+        wgpu::BufferUsages::UNIFORM,
+    );
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("cache sampler"),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..wgpu::SamplerDescriptor::default()
+    });
+    // Every cached value fresh (age 0): refresh is off here, and ages are
+    // tested through whole runs (`age_never_exceeds_refresh_period_under_motion`).
+    let age = harness_texture(
+        device,
+        size,
+        ("previous age", wgpu::TextureFormat::R16Float),
+        wgpu::TextureUsages::empty(),
+    );
+    let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
+    let (depth_view, payload_view, target_view) = (view(&depth), view(&payload), view(&target));
+    let age_view = view(&age);
+    let harness_group = harness_bind_group(device, &pipeline, &case_view, &outcomes, &harness);
+    let cache_views = CacheViews {
+        params: &params,
+        payload: &payload_view,
+        depth: &depth_view,
+        sampler: &sampler,
+        age: &age_view,
+    };
+    let cache_group = cache_bind_group(device, &pipeline, &cache_views);
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    record_harness(
+        &mut encoder,
+        (&writer, &writer_group, &depth_view),
+        (&pipeline, &harness_group, &cache_group, &target_view),
+    );
+    encoder.copy_buffer_to_buffer(&outcomes, 0, &readback, 0, outcome_size);
+    gpu.queue.submit([encoder.finish()]);
+    if let Some(err) = pollster::block_on(scope.pop()) {
+        panic!("harness: {err}");
+    }
+    read_outcomes(gpu, &readback, cases.len(), columns)
+}
+
+/// The harness's own group: the cases, the outcomes, the harness
+/// parameters.
+fn harness_bind_group(
+    device: &wgpu::Device,
+    pipeline: &wgpu::RenderPipeline,
+    case_view: &wgpu::TextureView,
+    outcomes: &wgpu::Buffer,
+    harness: &wgpu::Buffer,
+) -> wgpu::BindGroup {
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("harness"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(case_view),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: outcomes.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: harness.as_entire_binding(),
+            },
+        ],
+    })
+}
+
+/// What the cache group binds in the harness.
+struct CacheViews<'a> {
+    params: &'a wgpu::Buffer,
+    payload: &'a wgpu::TextureView,
+    depth: &'a wgpu::TextureView,
+    sampler: &'a wgpu::Sampler,
+    age: &'a wgpu::TextureView,
+}
+
+/// The cache group: bindings as cache.wgsl declares them (the current
+/// payload, unused here, is not in the layout).
+fn cache_bind_group(
+    device: &wgpu::Device,
+    pipeline: &wgpu::RenderPipeline,
+    views: &CacheViews,
+) -> wgpu::BindGroup {
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("cache"),
+        layout: &pipeline.get_bind_group_layout(1),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: views.params.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::TextureView(views.payload),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: wgpu::BindingResource::TextureView(views.depth),
+            },
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: wgpu::BindingResource::Sampler(views.sampler),
+            },
+            wgpu::BindGroupEntry {
+                binding: 5,
+                resource: wgpu::BindingResource::TextureView(views.age),
+            },
+        ],
+    })
+}
+
+/// Records the depth writer's pass, then the lookups'.
+fn record_harness(
+    encoder: &mut wgpu::CommandEncoder,
+    (writer, writer_group, depth_view): (
+        &wgpu::RenderPipeline,
+        &wgpu::BindGroup,
+        &wgpu::TextureView,
+    ),
+    (pipeline, harness_group, cache_group, target_view): (
+        &wgpu::RenderPipeline,
+        &wgpu::BindGroup,
+        &wgpu::BindGroup,
+        &wgpu::TextureView,
+    ),
+) {
+    {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("write depth"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            ..wgpu::RenderPassDescriptor::default()
+        });
+        pass.set_pipeline(writer);
+        pass.set_bind_group(0, writer_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+    {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("lookups"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..wgpu::RenderPassDescriptor::default()
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, harness_group, &[]);
+        pass.set_bind_group(1, cache_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}
+
+/// A texture of the harness's cache, bound in the lookups.
+fn harness_texture(
+    device: &wgpu::Device,
+    size: wgpu::Extent3d,
+    (label, format): (&str, wgpu::TextureFormat),
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: usage | wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    })
+}
+
+/// The pass that writes the cache's depths into last frame's depth
+/// buffer, and its bindings.
+fn depth_writer(device: &wgpu::Device, cache: &Cache) -> (wgpu::RenderPipeline, wgpu::BindGroup) {
+    let storage = |label: &str, bytes: &[u8], usage: wgpu::BufferUsages| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytes,
+            usage,
+        })
+    };
+    let writer = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("depth writer"),
+        source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(DEPTH_WRITER)),
+    });
     let writer = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some("depth writer"),
         layout: None,
@@ -331,11 +559,16 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
             },
         ],
     });
+    (writer, writer_group)
+}
 
-    // Last frame's payload, rgba16float as the bilinear lookup needs.
-    let payload = texture(
-        "previous payload",
-        wgpu::TextureFormat::Rgba16Float,
+/// Last frame's payload texture, rgba16float, each texel's depth in its
+/// fourth channel when `packed`.
+fn previous_payload(gpu: &Gpu, cache: &Cache, size: wgpu::Extent3d, packed: bool) -> wgpu::Texture {
+    let payload = harness_texture(
+        &gpu.device,
+        size,
+        ("previous payload", wgpu::TextureFormat::Rgba16Float),
         wgpu::TextureUsages::COPY_DST,
     );
     let texels: Vec<u8> = cache
@@ -363,8 +596,12 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
         },
         size,
     );
+    payload
+}
 
-    // The lookups. CacheParams as the runner fills it.
+/// The lookups' pipeline: the cache helpers and the harness, the packed
+/// lookups in place of the others when `packed`.
+fn lookup_pipeline(device: &wgpu::Device, packed: bool) -> wgpu::RenderPipeline {
     let helpers = std::fs::read_to_string(crate::util::root().join("shaders/cache.wgsl")).unwrap();
     let harness = if packed {
         HARNESS
@@ -380,24 +617,11 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
     } else {
         HARNESS.to_string()
     };
-    let lookup_module = module("harness", &format!("{helpers}\n{harness}"));
-    let columns = 32u32.min(cases.len() as u32).max(1);
-    let rows = (cases.len() as u32).div_ceil(columns).max(1);
-    let target = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("harness target"),
-        size: wgpu::Extent3d {
-            width: columns * 2,
-            height: rows * 2,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8Unorm,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-        view_formats: &[],
+    let lookup_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("harness"),
+        source: wgpu::ShaderSource::Wgsl(Cow::Owned(format!("{helpers}\n{harness}"))),
     });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some("harness"),
         layout: None,
         vertex: wgpu::VertexState {
@@ -417,7 +641,12 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
         }),
         multiview_mask: None,
         cache: None,
-    });
+    })
+}
+
+/// The cases, two rgba32uint texels each (clip position; slope, zoom,
+/// roll), `columns` to a row.
+fn cases_texture(gpu: &Gpu, cases: &[Case], (columns, rows): (u32, u32)) -> wgpu::Texture {
     let case_bytes: Vec<u8> = cases
         .iter()
         .flat_map(|c| {
@@ -429,7 +658,7 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
         .collect();
     let mut case_bytes = case_bytes;
     case_bytes.resize((columns * rows * 32) as usize, 0);
-    let case_texture = device.create_texture_with_data(
+    gpu.device.create_texture_with_data(
         &gpu.queue,
         &wgpu::TextureDescriptor {
             label: Some("cases"),
@@ -447,26 +676,11 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
         },
         wgpu::util::TextureDataOrder::LayerMajor,
         &case_bytes,
-    );
-    let case_view = case_texture.create_view(&wgpu::TextureViewDescriptor::default());
-    let outcome_size = (columns * 2 * rows * 2 * 80) as u64;
-    let outcomes = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("outcomes"),
-        size: outcome_size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("outcomes readback"),
-        size: outcome_size,
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let harness: Vec<u8> = [columns, cases.len() as u32, 0, 0]
-        .iter()
-        .flat_map(|v| v.to_le_bytes())
-        .collect();
-    let harness = storage("harness", &harness, wgpu::BufferUsages::UNIFORM);
+    )
+}
+
+/// `CacheParams` as the runner fills it for the harness's cache.
+fn cache_params(cache: &Cache) -> Vec<u8> {
     let mut params = Vec::new();
     params.extend((cache.size.x as f32).to_le_bytes());
     params.extend((cache.size.y as f32).to_le_bytes());
@@ -479,113 +693,11 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
     // far depth (standard Z), and padding to the struct's size.
     params.extend(1.0f32.to_le_bytes());
     params.resize(48, 0);
-    let params = storage("cache params", &params, wgpu::BufferUsages::UNIFORM);
-    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-        label: Some("cache sampler"),
-        mag_filter: wgpu::FilterMode::Linear,
-        min_filter: wgpu::FilterMode::Linear,
-        ..wgpu::SamplerDescriptor::default()
-    });
-    // Every cached value fresh (age 0): refresh is off here, and ages are
-    // tested through whole runs (`age_never_exceeds_refresh_period_under_motion`).
-    let age = texture(
-        "previous age",
-        wgpu::TextureFormat::R16Float,
-        wgpu::TextureUsages::empty(),
-    );
-    let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
-    let (depth_view, payload_view, target_view) = (view(&depth), view(&payload), view(&target));
-    let age_view = view(&age);
-    let harness_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("harness"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::TextureView(&case_view),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: outcomes.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: harness.as_entire_binding(),
-            },
-        ],
-    });
-    // The cache group: bindings as cache.wgsl declares them (the current
-    // payload, unused here, is not in the layout).
-    let cache_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("cache"),
-        layout: &pipeline.get_bind_group_layout(1),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: params.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: wgpu::BindingResource::TextureView(&payload_view),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: wgpu::BindingResource::TextureView(&depth_view),
-            },
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: wgpu::BindingResource::Sampler(&sampler),
-            },
-            wgpu::BindGroupEntry {
-                binding: 5,
-                resource: wgpu::BindingResource::TextureView(&age_view),
-            },
-        ],
-    });
+    params
+}
 
-    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-    {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("write depth"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            ..wgpu::RenderPassDescriptor::default()
-        });
-        pass.set_pipeline(&writer);
-        pass.set_bind_group(0, &writer_group, &[]);
-        pass.draw(0..3, 0..1);
-    }
-    {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("lookups"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &target_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            ..wgpu::RenderPassDescriptor::default()
-        });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &harness_group, &[]);
-        pass.set_bind_group(1, &cache_group, &[]);
-        pass.draw(0..3, 0..1);
-    }
-    encoder.copy_buffer_to_buffer(&outcomes, 0, &readback, 0, outcome_size);
-    gpu.queue.submit([encoder.finish()]);
-    if let Some(err) = pollster::block_on(scope.pop()) {
-        panic!("harness: {err}");
-    }
+/// The outcome of each case, read back from the lookups' buffer.
+fn read_outcomes(gpu: &Gpu, readback: &wgpu::Buffer, cases: usize, columns: u32) -> Vec<Outcome> {
     let slice = readback.slice(..);
     slice.map_async(wgpu::MapMode::Read, |_| {});
     gpu.device
@@ -597,7 +709,7 @@ fn run_harness(gpu: &Gpu, cache: &Cache, cases: &[Case], packed: bool) -> Vec<Ou
         .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
         .collect();
     let outcomes: Vec<&[f32]> = floats.chunks_exact(20).collect();
-    (0..cases.len())
+    (0..cases)
         .map(|i| {
             let (x, y) = (i as u32 % columns * 2, i as u32 / columns * 2);
             let o = outcomes[(y * columns * 2 + x) as usize];
