@@ -20,6 +20,7 @@
 //! Failures are rendered with codespan on stderr (cargo shows them) and
 //! `run` returns a short [`BuildError`].
 
+#![warn(missing_docs)]
 // Build scripts talk to cargo through stdout.
 #![allow(clippy::print_stdout)]
 
@@ -93,7 +94,9 @@ pub struct Outputs {
 /// been printed on stderr.
 #[derive(Clone, Debug)]
 pub struct BuildError {
+    /// A one-line summary (the diagnostics went to stderr, rendered).
     pub message: String,
+    /// Each failure, with its file and position.
     pub errors: Vec<Error>,
 }
 
@@ -106,6 +109,7 @@ impl fmt::Display for BuildError {
 impl std::error::Error for BuildError {}
 
 impl Build {
+    /// An empty set: add shaders with [`Build::shader`].
     pub fn new() -> Self {
         Build::default()
     }

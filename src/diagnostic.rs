@@ -7,6 +7,8 @@
 //! [`naga::Span::to_range`]). Every stage of the pipeline reports through
 //! [`Error`], so a user sees the same shape of message whatever went wrong.
 
+#![warn(missing_docs)]
+
 use std::fmt;
 use std::io::{IsTerminal, Write};
 use std::ops::Range;
@@ -20,8 +22,11 @@ use codespan_reporting::term::termcolor::{ColorChoice, StandardStream};
 /// How serious a diagnostic is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Severity {
+    /// Something failed.
     Error,
+    /// Something worked, with a caveat.
     Warning,
+    /// Information.
     Note,
 }
 
@@ -30,6 +35,7 @@ pub enum Severity {
 pub struct Label {
     /// Byte range into the source text.
     pub range: Range<usize>,
+    /// What the label says of its span.
     pub message: String,
     /// The primary label is the one the location (`path:line:col`) names.
     pub primary: bool,
@@ -38,13 +44,18 @@ pub struct Label {
 /// A message about a shader, with labelled spans and trailing notes.
 #[derive(Clone, Debug)]
 pub struct Diagnostic {
+    /// How serious it is.
     pub severity: Severity,
+    /// The one-line message.
     pub message: String,
+    /// The places in the file it points at.
     pub labels: Vec<Label>,
+    /// Lines said after the source excerpt.
     pub notes: Vec<String>,
 }
 
 impl Diagnostic {
+    /// A diagnostic of `severity` saying `message`, with no labels yet.
     pub fn new(severity: Severity, message: impl Into<String>) -> Self {
         Diagnostic {
             severity,
@@ -54,6 +65,7 @@ impl Diagnostic {
         }
     }
 
+    /// An error saying `message`.
     pub fn error(message: impl Into<String>) -> Self {
         Self::new(Severity::Error, message)
     }
@@ -69,6 +81,7 @@ impl Diagnostic {
         self
     }
 
+    /// The diagnostic with one more note.
     pub fn with_note(mut self, note: impl Into<String>) -> Self {
         self.notes.push(note.into());
         self
@@ -136,11 +149,14 @@ impl Diagnostic {
 /// A source file as diagnostics see it: a display path and its text.
 #[derive(Clone, Debug)]
 pub struct SourceFile {
+    /// The path as the user gave it (shown in diagnostics).
     pub path: String,
+    /// The whole text.
     pub text: String,
 }
 
 impl SourceFile {
+    /// A file named `path` holding `text`.
     pub fn new(path: impl Into<String>, text: impl Into<String>) -> Self {
         SourceFile {
             path: path.into(),
@@ -187,7 +203,9 @@ fn sanitize(text: &str) -> String {
 pub enum Color {
     /// Colour only when stderr is a terminal and `NO_COLOR` is not set.
     Auto,
+    /// Always colour.
     Always,
+    /// Never colour.
     Never,
 }
 
@@ -212,7 +230,9 @@ impl Color {
 /// there is one (a missing file has none to show).
 #[derive(Clone, Debug)]
 pub struct Error {
+    /// The file the diagnostic points into; `None` for one about no file.
     pub file: Option<Arc<SourceFile>>,
+    /// What went wrong, and where.
     pub diagnostic: Diagnostic,
     /// A bug in shadecache rather than a fault of the input (the CLI exits
     /// 2 for it, 1 otherwise).

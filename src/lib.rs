@@ -66,9 +66,14 @@ pub mod diagnostic;
 pub mod front;
 #[cfg(feature = "interpolate")]
 pub mod interpolate;
+// The toolchain's own internals, public for its end-to-end tests (in
+// the command's crate) and hidden from the documentation: no stability
+// promise.
 #[cfg(feature = "profile")]
+#[doc(hidden)]
 pub mod measure;
 pub mod plan;
+#[doc(hidden)]
 pub mod proc;
 #[cfg(feature = "profile")]
 pub mod profile;
@@ -76,6 +81,7 @@ pub mod profile;
 pub mod report;
 pub mod rewrite;
 #[cfg(feature = "profile")]
+#[doc(hidden)]
 pub mod runtime;
 #[cfg(feature = "profile")]
 pub mod scene;

@@ -38,7 +38,7 @@ pub struct CallStep {
     #[serde(skip)]
     pub range: Range<usize>,
     /// Which `Call` statement of the calling function it is, in statement
-    /// order ([`inline::InlinedCall::ordinal`]).
+    /// order (`InlinedCall::ordinal`).
     #[serde(skip)]
     pub ordinal: usize,
 }

@@ -17,15 +17,24 @@ use crate::proc;
 /// Why a node cannot be cached.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
 pub enum RejectReason {
+    /// Computed inside a loop: each iteration has its own value.
     InLoop,
+    /// Of a type no cache texture holds (not a number or a vector of up to
+    /// four).
     NotStorable,
+    /// Too cheap to be worth a lookup.
     Trivial,
+    /// Reads uniforms alone: the same at every pixel, nothing to cache per
+    /// pixel.
     UniformOnly,
+    /// Depends on where the pixel is on screen, which reprojection moves.
     ScreenSpace,
 }
 
 impl RejectReason {
+    /// The reason as `analysis.json` and the text output spell it.
     pub fn as_str(self) -> &'static str {
         match self {
             RejectReason::InLoop => "in-loop",

@@ -95,6 +95,8 @@ pub(super) fn fragment_entries_to_take(
     }
 }
 
+/// The WGSL attribute name of a shader stage (`vertex`, `fragment`,
+/// `compute`...).
 pub fn stage_name(stage: naga::ShaderStage) -> &'static str {
     match stage {
         naga::ShaderStage::Vertex => "vertex",

@@ -21,24 +21,26 @@
 //!
 //! Pointers and resource handles (textures, samplers) are not values and are
 //! not listed at all. Expressions inside helper functions are nodes per call
-//! site ([`calls`]): the entry point is analysed with its helpers inlined,
+//! site (`calls`): the entry point is analysed with its helpers inlined,
 //! and each node says which function's source it is in and the calls that
 //! lead there. A call of a helper is a node too: the value it returns there.
 //!
-//! For each candidate the [`graph`] gives its backward slice (what the payload
+//! For each candidate the `graph` gives its backward slice (what the payload
 //! needs) and the remainder (what the rest of the entry point still needs
 //! when the node is read from the cache). The [cost model](crate::cost)
 //! turns them into P (the slice's cost), T (the entry point's cost), P/T, and
 //! the *overlap*: the cost of the part of the slice the remainder also needs,
 //! which a multi-pass variant pays twice (seed 002, fig. 7).
 
-pub mod calls;
+#![warn(missing_docs)]
+
+pub(crate) mod calls;
 mod candidates;
 mod entry;
-pub mod graph;
+pub(crate) mod graph;
 mod id;
 mod per_frame;
-pub mod range;
+pub(crate) mod range;
 mod spans;
 pub mod text;
 mod varyings;
@@ -64,12 +66,14 @@ use crate::front::Shader;
 pub struct Options {
     /// The fragment entry point; `None` picks the only one.
     pub entry: Option<String>,
+    /// The cost model's weights.
     pub weights: Weights,
 }
 
 /// The result of analysing one fragment entry point. Serialises to the JSON
 /// format documented in `docs/analysis-json.md`.
 #[derive(Clone, Debug, Serialize)]
+#[non_exhaustive]
 pub struct Analysis {
     /// The shader's path as given.
     pub shader: String,
@@ -95,14 +99,20 @@ pub struct Analysis {
 /// characters).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub struct SourceSpan {
+    /// Line and column (1-based) of the first character.
     pub start: [usize; 2],
+    /// Line and column (1-based) just past the last character.
     pub end: [usize; 2],
 }
 
 /// What every node carries.
 #[derive(Clone, Debug, Serialize)]
+#[non_exhaustive]
 pub struct Node {
+    /// The stable id (`n` and eight hex digits) that `--nodes` and the build
+    /// API take.
     pub id: String,
+    /// Where the node is in the source.
     pub span: SourceSpan,
     /// The source text the node covers.
     pub text: String,
@@ -129,8 +139,10 @@ pub struct Node {
 
 /// A value that could be cached.
 #[derive(Clone, Debug, Serialize)]
+#[non_exhaustive]
 pub struct Candidate {
     #[serde(flatten)]
+    /// The node.
     pub node: Node,
     /// 1 to 4 `f32` components.
     pub components: u32,
@@ -149,7 +161,7 @@ pub struct Candidate {
     /// value goes stale as they change, so such nodes rank after
     /// object-space ones of similar P/T.
     pub depends_on: Vec<String>,
-    /// Bounds of the node's value from interval arithmetic ([`range`]);
+    /// Bounds of the node's value from interval arithmetic (`range`);
     /// `null` ends are unbounded.
     pub range: [Option<f64>; 2],
     /// Whether the value provably fits an rgba16float cache (|x| < 65504).
@@ -160,9 +172,12 @@ pub struct Candidate {
 
 /// A node that cannot be cached, and why.
 #[derive(Clone, Debug, Serialize)]
+#[non_exhaustive]
 pub struct Rejected {
     #[serde(flatten)]
+    /// The node.
     pub node: Node,
+    /// Why it is not a candidate.
     pub reason: RejectReason,
     /// A sentence saying why, for people.
     pub detail: String,
@@ -188,6 +203,9 @@ pub fn analyze_entries(shader: &Shader, options: &Options) -> Result<Vec<Analysi
         .collect()
 }
 
+/// Analyses the fragment entry point `options` names (or the module's only
+/// one): every candidate with its estimated P/T, and the values rejected with
+/// why. Errors name an entry point that does not exist or is ambiguous.
 pub fn analyze(shader: &Shader, options: &Options) -> Result<Analysis, Error> {
     let entry_index = fragment_entry(shader, options.entry.as_deref())?;
     let analysed = calls::inline_all(shader, entry_index)?;

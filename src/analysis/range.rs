@@ -165,15 +165,6 @@ impl std::fmt::Debug for EntryRanges<'_> {
 }
 
 impl<'a> EntryRanges<'a> {
-    /// Uniform values unbounded.
-    pub fn new(
-        module: &'a naga::Module,
-        info: &'a naga::valid::ModuleInfo,
-        entry_index: usize,
-    ) -> Self {
-        Self::with_uniforms(module, info, entry_index, &NO_BOUNDS)
-    }
-
     /// Uniform values within `uniforms`.
     pub fn with_uniforms(
         module: &'a naga::Module,
@@ -218,9 +209,6 @@ pub fn describe(range: [Option<f64>; 2]) -> String {
         [None, Some(hi)] => format!("at most {}", number(hi)),
     }
 }
-
-static NO_BOUNDS: std::sync::LazyLock<UniformBounds> =
-    std::sync::LazyLock::new(UniformBounds::default);
 
 /// Calls nest no deeper than this before their results count as unbounded
 /// (WGSL has no recursion; this only bounds the work).

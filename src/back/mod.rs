@@ -4,15 +4,23 @@
 //! SPIR-V, GLSL, MSL and HLSL go through naga's other writers for engines
 //! that consume those.
 
+#![warn(missing_docs)]
+
 use naga::valid::ModuleInfo;
 
 /// An output language.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Language {
+    /// WGSL, as naga writes it back (what shadecache validates and runs).
     Wgsl,
+    /// SPIR-V binary.
     Spv,
+    /// GLSL 4.50 core.
     Glsl,
+    /// Metal Shading Language.
     Msl,
+    /// HLSL shader model 5.1.
     Hlsl,
 }
 
@@ -21,10 +29,12 @@ pub enum Language {
 pub struct Output {
     /// File name suffix after the pass name, e.g. `.wgsl` or `.vert.glsl`.
     pub suffix: String,
+    /// The file's contents.
     pub bytes: Vec<u8>,
 }
 
 impl Language {
+    /// The language's name on the command line (`wgsl`, `spv`...).
     pub fn as_str(self) -> &'static str {
         match self {
             Language::Wgsl => "wgsl",
@@ -44,6 +54,8 @@ pub fn wgsl_text(module: &naga::Module, info: &ModuleInfo) -> Result<String, Str
         .map_err(|err| err.to_string())
 }
 
+/// Writes `module` in `language`: the file's contents, or naga's error in
+/// words.
 pub fn write(
     module: &naga::Module,
     info: &ModuleInfo,

@@ -16,6 +16,8 @@
 //!   operations, multiplies by the weight, costs helper calls by their
 //!   bodies (recursively, memoised) and loops by their trip counts.
 
+#![warn(missing_docs)]
+
 mod model;
 mod weights;
 

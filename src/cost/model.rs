@@ -18,6 +18,7 @@ pub struct CostModel<'m> {
 }
 
 impl<'m> CostModel<'m> {
+    /// A cost model of `module` (validated, with its `info`) under `weights`.
     pub fn new(module: &'m naga::Module, info: &'m ModuleInfo, weights: Weights) -> Self {
         CostModel {
             module,
@@ -27,6 +28,7 @@ impl<'m> CostModel<'m> {
         }
     }
 
+    /// The weights it counts with.
     pub fn weights(&self) -> &Weights {
         &self.weights
     }

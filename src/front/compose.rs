@@ -40,8 +40,11 @@ pub struct Composition {
 /// A shader def's value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShaderDef {
+    /// A boolean def (`--def NAME` alone, or `NAME=true`).
     Bool(bool),
+    /// A signed integer def.
     Int(i32),
+    /// An unsigned integer def (a `u` suffix).
     UInt(u32),
 }
 
@@ -79,6 +82,7 @@ impl ShaderDef {
 }
 
 impl Composition {
+    /// Whether nothing is composed: no import paths and no defs.
     pub fn is_empty(&self) -> bool {
         self.import_paths.is_empty() && self.defs.is_empty()
     }

@@ -11,6 +11,8 @@
 //! directory, bytes that are not UTF-8 (pointing at the first bad byte), a
 //! parse error or a validation error (pointing at naga's spans).
 
+#![warn(missing_docs)]
+
 pub mod compose;
 pub mod vertex;
 
@@ -25,8 +27,11 @@ use crate::diagnostic::{Diagnostic, Error, SourceFile};
 /// A parsed and validated WGSL shader.
 #[derive(Debug)]
 pub struct Shader {
+    /// The source the module was parsed from (for diagnostics and node text).
     pub file: Arc<SourceFile>,
+    /// The module, as naga's WGSL front end made it (composed, when it was).
     pub module: naga::Module,
+    /// naga's validation of it (all checks on).
     pub info: ModuleInfo,
     /// The separate module the vertex stage came from
     /// ([`with_vertex_module`]); `None` when `file` has the whole module.
@@ -255,7 +260,7 @@ pub fn validate(
 
 /// Gives a fragment-only `shader` the vertex stage of another module: its
 /// vertex entry point `entry` (or its only one), with everything it reads,
-/// imported on IR ([`crate::proc::import::import_vertex_stage`]). Engines
+/// imported on IR (`proc::import::import_vertex_stage`). Engines
 /// keep the two stages in separate files (Bevy's `mesh.wgsl` and
 /// `pbr.wgsl`). The resources both modules bind at one (group, binding) are
 /// one resource. Errors name the vertex file.

@@ -3,7 +3,7 @@
 //! extra colour outputs.
 //!
 //! - The vertex stage computes the position three times with identical
-//!   code ([`crate::rewrite::vertex::instrument_times`]): now, with the
+//!   code (`rewrite::vertex::instrument_times`): now, with the
 //!   *previous* I-frame's resources, and with the *next* I-frame's. Every
 //!   uniform and read-only storage buffer the position reads gets a twin
 //!   per time; the host fills them with that time's contents. So does

@@ -143,10 +143,12 @@
 
 pub mod bframe;
 mod blur;
+#[doc(hidden)]
 pub mod iframe;
 pub mod report;
 pub(crate) mod run;
-pub mod search;
+#[cfg(test)]
+mod search;
 
 use std::path::Path;
 
@@ -158,6 +160,7 @@ use crate::scene::Scene;
 /// A way to show the frames between I-frames.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
 pub enum Method {
     /// Every frame rendered.
     Reference,

@@ -17,6 +17,7 @@ pub const FORMAT: u32 = 1;
 pub const ANSWER_SSIM: f64 = 0.95;
 
 #[derive(Clone, Debug, Serialize)]
+#[non_exhaustive]
 pub struct Report {
     pub format: u32,
     pub shader: String,
@@ -62,6 +63,7 @@ pub struct Parameters {
 }
 
 #[derive(Clone, Debug, Serialize)]
+#[non_exhaustive]
 pub struct MethodReport {
     pub method: Method,
     pub frames_per_interval: u32,

@@ -6,14 +6,14 @@
 //! method — over the same scene, frame by frame, and compares them. Both
 //! stages stand on the same pieces, kept here so that they measure alike:
 //!
-//! * [`setup`]: the scene checked against what the shader binds (uniform
+//! * `setup`: the scene checked against what the shader binds (uniform
 //!   and storage buffers, roles, names), the frame counts, instancing;
-//! * [`inputs`]: what every run draws — the textures, the meshes laid
+//! * `inputs`: what every run draws — the textures, the meshes laid
 //!   out as the vertex inputs, each frame's buffers — and what was given
 //!   a neutral value;
-//! * [`bench`]: runners on one device and scene, the reference among
+//! * `bench`: runners on one device and scene, the reference among
 //!   them;
-//! * [`clock`]: one frame timed (GPU timestamp queries through
+//! * `clock`: one frame timed (GPU timestamp queries through
 //!   wgpu-profiler, from the first pass's start to the last one's end;
 //!   wall time where the device has none) and a colour target read back
 //!   in linear float;

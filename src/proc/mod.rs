@@ -9,21 +9,21 @@
 //! which branch conditions govern it, the expression graph needs every value
 //! a statement consumes — so they are computed here once per function.
 //!
-//! [`kind`] says what each naga expression does, in the one exhaustive
+//! `kind` says what each naga expression does, in the one exhaustive
 //! match the analysis and the cost model share.
 //!
-//! It also copies IR between modules: [`remap`] maps the handles of one
-//! expression or statement, [`import`] copies a whole module into another
+//! It also copies IR between modules: `remap` maps the handles of one
+//! expression or statement, `import` copies a whole module into another
 //! (the cache helpers into a rewrite, a separate vertex module into the
 //! fragment one's).
 
-pub mod import;
-pub mod inline;
+pub(crate) mod import;
+pub(crate) mod inline;
 mod kind;
 mod operands;
 mod placement;
 mod reaching;
-pub mod remap;
+pub(crate) mod remap;
 mod stages;
 
 pub use kind::{kind, takes_derivatives, ExpressionKind};

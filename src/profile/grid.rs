@@ -115,10 +115,13 @@ impl Setting {
 /// The settings to measure per node, for `variants` variants each.
 #[derive(Clone, Debug)]
 pub struct Grid {
+    /// How the grid was walked.
     pub design: Design,
+    /// The values of each knob.
     pub axes: Axes,
     /// Settings per node, in the order of the nodes given to [`Grid::new`].
     pub settings: Vec<Vec<Setting>>,
+    /// What was left out, and why.
     pub pruned: Vec<Pruned>,
     /// Configurations of the full grid (nodes × variants × product).
     pub full: usize,

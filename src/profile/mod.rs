@@ -23,6 +23,8 @@
 //! configuration's row (`result_row`); the misses each effect causes alone
 //! (`miss_causes`); and the answer, its winner measured again (`confirm`).
 
+#![warn(missing_docs)]
+
 pub(crate) mod bench;
 mod choice;
 pub mod grid;
@@ -60,14 +62,20 @@ pub use crate::report::Budget;
 /// What to measure.
 #[derive(Clone, Debug)]
 pub struct Options {
+    /// Which nodes to measure.
     pub nodes: Nodes,
+    /// Which variants to measure.
     pub variants: Vec<Variant>,
     /// The values of each knob to measure: Δn, k, reconstruction, cache
     /// format, depth ε.
     pub refresh_periods: Vec<u32>,
+    /// The k values (refresh blocks of k×k pixels) to measure.
     pub refresh_quads: Vec<u32>,
+    /// The reconstructions to measure.
     pub reconstructions: Vec<Reconstruction>,
+    /// The cache formats to measure.
     pub cache_formats: Vec<CacheFormat>,
+    /// The depth tolerances ε to measure.
     pub depth_epsilons: Vec<f32>,
     /// Measure their full product, or prune it as a sweep does (see
     /// [`grid`]).

@@ -20,6 +20,7 @@ pub use index::{entry_index, entry_index_html, EntryIndex, EntrySection};
 
 /// Everything a profile measured.
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Report {
     /// Version of this format.
     pub format: u32,
@@ -271,6 +272,7 @@ pub struct NodeReport {
 
 /// One configuration's measurements.
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct ResultRow {
     pub node: String,
     pub node_text: String,

@@ -6,26 +6,28 @@
 //!
 //! 1. the toolchain's cache helpers (`shaders/cache.wgsl`: reprojection,
 //!    bilinear lookup with depth test, refresh indicator) are
-//!    [imported](crate::proc::import) into the first free bind group;
+//!    imported (`proc::import`) into the first free bind group;
 //! 2. the [vertex stage](vertex) gains the previous clip position, computed
 //!    by the same code as the position but with previous-frame twins of the
 //!    uniforms and read-only storage it reads; the position is `@invariant`;
 //! 3. the fragment entry point is split at the node into a payload function
-//!    and a shade function ([copy]: handle-mapped, dead code dropped), and
-//!    each pass's [fragment] entry point is built from calls to them;
+//!    and a shade function (`copy`: handle-mapped, dead code dropped), and
+//!    each pass's fragment entry point (`fragment`) is built from calls to them;
 //! 4. each pass module is compacted, checked for derivatives in non-uniform
 //!    control flow ([uniformity]) and validated by naga with every flag.
 //!
 //! A variant that cannot be built is a [`Refusal`] with the reason; nothing
 //! broken is ever returned.
 
-pub mod builder;
-pub mod copy;
-pub mod fragment;
-pub mod gbuffer;
-pub mod gradients;
+#![warn(missing_docs)]
+
+pub(crate) mod builder;
+pub(crate) mod copy;
+pub(crate) mod fragment;
+pub(crate) mod gbuffer;
+pub(crate) mod gradients;
 mod helpers;
-pub mod path;
+pub(crate) mod path;
 pub mod plan;
 pub mod reprojection;
 mod split;
@@ -87,6 +89,7 @@ pub struct Options {
     pub refresh_period: u32,
     /// k: refresh decisions are made per k×k block.
     pub refresh_quad: u32,
+    /// The payload cache's texture format.
     pub cache_format: CacheFormat,
     /// ε of the depth test, relative: a cached depth d agrees with the
     /// expected depth e when |d − e| < ε·|e − far depth|. In a perspective
@@ -96,11 +99,12 @@ pub struct Options {
     pub depth_epsilon: f32,
     /// Which way the host's depth buffer runs.
     pub depth: DepthConvention,
+    /// How the payload and depth are read back where a point was.
     pub reconstruction: Reconstruction,
     /// Format of the colour targets, written into the plan.
     pub color_format: crate::plan::TextureFormat,
     /// The vertex entry point that draws with the fragment one; `None`
-    /// infers it ([`vertex::vertex_entry`]).
+    /// infers it (`vertex::vertex_entry`).
     pub vertex_entry: Option<String>,
     /// Make the payload and the shade free (each returns zero at once):
     /// the passes then cost what the variant costs with nothing to
@@ -138,6 +142,7 @@ impl Default for Options {
 /// Why a variant was not produced.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Refusal {
+    /// Whether the shader or the toolchain is why.
     pub kind: RefusalKind,
     /// The reason, in words; an internal one starts "internal error:".
     pub reason: String,
@@ -145,6 +150,7 @@ pub struct Refusal {
 
 /// What kind of refusal: a limit of what the rewrite supports, or a bug.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum RefusalKind {
     /// The shader asks for what a variant cannot do (the reason says what).
     Unsupported,
@@ -188,19 +194,26 @@ impl fmt::Display for Refusal {
 pub struct PassModule {
     /// File stem, e.g. `pass1`.
     pub name: String,
+    /// The pass's module.
     pub module: naga::Module,
+    /// Its validation (all checks on).
     pub info: ModuleInfo,
 }
 
 /// A variant ready to write: its pass modules and its plan.
 #[derive(Debug)]
+#[non_exhaustive]
 pub struct Rewritten {
+    /// The variant.
     pub variant: Variant,
+    /// The id of the node it caches.
     pub node: String,
+    /// Its passes, in the order they run.
     pub passes: Vec<PassModule>,
     /// The diagnostic pass that colours the cache's decisions (plan's
     /// `classify`).
     pub classify: PassModule,
+    /// How to run them (`plan.json`).
     pub plan: Plan,
 }
 
@@ -209,10 +222,12 @@ const MAX_BIND_GROUPS: u32 = 4;
 
 /// Where the cache's own resources and the previous-frame twins are bound:
 /// the cache's at `first_binding +` their bindings in `shaders/cache.wgsl`,
-/// the twins after them ([`first_twin_binding`]).
+/// the twins after them (`first_twin_binding`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CacheSlot {
+    /// The bind group.
     pub group: u32,
+    /// The first binding in it.
     pub first_binding: u32,
 }
 
@@ -309,7 +324,7 @@ pub fn cache_params_layout() -> Result<Vec<crate::plan::Field>, Refusal> {
 ///
 /// A node inside a helper is cached where its call path puts it: the calls
 /// on that path are inlined into the entry point first (on naga IR,
-/// [`crate::proc::inline`]), the other calls stay calls.
+/// `crate::proc::inline`), the other calls stay calls.
 pub fn rewrite(
     shader: &Shader,
     analysis: &Analysis,

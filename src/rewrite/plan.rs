@@ -15,7 +15,7 @@ use crate::rewrite;
 
 /// What [`build`] needs.
 #[derive(Debug)]
-pub struct Inputs<'a> {
+pub(crate) struct Inputs<'a> {
     pub shader: &'a Shader,
     pub analysis: &'a Analysis,
     pub candidate: &'a Candidate,
@@ -32,7 +32,7 @@ pub struct Inputs<'a> {
     pub params: Vec<Field>,
 }
 
-pub fn build(inputs: Inputs) -> Result<Plan, String> {
+pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
     let Inputs {
         shader,
         analysis,

@@ -55,10 +55,13 @@ pub const EDGE_SLACK: f32 = 0.001;
 /// (`CacheParams::far_depth`: 1, or 0 with reversed Z).
 #[derive(Clone, Copy, Debug)]
 pub struct PreviousDepth<'a> {
+    /// The cache's size in texels.
     pub size: UVec2,
     /// Row-major, top row first.
     pub depth: &'a [f32],
+    /// The depth test's ε.
     pub epsilon: f32,
+    /// The far plane's depth.
     pub far_depth: f32,
 }
 
@@ -148,6 +151,7 @@ pub fn expected_depth(depth: f32, offset: Vec2, slope: Vec2) -> f32 {
 /// Where a fragment was last frame, in the cache: `CacheFootprint`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Footprint {
+    /// Hit or why not.
     pub status: Status,
     /// The top-left texel of the 2×2 bilinear footprint.
     pub base: Vec2,

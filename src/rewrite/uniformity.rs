@@ -23,7 +23,9 @@ use naga::{Block, Expression, Function, Handle, Module, Statement};
 /// An implicit-derivative operation in non-uniform control flow.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Violation {
+    /// The entry point it is in.
     pub entry_point: String,
+    /// What takes the derivative, in words.
     pub what: String,
 }
 
@@ -62,7 +64,9 @@ pub fn check(module: &Module, info: &ModuleInfo) -> Result<(), Violation> {
 /// the rewrite put in a pass's entry point.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct AfterKill {
+    /// The entry point it is in.
     pub entry_point: String,
+    /// What takes the derivative, in words.
     pub what: String,
 }
 

@@ -23,7 +23,7 @@ use crate::analysis::graph::ExprSet;
 
 /// What instrumenting the vertex stage produced.
 #[derive(Debug)]
-pub struct VertexStage {
+pub(crate) struct VertexStage {
     /// Index of the vertex entry point in the module; `None` for a
     /// fragment-only module, whose host's vertex stage must output the
     /// previous clip position ([`fragment_only`]).
@@ -150,7 +150,7 @@ fn arguments_read(
 /// The vertex entry point that draws with the fragment entry point at
 /// `fragment` ([`crate::proc::vertex_entry`]), or the refusal saying why
 /// none does.
-pub fn vertex_entry(
+pub(crate) fn vertex_entry(
     module: &Module,
     fragment: usize,
     wanted: Option<&str>,
@@ -165,7 +165,7 @@ pub fn vertex_entry(
 /// `deforming` names per-vertex inputs the application changes between
 /// frames: those the position reads get a twin input as per-instance ones
 /// do. A name no input of the entry point has is a refusal.
-pub fn instrument(
+pub(crate) fn instrument(
     module: &mut Module,
     entry_index: usize,
     (group, first_binding): (u32, u32),
@@ -232,7 +232,7 @@ fn input_locations(
 /// on, which the host fills with that time's contents (last frame's for
 /// the cache; the previous and the next I-frame's for whole-frame reuse).
 #[derive(Clone, Copy, Debug)]
-pub struct TwinTime {
+pub(crate) struct TwinTime {
     pub name: &'static str,
     pub group: u32,
     pub first_binding: u32,
@@ -241,15 +241,14 @@ pub struct TwinTime {
 /// The position at one [`TwinTime`]: the output's location and the
 /// (original, twin) resources it reads.
 #[derive(Debug)]
-pub struct TimedPosition {
-    pub name: &'static str,
+pub(crate) struct TimedPosition {
     pub location: u32,
     pub twins: Vec<(Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>)>,
 }
 
 /// What [`instrument_times`] made of the vertex entry point.
 #[derive(Debug)]
-pub struct TimedVertexStage {
+pub(crate) struct TimedVertexStage {
     /// One per time asked for, in order, at consecutive locations.
     pub times: Vec<TimedPosition>,
     /// As [`VertexStage::instance_twins`], one list per time asked for.
@@ -263,7 +262,7 @@ pub struct TimedVertexStage {
 /// input per time (`<time>_<input>`, at free locations below
 /// `max_vertex_attributes`), which the host fills with that time's values;
 /// a refusal when they do not fit.
-pub fn instrument_times(
+pub(crate) fn instrument_times(
     module: &mut Module,
     entry_index: usize,
     times: &[TwinTime],
@@ -367,15 +366,10 @@ pub fn instrument_times(
     module.entry_points[entry_index].function = b.finish();
 
     Ok(TimedVertexStage {
-        times: times
-            .iter()
-            .zip(locations)
+        times: locations
+            .into_iter()
             .zip(twins_per_time)
-            .map(|((time, location), twins)| TimedPosition {
-                name: time.name,
-                location,
-                twins,
-            })
+            .map(|(location, twins)| TimedPosition { location, twins })
             .collect(),
         instance_twins,
         plain: plain_entry(function, helpers.current),
@@ -436,7 +430,7 @@ fn twin_resources(
 /// The resources the vertex entry point at `entry_index` reads that get
 /// twins, in handle order: uniforms and read-only storage, read directly
 /// or through helpers.
-pub fn twinned(module: &Module, entry_index: usize) -> Vec<Handle<naga::GlobalVariable>> {
+pub(crate) fn twinned(module: &Module, entry_index: usize) -> Vec<Handle<naga::GlobalVariable>> {
     let mut read: Vec<_> = crate::proc::globals_used_by(module, &[entry_index])
         .into_iter()
         .filter(|&g| match module.global_variables[g].space {
@@ -788,7 +782,7 @@ fn other_time_arguments(
 /// stage elsewhere): no vertex entry point to instrument, so the host's
 /// must output the previous clip position, at the first location after
 /// every one the fragment entry point `fragment` reads.
-pub fn fragment_only(module: &Module, fragment: usize) -> VertexStage {
+pub(crate) fn fragment_only(module: &Module, fragment: usize) -> VertexStage {
     let function = &module.entry_points[fragment].function;
     let locations: Vec<u32> = crate::proc::inputs(module, function)
         .iter()
@@ -842,7 +836,7 @@ fn calls_any(block: &naga::Block, functions: &HashMap<Handle<Function>, Handle<F
 }
 
 /// `vs_main` → `VsMain`.
-pub fn pascal(name: &str) -> String {
+pub(crate) fn pascal(name: &str) -> String {
     name.split('_')
         .filter(|part| !part.is_empty())
         .map(|part| {

@@ -25,11 +25,11 @@ pub struct PipelineOptions {
 pub struct RunOptions {
     pub pipelines: PipelineOptions,
     /// Draw the plan's `classify` pass after each frame (see
-    /// [`Runner::classes`]).
+    /// `Runner::classes`).
     pub classify: bool,
     /// A bind group of the plan's the caller binds itself (textures other
     /// runs rendered): the runner makes its layout, not its contents
-    /// ([`Runner::set_external_bind_group`]).
+    /// (`Runner::set_external_bind_group`).
     pub external_group: Option<u32>,
 }
 

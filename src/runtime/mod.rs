@@ -3,13 +3,13 @@
 //! (`shadecache-host`) that applications run variants with: what the
 //! profiler measures is what an application runs.
 //!
-//! [`frame`] describes the frame the profiler draws as an application
+//! `frame` describes the frame the profiler draws as an application
 //! describes its own: the plan's vertex inputs packed per step, the bind
 //! group layouts the plan implies, its colour outputs. [`Runner`] is the
 //! application: it owns the scene's meshes, per-object buffers and
 //! textures, writes each frame's contents, and draws every object in each
 //! pass the host records; the host keeps the cache, the twins and the
-//! refresh uniform. [`textures`] uploads the scene's textures and reads
+//! refresh uniform. `textures` uploads the scene's textures and reads
 //! targets back.
 
 mod frame;

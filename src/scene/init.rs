@@ -6,7 +6,7 @@
 //! camera and light, and then, for the shader at hand:
 //!
 //! - `[roles]`: the shader's own members the simulation fills, inferred
-//!   from the IR ([`super::roles::infer`]), each with a comment saying how;
+//!   from the IR (`super::roles::infer`), each with a comment saying how;
 //! - `[uniforms]`, `[storage.*]`, `[textures.*]`: a neutral value for
 //!   everything else the shader binds — factors and colours in 0.5–1,
 //!   matrices the identity, integers 0 (counts 1), textures a generated

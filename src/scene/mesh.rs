@@ -16,7 +16,7 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     pub uvs: Vec<Vec2>,
     pub indices: Vec<u32>,
-    /// Per vertex, for a skinned object ([`super::skin`]); empty: every
+    /// Per vertex, for a skinned object (`super::skin`); empty: every
     /// vertex follows joint 0 alone.
     pub influences: Vec<Influence>,
 }
@@ -605,8 +605,8 @@ fn packed_colour(attribute: &crate::plan::VertexAttribute) -> bool {
 
 impl Mesh {
     /// Vertex bytes for the shader's per-vertex attributes, packed in
-    /// `layout`'s order, each fed by its [`VertexSource`] (per-instance
-    /// ones are [`super::instance_inputs`]'s).
+    /// `layout`'s order, each fed by its `VertexSource` (per-instance
+    /// ones are `super::instance_inputs`'s).
     pub fn vertex_bytes(
         &self,
         layout: &[crate::plan::VertexAttribute],

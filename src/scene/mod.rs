@@ -9,7 +9,7 @@
 //! scene says it has.
 //!
 //! [`Scene::frame`] gives the state of frame n (camera, light, time, each
-//! object's transform); [`uniforms`] turns it into the bytes of the
+//! object's transform); `uniforms` turns it into the bytes of the
 //! shader's uniform buffers, filling the well-known members
 //! (`clip_from_world`, `world_from_local`, `camera_position`,
 //! `light_position`, `time`, ...) from the simulation and every other member
@@ -17,23 +17,23 @@
 //! error naming it: nothing is silently zero.
 //!
 //! An object may be drawn as `instances` in one instanced draw call
-//! ([`instances`]); the shader's read-only storage buffers then hold one
-//! element per instance, filled by [`storage`] from each instance's
-//! transform and the scene's `[storage.<binding>]` tables. [`layout`]
+//! (`instances`); the shader's read-only storage buffers then hold one
+//! element per instance, filled by `storage` from each instance's
+//! transform and the scene's `[storage.<binding>]` tables. `layout`
 //! writes values at naga's offsets for both kinds of buffer.
 
 pub mod bounds;
 pub mod init;
-pub mod instance_inputs;
-pub mod instances;
-pub mod layout;
-pub mod mesh;
-pub mod roles;
-pub mod shadow;
-pub mod skin;
-pub mod storage;
-pub mod textures;
-pub mod uniforms;
+pub(crate) mod instance_inputs;
+pub(crate) mod instances;
+pub(crate) mod layout;
+pub(crate) mod mesh;
+pub(crate) mod roles;
+pub(crate) mod shadow;
+pub(crate) mod skin;
+pub(crate) mod storage;
+pub(crate) mod textures;
+pub(crate) mod uniforms;
 
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -93,7 +93,7 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// The shader's own names for what the simulation animates:
     /// `"buffer.member"` (or a plain uniform's name) to a role of
-    /// [`layout::ROLES`], e.g. `"camera.view_proj" = "clip_from_world"`.
+    /// `layout::ROLES`, e.g. `"camera.view_proj" = "clip_from_world"`.
     /// Members named like a role (`clip_from_world`, ...) take it without
     /// one.
     #[serde(default)]

@@ -6,8 +6,6 @@ use super::layout::{self, is_padding, Member, Shape};
 use super::{FrameState, Scene};
 use crate::analysis::range::UniformBounds;
 
-pub use super::layout::SIMULATED;
-
 /// A uniform buffer of the shader and where each member lives in it.
 #[derive(Clone, Debug)]
 pub struct UniformBuffer {

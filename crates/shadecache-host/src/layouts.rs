@@ -74,7 +74,7 @@ fn buffer(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
     }
 }
 
-/// The layout entry a plan's resource implies ([`binding_type`]); `None`
+/// The layout entry a plan's resource implies (`binding_type`); `None`
 /// for what a layout cannot state from the plan.
 pub fn entry_for(resource: &Resource) -> Option<wgpu::BindGroupLayoutEntry> {
     let (ty, visibility) = binding_type(resource.kind)?;
