@@ -194,15 +194,15 @@ fn a_vertex_input_the_mesh_cannot_feed_is_an_error() {
     let shader = "@group(0) @binding(0) var<uniform> clip_from_world: mat4x4<f32>;
 struct V { @builtin(position) position: vec4<f32>, @location(0) weight: f32 }
 @vertex
-fn vs(@location(0) position: vec3<f32>, @location(5) bone_weight: f32) -> V {
-    return V(clip_from_world * vec4<f32>(position, 1.0), bone_weight);
+fn vs(@location(0) position: vec3<f32>, @location(5) wind_gust: f32) -> V {
+    return V(clip_from_world * vec4<f32>(position, 1.0), wind_gust);
 }
 @fragment
 fn fs(in: V) -> @location(0) vec4<f32> {
     return vec4<f32>(sin(in.weight * 40.0));
 }
 ";
-    let (dir, path) = temp_file("skinned.wgsl", shader.as_bytes());
+    let (dir, path) = temp_file("gusty.wgsl", shader.as_bytes());
     // A scene that says nothing of it: an error at the input. (The
     // default scene gives such an input a constant, listed as defaulted.)
     let scene = dir.path().join("scene.toml");
@@ -217,12 +217,12 @@ fn fs(in: V) -> @location(0) vec4<f32> {
     let err = stderr(&output);
     assert_eq!(output.status.code(), Some(1), "{err}");
     assert!(
-        err.contains("cannot feed vertex input @location(5) `bone_weight` (float32)"),
+        err.contains("cannot feed vertex input @location(5) `wind_gust` (float32)"),
         "{err}"
     );
     // At the input's declaration.
-    let column = shader.lines().nth(3).unwrap().find("bone_weight").unwrap() + 1;
-    assert!(err.contains(&format!("skinned.wgsl:4:{column}")), "{err}");
+    let column = shader.lines().nth(3).unwrap().find("wind_gust").unwrap() + 1;
+    assert!(err.contains(&format!("gusty.wgsl:4:{column}")), "{err}");
 }
 
 /// A float vertex input the mesh has nothing for (a text renderer's
