@@ -141,6 +141,9 @@
 //! t); a scripted scene knows them, so one pass writes both flows here,
 //! which the report says.
 
+#![warn(missing_docs)]
+
+#[doc(hidden)]
 pub mod bframe;
 mod blur;
 #[doc(hidden)]
@@ -149,6 +152,8 @@ pub mod report;
 pub(crate) mod run;
 #[cfg(test)]
 mod search;
+
+pub use bframe::Decision;
 
 use std::path::Path;
 
@@ -182,6 +187,7 @@ pub enum Method {
 }
 
 impl Method {
+    /// Every method, in the report's order.
     pub const ALL: [Method; 8] = [
         Method::Reference,
         Method::SampleAndHold,
@@ -193,6 +199,7 @@ impl Method {
         Method::ReverseReprojection,
     ];
 
+    /// The method's name on the command line and in reports.
     pub fn name(self) -> &'static str {
         match self {
             Method::Reference => "reference",
@@ -257,6 +264,7 @@ impl Method {
 /// says nothing of the passes, is skipped).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Options {
+    /// The methods to run.
     #[serde(skip)]
     pub methods: Vec<Method>,
     /// n: displayed frames per I-frame interval (at least 2).
@@ -291,13 +299,16 @@ pub struct Options {
     pub inpaint_passes: u32,
     /// Character removal's neighbour distance, in pixels.
     pub inpaint_delta: u32,
+    /// The frame's size; `None` takes the scene's.
     #[serde(skip)]
     pub size: Option<[u32; 2]>,
     /// Displayed frames measured (rounded up to whole intervals).
     #[serde(skip)]
     pub frames: Option<u32>,
+    /// The fragment entry point; `None` for the module's only one.
     #[serde(skip)]
     pub entry: Option<String>,
+    /// The vertex entry point drawing with it; `None` infers it.
     #[serde(skip)]
     pub vertex_entry: Option<String>,
     /// Keep every measured B-frame whole ([`report::Pictures::kept`]).

@@ -17,10 +17,14 @@ pub const FORMAT: u32 = 1;
 pub const ANSWER_SSIM: f64 = 0.95;
 
 #[derive(Clone, Debug, Serialize)]
+/// What `interpolate` measured: every method against rendering every frame.
 #[non_exhaustive]
 pub struct Report {
+    /// The report format's version.
     pub format: u32,
+    /// The shader's path.
     pub shader: String,
+    /// The scene's path.
     pub scene: String,
     /// What the scene is and how it moves, as the scene says.
     pub scene_description: String,
@@ -29,11 +33,13 @@ pub struct Report {
     /// `gpu-timestamps`, or `cpu` where the device has no timestamp
     /// queries (then times include submission).
     pub timing: String,
+    /// The frame's size in pixels.
     pub size: [u32; 2],
     /// n: displayed frames per I-frame interval.
     pub frames_per_interval: u32,
     /// Intervals measured (after one of warm-up).
     pub intervals: u32,
+    /// The knobs the B-frame passes used.
     pub parameters: Parameters,
     /// Median time of a reference frame (ms).
     pub reference_ms: f64,
@@ -43,9 +49,11 @@ pub struct Report {
     /// PSNR (dB, capped at 100). The I-frame is the user's shader with
     /// outputs added, so it must equal the reference.
     pub i_frame_psnr_min: f64,
+    /// Each method's cost and error.
     pub methods: Vec<MethodReport>,
     /// SSIM of every displayed frame measured, per method.
     pub frames: Vec<DisplayedFrame>,
+    /// What the reader should know of the run.
     pub notes: Vec<String>,
     /// How many frames can be skipped, with which method, at what cost.
     pub answer: String,
@@ -57,15 +65,19 @@ pub struct Parameters {
     /// m, ε1, ε2, the initialisations, half-velocity's knobs.
     #[serde(flatten)]
     pub options: super::Options,
+    /// The flow targets' format.
     pub flow_format: String,
     /// How the flows were rendered.
     pub flows: String,
 }
 
 #[derive(Clone, Debug, Serialize)]
+/// One method's cost against the reference and its error.
 #[non_exhaustive]
 pub struct MethodReport {
+    /// The method.
     pub method: Method,
+    /// n: displayed frames per I-frame interval.
     pub frames_per_interval: u32,
     /// T_I / T_ref: the I-frame's passes (with flows where the method
     /// reads them) over a reference frame.
@@ -78,7 +90,9 @@ pub struct MethodReport {
     pub b_frame_ms: f64,
     /// Over the B-frames, against the reference at the same time.
     pub ssim_mean: f64,
+    /// The worst B-frame's SSIM.
     pub ssim_min: f64,
+    /// Mean PSNR over the B-frames (dB, capped at 100).
     pub psnr_mean: f64,
     /// Share of the B-frames' pixels with geometry in either I-frame that
     /// neither search found (image-based only).
@@ -95,6 +109,7 @@ pub struct MethodReport {
     /// I-frame against the reference's, mean SSIM and PSNR.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub motion_blur_ssim: Option<f64>,
+    /// The motion-blurred composites' mean PSNR.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub motion_blur_psnr: Option<f64>,
     /// The displayed frame of its worst B-frame (lowest SSIM).
@@ -113,7 +128,9 @@ pub struct CorrespondenceError {
 }
 
 #[derive(Clone, Debug, Serialize)]
+/// One displayed frame's SSIM under every method.
 pub struct DisplayedFrame {
+    /// Its displayed frame.
     pub frame: u32,
     /// Where it is in its interval: 0 for an I-frame.
     pub alpha: f64,
@@ -125,7 +142,9 @@ pub struct DisplayedFrame {
 /// RGBA8; and the B-frames kept whole.
 #[derive(Clone, Debug, Default)]
 pub struct Pictures {
+    /// Each method's worst B-frame and the reference at its time, RGBA8.
     pub worst: Vec<(Method, Vec<u8>, Vec<u8>)>,
+    /// The B-frames kept whole (`keep_frames`, or the end points).
     pub kept: Vec<KeptFrame>,
     /// With `keep_frames`, every measured I-frame.
     pub iframes: Vec<KeptIFrame>,
@@ -138,6 +157,7 @@ pub struct KeptIFrame {
     pub frame: u32,
     /// RGBA.
     pub color: Vec<f32>,
+    /// Its depth buffer.
     pub depth: Vec<f32>,
     /// RGBA per pixel: Δx, Δy (pixels), Δz, valid; to the previous
     /// I-frame.
@@ -149,12 +169,17 @@ pub struct KeptIFrame {
 /// A B-frame kept whole, with the reference of its time.
 #[derive(Clone, Debug)]
 pub struct KeptFrame {
+    /// The method.
     pub method: Method,
     /// Its displayed frame.
     pub frame: u32,
+    /// α: where it is in its interval.
     pub alpha: f64,
+    /// Its error against the reference.
     pub error: crate::measure::metrics::FrameError,
+    /// The reference at its time, RGBA linear.
     pub reference: Vec<f32>,
+    /// The B-frame, RGBA linear.
     pub result: Vec<f32>,
     /// Each pixel's decision (`bframe::Decision` codes).
     pub decisions: Vec<u32>,

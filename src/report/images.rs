@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 /// and the GPU timer scopes of the last frame.
 #[derive(Debug)]
 pub struct Pictures {
+    /// The reference's last measured frame, RGBA8.
     pub reference: Vec<u8>,
     /// Colour and classes of each result, in `Report::results` order.
     pub results: Vec<Picture>,

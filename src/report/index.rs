@@ -14,6 +14,7 @@ use super::{ReferenceCheck, Report};
 /// One fragment entry point's profile, or why there is none.
 #[derive(Debug)]
 pub struct EntrySection {
+    /// The entry point's name.
     pub entry: String,
     /// The report, or the rendered error that stopped its profile.
     pub outcome: Result<Report, String>,

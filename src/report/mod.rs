@@ -2,6 +2,8 @@
 //! in `docs/report-json.md`), as a self-contained HTML page with tables and
 //! SVG plots, and as PNG maps of the cache's decisions.
 
+#![warn(missing_docs)]
+
 mod html;
 pub(crate) mod images;
 mod index;
@@ -24,18 +26,25 @@ pub use index::{entry_index, entry_index_html, EntryIndex, EntrySection};
 pub struct Report {
     /// Version of this format.
     pub format: u32,
+    /// The shader's path.
     pub shader: String,
+    /// The fragment entry point profiled.
     pub entry: String,
+    /// The scene's path (`default scene` without one).
     pub scene: String,
+    /// What the scene is and how it moves, as it says.
     pub scene_description: String,
     /// What the scene set to a neutral value because nothing said what it
     /// is (the default scene's bindings, vertex inputs fed a constant).
     #[serde(default)]
     pub defaulted: Vec<String>,
+    /// What moves in the scene.
     pub effects: Vec<Effect>,
+    /// The frame's width and height in pixels.
     pub size: [u32; 2],
     /// Frames measured (after the warm-up).
     pub frames: u32,
+    /// Frames rendered before the measured ones.
     pub warmup: u32,
     /// Whether the warm-up covers the longest refresh period measured, so
     /// that the errors are those of the cache in its steady state (every
@@ -43,6 +52,7 @@ pub struct Report {
     /// old). When not, they are a younger cache's, and optimistic.
     #[serde(default)]
     pub steady_state: bool,
+    /// The adapter the run drew on.
     pub device: Device,
     /// `gpu-timestamps` (timestamp queries around each pass) or
     /// `cpu-wall-clock` (submit to completion, where the adapter has no
@@ -50,6 +60,7 @@ pub struct Report {
     pub timing: String,
     /// The command that produced the report.
     pub command: String,
+    /// The unmodified shader's frame times.
     pub reference: Reference,
     /// The nodes profiled, highest estimated P/T first.
     pub nodes: Vec<NodeReport>,
@@ -149,7 +160,9 @@ pub struct ReferenceProblem {
 /// Which configurations were measured (see `profile::grid`).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct GridReport {
+    /// How the grid was walked.
     pub design: Design,
+    /// The values of each knob.
     pub axes: Axes,
     /// The setting the sweep's planes go through.
     pub base: Setting,
@@ -157,6 +170,7 @@ pub struct GridReport {
     pub full: usize,
     /// Configurations measured (refused rewrites excluded).
     pub measured: usize,
+    /// What was left out, and why.
     pub pruned: Vec<Pruned>,
 }
 
@@ -192,30 +206,44 @@ pub struct Choice {
 /// first).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Confirmation {
+    /// Frames in the confirming run.
     pub frames: u32,
+    /// The original's median frame time in it (ms).
     pub reference_ms: f64,
+    /// The configuration's median frame time in it (ms).
     pub time_ms: f64,
+    /// Original time over the configuration's.
     pub speedup: f64,
+    /// The speed-up's 95% bootstrap interval.
     pub speedup_ci: [f64; 2],
 }
 
 /// The misses of the best configuration when only `effect` is simulated.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct MissCause {
+    /// The effect simulated alone.
     pub effect: Effect,
+    /// Share of the covered pixels that missed.
     pub miss_rate: f64,
+    /// Share that missed because last frame's point was off-screen.
     pub offscreen_rate: f64,
+    /// Share that missed because last frame's point was hidden.
     pub disocclusion_rate: f64,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
+/// The adapter a run drew on, as wgpu names it.
 pub struct Device {
+    /// The adapter's name.
     pub name: String,
+    /// The backend (Vulkan, Metal, DX12...).
     pub backend: String,
+    /// The driver and its version.
     pub driver: String,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
+/// The unmodified shader's measured frames.
 pub struct Reference {
     /// Median frame time of the unmodified shader, ms.
     pub time_ms: f64,
@@ -226,16 +254,22 @@ pub struct Reference {
     /// (returning zero): what drawing the scene costs before shading.
     #[serde(default)]
     pub fixed_ms: f64,
+    /// Every measured frame's time, ms, in order.
     pub frame_ms: Vec<f64>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
+/// A node measured: where it is and what caching it costs and saves.
 pub struct NodeReport {
+    /// The node's stable id.
     pub id: String,
+    /// Its source text.
     pub text: String,
     /// `[line, column]` of the node's first and past-last characters.
     pub start: [usize; 2],
+    /// Line and column just past its end.
     pub end: [usize; 2],
+    /// Its WGSL type.
     #[serde(rename = "type")]
     pub ty: String,
     /// The source lines the node spans, for showing it.
@@ -274,13 +308,21 @@ pub struct NodeReport {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[non_exhaustive]
 pub struct ResultRow {
+    /// The node's id.
     pub node: String,
+    /// The node's source text.
     pub node_text: String,
+    /// The variant.
     pub variant: Variant,
+    /// Δn: every pixel recomputed at least every Δn frames (0: never).
     pub refresh_period: u32,
+    /// k: refresh decided per k×k block.
     pub refresh_quad: u32,
+    /// How the payload and depth are read back.
     pub reconstruction: Reconstruction,
+    /// The payload cache's format.
     pub cache_format: CacheFormat,
+    /// The depth test's relative tolerance ε.
     pub depth_epsilon: f32,
     /// Median frame time, ms: from the first pass's start timestamp to the
     /// last one's end, what runs between the passes included.
@@ -296,6 +338,7 @@ pub struct ResultRow {
     /// Means over the measured frames: PSNR over the covered pixels (those
     /// the shader draws), SSIM over the whole frame.
     pub psnr: f64,
+    /// Mean SSIM over the measured frames, against the reference.
     pub ssim: f64,
     /// PSNR over the whole frame, background included, mean.
     #[serde(default)]
@@ -311,6 +354,8 @@ pub struct ResultRow {
     pub flicker: f64,
     /// Largest over the measured frames.
     pub max_abs_error: f64,
+    /// Share of pixels whose largest channel error is above the report's
+    /// threshold.
     pub above_threshold: f64,
     /// The share of the image the node covers (where it is computed),
     /// mean over the measured frames.
@@ -318,13 +363,17 @@ pub struct ResultRow {
     pub coverage: f64,
     /// Shares of the covered pixels, means over the measured frames.
     pub hit_rate: f64,
+    /// Share of the covered pixels that missed.
     pub miss_rate: f64,
+    /// Share that missed off-screen.
     pub offscreen_rate: f64,
+    /// Share that missed disoccluded.
     pub disocclusion_rate: f64,
     /// Missed because the cached payload was not finite (NaN, infinity,
     /// an rgba16float overflow).
     #[serde(default)]
     pub invalid_rate: f64,
+    /// Share of the covered pixels refreshed.
     pub refresh_rate: f64,
     /// The oldest value the cache showed in the measured frames, in
     /// frames since it was computed: below the refresh period Δn whatever
@@ -358,19 +407,26 @@ pub struct ResultRow {
     /// `profile::choice::mark_pareto_fronts`).
     #[serde(default)]
     pub pareto_psnr: bool,
+    /// Whether it is on the SSIM-against-time Pareto front.
     #[serde(default)]
     pub pareto_ssim: bool,
+    /// Each measured frame's time, error and decisions.
     pub frame_stats: Vec<FrameStats>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
+/// One pass's time in a frame.
 pub struct PassTime {
+    /// The pass's name in the plan.
     pub name: String,
+    /// Its median time, ms.
     pub time_ms: f64,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
+/// One measured frame of a configuration.
 pub struct FrameStats {
+    /// The frame's time, ms.
     pub time_ms: f64,
     /// Over the covered pixels.
     pub psnr: f64,
@@ -380,12 +436,16 @@ pub struct FrameStats {
     /// Against the frame before ([`ResultRow::flicker`]); 0 for the first.
     #[serde(default)]
     pub flicker: f64,
+    /// SSIM against the reference's frame.
     pub ssim: f64,
     /// Largest channel difference from the reference frame, in [0, 1].
     #[serde(default)]
     pub max_abs_error: f64,
+    /// Share of covered pixels reused.
     pub hit_rate: f64,
+    /// Share that missed.
     pub miss_rate: f64,
+    /// Share refreshed.
     pub refresh_rate: f64,
 }
 
@@ -395,20 +455,30 @@ pub struct FrameStats {
 /// The values of each knob.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Axes {
+    /// The Δn values.
     pub refresh_periods: Vec<u32>,
+    /// The k values.
     pub refresh_quads: Vec<u32>,
+    /// The reconstructions.
     pub reconstructions: Vec<Reconstruction>,
+    /// The cache formats.
     pub cache_formats: Vec<CacheFormat>,
+    /// The depth tolerances ε.
     pub depth_epsilons: Vec<f32>,
 }
 
 /// The knobs of one configuration besides its node and variant.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Setting {
+    /// Δn.
     pub refresh_period: u32,
+    /// k.
     pub refresh_quad: u32,
+    /// The reconstruction.
     pub reconstruction: Reconstruction,
+    /// The cache format.
     pub cache_format: CacheFormat,
+    /// ε.
     pub depth_epsilon: f32,
 }
 
@@ -432,6 +502,7 @@ pub struct Pruned {
     pub node: Option<String>,
     /// Node × variant × setting configurations left out.
     pub configurations: usize,
+    /// Why, in words.
     pub reason: String,
 }
 
@@ -440,7 +511,9 @@ pub struct Pruned {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase", tag = "metric", content = "at_least")]
 pub enum Budget {
+    /// Mean PSNR (dB) at least this.
     Psnr(f64),
+    /// Mean SSIM at least this.
     Ssim(f64),
 }
 

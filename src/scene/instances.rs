@@ -20,7 +20,9 @@ pub const MAX_INSTANCES: u32 = 65536;
 /// How an object's instances are placed and move.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Instances {
+    /// How many instances the draw draws.
     pub count: u32,
+    /// How they are placed.
     pub layout: Layout,
     /// Each instance's initial rotation, degrees about x, y, z.
     pub rotation_degrees: Vec<Vec3>,

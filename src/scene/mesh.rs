@@ -12,9 +12,13 @@ use super::skin::{Influence, Skin};
 /// and, when skinned, each vertex's joints and weights.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
+    /// Each vertex's position, in the mesh's space.
     pub positions: Vec<Vec3>,
+    /// Each vertex's unit normal.
     pub normals: Vec<Vec3>,
+    /// Each vertex's texture coordinate.
     pub uvs: Vec<Vec2>,
+    /// Three indices a triangle, counter-clockwise seen from outside.
     pub indices: Vec<u32>,
     /// Per vertex, for a skinned object (`super::skin`); empty: every
     /// vertex follows joint 0 alone.
@@ -25,41 +29,57 @@ pub struct Mesh {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum MeshSource {
+    /// A UV sphere around the origin.
     Sphere {
+        /// The radius.
         #[serde(default = "one")]
         radius: f32,
+        /// Rings along the first parameter.
         #[serde(default = "rings")]
         rings: u32,
+        /// Segments around.
         #[serde(default = "segments")]
         segments: u32,
     },
+    /// A torus around the y axis.
     Torus {
+        /// The radius.
         #[serde(default = "one")]
         radius: f32,
+        /// The tube's radius.
         #[serde(default = "tube")]
         tube: f32,
+        /// Rings along the first parameter.
         #[serde(default = "rings")]
         rings: u32,
+        /// Segments around.
         #[serde(default = "segments")]
         segments: u32,
     },
     /// A square in the xz plane, facing +y.
     Plane {
+        /// The edge length.
         #[serde(default = "one")]
         size: f32,
+        /// Quads along each edge.
         #[serde(default = "subdivisions")]
         subdivisions: u32,
     },
     /// A height field in the xz plane: sums of sines, for terrain.
     Terrain {
+        /// The edge length.
         #[serde(default = "one")]
         size: f32,
+        /// Quads along each edge.
         #[serde(default = "subdivisions")]
         subdivisions: u32,
+        /// The height field's amplitude.
         #[serde(default = "height")]
         height: f32,
     },
+    /// A cube around the origin.
     Cube {
+        /// The edge length.
         #[serde(default = "one")]
         size: f32,
     },
@@ -67,12 +87,16 @@ pub enum MeshSource {
     /// its length (enough for a skin to bend it smoothly), `segments`
     /// around.
     Cylinder {
+        /// The radius.
         #[serde(default = "half")]
         radius: f32,
+        /// The length along x.
         #[serde(default = "two_units")]
         length: f32,
+        /// Rings along the first parameter.
         #[serde(default = "rings")]
         rings: u32,
+        /// Segments around.
         #[serde(default = "segments")]
         segments: u32,
     },
@@ -81,12 +105,18 @@ pub enum MeshSource {
     /// vertex data are a triangle covering the view in clip space, which
     /// such a shader does not read.
     Fullscreen,
-    /// A Wavefront OBJ file, relative to the scene file.
-    Obj { file: String },
+    /// A Wavefront OBJ file.
+    Obj {
+        /// Its path, relative to the scene file.
+        file: String,
+    },
     /// A glTF 2.0 file (`.gltf` with its buffers, or `.glb`), relative to
     /// the scene file: every triangle primitive of the default scene (or
     /// of the first), placed by its nodes' transforms.
-    Gltf { file: String },
+    Gltf {
+        /// Its path, relative to the scene file.
+        file: String,
+    },
 }
 
 fn one() -> f32 {
@@ -677,6 +707,7 @@ impl Mesh {
         Ok(bytes)
     }
 
+    /// How many triangles it has.
     pub fn triangles(&self) -> usize {
         self.indices.len() / 3
     }

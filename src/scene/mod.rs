@@ -22,6 +22,8 @@
 //! transform and the scene's `[storage.<binding>]` tables. `layout`
 //! writes values at naga's offsets for both kinds of buffer.
 
+#![warn(missing_docs)]
+
 pub mod bounds;
 pub mod init;
 pub(crate) mod instance_inputs;
@@ -55,8 +57,11 @@ pub type StorageTable = BTreeMap<String, toml::Spanned<toml::Value>>;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Deserialize, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Effect {
+    /// The camera orbits, pans, zooms or rolls.
     CameraMotion,
+    /// Objects turn and move (and instances orbit and spin).
     ObjectMotion,
+    /// The light orbits.
     LightMotion,
     /// Time-varying parameters: the `time` uniform advances.
     Time,
@@ -72,6 +77,7 @@ pub enum Effect {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
+    /// What the scene is and how it moves, in words.
     #[serde(default)]
     pub description: String,
     /// Frame size in pixels.
@@ -83,12 +89,16 @@ pub struct Scene {
     /// Frames rendered first and not measured.
     #[serde(default = "default_warmup")]
     pub warmup: u32,
+    /// What moves: only the effects declared are simulated.
     #[serde(default)]
     pub effects: Vec<Effect>,
+    /// The camera.
     #[serde(default)]
     pub camera: Camera,
+    /// The light.
     #[serde(default)]
     pub light: Light,
+    /// What is drawn, each object one draw.
     #[serde(default)]
     pub objects: Vec<Object>,
     /// The shader's own names for what the simulation animates:
@@ -149,14 +159,19 @@ fn default_frame_time() -> f32 {
 }
 
 #[derive(Clone, Debug, Deserialize)]
+/// The camera: where it is, where it looks, how it projects and moves.
 #[serde(deny_unknown_fields)]
 pub struct Camera {
+    /// Where it is.
     #[serde(default = "default_eye")]
     pub eye: [f32; 3],
+    /// What it looks at.
     #[serde(default)]
     pub target: [f32; 3],
+    /// The vertical field of view.
     #[serde(default = "default_fov")]
     pub fov_degrees: f32,
+    /// The near plane's distance.
     #[serde(default = "default_near")]
     pub near: f32,
     /// A distance, or `"infinity"` for an infinite far plane.
@@ -221,6 +236,7 @@ fn default_far() -> Far {
 /// Where the camera's far plane is.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Far {
+    /// The far plane at this distance.
     Distance(f32),
     /// No far plane: depth tends to the far value as distance grows.
     Infinity,
@@ -288,8 +304,10 @@ impl Camera {
 }
 
 #[derive(Clone, Debug, Deserialize)]
+/// The light: a point, which may orbit.
 #[serde(deny_unknown_fields)]
 pub struct Light {
+    /// Where it is at frame 0.
     #[serde(default = "default_light")]
     pub position: [f32; 3],
     /// With `light-motion`: orbit about the vertical axis.
@@ -311,14 +329,18 @@ fn default_light() -> [f32; 3] {
 }
 
 #[derive(Clone, Debug, Deserialize)]
+/// One object: a mesh, where it is and how it moves.
 #[serde(deny_unknown_fields)]
 pub struct Object {
+    /// Its mesh.
     pub mesh: MeshSource,
+    /// Where it is at frame 0.
     #[serde(default)]
     pub position: [f32; 3],
     /// Initial rotation, degrees about x, y, z.
     #[serde(default)]
     pub rotation_degrees: [f32; 3],
+    /// Its uniform scale.
     #[serde(default = "default_scale")]
     pub scale: f32,
     /// With `object-motion`: degrees per frame about x, y, z.
@@ -356,7 +378,9 @@ impl Object {
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Deformation {
+    /// How far vertices move along their normals.
     pub amplitude: f32,
+    /// The ripple's frequency along y.
     #[serde(default = "default_ripple_frequency")]
     pub frequency: f32,
     /// Radians per frame.
@@ -378,14 +402,20 @@ fn default_scale() -> f32 {
 /// The simulated state of one frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrameState {
+    /// The camera's view-projection.
     pub clip_from_world: Mat4,
     /// The camera's projection and view, whose product is
     /// `clip_from_world`, for shaders that take them apart.
     pub clip_from_view: Mat4,
+    /// The camera's view.
     pub view_from_world: Mat4,
+    /// The eye.
     pub camera_position: Vec3,
+    /// The light.
     pub light_position: Vec3,
+    /// The light's view-projection, looking at the origin.
     pub light_clip_from_world: Mat4,
+    /// Seconds since the first frame (with `time`).
     pub time: f32,
     /// The frame's size in pixels (the scene's, or the run's with
     /// [`Scene::frame_sized`]).
@@ -417,7 +447,9 @@ impl FrameState {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(untagged)]
 pub enum VertexConstant {
+    /// One value for every component.
     Scalar(f32),
+    /// One value per component.
     Vector(Vec<f32>),
 }
 
@@ -497,6 +529,7 @@ impl Scene {
         self
     }
 
+    /// Parses and checks a scene's text; errors point into it.
     pub fn parse(file: Arc<SourceFile>) -> Result<Scene, Error> {
         let mut scene: Scene = toml::from_str(&file.text).map_err(|err| {
             let range = err.span().unwrap_or(0..0);
@@ -592,6 +625,7 @@ impl Scene {
         }
     }
 
+    /// Whether the scene declares `effect`.
     pub fn has(&self, effect: Effect) -> bool {
         self.effects.contains(&effect)
     }
