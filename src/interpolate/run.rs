@@ -172,13 +172,13 @@ pub(super) fn run(
     progress.start(total);
     let measured = run.measure(
         &mut clock,
-        (
-            &mut reference,
-            &mut slots,
-            &mut scene_runs,
-            correspondence.as_mut(),
-            moving_runs.as_mut(),
-        ),
+        Runs {
+            reference: &mut reference,
+            slots: &mut slots,
+            scene: &mut scene_runs,
+            correspondence: correspondence.as_mut(),
+            moving: moving_runs.as_mut(),
+        },
         &|frame: u32| inputs.frame(scene, frame),
         plan.intervals,
         progress,
@@ -554,6 +554,18 @@ struct Measured {
     methods: BTreeMap<Method, MethodRun>,
 }
 
+/// The runners a measured run draws with: the reference, the two
+/// I-frame slots (an interval's opening and closing I-frames alternate
+/// between them), the scene-assisted methods', and image-based's
+/// correspondences and half-velocity's moving objects when asked for.
+struct Runs<'r> {
+    reference: &'r mut Runner,
+    slots: &'r mut [Runner; 2],
+    scene: &'r mut [SceneRun],
+    correspondence: Option<&'r mut Correspondence>,
+    moving: Option<&'r mut SceneRun>,
+}
+
 /// One interval as its B-frame methods see it: its first and closing
 /// I-frames' times, whether it is recorded, the reference at each of its
 /// frames and the two I-frames' textures.
@@ -666,13 +678,7 @@ impl Schedule<'_> {
     fn measure(
         &self,
         clock: &mut Clock,
-        (reference, slots, scene_runs, mut correspondence, mut moving): (
-            &mut Runner,
-            &mut [Runner; 2],
-            &mut [SceneRun],
-            Option<&mut Correspondence>,
-            Option<&mut SceneRun>,
-        ),
+        mut runs: Runs,
         inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
         intervals: u32,
         progress: &mut dyn Progress,
@@ -688,7 +694,7 @@ impl Schedule<'_> {
         // The first I-frame: the one the first interval opens with.
         timed(
             clock,
-            &mut slots[0],
+            &mut runs.slots[0],
             &self.twinned_inputs(inputs_of, [0, 0, n])?,
             "iframe",
         )
@@ -697,13 +703,7 @@ impl Schedule<'_> {
             let record = interval >= WARMUP_INTERVALS;
             self.interval(
                 clock,
-                (
-                    &mut *reference,
-                    &mut *slots,
-                    &mut *scene_runs,
-                    correspondence.as_deref_mut(),
-                    moving.as_deref_mut(),
-                ),
+                &mut runs,
                 inputs_of,
                 (interval, record),
                 &mut measured,
@@ -719,18 +719,19 @@ impl Schedule<'_> {
     fn interval(
         &self,
         clock: &mut Clock,
-        (reference, slots, scene_runs, mut correspondence, mut moving): (
-            &mut Runner,
-            &mut [Runner; 2],
-            &mut [SceneRun],
-            Option<&mut Correspondence>,
-            Option<&mut SceneRun>,
-        ),
+        runs: &mut Runs,
         inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
         (interval, record): (u32, bool),
         measured: &mut Measured,
         progress: &mut dyn Progress,
     ) -> Result<(), Error> {
+        let Runs {
+            reference,
+            slots,
+            scene: scene_runs,
+            correspondence,
+            moving,
+        } = runs;
         let n = self.options.frames_per_interval;
         let start = interval * n;
         let end = start + n;

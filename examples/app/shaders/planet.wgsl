@@ -1,6 +1,10 @@
 // A marble planet lit by a sun, written the way a wgpu tutorial writes
 // its shaders: a globals uniform for the camera and the sun, a locals
-// uniform for the object's transform, the material in helper functions.
+// uniform for the object, the material in helper functions. The planet is
+// skinned as engines skin characters: its northern hemisphere is a second
+// joint that twists against the southern one, each vertex blending the
+// joints' matrices (the model matrix times the joint's pose) by its
+// weights.
 
 struct Globals {
     view_projection: mat4x4<f32>,
@@ -9,7 +13,7 @@ struct Globals {
 }
 
 struct Locals {
-    transform: mat4x4<f32>,
+    joints: array<mat4x4<f32>, 2>,
 }
 
 @group(0) @binding(0) var<uniform> globals: Globals;
@@ -18,6 +22,8 @@ struct Locals {
 struct VertexIn {
     @location(0) pos: vec3<f32>,
     @location(1) normal: vec3<f32>,
+    @location(2) joint_indices: vec4<u32>,
+    @location(3) joint_weights: vec4<f32>,
 }
 
 struct VertexOut {
@@ -26,12 +32,20 @@ struct VertexOut {
     @location(1) world_normal: vec3<f32>,
 }
 
+fn skin_model(indices: vec4<u32>, weights: vec4<f32>) -> mat4x4<f32> {
+    return weights.x * locals.joints[indices.x]
+        + weights.y * locals.joints[indices.y]
+        + weights.z * locals.joints[indices.z]
+        + weights.w * locals.joints[indices.w];
+}
+
 @vertex
 fn vs_main(v: VertexIn) -> VertexOut {
+    let model = skin_model(v.joint_indices, v.joint_weights);
     var out: VertexOut;
-    out.clip = globals.view_projection * locals.transform * vec4<f32>(v.pos, 1.0);
+    out.clip = globals.view_projection * model * vec4<f32>(v.pos, 1.0);
     out.surface = v.pos;
-    out.world_normal = (locals.transform * vec4<f32>(v.normal, 0.0)).xyz;
+    out.world_normal = (model * vec4<f32>(v.normal, 0.0)).xyz;
     return out;
 }
 

@@ -2,7 +2,10 @@
 //!
 //! `build.rs` rewrites `shaders/planet.wgsl` with shadecache's build API
 //! into its three-pass reprojection-cache variant (the marble albedo
-//! cached, the sun's lighting recomputed every frame). At run time the
+//! cached, the sun's lighting recomputed every frame). The planet is
+//! skinned, as engines skin characters: its northern hemisphere twists
+//! against the southern one, the joints' matrices in the locals uniform,
+//! whose previous-frame twin gives each vertex where it was. At run time the
 //! application links only the host crate: it reads the plan, makes the
 //! variant on its own device from its own layouts, and each frame records
 //! it into its own encoder with its own draw call. The render loop runs

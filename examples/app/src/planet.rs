@@ -1,20 +1,26 @@
 //! The application's scene: a marble planet turning under a fixed camera
 //! and sun, its buffers, layouts and draw — what any wgpu app has before
-//! it caches anything.
+//! it caches anything. The planet is skinned: two joints, the southern
+//! hemisphere and the northern, which twists against it, each vertex
+//! weighted between them across the equator.
 
 use glam::{Mat4, Vec3};
 
 /// Frames of rotation: 0.4° about the vertical per frame.
 const DEGREES_PER_FRAME: f32 = 0.4;
+/// The northern joint's twist against the southern one, per frame.
+const TWIST_DEGREES_PER_FRAME: f32 = 0.6;
+/// The width of the weights' ramp across the equator (in radii).
+const BLEND: f32 = 0.3;
 
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
-pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 2] =
-    wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
+pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] =
+    wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Uint32x4, 3 => Float32x4];
 
 pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     wgpu::VertexBufferLayout {
-        array_stride: 24,
+        array_stride: 56,
         step_mode: wgpu::VertexStepMode::Vertex,
         attributes: &VERTEX_ATTRIBUTES,
     }
@@ -64,7 +70,7 @@ impl Planet {
         // COPY_SRC: the cached variant keeps last frame's copy of each.
         let uniform = wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_SRC;
         let globals = buffer("globals", &[0; 96], uniform);
-        let locals = buffer("locals", &[0; 64], uniform);
+        let locals = buffer("locals", &[0; 128], uniform);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("uniforms"),
             entries: &UNIFORM_ENTRY,
@@ -82,7 +88,7 @@ impl Planet {
         let (globals_group, locals_group) = (group(&globals), group(&locals));
         let index_bytes: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
         Planet {
-            vertices: buffer("sphere", &f32_bytes(&vertices), wgpu::BufferUsages::VERTEX),
+            vertices: buffer("sphere", &vertices, wgpu::BufferUsages::VERTEX),
             indices: buffer("sphere indices", &index_bytes, wgpu::BufferUsages::INDEX),
             index_count: indices.len() as u32,
             globals,
@@ -94,7 +100,7 @@ impl Planet {
         }
     }
 
-    /// Writes frame `frame`'s camera, sun and transform.
+    /// Writes frame `frame`'s camera, sun and joints.
     pub fn update(&self, queue: &wgpu::Queue, frame: u32) {
         let eye = Vec3::new(0.0, 0.3, 2.6);
         let view_projection = Mat4::perspective_rh(45f32.to_radians(), self.aspect, 0.1, 20.0)
@@ -104,8 +110,16 @@ impl Planet {
         globals.extend([sun.x, sun.y, sun.z, 0.0, 1.0, 0.97, 0.92, 1.0]);
         queue.write_buffer(&self.globals, 0, &f32_bytes(&globals));
         let turn = (DEGREES_PER_FRAME * frame as f32).to_radians();
-        let transform = Mat4::from_rotation_y(turn);
-        queue.write_buffer(&self.locals, 0, &f32_bytes(&transform.to_cols_array()));
+        let model = Mat4::from_rotation_y(turn);
+        // Each joint's skinning matrix: the model matrix times its pose.
+        // The northern joint turns about the vertical through its pivot at
+        // the centre.
+        let twist = Mat4::from_rotation_y((TWIST_DEGREES_PER_FRAME * frame as f32).to_radians());
+        let joints: Vec<f32> = [model, model * twist]
+            .iter()
+            .flat_map(|m| m.to_cols_array())
+            .collect();
+        queue.write_buffer(&self.locals, 0, &f32_bytes(&joints));
     }
 
     /// The planet's draw, as in the original pass.
@@ -137,9 +151,18 @@ impl Planet {
     }
 }
 
+/// A vertex's joints and weights: the southern joint below the equator,
+/// the northern above, smoothstep weights across a band `BLEND` wide.
+fn influence(y: f32) -> ([u32; 4], [f32; 4]) {
+    let t = ((y + BLEND * 0.5) / BLEND).clamp(0.0, 1.0);
+    let north = t * t * (3.0 - 2.0 * t);
+    ([0, 1, 0, 0], [1.0 - north, north, 0.0, 0.0])
+}
+
 /// A UV sphere of radius 1: (rings + 1) × (segments + 1) vertices of
-/// position and normal, two triangles per quad.
-fn sphere(rings: u32, segments: u32) -> (Vec<f32>, Vec<u32>) {
+/// position, normal, joints and weights (56 bytes), two triangles per
+/// quad.
+fn sphere(rings: u32, segments: u32) -> (Vec<u8>, Vec<u32>) {
     use std::f32::consts::{PI, TAU};
     let mut vertices = Vec::new();
     for ring in 0..=rings {
@@ -151,8 +174,16 @@ fn sphere(rings: u32, segments: u32) -> (Vec<f32>, Vec<u32>) {
                 theta.cos(),
                 theta.sin() * phi.sin(),
             ];
-            vertices.extend(n);
-            vertices.extend(n);
+            let (joints, weights) = influence(n[1]);
+            for value in n.into_iter().chain(n) {
+                vertices.extend(value.to_le_bytes());
+            }
+            for joint in joints {
+                vertices.extend(joint.to_le_bytes());
+            }
+            for weight in weights {
+                vertices.extend(weight.to_le_bytes());
+            }
         }
     }
     let row = segments + 1;

@@ -273,24 +273,13 @@ fn assert_moving_cubes_reproject(shader: &str, tail: &str) {
     let Some((pictures, _, scene)) = run_shader(shader, &scene, opts) else {
         return;
     };
-    let (w, h) = (128usize, 128usize);
-    let (before, now) = (
-        crate::util::silhouette(&scene, 1, 0, w, h),
-        crate::util::silhouette(&scene, 1, 1, w, h),
-    );
-    let leading: Vec<bool> = (0..w * h).map(|i| now[i] && !before[i]).collect();
-    let inner = crate::util::interior(&crate::util::interior(&leading, w), w);
-    let classes = &pictures.results[0].1;
-    let hit = |i: usize| classes[i * 4..i * 4 + 3] == shadecache::measure::metrics::HIT;
-    let band: Vec<usize> = (0..w * h).filter(|&i| inner[i]).collect();
+    let (band, uncovered) = crate::util::moved_bands(&scene, 1, 128, 128);
+    let hit = |i: usize| crate::util::is_hit(&pictures.results[0].1, i);
     assert!(band.len() > 50, "the leading band is {} pixels", band.len());
     let missed = band.iter().filter(|&&i| !hit(i)).count();
     assert_eq!(missed, 0, "of {} leading-band pixels", band.len());
 
     // And the band they uncovered misses.
-    let trailing: Vec<bool> = (0..w * h).map(|i| before[i] && !now[i]).collect();
-    let trailing = crate::util::interior(&trailing, w);
-    let uncovered: Vec<usize> = (0..w * h).filter(|&i| trailing[i]).collect();
     assert!(uncovered.len() > 50);
     assert!(uncovered.iter().all(|&i| !hit(i)));
 }

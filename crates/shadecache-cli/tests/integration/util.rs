@@ -298,3 +298,27 @@ light_color = [1.0, 1.0, 1.0]
 "#
     )
 }
+
+/// Where object `object` of `scene` moved between frames 0 and 1 at
+/// `w`×`h`: the pixels it newly covers (its leading band, two pixels in
+/// from the band's edges) and those it uncovers (one pixel in), from its
+/// silhouettes.
+pub fn moved_bands(scene: &Scene, object: usize, w: usize, h: usize) -> (Vec<usize>, Vec<usize>) {
+    let (before, now) = (
+        silhouette(scene, object, 0, w, h),
+        silhouette(scene, object, 1, w, h),
+    );
+    let leading: Vec<bool> = (0..w * h).map(|i| now[i] && !before[i]).collect();
+    let leading = interior(&interior(&leading, w), w);
+    let trailing: Vec<bool> = (0..w * h).map(|i| before[i] && !now[i]).collect();
+    let trailing = interior(&trailing, w);
+    (
+        (0..w * h).filter(|&i| leading[i]).collect(),
+        (0..w * h).filter(|&i| trailing[i]).collect(),
+    )
+}
+
+/// Whether pixel `i` of a classification map (RGBA8) is a hit.
+pub fn is_hit(classes: &[u8], i: usize) -> bool {
+    classes[i * 4..i * 4 + 3] == shadecache::measure::metrics::HIT
+}
