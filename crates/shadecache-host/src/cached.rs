@@ -664,6 +664,7 @@ impl CachedShader {
         self.frame
     }
 
+    /// The plan it runs.
     pub fn plan(&self) -> &Plan {
         &self.plan
     }
@@ -674,10 +675,12 @@ impl CachedShader {
         self.cache_group
     }
 
+    /// What it does beyond the plan's passes.
     pub fn options(&self) -> Options {
         self.options
     }
 
+    /// The size of its targets, in pixels.
     pub fn size(&self) -> (u32, u32) {
         self.size
     }

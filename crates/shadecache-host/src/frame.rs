@@ -25,6 +25,7 @@ pub struct FrameLayout<'a> {
     /// The depth buffer's format. The host renders depth itself, double
     /// buffered (last frame's depth is part of the cache), in this format.
     pub depth_format: wgpu::TextureFormat,
+    /// The original pipeline's primitive state (topology, culling, winding).
     pub primitive: wgpu::PrimitiveState,
     /// Samples per pixel; the cache holds one value per pixel: 1 only.
     pub sample_count: u32,
@@ -58,6 +59,7 @@ impl<'a> FrameLayout<'a> {
 /// Where the original pass draws in its targets.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Viewport {
+    /// The whole target, as a cache needs.
     WholeTarget,
     /// A rectangle of the target, in pixels: x, y, width, height.
     Rect([f32; 4]),
@@ -67,6 +69,7 @@ pub enum Viewport {
 /// how the first pass that writes each starts.
 #[derive(Clone, Debug)]
 pub struct Targets<'a> {
+    /// The frame's colour views, by `@location`.
     pub color: &'a [Option<&'a wgpu::TextureView>],
     /// The clear colour of the original pass; `None` keeps what the
     /// targets hold (the original pass loads).

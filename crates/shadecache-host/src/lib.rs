@@ -86,6 +86,8 @@
 //! # }
 //! ```
 
+#![warn(missing_docs)]
+
 mod cached;
 mod error;
 mod formats;

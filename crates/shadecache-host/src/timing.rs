@@ -7,12 +7,16 @@ use serde::Serialize;
 /// Times render passes. The host begins a query before each pass it
 /// records, gives the pass the query's timestamp writes, and ends it after.
 pub trait PassTimer {
+    /// What a begun query keeps until it ends.
     type Query;
+    /// Begins timing pass `pass`, before it is recorded.
     fn begin(&mut self, encoder: &mut wgpu::CommandEncoder, pass: &str) -> Self::Query;
+    /// The timestamp writes the pass takes, if any.
     fn timestamp_writes<'a>(
         &'a self,
         query: &'a Self::Query,
     ) -> Option<wgpu::RenderPassTimestampWrites<'a>>;
+    /// Ends timing the pass, after it is recorded.
     fn end(&mut self, encoder: &mut wgpu::CommandEncoder, query: Self::Query);
 }
 
@@ -32,7 +36,9 @@ impl PassTimer for NoTimer {
 /// One pass's GPU time.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PassTime {
+    /// The pass's name in the plan.
     pub pass: String,
+    /// Its GPU time.
     pub milliseconds: f64,
 }
 

@@ -10,12 +10,15 @@ use std::sync::{Arc, Mutex};
 /// `BufferUsages::COPY_SRC`.
 #[derive(Clone, Debug, Default)]
 pub struct TwinSources<'a> {
+    /// The uniform and storage buffers, by `[group, binding]`.
     pub buffers: &'a [([u32; 2], &'a wgpu::Buffer)],
+    /// The vertex buffers, by slot.
     pub vertex_buffers: &'a [(u32, &'a wgpu::Buffer)],
     /// Only for a shader that uses all four bind groups, whose last the
     /// cache shares: that group's textures and samplers (its buffers are
     /// in `buffers`), which the host binds with the cache's.
     pub textures: &'a [([u32; 2], &'a wgpu::TextureView)],
+    /// That group's samplers, by `[group, binding]`.
     pub samplers: &'a [([u32; 2], &'a wgpu::Sampler)],
 }
 
