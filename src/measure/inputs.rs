@@ -113,6 +113,7 @@ impl<'a> SceneInputs<'a> {
         // constant. An input it cannot feed is an error at the input.
         let mut defaulted = scene.defaulted.clone();
         defaulted.extend(scene::uniforms::zeroed(uniforms));
+        let skinned = scene.objects.iter().any(|object| object.skin.is_some());
         for attribute in &reference_plan.vertex_layout {
             let at_input = |message: String| {
                 let text = &shader.file.text;
@@ -126,7 +127,7 @@ impl<'a> SceneInputs<'a> {
                 plan::StepMode::Vertex => {
                     scene::mesh::VertexSource::of(attribute, &scene.vertex_inputs)
                         .map_err(at_input)?
-                        .defaulted(attribute)
+                        .defaulted(attribute, skinned)
                 }
                 plan::StepMode::Instance => scene::instance_inputs::InstanceSource::of(attribute)
                     .map_err(at_input)?
@@ -145,21 +146,6 @@ impl<'a> SceneInputs<'a> {
             .map(|object| Ok(object.mesh.build(dir)?.skinned(object.skin.as_ref())))
             .collect::<Result<_, String>>()
             .map_err(fail)?;
-        let skinned = scene.objects.iter().any(|object| object.skin.is_some());
-        for attribute in &reference_plan.vertex_layout {
-            let source = scene::mesh::VertexSource::of(attribute, &scene.vertex_inputs);
-            let joint_input = matches!(
-                source,
-                Ok(scene::mesh::VertexSource::JointIndices
-                    | scene::mesh::VertexSource::JointWeights)
-            );
-            if joint_input && !skinned {
-                defaulted.push(format!(
-                    "vertex input @location({}) `{}` = joint 0 with weight 1 (no object has a `[objects.skin]`)",
-                    attribute.location, attribute.name
-                ));
-            }
-        }
         let layout = &reference_plan.vertex_layout;
         let meshes: Vec<runtime::Mesh> = scene_meshes
             .iter()

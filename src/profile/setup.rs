@@ -155,21 +155,15 @@ fn deforming_inputs(
         .into_iter()
         .filter_map(|input| {
             let location = crate::proc::location_of(input.binding)?;
-            let name = input.name?.clone();
-            // What feeds it depends on its name and location alone.
-            let attribute = crate::plan::VertexAttribute {
-                location,
-                name: name.clone(),
-                format: crate::plan::VertexFormat::Float32x4,
-                step: crate::plan::StepMode::Vertex,
-                previous_of: None,
-            };
+            let name = input.name?;
             use crate::scene::mesh::VertexSource as S;
-            let moved = matches!(
-                S::of(&attribute, &scene.vertex_inputs),
-                Ok(S::Position | S::Normal | S::Tangent)
-            );
-            (moved && !per_instance.contains(&location)).then_some(name)
+            // A constant the scene gives it does not move.
+            let moved = !scene.vertex_inputs.contains_key(name)
+                && matches!(
+                    S::of_mesh(name, location),
+                    Some(S::Position | S::Normal | S::Tangent)
+                );
+            (moved && !per_instance.contains(&location)).then(|| name.clone())
         })
         .collect()
 }

@@ -577,25 +577,7 @@ impl VertexSource {
         if has(&["joint", "bone"]) && !attribute.format.is_float() {
             return Ok(VertexSource::JointIndices);
         }
-        let by_name = if has(&["pos"]) {
-            Some(VertexSource::Position)
-        } else if has(&["norm"]) {
-            Some(VertexSource::Normal)
-        } else if has(&["tang"]) {
-            Some(VertexSource::Tangent)
-        } else if has(&["uv", "tex", "coord"]) {
-            Some(VertexSource::Uv)
-        } else if has(&["col"]) {
-            Some(VertexSource::Colour)
-        } else {
-            None
-        };
-        let source = by_name.or(match attribute.location {
-            0 => Some(VertexSource::Position),
-            1 => Some(VertexSource::Normal),
-            2 => Some(VertexSource::Uv),
-            _ => None,
-        });
+        let source = VertexSource::of_mesh(&attribute.name, attribute.location);
         let float = attribute.format.is_float32();
         let integer = !attribute.format.is_float();
         match source {
@@ -610,11 +592,48 @@ impl VertexSource {
         }
     }
 
+    /// Which of the mesh's own attributes an input named `name` at
+    /// `location` takes, whatever its format: by its name (`position`,
+    /// `normal`, `tangent`, `uv`/`tex_coord`, `color`), else by the
+    /// corpus's locations (0 position, 1 normal, 2 uv).
+    pub fn of_mesh(name: &str, location: u32) -> Option<VertexSource> {
+        let name = name.to_ascii_lowercase();
+        let has = |words: &[&str]| words.iter().any(|w| name.contains(w));
+        let by_name = if has(&["pos"]) {
+            Some(VertexSource::Position)
+        } else if has(&["norm"]) {
+            Some(VertexSource::Normal)
+        } else if has(&["tang"]) {
+            Some(VertexSource::Tangent)
+        } else if has(&["uv", "tex", "coord"]) {
+            Some(VertexSource::Uv)
+        } else if has(&["col"]) {
+            Some(VertexSource::Colour)
+        } else {
+            None
+        };
+        by_name.or(match location {
+            0 => Some(VertexSource::Position),
+            1 => Some(VertexSource::Normal),
+            2 => Some(VertexSource::Uv),
+            _ => None,
+        })
+    }
+
     /// What feeds `attribute` when it is not the mesh's own values (a
     /// constant, or integers made from them), for the list of what was
     /// defaulted; `None` for the mesh's values as they are.
-    pub fn defaulted(self, attribute: &crate::plan::VertexAttribute) -> Option<&'static str> {
+    /// `skinned` says whether any object of the scene has a skin: without
+    /// one, joint inputs are the rigid default.
+    pub fn defaulted(
+        self,
+        attribute: &crate::plan::VertexAttribute,
+        skinned: bool,
+    ) -> Option<&'static str> {
         match self {
+            VertexSource::JointIndices | VertexSource::JointWeights if !skinned => {
+                Some("joint 0 with weight 1 (no object has a `[objects.skin]`)")
+            }
             VertexSource::Colour => Some("1.0 in every component"),
             VertexSource::IntegerPosition => {
                 Some("the mesh's positions rounded to integers (w = 1)")

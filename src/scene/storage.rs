@@ -64,6 +64,15 @@ impl StorageBuffer {
         }
     }
 
+    /// Whether the buffer is an object's joint-matrix array (its element
+    /// takes the role `joint_matrices`): one element per joint, whatever
+    /// the instance count.
+    pub fn holds_joints(&self, scene: &Scene) -> bool {
+        self.members
+            .iter()
+            .any(|m| scene.role(&self.name, &m.name) == Some("joint_matrices"))
+    }
+
     fn element(&self, member: &str) -> String {
         format!("`{}.{member}`", self.name)
     }
@@ -216,10 +225,7 @@ pub fn check(buffers: &[StorageBuffer], scene: &Scene) -> Result<(), Error> {
         }
         // Per object: its instance count against the array, and every
         // value against its member's shape and that count.
-        let joints = buffer
-            .members
-            .iter()
-            .any(|m| scene.role(name, &m.name) == Some("joint_matrices"));
+        let joints = buffer.holds_joints(scene);
         for (index, object) in scene.objects.iter().enumerate() {
             let instances = object.instance_count();
             let skin_joints = object.skin.as_ref().map_or(1, |skin| skin.joints);
@@ -334,12 +340,7 @@ pub fn fill(
     object: usize,
 ) -> Result<Vec<u8>, String> {
     let instances = scene.objects.get(object).map_or(1, |o| o.instance_count());
-    let joints = buffer
-        .members
-        .iter()
-        .any(|m| scene.role(&buffer.name, &m.name) == Some("joint_matrices"));
-    // A joint-matrix array holds one element per joint, whatever the
-    // instance count.
+    let joints = buffer.holds_joints(scene);
     let len = match (joints, buffer.elements) {
         (true, Elements::Runtime) => state.joints.get(object).map_or(1, |j| j.len() as u32),
         _ => buffer.len(instances),
@@ -366,9 +367,11 @@ pub fn fill(
             .map_err(|err| format!("storage member {}: {err}", buffer.element(&member.name)))?;
         for element in 0..len {
             let base = (element * buffer.stride) as usize;
+            // A joint's element is no instance: the object's placement.
             let instance = state.instances[object]
                 .get(element as usize)
                 .copied()
+                .filter(|_| !joints)
                 .unwrap_or(glam::Mat4::IDENTITY);
             let world_from_local = if relative {
                 instance
