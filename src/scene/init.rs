@@ -123,7 +123,7 @@ pub fn default_scene(
             .iter()
             .find(|i| i.key == key)
             .map(|i| i.role)
-            .or_else(|| implicit_role(member))
+            .or_else(|| implicit_role(&key))
     };
 
     if let Some(vertex) = vertex {

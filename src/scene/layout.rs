@@ -69,12 +69,17 @@ pub const ROLES: &[(&str, &str)] = &[
 const JOINT_ARRAYS: &[&str] = &["joints", "joint_matrices", "bones", "bone_matrices"];
 
 /// The role a member takes by its own name (the last part of a flattened
-/// one: `lights[0].light_position` takes `light_position`).
-pub fn implicit_role(member: &str) -> Option<&'static str> {
-    let last = member.rsplit('.').next().unwrap_or(member);
-    // A flattened uniform array's element (`joints[3]`) is the array's.
-    let array = last.split('[').next().unwrap_or(last);
-    if JOINT_ARRAYS.contains(&array) {
+/// one: `lights[0].light_position` takes `light_position`). `key` is the
+/// member's `[roles]` key, its binding's name first where it has one: an
+/// element of an array in a binding named for joints is a joint's,
+/// whatever the array is called (Bevy's `joint_matrices.data[3]`).
+pub fn implicit_role(key: &str) -> Option<&'static str> {
+    let named_for_joints =
+        |part: &str| JOINT_ARRAYS.contains(&part.split('[').next().unwrap_or(part));
+    let last = key.rsplit('.').next().unwrap_or(key);
+    // `joints`, `joints[3]` (a storage array's element, a uniform array's),
+    // or any element of an array inside a binding named for joints.
+    if named_for_joints(last) || (key.ends_with(']') && key.split('.').any(named_for_joints)) {
         return Some("joint_matrices");
     }
     SIMULATED.iter().copied().find(|s| *s == last)
@@ -151,7 +156,9 @@ pub fn members(module: &Module, ty: Handle<Type>, name: &str) -> (u32, Vec<Membe
     (size, out)
 }
 
-/// Arrays longer than this stay one member a scene cannot write.
+/// Arrays longer than this stay one member a scene cannot write, but for
+/// arrays of matrices up to [`super::skin::MAX_JOINTS`] (Bevy's joint
+/// matrices are 256).
 const MAX_FLATTENED_ELEMENTS: u32 = 64;
 
 fn flatten(module: &Module, ty: Handle<Type>, name: &str, offset: u32, out: &mut Vec<Member>) {
@@ -167,7 +174,10 @@ fn flatten(module: &Module, ty: Handle<Type>, name: &str, offset: u32, out: &mut
             base,
             size: naga::ArraySize::Constant(n),
             stride,
-        } if n.get() <= MAX_FLATTENED_ELEMENTS => {
+        } if n.get() <= MAX_FLATTENED_ELEMENTS
+            || (matches!(module.types[base].inner, TypeInner::Matrix { .. })
+                && n.get() <= super::skin::MAX_JOINTS) =>
+        {
             for i in 0..n.get() {
                 let element = format!("{name}[{i}]");
                 flatten(module, base, &element, offset + i * stride, out);
@@ -427,6 +437,40 @@ pub fn write_value(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Bevy's skinned-mesh uniform, `var<uniform> joint_matrices:
+    /// SkinnedMesh` with `data: array<mat4x4<f32>, 256u>`: every element is
+    /// a member the simulation fills, and each takes `joint_matrices` by the
+    /// binding's name; a storage array named `joints` by its own; other
+    /// matrices keep theirs.
+    #[test]
+    fn bevys_joint_matrices_take_the_joint_role() {
+        let module = naga::front::wgsl::parse_str(
+            "struct SkinnedMesh { data: array<mat4x4<f32>, 256u> }
+             @group(2) @binding(1) var<uniform> joint_matrices: SkinnedMesh;",
+        )
+        .unwrap();
+        let (_, skin) = members(
+            &module,
+            module.global_variables.iter().next().unwrap().1.ty,
+            "joint_matrices",
+        );
+        assert_eq!(skin.len(), 256);
+        assert_eq!(skin[255].name, "data[255]");
+        assert_eq!(skin[255].offset, 255 * 64);
+        assert_eq!(
+            implicit_role("joint_matrices.data[255]"),
+            Some("joint_matrices")
+        );
+        assert_eq!(element_index("data[255]"), 255);
+        assert_eq!(implicit_role("joints"), Some("joint_matrices"));
+        assert_eq!(implicit_role("bones[3]"), Some("joint_matrices"));
+        assert_eq!(implicit_role("joint_matrices.count"), None);
+        assert_eq!(
+            implicit_role("view.clip_from_world"),
+            Some("clip_from_world")
+        );
+    }
 
     #[test]
     fn nested_structs_and_arrays_are_members_named_as_wgsl_reaches_them() {

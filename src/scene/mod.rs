@@ -621,7 +621,7 @@ impl Scene {
     pub fn role(&self, binding: &str, member: &str) -> Option<&str> {
         match self.roles.get(&roles::key(binding, member)) {
             Some(role) => Some(role.get_ref().as_str()),
-            None => layout::implicit_role(member),
+            None => layout::implicit_role(&roles::key(binding, member)),
         }
     }
 
