@@ -32,6 +32,14 @@ struct CacheParams {
     // The depth buffer's value at the far plane (at infinity when the far
     // plane is infinite): 1 for standard depth, 0 for reversed Z.
     far_depth: f32,
+    // The lowres variant's knobs (seed 001; the plan's `upsampling`): σn of
+    // the normal weight, σz of the depth weight (relative to the depth), and
+    // a, the history's sensitivity to the temporal gradient (eq. 8). Its
+    // factor s is `refresh_quad`, and the sample's phase `refresh_phase`
+    // (the host keeps it as frame mod s²).
+    upsample_sigma_normal: f32,
+    upsample_sigma_depth: f32,
+    upsample_sensitivity: f32,
 }
 
 @group(1) @binding(0) var<uniform> cache_params: CacheParams;
@@ -47,6 +55,19 @@ struct CacheParams {
 // Last frame's age of each cached value (r16float): how many frames ago
 // it was computed, 0 where it was computed that frame (see `cache_age`).
 @group(1) @binding(5) var cache_previous_age: texture_2d<f32>;
+
+// The lowres variant's samples: this frame's payload at 1/s × 1/s of the
+// pixels, in the cache's format.
+@group(1) @binding(6) var cache_samples: texture_2d<f32>;
+// Their geometry (rgba32float): the octahedral normal (x, y), the view
+// depth (z), and the draw id and relative temporal gradient in one number
+// (w = 4 id + gradient + 1, see `cache_sample_texel`).
+@group(1) @binding(7) var cache_sample_geometry: texture_2d<f32>;
+// Last frame's upsampling history (rgba32float, see `cache_upsample`).
+@group(1) @binding(8) var cache_previous_history: texture_2d<f32>;
+// The draw's id (x): its ordinal in the pass, bound per draw at a dynamic
+// offset by the host. A material id, for the upsampling's weights.
+@group(1) @binding(9) var<uniform> cache_draw: vec4<u32>;
 
 struct CacheLookup {
     payload: vec4<f32>,
@@ -292,6 +313,21 @@ fn cache_lookup(previous_clip: vec4<f32>) -> CacheLookup {
     return cache_checked(payload, footprint.status, cache_age(footprint.base, footprint.weights));
 }
 
+// Lowres's history where this fragment was last frame: `cache_lookup`
+// without the age (lowres keeps none), one gather and one sample.
+fn cache_history(previous_clip: vec4<f32>) -> CacheLookup {
+    let footprint = cache_footprint(previous_clip);
+    let at = (footprint.base + vec2<f32>(0.5) + footprint.weights) / cache_params.viewport;
+    let payload = textureSampleLevel(cache_previous_payload, cache_sampler, at, 0.0);
+    return cache_checked(payload, footprint.status, 0.0);
+}
+
+// The same with four loads, for an rgba32float cache.
+fn cache_history_loads(previous_clip: vec4<f32>) -> CacheLookup {
+    let footprint = cache_footprint(previous_clip);
+    return cache_checked(cache_bilinear_loads(footprint.base, footprint.weights), footprint.status, 0.0);
+}
+
 // The same with four loads, for the rgba32float cache, which cannot be
 // filtered.
 fn cache_lookup_loads(previous_clip: vec4<f32>) -> CacheLookup {
@@ -464,4 +500,289 @@ fn cache_classify(status: u32, frag_coord: vec4<f32>, age: f32) -> vec4<f32> {
         return vec4<f32>(0.0, 0.0, 1.0, 1.0);
     }
     return vec4<f32>(0.0, 1.0, 0.0, 1.0);
+}
+
+// ---------------------------------------------------------------------------
+// The lowres variant: spatio-temporal upsampling (seed 001, Herzog et al.
+// 2010). Each frame the payload is shaded at one pixel of every s×s window
+// (pass 1, at 1/s × 1/s of the pixels, the geometry jittered so each
+// sample lands on a full-resolution pixel centre), and pass 2 rebuilds it
+// at every pixel from the four nearest samples and last frame's result.
+
+// The offset (x, y) within every s×s window that this frame samples: the
+// phase p = frame mod s² (`refresh_phase`) read through a Bayer order,
+// M(x, y) = reverse(interleave(x ^ y, y)) on 2·log2(s) bits, so that
+// consecutive frames sample far apart and s² frames sample every offset
+// once (for s = 4 the matrix [[0,8,2,10],[12,4,14,6],[3,11,1,9],[15,7,13,5]]).
+// Here M is inverted: p's bits reversed, de-interleaved into a = x ^ y and
+// b = y. s must be a power of two (2 or 4).
+fn cache_sample_offset() -> vec2<u32> {
+    let s = max(cache_params.refresh_quad, 1u);
+    let bits = countTrailingZeros(s);
+    let reversed = select(reverseBits(cache_params.refresh_phase) >> (32u - (2u * bits)), 0u, bits == 0u);
+    var a = 0u;
+    var b = 0u;
+    for (var i = 0u; i < bits; i = i + 1u) {
+        a = a | (((reversed >> (2u * i)) & 1u) << i);
+        b = b | (((reversed >> ((2u * i) + 1u)) & 1u) << i);
+    }
+    return vec2<u32>(a ^ b, b);
+}
+
+// The samples' target size: ceil(W/s) × ceil(H/s).
+fn cache_sample_size() -> vec2<f32> {
+    return ceil(cache_params.viewport / f32(max(cache_params.refresh_quad, 1u)));
+}
+
+// The clip position of pass 1's vertex stage: the frame's projection moved
+// (and, where s does not divide the size, scaled) so that the centre of
+// low-resolution pixel a sees the point at full-resolution pixel centre
+// s·a + offset + 0.5. In normalised coordinates u_low = (u − c) / m with
+// m = s·w / W and c = (offset + 0.5 − s/2) / W, on x and on y (which runs
+// down the framebuffer, up in NDC); with s dividing the size this is the
+// translation x += (s − 2·offset − 1) / W · w_clip of the paper's jittered
+// projection.
+fn cache_jitter(position: vec4<f32>) -> vec4<f32> {
+    let s = f32(max(cache_params.refresh_quad, 1u));
+    let offset = vec2<f32>(cache_sample_offset());
+    let m = (s * cache_sample_size()) / cache_params.viewport;
+    let c = ((offset + vec2<f32>(0.5)) - vec2<f32>(0.5 * s)) / cache_params.viewport;
+    let w = position.w;
+    let x = (((position.x + w) - (2.0 * c.x * w)) / m.x) - w;
+    let y = w - (((w - position.y) - (2.0 * c.y * w)) / m.y);
+    return vec4<f32>(x, y, position.z, w);
+}
+
+// A unit normal folded onto the octahedron, two numbers.
+fn cache_octahedral(n: vec3<f32>) -> vec2<f32> {
+    let p = n.xy / max(abs(n.x) + abs(n.y) + abs(n.z), 1e-20);
+    let folded = (vec2<f32>(1.0) - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
+    return select(folded, p, n.z >= 0.0);
+}
+
+fn cache_from_octahedral(e: vec2<f32>) -> vec3<f32> {
+    let z = 1.0 - abs(e.x) - abs(e.y);
+    let t = max(-z, 0.0);
+    let xy = e + select(vec2<f32>(t), vec2<f32>(-t), e >= vec2<f32>(0.0));
+    return normalize(vec3<f32>(xy, z));
+}
+
+// The fragment's unit normal from a normal the shader interpolates;
+// (0, 0, 1) where it is zero or not finite.
+fn cache_unit_normal(n: vec3<f32>) -> vec3<f32> {
+    let l = length(n);
+    let ok = (l > 1e-20) & cache_finite(vec4<f32>(n, 0.0));
+    return select(vec3<f32>(0.0, 0.0, 1.0), n / max(l, 1e-20), ok);
+}
+
+// The geometric normal where the shader has none: the cross product of
+// the screen derivatives of a point (ndc.x·z, ndc.y·z, z), z the view depth.
+// Only compared with other normals made the same way, so its space does
+// not matter; `low` says whether the pass renders the samples. Takes
+// derivatives: call it at the top of the entry point.
+fn cache_geometric_normal(frag_coord: vec4<f32>, low: bool) -> vec3<f32> {
+    let size = select(cache_params.viewport, cache_sample_size(), low);
+    let z = 1.0 / frag_coord.w;
+    let ndc = ((frag_coord.xy / size) * 2.0) - vec2<f32>(1.0);
+    let p = vec3<f32>(ndc * z, z);
+    return cache_unit_normal(cross(dpdx(p), dpdy(p)));
+}
+
+// The scalar the temporal gradient is taken of: the luminance of a colour
+// (three or four components), the mean of two, the value of one.
+fn cache_gradient_scalar(v: vec4<f32>, components: u32) -> f32 {
+    if (components >= 3u) {
+        return dot(v.xyz, vec3<f32>(0.2126, 0.7152, 0.0722));
+    }
+    return select(v.x, 0.5 * (v.x + v.y), components == 2u);
+}
+
+// The relative temporal gradient (§3.5.1): (now − before) / max(|now|,
+// |before|), clamped to [−1, 1], guarded where both are 0; 1, its largest,
+// where there is no before (disoccluded, off-screen, not finite).
+fn cache_relative_gradient(now: vec4<f32>, before: vec4<f32>, hit: bool, components: u32) -> f32 {
+    let a = cache_gradient_scalar(now, components);
+    let b = cache_gradient_scalar(before, components);
+    let g = clamp((a - b) / max(max(abs(a), abs(b)), 1e-6), -1.0, 1.0);
+    return select(1.0, g, hit & cache_finite(vec4<f32>(a, b, 0.0, 0.0)));
+}
+
+// Pass 1's geometry texel of a sample: its normal, view depth, the draw's
+// id and its temporal gradient against the history where the sample's
+// point was last frame (`before`, a lookup of the previous payload), packed
+// as w = 4·id + gradient + 1 (the gradient in [−1, 1], exact to 2^-14 for
+// ids below 2^9).
+fn cache_sample_texel(payload: vec4<f32>, normal: vec3<f32>, frag_coord: vec4<f32>, before: vec4<f32>, hit: bool, components: u32) -> vec4<f32> {
+    let gradient = cache_relative_gradient(payload, before, hit, components);
+    let id = f32(cache_draw.x & 511u);
+    return vec4<f32>(cache_octahedral(normal), 1.0 / frag_coord.w, ((4.0 * id) + gradient) + 1.0);
+}
+
+// The tri-weight kernel of eq. 3, g(x, σ, γ) = max(ε, 1 − x/σ)^γ, with
+// ε = 0.01: every product of three stays above f32's smallest normal.
+fn cache_kernel(x: f32, sigma: f32, gamma: f32) -> f32 {
+    return pow(max(0.01, 1.0 - (x / sigma)), gamma);
+}
+
+// The weight of another draw's sample (a material edge): tiny, not zero, so
+// that a pixel with only foreign samples still gets a plausible value.
+const CACHE_FOREIGN_WEIGHT: f32 = 1e-6;
+
+// The largest accumulated history weight hw: a static pixel's hw grows by
+// about one a frame (§A.6.4 of our notes); clamped so that it stays exact
+// in f32 and a change after a long rest is taken within frames.
+const CACHE_HISTORY_WEIGHT_LIMIT: f32 = 8.0;
+
+// The history's exactness mark, added to hw: the pixel's history is its
+// own shaded sample, kept since through hits that landed on texel centres.
+const CACHE_EXACT: f32 = 1024.0;
+
+// The gradient below which a pixel counts as unchanged: its exact history
+// is kept as it is.
+const CACHE_STILL: f32 = 0.002;
+
+struct CacheUpsampled {
+    // The payload at this pixel.
+    payload: vec4<f32>,
+    // What the history target keeps of it: hw (+ CACHE_EXACT when exact),
+    // and the three latest gradients, newest first.
+    history: vec4<f32>,
+}
+
+// The four nearest samples of a pixel (the lattice points around it,
+// clamped to the image): their payloads, their geometric weight (eq. 2's
+// normal and depth terms, and the draw's: a sample of another draw weighs
+// CACHE_FOREIGN_WEIGHT, an extension of ours for material edges), their
+// distance to the pixel in pixels, and their temporal gradients. Read once
+// per pixel; the image-space kernels are applied by `cache_blend`.
+struct CacheNeighbours {
+    payload: array<vec4<f32>, 4>,
+    geometry: vec4<f32>,
+    distance: vec4<f32>,
+    gradient: vec4<f32>,
+    // The index of the sample at the pixel itself, 4 where none is (the
+    // pixel is not on this frame's lattice), and of the nearest.
+    own: u32,
+    nearest: u32,
+}
+
+fn cache_neighbours(frag_coord: vec4<f32>, normal: vec3<f32>) -> CacheNeighbours {
+    let s = f32(max(cache_params.refresh_quad, 1u));
+    let offset = vec2<f32>(cache_sample_offset());
+    let last = vec2<i32>(cache_sample_size()) - vec2<i32>(1);
+    let pixel = floor(frag_coord.xy);
+    let z = 1.0 / frag_coord.w;
+    let id = cache_draw.x & 511u;
+    let base = vec2<i32>(floor((pixel - offset) / s));
+    let sigma_n = cache_params.upsample_sigma_normal * cache_params.upsample_sigma_normal;
+    let sigma_z = cache_params.upsample_sigma_depth * cache_params.upsample_sigma_depth;
+    var out: CacheNeighbours;
+    out.own = 4u;
+    out.nearest = 0u;
+    for (var i = 0; i < 4; i = i + 1) {
+        let a = clamp(base + vec2<i32>(i & 1, i >> 1u), vec2<i32>(0), last);
+        let l = textureLoad(cache_samples, a, 0);
+        let g = textureLoad(cache_sample_geometry, a, 0);
+        let nj = cache_from_octahedral(g.xy);
+        let idj = u32(max(floor(g.w * 0.25), 0.0));
+        let bend = max(0.0, 1.0 - dot(normal, nj));
+        let dz = (z - g.z) / max(z, 1e-20);
+        let n_w = max(0.01, 1.0 - ((bend * bend) / sigma_n));
+        let d_w = max(0.01, 1.0 - ((dz * dz) / sigma_z));
+        let finite = cache_finite(l);
+        out.payload[i] = select(vec4<f32>(0.0), l, finite);
+        out.geometry[i] = select(0.0, (n_w * n_w * n_w) * (d_w * d_w * d_w) * select(CACHE_FOREIGN_WEIGHT, 1.0, idj == id), finite);
+        out.distance[i] = length(((vec2<f32>(a) * s) + offset) - pixel);
+        out.gradient[i] = (g.w - (4.0 * f32(idj))) - 1.0;
+        out.own = select(out.own, u32(i), out.distance[i] < 0.5);
+        out.nearest = select(out.nearest, u32(i), out.distance[i] < out.distance[out.nearest]);
+    }
+    return out;
+}
+
+// The samples blended with weights `w`: the payload and the weight sum.
+struct CacheBlend {
+    payload: vec4<f32>,
+    weight: f32,
+}
+
+fn cache_blend(n: CacheNeighbours, w: vec4<f32>) -> CacheBlend {
+    let sum = (w.x * n.payload[0]) + (w.y * n.payload[1]) + (w.z * n.payload[2]) + (w.w * n.payload[3]);
+    let total = (w.x + w.y) + (w.z + w.w);
+    return CacheBlend(sum / max(total, 1e-30), total);
+}
+
+// Eq. 3's image-space kernel at each sample's distance, max(ε, 1 − d/r)^γ
+// with r the low-resolution pixel's diagonal (s·√2) and ε = 0.01.
+fn cache_image_kernel(n: CacheNeighbours, gamma: f32) -> vec4<f32> {
+    let r = f32(max(cache_params.refresh_quad, 1u)) * 1.41421356;
+    return pow(max(vec4<f32>(0.01), vec4<f32>(1.0) - (n.distance / r)), vec4<f32>(gamma));
+}
+
+// The payload at a full-resolution pixel (pass 2), and the history to keep.
+// `mode`: 0 nearest sample, 1 bilinear, 2 spatial (eq. 1 with normal, depth
+// and draw weights, a linear hat in image space), 3 temporal (eq. 4; the
+// spatial result where the history misses), 4 spatio-temporal (eqs. 6–8).
+// `before` and `hit` are the lookup of last frame's result where this
+// point was (the cache's depth-tested reprojection), `previous_clip` its
+// previous clip position, for the history texel.
+fn cache_upsample(mode: u32, components: u32, frag_coord: vec4<f32>, normal: vec3<f32>, before: vec4<f32>, hit: bool, previous_clip: vec4<f32>) -> CacheUpsampled {
+    let n = cache_neighbours(frag_coord, normal);
+    let none = vec4<f32>(0.0, 1.0, 1.0, 1.0);
+    if (mode == 0u) {
+        return CacheUpsampled(n.payload[n.nearest], none);
+    }
+    // The linear hat of bilinear and of the spatial upsampling: 1 − d/r.
+    let hat = cache_image_kernel(n, 1.0);
+    if (mode == 1u) {
+        // Bilinear over the lattice: the product of the hats along x and
+        // y is the tent's footprint; the radial hat stands in for it.
+        return CacheUpsampled(cache_blend(n, hat).payload, none);
+    }
+    let spatial = cache_blend(n, hat * n.geometry);
+    if (mode == 2u) {
+        return CacheUpsampled(spatial.payload, none);
+    }
+    let own = n.own < 4u;
+    let own_payload = n.payload[min(n.own, 3u)];
+    if (mode == 3u) {
+        let reused = select(spatial.payload, before, hit);
+        return CacheUpsampled(select(reused, own_payload, own), none);
+    }
+    // Last frame's history where this point was: its weight and gradients.
+    let point = cache_point(previous_clip);
+    let texel = round(point.texel);
+    let history = textureLoad(cache_previous_history, vec2<i32>(clamp(texel, vec2<f32>(0.0), cache_params.viewport - vec2<f32>(1.0))), 0);
+    let previous_exact = history.x >= CACHE_EXACT;
+    let previous_weight = history.x - select(0.0, CACHE_EXACT, previous_exact);
+    // Eq. 8: the gradient, filtered over the samples' footprint in space
+    // (the four nearest samples, 2s pixels across, weighted as the spatial
+    // upsampling) and over four frames in time (0.4, 0.3, 0.2, 0.1); 1
+    // where the history misses.
+    let spatial_weights = hat * n.geometry;
+    let now_gradient = dot(spatial_weights, n.gradient) / max(spatial.weight, 1e-30);
+    let now = select(1.0, now_gradient, hit);
+    let older = select(vec3<f32>(1.0), history.yzw, hit);
+    let filtered = abs((0.4 * now) + dot(vec3<f32>(0.3, 0.2, 0.1), older));
+    let confidence = 1.0 - clamp(filtered, 0.0, 1.0);
+    let wf = cache_params.upsample_sensitivity * confidence * confidence;
+    // Eq. 6 with the image kernel's exponent adapted (γ·wf, at most 4),
+    // then eq. 7.
+    let current = cache_blend(n, cache_image_kernel(n, 4.0 * wf) * n.geometry);
+    let weight = max(current.weight, 1e-30);
+    let kept = wf * select(0.0, previous_weight, hit);
+    var payload = ((current.payload * weight) + (before * kept)) / (weight + kept);
+    var accumulated = min(weight + kept, CACHE_HISTORY_WEIGHT_LIMIT);
+    // Ours: a static pixel converges to its own shading. The paper's blend
+    // averages the interpolated values of the other s² − 1 phases into it
+    // forever; here a pixel shaded this frame while unchanged (or with no
+    // history) takes its sample, and one whose history is such a sample,
+    // reprojected onto a texel centre and unchanged since, keeps it.
+    let still = filtered < CACHE_STILL;
+    let centred = all(abs(point.texel - texel) < vec2<f32>(0.01));
+    let keep = hit & previous_exact & centred & still;
+    let take = own & (still | !hit);
+    payload = select(select(payload, before, keep), own_payload, take);
+    accumulated = accumulated + select(0.0, CACHE_EXACT, take | keep);
+    return CacheUpsampled(payload, vec4<f32>(accumulated, now, older.x, older.y));
 }

@@ -39,7 +39,7 @@ impl Axes {
         Axes {
             refresh_periods: vec![4, 8, 16, 32, 64],
             refresh_quads: vec![1, 2, 4, 8],
-            reconstructions: Reconstruction::ALL.to_vec(),
+            reconstructions: Reconstruction::CACHE.to_vec(),
             cache_formats: vec![CacheFormat::Rgba16float, CacheFormat::Rgba32float],
             depth_epsilons: vec![epsilon / 4.0, epsilon, epsilon * 4.0],
         }

@@ -73,6 +73,11 @@ pub struct Options {
     pub refresh_quads: Vec<u32>,
     /// The reconstructions to measure.
     pub reconstructions: Vec<Reconstruction>,
+    /// The reconstructions lowres is measured with (its Δn and k are its
+    /// factor: s² and s); spatio-temporal by default, all five in a sweep.
+    pub lowres_reconstructions: Vec<Reconstruction>,
+    /// Lowres's factor and knobs.
+    pub upsampling: crate::rewrite::Upsampling,
     /// The cache formats to measure.
     pub cache_formats: Vec<CacheFormat>,
     /// The depth tolerances ε to measure.
@@ -116,6 +121,13 @@ impl Options {
             reconstructions: axes.reconstructions,
             cache_formats: axes.cache_formats,
             depth_epsilons: axes.depth_epsilons,
+            lowres_reconstructions: vec![
+                Reconstruction::Nearest,
+                Reconstruction::Bilinear,
+                Reconstruction::Spatial,
+                Reconstruction::Temporal,
+                Reconstruction::SpatioTemporal,
+            ],
             design: Design::Planes,
             ..self
         }
@@ -140,6 +152,8 @@ impl Default for Options {
             refresh_periods: vec![32],
             refresh_quads: vec![4],
             reconstructions: vec![Reconstruction::Bilinear],
+            lowres_reconstructions: vec![Reconstruction::SpatioTemporal],
+            upsampling: crate::rewrite::DEFAULT_UPSAMPLING,
             cache_formats: vec![CacheFormat::Rgba16float],
             depth_epsilons: vec![RewriteOptions::default().depth_epsilon],
             design: Design::Full,
@@ -353,7 +367,7 @@ pub fn profile(
     let mut configs = configurations(
         (shader, &prepared.analysis),
         &nodes,
-        &options.variants,
+        (&options.variants, &options.lowres_reconstructions),
         &prepared.base,
         &|plan, sources| bench.runner(plan, sources, true),
         (size, options.error_threshold),
@@ -681,7 +695,7 @@ type NewRunner<'a> = dyn Fn(&Plan, &HashMap<String, String>) -> Result<Runner, S
 fn configurations(
     (shader, analysis): (&Shader, &analysis::Analysis),
     nodes: &[(&Candidate, &[Setting])],
-    variants: &[Variant],
+    (variants, lowres_reconstructions): (&[Variant], &[Reconstruction]),
     base: &RewriteOptions,
     new_runner: &NewRunner,
     (size, error_threshold): ([u32; 2], f64),
@@ -692,6 +706,10 @@ fn configurations(
     let mut seen = Vec::new();
     for (node, (candidate, settings)) in nodes.iter().enumerate() {
         for &variant in variants {
+            let settings = match variant {
+                Variant::Lowres => lowres_settings(settings, base, lowres_reconstructions),
+                _ => settings.to_vec(),
+            };
             for setting in settings.iter() {
                 let what = format!(
                     "{} {variant} Δn={} k={} {} {} ε={}",
@@ -756,6 +774,35 @@ fn configurations(
     }
 
     Ok(configs)
+}
+
+/// Lowres's settings: each of its reconstructions at each cache format
+/// the grid measures, its Δn and k those its factor sets (s², s); the
+/// refresh knobs of the cache variants do not apply to it.
+fn lowres_settings(
+    settings: &[Setting],
+    base: &RewriteOptions,
+    reconstructions: &[Reconstruction],
+) -> Vec<Setting> {
+    let s = base.upsampling.factor;
+    let mut formats: Vec<CacheFormat> = settings.iter().map(|s| s.cache_format).collect();
+    formats.dedup();
+    let mut out = Vec::new();
+    for &reconstruction in reconstructions {
+        for &cache_format in &formats {
+            let setting = Setting {
+                refresh_period: s * s,
+                refresh_quad: s,
+                reconstruction,
+                cache_format,
+                depth_epsilon: base.depth_epsilon,
+            };
+            if !out.contains(&setting) {
+                out.push(setting);
+            }
+        }
+    }
+    out
 }
 
 /// What every configuration's row is measured against: the reference's

@@ -111,6 +111,7 @@ pub(super) fn prepare(
             scene,
             (analysis.entry_index, options.vertex_entry.as_deref()),
         ),
+        upsampling: options.upsampling.clone(),
         ..RewriteOptions::default()
     };
     Ok(Prepared {

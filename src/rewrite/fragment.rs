@@ -53,6 +53,8 @@ pub struct Pieces {
     /// cache's fourth channel (`cache_pack`), before `encode`.
     pub pack: Option<Handle<Function>>,
     pub vec4: Handle<naga::Type>,
+    /// The lowres variant's helpers.
+    pub lowres: super::lowres::LowresHelpers,
 }
 
 /// What a pass's fragment stage writes.
@@ -69,6 +71,11 @@ pub enum Writes {
     Classes,
     /// The G-buffer's textures, at locations from 0.
     GBuffer,
+    /// Lowres's samples at location 0 and their geometry at 1.
+    Samples,
+    /// The original outputs plus the upsampled payload and its history at
+    /// the next two free locations.
+    ColorAndHistory,
 }
 
 /// The fragment entry point of one pass.
@@ -92,6 +99,12 @@ pub enum Stage {
     /// A diagnostic pass, drawn after a frame: the cache's decision at each
     /// visible pixel as a colour (reuse, refresh, off-screen, disoccluded).
     Classify,
+    /// Lowres, pass 1: the payload at 1/s × 1/s of the pixels, jittered,
+    /// and the samples' geometry ([`super::lowres`]).
+    Samples,
+    /// Lowres, pass 2: the payload rebuilt at every pixel from the samples
+    /// and the history, and the shading from it.
+    Upsample,
 }
 
 impl Stage {
@@ -102,6 +115,8 @@ impl Stage {
             Stage::ShadeFromCache => Writes::Color,
             Stage::Classify => Writes::Classes,
             Stage::GBuffer => Writes::GBuffer,
+            Stage::Samples => Writes::Samples,
+            Stage::Upsample => Writes::ColorAndHistory,
         }
     }
 
@@ -121,6 +136,8 @@ impl Stage {
                 | Stage::ReprojectOrDiscard
                 | Stage::Classify
                 | Stage::GBuffer
+                | Stage::Samples
+                | Stage::Upsample
         )
     }
 
@@ -274,10 +291,10 @@ pub(super) fn entry_point(
     stage: Stage,
     inputs: Inputs,
 ) -> Result<Function, Refusal> {
-    if stage == Stage::GBuffer {
-        return Err(Refusal::internal(
-            "the G-buffer pass is built by `GBuffer::write_entry`",
-        ));
+    if matches!(stage, Stage::GBuffer | Stage::Samples | Stage::Upsample) {
+        return Err(Refusal::internal(format!(
+            "the {stage:?} pass is built by its own module"
+        )));
     }
     // Where the inputs come from: the arguments made here, or the G-buffer.
     enum Reader<'g> {
@@ -304,7 +321,11 @@ pub(super) fn entry_point(
                 Writes::Classes => Some(location(0)),
                 Writes::Color => pieces.result.binding.clone(),
                 // A struct: its members carry the bindings.
-                Writes::Cache | Writes::ColorAndCache | Writes::GBuffer => None,
+                Writes::Cache
+                | Writes::ColorAndCache
+                | Writes::GBuffer
+                | Writes::Samples
+                | Writes::ColorAndHistory => None,
             },
         }),
         ..Function::default()
@@ -447,7 +468,7 @@ fn payload_of(
             let cached = b.call(pieces.current, vec![at.frag_coord]);
             plain(from_vec4(b, cached, pieces.components))
         }
-        Stage::Classify | Stage::GBuffer => {
+        Stage::Classify | Stage::GBuffer | Stage::Samples | Stage::Upsample => {
             return Err(Refusal::internal(format!("{stage:?} has no payload")))
         }
     })
@@ -522,7 +543,7 @@ fn output_value(
                 components: vec![cache, age],
             })
         }
-        Writes::Classes | Writes::GBuffer => {
+        Writes::Classes | Writes::GBuffer | Writes::Samples | Writes::ColorAndHistory => {
             return Err(Refusal::internal(format!("{stage:?} writes no payload")))
         }
         Writes::Color => {
@@ -563,7 +584,7 @@ fn f32_type(module: &mut Module) -> Handle<naga::Type> {
     )
 }
 
-fn is_struct(module: &Module, ty: Handle<naga::Type>) -> bool {
+pub(super) fn is_struct(module: &Module, ty: Handle<naga::Type>) -> bool {
     matches!(module.types[ty].inner, TypeInner::Struct { .. })
 }
 
@@ -575,7 +596,9 @@ fn output_type(
     writes: Writes,
 ) -> (Handle<naga::Type>, Option<u32>) {
     match writes {
-        Writes::Classes | Writes::GBuffer => (pieces.vec4, None),
+        Writes::Classes | Writes::GBuffer | Writes::Samples | Writes::ColorAndHistory => {
+            (pieces.vec4, None)
+        }
         Writes::Cache => {
             let f32_ty = f32_type(module);
             let ty = module.types.insert(
@@ -605,47 +628,59 @@ fn output_type(
         }
         Writes::Color => (pieces.result.ty, None),
         Writes::ColorAndCache => {
-            let cache_at = cache_location(module, &pieces.result);
-            let (mut members, span) = match module.types[pieces.result.ty].inner {
-                TypeInner::Struct { ref members, span } => (members.clone(), span),
-                _ => (
-                    vec![naga::StructMember {
-                        name: Some("color".into()),
-                        ty: pieces.result.ty,
-                        binding: pieces.result.binding.clone(),
-                        offset: 0,
-                    }],
-                    16,
-                ),
-            };
-            let count = members.len() as u32;
-            let offset = span.div_ceil(16) * 16;
-            members.push(naga::StructMember {
-                name: Some("cache".into()),
-                ty: pieces.vec4,
-                binding: Some(location(cache_at)),
-                offset,
-            });
             let f32_ty = f32_type(module);
-            members.push(naga::StructMember {
-                name: Some("age".into()),
-                ty: f32_ty,
-                binding: Some(location(cache_at + 1)),
-                offset: offset + 16,
-            });
-            let ty = module.types.insert(
-                naga::Type {
-                    name: Some("CacheFragmentOutput".into()),
-                    inner: TypeInner::Struct {
-                        members,
-                        span: offset + 32,
-                    },
-                },
-                naga::Span::UNDEFINED,
-            );
-            (ty, Some(count))
+            color_and_cache_output(module, pieces, f32_ty)
         }
     }
+}
+
+/// The original outputs, then the cache (`vec4<f32>`) at the first free
+/// location and `second` at the next (the age, or lowres's history); with
+/// the number of original members before the cache.
+pub(super) fn color_and_cache_output(
+    module: &mut Module,
+    pieces: &Pieces,
+    second: Handle<naga::Type>,
+) -> (Handle<naga::Type>, Option<u32>) {
+    let cache_at = cache_location(module, &pieces.result);
+    let (mut members, span) = match module.types[pieces.result.ty].inner {
+        TypeInner::Struct { ref members, span } => (members.clone(), span),
+        _ => (
+            vec![naga::StructMember {
+                name: Some("color".into()),
+                ty: pieces.result.ty,
+                binding: pieces.result.binding.clone(),
+                offset: 0,
+            }],
+            16,
+        ),
+    };
+    let count = members.len() as u32;
+    let offset = span.div_ceil(16) * 16;
+    members.push(naga::StructMember {
+        name: Some("cache".into()),
+        ty: pieces.vec4,
+        binding: Some(location(cache_at)),
+        offset,
+    });
+    let second_is_vec4 = second == pieces.vec4;
+    members.push(naga::StructMember {
+        name: Some(if second_is_vec4 { "history" } else { "age" }.into()),
+        ty: second,
+        binding: Some(location(cache_at + 1)),
+        offset: offset + 16,
+    });
+    let ty = module.types.insert(
+        naga::Type {
+            name: Some("CacheFragmentOutput".into()),
+            inner: TypeInner::Struct {
+                members,
+                span: offset + 32,
+            },
+        },
+        naga::Span::UNDEFINED,
+    );
+    (ty, Some(count))
 }
 
 /// Looks the fragment up in last frame's cache and decides whether to
@@ -676,7 +711,11 @@ fn reuse_condition(
 }
 
 /// The payload's own type from the cache's `vec4<f32>`.
-fn from_vec4(b: &mut Builder, value: Handle<Expression>, components: u32) -> Handle<Expression> {
+pub(super) fn from_vec4(
+    b: &mut Builder,
+    value: Handle<Expression>,
+    components: u32,
+) -> Handle<Expression> {
     use naga::SwizzleComponent as S;
     let pattern = [S::X, S::Y, S::Z, S::W];
     match components {
@@ -711,7 +750,7 @@ fn cache_texel(
 }
 
 /// The payload padded with zeros to the cache's `vec4<f32>`.
-fn to_vec4(
+pub(super) fn to_vec4(
     b: &mut Builder,
     value: Handle<Expression>,
     components: u32,

@@ -5,6 +5,7 @@
 use naga::{Function, Handle, Module};
 
 use super::fragment::Pieces;
+use super::lowres::LowresHelpers;
 use super::split::Split;
 use super::{cache_helpers, CacheSlot, Options, Refusal};
 use crate::analysis::Candidate;
@@ -24,6 +25,7 @@ pub(super) struct CacheHelpers {
     /// "No value": a payload's value where the node is not computed.
     pub absent: Handle<Function>,
     vec4: Handle<naga::Type>,
+    lowres: LowresHelpers,
 }
 
 impl CacheHelpers {
@@ -46,9 +48,23 @@ impl CacheHelpers {
         // not: four loads. Nearest reads one texel of each. Packed
         // reconstructions read the depth from the payload texture instead.
         let lookup = match (options.reconstruction, options.cache_format) {
+            // Lowres reads its history bilinearly (with nearest and
+            // bilinear upsampling it reads none).
             (Reconstruction::Nearest, _) => "cache_lookup_nearest",
-            (Reconstruction::Bilinear, CacheFormat::Rgba16float) => "cache_lookup",
-            (Reconstruction::Bilinear, CacheFormat::Rgba32float) => "cache_lookup_loads",
+            (
+                Reconstruction::Bilinear
+                | Reconstruction::Spatial
+                | Reconstruction::Temporal
+                | Reconstruction::SpatioTemporal,
+                CacheFormat::Rgba16float,
+            ) => "cache_lookup",
+            (
+                Reconstruction::Bilinear
+                | Reconstruction::Spatial
+                | Reconstruction::Temporal
+                | Reconstruction::SpatioTemporal,
+                CacheFormat::Rgba32float,
+            ) => "cache_lookup_loads",
             (Reconstruction::NearestPacked, _) => "cache_lookup_nearest_packed",
             (Reconstruction::BilinearPacked, CacheFormat::Rgba16float) => "cache_lookup_packed",
             (Reconstruction::BilinearPacked, CacheFormat::Rgba32float) => {
@@ -80,6 +96,17 @@ impl CacheHelpers {
             absent: helper("cache_absent")?,
             pack,
             vec4,
+            lowres: LowresHelpers {
+                jitter: helper("cache_jitter")?,
+                sample_texel: helper("cache_sample_texel")?,
+                upsample: helper("cache_upsample")?,
+                unit_normal: helper("cache_unit_normal")?,
+                geometric_normal: helper("cache_geometric_normal")?,
+                history: helper(match options.cache_format {
+                    CacheFormat::Rgba16float => "cache_history",
+                    CacheFormat::Rgba32float => "cache_history_loads",
+                })?,
+            },
         })
     }
 
@@ -113,6 +140,7 @@ impl CacheHelpers {
             encode: self.encode,
             pack: self.pack,
             vec4: self.vec4,
+            lowres: self.lowres,
         }
     }
 }

@@ -27,6 +27,7 @@ pub(crate) mod fragment;
 pub(crate) mod gbuffer;
 pub(crate) mod gradients;
 mod helpers;
+pub mod lowres;
 pub(crate) mod path;
 pub mod plan;
 pub mod reprojection;
@@ -48,8 +49,8 @@ use fragment::{Pieces, Stage};
 pub const CACHE_WGSL: &str = include_str!("../../shaders/cache.wgsl");
 
 pub use crate::plan::{
-    CacheFormat, DepthConvention, Reconstruction, Variant, DEFAULT_DEPTH_EPSILON,
-    MAX_REFRESH_PERIOD,
+    CacheFormat, DepthConvention, Reconstruction, Upsampling, Variant, DEFAULT_DEPTH_EPSILON,
+    DEFAULT_UPSAMPLING, MAX_REFRESH_PERIOD,
 };
 
 /// The index of the pass of `variant` that computes the payload alone
@@ -77,6 +78,8 @@ fn stages(variant: Variant) -> &'static [Stage] {
             Stage::Payload,
             Stage::ShadeFromCache,
         ],
+        // The samples at 1/s × 1/s, then the upsampling and shading.
+        Variant::Lowres => &[Stage::Samples, Stage::Upsample],
         Variant::Reference => &[],
     }
 }
@@ -120,6 +123,24 @@ pub struct Options {
     /// skinned on the GPU need none: their joint matrices are a buffer,
     /// which has its twin.
     pub deforming_inputs: Vec<String>,
+    /// The lowres variant's factor and knobs (seed 001); its
+    /// reconstruction is [`Options::reconstruction`], spatio-temporal by
+    /// default ([`Options::for_variant`]).
+    pub upsampling: Upsampling,
+}
+
+impl Options {
+    /// The default options of `variant`: lowres upsamples
+    /// spatio-temporally, the others reconstruct bilinearly.
+    pub fn for_variant(variant: Variant) -> Options {
+        Options {
+            reconstruction: match variant {
+                Variant::Lowres => Reconstruction::SpatioTemporal,
+                _ => Reconstruction::Bilinear,
+            },
+            ..Options::default()
+        }
+    }
 }
 
 impl Default for Options {
@@ -135,6 +156,7 @@ impl Default for Options {
             vertex_entry: None,
             free_payload: false,
             deforming_inputs: Vec::new(),
+            upsampling: DEFAULT_UPSAMPLING,
         }
     }
 }
@@ -416,6 +438,11 @@ fn rewrite_at(
             &options.deforming_inputs,
         )?
     };
+    if variant == Variant::Lowres && vertex.entry_index.is_none() {
+        return Err(Refusal::new(
+            "lowres shades its samples with the projection jittered in the vertex stage, and this module has no vertex stage (it is composed with the host's): give the vertex entry point (`--vertex-entry`) in a module that has it",
+        ));
+    }
     mark_positions_invariant(&mut module);
     let functions = split::split(
         &mut module,
@@ -454,9 +481,9 @@ fn rewrite_at(
             &pieces,
             &vertex,
             entry,
-            stage,
-            name,
+            (stage, name),
             gbuffer.as_ref(),
+            (options.upsampling.factor, options.reconstruction),
         )
     };
     let mut passes = Vec::new();
@@ -497,6 +524,15 @@ fn refuse_settings(variant: Variant, options: &Options) -> Result<(), Refusal> {
         return Err(Refusal::new(
             "the reference is the original shader; there is nothing to rewrite",
         ));
+    }
+    if variant == Variant::Lowres {
+        options.upsampling.check().map_err(Refusal::new)?;
+        lowres::mode(options.reconstruction)?;
+    } else if options.reconstruction.upsamples() {
+        return Err(Refusal::new(format!(
+            "{} reconstruction upsamples lowres's samples; {variant} reads its cache with bilinear, nearest, bilinear-packed or nearest-packed",
+            options.reconstruction
+        )));
     }
     if options.refresh_period > MAX_REFRESH_PERIOD {
         return Err(Refusal::new(format!(
@@ -545,12 +581,25 @@ fn pass_module(
     pieces: &Pieces,
     vertex: &vertex::VertexStage,
     entry: &naga::EntryPoint,
-    stage: Stage,
-    name: String,
+    (stage, name): (Stage, String),
     gbuffer: Option<&gbuffer::GBuffer>,
+    (lowres_factor, reconstruction): (u32, Reconstruction),
 ) -> Result<PassModule, Refusal> {
     let mut pass = module.clone();
     let (fragment, screen_vertex) = match (gbuffer, stage) {
+        (_, Stage::Samples) => (
+            lowres::samples_entry(
+                &mut pass,
+                pieces,
+                &pieces.lowres,
+                (lowres_factor, reconstruction),
+            )?,
+            None,
+        ),
+        (_, Stage::Upsample) => (
+            lowres::upsample_entry(&mut pass, pieces, &pieces.lowres, reconstruction)?,
+            None,
+        ),
         (Some(gbuffer), Stage::GBuffer) => (gbuffer.write_entry(&mut pass, pieces)?, None),
         (Some(gbuffer), _) => (
             fragment::entry_point(&mut pass, pieces, stage, fragment::Inputs::Screen(gbuffer))?,
@@ -574,6 +623,10 @@ fn pass_module(
         gbuffer,
     ) {
         entry.function = plain.clone();
+    }
+    // The samples are shaded on the jittered lattice.
+    if let (Some(entry), Stage::Samples) = (&mut vertex_entry, stage) {
+        lowres::jitter_vertex(&mut pass, entry, pieces.lowres.jitter)?;
     }
     pass.entry_points = vertex_entry
         .into_iter()

@@ -63,6 +63,16 @@ pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
         .map(|(stage, pass)| plan_pass(module, result, options, (*stage, pass), &names, gbuffer))
         .collect();
     first_writers_clear(&mut plan_passes);
+    // Lowres's samples have a depth buffer of their own: the full-size
+    // pass after them starts the frame's.
+    if let Some(full) = plan_passes
+        .iter_mut()
+        .skip_while(|p| p.resolution_divisor == 1)
+        .find(|p| p.resolution_divisor == 1)
+    {
+        full.depth.load = LoadOp::Clear;
+    }
+    let lowres = variant == Variant::Lowres;
 
     let entries: Vec<usize> = std::iter::once(analysis.entry_index)
         .chain(vertex.entry_index)
@@ -121,15 +131,30 @@ pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
             format_note: None,
             reconstruction: options.reconstruction,
             components: candidate.components,
-            swap: "two payload textures, two age textures and two depth buffers alternate: at the end of a frame, this frame's payload texture, age texture and depth buffer become last frame's (bound as cache_previous_payload, cache_previous_age and cache_previous_depth) and last frame's are rendered into next; on the first frame, after a resize or a camera cut, the previous depth is cleared to the far-plane depth (clear.depth) so every pixel misses".into(),
+            swap: if lowres {
+                "two payload textures, two history textures and two depth buffers alternate: at the end of a frame, this frame's payload, history and depth become last frame's (cache_previous_payload, cache_previous_history, cache_previous_depth); the samples, their geometry and their depth buffer (1/s × 1/s) are made again every frame; on the first frame, after a resize or a camera cut, the previous depth is cleared to the far-plane depth so every pixel's history misses".into()
+            } else {
+                "two payload textures, two age textures and two depth buffers alternate: at the end of a frame, this frame's payload texture, age texture and depth buffer become last frame's (bound as cache_previous_payload, cache_previous_age and cache_previous_depth) and last frame's are rendered into next; on the first frame, after a resize or a camera cut, the previous depth is cleared to the far-plane depth (clear.depth) so every pixel misses".into()
+            },
             params,
         },
-        refresh: Refresh {
+        refresh: if lowres {
+            let s = options.upsampling.factor;
+            Refresh {
+                period: s * s,
+                quad: s,
+                depth_epsilon: options.depth_epsilon,
+                offsets: "the samples' offset in each s×s window (s = quad) is refresh_phase = frame mod s² (period) read through a Bayer order (shaders/cache.wgsl, cache_sample_offset): every pixel is shaded once every s² frames".into(),
+            }
+        } else {
+            Refresh {
             period: options.refresh_period,
             quad: options.refresh_quad,
             depth_epsilon: options.depth_epsilon,
             offsets: "16 bits of a PCG hash of the k×k block coordinates, times the period, over 2^16; refresh when (offset + refresh_phase) mod period == 0, with refresh_phase = frame mod period kept by the host, or when the value's age (the age target) reaches min(period, 2048)".into(),
+        }
         },
+        upsampling: lowres.then(|| options.upsampling.clone()),
         clear: Clear {
             color: [0.0, 0.0, 0.0, 1.0],
             cache: [0.0, 0.0, 0.0, 0.0],
@@ -172,6 +197,7 @@ fn plan_pass(
         )
     };
     let cache = |l: u32| target(l, TargetKind::Cache, options.cache_format.texture_format());
+    let history = |l: u32| target(l, TargetKind::History, HISTORY_FORMAT);
     let age = |l: u32| target(l, TargetKind::Age, AGE_FORMAT);
     let color_locations = fragment::output_locations(module, result);
     let cache_location = fragment::cache_location(module, result);
@@ -183,6 +209,20 @@ fn plan_pass(
             let mut targets: Vec<_> = color_locations.iter().map(|&l| color(l)).collect();
             targets.push(cache(cache_location));
             targets.push(age(cache_location + 1));
+            targets
+        }
+        Writes::Samples => vec![
+            target(
+                0,
+                TargetKind::Samples,
+                options.cache_format.texture_format(),
+            ),
+            target(1, TargetKind::SampleGeometry, HISTORY_FORMAT),
+        ],
+        Writes::ColorAndHistory => {
+            let mut targets: Vec<_> = color_locations.iter().map(|&l| color(l)).collect();
+            targets.push(cache(cache_location));
+            targets.push(history(cache_location + 1));
             targets
         }
         Writes::GBuffer => gbuffer
@@ -224,8 +264,15 @@ fn plan_pass(
             DrawKind::Geometry
         },
         stencil: gbuffer.map(|_| deferred_stencil(stage)),
+        resolution_divisor: match stage {
+            Stage::Samples => options.upsampling.factor,
+            _ => 1,
+        },
     }
 }
+
+/// The format of lowres's history and of its samples' geometry.
+const HISTORY_FORMAT: TextureFormat = TextureFormat::Rgba32Float;
 
 /// The stencil bit a deferred lookup sets where it reused the cache.
 const REUSED_BIT: u32 = 0x80;
@@ -381,6 +428,8 @@ fn role(stage: Stage, screen: bool) -> &'static str {
         Stage::Payload => "the pixels pass 1 left empty (depth test): compute the payload into the cache",
         Stage::ShadeFromCache => "every pixel (depth equal): shade from this frame's cache at the pixel",
         Stage::Classify => "diagnostic, after the frame (depth equal): the cache's decision at each visible pixel",
+        Stage::Samples => "at 1/s × 1/s of the pixels, its own depth buffer, the projection jittered onto this frame's lattice: the payload (level of detail biased by −log2 s) into the samples, and their normal, depth, draw id and temporal gradient",
+        Stage::Upsample => "every pixel (depth test): rebuild the payload from the four nearest samples and the reprojected history, shade from it, write colour, the payload and its history",
     }
 }
 
@@ -462,6 +511,14 @@ fn what_to_bind(name: &str) -> &'static str {
         "cache_current_payload" => "this frame's payload texture, after the passes that write it",
         "cache_sampler" => "linear filtering, clamp to edge",
         "cache_previous_age" => "last frame's age texture (r16float)",
+        "cache_samples" => "this frame's samples (lowres: 1/s × 1/s, the cache's format)",
+        "cache_sample_geometry" => {
+            "this frame's samples' geometry (lowres: 1/s × 1/s, rgba32float)"
+        }
+        "cache_previous_history" => "last frame's upsampling history (lowres: rgba32float)",
+        "cache_draw" => {
+            "the draw's ordinal in its pass (vec4<u32>, x), at a dynamic offset per draw"
+        }
         _ => "see shaders/cache.wgsl",
     }
 }
@@ -673,9 +730,11 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
             bindings,
             draw: DrawKind::Geometry,
             stencil: None,
+            resolution_divisor: 1,
         }],
         classify: None,
         vertex_layout: vertex_layout(module, &vertex_entry.function, &[])?,
+        upsampling: None,
         host_vertex: None,
         bindings: Bindings {
             original,

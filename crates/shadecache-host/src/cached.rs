@@ -35,6 +35,9 @@ struct Built {
     cache_layout: Option<wgpu::BindGroupLayout>,
     /// Its place among the passes (the classification last).
     index: usize,
+    /// Whether the pass reads the draw's ordinal (`cache_draw`): the cache
+    /// group is then bound per draw, at the ordinal's offset.
+    per_draw: bool,
 }
 
 /// The targets the host owns, double-buffered where last frame's is read.
@@ -45,6 +48,9 @@ struct CacheTargets {
     classes: wgpu::Texture,
     /// This frame's G-buffer (the deferred variant), by index.
     gbuffer: Vec<wgpu::TextureView>,
+    /// Lowres's samples, their geometry and depth (at 1/s × 1/s), and its
+    /// double-buffered history.
+    lowres: Option<LowresTargets>,
     payload_views: [wgpu::TextureView; 2],
     age_views: [wgpu::TextureView; 2],
     /// Attachment views.
@@ -52,6 +58,14 @@ struct CacheTargets {
     /// Depth-aspect views, to bind.
     depth_sampled: [wgpu::TextureView; 2],
     classes_view: wgpu::TextureView,
+}
+
+/// The lowres variant's own targets.
+struct LowresTargets {
+    samples: wgpu::TextureView,
+    geometry: wgpu::TextureView,
+    depth: wgpu::TextureView,
+    history: [wgpu::TextureView; 2],
 }
 
 /// A shader variant and its reprojection cache on the application's
@@ -75,6 +89,8 @@ pub struct CachedShader {
     /// are stale.
     generation: u64,
     params: wgpu::Buffer,
+    /// The draws' ordinals, one per `DRAW_ID_STRIDE` bytes.
+    draw_ids: wgpu::Buffer,
     sampler: wgpu::Sampler,
     /// This shader's number among the process's, which its twins carry.
     id: u64,
@@ -143,6 +159,7 @@ impl CachedShader {
             cache: cache_format(plan.cache.format),
             age: texture_format(shadecache_plan::AGE_FORMAT),
             classes: wgpu::TextureFormat::Rgba8Unorm,
+            history: wgpu::TextureFormat::Rgba32Float,
         };
         let needs_stencil = plan.passes.iter().any(|p| p.stencil.is_some());
         let depth_format = host_depth_format(device, frame.depth_format, needs_stencil);
@@ -196,11 +213,18 @@ impl CachedShader {
                 gbuffer: &gbuffer_formats,
                 options,
             };
+            let per_draw = cache_group.is_some_and(|group| {
+                plan.bindings
+                    .cache
+                    .iter()
+                    .any(|r| r.name == "cache_draw" && pass.bindings.contains(&[group, r.binding]))
+            });
             Ok(Built {
                 pass: pass.clone(),
                 pipeline: pipeline(device, pass, source, &inputs).await?,
                 cache_layout,
                 index,
+                per_draw,
             })
         };
         let mut passes = Vec::with_capacity(plan.passes.len());
@@ -230,9 +254,17 @@ impl CachedShader {
             min_filter: filter,
             ..wgpu::SamplerDescriptor::default()
         });
+        let draw_ids = draw_ids(device);
         let cached = CachedShader {
             device: device.clone(),
-            targets: CacheTargets::new(device, size, formats, depth_format, &gbuffer_formats),
+            targets: CacheTargets::new(
+                device,
+                size,
+                formats,
+                depth_format,
+                (&gbuffer_formats, lowres_divisor(plan)),
+            ),
+            draw_ids,
             plan: plan.clone(),
             options,
             passes,
@@ -480,6 +512,7 @@ impl CachedShader {
                     error: None,
                     drawn: 0,
                     bound: None,
+                    per_draw: None,
                 };
                 draw(&mut draws);
                 if let Some(err) = draws.error.take() {
@@ -569,6 +602,15 @@ impl CachedShader {
                     Some(view) => (view, Some(wgpu::Color::TRANSPARENT)),
                     None => continue,
                 },
+                TargetKind::Samples | TargetKind::SampleGeometry | TargetKind::History => {
+                    let Some(lowres) = &t.lowres else { continue };
+                    let view = match target.target {
+                        TargetKind::Samples => &lowres.samples,
+                        TargetKind::SampleGeometry => &lowres.geometry,
+                        _ => &lowres.history[current],
+                    };
+                    (view, Some(wgpu::Color::TRANSPARENT))
+                }
                 // The application's own clear, on the pass that clears.
                 TargetKind::Color => match targets.color.get(index).copied().flatten() {
                     Some(view) => (view, targets.clear),
@@ -609,8 +651,13 @@ impl CachedShader {
                 },
                 store: wgpu::StoreOp::Store,
             });
+        // Lowres's samples have a depth buffer of their size.
+        let view = match (&self.targets.lowres, pass.resolution_divisor) {
+            (Some(lowres), d) if d > 1 => &lowres.depth,
+            _ => &self.targets.depth_views[self.current],
+        };
         wgpu::RenderPassDepthStencilAttachment {
-            view: &self.targets.depth_views[self.current],
+            view,
             depth_ops: Some(wgpu::Operations {
                 load,
                 store: wgpu::StoreOp::Store,
@@ -633,7 +680,7 @@ impl CachedShader {
             size,
             self.formats,
             self.depth_format,
-            &self.gbuffer_formats,
+            (&self.gbuffer_formats, lowres_divisor(&self.plan)),
         );
         self.generation += 1;
         self.fresh = true;
@@ -748,7 +795,7 @@ impl CacheTargets {
         size: (u32, u32),
         formats: HostFormats,
         depth_format: wgpu::TextureFormat,
-        gbuffer_formats: &[wgpu::TextureFormat],
+        (gbuffer_formats, lowres_divisor): (&[wgpu::TextureFormat], Option<u32>),
     ) -> CacheTargets {
         let make = |label: &str, format| render_target(device, label, size, format);
         let pair = |label: &str, format| [make(label, format), make(label, format)];
@@ -767,8 +814,27 @@ impl CacheTargets {
             .iter()
             .map(|&format| view(&make("shadecache G-buffer", format)))
             .collect();
+        let lowres = lowres_divisor.map(|d| {
+            let low = (size.0.div_ceil(d), size.1.div_ceil(d));
+            let small = |label: &str, format| view(&render_target(device, label, low, format));
+            LowresTargets {
+                samples: small("shadecache samples", formats.cache),
+                geometry: small("shadecache sample geometry", formats.history),
+                depth: depth_only_attachment(&render_target(
+                    device,
+                    "shadecache samples' depth",
+                    low,
+                    depth_format,
+                )),
+                history: [
+                    view(&make("shadecache history", formats.history)),
+                    view(&make("shadecache history", formats.history)),
+                ],
+            }
+        });
         CacheTargets {
             gbuffer,
+            lowres,
             payload_views: [view(&payload[0]), view(&payload[1])],
             age_views: [view(&age[0]), view(&age[1])],
             depth_views: [view(&depth[0]), view(&depth[1])],
@@ -780,6 +846,37 @@ impl CacheTargets {
             classes,
         }
     }
+}
+
+/// The divisor of the plan's reduced-resolution pass (lowres's samples),
+/// if it has one.
+fn lowres_divisor(plan: &Plan) -> Option<u32> {
+    plan.passes
+        .iter()
+        .map(|p| p.resolution_divisor)
+        .find(|&d| d > 1)
+}
+
+/// An attachment view of a depth texture.
+fn depth_only_attachment(texture: &wgpu::Texture) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor::default())
+}
+
+/// The buffer of draw ordinals: ordinal i + 1 at byte i·`DRAW_ID_STRIDE`.
+fn draw_ids(device: &wgpu::Device) -> wgpu::Buffer {
+    let stride = layouts::DRAW_ID_STRIDE as usize;
+    let mut bytes = vec![0u8; stride * layouts::DRAW_IDS as usize];
+    for i in 0..layouts::DRAW_IDS as usize {
+        bytes[i * stride..i * stride + 4].copy_from_slice(&(i as u32 + 1).to_le_bytes());
+    }
+    wgpu::util::DeviceExt::create_buffer_init(
+        device,
+        &wgpu::util::BufferInitDescriptor {
+            label: Some("shadecache draw ordinals"),
+            contents: &bytes,
+            usage: wgpu::BufferUsages::UNIFORM,
+        },
+    )
 }
 
 /// A 2D texture of `size` that passes render into, that later passes
@@ -889,7 +986,23 @@ impl CachedShader {
             .filter(|r| bound(r.binding))
         {
             let view = wgpu::BindingResource::TextureView;
+            let lowres = || {
+                t.lowres.as_ref().ok_or_else(|| {
+                    Error::Plan(format!(
+                        "`{}` is lowres's, and the plan has no pass at a reduced resolution",
+                        resource.name
+                    ))
+                })
+            };
             let resource_of = match CacheResource::named(&resource.name)? {
+                CacheResource::Samples => view(&lowres()?.samples),
+                CacheResource::SampleGeometry => view(&lowres()?.geometry),
+                CacheResource::PreviousHistory => view(&lowres()?.history[previous]),
+                CacheResource::Draw => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &shader.draw_ids,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(16),
+                }),
                 CacheResource::Params => shader.params.as_entire_binding(),
                 CacheResource::PreviousPayload => view(&t.payload_views[previous]),
                 CacheResource::CurrentPayload => view(&t.payload_views[current]),
@@ -964,6 +1077,9 @@ pub struct Draw<'r, 'e> {
     drawn: u32,
     /// The twins whose cache group is bound now.
     bound: Option<u64>,
+    /// The cache group's bind group of those twins, for a pass that binds
+    /// it again at each draw's ordinal (`Built::per_draw`).
+    per_draw: Option<(u32, wgpu::BindGroup)>,
 }
 
 impl Draw<'_, '_> {
@@ -1064,6 +1180,11 @@ impl Draw<'_, '_> {
             self.render
                 .set_stencil_reference(self.drawn | stencil.reference_bits);
         }
+        if let Some((group, bind_group)) = &self.per_draw {
+            let slot = (self.drawn - 1) % layouts::DRAW_IDS;
+            self.render
+                .set_bind_group(*group, bind_group, &[slot * layouts::DRAW_ID_STRIDE]);
+        }
         match pass.draw {
             DrawKind::Geometry => true,
             DrawKind::Fullscreen => {
@@ -1088,6 +1209,9 @@ impl Draw<'_, '_> {
             return true;
         }
         match self.binder.bind_group(self.built, inner) {
+            Ok(Some((group, bind_group))) if self.built.per_draw => {
+                self.per_draw = Some((group, bind_group));
+            }
             Ok(Some((group, bind_group))) => self.render.set_bind_group(group, &bind_group, &[]),
             Ok(None) => {}
             Err(err) => {

@@ -211,7 +211,21 @@ pub(crate) enum CacheResource {
     /// This frame's G-buffer texture of that index (the deferred
     /// variant's), read with `textureLoad`.
     GBuffer(usize),
+    /// Lowres: this frame's samples, their geometry, last frame's
+    /// upsampling history (all read with `textureLoad`).
+    Samples,
+    SampleGeometry,
+    PreviousHistory,
+    /// The draw's ordinal, a uniform bound per draw at a dynamic offset.
+    Draw,
 }
+
+/// The draws whose ordinals the `Draw` uniform tells apart; later draws
+/// take the ordinals again from 1.
+pub(crate) const DRAW_IDS: u32 = 128;
+/// Bytes between two ordinals in the `Draw` uniform: WebGPU's largest
+/// `minUniformBufferOffsetAlignment`.
+pub(crate) const DRAW_ID_STRIDE: u32 = 256;
 
 impl CacheResource {
     pub fn named(name: &str) -> Result<CacheResource, Error> {
@@ -226,6 +240,10 @@ impl CacheResource {
             "cache_previous_age" => CacheResource::PreviousAge,
             "cache_previous_depth" => CacheResource::PreviousDepth,
             "cache_sampler" => CacheResource::Sampler,
+            "cache_samples" => CacheResource::Samples,
+            "cache_sample_geometry" => CacheResource::SampleGeometry,
+            "cache_previous_history" => CacheResource::PreviousHistory,
+            "cache_draw" => CacheResource::Draw,
             other => {
                 return Err(Error::Plan(format!(
                     "the cache binds `{other}`, which this host does not know (a newer plan?)"
@@ -255,6 +273,16 @@ impl CacheResource {
             }
             CacheResource::PreviousDepth => texture(wgpu::TextureSampleType::Depth),
             CacheResource::GBuffer(_) => texture(wgpu::TextureSampleType::Uint),
+            CacheResource::Samples
+            | CacheResource::SampleGeometry
+            | CacheResource::PreviousHistory => {
+                texture(wgpu::TextureSampleType::Float { filterable: false })
+            }
+            CacheResource::Draw => wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: true,
+                min_binding_size: wgpu::BufferSize::new(16),
+            },
             CacheResource::Sampler => wgpu::BindingType::Sampler(if payload_filterable {
                 wgpu::SamplerBindingType::Filtering
             } else {

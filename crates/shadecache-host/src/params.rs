@@ -61,6 +61,10 @@ pub(crate) fn bytes(plan: &Plan, state: FrameState) -> Result<Vec<u8>, Error> {
             .to_vec(),
             // The depth test's tolerance is relative to it.
             "far_depth" => (plan.clear.depth as f32).to_le_bytes().to_vec(),
+            // Lowres's knobs; zero for the variants without them.
+            "upsample_sigma_normal" => upsampling(plan, |u| u.sigma_normal),
+            "upsample_sigma_depth" => upsampling(plan, |u| u.sigma_depth),
+            "upsample_sensitivity" => upsampling(plan, |u| u.sensitivity),
             other => {
                 return Err(Error::Plan(format!(
                     "the plan's CacheParams has a field `{other}` this host does not fill"
@@ -79,4 +83,13 @@ pub(crate) fn bytes(plan: &Plan, state: FrameState) -> Result<Vec<u8>, Error> {
             .copy_from_slice(&value);
     }
     Ok(bytes)
+}
+
+/// One of the plan's upsampling knobs as uniform bytes (0 without them).
+fn upsampling(plan: &Plan, knob: impl Fn(&shadecache_plan::Upsampling) -> f32) -> Vec<u8> {
+    plan.upsampling
+        .as_ref()
+        .map_or(0.0, knob)
+        .to_le_bytes()
+        .to_vec()
 }

@@ -14,6 +14,8 @@ pub(crate) struct HostFormats {
     pub cache: wgpu::TextureFormat,
     pub age: wgpu::TextureFormat,
     pub classes: wgpu::TextureFormat,
+    /// Lowres's history and its samples' geometry.
+    pub history: wgpu::TextureFormat,
 }
 
 /// The pipeline layout of every pass: the application's groups, the
@@ -143,6 +145,8 @@ fn color_targets(
             TargetKind::Cache => host(inputs.formats.cache),
             TargetKind::Age => host(inputs.formats.age),
             TargetKind::Classes => host(inputs.formats.classes),
+            TargetKind::Samples => host(inputs.formats.cache),
+            TargetKind::SampleGeometry | TargetKind::History => host(inputs.formats.history),
             TargetKind::GBuffer => host(inputs.gbuffer.get(index).copied().ok_or_else(|| {
                 Error::Plan(format!(
                     "pass `{}` writes G-buffer texture {index}, which the plan's G-buffer pass does not make",

@@ -273,6 +273,10 @@ pub struct Plan {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub classify: Option<Pass>,
     pub vertex_layout: Vec<VertexAttribute>,
+    /// The lowres variant's upsampling (seed 001): its factor s and the
+    /// reconstruction's knobs. Absent for the other variants.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub upsampling: Option<Upsampling>,
     /// For a fragment-only module: what the host's own vertex stage must
     /// output for these passes (absent when the module has its vertex
     /// stage and the passes carry it).
@@ -286,6 +290,61 @@ pub struct Plan {
     /// frame that breaks it.
     #[serde(default)]
     pub assumes: FrameAssumptions,
+}
+
+/// How the lowres variant rebuilds the payload at full resolution from
+/// the samples it shades at 1/s × 1/s of the pixels (seed 001).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Upsampling {
+    /// s: one pixel of each s×s window is shaded per frame (2 or 4), the
+    /// window's offset stepping through a Bayer order of the s² positions
+    /// (`refresh_phase` = frame mod s²).
+    pub factor: u32,
+    /// σn of the normal weight (eq. 2).
+    pub sigma_normal: f32,
+    /// σz of the depth weight, relative: |z_i − z_j| / z_i, z the view
+    /// depth (eq. 2).
+    pub sigma_depth: f32,
+    /// a: the sensitivity of the history's weight to the temporal gradient
+    /// (eq. 8); 1 in most of the paper's scenes.
+    pub sensitivity: f32,
+}
+
+/// The knobs of seed 001 as the paper sets them: σn = 0.2 (§3.1), σz as
+/// 3% (§3.1, there of the depth range; here of the depth itself), a = 1
+/// (§3.5.1), s = 4 (§3.2).
+pub const DEFAULT_UPSAMPLING: Upsampling = Upsampling {
+    factor: 4,
+    sigma_normal: 0.2,
+    sigma_depth: 0.03,
+    sensitivity: 1.0,
+};
+
+impl Upsampling {
+    /// Checks the knobs: s is 2 or 4, σn and σz are positive and finite,
+    /// a lies in (0, 1].
+    pub fn check(&self) -> Result<(), String> {
+        if self.factor != 2 && self.factor != 4 {
+            return Err(format!(
+                "an upsampling factor of {} is not one lowres takes: s is 2 or 4 (one pixel of each s×s window per frame)",
+                self.factor
+            ));
+        }
+        for (name, value) in [("σn", self.sigma_normal), ("σz", self.sigma_depth)] {
+            if !(value > 0.0 && value.is_finite()) {
+                return Err(format!(
+                    "{name} = {value}: the weights' widths must be positive and finite"
+                ));
+            }
+        }
+        if !(self.sensitivity > 0.0 && self.sensitivity <= 1.0) {
+            return Err(format!(
+                "a = {}: the sensitivity must lie in (0, 1]",
+                self.sensitivity
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// What a variant assumes of the application's frame. The cache holds
@@ -389,6 +448,19 @@ pub struct Pass {
     /// The stencil test and write of the pass; absent when it has none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stencil: Option<Stencil>,
+    /// The pass renders at 1/d × 1/d of the frame's size (rounded up),
+    /// into targets and a depth buffer of that size: the lowres variant's
+    /// samples. 1 for the frame's own size.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub resolution_divisor: u32,
+}
+
+fn one() -> u32 {
+    1
+}
+
+fn is_one(value: &u32) -> bool {
+    *value == 1
 }
 
 /// What a pass draws.
@@ -456,6 +528,16 @@ pub enum TargetKind {
     /// location is its index.
     #[serde(rename = "g-buffer")]
     GBuffer,
+    /// The lowres variant's samples: the payload at 1/s × 1/s of the
+    /// pixels, in the cache's format.
+    Samples,
+    /// The samples' geometry (rgba32float): their normal, view depth, draw
+    /// id and relative temporal gradient.
+    #[serde(rename = "sample-geometry")]
+    SampleGeometry,
+    /// This frame's upsampling history (rgba32float): the accumulated
+    /// weight and the latest temporal gradients.
+    History,
 }
 
 /// What a pass does with a target's contents when it begins.
@@ -477,6 +559,9 @@ impl TargetKind {
             TargetKind::Age => "age",
             TargetKind::Classes => "classes",
             TargetKind::GBuffer => "g-buffer",
+            TargetKind::Samples => "samples",
+            TargetKind::SampleGeometry => "sample-geometry",
+            TargetKind::History => "history",
         }
     }
 }
@@ -751,17 +836,22 @@ pub enum Variant {
     /// G-buffer; the lookup, the misses and the shading run in screen
     /// space.
     Deferred,
+    /// The payload shaded at 1/s × 1/s of the pixels on a jittered
+    /// lattice and rebuilt at full resolution from the samples and the
+    /// reprojected history (seed 001).
+    Lowres,
     /// The unmodified shader, run by the profiler as the reference; never
     /// a rewrite.
     Reference,
 }
 
 impl Variant {
-    pub const ALL: [Variant; 4] = [
+    pub const ALL: [Variant; 5] = [
         Variant::OnePass,
         Variant::TwoPass,
         Variant::ThreePass,
         Variant::Deferred,
+        Variant::Lowres,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -770,6 +860,7 @@ impl Variant {
             Variant::TwoPass => "two-pass",
             Variant::ThreePass => "three-pass",
             Variant::Deferred => "deferred",
+            Variant::Lowres => "lowres",
             Variant::Reference => "reference",
         }
     }
@@ -821,14 +912,36 @@ pub enum Reconstruction {
     /// The texel the point falls in, its depth in its fourth channel: one
     /// load instead of two. For payloads of up to three components.
     NearestPacked,
+    /// Lowres only: the joint-bilateral upsampling of this frame's
+    /// samples, with normal, depth and draw weights and a linear hat in
+    /// image space (seed 001, eqs. 1–3); no history.
+    Spatial,
+    /// Lowres only: each pixel shaded this frame takes its sample, the
+    /// others the reprojected history (eq. 4); where the history misses,
+    /// the spatial upsampling.
+    Temporal,
+    /// Lowres only: the spatial upsampling blended with the exponential
+    /// history, weighted by the temporal gradient's confidence (eqs. 6–8).
+    SpatioTemporal,
 }
 
 impl Reconstruction {
-    pub const ALL: [Reconstruction; 4] = [
+    /// The cache variants' reconstructions (reads of the cache).
+    pub const CACHE: [Reconstruction; 4] = [
         Reconstruction::Bilinear,
         Reconstruction::Nearest,
         Reconstruction::BilinearPacked,
         Reconstruction::NearestPacked,
+    ];
+
+    pub const ALL: [Reconstruction; 7] = [
+        Reconstruction::Bilinear,
+        Reconstruction::Nearest,
+        Reconstruction::BilinearPacked,
+        Reconstruction::NearestPacked,
+        Reconstruction::Spatial,
+        Reconstruction::Temporal,
+        Reconstruction::SpatioTemporal,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -837,7 +950,20 @@ impl Reconstruction {
             Reconstruction::Nearest => "nearest",
             Reconstruction::BilinearPacked => "bilinear-packed",
             Reconstruction::NearestPacked => "nearest-packed",
+            Reconstruction::Spatial => "spatial",
+            Reconstruction::Temporal => "temporal",
+            Reconstruction::SpatioTemporal => "spatio-temporal",
         }
+    }
+
+    /// Whether the reconstruction upsamples lowres's samples (the others
+    /// read the reprojection cache; lowres takes `nearest` and `bilinear`
+    /// too, as upsampling filters).
+    pub fn upsamples(self) -> bool {
+        matches!(
+            self,
+            Reconstruction::Spatial | Reconstruction::Temporal | Reconstruction::SpatioTemporal
+        )
     }
 
     /// Whether the cache keeps the depth in the payload texture's fourth

@@ -58,6 +58,15 @@ pub struct Args {
     #[arg(long, value_name = "R,...", value_enum, value_delimiter = ',')]
     pub reconstruction: Option<Vec<ReconstructionArg>>,
 
+    /// How lowres rebuilds the payload from its samples, separated by
+    /// commas: nearest, bilinear, spatial, temporal, spatio-temporal
+    /// [default: spatio-temporal; with --sweep all five].
+    #[arg(long, value_name = "R,...", value_enum, value_delimiter = ',')]
+    pub lowres_reconstruction: Option<Vec<ReconstructionArg>>,
+
+    #[command(flatten)]
+    pub upsampling: super::rewrite::UpsamplingArgs,
+
     /// Sweep accuracy against time: every knob over its sweep values (lists
     /// given explicitly are kept), pruned with the cost model and by
     /// measuring the refresh and read-back planes (docs/accuracy.md).
@@ -307,6 +316,12 @@ fn options(args: &Args, stages: &super::StageArgs) -> Result<Options, Error> {
             .as_ref()
             .map(|r| r.iter().map(|&r| r.into()).collect())
             .unwrap_or(defaults.reconstructions),
+        lowres_reconstructions: args
+            .lowres_reconstruction
+            .as_ref()
+            .map(|r| r.iter().map(|&r| r.into()).collect())
+            .unwrap_or(defaults.lowres_reconstructions),
+        upsampling: args.upsampling.upsampling()?,
         max_error: args.max_error,
         frames: args.frames,
         warmup: args.warmup,

@@ -54,9 +54,15 @@ pub struct Args {
     /// How payload and depth are read back where a point was last frame:
     /// bilinear or nearest from the payload and last frame's depth buffer,
     /// or their packed forms, which keep the depth in the payload's fourth
-    /// channel (payloads of up to three components).
-    #[arg(long, value_enum, default_value_t = ReconstructionArg::Bilinear)]
-    pub reconstruction: ReconstructionArg,
+    /// channel (payloads of up to three components). For lowres, how the
+    /// payload is rebuilt from its samples: nearest, bilinear, spatial,
+    /// temporal or spatio-temporal. Default: bilinear, and spatio-temporal
+    /// for lowres.
+    #[arg(long, value_enum)]
+    pub reconstruction: Option<ReconstructionArg>,
+
+    #[command(flatten)]
+    pub upsampling: UpsamplingArgs,
 
     /// Per-vertex inputs (by name, separated by commas) that the
     /// application changes every frame, deforming the mesh on the CPU:
@@ -85,7 +91,45 @@ pub enum VariantArg {
     /// One geometry pass into a G-buffer; lookup, misses and shading in
     /// screen space.
     Deferred,
+    /// The payload shaded at 1/s × 1/s of the pixels on a jittered
+    /// lattice, rebuilt at full resolution from the samples and the
+    /// reprojected history (seed 001).
+    Lowres,
     All,
+}
+
+/// The lowres variant's knobs (seed 001); the paper's values by default.
+#[derive(Clone, Debug, clap::Args)]
+pub struct UpsamplingArgs {
+    /// s: lowres shades one pixel of each S×S window per frame (2 or 4).
+    #[arg(long, value_name = "S", default_value_t = rewrite::DEFAULT_UPSAMPLING.factor)]
+    pub upsample_factor: u32,
+    /// σn of lowres's normal weight (eq. 2 of seed 001).
+    #[arg(long, value_name = "SIGMA", default_value_t = rewrite::DEFAULT_UPSAMPLING.sigma_normal)]
+    pub sigma_normal: f32,
+    /// σz of lowres's depth weight, relative to the depth.
+    #[arg(long, value_name = "SIGMA", default_value_t = rewrite::DEFAULT_UPSAMPLING.sigma_depth)]
+    pub sigma_depth: f32,
+    /// a: how much lowres's history weighs where the scene is unchanged
+    /// (eq. 8), in (0, 1].
+    #[arg(long, value_name = "A", default_value_t = rewrite::DEFAULT_UPSAMPLING.sensitivity)]
+    pub sensitivity: f32,
+}
+
+impl UpsamplingArgs {
+    /// The knobs, checked: a clear error for a value lowres does not take.
+    pub fn upsampling(&self) -> Result<rewrite::Upsampling, Error> {
+        let upsampling = rewrite::Upsampling {
+            factor: self.upsample_factor,
+            sigma_normal: self.sigma_normal,
+            sigma_depth: self.sigma_depth,
+            sensitivity: self.sensitivity,
+        };
+        upsampling
+            .check()
+            .map_err(|err| Error::plain(Diagnostic::error(err)))?;
+        Ok(upsampling)
+    }
 }
 
 impl VariantArg {
@@ -98,6 +142,7 @@ impl VariantArg {
                 VariantArg::TwoPass => &[Variant::TwoPass],
                 VariantArg::ThreePass => &[Variant::ThreePass],
                 VariantArg::Deferred => &[Variant::Deferred],
+                VariantArg::Lowres => &[Variant::Lowres],
                 VariantArg::All => &Variant::ALL,
             };
             for &variant in named {
@@ -139,6 +184,9 @@ pub enum ReconstructionArg {
     Nearest,
     BilinearPacked,
     NearestPacked,
+    Spatial,
+    Temporal,
+    SpatioTemporal,
 }
 
 impl From<ReconstructionArg> for Reconstruction {
@@ -148,6 +196,9 @@ impl From<ReconstructionArg> for Reconstruction {
             ReconstructionArg::Nearest => Reconstruction::Nearest,
             ReconstructionArg::BilinearPacked => Reconstruction::BilinearPacked,
             ReconstructionArg::NearestPacked => Reconstruction::NearestPacked,
+            ReconstructionArg::Spatial => Reconstruction::Spatial,
+            ReconstructionArg::Temporal => Reconstruction::Temporal,
+            ReconstructionArg::SpatioTemporal => Reconstruction::SpatioTemporal,
         }
     }
 }
@@ -269,10 +320,18 @@ fn rewrite_entry(
             DepthArg::Standard => DepthConvention::Standard,
             DepthArg::Reversed => DepthConvention::Reversed,
         },
-        reconstruction: args.reconstruction.into(),
         vertex_entry: args.stages.vertex_entry.clone(),
         deforming_inputs: args.deforming_input.clone(),
+        upsampling: args.upsampling.upsampling()?,
         ..Options::default()
+    };
+    // Each variant's own reconstruction unless one is named.
+    let options_for = |variant: Variant| Options {
+        reconstruction: args
+            .reconstruction
+            .map(Reconstruction::from)
+            .unwrap_or(Options::for_variant(variant).reconstruction),
+        ..options.clone()
     };
     let language = match args.emit {
         EmitArg::Wgsl => Language::Wgsl,
@@ -297,7 +356,7 @@ fn rewrite_entry(
                 (false, 1) => out.to_path_buf(),
                 (false, _) => out.join(variant.as_str()),
             };
-            match rewrite::rewrite(shader, analysis, candidate, variant, &options) {
+            match rewrite::rewrite(shader, analysis, candidate, variant, &options_for(variant)) {
                 Ok(rewritten) => {
                     back::write_variant(&dir, &rewritten, language)?;
                     totals.written += 1;

@@ -68,7 +68,7 @@ fn deferred_refresh_period_one_equals_the_reference() {
     let mut opts = options(&[1], &[1]);
     opts.variants = vec![Variant::Deferred];
     opts.cache_formats = vec![CacheFormat::Rgba32float];
-    opts.reconstructions = Reconstruction::ALL.to_vec();
+    opts.reconstructions = Reconstruction::CACHE.to_vec();
     let scene = sphere_over_floor(
         "\"object-motion\", \"camera-motion\"",
         "orbit_degrees_per_frame = 1.0",
@@ -101,7 +101,7 @@ fn deferred_refresh_period_one_equals_the_reference() {
 fn deferred_static_scene_reuses_every_pixel() {
     let mut opts = options(&[0], &[4]);
     opts.variants = vec![Variant::Deferred];
-    opts.reconstructions = Reconstruction::ALL.to_vec();
+    opts.reconstructions = Reconstruction::CACHE.to_vec();
     let Some((_, report, _)) = run_tinted(&sphere_over_floor("", "", ""), opts) else {
         return;
     };

@@ -593,7 +593,7 @@ light_color = [1.0, 1.0, 1.0]
 "#;
     let mut opts = options(&[0], &[4]);
     opts.variants = vec![Variant::OnePass];
-    opts.reconstructions = shadecache::rewrite::Reconstruction::ALL.to_vec();
+    opts.reconstructions = shadecache::rewrite::Reconstruction::CACHE.to_vec();
     let Some((pictures, report, _)) = run(scene_text, opts) else {
         return;
     };

@@ -17,6 +17,7 @@ mod hard_cases;
 mod hard_runs;
 mod instanced;
 mod interpolate;
+mod lowres;
 mod profile;
 mod real_shaders;
 mod report_page;

@@ -101,9 +101,14 @@ fn snapshots_of_emitted_passes() {
                 .candidate(node)
                 .unwrap_or_else(|| panic!("{}: `{node}` is no candidate", case_path.display()));
             for &variant in &variants {
-                let rewritten =
-                    rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
-                        .unwrap_or_else(|r| panic!("{stem} {node} {variant}: {r}"));
+                let rewritten = rewrite::rewrite(
+                    &shader,
+                    &analysis,
+                    candidate,
+                    variant,
+                    &Options::for_variant(variant),
+                )
+                .unwrap_or_else(|r| panic!("{stem} {node} {variant}: {r}"));
                 for &language in &languages {
                     for (file, bytes) in back::render_variant(&rewritten, language).unwrap() {
                         let text = String::from_utf8(bytes).unwrap();
@@ -229,6 +234,7 @@ fn rewrite_all_nodes_writes_every_candidate_and_variant() {
                 Variant::TwoPass => 2,
                 Variant::ThreePass => 3,
                 Variant::Deferred => 4,
+                Variant::Lowres => 2,
                 Variant::Reference => unreachable!("not a rewrite"),
             };
             assert_eq!(passes.len(), expected);
@@ -248,9 +254,15 @@ fn plans_describe_the_passes() {
     let (shader, analysis) = load(Path::new("corpus/noise_marble.wgsl"));
     let candidate = analysis.candidate("nb0c12cc4").unwrap();
     let plan = |variant| {
-        rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
-            .unwrap()
-            .plan
+        rewrite::rewrite(
+            &shader,
+            &analysis,
+            candidate,
+            variant,
+            &Options::for_variant(variant),
+        )
+        .unwrap()
+        .plan
     };
     let three = plan(Variant::ThreePass);
     let depth: Vec<(CompareFunction, bool)> = three
@@ -335,8 +347,14 @@ fn every_emitted_vertex_position_is_invariant() {
     let (shader, analysis) = load(Path::new("corpus/position_direct.wgsl"));
     let candidate = &analysis.candidates[0];
     for variant in Variant::ALL {
-        let rewritten =
-            rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default()).unwrap();
+        let rewritten = rewrite::rewrite(
+            &shader,
+            &analysis,
+            candidate,
+            variant,
+            &Options::for_variant(variant),
+        )
+        .unwrap();
         for (pass, text) in wgsl(&rewritten) {
             // Every position, vertex output and fragment input alike.
             let positions = text.matches("@builtin(position)").count();
@@ -576,6 +594,21 @@ fn every_reconstruction_validates_and_builds() {
                     let rewritten =
                         match rewrite::rewrite(&shader, &analysis, candidate, variant, &options) {
                             Ok(rewritten) => rewritten,
+                            // Lowres takes nearest, bilinear and its own
+                            // upsamplings; the cache variants none of those.
+                            Err(refusal)
+                                if (variant == Variant::Lowres) != reconstruction.upsamples()
+                                    && (variant != Variant::Lowres
+                                        || reconstruction.packs_depth()) =>
+                            {
+                                assert!(
+                                    refusal.reason.contains("upsamples lowres's samples")
+                                        || refusal.reason.contains("rebuilds the payload"),
+                                    "{}",
+                                    refusal.reason
+                                );
+                                continue;
+                            }
                             Err(refusal) => {
                                 assert!(
                                     reconstruction.packs_depth() && candidate.components == 4,
@@ -590,6 +623,16 @@ fn every_reconstruction_validates_and_builds() {
                             }
                         };
                     assert_eq!(rewritten.plan.cache.reconstruction, reconstruction);
+                    if variant == Variant::Lowres {
+                        let out = dir
+                            .path()
+                            .join(reconstruction.as_str())
+                            .join(cache_format.as_str())
+                            .join(&candidate.node.id)
+                            .join(variant.as_str());
+                        files.extend(write_wgsl(&out, &rewritten));
+                        continue;
+                    }
                     // A three-pass cache may be widened to rgba32float.
                     let filterable = rewritten.plan.cache.format == CacheFormat::Rgba16float;
                     let lookup = match (reconstruction, filterable) {
@@ -603,6 +646,7 @@ fn every_reconstruction_validates_and_builds() {
                         (rewrite::Reconstruction::NearestPacked, _) => {
                             "cache_lookup_nearest_packed"
                         }
+                        (r, _) => panic!("{variant} ran with lowres's {r}"),
                     };
                     // Pass 1 of every variant reprojects (the deferred
                     // variant's pass 2, after its G-buffer pass).
@@ -650,7 +694,8 @@ fn every_reconstruction_validates_and_builds() {
     }
     // `vec4<f32>(color, 1.0)` is among the first five, for both packed
     // reconstructions, both formats and every variant.
-    assert_eq!(refused, 2 * 2 * Variant::ALL.len());
+    // Lowres refuses the packed ones anyway (above).
+    assert_eq!(refused, 2 * 2 * (Variant::ALL.len() - 1));
     for result in tint_validate(&files) {
         assert!(
             result.ok,

@@ -1,0 +1,542 @@
+//! The lowres variant's passes: spatio-temporal upsampling of the payload
+//! (seed 001, Herzog et al. 2010).
+//!
+//! Pass 1 draws the geometry at 1/s × 1/s of the pixels with the
+//! projection jittered (`cache_jitter`), so that each low-resolution pixel
+//! shades the full-resolution pixel centre s·a + offset, the offset
+//! stepping through the s×s window in a Bayer order (`cache_sample_offset`).
+//! It writes the payload (the samples) and the samples' geometry: normal,
+//! view depth, the draw's id, and the relative temporal gradient against
+//! last frame's result where the sample's point was. Its texture reads
+//! see derivatives s times too large, so their level of detail is biased
+//! by −log2 s and explicit derivatives are divided by s.
+//!
+//! Pass 2 draws the geometry at full resolution: it rebuilds the payload
+//! at each pixel from the four nearest samples and the reprojected
+//! history (`cache_upsample`: nearest, bilinear, spatial, temporal or
+//! spatio-temporal), shades with it, and writes the result and its
+//! history for the next frame.
+
+use naga::{Binding, Expression, Function, Handle, Module, Statement, TypeInner};
+
+use super::builder::{location, Builder};
+use super::copy::FunctionCopy;
+use super::fragment::{self, Pieces};
+use super::Refusal;
+use crate::analysis::graph::ExprSet;
+use crate::plan::Reconstruction;
+
+/// The imported helpers the lowres passes call.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LowresHelpers {
+    pub jitter: Handle<Function>,
+    pub sample_texel: Handle<Function>,
+    pub upsample: Handle<Function>,
+    pub unit_normal: Handle<Function>,
+    pub geometric_normal: Handle<Function>,
+    /// The history's lookup (`cache_history`, or `cache_history_loads`
+    /// for an rgba32float cache).
+    pub history: Handle<Function>,
+}
+
+/// Whether a reconstruction reads the history (and so the samples pass
+/// takes their temporal gradient): temporal and spatio-temporal.
+fn reads_history(reconstruction: Reconstruction) -> bool {
+    matches!(
+        reconstruction,
+        Reconstruction::Temporal | Reconstruction::SpatioTemporal
+    )
+}
+
+/// The history where the fragment was (`before`, `hit`): looked up where
+/// the reconstruction reads it, else a miss that costs nothing.
+fn history(
+    b: &mut Builder,
+    pieces: &Pieces,
+    previous: Handle<Expression>,
+    reconstruction: Reconstruction,
+) -> (Handle<Expression>, Handle<Expression>) {
+    if reads_history(reconstruction) {
+        let lookup = b.call(pieces.lowres.history, vec![previous]);
+        (b.member(lookup, 0), b.member(lookup, 1))
+    } else {
+        let before = b.expr(Expression::ZeroValue(pieces.vec4));
+        let hit = b.expr(Expression::Literal(naga::Literal::Bool(false)));
+        (before, hit)
+    }
+}
+
+/// `cache_upsample`'s mode for a reconstruction.
+pub(crate) fn mode(reconstruction: Reconstruction) -> Result<u32, Refusal> {
+    Ok(match reconstruction {
+        Reconstruction::Nearest => 0,
+        Reconstruction::Bilinear => 1,
+        Reconstruction::Spatial => 2,
+        Reconstruction::Temporal => 3,
+        Reconstruction::SpatioTemporal => 4,
+        other => {
+            return Err(Refusal::new(format!(
+                "lowres rebuilds the payload from its samples: its reconstruction is nearest, bilinear, spatial, temporal or spatio-temporal, not {other}"
+            )))
+        }
+    })
+}
+
+/// Where the fragment's normal comes from: an input the shader
+/// interpolates (an argument or a struct member whose name says normal),
+/// else the geometry's derivatives.
+#[derive(Clone, Copy, Debug)]
+enum NormalSource {
+    Argument(u32),
+    Member(u32, u32),
+    Geometric,
+}
+
+/// The shader's interpolated normal: a `vec3<f32>` input at a location
+/// whose name contains "normal" (`world_normal`, `v_normal`, `N`-less
+/// engines fall back to the geometry).
+fn normal_source(module: &Module, arguments: &[naga::FunctionArgument]) -> NormalSource {
+    let is_normal = |name: &Option<String>, ty: Handle<naga::Type>, binding: &Option<Binding>| {
+        let vec3 = matches!(
+            module.types[ty].inner,
+            TypeInner::Vector {
+                size: naga::VectorSize::Tri,
+                scalar: naga::Scalar::F32
+            }
+        );
+        vec3 && matches!(binding, Some(Binding::Location { .. }))
+            && name
+                .as_deref()
+                .is_some_and(|n| n.to_ascii_lowercase().contains("normal"))
+    };
+    for (i, argument) in arguments.iter().enumerate() {
+        if is_normal(&argument.name, argument.ty, &argument.binding) {
+            return NormalSource::Argument(i as u32);
+        }
+        if let TypeInner::Struct { ref members, .. } = module.types[argument.ty].inner {
+            if let Some(m) = members
+                .iter()
+                .position(|m| is_normal(&m.name, m.ty, &m.binding))
+            {
+                return NormalSource::Member(i as u32, m as u32);
+            }
+        }
+    }
+    NormalSource::Geometric
+}
+
+/// The fragment's unit normal, computed first in the entry point (the
+/// geometric one takes derivatives, so it must be in uniform control
+/// flow; nothing before it branches).
+fn normal(
+    b: &mut Builder,
+    module: &Module,
+    pieces: &Pieces,
+    helpers: &LowresHelpers,
+    (originals, frag_coord): (&[Handle<Expression>], Handle<Expression>),
+    low: bool,
+) -> Handle<Expression> {
+    let n = match normal_source(module, &pieces.arguments) {
+        NormalSource::Argument(i) => {
+            let raw = originals[i as usize];
+            b.call(helpers.unit_normal, vec![raw])
+        }
+        NormalSource::Member(i, m) => {
+            let raw = b.member(originals[i as usize], m);
+            b.call(helpers.unit_normal, vec![raw])
+        }
+        NormalSource::Geometric => {
+            let low = b.expr(Expression::Literal(naga::Literal::Bool(low)));
+            b.call(helpers.geometric_normal, vec![frag_coord, low])
+        }
+    };
+    b.name(n, "normal");
+    n
+}
+
+fn literal_u32(b: &mut Builder, value: u32) -> Handle<Expression> {
+    b.expr(Expression::Literal(naga::Literal::U32(value)))
+}
+
+/// Pass 1's fragment entry point: the payload with its level of detail
+/// biased by −log2 s, written to the samples (location 0), and the
+/// sample's geometry texel (location 1).
+pub(crate) fn samples_entry(
+    module: &mut Module,
+    pieces: &Pieces,
+    helpers: &LowresHelpers,
+    (factor, reconstruction): (u32, Reconstruction),
+) -> Result<Function, Refusal> {
+    let payload = biased_payload(module, pieces.payload, factor)?;
+    let (arguments, at) = fragment::varying_arguments(module, pieces, true);
+    let output = two_member_output(module, "LowresSamples", pieces.vec4, pieces.vec4);
+    let mut b = Builder::new(Function {
+        name: Some(pieces.name.clone()),
+        arguments,
+        result: Some(naga::FunctionResult {
+            ty: output,
+            binding: None,
+        }),
+        ..Function::default()
+    });
+    let frag = fragment::read_varyings(&mut b, &at);
+    let previous = frag
+        .previous
+        .ok_or_else(|| Refusal::internal("the samples pass reads no previous clip position"))?;
+    let n = normal(
+        &mut b,
+        module,
+        pieces,
+        helpers,
+        (&frag.originals, frag.frag_coord),
+        true,
+    );
+    let value = b.call(payload, frag.originals.clone());
+    let value = fragment::to_vec4(&mut b, value, pieces.components, pieces.vec4);
+    b.name(value, "sample");
+    let (before, hit) = history(&mut b, pieces, previous, reconstruction);
+    let components = literal_u32(&mut b, pieces.components);
+    let geometry = b.call(
+        helpers.sample_texel,
+        vec![value, n, frag.frag_coord, before, hit, components],
+    );
+    let encoded = b.call(pieces.encode, vec![value]);
+    let result = b.expr(Expression::Compose {
+        ty: output,
+        components: vec![encoded, geometry],
+    });
+    b.push(Statement::Return {
+        value: Some(result),
+    });
+    Ok(b.finish())
+}
+
+/// Pass 2's fragment entry point: the payload rebuilt by
+/// `cache_upsample`, the shading from it, and the result and history
+/// written after the original outputs (the cache at the first free
+/// location, the history at the next).
+pub(crate) fn upsample_entry(
+    module: &mut Module,
+    pieces: &Pieces,
+    helpers: &LowresHelpers,
+    reconstruction: Reconstruction,
+) -> Result<Function, Refusal> {
+    let mode = mode(reconstruction)?;
+    let (arguments, at) = fragment::varying_arguments(module, pieces, true);
+    let (output, members) = fragment::color_and_cache_output(module, pieces, pieces.vec4);
+    let mut b = Builder::new(Function {
+        name: Some(pieces.name.clone()),
+        arguments,
+        result: Some(naga::FunctionResult {
+            ty: output,
+            binding: None,
+        }),
+        ..Function::default()
+    });
+    let frag = fragment::read_varyings(&mut b, &at);
+    let previous = frag
+        .previous
+        .ok_or_else(|| Refusal::internal("the upsampling pass reads no previous clip position"))?;
+    let n = normal(
+        &mut b,
+        module,
+        pieces,
+        helpers,
+        (&frag.originals, frag.frag_coord),
+        false,
+    );
+    let (before, hit) = history(&mut b, pieces, previous, reconstruction);
+    let mode = literal_u32(&mut b, mode);
+    let components = literal_u32(&mut b, pieces.components);
+    let upsampled = b.call(
+        helpers.upsample,
+        vec![mode, components, frag.frag_coord, n, before, hit, previous],
+    );
+    b.name(upsampled, "upsampled");
+    let value = b.member(upsampled, 0);
+    let history = b.member(upsampled, 1);
+    let payload = fragment::from_vec4(&mut b, value, pieces.components);
+    let mut arguments = frag.originals.clone();
+    arguments.push(payload);
+    let color = b.call(pieces.shade, arguments);
+    b.name(color, "color");
+    let encoded = b.call(pieces.encode, vec![value]);
+    let mut components: Vec<_> = match members {
+        Some(count) if count > 0 && fragment::is_struct(module, pieces.result.ty) => {
+            (0..count).map(|i| b.member(color, i)).collect()
+        }
+        _ => vec![color],
+    };
+    components.push(encoded);
+    components.push(history);
+    let result = b.expr(Expression::Compose {
+        ty: output,
+        components,
+    });
+    b.push(Statement::Return {
+        value: Some(result),
+    });
+    Ok(b.finish())
+}
+
+/// A struct of two `vec4<f32>` outputs at locations 0 and 1.
+fn two_member_output(
+    module: &mut Module,
+    name: &str,
+    first: Handle<naga::Type>,
+    second: Handle<naga::Type>,
+) -> Handle<naga::Type> {
+    let member = |name: &str, ty, at: u32| naga::StructMember {
+        name: Some(name.into()),
+        ty,
+        binding: Some(location(at)),
+        offset: at * 16,
+    };
+    module.types.insert(
+        naga::Type {
+            name: Some(name.into()),
+            inner: TypeInner::Struct {
+                members: vec![member("samples", first, 0), member("geometry", second, 1)],
+                span: 32,
+            },
+        },
+        naga::Span::UNDEFINED,
+    )
+}
+
+/// A copy of the payload function for the samples pass, where every
+/// derivative is s times what it is at full resolution: implicit-LOD
+/// samples get a bias of −log2 s (added to an explicit bias), explicit
+/// gradients and `dpdx`/`dpdy`/`fwidth` are divided by s. Reads in
+/// functions the payload calls are not reached (a texture sampled in a
+/// helper keeps its level, one mip coarser per factor of two).
+fn biased_payload(
+    module: &mut Module,
+    payload: Handle<Function>,
+    factor: u32,
+) -> Result<Handle<Function>, Refusal> {
+    let source = module.functions[payload].clone();
+    let mut live = ExprSet::with_capacity(source.expressions.len());
+    live.insert_range(..);
+    let bias = -(factor as f32).log2();
+    let scale = 1.0 / factor as f32;
+    let src = &source;
+    let biased = {
+        let mut copy = FunctionCopy::new(
+            module,
+            &source,
+            &live,
+            Function {
+                name: source.name.as_ref().map(|n| format!("{n}_lowres")),
+                arguments: source.arguments.clone(),
+                result: source.result.clone(),
+                ..Function::default()
+            },
+        );
+        for (handle, expr) in source.expressions.iter() {
+            match *expr {
+                Expression::ImageSample {
+                    level: naga::SampleLevel::Auto | naga::SampleLevel::Bias(_),
+                    depth_ref: None,
+                    gather: None,
+                    ..
+                } => copy.rebuild(
+                    handle,
+                    Box::new(move |copy: &mut FunctionCopy| {
+                        let mut sample =
+                            crate::proc::remap::expression(&src.expressions[handle], copy);
+                        if let Expression::ImageSample { ref mut level, .. } = sample {
+                            let lod = copy.add(Expression::Literal(naga::Literal::F32(bias)));
+                            *level = match *level {
+                                naga::SampleLevel::Bias(b) => {
+                                    naga::SampleLevel::Bias(copy.add(Expression::Binary {
+                                        op: naga::BinaryOperator::Add,
+                                        left: b,
+                                        right: lod,
+                                    }))
+                                }
+                                _ => naga::SampleLevel::Bias(lod),
+                            };
+                        }
+                        sample
+                    }),
+                ),
+                Expression::ImageSample {
+                    level: naga::SampleLevel::Gradient { .. },
+                    ..
+                } => copy.rebuild(
+                    handle,
+                    Box::new(move |copy: &mut FunctionCopy| {
+                        let mut sample =
+                            crate::proc::remap::expression(&src.expressions[handle], copy);
+                        if let Expression::ImageSample {
+                            level:
+                                naga::SampleLevel::Gradient {
+                                    ref mut x,
+                                    ref mut y,
+                                },
+                            ..
+                        } = sample
+                        {
+                            let k = copy.add(Expression::Literal(naga::Literal::F32(scale)));
+                            *x = scaled(copy, *x, k);
+                            *y = scaled(copy, *y, k);
+                        }
+                        sample
+                    }),
+                ),
+                Expression::Derivative { .. } => copy.rebuild(
+                    handle,
+                    Box::new(move |copy: &mut FunctionCopy| {
+                        let derivative =
+                            crate::proc::remap::expression(&src.expressions[handle], copy);
+                        let d = copy.add(derivative);
+                        let k = copy.add(Expression::Literal(naga::Literal::F32(scale)));
+                        Expression::Binary {
+                            op: naga::BinaryOperator::Multiply,
+                            left: d,
+                            right: k,
+                        }
+                    }),
+                ),
+                _ => {}
+            }
+        }
+        copy.run()
+    };
+    Ok(module.functions.append(biased, naga::Span::UNDEFINED))
+}
+
+fn scaled(
+    copy: &mut FunctionCopy,
+    value: Handle<Expression>,
+    k: Handle<Expression>,
+) -> Handle<Expression> {
+    copy.add(Expression::Binary {
+        op: naga::BinaryOperator::Multiply,
+        left: value,
+        right: k,
+    })
+}
+
+/// Wraps a pass's vertex entry point so that its clip position is
+/// jittered for the samples pass: the original entry becomes a function
+/// the new entry calls, and the position it returns goes through
+/// `cache_jitter`.
+pub(crate) fn jitter_vertex(
+    module: &mut Module,
+    entry: &mut naga::EntryPoint,
+    jitter: Handle<Function>,
+) -> Result<(), Refusal> {
+    let original = entry.function.clone();
+    let result = original
+        .result
+        .clone()
+        .ok_or_else(|| Refusal::internal("the vertex entry point returns nothing"))?;
+    let position_member = match module.types[result.ty].inner {
+        TypeInner::Struct { ref members, .. } => Some(
+            members
+                .iter()
+                .position(|m| fragment::is_position(&m.binding))
+                .ok_or_else(|| {
+                    Refusal::internal("the vertex stage's output has no @builtin(position)")
+                })? as u32,
+        ),
+        _ => None,
+    };
+    let mut helper = original.clone();
+    helper.name = Some(format!("{}_unjittered", entry.name));
+    helper.arguments = super::without_bindings(&original.arguments);
+    helper.result = Some(naga::FunctionResult {
+        ty: result.ty,
+        binding: None,
+    });
+    let helper = module.functions.append(helper, naga::Span::UNDEFINED);
+    let mut b = Builder::new(Function {
+        name: original.name.clone(),
+        arguments: original.arguments.clone(),
+        result: Some(result.clone()),
+        ..Function::default()
+    });
+    let arguments = (0..original.arguments.len() as u32)
+        .map(|i| b.argument(i))
+        .collect();
+    let out = b.call(helper, arguments);
+    let value = match position_member {
+        None => b.call(jitter, vec![out]),
+        Some(at) => {
+            let TypeInner::Struct { ref members, .. } = module.types[result.ty].inner else {
+                return Err(Refusal::internal(
+                    "the vertex output stopped being a struct",
+                ));
+            };
+            let count = members.len() as u32;
+            let mut components = Vec::new();
+            for i in 0..count {
+                let member = b.member(out, i);
+                components.push(if i == at {
+                    b.call(jitter, vec![member])
+                } else {
+                    member
+                });
+            }
+            b.expr(Expression::Compose {
+                ty: result.ty,
+                components,
+            })
+        }
+    };
+    b.push(Statement::Return { value: Some(value) });
+    entry.function = b.finish();
+    Ok(())
+}
+
+/// The offset (x, y) within every s×s window that phase p samples: the
+/// CPU's statement of `cache_sample_offset` (`shaders/cache.wgsl`), the
+/// Bayer order M(x, y) = reverse(interleave(x ^ y, y)) inverted. s is a
+/// power of two.
+pub fn sample_offset(phase: u32, s: u32) -> (u32, u32) {
+    let bits = s.max(1).trailing_zeros();
+    let reversed = if bits == 0 {
+        0
+    } else {
+        phase.reverse_bits() >> (32 - 2 * bits)
+    };
+    let (mut a, mut b) = (0, 0);
+    for i in 0..bits {
+        a |= ((reversed >> (2 * i)) & 1) << i;
+        b |= ((reversed >> (2 * i + 1)) & 1) << i;
+    }
+    (a ^ b, b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sample_offset;
+
+    /// The host keeps the phase as frame mod s² (`set_frame_counter`, then
+    /// +1 mod s² a frame): any s² consecutive frames sample each offset of
+    /// the window once, across the u32 frame counter's wrap as anywhere.
+    #[test]
+    fn jitter_covers_every_pixel_every_s2_frames() {
+        for s in [2u32, 4] {
+            let period = u64::from(s * s);
+            for start in [0u64, 5, (1 << 32) - 16, (1 << 32) - 7, u64::MAX - 20] {
+                let mut seen = std::collections::HashSet::new();
+                for frame in start..start + period {
+                    let (x, y) = sample_offset((frame % period) as u32, s);
+                    assert!(x < s && y < s, "s = {s}: ({x}, {y})");
+                    seen.insert((x, y));
+                }
+                assert_eq!(seen.len() as u64, period, "s = {s}, from frame {start}");
+            }
+        }
+        // The paper's 4×4 order is lost; ours is Bayer's.
+        let bayer = [[0, 8, 2, 10], [12, 4, 14, 6], [3, 11, 1, 9], [15, 7, 13, 5]];
+        for (y, row) in bayer.iter().enumerate() {
+            for (x, &phase) in row.iter().enumerate() {
+                assert_eq!(sample_offset(phase, 4), (x as u32, y as u32));
+            }
+        }
+    }
+}
