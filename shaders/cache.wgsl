@@ -637,9 +637,19 @@ const CACHE_HISTORY_WEIGHT_LIMIT: f32 = 8.0;
 // own shaded sample, kept since through hits that landed on texel centres.
 const CACHE_EXACT: f32 = 1024.0;
 
-// The gradient below which a pixel counts as unchanged: its exact history
-// is kept as it is.
-const CACHE_STILL: f32 = 0.002;
+// The spatial weight sum below which no sample shows the pixel's surface:
+// a sample of another draw weighs at most CACHE_FOREIGN_WEIGHT (four of
+// them 4e-6), and one of this surface, its normal and depth within σn and
+// σz, its linear hat (at least 0.01 within the four nearest).
+const CACHE_RELIABLE: f32 = 1e-5;
+
+// The relative gradient of this frame's samples from which the history is
+// dropped rather than blended.
+const CACHE_CHANGED: f32 = 0.5;
+
+// The filtered relative gradient below which a pixel counts as unchanged:
+// its exact history is kept as it is (a 5% change of luminance is not).
+const CACHE_STILL: f32 = 0.05;
 
 struct CacheUpsampled {
     // The payload at this pixel.
@@ -694,7 +704,9 @@ fn cache_neighbours(frag_coord: vec4<f32>, normal: vec3<f32>) -> CacheNeighbours
         out.geometry[i] = select(0.0, (n_w * n_w * n_w) * (d_w * d_w * d_w) * select(CACHE_FOREIGN_WEIGHT, 1.0, idj == id), finite);
         out.distance[i] = length(((vec2<f32>(a) * s) + offset) - pixel);
         out.gradient[i] = (g.w - (4.0 * f32(idj))) - 1.0;
-        out.own = select(out.own, u32(i), out.distance[i] < 0.5);
+        // The pixel's own sample, when it shows the same surface (at a
+        // silhouette the samples pass may see what is behind).
+        out.own = select(out.own, u32(i), (out.distance[i] < 0.5) & (out.geometry[i] > 0.5));
         out.nearest = select(out.nearest, u32(i), out.distance[i] < out.distance[out.nearest]);
     }
     return out;
@@ -761,11 +773,21 @@ fn cache_upsample(mode: u32, components: u32, frag_coord: vec4<f32>, normal: vec
     // where the history misses.
     let spatial_weights = hat * n.geometry;
     let now_gradient = dot(spatial_weights, n.gradient) / max(spatial.weight, 1e-30);
-    let now = select(1.0, now_gradient, hit);
+    // Where no sample shows this surface (a silhouette pixel whose lattice
+    // points this frame all fell on another draw or the background), the
+    // samples say nothing of its change: it carries its last gradient, and
+    // eq. 7 leans on its history.
+    let reliable = spatial.weight > CACHE_RELIABLE;
+    let now = select(1.0, select(history.y, now_gradient, reliable), hit);
     let older = select(vec3<f32>(1.0), history.yzw, hit);
     let filtered = abs((0.4 * now) + dot(vec3<f32>(0.3, 0.2, 0.1), older));
     let confidence = 1.0 - clamp(filtered, 0.0, 1.0);
-    let wf = cache_params.upsample_sensitivity * confidence * confidence;
+    // Ours: where this frame's samples alone say the shading changed by
+    // half or more (a light switched on), the history is dropped at once,
+    // as where it is disoccluded; eq. 8's temporal filter would keep a
+    // share of it for frames. Smaller changes follow eq. 8.
+    let changed = reliable & (abs(now) >= CACHE_CHANGED);
+    let wf = select(cache_params.upsample_sensitivity * confidence * confidence, 0.0, changed);
     // Eq. 6 with the image kernel's exponent adapted (γ·wf, at most 4),
     // then eq. 7.
     let current = cache_blend(n, cache_image_kernel(n, 4.0 * wf) * n.geometry);
@@ -775,14 +797,15 @@ fn cache_upsample(mode: u32, components: u32, frag_coord: vec4<f32>, normal: vec
     var accumulated = min(weight + kept, CACHE_HISTORY_WEIGHT_LIMIT);
     // Ours: a static pixel converges to its own shading. The paper's blend
     // averages the interpolated values of the other s² − 1 phases into it
-    // forever; here a pixel shaded this frame while unchanged (or with no
-    // history) takes its sample, and one whose history is such a sample,
-    // reprojected onto a texel centre and unchanged since, keeps it.
+    // forever. Here a pixel shaded this frame shows its own sample (the
+    // exact value now), and a pixel whose history is such a sample,
+    // reprojected onto a texel centre (nothing moved) with the temporal
+    // gradient below CACHE_STILL, keeps it until it is shaded again, s²
+    // frames on: the cache variants' bounded staleness, with Δn = s².
     let still = filtered < CACHE_STILL;
     let centred = all(abs(point.texel - texel) < vec2<f32>(0.01));
     let keep = hit & previous_exact & centred & still;
-    let take = own & (still | !hit);
-    payload = select(select(payload, before, keep), own_payload, take);
-    accumulated = accumulated + select(0.0, CACHE_EXACT, take | keep);
+    payload = select(select(payload, before, keep), own_payload, own);
+    accumulated = accumulated + select(0.0, CACHE_EXACT, own | keep);
     return CacheUpsampled(payload, vec4<f32>(accumulated, now, older.x, older.y));
 }

@@ -20,31 +20,32 @@ fn lowres(reconstructions: &[Reconstruction], warmup: u32, frames: u32) -> Optio
 }
 
 /// A static scene: after s² = 16 frames every pixel has been shaded on
-/// its own once, and the spatio-temporal reconstruction shows that away
-/// from the silhouette (PSNR above 40 dB, under 0.2% of the pixels off by
-/// more than the error threshold). This runs the whole variant through
-/// the host crate, as an application does: the samples at 32×32 with the
+/// its own once, and the spatio-temporal reconstruction shows its own
+/// samples: within 0.02 of the reference everywhere, silhouettes included
+/// (64 dB). Not to the bit: a sample is shaded where the jittered
+/// low-resolution raster interpolates the varyings, which on lavapipe
+/// differs from the full-resolution raster by about 1e-5, and the marble's
+/// turbulence turns that into up to 0.01 (with its turbulence ×6, 0.06 at
+/// 0.04% of the pixels). This runs the whole variant through the host
+/// crate, as an application does: the samples at 32×32 with the
 /// projection jittered onto each frame's lattice, the upsampling, the
-/// history. Not yet exact: at the silhouette the bilinear history lookup
-/// straddles the edge and misses, and those pixels are upsampled anew each
-/// frame (a nearest history fetch there is the next step).
+/// history. Checked: without the exact-sample rule of `cache_upsample`
+/// (the paper's blend alone, which averages the other phases' interpolated
+/// values in for ever) it is 58.6 dB.
 #[test]
-fn static_scene_lowres_converges_away_from_silhouettes() {
-    let Some((_, report, _)) = run(
-        &marble_scene("", ""),
-        lowres(&[Reconstruction::SpatioTemporal], 17, 3),
-    ) else {
+fn static_scene_lowres_converges_to_full_resolution() {
+    let scene = marble_scene("", "").replace("turbulence_amount = 6.0", "turbulence_amount = 1.0");
+    let Some((_, report, _)) = run(&scene, lowres(&[Reconstruction::SpatioTemporal], 17, 3)) else {
         return;
     };
     assert_eq!(report.results.len(), 1);
     let row = &report.results[0];
     assert_eq!(row.refresh_period, 16);
     assert!(
-        row.psnr > 40.0 && row.above_threshold < 0.002,
-        "largest difference {} after 16 frames (PSNR {} dB, {} of pixels wrong)",
+        row.max_abs_error < 0.02 && row.psnr > 61.0,
+        "largest difference {} after 16 frames (PSNR {} dB)",
         row.max_abs_error,
-        row.psnr,
-        row.above_threshold
+        row.psnr
     );
 }
 
@@ -128,4 +129,160 @@ fn lowres_and_cache_reconstructions_do_not_mix() {
         assert!(!output.status.success());
         assert!(stderr(&output).contains(says), "{}", stderr(&output));
     }
+}
+
+/// A flat colour per object (which side of x = 0 it stands on), dimmed
+/// until a light switches on at `time` 0.5, lit by the up-facing normal,
+/// through a loop that makes it worth caching: the same value at every
+/// pixel of an object, so that any error of an upsampling is a neighbour's
+/// colour bleeding in, or a stale one.
+const FLAT: &str = r#"
+struct Frame {
+    clip_from_world: mat4x4<f32>,
+    world_from_local: mat4x4<f32>,
+    camera_position: vec3<f32>,
+    time: f32,
+}
+@group(0) @binding(0) var<uniform> frame: Frame;
+struct VertexInput {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+}
+struct VertexOutput {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) world_normal: vec3<f32>,
+}
+@vertex
+fn vs_main(in: VertexInput) -> VertexOutput {
+    var out: VertexOutput;
+    out.clip_position = frame.clip_from_world * frame.world_from_local * vec4<f32>(in.position, 1.0);
+    out.world_normal = (frame.world_from_local * vec4<f32>(in.normal, 0.0)).xyz;
+    return out;
+}
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
+    let albedo = select(vec3<f32>(0.8, 0.2, 0.1), vec3<f32>(0.1, 0.3, 0.9), frame.world_from_local[3].x > 0.0);
+    let lit = albedo * select(0.2, 1.0, frame.time >= 0.5) * max(normalize(in.world_normal).y, 0.0);
+    var c = lit;
+    for (var i = 0; i < 32; i++) {
+        c = sqrt((c * c) + vec3<f32>(1e-6));
+    }
+    return vec4<f32>(c, 1.0);
+}
+"#;
+
+/// Two coplanar planes side by side, each its own draw and colour, seen
+/// from above at an angle: their edge has one depth and one normal, only
+/// the draw tells the sides apart. `effects` and `settings` (TOML lines)
+/// add motion and the frame counts.
+fn two_planes(settings: &str, effects: &str) -> String {
+    format!(
+        r#"
+size = [128, 128]
+{settings}
+effects = [{effects}]
+[camera]
+eye = [0.0, 3.0, 3.0]
+target = [0.0, 0.0, 0.0]
+[[objects]]
+mesh = {{ kind = "plane", size = 3.0, subdivisions = 2 }}
+position = [-1.5, 0.0, 0.0]
+[[objects]]
+mesh = {{ kind = "plane", size = 3.0, subdivisions = 2 }}
+position = [1.5, 0.0, 0.0]
+"#
+    )
+}
+
+fn lowres_top(reconstructions: &[Reconstruction], warmup: u32, frames: u32) -> Options {
+    Options {
+        nodes: shadecache::profile::Nodes::Top(1),
+        ..lowres(reconstructions, warmup, frames)
+    }
+}
+
+/// A material edge on one plane (two draws, coplanar): the spatial
+/// upsampling weighs each sample by its draw (ours: eq. 2 has normal and
+/// depth terms only, which cannot tell these sides apart), so no pixel
+/// takes the other side's colour; bilinear upsampling, without weights,
+/// bleeds across, which shows the scene tests what it should.
+#[test]
+fn material_edge_does_not_bleed() {
+    let Some((_, report, _)) = crate::profile::run_shader(
+        FLAT,
+        &two_planes("frames = 1\nwarmup = 0", ""),
+        lowres_top(&[Reconstruction::Spatial, Reconstruction::Bilinear], 0, 1),
+    ) else {
+        return;
+    };
+    let error = |r: Reconstruction| {
+        report
+            .results
+            .iter()
+            .find(|row| row.reconstruction == r)
+            .unwrap()
+            .max_abs_error
+    };
+    assert!(
+        error(Reconstruction::Spatial) < 0.01,
+        "spatial: {}",
+        error(Reconstruction::Spatial)
+    );
+    assert!(
+        error(Reconstruction::Bilinear) > 0.1,
+        "bilinear: {}",
+        error(Reconstruction::Bilinear)
+    );
+}
+
+/// The light switches on: the samples' temporal gradient is 0.8 where
+/// they meet the dim history, the history is dropped, and from the frame
+/// of the switch on no stale (dim) value is shown: every frame is within
+/// 0.02 of the reference. The temporal reconstruction, which trusts its
+/// history, still shows dim pixels frames later. Checked: with eq. 8's
+/// filtered confidence alone (no drop on a change of half or more) the
+/// error is 0.69, 0.63, 0.12, 0.08, 0.05 over the five frames from the
+/// switch.
+#[test]
+fn history_rejected_on_shading_change() {
+    // `time` advances 0.02 a frame: after 20 warm-up frames the history
+    // is settled, and the light comes on at frame 25, measured frame 5.
+    let scene = two_planes(
+        "frames = 10\nwarmup = 20\nseconds_per_frame = 0.02",
+        "\"time\"",
+    );
+    let Some((_, report, _)) = crate::profile::run_shader(
+        FLAT,
+        &scene,
+        lowres_top(
+            &[Reconstruction::SpatioTemporal, Reconstruction::Temporal],
+            20,
+            10,
+        ),
+    ) else {
+        return;
+    };
+    let row = |r: Reconstruction| {
+        report
+            .results
+            .iter()
+            .find(|row| row.reconstruction == r)
+            .unwrap()
+    };
+    // Frame 25 (time 0.5) is measured frame 5.
+    let switched = 5;
+    let adaptive = row(Reconstruction::SpatioTemporal);
+    for (frame, stats) in adaptive.frame_stats.iter().enumerate() {
+        assert!(
+            stats.max_abs_error < 0.02,
+            "frame {frame}: {}",
+            stats.max_abs_error
+        );
+    }
+    let temporal = row(Reconstruction::Temporal);
+    assert!(
+        temporal.frame_stats[switched + 2].max_abs_error > 0.1,
+        "temporal: {}",
+        temporal.frame_stats[switched + 2].max_abs_error
+    );
 }
