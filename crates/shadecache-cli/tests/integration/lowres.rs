@@ -292,7 +292,7 @@ fn history_rejected_on_shading_change() {
 fn mean_error(a: &[u8], b: &[u8], pixels: &[usize]) -> f64 {
     let sum: f64 = pixels
         .iter()
-        .flat_map(|&i| (0..3).map(move |c| (i * 4 + c)))
+        .flat_map(|&i| (0..3).map(move |c| i * 4 + c))
         .map(|k| f64::from(a[k].abs_diff(b[k])) / 255.0)
         .sum();
     sum / (3 * pixels.len().max(1)) as f64
