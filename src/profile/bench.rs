@@ -45,14 +45,6 @@ pub(super) fn fixed_cost_runs(
         probes.push(Probe::new(ProbeOf::Payload(node), payload(&free)?));
         // Each variant with its payload and shade free: its fixed cost.
         for &variant in variants {
-            // Lowres's probe upsamples as lowres does by default.
-            let free = RewriteOptions {
-                reconstruction: match variant {
-                    Variant::Lowres => RewriteOptions::for_variant(variant).reconstruction,
-                    _ => free.reconstruction,
-                },
-                ..free.clone()
-            };
             let Ok(rewritten) =
                 rewrite::rewrite(shader, &prepared.analysis, candidate, variant, &free)
             else {

@@ -99,6 +99,21 @@ impl Axes {
 }
 
 impl Setting {
+    /// Rewrite options with this setting over `base` for `variant`: for
+    /// lowres the reconstruction is its upsampling's.
+    pub fn rewrite_options_of(
+        &self,
+        variant: crate::rewrite::Variant,
+        base: &RewriteOptions,
+    ) -> RewriteOptions {
+        let mut options = self.rewrite_options(base);
+        if variant == crate::rewrite::Variant::Lowres {
+            options.upsampling.reconstruction = self.reconstruction;
+            options.reconstruction = base.reconstruction;
+        }
+        options
+    }
+
     /// Rewrite options with this setting over `base`.
     pub fn rewrite_options(&self, base: &RewriteOptions) -> RewriteOptions {
         RewriteOptions {

@@ -725,7 +725,7 @@ fn configurations(
                     analysis,
                     candidate,
                     variant,
-                    &setting.rewrite_options(base),
+                    &setting.rewrite_options_of(variant, base),
                 ) {
                     Ok(rewritten) => rewritten,
                     Err(refusal) => {
@@ -1029,7 +1029,7 @@ pub fn rewrite_of(
         analysis,
         candidate,
         row.variant,
-        &setting.rewrite_options(defaults),
+        &setting.rewrite_options_of(row.variant, defaults),
     )
     .map_err(|refusal| {
         Error::plain(Diagnostic::error(format!(

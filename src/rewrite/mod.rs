@@ -123,24 +123,9 @@ pub struct Options {
     /// skinned on the GPU need none: their joint matrices are a buffer,
     /// which has its twin.
     pub deforming_inputs: Vec<String>,
-    /// The lowres variant's factor and knobs (seed 001); its
-    /// reconstruction is [`Options::reconstruction`], spatio-temporal by
-    /// default ([`Options::for_variant`]).
+    /// The lowres variant's reconstruction, factor and knobs (seed 001);
+    /// [`Options::reconstruction`] is the cache variants'.
     pub upsampling: Upsampling,
-}
-
-impl Options {
-    /// The default options of `variant`: lowres upsamples
-    /// spatio-temporally, the others reconstruct bilinearly.
-    pub fn for_variant(variant: Variant) -> Options {
-        Options {
-            reconstruction: match variant {
-                Variant::Lowres => Reconstruction::SpatioTemporal,
-                _ => Reconstruction::Bilinear,
-            },
-            ..Options::default()
-        }
-    }
 }
 
 impl Default for Options {
@@ -394,6 +379,18 @@ fn rewrite_at(
     options: &Options,
 ) -> Result<Rewritten, Refusal> {
     refuse_settings(variant, options)?;
+    // Lowres reads its history bilinearly and rebuilds the payload as its
+    // upsampling says: that is the plan's reconstruction.
+    let lowres_options;
+    let options = if variant == Variant::Lowres {
+        lowres_options = Options {
+            reconstruction: options.upsampling.reconstruction,
+            ..options.clone()
+        };
+        &lowres_options
+    } else {
+        options
+    };
     let (options, format_note) = cache_format(variant, options, candidate);
     let options = &options;
     let original = &shader.module;
@@ -527,7 +524,7 @@ fn refuse_settings(variant: Variant, options: &Options) -> Result<(), Refusal> {
     }
     if variant == Variant::Lowres {
         options.upsampling.check().map_err(Refusal::new)?;
-        lowres::mode(options.reconstruction)?;
+        lowres::mode(options.upsampling.reconstruction)?;
     } else if options.reconstruction.upsamples() {
         return Err(Refusal::new(format!(
             "{} reconstruction upsamples lowres's samples; {variant} reads its cache with bilinear, nearest, bilinear-packed or nearest-packed",

@@ -296,6 +296,10 @@ pub struct Plan {
 /// the samples it shades at 1/s × 1/s of the pixels (seed 001).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Upsampling {
+    /// How the payload is rebuilt from the samples: nearest, bilinear,
+    /// spatial, temporal or spatio-temporal (the paper's method).
+    #[serde(default = "spatio_temporal")]
+    pub reconstruction: Reconstruction,
     /// s: one pixel of each s×s window is shaded per frame (2 or 4), the
     /// window's offset stepping through a Bayer order of the s² positions
     /// (`refresh_phase` = frame mod s²).
@@ -310,15 +314,21 @@ pub struct Upsampling {
     pub sensitivity: f32,
 }
 
-/// The knobs of seed 001 as the paper sets them: σn = 0.2 (§3.1), σz as
+/// The knobs of seed 001 as the paper sets them: spatio-temporal
+/// reconstruction, σn = 0.2 (§3.1), σz as
 /// 3% (§3.1, there of the depth range; here of the depth itself), a = 1
 /// (§3.5.1), s = 4 (§3.2).
 pub const DEFAULT_UPSAMPLING: Upsampling = Upsampling {
+    reconstruction: Reconstruction::SpatioTemporal,
     factor: 4,
     sigma_normal: 0.2,
     sigma_depth: 0.03,
     sensitivity: 1.0,
 };
+
+fn spatio_temporal() -> Reconstruction {
+    Reconstruction::SpatioTemporal
+}
 
 impl Upsampling {
     /// Checks the knobs: s is 2 or 4, σn and σz are positive and finite,

@@ -124,6 +124,7 @@ impl UpsamplingArgs {
             sigma_normal: self.sigma_normal,
             sigma_depth: self.sigma_depth,
             sensitivity: self.sensitivity,
+            ..rewrite::DEFAULT_UPSAMPLING
         };
         upsampling
             .check()
@@ -325,13 +326,17 @@ fn rewrite_entry(
         upsampling: args.upsampling.upsampling()?,
         ..Options::default()
     };
-    // Each variant's own reconstruction unless one is named.
-    let options_for = |variant: Variant| Options {
-        reconstruction: args
-            .reconstruction
-            .map(Reconstruction::from)
-            .unwrap_or(Options::for_variant(variant).reconstruction),
-        ..options.clone()
+    // A reconstruction named is lowres's upsampling for lowres, the
+    // cache's read-back for the others.
+    let options_for = |variant: Variant| {
+        let mut options = options.clone();
+        if let Some(reconstruction) = args.reconstruction.map(Reconstruction::from) {
+            match variant {
+                Variant::Lowres => options.upsampling.reconstruction = reconstruction,
+                _ => options.reconstruction = reconstruction,
+            }
+        }
+        options
     };
     let language = match args.emit {
         EmitArg::Wgsl => Language::Wgsl,

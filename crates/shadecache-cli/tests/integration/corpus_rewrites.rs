@@ -73,16 +73,12 @@ fn rewrite_shader(path: &Path) -> Vec<CorpusRewrite> {
     let mut out = Vec::new();
     for candidate in &analysis.candidates {
         for variant in Variant::ALL {
-            let outcome = match rewrite::rewrite(
-                &shader,
-                &analysis,
-                candidate,
-                variant,
-                &Options::for_variant(variant),
-            ) {
-                Ok(rewritten) => Ok(emitted(&rewritten)),
-                Err(refusal) => Err(refusal.reason),
-            };
+            let outcome =
+                match rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
+                {
+                    Ok(rewritten) => Ok(emitted(&rewritten)),
+                    Err(refusal) => Err(refusal.reason),
+                };
             out.push(CorpusRewrite {
                 shader: path.to_path_buf(),
                 node: candidate.node.id.clone(),

@@ -101,14 +101,9 @@ fn snapshots_of_emitted_passes() {
                 .candidate(node)
                 .unwrap_or_else(|| panic!("{}: `{node}` is no candidate", case_path.display()));
             for &variant in &variants {
-                let rewritten = rewrite::rewrite(
-                    &shader,
-                    &analysis,
-                    candidate,
-                    variant,
-                    &Options::for_variant(variant),
-                )
-                .unwrap_or_else(|r| panic!("{stem} {node} {variant}: {r}"));
+                let rewritten =
+                    rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
+                        .unwrap_or_else(|r| panic!("{stem} {node} {variant}: {r}"));
                 for &language in &languages {
                     for (file, bytes) in back::render_variant(&rewritten, language).unwrap() {
                         let text = String::from_utf8(bytes).unwrap();
@@ -254,15 +249,9 @@ fn plans_describe_the_passes() {
     let (shader, analysis) = load(Path::new("corpus/noise_marble.wgsl"));
     let candidate = analysis.candidate("nb0c12cc4").unwrap();
     let plan = |variant| {
-        rewrite::rewrite(
-            &shader,
-            &analysis,
-            candidate,
-            variant,
-            &Options::for_variant(variant),
-        )
-        .unwrap()
-        .plan
+        rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
+            .unwrap()
+            .plan
     };
     let three = plan(Variant::ThreePass);
     let depth: Vec<(CompareFunction, bool)> = three
@@ -347,14 +336,8 @@ fn every_emitted_vertex_position_is_invariant() {
     let (shader, analysis) = load(Path::new("corpus/position_direct.wgsl"));
     let candidate = &analysis.candidates[0];
     for variant in Variant::ALL {
-        let rewritten = rewrite::rewrite(
-            &shader,
-            &analysis,
-            candidate,
-            variant,
-            &Options::for_variant(variant),
-        )
-        .unwrap();
+        let rewritten =
+            rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default()).unwrap();
         for (pass, text) in wgsl(&rewritten) {
             // Every position, vertex output and fragment input alike.
             let positions = text.matches("@builtin(position)").count();
@@ -591,15 +574,27 @@ fn every_reconstruction_validates_and_builds() {
             };
             for candidate in analysis.candidates.iter().take(5) {
                 for variant in Variant::ALL {
+                    // Lowres's reconstruction is its upsampling's: nearest,
+                    // bilinear or its own three.
+                    let options = match variant {
+                        Variant::Lowres => Options {
+                            upsampling: rewrite::Upsampling {
+                                reconstruction,
+                                ..rewrite::DEFAULT_UPSAMPLING
+                            },
+                            ..options.clone()
+                        },
+                        _ => options.clone(),
+                    };
                     let rewritten =
                         match rewrite::rewrite(&shader, &analysis, candidate, variant, &options) {
                             Ok(rewritten) => rewritten,
-                            // Lowres takes nearest, bilinear and its own
-                            // upsamplings; the cache variants none of those.
+                            // Lowres refuses the packed read-backs; the
+                            // cache variants refuse the upsamplings.
                             Err(refusal)
-                                if (variant == Variant::Lowres) != reconstruction.upsamples()
-                                    && (variant != Variant::Lowres
-                                        || reconstruction.packs_depth()) =>
+                                if (variant == Variant::Lowres && reconstruction.packs_depth())
+                                    || (variant != Variant::Lowres
+                                        && reconstruction.upsamples()) =>
                             {
                                 assert!(
                                     refusal.reason.contains("upsamples lowres's samples")
