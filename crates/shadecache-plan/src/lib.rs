@@ -856,6 +856,14 @@ pub enum Variant {
 }
 
 impl Variant {
+    /// The reprojection-cache variants (seed 002), lowres aside.
+    pub const CACHE: [Variant; 4] = [
+        Variant::OnePass,
+        Variant::TwoPass,
+        Variant::ThreePass,
+        Variant::Deferred,
+    ];
+
     pub const ALL: [Variant; 5] = [
         Variant::OnePass,
         Variant::TwoPass,

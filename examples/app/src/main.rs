@@ -19,7 +19,7 @@
 //! switching between the original pipeline and the cached variant.
 //!
 //! ```text
-//! cargo run --release -- [--frames N] [--warmup N] [--size PIXELS] [--refresh-period N] [--out DIR]
+//! cargo run --release -- [--frames N] [--warmup N] [--size PIXELS] [--refresh-period N] [--variant three-pass|lowres] [--out DIR]
 //! cargo run --release --features window -- --window [--refresh-period N]
 //! ```
 
@@ -63,6 +63,27 @@ const PASSES: [(&str, &str); 3] = [
         )),
     ),
 ];
+/// The lowres variant the build script wrote.
+const LOWRES_PLAN: &str = include_str!(concat!(
+    env!("OUT_DIR"),
+    "/shadecache/planet/nf50106c5/lowres/plan.json"
+));
+const LOWRES_PASSES: [(&str, &str); 2] = [
+    (
+        "pass1.wgsl",
+        include_str!(concat!(
+            env!("OUT_DIR"),
+            "/shadecache/planet/nf50106c5/lowres/pass1.wgsl"
+        )),
+    ),
+    (
+        "pass2.wgsl",
+        include_str!(concat!(
+            env!("OUT_DIR"),
+            "/shadecache/planet/nf50106c5/lowres/pass2.wgsl"
+        )),
+    ),
+];
 const ORIGINAL: &str = include_str!("../shaders/planet.wgsl");
 
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
@@ -78,6 +99,8 @@ struct Args {
     warmup: Option<u32>,
     size: u32,
     refresh_period: Option<u32>,
+    /// Run the lowres variant instead of three-pass.
+    lowres: bool,
     out: PathBuf,
     /// Draw into a window instead, switching between the original and the
     /// cached variant with the space bar.
@@ -90,6 +113,7 @@ fn args() -> Result<Args, String> {
         warmup: None,
         size: 256,
         refresh_period: None,
+        lowres: false,
         out: PathBuf::from("frames"),
         window: false,
     };
@@ -102,6 +126,13 @@ fn args() -> Result<Args, String> {
             "--warmup" => args.warmup = Some(number(value()?)?),
             "--size" => args.size = number(value()?)?.max(16),
             "--refresh-period" => args.refresh_period = Some(number(value()?)?),
+            "--variant" => {
+                args.lowres = match value()?.as_str() {
+                    "three-pass" => false,
+                    "lowres" => true,
+                    other => return Err(format!("--variant: three-pass or lowres, not `{other}`")),
+                }
+            }
             "--out" => args.out = PathBuf::from(value()?),
             "--window" => args.window = true,
             other => return Err(format!("unknown argument `{other}`")),
@@ -224,17 +255,41 @@ fn draw_original(
 }
 
 /// The cached variant drawing into `format` targets of `size`.
+/// Three-pass unless `lowres`, whose Δn is its factor's s² and not set
+/// here.
 fn cached_shader(
     gpu: &Gpu,
-    refresh_period: Option<u32>,
+    (refresh_period, lowres): (Option<u32>, bool),
     format: wgpu::TextureFormat,
     size: (u32, u32),
 ) -> Result<CachedShader, Box<dyn Error>> {
+    if lowres {
+        let plan: Plan = serde_json::from_str(LOWRES_PLAN)?;
+        let source = |name: &str| {
+            LOWRES_PASSES
+                .iter()
+                .find(|(n, _)| *n == name)
+                .map(|(_, s)| *s)
+        };
+        return made(gpu, &plan, source, format, size);
+    }
     let mut plan: Plan = serde_json::from_str(PLAN)?;
     if let Some(period) = refresh_period {
         // Δn is data: the refresh uniform carries it to the passes.
         plan.refresh.period = period;
     }
+    let source = |name: &str| PASSES.iter().find(|(n, _)| *n == name).map(|(_, s)| *s);
+    made(gpu, &plan, source, format, size)
+}
+
+/// `plan` on the application's device, in its frame.
+fn made<'s>(
+    gpu: &Gpu,
+    plan: &Plan,
+    source: impl Fn(&str) -> Option<&'s str>,
+    format: wgpu::TextureFormat,
+    size: (u32, u32),
+) -> Result<CachedShader, Box<dyn Error>> {
     let buffers = [Some(planet::vertex_layout())];
     let groups = [
         (0, &planet::UNIFORM_ENTRY[..]),
@@ -242,10 +297,9 @@ fn cached_shader(
     ];
     let colors = [Some(format.into())];
     let frame = FrameLayout::new(&buffers, &groups, &colors);
-    let source = |name: &str| PASSES.iter().find(|(n, _)| *n == name).map(|(_, s)| *s);
     Ok(CachedShader::new(
         &gpu.device,
-        &plan,
+        plan,
         source,
         &frame,
         size,
@@ -267,7 +321,12 @@ fn main() -> Result<(), Box<dyn Error>> {
     let planet = Planet::new(&gpu.device, &gpu.queue, 1.0);
     let original = original_pipeline(&gpu, &planet, COLOR_FORMAT);
     let size = (args.size, args.size);
-    let mut cached = cached_shader(&gpu, args.refresh_period, COLOR_FORMAT, size)?;
+    let mut cached = cached_shader(
+        &gpu,
+        (args.refresh_period, args.lowres),
+        COLOR_FORMAT,
+        size,
+    )?;
     let twins = cached.twins(&TwinSources {
         buffers: &[([0, 0], &planet.globals), ([1, 0], &planet.locals)],
         ..TwinSources::default()

@@ -148,7 +148,12 @@ impl App {
         };
         let planet = Planet::new(&gpu.device, &gpu.queue, width as f32 / height as f32);
         let original = original_pipeline(&gpu, &planet, config.format);
-        let mut cached = cached_shader(&gpu, self.refresh_period, config.format, (width, height))?;
+        let mut cached = cached_shader(
+            &gpu,
+            (self.refresh_period, false),
+            config.format,
+            (width, height),
+        )?;
         let twins = cached.twins(&TwinSources {
             buffers: &[([0, 0], &planet.globals), ([1, 0], &planet.locals)],
             ..TwinSources::default()

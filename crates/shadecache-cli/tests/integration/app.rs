@@ -232,3 +232,26 @@ fn host_crate_depends_on_wgpu_serde_and_the_plan_only() {
         assert!(!pulled || by_wgpu, "the host crate pulls in {toolchain}");
     }
 }
+
+/// The app runs its lowres variant (the albedo shaded at a sixteenth of
+/// the pixels, upsampled spatio-temporally) through the host crate as it
+/// runs three-pass: the build script wrote it beside three-pass, the app
+/// makes it from its own layouts and records it into its own encoder,
+/// with the samples' targets at 24×24 its own size. The frames after 16
+/// warm-up frames are close to the original's (the planet turns and its
+/// north twists against its south, so the history is reprojected).
+#[test]
+fn lowres_runs_in_the_host_crate() {
+    if crate::gpu::gpu().is_none() {
+        return;
+    }
+    let out = tempfile::tempdir().unwrap();
+    let stdout = run_app(
+        &["--variant", "lowres", "--frames", "4", "--size", "96"],
+        out.path(),
+    );
+    assert!(stdout.contains("variant: lowres"), "{stdout}");
+    let [mean, worst, _] = steady_state(&stdout);
+    assert!(mean > 30.0 && worst > 28.0, "{stdout}");
+    assert!(stdout.contains("GPU ms per frame: original"), "{stdout}");
+}

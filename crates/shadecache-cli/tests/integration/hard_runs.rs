@@ -154,7 +154,7 @@ fn reversed_z() {
         .max()
         .unwrap();
     assert!(worst <= 1, "reversed against standard Z: {worst}/255");
-    assert_eq!(report.results.len(), Variant::ALL.len());
+    assert_eq!(report.results.len(), Variant::CACHE.len());
     for row in &report.results {
         for (frame, stats) in row.frame_stats.iter().enumerate() {
             assert_eq!(
@@ -384,7 +384,7 @@ fn plane_point_in_frame_0(scene: &Scene, i: usize, w: usize, h: usize) -> glam::
 fn fast_motion() {
     let all = || {
         let mut opts = options(&[0], &[4]);
-        opts.variants = Variant::ALL.to_vec();
+        opts.variants = Variant::CACHE.to_vec();
         opts
     };
     if fast_sliding_object(all()).is_none() {
@@ -683,7 +683,7 @@ light_color = [1.0, 1.0, 1.0]
     };
     for speed in [0.0, 0.25, 0.7, 2.0] {
         let mut opts = options(&[period], &[4]);
-        opts.variants = Variant::ALL.to_vec();
+        opts.variants = Variant::CACHE.to_vec();
         opts.reconstructions = vec![
             shadecache::rewrite::Reconstruction::Bilinear,
             shadecache::rewrite::Reconstruction::Nearest,

@@ -76,6 +76,7 @@ pub(crate) fn assert_refresh_one_equals_reference(
         frames: Some(2),
         warmup: Some(1),
         size: Some([size, size]),
+        variants: Variant::CACHE.to_vec(),
         ..Options::default()
     };
     let (report, _) = profile::profile(
@@ -123,7 +124,7 @@ fn static_scene_without_refresh_reuses_every_pixel() {
     let Some((_, report, _)) = run(&marble_scene("", ""), opts) else {
         return;
     };
-    assert_eq!(report.results.len(), (Variant::ALL.len() - 1) * 4);
+    assert_eq!(report.results.len(), Variant::CACHE.len() * 4);
     for row in &report.results {
         for (frame, stats) in row.frame_stats.iter().enumerate() {
             assert_eq!(
@@ -160,7 +161,7 @@ fn refresh_period_one_equals_the_reference() {
     ) else {
         return;
     };
-    assert_eq!(report.results.len(), (Variant::ALL.len() - 1) * 4);
+    assert_eq!(report.results.len(), Variant::CACHE.len() * 4);
     for row in &report.results {
         assert_eq!(row.hit_rate, 0.0, "{}", row.variant);
         assert!(
@@ -314,6 +315,7 @@ fn report_json_carries_the_documented_fields() {
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.path().join("report.json")).unwrap()).unwrap();
     let results = report["results"].as_array().unwrap();
+    // The command's default measures every variant, lowres too.
     assert_eq!(results.len(), 2 * Variant::ALL.len());
     for row in results {
         for key in [
@@ -332,7 +334,7 @@ fn report_json_carries_the_documented_fields() {
         ] {
             assert!(!row[key].is_null(), "{key} missing: {row}");
         }
-        assert!(["one-pass", "two-pass", "three-pass", "deferred"]
+        assert!(["one-pass", "two-pass", "three-pass", "deferred", "lowres"]
             .contains(&row["variant"].as_str().unwrap()));
         assert!(row["speedup"].as_f64().unwrap() > 0.0);
     }
@@ -463,6 +465,7 @@ fn non_finite_options(node_text: &str, shader: &str, format: CacheFormat) -> Opt
         // sphere turns 2° a frame, and the share of the non-finite half in
         // view depends on how far it has turned (at 64°, nearly all).
         warmup: Some(2),
+        variants: Variant::CACHE.to_vec(),
         ..Options::default()
     }
 }
@@ -509,7 +512,7 @@ fn nan_payload_does_not_spread() {
 /// finite neighbour's value, where the reference shows whatever clamp(NaN)
 /// gives: not an error of the cache.)
 fn assert_contained(report: &shadecache::report::Report, detected: f64) {
-    assert_eq!(report.results.len(), (Variant::ALL.len() - 1) * 4);
+    assert_eq!(report.results.len(), Variant::CACHE.len() * 4);
     for row in &report.results {
         let what = format!("{} {}", row.variant, row.reconstruction.as_str());
         assert!(row.invalid_rate > detected, "{what}: {}", row.invalid_rate);
@@ -557,7 +560,7 @@ fn f16_overflow_is_recomputed_not_reused() {
     let Some((_, wide, _)) = run_shader(&shader, &rotating_sphere(), full) else {
         return;
     };
-    for variant in Variant::ALL {
+    for variant in Variant::CACHE {
         let narrow = narrow
             .results
             .iter()
@@ -972,6 +975,7 @@ fn fixed_cost_bound_is_at_least_the_measured_speedup() {
         frames: Some(4),
         warmup: Some(4),
         size: Some([64, 64]),
+        variants: Variant::CACHE.to_vec(),
         ..Options::default()
     };
     let (report, _) = profile::profile(
@@ -982,7 +986,7 @@ fn fixed_cost_bound_is_at_least_the_measured_speedup() {
         &mut Quiet,
     )
     .unwrap();
-    assert_eq!(report.results.len(), Variant::ALL.len());
+    assert_eq!(report.results.len(), Variant::CACHE.len());
     assert!(report.reference.fixed_ms > 0.0);
     for row in &report.results {
         let fixed: f64 = row.fixed_cost_ms.iter().map(|p| p.time_ms).sum();

@@ -76,7 +76,7 @@ fn a_loop_result_is_a_candidate() {
         .rejected
         .iter()
         .any(|r| r.node.text.starts_with("sin(") && r.reason.as_str() == "in-loop"));
-    for variant in Variant::ALL {
+    for variant in Variant::CACHE {
         rewrite::rewrite(&shader, &analysis, sum, variant, &Options::default())
             .unwrap_or_else(|r| panic!("{variant}: {r}"));
     }
@@ -123,7 +123,7 @@ fn a_node_under_a_uniform_branch_is_cached() {
 fn a_node_under_a_per_pixel_branch_is_cached_where_it_exists() {
     let (shader, analysis) = corpus_shader("terrain_slope_branch.wgsl");
     let grass = candidate(&analysis, "fbm(in.world_position * 24.0)");
-    for variant in Variant::ALL {
+    for variant in Variant::CACHE {
         let rewritten = rewrite::rewrite(&shader, &analysis, grass, variant, &Options::default())
             .unwrap_or_else(|r| panic!("{variant}: {r}"));
         assert_eq!(
@@ -157,7 +157,7 @@ fn vertex_entry_is_inferred_from_what_the_fragment_takes() {
     .unwrap();
     // The light loop's result.
     let color = candidate(&analysis, "color");
-    for variant in Variant::ALL {
+    for variant in Variant::CACHE {
         let rewritten = rewrite::rewrite(&shader, &analysis, color, variant, &Options::default())
             .unwrap_or_else(|r| panic!("{variant}: {r}"));
         assert!(rewritten
@@ -255,6 +255,7 @@ fn engine_style_shaders_at_refresh_period_one_equal_the_reference() {
             reconstructions: vec![Reconstruction::Bilinear, Reconstruction::NearestPacked],
             frames: Some(3),
             warmup: Some(1),
+            variants: Variant::CACHE.to_vec(),
             ..ProfileOptions::default()
         };
         let Some((_, report, _)) = run_shader(&shader_text, &scene, options) else {
@@ -322,7 +323,7 @@ fn a_node_after_returns_in_other_cases_is_absent_there() {
         &analysis,
         "textureSampleLevel(atlas, atlas_sampler, in.uv, 0.0).x * sin(in.uv.x * 40.0)",
     );
-    for variant in Variant::ALL {
+    for variant in Variant::CACHE {
         let rewritten =
             rewrite::rewrite(&shader, &analysis, coverage, variant, &Options::default())
                 .unwrap_or_else(|r| panic!("{variant}: {r}"));
@@ -358,6 +359,7 @@ size = 64
         cache_formats: vec![CacheFormat::Rgba32float],
         frames: Some(2),
         warmup: Some(1),
+        variants: Variant::CACHE.to_vec(),
         ..ProfileOptions::default()
     };
     let Some((_, report, _)) = run_shader(source, scene, differential) else {
@@ -377,6 +379,7 @@ size = 64
         reconstructions: vec![Reconstruction::Nearest],
         frames: Some(2),
         warmup: Some(2),
+        variants: Variant::CACHE.to_vec(),
         ..ProfileOptions::default()
     };
     let Some((_, report, _)) = run_shader(source, scene, still) else {
@@ -429,7 +432,7 @@ fn a_store_overwritten_by_the_cached_value_is_dropped_with_its_call() {
         .iter()
         .find(|c| c.node.text == "lit += vec3<f32>(rim * 0.25)")
         .unwrap_or_else(|| panic!("{:#?}", analysis.candidates));
-    for variant in Variant::ALL {
+    for variant in Variant::CACHE {
         let rewritten = rewrite::rewrite(&shader, &analysis, second, variant, &Options::default())
             .unwrap_or_else(|r| panic!("{variant}: {r}"));
         // The shade keeps no call to `shine`: its value is in the cache.
@@ -462,7 +465,7 @@ fn a_shader_using_all_four_bind_groups_gets_the_cache_after_its_last_binding() {
     assert!(text.contains("@group(3)"));
     let (shader, analysis) = analyzed("four_groups.wgsl", &text);
     let node = &analysis.candidates[0];
-    for variant in Variant::ALL {
+    for variant in Variant::CACHE {
         let rewritten = rewrite::rewrite(&shader, &analysis, node, variant, &Options::default())
             .unwrap_or_else(|r| panic!("{variant}: {r}"));
         let bindings = &rewritten.plan.bindings;
@@ -479,7 +482,7 @@ fn a_shader_using_all_four_bind_groups_gets_the_cache_after_its_last_binding() {
     if let Some(report) =
         crate::profile::assert_refresh_one_equals_reference(&shader, vec![node.node.id.clone()], 48)
     {
-        assert_eq!(report.results.len(), Variant::ALL.len());
+        assert_eq!(report.results.len(), Variant::CACHE.len());
     }
 }
 
@@ -503,7 +506,7 @@ fn a_shadow_and_forward_module_profiles_each_fragment_stage_without_a_scene() {
         )
         .unwrap();
         let node = &analysis.candidates[0];
-        for variant in Variant::ALL {
+        for variant in Variant::CACHE {
             let rewritten =
                 rewrite::rewrite(&shader, &analysis, node, variant, &Options::default())
                     .unwrap_or_else(|r| panic!("{entry} {variant}: {r}"));
@@ -550,6 +553,7 @@ fn a_shadow_and_forward_module_profiles_each_fragment_stage_without_a_scene() {
             frames: Some(2),
             warmup: Some(1),
             size: Some([48, 48]),
+            variants: Variant::CACHE.to_vec(),
             ..ProfileOptions::default()
         };
         let (report, _) = shadecache::profile::profile(
