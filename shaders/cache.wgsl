@@ -651,13 +651,29 @@ const CACHE_CHANGED: f32 = 0.5;
 // its exact history is kept as it is (a 5% change of luminance is not).
 const CACHE_STILL: f32 = 0.05;
 
+// The history of a pixel shaded at full resolution (adaptive refresh's
+// third pass): exact, of weight 1, unchanged.
+fn cache_exact_history() -> vec4<f32> {
+    return vec4<f32>(CACHE_EXACT + 1.0, 0.0, 0.0, 0.0);
+}
+
 struct CacheUpsampled {
     // The payload at this pixel.
     payload: vec4<f32>,
     // What the history target keeps of it: hw (+ CACHE_EXACT when exact),
     // and the three latest gradients, newest first.
     history: vec4<f32>,
+    // Whether the upsampling cannot vouch for the pixel (the paper's Fig. 5
+    // "red"): no temporal weight (disoccluded, off-screen or changed), no
+    // own sample, and undersampled (its samples' spatial weight below
+    // CACHE_UNDERSAMPLED). With adaptive refresh a third pass shades it.
+    unreliable: bool,
 }
+
+// The spatial weight sum below which a pixel counts as undersampled: four
+// samples of its surface weigh 1 to 4 by their hats; a silhouette's or a
+// thin feature's fewer.
+const CACHE_UNDERSAMPLED: f32 = 0.5;
 
 // The four nearest samples of a pixel (the lattice points around it,
 // clamped to the image): their payloads, their geometric weight (eq. 2's
@@ -742,24 +758,25 @@ fn cache_upsample(mode: u32, components: u32, frag_coord: vec4<f32>, normal: vec
     let n = cache_neighbours(frag_coord, normal);
     let none = vec4<f32>(0.0, 1.0, 1.0, 1.0);
     if (mode == 0u) {
-        return CacheUpsampled(n.payload[n.nearest], none);
+        return CacheUpsampled(n.payload[n.nearest], none, false);
     }
     // The linear hat of bilinear and of the spatial upsampling: 1 − d/r.
     let hat = cache_image_kernel(n, 1.0);
     if (mode == 1u) {
         // Bilinear over the lattice: the product of the hats along x and
         // y is the tent's footprint; the radial hat stands in for it.
-        return CacheUpsampled(cache_blend(n, hat).payload, none);
+        return CacheUpsampled(cache_blend(n, hat).payload, none, false);
     }
     let spatial = cache_blend(n, hat * n.geometry);
+    let own_spatial = n.own < 4u;
     if (mode == 2u) {
-        return CacheUpsampled(spatial.payload, none);
+        return CacheUpsampled(spatial.payload, none, !own_spatial & (spatial.weight < CACHE_UNDERSAMPLED));
     }
     let own = n.own < 4u;
     let own_payload = n.payload[min(n.own, 3u)];
     if (mode == 3u) {
         let reused = select(spatial.payload, before, hit);
-        return CacheUpsampled(select(reused, own_payload, own), none);
+        return CacheUpsampled(select(reused, own_payload, own), none, !own & !hit & (spatial.weight < CACHE_UNDERSAMPLED));
     }
     // Last frame's history where this point was: its weight and gradients.
     let point = cache_point(previous_clip);
@@ -807,5 +824,6 @@ fn cache_upsample(mode: u32, components: u32, frag_coord: vec4<f32>, normal: vec
     let keep = hit & previous_exact & centred & still;
     payload = select(select(payload, before, keep), own_payload, own);
     accumulated = accumulated + select(0.0, CACHE_EXACT, own | keep);
-    return CacheUpsampled(payload, vec4<f32>(accumulated, now, older.x, older.y));
+    let unreliable = !own & (!hit | changed) & (spatial.weight < CACHE_UNDERSAMPLED);
+    return CacheUpsampled(payload, vec4<f32>(accumulated, now, older.x, older.y), unreliable);
 }

@@ -78,6 +78,9 @@ pub struct Options {
     pub lowres_reconstructions: Vec<Reconstruction>,
     /// Lowres's factor and knobs.
     pub upsampling: crate::rewrite::Upsampling,
+    /// Lowres's adaptive refresh to measure: off, on, or both (a sweep
+    /// measures both).
+    pub lowres_reshade: Vec<bool>,
     /// The cache formats to measure.
     pub cache_formats: Vec<CacheFormat>,
     /// The depth tolerances ε to measure.
@@ -121,6 +124,7 @@ impl Options {
             reconstructions: axes.reconstructions,
             cache_formats: axes.cache_formats,
             depth_epsilons: axes.depth_epsilons,
+            lowres_reshade: vec![false, true],
             lowres_reconstructions: vec![
                 Reconstruction::Nearest,
                 Reconstruction::Bilinear,
@@ -153,6 +157,7 @@ impl Default for Options {
             refresh_quads: vec![4],
             reconstructions: vec![Reconstruction::Bilinear],
             lowres_reconstructions: vec![Reconstruction::SpatioTemporal],
+            lowres_reshade: vec![false],
             upsampling: crate::rewrite::DEFAULT_UPSAMPLING,
             cache_formats: vec![CacheFormat::Rgba16float],
             depth_epsilons: vec![RewriteOptions::default().depth_epsilon],
@@ -367,7 +372,10 @@ pub fn profile(
     let mut configs = configurations(
         (shader, &prepared.analysis),
         &nodes,
-        (&options.variants, &options.lowres_reconstructions),
+        (
+            &options.variants,
+            (&options.lowres_reconstructions, &options.lowres_reshade),
+        ),
         &prepared.base,
         &|plan, sources| bench.runner(plan, sources, true),
         (size, options.error_threshold),
@@ -695,7 +703,7 @@ type NewRunner<'a> = dyn Fn(&Plan, &HashMap<String, String>) -> Result<Runner, S
 fn configurations(
     (shader, analysis): (&Shader, &analysis::Analysis),
     nodes: &[(&Candidate, &[Setting])],
-    (variants, lowres_reconstructions): (&[Variant], &[Reconstruction]),
+    (variants, lowres): (&[Variant], (&[Reconstruction], &[bool])),
     base: &RewriteOptions,
     new_runner: &NewRunner,
     (size, error_threshold): ([u32; 2], f64),
@@ -707,18 +715,19 @@ fn configurations(
     for (node, (candidate, settings)) in nodes.iter().enumerate() {
         for &variant in variants {
             let settings = match variant {
-                Variant::Lowres => lowres_settings(settings, base, lowres_reconstructions),
+                Variant::Lowres => lowres_settings(settings, base, lowres),
                 _ => settings.to_vec(),
             };
             for setting in settings.iter() {
                 let what = format!(
-                    "{} {variant} Δn={} k={} {} {} ε={}",
+                    "{} {variant} Δn={} k={} {} {} ε={}{}",
                     candidate.node.id,
                     setting.refresh_period,
                     setting.refresh_quad,
                     setting.reconstruction.as_str(),
                     setting.cache_format.as_str(),
-                    setting.depth_epsilon
+                    setting.depth_epsilon,
+                    if setting.reshade { " re-shade" } else { "" }
                 );
                 let rewritten = match rewrite::rewrite(
                     shader,
@@ -782,7 +791,7 @@ fn configurations(
 fn lowres_settings(
     settings: &[Setting],
     base: &RewriteOptions,
-    reconstructions: &[Reconstruction],
+    (reconstructions, reshades): (&[Reconstruction], &[bool]),
 ) -> Vec<Setting> {
     let s = base.upsampling.factor;
     let mut formats: Vec<CacheFormat> = settings.iter().map(|s| s.cache_format).collect();
@@ -790,15 +799,18 @@ fn lowres_settings(
     let mut out = Vec::new();
     for &reconstruction in reconstructions {
         for &cache_format in &formats {
-            let setting = Setting {
-                refresh_period: s * s,
-                refresh_quad: s,
-                reconstruction,
-                cache_format,
-                depth_epsilon: base.depth_epsilon,
-            };
-            if !out.contains(&setting) {
-                out.push(setting);
+            for &reshade in reshades {
+                let setting = Setting {
+                    refresh_period: s * s,
+                    refresh_quad: s,
+                    reconstruction,
+                    cache_format,
+                    depth_epsilon: base.depth_epsilon,
+                    reshade,
+                };
+                if !out.contains(&setting) {
+                    out.push(setting);
+                }
             }
         }
     }
@@ -849,6 +861,7 @@ fn result_row(config: Config, node: &NodeReport, baseline: &Baseline) -> (Result
         refresh_period: config.setting.refresh_period,
         refresh_quad: config.setting.refresh_quad,
         reconstruction: config.setting.reconstruction,
+        reshade: config.setting.reshade,
         cache_format: config.setting.cache_format,
         depth_epsilon: config.setting.depth_epsilon,
         time_ms,
@@ -1023,6 +1036,7 @@ pub fn rewrite_of(
         reconstruction: row.reconstruction,
         cache_format: row.cache_format,
         depth_epsilon: row.depth_epsilon,
+        reshade: row.reshade,
     };
     rewrite::rewrite(
         shader,

@@ -324,6 +324,10 @@ pub struct ResultRow {
     pub cache_format: CacheFormat,
     /// The depth test's relative tolerance ε.
     pub depth_epsilon: f32,
+    /// Lowres's adaptive refresh: its unreliable pixels shaded at full
+    /// resolution in a third pass.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub reshade: bool,
     /// Median frame time, ms: from the first pass's start timestamp to the
     /// last one's end, what runs between the passes included.
     pub time_ms: f64,
@@ -480,6 +484,10 @@ pub struct Setting {
     pub cache_format: CacheFormat,
     /// ε.
     pub depth_epsilon: f32,
+    /// Lowres's adaptive refresh: its unreliable pixels shaded at full
+    /// resolution.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub reshade: bool,
 }
 
 /// How the grid is covered.
@@ -576,12 +584,17 @@ impl ResultRow {
     /// Its knobs in words: `Δn = 32, k = 4, bilinear, rgba16float, ε = 0.02`.
     pub fn setting(&self) -> String {
         format!(
-            "Δn = {}, k = {}, {}, {}, ε = {}",
+            "Δn = {}, k = {}, {}, {}, ε = {}{}",
             self.refresh_period,
             self.refresh_quad,
             self.reconstruction.as_str(),
             self.cache_format.as_str(),
-            self.depth_epsilon
+            self.depth_epsilon,
+            if self.reshade {
+                ", unreliable pixels re-shaded"
+            } else {
+                ""
+            }
         )
     }
 }

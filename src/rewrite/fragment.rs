@@ -105,6 +105,10 @@ pub enum Stage {
     /// Lowres, pass 2: the payload rebuilt at every pixel from the samples
     /// and the history, and the shading from it.
     Upsample,
+    /// Lowres with adaptive refresh, pass 3: the original computation at
+    /// the pixels the upsampling left (its unreliable ones), writing
+    /// colour, the payload and an exact history.
+    Reshade,
 }
 
 impl Stage {
@@ -116,7 +120,7 @@ impl Stage {
             Stage::Classify => Writes::Classes,
             Stage::GBuffer => Writes::GBuffer,
             Stage::Samples => Writes::Samples,
-            Stage::Upsample => Writes::ColorAndHistory,
+            Stage::Upsample | Stage::Reshade => Writes::ColorAndHistory,
         }
     }
 
@@ -291,7 +295,10 @@ pub(super) fn entry_point(
     stage: Stage,
     inputs: Inputs,
 ) -> Result<Function, Refusal> {
-    if matches!(stage, Stage::GBuffer | Stage::Samples | Stage::Upsample) {
+    if matches!(
+        stage,
+        Stage::GBuffer | Stage::Samples | Stage::Upsample | Stage::Reshade
+    ) {
         return Err(Refusal::internal(format!(
             "the {stage:?} pass is built by its own module"
         )));
@@ -399,7 +406,7 @@ fn classify_return(
 }
 
 /// Ends the invocation where `reuse` is false.
-fn kill_unless(b: &mut Builder, reuse: Handle<Expression>) {
+pub(super) fn kill_unless(b: &mut Builder, reuse: Handle<Expression>) {
     let kill = b.nested(|b| b.push(Statement::Kill));
     b.push(Statement::If {
         condition: reuse,
@@ -468,7 +475,7 @@ fn payload_of(
             let cached = b.call(pieces.current, vec![at.frag_coord]);
             plain(from_vec4(b, cached, pieces.components))
         }
-        Stage::Classify | Stage::GBuffer | Stage::Samples | Stage::Upsample => {
+        Stage::Classify | Stage::GBuffer | Stage::Samples | Stage::Upsample | Stage::Reshade => {
             return Err(Refusal::internal(format!("{stage:?} has no payload")))
         }
     })

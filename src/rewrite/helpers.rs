@@ -102,6 +102,7 @@ impl CacheHelpers {
                 upsample: helper("cache_upsample")?,
                 unit_normal: helper("cache_unit_normal")?,
                 geometric_normal: helper("cache_geometric_normal")?,
+                exact_history: helper("cache_exact_history")?,
                 history: helper(match options.cache_format {
                     CacheFormat::Rgba16float => "cache_history",
                     CacheFormat::Rgba32float => "cache_history_loads",

@@ -37,6 +37,8 @@ pub(crate) struct LowresHelpers {
     /// The history's lookup (`cache_history`, or `cache_history_loads`
     /// for an rgba32float cache).
     pub history: Handle<Function>,
+    /// The history of a pixel shaded at full resolution.
+    pub exact_history: Handle<Function>,
 }
 
 /// Whether a reconstruction reads the history (and so the samples pass
@@ -219,7 +221,7 @@ pub(crate) fn upsample_entry(
     module: &mut Module,
     pieces: &Pieces,
     helpers: &LowresHelpers,
-    reconstruction: Reconstruction,
+    (reconstruction, reshade): (Reconstruction, bool),
 ) -> Result<Function, Refusal> {
     let mode = mode(reconstruction)?;
     let (arguments, at) = fragment::varying_arguments(module, pieces, true);
@@ -261,6 +263,63 @@ pub(crate) fn upsample_entry(
     let color = b.call(pieces.shade, arguments);
     b.name(color, "color");
     let encoded = b.call(pieces.encode, vec![value]);
+    let mut components: Vec<_> = match members {
+        Some(count) if count > 0 && fragment::is_struct(module, pieces.result.ty) => {
+            (0..count).map(|i| b.member(color, i)).collect()
+        }
+        _ => vec![color],
+    };
+    components.push(encoded);
+    components.push(history);
+    let result = b.expr(Expression::Compose {
+        ty: output,
+        components,
+    });
+    // Adaptive refresh: the unreliable pixels are left to the third pass.
+    // The kill comes last, after the shading's derivatives (naga writes
+    // `discard` as OpKill, which ends the invocation).
+    if reshade {
+        let unreliable = b.member(upsampled, 2);
+        let kept = b.expr(Expression::Unary {
+            op: naga::UnaryOperator::LogicalNot,
+            expr: unreliable,
+        });
+        fragment::kill_unless(&mut b, kept);
+    }
+    b.push(Statement::Return {
+        value: Some(result),
+    });
+    Ok(b.finish())
+}
+
+/// Pass 3 with adaptive refresh: the original payload at full resolution
+/// where pass 2 discarded (the depth test passes only there), the shading
+/// from it, the payload and an exact history (weight 1, gradient 0).
+pub(crate) fn reshade_entry(
+    module: &mut Module,
+    pieces: &Pieces,
+    helpers: &LowresHelpers,
+) -> Result<Function, Refusal> {
+    let (arguments, at) = fragment::varying_arguments(module, pieces, false);
+    let (output, members) = fragment::color_and_cache_output(module, pieces, pieces.vec4);
+    let mut b = Builder::new(Function {
+        name: Some(pieces.name.clone()),
+        arguments,
+        result: Some(naga::FunctionResult {
+            ty: output,
+            binding: None,
+        }),
+        ..Function::default()
+    });
+    let frag = fragment::read_varyings(&mut b, &at);
+    let payload = b.call(pieces.payload, frag.originals.clone());
+    let value = fragment::to_vec4(&mut b, payload, pieces.components, pieces.vec4);
+    let mut arguments = frag.originals.clone();
+    arguments.push(payload);
+    let color = b.call(pieces.shade, arguments);
+    b.name(color, "color");
+    let encoded = b.call(pieces.encode, vec![value]);
+    let history = b.call(helpers.exact_history, Vec::new());
     let mut components: Vec<_> = match members {
         Some(count) if count > 0 && fragment::is_struct(module, pieces.result.ty) => {
             (0..count).map(|i| b.member(color, i)).collect()

@@ -480,11 +480,20 @@ fn rewrite_at(
             entry,
             (stage, name),
             gbuffer.as_ref(),
-            (options.upsampling.factor, options.reconstruction),
+            (
+                options.upsampling.factor,
+                options.reconstruction,
+                options.upsampling.reshade,
+            ),
         )
     };
+    let mut stages = stages(variant).to_vec();
+    // Adaptive refresh: the unreliable pixels shaded in a third pass.
+    if variant == Variant::Lowres && options.upsampling.reshade {
+        stages.push(Stage::Reshade);
+    }
     let mut passes = Vec::new();
-    for (index, &stage) in stages(variant).iter().enumerate() {
+    for (index, &stage) in stages.iter().enumerate() {
         passes.push((stage, stage_pass(stage, format!("pass{}", index + 1))?));
     }
     let classify = stage_pass(Stage::Classify, "classify".into())?;
@@ -580,7 +589,7 @@ fn pass_module(
     entry: &naga::EntryPoint,
     (stage, name): (Stage, String),
     gbuffer: Option<&gbuffer::GBuffer>,
-    (lowres_factor, reconstruction): (u32, Reconstruction),
+    (lowres_factor, reconstruction, reshade): (u32, Reconstruction, bool),
 ) -> Result<PassModule, Refusal> {
     let mut pass = module.clone();
     let (fragment, screen_vertex) = match (gbuffer, stage) {
@@ -594,7 +603,11 @@ fn pass_module(
             None,
         ),
         (_, Stage::Upsample) => (
-            lowres::upsample_entry(&mut pass, pieces, &pieces.lowres, reconstruction)?,
+            lowres::upsample_entry(&mut pass, pieces, &pieces.lowres, (reconstruction, reshade))?,
+            None,
+        ),
+        (_, Stage::Reshade) => (
+            lowres::reshade_entry(&mut pass, pieces, &pieces.lowres)?,
             None,
         ),
         (Some(gbuffer), Stage::GBuffer) => (gbuffer.write_entry(&mut pass, pieces)?, None),

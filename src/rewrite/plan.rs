@@ -429,7 +429,8 @@ fn role(stage: Stage, screen: bool) -> &'static str {
         Stage::ShadeFromCache => "every pixel (depth equal): shade from this frame's cache at the pixel",
         Stage::Classify => "diagnostic, after the frame (depth equal): the cache's decision at each visible pixel",
         Stage::Samples => "at 1/s × 1/s of the pixels, its own depth buffer, the projection jittered onto this frame's lattice: the payload (level of detail biased by −log2 s) into the samples, and their normal, depth, draw id and temporal gradient",
-        Stage::Upsample => "every pixel (depth test): rebuild the payload from the four nearest samples and the reprojected history, shade from it, write colour, the payload and its history",
+        Stage::Upsample => "every pixel (depth test): rebuild the payload from the four nearest samples and the reprojected history, shade from it, write colour, the payload and its history (with adaptive refresh: discard the pixels it cannot vouch for)",
+        Stage::Reshade => "the pixels pass 2 left empty (depth test): compute the payload at full resolution and shade, write colour, the payload and an exact history",
     }
 }
 

@@ -312,6 +312,13 @@ pub struct Upsampling {
     /// a: the sensitivity of the history's weight to the temporal gradient
     /// (eq. 8); 1 in most of the paper's scenes.
     pub sensitivity: f32,
+    /// Adaptive refresh: shade at full resolution, in a third pass, the
+    /// pixels the upsampling cannot vouch for (the paper's Fig. 5 "red":
+    /// no temporal weight, being disoccluded or changed, and undersampled,
+    /// with no own sample this frame) instead of showing their spatial
+    /// guess.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub reshade: bool,
 }
 
 /// The knobs of seed 001 as the paper sets them: spatio-temporal
@@ -324,6 +331,7 @@ pub const DEFAULT_UPSAMPLING: Upsampling = Upsampling {
     sigma_normal: 0.2,
     sigma_depth: 0.03,
     sensitivity: 1.0,
+    reshade: false,
 };
 
 fn spatio_temporal() -> Reconstruction {

@@ -322,6 +322,12 @@ fn options(args: &Args, stages: &super::StageArgs) -> Result<Options, Error> {
             .map(|r| r.iter().map(|&r| r.into()).collect())
             .unwrap_or(defaults.lowres_reconstructions),
         upsampling: args.upsampling.upsampling()?,
+        // Lowres's adaptive refresh: on when asked, both ways in a sweep.
+        lowres_reshade: if args.upsampling.reshade_unreliable {
+            vec![true]
+        } else {
+            defaults.lowres_reshade
+        },
         max_error: args.max_error,
         frames: args.frames,
         warmup: args.warmup,

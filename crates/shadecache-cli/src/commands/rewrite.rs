@@ -114,6 +114,11 @@ pub struct UpsamplingArgs {
     /// (eq. 8), in (0, 1].
     #[arg(long, value_name = "A", default_value_t = rewrite::DEFAULT_UPSAMPLING.sensitivity)]
     pub sensitivity: f32,
+    /// Adaptive refresh for lowres: shade at full resolution, in a third
+    /// pass, the pixels its upsampling cannot vouch for (disoccluded or
+    /// changed, undersampled, not sampled this frame).
+    #[arg(long)]
+    pub reshade_unreliable: bool,
 }
 
 impl UpsamplingArgs {
@@ -124,6 +129,7 @@ impl UpsamplingArgs {
             sigma_normal: self.sigma_normal,
             sigma_depth: self.sigma_depth,
             sensitivity: self.sensitivity,
+            reshade: self.reshade_unreliable,
             ..rewrite::DEFAULT_UPSAMPLING
         };
         upsampling

@@ -580,11 +580,13 @@ fn every_reconstruction_validates_and_builds() {
             for candidate in analysis.candidates.iter().take(5) {
                 for variant in Variant::ALL {
                     // Lowres's reconstruction is its upsampling's: nearest,
-                    // bilinear or its own three.
+                    // bilinear or its own three; with adaptive refresh (its
+                    // third pass) at rgba32float.
                     let options = match variant {
                         Variant::Lowres => Options {
                             upsampling: rewrite::Upsampling {
                                 reconstruction,
+                                reshade: cache_format == CacheFormat::Rgba32float,
                                 ..rewrite::DEFAULT_UPSAMPLING
                             },
                             ..options.clone()
