@@ -651,6 +651,24 @@ const CACHE_CHANGED: f32 = 0.5;
 // its exact history is kept as it is (a 5% change of luminance is not).
 const CACHE_STILL: f32 = 0.05;
 
+// Lowres's classes: a pixel on this frame's lattice (shaded this frame,
+// blue), else what the history lookup found: reused (green), off-screen
+// (orange), disoccluded (red), not finite (magenta).
+fn cache_classify_lowres(status: u32, frag_coord: vec4<f32>, age: f32) -> vec4<f32> {
+    let s = max(cache_params.refresh_quad, 1u);
+    let offset = cache_sample_offset();
+    let pixel = vec2<u32>(frag_coord.xy);
+    let sampled = all((pixel % vec2<u32>(s)) == offset);
+    var classes = array<vec4<f32>, 4>(
+        vec4<f32>(0.0, 1.0, 0.0, 1.0),
+        vec4<f32>(1.0, 0.5, 0.0, 1.0),
+        vec4<f32>(1.0, 0.0, 0.0, 1.0),
+        vec4<f32>(1.0, 0.0, 1.0, 1.0),
+    );
+    let found = classes[min(status, 3u)] + vec4<f32>(0.0 * age);
+    return select(found, vec4<f32>(0.0, 0.0, 1.0, 1.0), sampled & (status != 3u));
+}
+
 // The history of a pixel shaded at full resolution (adaptive refresh's
 // third pass): exact, of weight 1, unchanged.
 fn cache_exact_history() -> vec4<f32> {

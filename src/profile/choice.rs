@@ -254,6 +254,7 @@ mod tests {
             miss_causes: Vec::new(),
             warnings: Vec::new(),
             grid: None,
+            upsampling: None,
             reference_check: None,
             choice: None,
         }

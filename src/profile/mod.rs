@@ -587,6 +587,11 @@ impl RunContext<'_> {
             miss_causes: findings.miss_causes,
             reference_check: Some(findings.reference_check),
             choice: None,
+            upsampling: self
+                .options
+                .variants
+                .contains(&Variant::Lowres)
+                .then(|| self.prepared.defaults.upsampling.clone()),
         }
     }
 }

@@ -69,6 +69,17 @@ fn header(report: &Report) -> String {
         escape(&report.timing),
         escape(&report.command),
     );
+    if let Some(u) = &report.upsampling {
+        let _ = write!(
+            page,
+            "<p>Lowres (seed 001): one pixel of each {s}×{s} window shaded per frame (Δn = {}, k = {s} in the tables), σn = {}, σz = {} of the depth, a = {}. In its maps blue is a pixel shaded this frame, green one whose history was reused, red and orange one whose history was missing.</p>",
+            u.factor * u.factor,
+            u.sigma_normal,
+            u.sigma_depth,
+            u.sensitivity,
+            s = u.factor,
+        );
+    }
     if !report.steady_state {
         let _ = write!(
             page,

@@ -88,6 +88,10 @@ pub struct Report {
     /// The configuration picked for an error budget (`--max-error`).
     #[serde(default)]
     pub choice: Option<Choice>,
+    /// Lowres's factor and knobs, when lowres was measured (its rows'
+    /// reconstruction and adaptive refresh are their own).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub upsampling: Option<crate::rewrite::Upsampling>,
 }
 
 /// The reference's measured frames, looked at.

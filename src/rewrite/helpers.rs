@@ -33,7 +33,7 @@ impl CacheHelpers {
     pub fn import(
         module: &mut Module,
         slot: CacheSlot,
-        options: &Options,
+        (options, lowres): (&Options, bool),
         candidate: &Candidate,
     ) -> Result<CacheHelpers, Refusal> {
         let imported =
@@ -89,7 +89,12 @@ impl CacheHelpers {
             lookup: helper(lookup)?,
             refresh: helper("cache_refresh")?,
             current: helper("cache_current")?,
-            classify: helper("cache_classify")?,
+            // Lowres's refreshed pixels are its lattice's.
+            classify: helper(if lowres {
+                "cache_classify_lowres"
+            } else {
+                "cache_classify"
+            })?,
             classify_absent: helper("cache_classify_absent")?,
             age_written: helper("cache_age_written")?,
             encode: helper("cache_encode")?,

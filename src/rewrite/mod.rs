@@ -415,7 +415,12 @@ fn rewrite_at(
     // last binding in the last one.
     let slot = CacheSlot::for_module(original);
     let mut module = original.clone();
-    let helpers = helpers::CacheHelpers::import(&mut module, slot, options, candidate)?;
+    let helpers = helpers::CacheHelpers::import(
+        &mut module,
+        slot,
+        (options, variant == Variant::Lowres),
+        candidate,
+    )?;
     // A fragment-only module (its vertex stage composed elsewhere) gets
     // fragment passes that take the previous clip position as an input;
     // the plan says what the host's vertex stage must output.

@@ -340,6 +340,37 @@ fn options(args: &Args, stages: &super::StageArgs) -> Result<Options, Error> {
 /// What the terminal says of a profile: the reference, its check, the
 /// warnings, the best of each variant, the defaults, the miss causes and
 /// what the grid left out.
+/// Lowres's line: its knobs, and what its classes mean for it (pixels
+/// shaded this frame, history reused, history missing).
+fn lowres_line(report: &report::Report, row: &report::ResultRow) -> String {
+    let knobs = report.upsampling.as_ref().map_or(String::new(), |u| {
+        format!(
+            "s = {}, σn = {}, σz = {}, a = {}, ",
+            u.factor, u.sigma_normal, u.sigma_depth, u.sensitivity
+        )
+    });
+    format!(
+        "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] ({knobs}{}{}, {:.2}× with its fixed costs, P/T {:.2}, shaded this frame {:.0}%, history reused {:.0}%, history missing {:.0}%), PSNR {:.1} dB over the covered pixels (worst frame {:.1}), SSIM {:.4}, flicker {:.4}\n",
+        row.variant.as_str(),
+        row.node,
+        row.node_text,
+        row.speedup,
+        row.speedup_ci[0],
+        row.speedup_ci[1],
+        row.reconstruction.as_str(),
+        if row.reshade { ", unreliable pixels re-shaded" } else { "" },
+        row.bound_with_fixed_costs,
+        row.p_over_t,
+        row.refresh_rate * 100.0,
+        row.hit_rate * 100.0,
+        row.miss_rate * 100.0,
+        row.psnr,
+        row.worst_psnr,
+        row.ssim,
+        row.flicker
+    )
+}
+
 fn summary(report: &report::Report) -> String {
     let mut summary = format!(
         "{} on {} ({}×{}, {} frames after {} warm-up, {}): reference {:.3} ms (frames {:.3}–{:.3})\n",
@@ -367,6 +398,10 @@ fn summary(report: &report::Report) -> String {
         summary.push_str(&format!("  warning: {warning}\n"));
     }
     for row in report.best_per_variant() {
+        if row.variant == shadecache::rewrite::Variant::Lowres {
+            summary.push_str(&lowres_line(report, row));
+            continue;
+        }
         summary.push_str(&format!(
             "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] (ideal {:.2}×, {:.2}× with its fixed costs, P/T {:.2}, hit {:.0}% miss {:.0}% refresh {:.0}%, oldest value shown {} frames), PSNR {:.1} dB over the covered pixels (worst frame {:.1}), SSIM {:.4}, flicker {:.4}\n",
             row.variant.as_str(),
