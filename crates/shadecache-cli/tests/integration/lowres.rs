@@ -490,3 +490,86 @@ fn lowres_reshades_unreliable_pixels() {
         "revealed band: re-shaded {reshaded}, upsampled {guessed}"
     );
 }
+
+/// [`FLAT`] coloured by depth instead of by object: red in front of
+/// z = 0, blue behind it.
+const BY_DEPTH: &str = r#"
+struct Frame {
+    clip_from_world: mat4x4<f32>,
+    world_from_local: mat4x4<f32>,
+}
+@group(0) @binding(0) var<uniform> frame: Frame;
+struct VertexInput {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+}
+struct VertexOutput {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) world_normal: vec3<f32>,
+    @location(1) world_position: vec3<f32>,
+}
+@vertex
+fn vs_main(in: VertexInput) -> VertexOutput {
+    var out: VertexOutput;
+    let world = frame.world_from_local * vec4<f32>(in.position, 1.0);
+    out.clip_position = frame.clip_from_world * world;
+    out.world_normal = (frame.world_from_local * vec4<f32>(in.normal, 0.0)).xyz;
+    out.world_position = world.xyz;
+    return out;
+}
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
+    let albedo = select(vec3<f32>(0.1, 0.3, 0.9), vec3<f32>(0.8, 0.2, 0.1), in.world_position.z > 0.0);
+    var c = albedo * max(normalize(in.world_normal).z, 0.0);
+    for (var i = 0; i < 32; i++) {
+        c = sqrt((c * c) + vec3<f32>(1e-6));
+    }
+    return vec4<f32>(c, 1.0);
+}
+"#;
+
+/// One mesh, one draw: a small square a unit in front of a large one,
+/// both facing the camera. Around the small square's outline the samples
+/// of both squares have one normal and one draw id, and only eq. 2's
+/// depth weight (σz, 3% of the depth) tells them apart: the spatial
+/// upsampling does not bleed the back square's colour onto the front one
+/// or the reverse. With the depth weight made flat (σz = 100) it does,
+/// which shows the scene tests what it should.
+#[test]
+fn depth_edge_does_not_bleed() {
+    let meshes = tempfile::tempdir().unwrap();
+    let obj = meshes.path().join("squares.obj");
+    std::fs::write(
+        &obj,
+        "v -1.5 -1.5 -0.5\nv 1.5 -1.5 -0.5\nv 1.5 1.5 -0.5\nv -1.5 1.5 -0.5\n\
+         v -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv 0.5 0.5 0.5\nv -0.5 0.5 0.5\nvn 0 0 1\n\
+         f 1//1 2//1 3//1\nf 1//1 3//1 4//1\nf 5//1 6//1 7//1\nf 5//1 7//1 8//1\n",
+    )
+    .unwrap();
+    let scene = format!(
+        r#"
+size = [128, 128]
+frames = 1
+warmup = 0
+effects = []
+[camera]
+eye = [0.0, 0.0, 3.0]
+target = [0.0, 0.0, 0.0]
+[[objects]]
+mesh = {{ kind = "obj", file = "{}" }}
+"#,
+        obj.display()
+    );
+    let error = |sigma_depth: f32| {
+        let mut options = lowres_top(&[Reconstruction::Spatial], 0, 1);
+        options.upsampling.sigma_depth = sigma_depth;
+        let (_, report, _) = crate::profile::run_shader(BY_DEPTH, &scene, options)?;
+        Some(report.results[0].max_abs_error)
+    };
+    let Some(weighted) = error(0.03) else {
+        return;
+    };
+    assert!(weighted < 0.01, "with σz = 0.03: {weighted}");
+    let flat = error(100.0).unwrap();
+    assert!(flat > 0.1, "with σz = 100: {flat}");
+}
