@@ -156,6 +156,54 @@ fn normal(
     n
 }
 
+/// A fragment entry point drawn over the geometry, returning `output`:
+/// its builder and what it reads (the previous clip position where
+/// `reprojects`).
+fn entry_builder(
+    module: &Module,
+    pieces: &Pieces,
+    reprojects: bool,
+    output: Handle<naga::Type>,
+) -> (Builder, fragment::Fragment) {
+    let (arguments, at) = fragment::varying_arguments(module, pieces, reprojects);
+    let mut b = Builder::new(Function {
+        name: Some(pieces.name.clone()),
+        arguments,
+        result: Some(naga::FunctionResult {
+            ty: output,
+            binding: None,
+        }),
+        ..Function::default()
+    });
+    let frag = fragment::read_varyings(&mut b, &at);
+    (b, frag)
+}
+
+/// Returns the original outputs of `color`, the encoded payload `value`
+/// and `history`, as `output` (from `fragment::color_and_cache_output`,
+/// with `members` original members).
+fn return_color_cache_history(
+    b: &mut Builder,
+    module: &Module,
+    pieces: &Pieces,
+    (color, value, history): (Handle<Expression>, Handle<Expression>, Handle<Expression>),
+    (output, members): (Handle<naga::Type>, Option<u32>),
+) -> Handle<Expression> {
+    let encoded = b.call(pieces.encode, vec![value]);
+    let mut components: Vec<_> = match members {
+        Some(count) if count > 0 && fragment::is_struct(module, pieces.result.ty) => {
+            (0..count).map(|i| b.member(color, i)).collect()
+        }
+        _ => vec![color],
+    };
+    components.push(encoded);
+    components.push(history);
+    b.expr(Expression::Compose {
+        ty: output,
+        components,
+    })
+}
+
 fn literal_u32(b: &mut Builder, value: u32) -> Handle<Expression> {
     b.expr(Expression::Literal(naga::Literal::U32(value)))
 }
@@ -170,18 +218,8 @@ pub(crate) fn samples_entry(
     (factor, reconstruction): (u32, Reconstruction),
 ) -> Result<Function, Refusal> {
     let payload = biased_payload(module, pieces.payload, factor)?;
-    let (arguments, at) = fragment::varying_arguments(module, pieces, true);
     let output = two_member_output(module, "LowresSamples", pieces.vec4, pieces.vec4);
-    let mut b = Builder::new(Function {
-        name: Some(pieces.name.clone()),
-        arguments,
-        result: Some(naga::FunctionResult {
-            ty: output,
-            binding: None,
-        }),
-        ..Function::default()
-    });
-    let frag = fragment::read_varyings(&mut b, &at);
+    let (mut b, frag) = entry_builder(module, pieces, true, output);
     let previous = frag
         .previous
         .ok_or_else(|| Refusal::internal("the samples pass reads no previous clip position"))?;
@@ -224,18 +262,8 @@ pub(crate) fn upsample_entry(
     (reconstruction, reshade): (Reconstruction, bool),
 ) -> Result<Function, Refusal> {
     let mode = mode(reconstruction)?;
-    let (arguments, at) = fragment::varying_arguments(module, pieces, true);
-    let (output, members) = fragment::color_and_cache_output(module, pieces, pieces.vec4);
-    let mut b = Builder::new(Function {
-        name: Some(pieces.name.clone()),
-        arguments,
-        result: Some(naga::FunctionResult {
-            ty: output,
-            binding: None,
-        }),
-        ..Function::default()
-    });
-    let frag = fragment::read_varyings(&mut b, &at);
+    let output = fragment::color_and_cache_output(module, pieces, pieces.vec4);
+    let (mut b, frag) = entry_builder(module, pieces, true, output.0);
     let previous = frag
         .previous
         .ok_or_else(|| Refusal::internal("the upsampling pass reads no previous clip position"))?;
@@ -262,19 +290,8 @@ pub(crate) fn upsample_entry(
     arguments.push(payload);
     let color = b.call(pieces.shade, arguments);
     b.name(color, "color");
-    let encoded = b.call(pieces.encode, vec![value]);
-    let mut components: Vec<_> = match members {
-        Some(count) if count > 0 && fragment::is_struct(module, pieces.result.ty) => {
-            (0..count).map(|i| b.member(color, i)).collect()
-        }
-        _ => vec![color],
-    };
-    components.push(encoded);
-    components.push(history);
-    let result = b.expr(Expression::Compose {
-        ty: output,
-        components,
-    });
+    let result =
+        return_color_cache_history(&mut b, module, pieces, (color, value, history), output);
     // Adaptive refresh: the unreliable pixels are left to the third pass.
     // The kill comes last, after the shading's derivatives (naga writes
     // `discard` as OpKill, which ends the invocation).
@@ -300,38 +317,17 @@ pub(crate) fn reshade_entry(
     pieces: &Pieces,
     helpers: &LowresHelpers,
 ) -> Result<Function, Refusal> {
-    let (arguments, at) = fragment::varying_arguments(module, pieces, false);
-    let (output, members) = fragment::color_and_cache_output(module, pieces, pieces.vec4);
-    let mut b = Builder::new(Function {
-        name: Some(pieces.name.clone()),
-        arguments,
-        result: Some(naga::FunctionResult {
-            ty: output,
-            binding: None,
-        }),
-        ..Function::default()
-    });
-    let frag = fragment::read_varyings(&mut b, &at);
+    let output = fragment::color_and_cache_output(module, pieces, pieces.vec4);
+    let (mut b, frag) = entry_builder(module, pieces, false, output.0);
     let payload = b.call(pieces.payload, frag.originals.clone());
     let value = fragment::to_vec4(&mut b, payload, pieces.components, pieces.vec4);
     let mut arguments = frag.originals.clone();
     arguments.push(payload);
     let color = b.call(pieces.shade, arguments);
     b.name(color, "color");
-    let encoded = b.call(pieces.encode, vec![value]);
     let history = b.call(helpers.exact_history, Vec::new());
-    let mut components: Vec<_> = match members {
-        Some(count) if count > 0 && fragment::is_struct(module, pieces.result.ty) => {
-            (0..count).map(|i| b.member(color, i)).collect()
-        }
-        _ => vec![color],
-    };
-    components.push(encoded);
-    components.push(history);
-    let result = b.expr(Expression::Compose {
-        ty: output,
-        components,
-    });
+    let result =
+        return_color_cache_history(&mut b, module, pieces, (color, value, history), output);
     b.push(Statement::Return {
         value: Some(result),
     });

@@ -350,7 +350,7 @@ fn lowres_line(report: &report::Report, row: &report::ResultRow) -> String {
         )
     });
     format!(
-        "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] ({knobs}{}{}, {:.2}× with its fixed costs, P/T {:.2}, shaded this frame {:.0}%, history reused {:.0}%, history missing {:.0}%), PSNR {:.1} dB over the covered pixels (worst frame {:.1}), SSIM {:.4}, flicker {:.4}\n",
+        "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] ({knobs}{}{}, {:.2}× with its fixed costs, P/T {:.2}, shaded this frame {:.0}%, history reused {:.0}%, history missing {:.0}%), {}\n",
         row.variant.as_str(),
         row.node,
         row.node_text,
@@ -364,10 +364,15 @@ fn lowres_line(report: &report::Report, row: &report::ResultRow) -> String {
         row.refresh_rate * 100.0,
         row.hit_rate * 100.0,
         row.miss_rate * 100.0,
-        row.psnr,
-        row.worst_psnr,
-        row.ssim,
-        row.flicker
+        quality(row)
+    )
+}
+
+/// A row's error against the reference, in words.
+fn quality(row: &report::ResultRow) -> String {
+    format!(
+        "PSNR {:.1} dB over the covered pixels (worst frame {:.1}), SSIM {:.4}, flicker {:.4}",
+        row.psnr, row.worst_psnr, row.ssim, row.flicker
     )
 }
 
@@ -403,7 +408,7 @@ fn summary(report: &report::Report) -> String {
             continue;
         }
         summary.push_str(&format!(
-            "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] (ideal {:.2}×, {:.2}× with its fixed costs, P/T {:.2}, hit {:.0}% miss {:.0}% refresh {:.0}%, oldest value shown {} frames), PSNR {:.1} dB over the covered pixels (worst frame {:.1}), SSIM {:.4}, flicker {:.4}\n",
+            "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] (ideal {:.2}×, {:.2}× with its fixed costs, P/T {:.2}, hit {:.0}% miss {:.0}% refresh {:.0}%, oldest value shown {} frames), {}\n",
             row.variant.as_str(),
             row.node,
             row.node_text,
@@ -417,10 +422,7 @@ fn summary(report: &report::Report) -> String {
             row.miss_rate * 100.0,
             row.refresh_rate * 100.0,
             row.max_age,
-            row.psnr,
-            row.worst_psnr,
-            row.ssim,
-            row.flicker
+            quality(row)
         ));
     }
     if !report.defaulted.is_empty() {
