@@ -10,6 +10,10 @@
 //! last frame's result where the sample's point was. Its texture reads
 //! see derivatives s times too large, so their level of detail is biased
 //! by −log2 s and explicit derivatives are divided by s.
+//! Its `@builtin(position)` is the low-resolution pixel's in x and y; no
+//! payload reads those (the analysis rejects screen-space nodes: a cached
+//! value would be reprojected onto other pixels), and its z and w are the
+//! full-resolution fragment's, since the jitter moves x and y alone.
 //!
 //! Pass 2 draws the geometry at full resolution: it rebuilds the payload
 //! at each pixel from the four nearest samples and the reprojected
