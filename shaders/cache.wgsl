@@ -669,6 +669,22 @@ fn cache_classify_lowres(status: u32, frag_coord: vec4<f32>, age: f32) -> vec4<f
     return select(found, vec4<f32>(0.0, 0.0, 1.0, 1.0), sampled & (status != 3u));
 }
 
+// Adaptive refresh of the cache variants (ours, after seed 001's temporal
+// gradient): the age a value computed now starts from. Where it differs
+// from what the cache held for the same surface point (a hit) by a
+// relative CACHE_ADAPTIVE_CHANGE or more in a component, it starts at three
+// quarters of Δn, so the age rule (`cache_refresh`) refreshes it again Δn/4
+// frames on; elsewhere at 0, a whole Δn. Values that change are refreshed
+// four times as often, still ones as before.
+const CACHE_ADAPTIVE_CHANGE: f32 = 0.1;
+
+fn cache_adaptive_age(lookup: CacheLookup, payload: vec4<f32>) -> f32 {
+    let largest = max(max(abs(payload), abs(lookup.payload)), vec4<f32>(1e-6));
+    let changed = lookup.hit & any((abs(payload - lookup.payload) / largest) >= vec4<f32>(CACHE_ADAPTIVE_CHANGE));
+    let period = min(f32(cache_params.refresh_period), CACHE_AGE_LIMIT);
+    return select(0.0, floor(0.75 * period), changed);
+}
+
 // The history of a pixel shaded at full resolution (adaptive refresh's
 // third pass): exact, of weight 1, unchanged.
 fn cache_exact_history() -> vec4<f32> {

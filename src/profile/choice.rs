@@ -165,7 +165,7 @@ mod tests {
             reconstruction: Reconstruction::Bilinear,
             cache_format: CacheFormat::Rgba16float,
             depth_epsilon: 1e-3,
-            reshade: false,
+            adaptive: false,
             time_ms,
             passes: Vec::new(),
             speedup: 10.0 / time_ms,

@@ -71,7 +71,7 @@ impl Axes {
             reconstruction: pick(&self.reconstructions, defaults.reconstruction)?,
             cache_format: pick(&self.cache_formats, defaults.cache_format)?,
             depth_epsilon: pick(&self.depth_epsilons, defaults.depth_epsilon)?,
-            reshade: false,
+            adaptive: false,
         })
     }
 
@@ -89,7 +89,7 @@ impl Axes {
                                 reconstruction,
                                 cache_format,
                                 depth_epsilon,
-                                reshade: false,
+                                adaptive: false,
                             });
                         }
                     }
@@ -111,8 +111,10 @@ impl Setting {
         let mut options = self.rewrite_options(base);
         if variant == crate::rewrite::Variant::Lowres {
             options.upsampling.reconstruction = self.reconstruction;
-            options.upsampling.reshade = self.reshade;
+            options.upsampling.reshade = self.adaptive;
             options.reconstruction = base.reconstruction;
+        } else {
+            options.adaptive_refresh = self.adaptive;
         }
         options
     }

@@ -78,9 +78,10 @@ pub struct Options {
     pub lowres_reconstructions: Vec<Reconstruction>,
     /// Lowres's factor and knobs.
     pub upsampling: crate::rewrite::Upsampling,
-    /// Lowres's adaptive refresh to measure: off, on, or both (a sweep
-    /// measures both).
-    pub lowres_reshade: Vec<bool>,
+    /// Adaptive refresh to measure, for every variant: off, on, or both (a
+    /// sweep measures both). Lowres re-shades its unreliable pixels; the
+    /// cache variants refresh a changed value after Δn/4 frames.
+    pub adaptive_refresh: Vec<bool>,
     /// The cache formats to measure.
     pub cache_formats: Vec<CacheFormat>,
     /// The depth tolerances ε to measure.
@@ -124,7 +125,7 @@ impl Options {
             reconstructions: axes.reconstructions,
             cache_formats: axes.cache_formats,
             depth_epsilons: axes.depth_epsilons,
-            lowres_reshade: vec![false, true],
+            adaptive_refresh: vec![false, true],
             lowres_reconstructions: vec![
                 Reconstruction::Nearest,
                 Reconstruction::Bilinear,
@@ -157,7 +158,7 @@ impl Default for Options {
             refresh_quads: vec![4],
             reconstructions: vec![Reconstruction::Bilinear],
             lowres_reconstructions: vec![Reconstruction::SpatioTemporal],
-            lowres_reshade: vec![false],
+            adaptive_refresh: vec![false],
             upsampling: crate::rewrite::DEFAULT_UPSAMPLING,
             cache_formats: vec![CacheFormat::Rgba16float],
             depth_epsilons: vec![RewriteOptions::default().depth_epsilon],
@@ -374,7 +375,7 @@ pub fn profile(
         &nodes,
         (
             &options.variants,
-            (&options.lowres_reconstructions, &options.lowres_reshade),
+            (&options.lowres_reconstructions, &options.adaptive_refresh),
         ),
         &prepared.base,
         &|plan, sources| bench.runner(plan, sources, true),
@@ -721,7 +722,7 @@ fn configurations(
         for &variant in variants {
             let settings = match variant {
                 Variant::Lowres => lowres_settings(settings, base, lowres),
-                _ => settings.to_vec(),
+                _ => adaptive_settings(settings, lowres.1, base),
             };
             for setting in settings.iter() {
                 let what = format!(
@@ -732,7 +733,7 @@ fn configurations(
                     setting.reconstruction.as_str(),
                     setting.cache_format.as_str(),
                     setting.depth_epsilon,
-                    if setting.reshade { " re-shade" } else { "" }
+                    if setting.adaptive { " adaptive" } else { "" }
                 );
                 let rewritten = match rewrite::rewrite(
                     shader,
@@ -790,6 +791,39 @@ fn configurations(
     Ok(configs)
 }
 
+/// The cache variants' settings with adaptive refresh as `adaptive` asks:
+/// off, or on for every setting; asked both ways (a sweep), every setting
+/// without it and the base setting (`base`'s knobs) with it too: one
+/// more point per node and variant, as the sweep's planes go through the
+/// base.
+fn adaptive_settings(
+    settings: &[Setting],
+    adaptive: &[bool],
+    base: &RewriteOptions,
+) -> Vec<Setting> {
+    let with = |setting: &Setting, adaptive| Setting {
+        adaptive,
+        ..*setting
+    };
+    match (adaptive.contains(&false), adaptive.contains(&true)) {
+        (_, false) => settings.to_vec(),
+        (false, true) => settings.iter().map(|s| with(s, true)).collect(),
+        (true, true) => {
+            let base = Setting {
+                refresh_period: base.refresh_period,
+                refresh_quad: base.refresh_quad,
+                reconstruction: base.reconstruction,
+                cache_format: base.cache_format,
+                depth_epsilon: base.depth_epsilon,
+                adaptive: true,
+            };
+            let mut out = settings.to_vec();
+            out.push(base);
+            out
+        }
+    }
+}
+
 /// Lowres's settings: each of its reconstructions at each cache format
 /// the grid measures, its Δn and k those its factor sets (s², s); the
 /// refresh knobs of the cache variants do not apply to it.
@@ -804,14 +838,14 @@ fn lowres_settings(
     let mut out = Vec::new();
     for &reconstruction in reconstructions {
         for &cache_format in &formats {
-            for &reshade in reshades {
+            for &adaptive in reshades {
                 let setting = Setting {
                     refresh_period: s * s,
                     refresh_quad: s,
                     reconstruction,
                     cache_format,
                     depth_epsilon: base.depth_epsilon,
-                    reshade,
+                    adaptive,
                 };
                 if !out.contains(&setting) {
                     out.push(setting);
@@ -866,7 +900,7 @@ fn result_row(config: Config, node: &NodeReport, baseline: &Baseline) -> (Result
         refresh_period: config.setting.refresh_period,
         refresh_quad: config.setting.refresh_quad,
         reconstruction: config.setting.reconstruction,
-        reshade: config.setting.reshade,
+        adaptive: config.setting.adaptive,
         cache_format: config.setting.cache_format,
         depth_epsilon: config.setting.depth_epsilon,
         time_ms,
@@ -1041,7 +1075,7 @@ pub fn rewrite_of(
         reconstruction: row.reconstruction,
         cache_format: row.cache_format,
         depth_epsilon: row.depth_epsilon,
-        reshade: row.reshade,
+        adaptive: row.adaptive,
     };
     rewrite::rewrite(
         shader,

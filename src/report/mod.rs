@@ -328,10 +328,11 @@ pub struct ResultRow {
     pub cache_format: CacheFormat,
     /// The depth test's relative tolerance ε.
     pub depth_epsilon: f32,
-    /// Lowres's adaptive refresh: its unreliable pixels shaded at full
-    /// resolution in a third pass.
+    /// Adaptive refresh: lowres's unreliable pixels shaded at full
+    /// resolution in a third pass; the cache variants' changed values
+    /// refreshed after Δn/4 frames.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub reshade: bool,
+    pub adaptive: bool,
     /// Median frame time, ms: from the first pass's start timestamp to the
     /// last one's end, what runs between the passes included.
     pub time_ms: f64,
@@ -488,10 +489,11 @@ pub struct Setting {
     pub cache_format: CacheFormat,
     /// ε.
     pub depth_epsilon: f32,
-    /// Lowres's adaptive refresh: its unreliable pixels shaded at full
-    /// resolution.
+    /// Adaptive refresh: lowres shades its unreliable pixels at full
+    /// resolution; the cache variants refresh a value that changed after
+    /// Δn/4 frames.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub reshade: bool,
+    pub adaptive: bool,
 }
 
 /// How the grid is covered.
@@ -594,10 +596,10 @@ impl ResultRow {
             self.reconstruction.as_str(),
             self.cache_format.as_str(),
             self.depth_epsilon,
-            if self.reshade {
-                ", unreliable pixels re-shaded"
-            } else {
-                ""
+            match (self.adaptive, self.variant) {
+                (false, _) => "",
+                (true, Variant::Lowres) => ", unreliable pixels re-shaded",
+                (true, _) => ", adaptive refresh",
             }
         )
     }

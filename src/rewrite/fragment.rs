@@ -55,6 +55,17 @@ pub struct Pieces {
     pub vec4: Handle<naga::Type>,
     /// The lowres variant's helpers.
     pub lowres: super::lowres::LowresHelpers,
+    /// With adaptive refresh, the age a computed value starts from
+    /// (`cache_adaptive_age`).
+    pub adaptive: Option<Handle<Function>>,
+}
+
+/// Whether the pass of `stage` reprojects: the stages that look the
+/// fragment up, and with adaptive refresh those that compute the payload
+/// too (they compare it with the cached value).
+pub(super) fn reprojects_in(stage: Stage, pieces: &Pieces) -> bool {
+    stage.reprojects()
+        || (pieces.adaptive.is_some() && matches!(stage, Stage::Full | Stage::Payload))
 }
 
 /// What a pass's fragment stage writes.
@@ -310,7 +321,7 @@ pub(super) fn entry_point(
     }
     let (arguments, reader) = match inputs {
         Inputs::Varyings => {
-            let (arguments, at) = varying_arguments(module, pieces, stage.reprojects());
+            let (arguments, at) = varying_arguments(module, pieces, reprojects_in(stage, pieces));
             (arguments, Reader::Arguments(at))
         }
         Inputs::Screen(screen) => (
@@ -444,9 +455,23 @@ fn payload_of(
     Ok(match stage {
         Stage::OnePass => {
             let (lookup, reuse) = reuse_condition(b, pieces, previous()?, at.frag_coord);
-            let age = b.call(pieces.age_written, vec![lookup, reuse]);
+            let reused_age = b.call(pieces.age_written, vec![lookup, reuse]);
+            let value = one_pass_payload(b, pieces, (lookup, reuse), &at.originals);
+            let age = match pieces.adaptive {
+                // A computed value starts from its adaptive age.
+                Some(adaptive) => {
+                    let texel = to_vec4(b, value, pieces.components, pieces.vec4);
+                    let computed = b.call(adaptive, vec![lookup, texel]);
+                    b.expr(Expression::Select {
+                        condition: reuse,
+                        accept: reused_age,
+                        reject: computed,
+                    })
+                }
+                None => reused_age,
+            };
             PassPayload {
-                value: one_pass_payload(b, pieces, (lookup, reuse), &at.originals),
+                value,
                 age: Some(age),
                 deferred_kill: None,
             }
@@ -470,7 +495,22 @@ fn payload_of(
                 deferred_kill: shade_derives.then_some(reuse),
             }
         }
-        Stage::Full | Stage::Payload => plain(b.call(pieces.payload, at.originals.clone())),
+        Stage::Full | Stage::Payload => {
+            let value = b.call(pieces.payload, at.originals.clone());
+            match pieces.adaptive {
+                Some(adaptive) => {
+                    let lookup = b.call(pieces.lookup, vec![previous()?]);
+                    let texel = to_vec4(b, value, pieces.components, pieces.vec4);
+                    let age = b.call(adaptive, vec![lookup, texel]);
+                    PassPayload {
+                        value,
+                        age: Some(age),
+                        deferred_kill: None,
+                    }
+                }
+                None => plain(value),
+            }
+        }
         Stage::ShadeFromCache => {
             let cached = b.call(pieces.current, vec![at.frag_coord]);
             plain(from_vec4(b, cached, pieces.components))

@@ -26,6 +26,7 @@ pub(super) struct CacheHelpers {
     pub absent: Handle<Function>,
     vec4: Handle<naga::Type>,
     lowres: LowresHelpers,
+    adaptive: Option<Handle<Function>>,
 }
 
 impl CacheHelpers {
@@ -85,7 +86,13 @@ impl CacheHelpers {
             None
         };
         let vec4 = super::builder::vec4_type(module);
+        let adaptive = if options.adaptive_refresh && !lowres {
+            Some(helper("cache_adaptive_age")?)
+        } else {
+            None
+        };
         Ok(CacheHelpers {
+            adaptive,
             lookup: helper(lookup)?,
             refresh: helper("cache_refresh")?,
             current: helper("cache_current")?,
@@ -147,6 +154,7 @@ impl CacheHelpers {
             pack: self.pack,
             vec4: self.vec4,
             lowres: self.lowres,
+            adaptive: self.adaptive,
         }
     }
 }

@@ -126,6 +126,12 @@ pub struct Options {
     /// The lowres variant's reconstruction, factor and knobs (seed 001);
     /// [`Options::reconstruction`] is the cache variants'.
     pub upsampling: Upsampling,
+    /// Adaptive refresh for the cache variants: a value that changed by
+    /// 10% or more since it was cached is refreshed again after Δn/4
+    /// frames instead of Δn (`cache_adaptive_age`); the passes that
+    /// compute the payload then reproject, to compare. Lowres's own is
+    /// [`Upsampling::reshade`].
+    pub adaptive_refresh: bool,
 }
 
 impl Default for Options {
@@ -142,6 +148,7 @@ impl Default for Options {
             free_payload: false,
             deforming_inputs: Vec::new(),
             upsampling: DEFAULT_UPSAMPLING,
+            adaptive_refresh: false,
         }
     }
 }
@@ -634,7 +641,7 @@ fn pass_module(
     if let (Some(entry), Some(plain), false, None) = (
         &mut vertex_entry,
         &vertex.plain,
-        stage.reprojects(),
+        fragment::reprojects_in(stage, pieces),
         gbuffer,
     ) {
         entry.function = plain.clone();

@@ -138,22 +138,7 @@ pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
             },
             params,
         },
-        refresh: if lowres {
-            let s = options.upsampling.factor;
-            Refresh {
-                period: s * s,
-                quad: s,
-                depth_epsilon: options.depth_epsilon,
-                offsets: "the samples' offset in each s×s window (s = quad) is refresh_phase = frame mod s² (period) read through a Bayer order (shaders/cache.wgsl, cache_sample_offset): every pixel is shaded once every s² frames".into(),
-            }
-        } else {
-            Refresh {
-            period: options.refresh_period,
-            quad: options.refresh_quad,
-            depth_epsilon: options.depth_epsilon,
-            offsets: "16 bits of a PCG hash of the k×k block coordinates, times the period, over 2^16; refresh when (offset + refresh_phase) mod period == 0, with refresh_phase = frame mod period kept by the host, or when the value's age (the age target) reaches min(period, 2048)".into(),
-        }
-        },
+        refresh: refresh(options, lowres),
         upsampling: lowres.then(|| options.upsampling.clone()),
         clear: Clear {
             color: [0.0, 0.0, 0.0, 1.0],
@@ -162,6 +147,30 @@ pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
         },
         assumes: FrameAssumptions::default(),
     })
+}
+
+/// The refresh the passes follow: lowres's lattice, or the cache's
+/// refresh pattern (with adaptive refresh, said).
+fn refresh(options: &Options, lowres: bool) -> Refresh {
+    if lowres {
+        let s = options.upsampling.factor;
+        return Refresh {
+            period: s * s,
+            quad: s,
+            depth_epsilon: options.depth_epsilon,
+            offsets: "the samples' offset in each s×s window (s = quad) is refresh_phase = frame mod s² (period) read through a Bayer order (shaders/cache.wgsl, cache_sample_offset): every pixel is shaded once every s² frames".into(),
+        };
+    }
+    let mut offsets = String::from("16 bits of a PCG hash of the k×k block coordinates, times the period, over 2^16; refresh when (offset + refresh_phase) mod period == 0, with refresh_phase = frame mod period kept by the host, or when the value's age (the age target) reaches min(period, 2048)");
+    if options.adaptive_refresh {
+        offsets.push_str("; adaptive: a value computed where the cache held one for the same point that differs from it by 10% or more starts at age ⌊¾·min(period, 2048)⌋, so it is refreshed again after a quarter of the period (cache_adaptive_age)");
+    }
+    Refresh {
+        period: options.refresh_period,
+        quad: options.refresh_quad,
+        depth_epsilon: options.depth_epsilon,
+        offsets,
+    }
 }
 
 /// The entry points every pass draws with.

@@ -67,6 +67,13 @@ pub struct Args {
     #[command(flatten)]
     pub upsampling: super::rewrite::UpsamplingArgs,
 
+    /// Adaptive refresh: the cache variants refresh a value that changed by
+    /// 10% since it was cached after Δn/4 frames instead of Δn, and lowres
+    /// shades its unreliable pixels at full resolution [default: off; with
+    /// --sweep both ways].
+    #[arg(long)]
+    pub adaptive_refresh: bool,
+
     /// Sweep accuracy against time: every knob over its sweep values (lists
     /// given explicitly are kept), pruned with the cost model and by
     /// measuring the refresh and read-back planes (docs/accuracy.md).
@@ -322,11 +329,11 @@ fn options(args: &Args, stages: &super::StageArgs) -> Result<Options, Error> {
             .map(|r| r.iter().map(|&r| r.into()).collect())
             .unwrap_or(defaults.lowres_reconstructions),
         upsampling: args.upsampling.upsampling()?,
-        // Lowres's adaptive refresh: on when asked, both ways in a sweep.
-        lowres_reshade: if args.upsampling.reshade_unreliable {
+        // Adaptive refresh: on when asked, both ways in a sweep.
+        adaptive_refresh: if args.upsampling.reshade_unreliable || args.adaptive_refresh {
             vec![true]
         } else {
-            defaults.lowres_reshade
+            defaults.adaptive_refresh
         },
         max_error: args.max_error,
         frames: args.frames,
@@ -358,7 +365,7 @@ fn lowres_line(report: &report::Report, row: &report::ResultRow) -> String {
         row.speedup_ci[0],
         row.speedup_ci[1],
         row.reconstruction.as_str(),
-        if row.reshade { ", unreliable pixels re-shaded" } else { "" },
+        if row.adaptive { ", unreliable pixels re-shaded" } else { "" },
         row.bound_with_fixed_costs,
         row.p_over_t,
         row.refresh_rate * 100.0,

@@ -64,6 +64,12 @@ pub struct Args {
     #[command(flatten)]
     pub upsampling: UpsamplingArgs,
 
+    /// Adaptive refresh for the cache variants: a value that changed by 10%
+    /// or more since it was cached is refreshed again after Δn/4 frames
+    /// (lowres's is --reshade-unreliable).
+    #[arg(long)]
+    pub adaptive_refresh: bool,
+
     /// Per-vertex inputs (by name, separated by commas) that the
     /// application changes every frame, deforming the mesh on the CPU:
     /// the position gets last frame's value of each from a twin of its
@@ -330,6 +336,7 @@ fn rewrite_entry(
         vertex_entry: args.stages.vertex_entry.clone(),
         deforming_inputs: args.deforming_input.clone(),
         upsampling: args.upsampling.upsampling()?,
+        adaptive_refresh: args.adaptive_refresh,
         ..Options::default()
     };
     // A reconstruction named is lowres's upsampling for lowres, the

@@ -459,7 +459,7 @@ fn thin_feature_flicker_bounded() {
 fn lowres_reshades_unreliable_pixels() {
     let (warmup, frames) = (16, 2);
     let mut options = lowres(&[Reconstruction::SpatioTemporal], warmup, frames);
-    options.lowres_reshade = vec![false, true];
+    options.adaptive_refresh = vec![false, true];
     let Some((pictures, report, scene)) = run(
         &sliding_sphere("size = [128, 128]\nframes = 2\nwarmup = 16"),
         options,
@@ -476,7 +476,7 @@ fn lowres_reshades_unreliable_pixels() {
         let index = report
             .results
             .iter()
-            .position(|row| row.reshade == reshade)
+            .position(|row| row.adaptive == reshade)
             .unwrap();
         assert_eq!(
             report.results[index].passes.len(),

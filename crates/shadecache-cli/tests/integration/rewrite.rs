@@ -580,8 +580,9 @@ fn every_reconstruction_validates_and_builds() {
             for candidate in analysis.candidates.iter().take(5) {
                 for variant in Variant::ALL {
                     // Lowres's reconstruction is its upsampling's: nearest,
-                    // bilinear or its own three; with adaptive refresh (its
-                    // third pass) at rgba32float.
+                    // bilinear or its own three. Adaptive refresh at
+                    // rgba32float (lowres's third pass, the cache variants'
+                    // lookup in the passes that compute the payload).
                     let options = match variant {
                         Variant::Lowres => Options {
                             upsampling: rewrite::Upsampling {
@@ -591,7 +592,10 @@ fn every_reconstruction_validates_and_builds() {
                             },
                             ..options.clone()
                         },
-                        _ => options.clone(),
+                        _ => Options {
+                            adaptive_refresh: cache_format == CacheFormat::Rgba32float,
+                            ..options.clone()
+                        },
                     };
                     let rewritten =
                         match rewrite::rewrite(&shader, &analysis, candidate, variant, &options) {
