@@ -598,27 +598,50 @@ fn output_value(
             arguments.push(payload);
             b.call(pieces.shade, arguments)
         }
-        Writes::ColorAndCache => {
-            let mut arguments = at.originals.clone();
-            arguments.push(payload);
-            let color = b.call(pieces.shade, arguments);
-            b.name(color, "color");
-            let cache = cache_texel(b, pieces, payload, frag_coord);
-            let cache = b.call(pieces.encode, vec![cache]);
-            let mut components: Vec<_> = match output.cache_member {
-                Some(count) if count > 0 && is_struct(module, pieces.result.ty) => {
-                    (0..count).map(|i| b.member(color, i)).collect()
-                }
-                _ => vec![color],
-            };
-            components.push(cache);
-            components.push(age);
-            b.expr(Expression::Compose {
-                ty: output.ty,
-                components,
-            })
-        }
+        Writes::ColorAndCache => shade_with_cache(
+            b,
+            module,
+            pieces,
+            (&at.originals, payload),
+            (
+                |b: &mut Builder| cache_texel(b, pieces, payload, frag_coord),
+                age,
+            ),
+            (output.ty, output.cache_member),
+        ),
     })
+}
+
+/// The shading from `payload`, then the original outputs, the encoded
+/// cache texel (`cache` makes it, after the shading) and `second` (the
+/// age, or lowres's history) as `output` (from [`color_and_cache_output`],
+/// with its count of original members).
+pub(super) fn shade_with_cache(
+    b: &mut Builder,
+    module: &Module,
+    pieces: &Pieces,
+    (originals, payload): (&[Handle<Expression>], Handle<Expression>),
+    (cache, second): (
+        impl FnOnce(&mut Builder) -> Handle<Expression>,
+        Handle<Expression>,
+    ),
+    (ty, members): (Handle<naga::Type>, Option<u32>),
+) -> Handle<Expression> {
+    let mut arguments = originals.to_vec();
+    arguments.push(payload);
+    let color = b.call(pieces.shade, arguments);
+    b.name(color, "color");
+    let cache = cache(b);
+    let cache = b.call(pieces.encode, vec![cache]);
+    let mut components: Vec<_> = match members {
+        Some(count) if count > 0 && is_struct(module, pieces.result.ty) => {
+            (0..count).map(|i| b.member(color, i)).collect()
+        }
+        _ => vec![color],
+    };
+    components.push(cache);
+    components.push(second);
+    b.expr(Expression::Compose { ty, components })
 }
 
 fn f32_type(module: &mut Module) -> Handle<naga::Type> {

@@ -183,31 +183,6 @@ fn entry_builder(
     (b, frag)
 }
 
-/// Returns the original outputs of `color`, the encoded payload `value`
-/// and `history`, as `output` (from `fragment::color_and_cache_output`,
-/// with `members` original members).
-fn return_color_cache_history(
-    b: &mut Builder,
-    module: &Module,
-    pieces: &Pieces,
-    (color, value, history): (Handle<Expression>, Handle<Expression>, Handle<Expression>),
-    (output, members): (Handle<naga::Type>, Option<u32>),
-) -> Handle<Expression> {
-    let encoded = b.call(pieces.encode, vec![value]);
-    let mut components: Vec<_> = match members {
-        Some(count) if count > 0 && fragment::is_struct(module, pieces.result.ty) => {
-            (0..count).map(|i| b.member(color, i)).collect()
-        }
-        _ => vec![color],
-    };
-    components.push(encoded);
-    components.push(history);
-    b.expr(Expression::Compose {
-        ty: output,
-        components,
-    })
-}
-
 fn literal_u32(b: &mut Builder, value: u32) -> Handle<Expression> {
     b.expr(Expression::Literal(naga::Literal::U32(value)))
 }
@@ -290,12 +265,14 @@ pub(crate) fn upsample_entry(
     let value = b.member(upsampled, 0);
     let history = b.member(upsampled, 1);
     let payload = fragment::from_vec4(&mut b, value, pieces.components);
-    let mut arguments = frag.originals.clone();
-    arguments.push(payload);
-    let color = b.call(pieces.shade, arguments);
-    b.name(color, "color");
-    let result =
-        return_color_cache_history(&mut b, module, pieces, (color, value, history), output);
+    let result = fragment::shade_with_cache(
+        &mut b,
+        module,
+        pieces,
+        (&frag.originals, payload),
+        (|_: &mut Builder| value, history),
+        output,
+    );
     // Adaptive refresh: the unreliable pixels are left to the third pass.
     // The kill comes last, after the shading's derivatives (naga writes
     // `discard` as OpKill, which ends the invocation).
@@ -325,13 +302,15 @@ pub(crate) fn reshade_entry(
     let (mut b, frag) = entry_builder(module, pieces, false, output.0);
     let payload = b.call(pieces.payload, frag.originals.clone());
     let value = fragment::to_vec4(&mut b, payload, pieces.components, pieces.vec4);
-    let mut arguments = frag.originals.clone();
-    arguments.push(payload);
-    let color = b.call(pieces.shade, arguments);
-    b.name(color, "color");
     let history = b.call(helpers.exact_history, Vec::new());
-    let result =
-        return_color_cache_history(&mut b, module, pieces, (color, value, history), output);
+    let result = fragment::shade_with_cache(
+        &mut b,
+        module,
+        pieces,
+        (&frag.originals, payload),
+        (|_: &mut Builder| value, history),
+        output,
+    );
     b.push(Statement::Return {
         value: Some(result),
     });
