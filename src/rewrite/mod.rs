@@ -449,7 +449,7 @@ fn rewrite_at(
     };
     if variant == Variant::Lowres && vertex.entry_index.is_none() {
         return Err(Refusal::new(
-            "lowres shades its samples with the projection jittered in the vertex stage, and this module has no vertex stage (it is composed with the host's): give the vertex entry point (`--vertex-entry`) in a module that has it",
+            "lowres shades its samples with the projection jittered in the vertex stage, and this module has no vertex stage (it is composed with the host's): give the module with the vertex stage (`--vertex FILE`, `Build::vertex_shader`) so the rewrite can jitter it",
         ));
     }
     mark_positions_invariant(&mut module);

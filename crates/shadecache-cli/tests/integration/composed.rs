@@ -34,6 +34,21 @@ fn a_fragment_only_module_emits_fragment_passes_and_says_what_the_vertex_stage_m
     let mut files = Vec::new();
     let mut emitted = 0;
     for candidate in analysis.candidates.iter().take(4) {
+        // Lowres jitters the vertex stage, which a fragment-only module
+        // does not have: refused, saying what to give.
+        let refusal = rewrite::rewrite(
+            &shader,
+            &analysis,
+            candidate,
+            Variant::Lowres,
+            &Options::default(),
+        )
+        .expect_err("lowres needs the vertex stage");
+        assert!(
+            refusal.reason.contains("--vertex FILE"),
+            "{}",
+            refusal.reason
+        );
         for variant in Variant::CACHE {
             let rewritten =
                 rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
