@@ -191,7 +191,7 @@ fn targets(method: Method, latest: bool) -> Vec<Option<wgpu::ColorTargetState>> 
 }
 
 /// A pipeline drawing `entry` of `shaders/bframe.wgsl` over the frame.
-fn fullscreen_pipeline(
+pub(super) fn fullscreen_pipeline(
     device: &wgpu::Device,
     module: &wgpu::ShaderModule,
     label: &str,
@@ -551,7 +551,7 @@ impl BFrames {
 
 /// Records one fullscreen pass of `pipeline` into `outputs` (cleared),
 /// timed as `<label>/<name>` when a profiler is given.
-fn fullscreen_pass(
+pub(super) fn fullscreen_pass(
     encoder: &mut wgpu::CommandEncoder,
     profiler: &mut Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
     name: &str,

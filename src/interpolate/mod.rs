@@ -148,6 +148,9 @@ pub mod bframe;
 mod blur;
 #[doc(hidden)]
 pub mod iframe;
+#[doc(hidden)]
+pub mod morph;
+pub mod pursuit;
 pub mod report;
 pub(crate) mod run;
 #[cfg(test)]
@@ -184,11 +187,20 @@ pub enum Method {
     /// Single-direction reverse reprojection from the earlier I-frame, no
     /// reshading (a baseline).
     ReverseReprojection,
+    /// Seed 004: the frames after an I-frame extrapolated by the snapped
+    /// grid morph with the twin's exact motion, blurred, the I-frame
+    /// compensated.
+    Morph,
+    /// The same with the motion extrapolated from the I-frame before
+    /// (what a game that does not know the future has).
+    MorphPast,
+    /// The snapped grid morph alone: no blur, no compensation.
+    MorphWarp,
 }
 
 impl Method {
     /// Every method, in the report's order.
-    pub const ALL: [Method; 8] = [
+    pub const ALL: [Method; 11] = [
         Method::Reference,
         Method::SampleAndHold,
         Method::LinearBlend,
@@ -197,6 +209,9 @@ impl Method {
         Method::SceneAssisted,
         Method::SceneAssistedShadeOnMiss,
         Method::ReverseReprojection,
+        Method::Morph,
+        Method::MorphPast,
+        Method::MorphWarp,
     ];
 
     /// The method's name on the command line and in reports.
@@ -210,6 +225,9 @@ impl Method {
             Method::SceneAssisted => "scene-assisted",
             Method::SceneAssistedShadeOnMiss => "scene-assisted-shade-on-miss",
             Method::ReverseReprojection => "reverse-reprojection",
+            Method::Morph => "morph",
+            Method::MorphPast => "morph-past",
+            Method::MorphWarp => "morph-warp",
         }
     }
 
@@ -239,7 +257,13 @@ impl Method {
     /// Whether its B-frames read the I-frames' flows (its I-frames are
     /// the instrumented pass; else the original shader).
     pub fn reads_flows(self) -> bool {
-        matches!(self, Method::ImageBased | Method::HalfVelocity)
+        matches!(self, Method::ImageBased | Method::HalfVelocity) || self.extrapolates()
+    }
+
+    /// Whether it extrapolates from the earlier I-frame alone by the grid
+    /// morph (seed 004), its I-frame followed by the morph's preparation.
+    pub fn extrapolates(self) -> bool {
+        matches!(self, Method::Morph | Method::MorphPast | Method::MorphWarp)
     }
 
     /// Whether its B-frames read the later I-frame's colour, which must
@@ -299,6 +323,39 @@ pub struct Options {
     pub inpaint_passes: u32,
     /// Character removal's neighbour distance, in pixels.
     pub inpaint_delta: u32,
+    /// The morph's grid spacing in pixels (seed 004: 8): a power of two
+    /// that divides the frame; each vertex searches its grid × grid
+    /// neighbourhood.
+    pub grid: u32,
+    /// Snap the grid's vertices to the motion's discontinuities (off: the
+    /// regular grid, to measure what snapping gives).
+    pub snap: bool,
+    /// The least motion gradient (pixels of flow per pixel) a vertex snaps
+    /// to: below it the grid stays regular.
+    pub snap_threshold: f32,
+    /// The low-pass's pyramid level (each halves the frame with the
+    /// binomial [1 3 3 1]/8), read with a cubic B-spline.
+    pub blur_level: u32,
+    /// The display's gamma (light = value^γ) the compensation conserves
+    /// light under.
+    pub gamma: f32,
+    /// The display's refresh rate R_d; the rendered rate is R_d / n.
+    pub display_hz: f32,
+    /// The display's pixels per degree of visual angle (a 22" 1680×1050
+    /// panel seen from 60 cm: 37).
+    pub pixels_per_degree: f32,
+    /// Eye-tracking damping f(v) = 1 − smoothstep(a, b, v), deg/s (seed
+    /// 004 §6: 70 and 90).
+    pub tracking: [f32; 2],
+    /// Selective blur: blur (and compensate) only where the motion is at
+    /// least this fast, deg/s (the drift limit below which the eye does
+    /// not track: 0.15); `None` blurs everywhere, as the paper.
+    pub selective_blur: Option<f32>,
+    /// The grid distortion mapped to full blur: smoothstep(a, b, D), D the
+    /// largest |s − 1| over the warp's singular values.
+    pub distortion_blur: [f32; 2],
+    /// Sub-steps per displayed frame of the pursuit integral.
+    pub pursuit_substeps: u32,
     /// The frame's size; `None` takes the scene's.
     #[serde(skip)]
     pub size: Option<[u32; 2]>,
@@ -341,6 +398,17 @@ impl Default for Options {
             moving_objects: true,
             inpaint_passes: 3,
             inpaint_delta: 2,
+            grid: 8,
+            snap: true,
+            snap_threshold: 1.0,
+            blur_level: 2,
+            gamma: 2.2,
+            display_hz: 120.0,
+            pixels_per_degree: 37.0,
+            tracking: [70.0, 90.0],
+            selective_blur: None,
+            distortion_blur: [0.25, 1.0],
+            pursuit_substeps: 8,
             size: None,
             frames: None,
             entry: None,

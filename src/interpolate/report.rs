@@ -115,6 +115,17 @@ pub struct MethodReport {
     /// The displayed frame of its worst B-frame (lowest SSIM).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub worst_frame: Option<u32>,
+    /// What an eye tracking the motion integrates over each interval's n
+    /// displayed frames against the same of the reference: RMS over RGB,
+    /// display values, mean over the intervals (`pursuit.rs` has the
+    /// formula); 0 for the reference.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pursuit_error: Option<f64>,
+    /// The extrapolators that compensate: the I-frame as they display it
+    /// (its high frequencies amplified) against the reference, mean PSNR
+    /// over the intervals (dB).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub displayed_i_frame_psnr: Option<f64>,
 }
 
 /// 000 Fig. 11's correspondence error, mean pixels over the B-frames.
@@ -193,7 +204,7 @@ pub fn answer(methods: &[MethodReport], n: u32) -> String {
         .iter()
         .filter(|m| m.method != Method::Reference && m.ssim_mean >= ANSWER_SSIM)
         .min_by(|a, b| a.amortized_time_ratio.total_cmp(&b.amortized_time_ratio));
-    match best {
+    let interpolated = match best {
         Some(m) if m.amortized_time_ratio < 1.0 => format!(
             "at n = {n} ({skipped}), {} costs {:.2}× of rendering every frame, with B-frames at mean SSIM {:.4} (worst {:.4}) and {} frame(s) of added latency",
             m.method.name(),
@@ -211,7 +222,32 @@ pub fn answer(methods: &[MethodReport], n: u32) -> String {
         None => format!(
             "at n = {n} ({skipped}), no method keeps mean SSIM ≥ {ANSWER_SSIM}: render every frame, or interpolate fewer"
         ),
+    };
+    match lag_free(methods) {
+        Some(lag_free) => format!("{interpolated}; {lag_free}"),
+        None => interpolated,
     }
+}
+
+/// The lag-free choice beside it: the extrapolator with the least pursuit
+/// error, its cost, and frame repetition's pursuit error.
+fn lag_free(methods: &[MethodReport]) -> Option<String> {
+    let best = methods
+        .iter()
+        .filter(|m| m.method.extrapolates())
+        .filter_map(|m| Some((m, m.pursuit_error?)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    let hold = methods
+        .iter()
+        .find(|m| m.method == Method::SampleAndHold)
+        .and_then(|m| m.pursuit_error);
+    Some(format!(
+        "with no added latency, {} costs {:.2}× with pursuit error {:.4}{}",
+        best.0.method.name(),
+        best.0.amortized_time_ratio,
+        best.1,
+        hold.map_or(String::new(), |h| format!(" (frame repetition's: {h:.4})"))
+    ))
 }
 
 /// Writes each method's worst B-frame, its reference and their
@@ -267,13 +303,13 @@ pub fn html(report: &Report) -> String {
     let _ = write!(
         out,
         "<h2>Methods</h2><p>Reference frame {:.3} ms; I-frame with flows {:.3} ms (worst PSNR against the reference {:.1} dB).</p>\
-         <table><tr><th>method</th><th>I-frame ×</th><th>B-frame ×</th><th>amortised ×</th><th>SSIM mean</th><th>SSIM min</th><th>PSNR mean</th><th>double misses</th><th>latency (frames)</th></tr>",
+         <table><tr><th>method</th><th>I-frame ×</th><th>B-frame ×</th><th>amortised ×</th><th>SSIM mean</th><th>SSIM min</th><th>PSNR mean</th><th>double misses</th><th>latency (frames)</th><th>pursuit error</th></tr>",
         report.reference_ms, report.i_frame_ms, report.i_frame_psnr_min
     );
     for m in &report.methods {
         let _ = write!(
             out,
-            "<tr><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.1}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.1}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             m.method.name(),
             m.i_frame_time_ratio,
             m.b_frame_time_ratio,
@@ -283,7 +319,9 @@ pub fn html(report: &Report) -> String {
             m.psnr_mean,
             m.double_miss_rate
                 .map_or("—".to_string(), |r| format!("{:.2}%", r * 100.0)),
-            m.added_latency_frames
+            m.added_latency_frames,
+            m.pursuit_error
+                .map_or("—".to_string(), |e| format!("{e:.4}")),
         );
     }
     out.push_str("</table>");

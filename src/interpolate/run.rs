@@ -7,10 +7,11 @@ use std::path::Path;
 
 use super::bframe::{BFrameParams, BFrames, Decision, IFrameTextures, MovingObjects};
 use super::iframe::{self, IFrameShader, SceneMode};
+use super::morph::{Morph, MorphParams, MorphSetup, Source};
 use super::report::{
     self, DisplayedFrame, KeptFrame, KeptIFrame, MethodReport, Parameters, Pictures, Report,
 };
-use super::{Method, Options};
+use super::{pursuit, Method, Options};
 use crate::diagnostic::Error;
 use crate::front::Shader;
 use crate::measure::bench::{self, Bench};
@@ -39,6 +40,13 @@ struct MethodRun {
     decisions: [u64; 5],
     /// The lowest-SSIM B-frame: (SSIM, frame, reference, result).
     worst: Option<(f64, u32, Vec<u8>, Vec<u8>)>,
+    /// The extrapolators: what each interval's I-frame passes add (the
+    /// morph's preparation), ms.
+    prepare_times: Vec<f64>,
+    /// The extrapolators that compensate: their displayed I-frame's PSNR.
+    displayed_i_frame_psnr: Vec<f64>,
+    /// Its pursuit error per interval.
+    pursuit: Vec<f64>,
 }
 
 /// The knobs checked, and what a run needs of them.
@@ -68,10 +76,82 @@ fn check(options: &Options) -> Result<(), Error> {
             "--latest-radius must be at least 1: its taps are the pixel's diagonal neighbours that far away".into(),
         ));
     }
+    if options.methods.iter().any(|m| m.extrapolates()) {
+        check_morph(options)?;
+    }
     if options.inpaint_passes == 0 || options.inpaint_delta == 0 {
         return Err(fail(format!(
             "--inpaint-passes and --inpaint-delta must be at least 1, not {} and {}",
             options.inpaint_passes, options.inpaint_delta
+        )));
+    }
+    Ok(())
+}
+
+/// The morph's knobs (the grid against the frame's size is checked by
+/// [`check_grid`] once the size is known).
+fn check_morph(options: &Options) -> Result<(), Error> {
+    let ramp = |[a, b]: [f32; 2]| a.is_finite() && b.is_finite() && a < b;
+    let problems = [
+        (options.blur_level == 0 || options.blur_level > 6).then(|| {
+            format!(
+                "--blur-level must be from 1 to 6 (each level halves the frame), not {}",
+                options.blur_level
+            )
+        }),
+        (!(options.gamma > 0.0 && options.gamma.is_finite()))
+            .then(|| format!("--gamma must be positive, not {}", options.gamma)),
+        (!(options.display_hz > 0.0 && options.display_hz.is_finite()))
+            .then(|| format!("--display-hz must be positive, not {}", options.display_hz)),
+        (!(options.pixels_per_degree > 0.0 && options.pixels_per_degree.is_finite())).then(|| {
+            format!(
+                "--pixels-per-degree must be positive, not {}",
+                options.pixels_per_degree
+            )
+        }),
+        (!ramp(options.tracking)).then(|| {
+            format!(
+                "--tracking takes two speeds, the lower first, not {:?}",
+                options.tracking
+            )
+        }),
+        (!ramp(options.distortion_blur)).then(|| {
+            format!(
+                "--distortion-blur takes two distortions, the lower first, not {:?}",
+                options.distortion_blur
+            )
+        }),
+        options
+            .selective_blur
+            .filter(|v| !(*v >= 0.0 && v.is_finite()))
+            .map(|v| format!("--selective-blur takes a speed of 0 deg/s or more, not {v}")),
+        (!(options.snap_threshold >= 0.0 && options.snap_threshold.is_finite())).then(|| {
+            format!(
+                "--snap-threshold must be 0 or more, not {}",
+                options.snap_threshold
+            )
+        }),
+        (options.pursuit_substeps == 0)
+            .then(|| "--pursuit-substeps must be at least 1".to_string()),
+    ];
+    match problems.into_iter().flatten().next() {
+        Some(problem) => Err(fail(problem)),
+        None => Ok(()),
+    }
+}
+
+/// The morph's grid against the frame: a power of two from 2 to 128 that
+/// divides both sides (each vertex searches a grid × grid neighbourhood
+/// through a pyramid of halvings).
+fn check_grid(grid: u32, [width, height]: [u32; 2]) -> Result<(), Error> {
+    if !grid.is_power_of_two() || !(2..=128).contains(&grid) {
+        return Err(fail(format!(
+            "--grid must be a power of two from 2 to 128 (its neighbourhoods are searched by halving), not {grid}"
+        )));
+    }
+    if width % grid != 0 || height % grid != 0 {
+        return Err(fail(format!(
+            "--grid {grid} does not divide the {width}×{height} frame: the morph's tiles must cover it exactly"
         )));
     }
     Ok(())
@@ -151,6 +231,24 @@ pub(super) fn run(
         ),
     )
     .map_err(fail)?;
+    let morph = if options.methods.iter().any(|m| m.extrapolates()) {
+        check_grid(options.grid, size)?;
+        let setup = MorphSetup {
+            size,
+            grid: options.grid,
+            blur_level: options.blur_level,
+            selective_blur: options.selective_blur.is_some(),
+        };
+        Some(Morph::new(&gpu, setup).map_err(fail)?)
+    } else {
+        None
+    };
+    let morph_methods: Vec<Method> = options
+        .methods
+        .iter()
+        .copied()
+        .filter(|m| m.extrapolates())
+        .collect();
     let b_methods: Vec<Method> = options
         .methods
         .iter()
@@ -162,13 +260,16 @@ pub(super) fn run(
         instrumented: &instrumented,
         bframes: &bframes,
         methods: &b_methods,
+        morph: morph.as_ref().map(|m| (m, &morph_methods[..])),
         options,
         size,
         far_depth: scene.camera.depth.far_depth(),
         moving: &moving,
     };
     let total = u64::from(WARMUP_INTERVALS + plan.intervals)
-        * u64::from(n + 1 + (b_methods.len() + scene_runs.len()) as u32 * (n - 1));
+        * u64::from(
+            n + 1 + (b_methods.len() + scene_runs.len() + morph_methods.len()) as u32 * (n - 1),
+        );
     progress.start(total);
     let measured = run.measure(
         &mut clock,
@@ -552,6 +653,10 @@ struct Measured {
     /// The I-frames against the reference at the same time.
     iframe_errors: Vec<(u32, FrameError)>,
     methods: BTreeMap<Method, MethodRun>,
+    /// The interval's displayed frames per method, for the pursuit error:
+    /// the I-frame as the method shows it (`None`: as rendered) and its
+    /// B-frames.
+    groups: BTreeMap<Method, Vec<Option<LinearFrame>>>,
 }
 
 /// The runners a measured run draws with: the reference, the two
@@ -584,6 +689,8 @@ struct Schedule<'a> {
     bframes: &'a BFrames,
     /// The methods with B-frame passes.
     methods: &'a [Method],
+    /// The morph's passes and the methods that extrapolate with them.
+    morph: Option<(&'a Morph, &'a [Method])>,
     options: &'a Options,
     size: [u32; 2],
     far_depth: f32,
@@ -803,6 +910,14 @@ impl Schedule<'_> {
         for scene_run in scene_runs.iter_mut() {
             self.scene_method(clock, scene_run, inputs_of, &at, measured, progress)?;
         }
+        if let Some((morph, methods)) = self.morph {
+            for &method in methods {
+                self.morph_method(clock, (morph, method), &at, measured, progress)?;
+            }
+        }
+        if record {
+            self.pursue(&at, measured)?;
+        }
         measured.previous_end = pictures.pop();
         Ok(())
     }
@@ -920,6 +1035,174 @@ impl Schedule<'_> {
                     &self.reference_at(k, pictures, measured)?,
                 );
             }
+        }
+        Ok(())
+    }
+
+    /// One extrapolator's frames of the interval, from I-frame 0 alone:
+    /// the morph's preparation (timed with the I-frame), then each
+    /// in-between frame, timed and compared when recorded. The
+    /// compensating ones display I-frame 0 as the preparation left it.
+    fn morph_method(
+        &self,
+        clock: &mut Clock,
+        (morph, method): (&Morph, Method),
+        at: &IntervalAt,
+        measured: &mut Measured,
+        progress: &mut dyn Progress,
+    ) -> Result<(), Error> {
+        let (start, record, pictures) = (at.start, at.record, at.pictures);
+        let n = self.options.frames_per_interval;
+        let earlier = &at.textures.0;
+        let mut params = self.morph_params(method);
+        let source = Source {
+            color: earlier.color,
+            depth: earlier.depth,
+            flow: if params.exact_motion {
+                earlier.flow_next
+            } else {
+                earlier.flow_previous
+            },
+        };
+        let (prepare_ms, _, _) = timed_recording(clock, "morph", |profiler| {
+            morph.prepare(self.gpu, &source, &params, profiler);
+            Ok(())
+        })
+        .map_err(fail)?;
+        if record {
+            measured
+                .methods
+                .entry(method)
+                .or_default()
+                .prepare_times
+                .push(prepare_ms);
+            if params.blur && measured.previous_end.is_some() {
+                let shown = read_linear(self.gpu, morph.displayed()).map_err(fail)?;
+                let reference = self.reference_at(0, pictures, measured)?;
+                let [width, height] = self.size;
+                let error = metrics::compare_frames(&reference, &shown, width, height, THRESHOLD);
+                let run = measured.methods.entry(method).or_default();
+                run.displayed_i_frame_psnr.push(error.psnr_frame);
+                measured
+                    .groups
+                    .entry(method)
+                    .or_insert_with(|| vec![None; n as usize])[0] = Some(shown);
+            }
+        }
+        // Extrapolated from I-frame 0 alone: α = 1 is no end point of it.
+        for k in self.frames_of_interval(record, measured) {
+            if k == n {
+                continue;
+            }
+            params.step = k as f32 / n as f32;
+            let (time, _, _) = timed_recording(clock, "bframe", |profiler| {
+                morph.render(self.gpu, &source, &params, profiler);
+                Ok(())
+            })
+            .map_err(fail)?;
+            progress.step(method.name());
+            if record {
+                let sample = BFrameSample {
+                    displayed: start + k,
+                    alpha: f64::from(params.step),
+                    time,
+                    frame: read_linear(self.gpu, morph.color()).map_err(fail)?,
+                    decisions: Vec::new(),
+                };
+                let reference = self.reference_at(k, pictures, measured)?;
+                self.keep(measured, method, sample, &reference);
+            }
+        }
+        Ok(())
+    }
+
+    /// The morph's knobs for `method` (its step set per frame).
+    fn morph_params(&self, method: Method) -> MorphParams {
+        let o = self.options;
+        let n = o.frames_per_interval as f32;
+        MorphParams {
+            step: 0.0,
+            frames: n,
+            gamma: o.gamma,
+            exact_motion: method != Method::MorphPast,
+            speed_scale: self.speed_scale(),
+            tracking: o.tracking,
+            blur_min_speed: o.selective_blur,
+            distortion: o.distortion_blur,
+            snap_threshold: o.snap_threshold,
+            far_depth: self.far_depth,
+            blur: method != Method::MorphWarp,
+            snap: o.snap,
+        }
+    }
+
+    /// Degrees per second on the retina per pixel of flow over an
+    /// interval: the rendered rate R_d / n over the pixels per degree.
+    fn speed_scale(&self) -> f32 {
+        let o = self.options;
+        o.display_hz / o.frames_per_interval as f32 / o.pixels_per_degree
+    }
+
+    /// Each method's pursuit error over the interval just built: the
+    /// interval's displayed frames integrated along I-frame 0's exact
+    /// motion (damped where the eye cannot track), against the same of
+    /// the reference ([`super::pursuit`]).
+    fn pursue(&self, at: &IntervalAt, measured: &mut Measured) -> Result<(), Error> {
+        let groups = std::mem::take(&mut measured.groups);
+        let n = self.options.frames_per_interval as usize;
+        let Some(first) = measured.previous_end.as_ref() else {
+            return Ok(());
+        };
+        let rendered = read_linear(self.gpu, at.textures.0.color).map_err(fail)?;
+        let flow = read_linear(self.gpu, at.textures.0.flow_next).map_err(fail)?;
+        let scale = self.speed_scale();
+        let motion: Vec<[f32; 2]> = flow
+            .chunks_exact(4)
+            .map(|f| {
+                if f[3] > 0.0 {
+                    let damping =
+                        pursuit::tracking(f[0].hypot(f[1]) * scale, self.options.tracking);
+                    [f[0] * damping, f[1] * damping]
+                } else {
+                    [0.0; 2]
+                }
+            })
+            .collect();
+        let integrate = |frames: &[&[f32]]| {
+            pursuit::integrate(
+                frames,
+                &motion,
+                self.size,
+                self.options.gamma,
+                self.options.pursuit_substeps,
+            )
+        };
+        let reference: Vec<&[f32]> = std::iter::once(first.as_slice())
+            .chain(at.pictures.iter().take(n - 1).map(Vec::as_slice))
+            .collect();
+        let seen = integrate(&reference);
+        let mut errors = Vec::new();
+        for (method, group) in &groups {
+            let frames: Option<Vec<&[f32]>> = group
+                .iter()
+                .enumerate()
+                .map(|(k, frame)| match (k, frame) {
+                    (_, Some(frame)) => Some(frame.as_slice()),
+                    (0, None) => Some(rendered.as_slice()),
+                    _ => None,
+                })
+                .collect();
+            if let Some(frames) = frames {
+                errors.push((*method, pursuit::error(&integrate(&frames), &seen)));
+            }
+        }
+        for (method, error) in errors {
+            measured
+                .methods
+                .entry(method)
+                .or_default()
+                .pursuit
+                .push(error);
         }
         Ok(())
     }
@@ -1109,6 +1392,14 @@ impl Schedule<'_> {
         if endpoint {
             return;
         }
+        let n = self.options.frames_per_interval;
+        let group = measured
+            .groups
+            .entry(method)
+            .or_insert_with(|| vec![None; n as usize]);
+        if let Some(slot) = group.get_mut((sample.displayed % n) as usize) {
+            *slot = Some(sample.frame.clone());
+        }
         if let Some(blur) = measured.blur.as_mut() {
             blur.add(Some(method), sample.displayed, &sample.frame);
         }
@@ -1144,7 +1435,9 @@ impl Schedule<'_> {
             _ => b.of(method),
         });
         let b_ms = run.map_or(0.0, |r| metrics::median(&r.times));
-        let i_ms = if method.reads_flows() {
+        let i_ms = if method.extrapolates() {
+            iframe_ms + run.map_or(0.0, |r| metrics::median(&r.prepare_times))
+        } else if method.reads_flows() {
             iframe_ms
         } else {
             reference_ms
@@ -1209,6 +1502,15 @@ impl Schedule<'_> {
             worst_frame: run.and_then(|r| r.worst.as_ref().map(|w| w.1)),
             motion_blur_ssim: blur.map(|b| b.0),
             motion_blur_psnr: blur.map(|b| b.1),
+            pursuit_error: if method == Method::Reference {
+                Some(0.0)
+            } else {
+                run.filter(|r| !r.pursuit.is_empty())
+                    .map(|r| metrics::mean(&r.pursuit))
+            },
+            displayed_i_frame_psnr: run
+                .filter(|r| !r.displayed_i_frame_psnr.is_empty())
+                .map(|r| metrics::mean(&r.displayed_i_frame_psnr)),
         }
     }
 

@@ -139,6 +139,60 @@ pub struct Args {
     #[arg(long)]
     pub motion_blur: bool,
 
+    /// The morph's grid spacing in pixels (seed 004: 8): a power of two
+    /// that divides the frame's width and height.
+    #[arg(long, value_name = "PX", default_value_t = 8)]
+    pub grid: u32,
+
+    /// The morph on its regular grid: no snapping of the vertices to the
+    /// motion's discontinuities.
+    #[arg(long)]
+    pub no_snap: bool,
+
+    /// The least motion gradient a morph vertex snaps to, in pixels of
+    /// flow per pixel.
+    #[arg(long, value_name = "PX", default_value_t = 1.0)]
+    pub snap_threshold: f32,
+
+    /// The morph's low-pass: the pyramid level it reads (each level
+    /// halves the frame).
+    #[arg(long, value_name = "L", default_value_t = 2)]
+    pub blur_level: u32,
+
+    /// The display's gamma, under which the morph's compensation
+    /// conserves light.
+    #[arg(long, value_name = "G", default_value_t = 2.2)]
+    pub gamma: f32,
+
+    /// The display's refresh rate in Hz; the rendered rate is this over
+    /// n (120 at n = 3: the paper's 40 → 120 Hz).
+    #[arg(long, value_name = "HZ", default_value_t = 120.0)]
+    pub display_hz: f32,
+
+    /// The display's pixels per degree of visual angle.
+    #[arg(long, value_name = "PPD", default_value_t = 37.0)]
+    pub pixels_per_degree: f32,
+
+    /// The eye-tracking damping's ramp, deg/s: full tracking below the
+    /// first, none above the second.
+    #[arg(long, value_name = "FROM,TO", value_delimiter = ',', num_args = 2, default_values_t = [70.0, 90.0])]
+    pub tracking: Vec<f32>,
+
+    /// Selective blur: the morph blurs and compensates only where the
+    /// motion is at least this fast, deg/s (given without a value: 0.15,
+    /// the drift limit below which the eye does not track).
+    #[arg(long, value_name = "DEG_PER_S", num_args = 0..=1, default_missing_value = "0.15")]
+    pub selective_blur: Option<f32>,
+
+    /// The grid distortion mapped to full blur: a smooth step between the
+    /// two.
+    #[arg(long, value_name = "FROM,TO", value_delimiter = ',', num_args = 2, default_values_t = [0.25, 1.0])]
+    pub distortion_blur: Vec<f32>,
+
+    /// Sub-steps per displayed frame of the pursuit integral.
+    #[arg(long, value_name = "S", default_value_t = 8)]
+    pub pursuit_substeps: u32,
+
     /// Frame size (default: the scene's).
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<[u32; 2]>,
@@ -186,6 +240,17 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         moving_objects: !args.no_moving_objects,
         inpaint_passes: args.inpaint_passes,
         inpaint_delta: args.inpaint_delta,
+        grid: args.grid,
+        snap: !args.no_snap,
+        snap_threshold: args.snap_threshold,
+        blur_level: args.blur_level,
+        gamma: args.gamma,
+        display_hz: args.display_hz,
+        pixels_per_degree: args.pixels_per_degree,
+        tracking: pair(&args.tracking),
+        selective_blur: args.selective_blur,
+        distortion_blur: pair(&args.distortion_blur),
+        pursuit_substeps: args.pursuit_substeps,
         size: args.size,
         frames: args.frames,
         entry: args.stages.entry.clone(),
@@ -240,6 +305,16 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
                 error.all, error.hit
             ));
         }
+        if let Some(error) = m.pursuit_error {
+            summary.push_str(&format!(
+                "                   pursuit error {error:.4}, {} frame(s) of added latency{}\n",
+                m.added_latency_frames,
+                m.displayed_i_frame_psnr
+                    .map_or(String::new(), |psnr| format!(
+                        ", its I-frame displayed compensated at {psnr:.1} dB"
+                    ))
+            ));
+        }
         if let (Some(ssim), Some(psnr)) = (m.motion_blur_ssim, m.motion_blur_psnr) {
             summary.push_str(&format!(
                 "                   motion blur around each I-frame: SSIM {ssim:.4}, PSNR {psnr:.1} dB\n"
@@ -255,6 +330,13 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         args.out.join("report.html").display()
     ));
     super::write_stdout(&summary)
+}
+
+/// Two values clap has already counted (NaN, which the run refuses, for
+/// a missing one).
+fn pair(values: &[f32]) -> [f32; 2] {
+    let at = |i: usize| values.get(i).copied().unwrap_or(f32::NAN);
+    [at(0), at(1)]
 }
 
 /// A cosine: a number from −1 to 1.

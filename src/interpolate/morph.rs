@@ -1,0 +1,621 @@
+//! Morph-and-blur extrapolation (seed 004): the frames after a rendered
+//! frame, warped forward from it (`shaders/morph.wgsl`).
+//!
+//! Once per rendered frame ([`Morph::prepare`]): the argmax pyramid that
+//! snaps the grid to the motion's discontinuities, the low-pass pyramid,
+//! and the rendered frame as displayed (its high frequencies amplified so
+//! that the group of N displayed frames integrates to it). Per in-between
+//! frame ([`Morph::render`]): one draw of the grid, its vertices moved by
+//! s_k = k/N of the motion, depth-tested with the rendered frame's depth;
+//! the fragment warps the colour and the low-pass together and assembles
+//! the in-between frame from them, so an extrapolated frame costs one
+//! pass.
+//!
+//! The paper blurs each morphed frame (a pyramid per in-between frame);
+//! here the rendered frame's low-pass is warped with it, by the same
+//! grid. The two agree wherever the grid moves as a translation, which is
+//! everywhere but the tiles that stretch or fold; those are blended to the
+//! low-pass by their distortion all the same.
+
+use super::bframe::{depth_view, fullscreen_pass, linear_clamp, view};
+use crate::runtime::Gpu;
+
+/// The morph's shaders.
+pub const MORPH_WGSL: &str = include_str!("../../shaders/morph.wgsl");
+
+/// The in-between frames' and the displayed rendered frame's format: the
+/// measured colour format.
+const COLOR_FORMAT: wgpu::TextureFormat = super::bframe::COLOR_FORMAT;
+
+/// The argmax pyramid's texels (`fs_flow_edges`).
+const ARGMAX_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+
+/// The morph's depth buffer.
+const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// What a run fixes of the passes: the frame's size, the grid's spacing
+/// (a power of two that divides the frame) and the low-pass's pyramid
+/// level.
+#[derive(Clone, Copy, Debug)]
+pub struct MorphSetup {
+    pub size: [u32; 2],
+    pub grid: u32,
+    pub blur_level: u32,
+    /// Blur only where the motion is fast enough (the speed is
+    /// [`MorphParams::blur_min_speed`]).
+    pub selective_blur: bool,
+}
+
+/// The knobs of one pass, as `MorphParams` of `shaders/morph.wgsl` lays
+/// them out.
+#[derive(Clone, Copy, Debug)]
+pub struct MorphParams {
+    /// s_k = k/N.
+    pub step: f32,
+    /// N.
+    pub frames: f32,
+    pub gamma: f32,
+    /// The flow bound is the motion to the next rendered frame (the
+    /// twin's); else the flow to the previous one, extrapolated.
+    pub exact_motion: bool,
+    /// Degrees per second of eye motion per pixel of flow.
+    pub speed_scale: f32,
+    /// f(v)'s ramp, deg/s.
+    pub tracking: [f32; 2],
+    /// Selective blur's least speed, deg/s ([`MorphSetup::selective_blur`]).
+    pub blur_min_speed: Option<f32>,
+    /// The distortion's ramp to full blur.
+    pub distortion: [f32; 2],
+    pub snap_threshold: f32,
+    pub far_depth: f32,
+    /// Blur and compensate (else the warp alone).
+    pub blur: bool,
+    pub snap: bool,
+}
+
+impl MorphParams {
+    fn bytes(&self, setup: &MorphSetup) -> Vec<u8> {
+        let floats = [
+            setup.size[0] as f32,
+            setup.size[1] as f32,
+            self.step,
+            self.frames,
+            self.gamma,
+            if self.exact_motion { 1.0 } else { -1.0 },
+            self.speed_scale,
+            self.tracking[0],
+            self.tracking[1],
+            self.blur_min_speed.unwrap_or(0.0),
+            self.distortion[0],
+            self.distortion[1],
+            self.snap_threshold,
+            self.far_depth,
+        ];
+        let mut words: Vec<u32> = floats.iter().map(|f| f.to_bits()).collect();
+        words.push(setup.grid);
+        words.push(u32::from(self.snap));
+        words.iter().flat_map(|w| w.to_le_bytes()).collect()
+    }
+}
+
+/// The rendered frame a morph reads: its colour, depth and the flow that
+/// gives the motion.
+#[derive(Clone, Copy, Debug)]
+pub struct Source<'a> {
+    pub color: &'a wgpu::Texture,
+    pub depth: &'a wgpu::Texture,
+    pub flow: &'a wgpu::Texture,
+}
+
+/// What a pass reads of the pyramids.
+#[derive(Clone, Copy, Default)]
+struct Reads<'a> {
+    /// The argmax per grid vertex.
+    snap: bool,
+    /// The low-pass level.
+    low: bool,
+    /// What a halving pass halves.
+    argmax_source: Option<&'a wgpu::Texture>,
+    blur_source: Option<&'a wgpu::Texture>,
+}
+
+/// The morph's pipelines and targets.
+#[derive(Debug)]
+pub struct Morph {
+    setup: MorphSetup,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    sampler: wgpu::Sampler,
+    flow_edges: wgpu::RenderPipeline,
+    argmax_reduce: wgpu::RenderPipeline,
+    blur_down: wgpu::RenderPipeline,
+    compensate: wgpu::RenderPipeline,
+    /// The grid with blur and compensation, and the warp alone.
+    morph: wgpu::RenderPipeline,
+    warp: wgpu::RenderPipeline,
+    /// Two triangles per tile of the grid's vertices.
+    indices: wgpu::Buffer,
+    index_count: u32,
+    /// The argmax pyramid, from the shifted full frame down to one texel
+    /// per grid vertex.
+    argmax: Vec<wgpu::Texture>,
+    /// The low-pass pyramid, levels 1 to `blur_level`.
+    pyramid: Vec<wgpu::Texture>,
+    displayed: wgpu::Texture,
+    color: wgpu::Texture,
+    depth: wgpu::Texture,
+    /// Bound where a pass reads nothing.
+    no_argmax: wgpu::Texture,
+    no_color: wgpu::Texture,
+}
+
+fn entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty,
+        count: None,
+    }
+}
+
+fn texture(sample_type: wgpu::TextureSampleType) -> wgpu::BindingType {
+    wgpu::BindingType::Texture {
+        sample_type,
+        view_dimension: wgpu::TextureViewDimension::D2,
+        multisampled: false,
+    }
+}
+
+/// The morph's bindings, one layout for every pass.
+fn layout_entries() -> [wgpu::BindGroupLayoutEntry; 9] {
+    let both = wgpu::ShaderStages::VERTEX_FRAGMENT;
+    let float = wgpu::TextureSampleType::Float { filterable: true };
+    let uint = wgpu::TextureSampleType::Uint;
+    [
+        entry(
+            0,
+            both,
+            wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+        ),
+        entry(
+            1,
+            both,
+            wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+        ),
+        entry(2, both, texture(float)),
+        entry(3, both, texture(wgpu::TextureSampleType::Depth)),
+        entry(4, both, texture(float)),
+        entry(5, both, texture(uint)),
+        entry(6, both, texture(float)),
+        entry(7, both, texture(uint)),
+        entry(8, both, texture(float)),
+    ]
+}
+
+/// The argmax pyramid's level sizes: level 0 is the frame shifted by
+/// grid/2 and padded to whole neighbourhoods, ((W/g + 1)·g) × ((H/g + 1)·g);
+/// each level halves it, down to (W/g + 1) × (H/g + 1).
+pub fn argmax_sizes(size: [u32; 2], grid: u32) -> Vec<(u32, u32)> {
+    let vertices = (size[0] / grid + 1, size[1] / grid + 1);
+    let levels = grid.trailing_zeros();
+    (0..=levels)
+        .map(|l| {
+            let scale = grid >> l;
+            (vertices.0 * scale, vertices.1 * scale)
+        })
+        .collect()
+}
+
+impl Morph {
+    /// Builds the passes for `setup`.
+    pub fn new(gpu: &Gpu, setup: MorphSetup) -> Result<Morph, String> {
+        let device = &gpu.device;
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("morph"),
+            entries: &layout_entries(),
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("morph"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let selective = ("selective_blur", f64::from(u8::from(setup.selective_blur)));
+        let (flow_edges, argmax_reduce, blur_down, compensate, morph, warp) =
+            crate::runtime::validated(device, || {
+                let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some("shaders/morph.wgsl"),
+                    source: wgpu::ShaderSource::Wgsl(MORPH_WGSL.into()),
+                });
+                let fullscreen = |entry: &str, format: wgpu::TextureFormat| {
+                    super::bframe::fullscreen_pipeline(
+                        device,
+                        &module,
+                        entry,
+                        &pipeline_layout,
+                        entry,
+                        &[selective],
+                        &[Some(format.into())],
+                    )
+                };
+                let grid = |blur: bool| {
+                    let constants = [("blur", f64::from(u8::from(blur))), selective];
+                    grid_pipeline(device, &module, &pipeline_layout, &constants)
+                };
+                (
+                    fullscreen("fs_flow_edges", ARGMAX_FORMAT),
+                    fullscreen("fs_argmax_reduce", ARGMAX_FORMAT),
+                    fullscreen("fs_blur_down", COLOR_FORMAT),
+                    fullscreen("fs_compensate", COLOR_FORMAT),
+                    grid(true),
+                    grid(false),
+                )
+            })
+            .map_err(|err| format!("the morph passes do not build: {err}"))?;
+        let target = |label, size, format| {
+            shadecache_host::toolchain::render_target(device, label, size, format)
+        };
+        let [width, height] = setup.size;
+        let argmax = argmax_sizes(setup.size, setup.grid)
+            .into_iter()
+            .map(|size| target("morph argmax pyramid", size, ARGMAX_FORMAT))
+            .collect();
+        let pyramid = (1..=setup.blur_level)
+            .map(|l| {
+                let size = (width.div_ceil(1 << l), height.div_ceil(1 << l));
+                target("morph low-pass pyramid", size, COLOR_FORMAT)
+            })
+            .collect();
+        let indices = grid_indices(setup.size, setup.grid);
+        let index_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("morph grid"),
+            size: (indices.len() * 4) as u64,
+            usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bytes: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+        gpu.queue.write_buffer(&index_buffer, 0, &bytes);
+        Ok(Morph {
+            setup,
+            layout,
+            indices: index_buffer,
+            index_count: indices.len() as u32,
+            params: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("morph parameters"),
+                size: 64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            sampler: linear_clamp(device),
+            flow_edges,
+            argmax_reduce,
+            blur_down,
+            compensate,
+            morph,
+            warp,
+            argmax,
+            pyramid,
+            displayed: target("morph displayed frame", (width, height), COLOR_FORMAT),
+            color: target("morph in-between frame", (width, height), COLOR_FORMAT),
+            depth: target("morph depth", (width, height), DEPTH_FORMAT),
+            no_argmax: target("no argmax", (1, 1), ARGMAX_FORMAT),
+            no_color: target("no colour", (1, 1), COLOR_FORMAT),
+        })
+    }
+
+    /// A bind group of `source` and what the pass reads of the pyramids
+    /// (`Reads`; a placeholder for the rest: a texture a pass writes must
+    /// not be bound to it).
+    fn bind(&self, gpu: &Gpu, source: &Source, reads: Reads) -> wgpu::BindGroup {
+        let argmax = |t: Option<&wgpu::Texture>| view(t.unwrap_or(&self.no_argmax));
+        let color = |t: Option<&wgpu::Texture>| view(t.unwrap_or(&self.no_color));
+        let views = [
+            view(source.color),
+            depth_view(source.depth),
+            view(source.flow),
+            argmax(reads.snap.then(|| self.snapped())),
+            color(reads.low.then(|| self.pyramid.last()).flatten()),
+            argmax(reads.argmax_source),
+            color(reads.blur_source),
+        ];
+        let mut entries = vec![
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: self.params.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::Sampler(&self.sampler),
+            },
+        ];
+        entries.extend(
+            views
+                .iter()
+                .zip(2..)
+                .map(|(view, binding)| wgpu::BindGroupEntry {
+                    binding,
+                    resource: wgpu::BindingResource::TextureView(view),
+                }),
+        );
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("morph"),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+
+    /// What every in-between frame of a rendered frame shares, timed as
+    /// `<label>/…` when a profiler is given: the snapping pyramid (with
+    /// `params.snap`), and with `params.blur` the low-pass pyramid and the
+    /// displayed rendered frame ([`Morph::displayed`]).
+    pub fn prepare(
+        &self,
+        gpu: &Gpu,
+        source: &Source,
+        params: &MorphParams,
+        mut profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+    ) {
+        gpu.queue
+            .write_buffer(&self.params, 0, &params.bytes(&self.setup));
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        if params.snap {
+            let group = self.bind(gpu, source, Reads::default());
+            fullscreen_pass(
+                &mut encoder,
+                &mut profiler,
+                "flow edges",
+                (&self.flow_edges, &group),
+                &[view(&self.argmax[0])],
+            );
+            for level in 1..self.argmax.len() {
+                let reads = Reads {
+                    argmax_source: Some(&self.argmax[level - 1]),
+                    ..Reads::default()
+                };
+                let group = self.bind(gpu, source, reads);
+                fullscreen_pass(
+                    &mut encoder,
+                    &mut profiler,
+                    "argmax",
+                    (&self.argmax_reduce, &group),
+                    &[view(&self.argmax[level])],
+                );
+            }
+        }
+        if params.blur {
+            for level in 0..self.pyramid.len() {
+                let from = if level == 0 {
+                    source.color
+                } else {
+                    &self.pyramid[level - 1]
+                };
+                let reads = Reads {
+                    blur_source: Some(from),
+                    ..Reads::default()
+                };
+                let group = self.bind(gpu, source, reads);
+                fullscreen_pass(
+                    &mut encoder,
+                    &mut profiler,
+                    "low-pass",
+                    (&self.blur_down, &group),
+                    &[view(&self.pyramid[level])],
+                );
+            }
+            let reads = Reads {
+                low: true,
+                ..Reads::default()
+            };
+            let group = self.bind(gpu, source, reads);
+            fullscreen_pass(
+                &mut encoder,
+                &mut profiler,
+                "compensate",
+                (&self.compensate, &group),
+                &[view(&self.displayed)],
+            );
+        }
+        gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// One in-between frame at `params.step` ([`Morph::color`]), after
+    /// [`Morph::prepare`] of the same source, timed as `<label>/morph`.
+    pub fn render(
+        &self,
+        gpu: &Gpu,
+        source: &Source,
+        params: &MorphParams,
+        profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+    ) {
+        gpu.queue
+            .write_buffer(&self.params, 0, &params.bytes(&self.setup));
+        let reads = Reads {
+            snap: params.snap,
+            low: params.blur,
+            ..Reads::default()
+        };
+        let group = self.bind(gpu, source, reads);
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        let query = profiler.map(|(profiler, label)| {
+            let query = profiler.begin_pass_query(format!("{label}/morph"), &mut encoder);
+            (profiler, query)
+        });
+        {
+            let color = view(&self.color);
+            let depth = view(&self.depth);
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("morph"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &color,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: query
+                    .as_ref()
+                    .and_then(|(_, q)| q.render_pass_timestamp_writes()),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(if params.blur { &self.morph } else { &self.warp });
+            pass.set_bind_group(0, &group, &[]);
+            pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..self.index_count, 0, 0..1);
+        }
+        if let Some((profiler, query)) = query {
+            profiler.end_query(&mut encoder, query);
+            profiler.resolve_queries(&mut encoder);
+        }
+        gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// The last in-between frame.
+    pub fn color(&self) -> &wgpu::Texture {
+        &self.color
+    }
+
+    /// The rendered frame as displayed, compensated (after a
+    /// [`Morph::prepare`] with blur).
+    pub fn displayed(&self) -> &wgpu::Texture {
+        &self.displayed
+    }
+
+    /// One texel per grid vertex: its neighbourhood's packed argmax
+    /// (after a [`Morph::prepare`] with snapping).
+    pub fn snapped(&self) -> &wgpu::Texture {
+        self.argmax.last().unwrap_or(&self.no_argmax)
+    }
+}
+
+/// The grid's triangles: two per tile, over vertices numbered row by row,
+/// W/grid + 1 to a row.
+fn grid_indices([width, height]: [u32; 2], grid: u32) -> Vec<u32> {
+    let (tiles_x, tiles_y) = (width / grid, height / grid);
+    let columns = tiles_x + 1;
+    let mut indices = Vec::with_capacity((tiles_x * tiles_y * 6) as usize);
+    for y in 0..tiles_y {
+        for x in 0..tiles_x {
+            let v = y * columns + x;
+            indices.extend([v, v + 1, v + columns, v + 1, v + columns + 1, v + columns]);
+        }
+    }
+    indices
+}
+
+/// The grid's pipeline: depth-tested (nearer wins, `vs_morph` orders the
+/// depth so whichever way it runs), no culling (fold-overs flip the
+/// winding).
+fn grid_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    constants: &[(&str, f64)],
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("morph"),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_morph"),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
+            buffers: &[],
+        },
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some("fs_morph"),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
+            targets: &[Some(COLOR_FORMAT.into())],
+        }),
+        primitive: wgpu::PrimitiveState {
+            cull_mode: None,
+            ..wgpu::PrimitiveState::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::LessEqual),
+            stencil: wgpu::StencilState::default(),
+            bias: wgpu::DepthBiasState::default(),
+        }),
+        multisample: wgpu::MultisampleState::default(),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// The argmax a neighbourhood's texel holds, as `fs_flow_edges` and
+/// `fs_argmax_reduce` compute it, on the CPU: for each grid vertex, the
+/// largest packed (gradient, y, x) over its neighbourhood of the motion
+/// `motion` (row-major, pixels). A mirror for the tests.
+#[cfg(test)]
+pub fn argmax_on_cpu(
+    motion: &[[f32; 2]],
+    size: [u32; 2],
+    grid: u32,
+    snap_threshold: f32,
+) -> Vec<u32> {
+    let [w, h] = [size[0] as i32, size[1] as i32];
+    let at = |x: i32, y: i32| motion[(y * w + x) as usize];
+    let gradient = |x: i32, y: i32| -> f32 {
+        let here = at(x, y);
+        let mut g = 0.0f32;
+        for (nx, ny) in [(x + 1, y), (x, y + 1)] {
+            if nx < w && ny < h {
+                let there = at(nx, ny);
+                g = g.max((there[0] - here[0]).hypot(there[1] - here[1]));
+            }
+        }
+        g
+    };
+    let (columns, rows) = (w / grid as i32 + 1, h / grid as i32 + 1);
+    let half = grid as i32 / 2;
+    let mut out = Vec::new();
+    for j in 0..rows {
+        for i in 0..columns {
+            let mut best = 0u32;
+            for ry in 0..grid as i32 {
+                for rx in 0..grid as i32 {
+                    let (x, y) = (i * grid as i32 - half + rx, j * grid as i32 - half + ry);
+                    let mut packed = ((ry as u32) << 8) | rx as u32;
+                    if x >= 0 && y >= 0 && x < w && y < h {
+                        let g = gradient(x, y);
+                        if g >= snap_threshold {
+                            packed |= ((g * 256.0).clamp(0.0, 65535.0) as u32) << 16;
+                        }
+                    }
+                    best = best.max(packed);
+                }
+            }
+            out.push(best);
+        }
+    }
+    out
+}

@@ -1,0 +1,137 @@
+//! Pursuit error: what an eye tracking the motion sees of a group of
+//! displayed frames, against what it sees of the reference's.
+//!
+//! Seed 004's claims rest on a user study of perceived blur; this is the
+//! stand-in the design note proposes (`seeds-001-004.md` §B.9, metric 2).
+//! A hold-type display shows displayed frame k of a group of n for
+//! [k, k + 1) (in displayed frames). An eye tracking the surface seen at
+//! pixel p of the group's first frame is, at time τ ∈ [0, n), at
+//! p + (τ/n)·f(v)·m(p), m(p) the surface's motion over the group (the
+//! I-frame's exact flow to the next I-frame) and f(v) the eye-tracking
+//! damping (seed 004 §6: no pursuit beyond 90 deg/s). The retina
+//! integrates light (Bloch's law), so the pursuit image is
+//!
+//! P(p) = ( 1/(n·S) · Σ_k Σ_s clamp(D_k(p + ((k + (s + ½)/S)/n)·f·m(p)), 0, 1)^γ )^(1/γ)
+//!
+//! with S sub-steps per displayed frame, D_k sampled bilinearly, and the
+//! pursuit error the RMS difference over RGB of a method's P and the
+//! reference's (display values, 0 to 1). Frame repetition's error is the
+//! hold-type blur a 1/n rate adds; the reference's is zero.
+
+/// The pursuit image of `frames` (RGBA linear frames of `size`, the
+/// group's displayed frames in order) along `motion` (per pixel, over the
+/// whole group, damping applied), in display values, RGB.
+pub fn integrate(
+    frames: &[&[f32]],
+    motion: &[[f32; 2]],
+    size: [u32; 2],
+    gamma: f32,
+    substeps: u32,
+) -> Vec<f32> {
+    let [width, height] = [size[0] as usize, size[1] as usize];
+    let n = frames.len() as f32;
+    let samples = (frames.len() as u32 * substeps.max(1)) as f32;
+    let mut out = vec![0.0f32; width * height * 3];
+    for y in 0..height {
+        for x in 0..width {
+            let p = y * width + x;
+            let m = motion[p];
+            let mut light = [0.0f32; 3];
+            for (k, frame) in frames.iter().enumerate() {
+                for s in 0..substeps.max(1) {
+                    let tau = (k as f32 + (s as f32 + 0.5) / substeps.max(1) as f32) / n;
+                    let at = [x as f32 + 0.5 + tau * m[0], y as f32 + 0.5 + tau * m[1]];
+                    let c = bilinear(frame, [width, height], at);
+                    for (l, v) in light.iter_mut().zip(c) {
+                        *l += v.clamp(0.0, 1.0).powf(gamma);
+                    }
+                }
+            }
+            for (c, l) in light.iter().enumerate() {
+                out[p * 3 + c] = (l / samples).powf(1.0 / gamma);
+            }
+        }
+    }
+    out
+}
+
+/// The RMS difference of two pursuit images.
+pub fn error(a: &[f32], b: &[f32]) -> f64 {
+    let squared: f64 = a.iter().zip(b).map(|(x, y)| f64::from(x - y).powi(2)).sum();
+    (squared / a.len().max(1) as f64).sqrt()
+}
+
+/// RGB of `frame` at continuous position `at` (pixel centres at +0.5),
+/// bilinear, clamped to the edge.
+fn bilinear(frame: &[f32], [width, height]: [usize; 2], at: [f32; 2]) -> [f32; 3] {
+    let fx = (at[0] - 0.5).clamp(0.0, (width - 1) as f32);
+    let fy = (at[1] - 0.5).clamp(0.0, (height - 1) as f32);
+    let (x0, y0) = (fx.floor() as usize, fy.floor() as usize);
+    let (x1, y1) = ((x0 + 1).min(width - 1), (y0 + 1).min(height - 1));
+    let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
+    let texel = |x: usize, y: usize, c: usize| frame[(y * width + x) * 4 + c];
+    let mut out = [0.0; 3];
+    for (c, o) in out.iter_mut().enumerate() {
+        let top = texel(x0, y0, c) * (1.0 - tx) + texel(x1, y0, c) * tx;
+        let bottom = texel(x0, y1, c) * (1.0 - tx) + texel(x1, y1, c) * tx;
+        *o = top * (1.0 - ty) + bottom * ty;
+    }
+    out
+}
+
+/// The eye-tracking damping of seed 004 §6: 1 below `from` deg/s, 0 above
+/// `to`, a cubic smooth step between (`tracking` in `shaders/morph.wgsl`).
+pub fn tracking(speed: f32, [from, to]: [f32; 2]) -> f32 {
+    let t = ((speed - from) / (to - from)).clamp(0.0, 1.0);
+    1.0 - t * t * (3.0 - 2.0 * t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A bright bar one pixel wide at column `column` of a 16×4 frame.
+    fn bar(column: usize) -> Vec<f32> {
+        let mut frame = vec![0.0f32; 16 * 4 * 4];
+        for y in 0..4 {
+            for c in 0..3 {
+                frame[(y * 16 + column) * 4 + c] = 1.0;
+            }
+        }
+        frame
+    }
+
+    #[test]
+    fn still_frames_integrate_to_themselves() {
+        let frame = bar(5);
+        let out = integrate(&[&frame, &frame], &[[0.0; 2]; 64], [16, 4], 2.2, 8);
+        for p in 0..64 {
+            assert!((out[p * 3] - frame[p * 4]).abs() < 1e-5);
+        }
+    }
+
+    /// A bar moving 2 pixels a displayed frame: shown where it is at each
+    /// frame, the eye sees it sharp; held, it smears over the group.
+    #[test]
+    fn a_held_frame_smears_what_the_eye_tracks() {
+        let motion = vec![[4.0, 0.0]; 64];
+        let moving = [bar(4), bar(6)];
+        let held = [bar(4), bar(4)];
+        let reference = integrate(&[&moving[0], &moving[1]], &motion, [16, 4], 2.2, 8);
+        let same = integrate(&[&moving[0], &moving[1]], &motion, [16, 4], 2.2, 8);
+        let hold = integrate(&[&held[0], &held[1]], &motion, [16, 4], 2.2, 8);
+        assert_eq!(error(&reference, &same), 0.0);
+        assert!(
+            error(&reference, &hold) > 0.05,
+            "{}",
+            error(&reference, &hold)
+        );
+    }
+
+    #[test]
+    fn tracking_ramps_from_one_to_zero() {
+        assert_eq!(tracking(10.0, [70.0, 90.0]), 1.0);
+        assert_eq!(tracking(80.0, [70.0, 90.0]), 0.5);
+        assert_eq!(tracking(95.0, [70.0, 90.0]), 0.0);
+    }
+}
