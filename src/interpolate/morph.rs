@@ -571,11 +571,82 @@ fn grid_pipeline(
     })
 }
 
+/// The argmax per grid vertex the GPU finds for the motion `motion`
+/// (row-major, pixels, over `setup.size`): the snapping pyramid alone, on
+/// a flow made from it. What [`argmax_on_cpu`] is checked against.
+pub fn argmax_on_gpu(
+    gpu: &Gpu,
+    setup: MorphSetup,
+    motion: &[[f32; 2]],
+    snap_threshold: f32,
+) -> Result<Vec<u32>, String> {
+    let morph = Morph::new(gpu, setup)?;
+    let size = (setup.size[0], setup.size[1]);
+    let flow = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("motion"),
+        size: wgpu::Extent3d {
+            width: size.0,
+            height: size.1,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: COLOR_FORMAT,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let texels: Vec<u8> = motion
+        .iter()
+        .flat_map(|m| [m[0], m[1], 0.0, 1.0])
+        .flat_map(|v| half::f16::from_f32(v).to_le_bytes())
+        .collect();
+    gpu.queue.write_texture(
+        flow.as_image_copy(),
+        &texels,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(size.0 * 8),
+            rows_per_image: None,
+        },
+        flow.size(),
+    );
+    let target =
+        |label, format| shadecache_host::toolchain::render_target(&gpu.device, label, size, format);
+    let (color, depth) = (
+        target("colour", COLOR_FORMAT),
+        target("depth", DEPTH_FORMAT),
+    );
+    let source = Source {
+        color: &color,
+        depth: &depth,
+        flow: &flow,
+    };
+    let params = MorphParams {
+        step: 0.0,
+        frames: 2.0,
+        gamma: 2.2,
+        exact_motion: true,
+        speed_scale: 0.0,
+        tracking: [70.0, 90.0],
+        blur_min_speed: None,
+        distortion: [0.25, 1.0],
+        snap_threshold,
+        far_depth: 1.0,
+        blur: false,
+        snap: true,
+    };
+    morph.prepare(gpu, &source, &params, None);
+    Ok(crate::runtime::read_texture(gpu, morph.snapped(), 4)?
+        .chunks_exact(4)
+        .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+        .collect())
+}
+
 /// The argmax a neighbourhood's texel holds, as `fs_flow_edges` and
 /// `fs_argmax_reduce` compute it, on the CPU: for each grid vertex, the
 /// largest packed (gradient, y, x) over its neighbourhood of the motion
 /// `motion` (row-major, pixels). A mirror for the tests.
-#[cfg(test)]
 pub fn argmax_on_cpu(
     motion: &[[f32; 2]],
     size: [u32; 2],
@@ -618,4 +689,30 @@ pub fn argmax_on_cpu(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    /// The passes' module passes naga's validation with every flag (Tint
+    /// and a pipeline per pass: the interpolation tests).
+    #[test]
+    fn morph_shaders_validate() {
+        let module = naga::front::wgsl::parse_str(super::MORPH_WGSL)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(super::MORPH_WGSL)));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::all(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(super::MORPH_WGSL)));
+    }
+
+    #[test]
+    fn grid_has_two_triangles_per_tile() {
+        let indices = super::grid_indices([32, 16], 8);
+        assert_eq!(indices.len(), 4 * 2 * 6);
+        // Five vertices to a row: the last tile's far corner is the last
+        // vertex.
+        assert_eq!(indices.iter().max(), Some(&(5 * 3 - 1)));
+    }
 }

@@ -155,7 +155,9 @@ pub struct DisplayedFrame {
 pub struct Pictures {
     /// Each method's worst B-frame and the reference at its time, RGBA8.
     pub worst: Vec<(Method, Vec<u8>, Vec<u8>)>,
-    /// The B-frames kept whole (`keep_frames`, or the end points).
+    /// The B-frames kept whole (`keep_frames`, or the end points); with
+    /// `keep_frames` also the I-frames the compensating extrapolators
+    /// display (α = 0).
     pub kept: Vec<KeptFrame>,
     /// With `keep_frames`, every measured I-frame.
     pub iframes: Vec<KeptIFrame>,

@@ -1083,6 +1083,17 @@ impl Schedule<'_> {
                 let error = metrics::compare_frames(&reference, &shown, width, height, THRESHOLD);
                 let run = measured.methods.entry(method).or_default();
                 run.displayed_i_frame_psnr.push(error.psnr_frame);
+                if self.options.keep_frames {
+                    measured.kept.push(KeptFrame {
+                        method,
+                        frame: start,
+                        alpha: 0.0,
+                        error,
+                        reference: reference.clone(),
+                        result: shown.clone(),
+                        decisions: Vec::new(),
+                    });
+                }
                 measured
                     .groups
                     .entry(method)

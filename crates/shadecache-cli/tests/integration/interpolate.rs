@@ -30,17 +30,17 @@ pub(crate) fn run_interpolation(
     Some((report, pictures, scene))
 }
 
-fn marble() -> String {
+pub(crate) fn marble() -> String {
     std::fs::read_to_string(root().join("corpus/noise_marble.wgsl")).unwrap()
 }
 
 /// A marble sphere over a marble floor; `effects`, `camera` and `sphere`
 /// (TOML lines) set the motion.
-fn sphere_over_floor(effects: &str, camera: &str, sphere: &str) -> String {
+pub(crate) fn sphere_over_floor(effects: &str, camera: &str, sphere: &str) -> String {
     crate::util::sphere_over_floor("size = [96, 96]\nframes = 8", effects, camera, sphere)
 }
 
-fn method(report: &Report, method: Method) -> &interpolate::report::MethodReport {
+pub(crate) fn method(report: &Report, method: Method) -> &interpolate::report::MethodReport {
     report
         .methods
         .iter()
@@ -48,7 +48,7 @@ fn method(report: &Report, method: Method) -> &interpolate::report::MethodReport
         .unwrap_or_else(|| panic!("{} missing from the report", method.name()))
 }
 
-fn kept(pictures: &Pictures, method: Method) -> Vec<&KeptFrame> {
+pub(crate) fn kept(pictures: &Pictures, method: Method) -> Vec<&KeptFrame> {
     pictures
         .kept
         .iter()
@@ -423,7 +423,10 @@ fn reversed_z_interpolation() {
 fn every_interpolation_pass_is_valid_and_builds() {
     let Some(gpu) = crate::gpu::gpu() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let mut files = vec![root().join("shaders/bframe.wgsl")];
+    let mut files = vec![
+        root().join("shaders/bframe.wgsl"),
+        root().join("shaders/morph.wgsl"),
+    ];
     let mut built = 0;
     for path in crate::util::corpus() {
         let text = std::fs::read_to_string(root().join(&path)).unwrap();
@@ -487,6 +490,17 @@ fn every_interpolation_pass_is_valid_and_builds() {
         interpolate::bframe::BFrames::new(&gpu, (16, 16), &Method::ALL, (3, latest))
             .unwrap_or_else(|err| panic!("{err}"));
     }
+    // The morph's passes, with and without selective blur, at the
+    // smallest and the paper's grid.
+    for (grid, selective_blur) in [(2, false), (8, true)] {
+        let setup = interpolate::morph::MorphSetup {
+            size: [32, 16],
+            grid,
+            blur_level: 2,
+            selective_blur,
+        };
+        interpolate::morph::Morph::new(&gpu, setup).unwrap_or_else(|err| panic!("{err}"));
+    }
     assert!(built >= 30, "{built} pipelines");
 }
 
@@ -506,6 +520,18 @@ fn interpolate_bad_input_is_an_error() {
         (vec!["--screen-epsilon=-1"], "screen-epsilon"),
         (vec!["--inpaint-passes", "0"], "inpaint-passes"),
         (vec!["--latest-radius", "0"], "latest-radius"),
+        (vec!["--method", "morph", "--grid", "12"], "power of two"),
+        (
+            vec!["--method", "morph", "--size", "100x100"],
+            "does not divide the 100×100 frame",
+        ),
+        (vec!["--method", "morph", "--gamma", "0"], "gamma"),
+        (vec!["--method", "morph", "--tracking", "90,70"], "tracking"),
+        (vec!["--method", "morph", "--blur-level", "0"], "blur-level"),
+        (
+            vec!["--method", "morph", "--frames-per-interval", "1"],
+            "frames-per-interval",
+        ),
     ] {
         let mut full = vec!["interpolate", marble, "--scene", scene, "--out", &out_arg];
         full.extend(args.iter().copied());
@@ -515,6 +541,37 @@ fn interpolate_bad_input_is_an_error() {
         assert!(err.contains(says), "{args:?}: {err}");
         assert!(!out_dir.exists(), "{args:?} wrote a report");
     }
+    // A shader whose flows cannot be made (the fragment stage moves its
+    // own depth): refused with the reason, before anything is written.
+    let (_dir, shader) = temp_file(
+        "depth.wgsl",
+        br#"
+struct Frame { clip_from_world: mat4x4<f32> }
+@group(0) @binding(0) var<uniform> frame: Frame;
+@vertex
+fn vs_main(@location(0) position: vec3<f32>) -> @builtin(position) vec4<f32> {
+    return frame.clip_from_world * vec4<f32>(position, 1.0);
+}
+struct Out { @location(0) color: vec4<f32>, @builtin(frag_depth) depth: f32 }
+@fragment
+fn fs_main(@builtin(position) p: vec4<f32>) -> Out {
+    return Out(vec4<f32>(1.0), p.z * 0.5);
+}
+"#,
+    );
+    let shader = shader.display().to_string();
+    let output = crate::util::shadecache([
+        "interpolate",
+        &shader,
+        "--method",
+        "morph",
+        "--out",
+        &out_arg,
+    ]);
+    assert_eq!(output.status.code(), Some(1));
+    let err = crate::util::stderr(&output);
+    assert!(err.contains("frag_depth"), "{err}");
+    assert!(!out_dir.exists());
 }
 
 /// Seed 000's globe (Fig. 3): turning and moving at once, its silhouette
@@ -657,7 +714,7 @@ fn flows_match_cpu_projection() {
 /// Flat shading by height, like [`DEPTH_SHADED`], with stripes in the
 /// object's own space on what stands in front of the wall only: the wall
 /// is one flat colour, the square (bright) carries its stripes along.
-const SLIDING_SHADED: &str = with_frame_vertex!(
+pub(crate) const SLIDING_SHADED: &str = with_frame_vertex!(
     r#"
 @fragment
 fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
@@ -669,11 +726,11 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
 );
 
 /// Brightness of [`SLIDING_SHADED`] above which a pixel shows the square.
-const SQUARE: f32 = 0.4;
+pub(crate) const SQUARE: f32 = 0.4;
 
 /// Squares before a wall, the camera still: each `(size, [x, y], speed)`,
 /// moving `speed` world units a frame along x, the wall `wall_speed`.
-fn squares_before_wall(wall_speed: f32, squares: &[(f32, [f32; 2], f32)]) -> String {
+pub(crate) fn squares_before_wall(wall_speed: f32, squares: &[(f32, [f32; 2], f32)]) -> String {
     let objects: String = squares
         .iter()
         .map(|(size, [x, y], speed)| {
@@ -693,7 +750,7 @@ translation_per_frame = [{speed}, 0.0, 0.0]
 /// A 96² scene of `objects` (TOML) before a wall one unit behind the
 /// origin moving `wall_speed` world units a frame along x, the camera
 /// still three units in front with depth convention `depth`.
-fn before_wall(depth: &str, wall_speed: f32, objects: &str) -> String {
+pub(crate) fn before_wall(depth: &str, wall_speed: f32, objects: &str) -> String {
     format!(
         r#"
 size = [96, 96]
@@ -722,7 +779,7 @@ fn sliding_square(speed: f32) -> String {
 
 /// World units a frame that move the sliding square `pixels` pixels at
 /// 96² (the camera 3 units away, 45° field of view).
-fn square_speed(pixels: f32) -> f32 {
+pub(crate) fn square_speed(pixels: f32) -> f32 {
     pixels * 2.0 * 3.0 * 22.5f32.to_radians().tan() / 96.0
 }
 
@@ -757,7 +814,7 @@ fn half_velocity_frames_with(
 }
 
 /// Largest channel difference at pixel `p` of a kept B-frame.
-fn error_at(frame: &KeptFrame, p: usize) -> f32 {
+pub(crate) fn error_at(frame: &KeptFrame, p: usize) -> f32 {
     (0..3)
         .map(|c| (frame.reference[p * 4 + c] - frame.result[p * 4 + c]).abs())
         .fold(0.0f32, f32::max)

@@ -1,0 +1,505 @@
+//! Morph-and-blur extrapolation (seed 004: `morph`, `morph-past`,
+//! `morph-warp` of `shadecache interpolate`): the frames after an I-frame,
+//! built from it alone, on small scenes.
+
+use shadecache::interpolate::morph::{argmax_on_cpu, argmax_on_gpu, MorphSetup};
+use shadecache::interpolate::report::{KeptFrame, Pictures, Report};
+use shadecache::interpolate::{Method, Options};
+use shadecache::scene::Scene;
+
+use crate::interpolate::{
+    error_at, kept, marble, method, run_interpolation, sphere_over_floor, square_speed,
+    squares_before_wall, SLIDING_SHADED, SQUARE,
+};
+
+const SIZE: usize = 96;
+
+/// The display's gamma the tests' energies are in (the default).
+const GAMMA: f32 = 2.2;
+
+fn run(scene: &str, options: Options) -> Option<(Report, Pictures, Scene)> {
+    run_interpolation(SLIDING_SHADED, scene, options)
+}
+
+/// A square sliding right before a still wall at `pixels` a displayed
+/// frame; `n` frames an interval, the frames kept.
+fn sliding(pixels: f32, n: u32, methods: Vec<Method>) -> Option<(Report, Pictures, Scene)> {
+    sliding_with(
+        pixels,
+        Options {
+            methods,
+            frames_per_interval: n,
+            frames: Some(3 * n),
+            keep_frames: true,
+            ..Options::default()
+        },
+    )
+}
+
+fn sliding_with(pixels: f32, options: Options) -> Option<(Report, Pictures, Scene)> {
+    let scene = squares_before_wall(0.0, &[(0.8, [-0.6, 0.0], square_speed(pixels))]);
+    run(&scene, options)
+}
+
+/// The extrapolated frames of `method` (α > 0).
+fn extrapolated<'a>(pictures: &'a Pictures, method: Method) -> Vec<&'a KeptFrame> {
+    let frames: Vec<&KeptFrame> = kept(pictures, method)
+        .into_iter()
+        .filter(|f| f.alpha > 0.0)
+        .collect();
+    assert!(!frames.is_empty(), "no frame of {} kept", method.name());
+    frames
+}
+
+/// The pixels within `radius` pixels (Chebyshev) of the square's outline
+/// at any of `frames`.
+fn near_outline(scene: &Scene, frames: &[u32], radius: i64) -> Vec<bool> {
+    let masks: Vec<Vec<bool>> = frames
+        .iter()
+        .map(|&f| crate::util::silhouette(scene, 1, f, SIZE, SIZE))
+        .collect();
+    let edge: Vec<bool> = (0..SIZE * SIZE)
+        .map(|p| {
+            masks
+                .iter()
+                .any(|m| crate::util::near(m, SIZE, p) && !crate::util::interior(m, SIZE)[p])
+        })
+        .collect();
+    (0..SIZE * SIZE)
+        .map(|p| {
+            let (x, y) = ((p % SIZE) as i64, (p / SIZE) as i64);
+            (-radius..=radius).any(|dy| {
+                (-radius..=radius).any(|dx| {
+                    let (nx, ny) = (x + dx, y + dy);
+                    (0..SIZE as i64).contains(&nx)
+                        && (0..SIZE as i64).contains(&ny)
+                        && edge[ny as usize * SIZE + nx as usize]
+                })
+            })
+        })
+        .collect()
+}
+
+/// The interval's I-frame of a kept frame (its α·n frames before).
+fn iframe_of(frame: &KeptFrame, n: u32) -> u32 {
+    frame.frame - (frame.alpha * f64::from(n)).round() as u32
+}
+
+/// Nothing moves: the warp is the identity, and with selective blur
+/// (none below the drift limit) the full method shows the I-frame in every
+/// slot, compensated by nothing. Without selective blur the same frames
+/// are blurred: the identity is selective blur's doing.
+#[test]
+fn static_scene_extrapolation_is_identity() {
+    let options = |selective_blur| Options {
+        methods: vec![Method::MorphWarp, Method::Morph],
+        frames_per_interval: 3,
+        frames: Some(6),
+        keep_frames: true,
+        selective_blur,
+        ..Options::default()
+    };
+    let scene = sphere_over_floor("", "", "");
+    let Some((_, selective, _)) = run_interpolation(&marble(), &scene, options(Some(0.15))) else {
+        return;
+    };
+    for method in [Method::MorphWarp, Method::Morph] {
+        let frames = kept(&selective, method);
+        assert!(
+            frames.len() >= 4,
+            "{}: {} frames",
+            method.name(),
+            frames.len()
+        );
+        for frame in frames {
+            assert!(
+                frame.error.max_abs_error < 2e-3,
+                "{} frame {} (α = {}): {:?}",
+                method.name(),
+                frame.frame,
+                frame.alpha,
+                frame.error
+            );
+        }
+    }
+    let (_, everywhere, _) = run_interpolation(&marble(), &scene, options(None)).unwrap();
+    let worst = extrapolated(&everywhere, Method::Morph)
+        .iter()
+        .map(|f| f.error.max_abs_error)
+        .fold(0.0, f64::max);
+    assert!(
+        worst > 0.02,
+        "blurred everywhere, the frames moved by {worst}"
+    );
+}
+
+/// A square translating two pixels a displayed frame (n = 2: the
+/// in-between frame is four pixels along the interval's motion, on texel
+/// centres): away from the outlines, by a grid spacing, the warp is the
+/// frame rendered at its time.
+#[test]
+fn constant_translation_warp_is_exact_away_from_edges() {
+    let Some((_, pictures, scene)) = sliding(2.0, 2, vec![Method::MorphWarp]) else {
+        return;
+    };
+    for frame in extrapolated(&pictures, Method::MorphWarp) {
+        let band = near_outline(&scene, &[iframe_of(frame, 2), frame.frame], 8);
+        let checked: Vec<usize> = (0..SIZE * SIZE).filter(|&p| !band[p]).collect();
+        assert!(checked.len() > SIZE * SIZE / 2);
+        let worst = checked
+            .iter()
+            .map(|&p| error_at(frame, p))
+            .fold(0.0f32, f32::max);
+        assert!(worst <= 0.02, "frame {}: worst error {worst}", frame.frame);
+        // The square's stripes are checked too, not only the flat wall.
+        let square = checked
+            .iter()
+            .filter(|&&p| frame.reference[p * 4] > SQUARE)
+            .count();
+        assert!(square > 100, "{square} pixels of the square checked");
+    }
+}
+
+/// The square moves 12 pixels an in-between frame, more than a grid
+/// spacing: its tiles fold over the wall's ahead of it, and the depth test
+/// keeps the nearer square where the frame rendered at that time shows it,
+/// with either depth convention (drawn in the grid's order instead, the
+/// wall hides a third of it).
+#[test]
+fn fold_over_nearer_surface_wins() {
+    for depth in ["standard", "reversed"] {
+        let object = format!(
+            r#"[[objects]]
+mesh = {{ kind = "plane", size = 0.8, subdivisions = 2 }}
+position = [-1.0, 0.0, 0.0]
+rotation_degrees = [90.0, 0.0, 0.0]
+translation_per_frame = [{}, 0.0, 0.0]
+"#,
+            square_speed(12.0)
+        );
+        let scene = crate::interpolate::before_wall(depth, 0.0, &object);
+        let options = Options {
+            methods: vec![Method::MorphWarp],
+            frames_per_interval: 2,
+            frames: Some(4),
+            keep_frames: true,
+            ..Options::default()
+        };
+        let Some((_, pictures, scene)) = run(&scene, options) else {
+            return;
+        };
+        for frame in extrapolated(&pictures, Method::MorphWarp) {
+            let before = crate::util::silhouette(&scene, 1, iframe_of(frame, 2), SIZE, SIZE);
+            let now = crate::util::silhouette(&scene, 1, frame.frame, SIZE, SIZE);
+            let inside = crate::util::interior(&now, SIZE);
+            // Newly covered by the square: the wall before, the square now.
+            let covered: Vec<usize> = (0..SIZE * SIZE)
+                .filter(|&p| inside[p] && !crate::util::near(&before, SIZE, p))
+                .collect();
+            assert!(covered.len() >= 40, "{depth}: {} pixels", covered.len());
+            let lost: Vec<usize> = covered
+                .iter()
+                .copied()
+                .filter(|&p| frame.result[p * 4] < SQUARE)
+                .collect();
+            // The corners, where two edges meet in one neighbourhood and
+            // one vertex snaps to one of them, may smear a pixel.
+            assert!(
+                lost.len() * 50 <= covered.len(),
+                "{depth}, frame {}: the wall shows at {} of {} pixels the square covers, e.g. {:?}",
+                frame.frame,
+                lost.len(),
+                covered.len(),
+                &lost[..lost.len().min(5)]
+            );
+        }
+    }
+}
+
+/// Snapping, checked twice. The argmax pyramid finds, per vertex, the
+/// largest motion gradient of its neighbourhood, as a brute-force search
+/// on the CPU does (same tie-break), and a vertex whose neighbourhood a
+/// diagonal motion edge crosses lands on it. And on the sliding square,
+/// whose outline falls between grid lines, the warp is nearer the frame
+/// rendered at its time along the outline with snapping than on the
+/// regular grid.
+#[test]
+fn grid_snaps_to_motion_edge() {
+    let Some(gpu) = crate::gpu::gpu() else { return };
+    let (size, grid) = ([64u32, 48u32], 8u32);
+    let motion: Vec<[f32; 2]> = (0..size[0] * size[1])
+        .map(|p| {
+            let (x, y) = ((p % size[0]) as f32, (p / size[0]) as f32);
+            if x + 0.6 * y > 37.3 {
+                [6.0, -2.0]
+            } else {
+                [0.0, 0.0]
+            }
+        })
+        .collect();
+    let setup = MorphSetup {
+        size,
+        grid,
+        blur_level: 2,
+        selective_blur: false,
+    };
+    let gpu_argmax = argmax_on_gpu(&gpu, setup, &motion, 1.0).unwrap();
+    let cpu_argmax = argmax_on_cpu(&motion, size, grid, 1.0);
+    assert_eq!(gpu_argmax, cpu_argmax);
+    let columns = size[0] / grid + 1;
+    let on_edge = |x: i32, y: i32| {
+        let at = |x: i32, y: i32| motion[(y * size[0] as i32 + x) as usize];
+        at(x + 1, y) != at(x, y) || at(x, y + 1) != at(x, y)
+    };
+    let mut snapped = 0;
+    for (v, packed) in gpu_argmax.iter().enumerate() {
+        let (i, j) = (v as u32 % columns, v as u32 / columns);
+        if i == 0 || j == 0 || i == columns - 1 || j == size[1] / grid {
+            continue;
+        }
+        let corner = |at: u32, r: u32| (at * grid) as i32 - (grid / 2) as i32 + r as i32;
+        let (x, y) = (corner(i, packed & 0xff), corner(j, (packed >> 8) & 0xff));
+        let crossed = (0..grid).any(|ry| (0..grid).any(|rx| on_edge(corner(i, rx), corner(j, ry))));
+        assert_eq!(packed >> 16 > 0, crossed, "vertex ({i}, {j})");
+        if crossed {
+            assert!(on_edge(x, y), "vertex ({i}, {j}) snapped to ({x}, {y})");
+            snapped += 1;
+        }
+    }
+    assert!(snapped >= 4, "{snapped} vertices snapped");
+
+    let band_error = |snap: bool| {
+        let options = Options {
+            methods: vec![Method::MorphWarp],
+            frames_per_interval: 2,
+            frames: Some(6),
+            keep_frames: true,
+            snap,
+            ..Options::default()
+        };
+        let (_, pictures, scene) = sliding_with(2.0, options).unwrap();
+        let mut sum = 0.0f64;
+        let mut count = 0usize;
+        for frame in extrapolated(&pictures, Method::MorphWarp) {
+            let band = near_outline(&scene, &[frame.frame], 3);
+            for p in (0..SIZE * SIZE).filter(|&p| band[p]) {
+                sum += f64::from(error_at(frame, p));
+                count += 1;
+            }
+        }
+        sum / count as f64
+    };
+    let (with, without) = (band_error(true), band_error(false));
+    assert!(
+        with < 0.8 * without,
+        "mean error along the outline: {with:.4} snapped, {without:.4} on the regular grid"
+    );
+}
+
+/// Light of a display value (clamped to the display's range).
+fn light(v: f32) -> f32 {
+    v.clamp(0.0, 1.0).powf(GAMMA)
+}
+
+/// Each interval's displayed frames of `method`: its I-frame as displayed
+/// and its in-between frames, by interval.
+fn groups(pictures: &Pictures, method: Method, n: u32) -> Vec<Vec<&KeptFrame>> {
+    let frames = kept(pictures, method);
+    let starts: Vec<u32> = frames
+        .iter()
+        .filter(|f| f.alpha == 0.0)
+        .map(|f| f.frame)
+        .collect();
+    let groups: Vec<Vec<&KeptFrame>> = starts
+        .iter()
+        .map(|&start| {
+            let mut group: Vec<&KeptFrame> = frames
+                .iter()
+                .copied()
+                .filter(|f| f.frame >= start && f.frame < start + n)
+                .collect();
+            group.sort_by_key(|f| f.frame);
+            group
+        })
+        .filter(|g| g.len() == n as usize)
+        .collect();
+    assert!(!groups.is_empty(), "no whole interval of {}", method.name());
+    groups
+}
+
+/// On a still scene (the square standing before the wall, high contrast
+/// at its stripes and edges) the in-between frames are blurred and the
+/// I-frame compensated: the mean light of the n displayed frames is the
+/// rendered frame's wherever no displayed value clips.
+#[test]
+fn hf_compensation_preserves_the_group_average() {
+    for n in [2, 3] {
+        let Some((_, pictures, _)) = sliding(0.0, n, vec![Method::Morph]) else {
+            return;
+        };
+        let mut checked = 0;
+        for group in groups(&pictures, Method::Morph, n) {
+            let rendered = &group[0].reference;
+            let mut changed = 0;
+            for p in 0..SIZE * SIZE {
+                for c in 0..3 {
+                    let values: Vec<f32> = group.iter().map(|f| f.result[p * 4 + c]).collect();
+                    if values.iter().any(|&v| !(0.002..=0.998).contains(&v)) {
+                        continue;
+                    }
+                    let mean = values.iter().map(|&v| light(v)).sum::<f32>() / n as f32;
+                    let want = light(rendered[p * 4 + c]);
+                    assert!(
+                        (mean - want).abs() <= 4e-3 + 4e-3 * want,
+                        "n = {n}, pixel {p} channel {c}: frames {values:?} average {mean}, the rendered frame {want}"
+                    );
+                    checked += 1;
+                    if (values[0] - rendered[p * 4 + c]).abs() > 0.02 {
+                        changed += 1;
+                    }
+                }
+            }
+            assert!(changed > 200, "n = {n}: only {changed} values compensated");
+        }
+        assert!(checked > SIZE * SIZE, "n = {n}: {checked} values checked");
+    }
+}
+
+/// Where the amplified detail would leave the display's range, the
+/// displayed I-frame clips at 1 and the in-between frames take the light
+/// it could not show: no value outside [0, 1], the group's mean light the
+/// rendered frame's at the clipped pixels too (until the in-between frames
+/// clip as well).
+#[test]
+fn compensation_clamped_at_display_range() {
+    let n = 3;
+    let Some((_, pictures, _)) = sliding(0.0, n, vec![Method::Morph]) else {
+        return;
+    };
+    let mut clipped = 0;
+    for group in groups(&pictures, Method::Morph, n) {
+        for frame in &group {
+            let worst = frame.result.iter().fold(0.0f32, |m, &v| m.max(v));
+            assert!(worst <= 1.0 + 1e-3, "frame {}: {worst}", frame.frame);
+            assert!(frame.result.iter().all(|&v| v >= -1e-3));
+        }
+        let rendered = &group[0].reference;
+        for p in 0..SIZE * SIZE {
+            for c in 0..3 {
+                let values: Vec<f32> = group.iter().map(|f| f.result[p * 4 + c]).collect();
+                let shifted = values[0] >= 0.999 && values[1..].iter().all(|&v| v < 0.998);
+                if !shifted {
+                    continue;
+                }
+                clipped += 1;
+                let mean = values.iter().map(|&v| light(v)).sum::<f32>() / n as f32;
+                let want = light(rendered[p * 4 + c]);
+                assert!(
+                    (mean - want).abs() <= 6e-3 + 4e-3 * want,
+                    "pixel {p} channel {c}: frames {values:?} average {mean}, the rendered frame {want}"
+                );
+            }
+        }
+    }
+    assert!(
+        clipped > 20,
+        "{clipped} values clipped: the scene does not test it"
+    );
+}
+
+/// Behind the sliding square the wall it uncovers was never rendered:
+/// the grid stretches over it (no pixel left unwritten), and the blurred
+/// method shows something nearer the truth there than frame repetition's
+/// square.
+#[test]
+fn disocclusion_hole_filled() {
+    let n = 2;
+    let Some((_, pictures, scene)) = sliding(
+        3.0,
+        n,
+        vec![Method::Morph, Method::MorphWarp, Method::SampleAndHold],
+    ) else {
+        return;
+    };
+    let revealed_error = |method: Method| {
+        let mut sum = 0.0f64;
+        let mut count = 0;
+        for frame in extrapolated(&pictures, method) {
+            assert!(
+                frame.result.chunks_exact(4).all(|p| p[3] > 0.5),
+                "{} frame {}: a pixel left unwritten",
+                method.name(),
+                frame.frame
+            );
+            let before = crate::util::silhouette(&scene, 1, iframe_of(frame, n), SIZE, SIZE);
+            let now = crate::util::silhouette(&scene, 1, frame.frame, SIZE, SIZE);
+            let before_inside = crate::util::interior(&before, SIZE);
+            for p in
+                (0..SIZE * SIZE).filter(|&p| before_inside[p] && !crate::util::near(&now, SIZE, p))
+            {
+                sum += f64::from(error_at(frame, p));
+                count += 1;
+            }
+        }
+        assert!(count >= 40, "{count} revealed pixels");
+        sum / f64::from(count)
+    };
+    let (morph, warp, hold) = (
+        revealed_error(Method::Morph),
+        revealed_error(Method::MorphWarp),
+        revealed_error(Method::SampleAndHold),
+    );
+    assert!(
+        morph < hold && warp < hold,
+        "mean error where the wall is revealed: morph {morph:.4}, morph-warp {warp:.4}, frame repetition {hold:.4}"
+    );
+}
+
+/// The camera orbits 4° a frame while the sphere turns and slides, so
+/// every point's screen velocity changes from interval to interval (the
+/// orbit's centripetal acceleration, the perspective's changing scale).
+/// Extrapolated from the motion between the I-frame before and this one,
+/// the frames are wrong by the change of velocity, not by all of it: they
+/// stay nearer the truth than frame repetition, and within reach of the
+/// exact motion's. The report gives both.
+#[test]
+fn acceleration_error_is_bounded() {
+    let scene = crate::util::sphere_over_floor(
+        "size = [96, 96]\nframes = 9",
+        "\"camera-motion\", \"object-motion\"",
+        "orbit_degrees_per_frame = 4.0",
+        "position = [0.0, 0.0, 0.0]\ntranslation_per_frame = [0.03, 0.0, 0.0]\nrotation_degrees_per_frame = [0.0, 9.0, 0.0]",
+    );
+    let options = Options {
+        methods: vec![Method::SampleAndHold, Method::Morph, Method::MorphPast],
+        frames_per_interval: 3,
+        frames: Some(9),
+        ..Options::default()
+    };
+    let Some((report, _, _)) = run_interpolation(&marble(), &scene, options) else {
+        return;
+    };
+    let (hold, exact, past) = (
+        method(&report, Method::SampleAndHold),
+        method(&report, Method::Morph),
+        method(&report, Method::MorphPast),
+    );
+    let pursuit = |m: &shadecache::interpolate::report::MethodReport| m.pursuit_error.unwrap();
+    assert!(
+        pursuit(past) < pursuit(hold) && past.psnr_mean > hold.psnr_mean,
+        "morph-past: pursuit {:.4}, PSNR {:.1}; frame repetition: {:.4}, {:.1}",
+        pursuit(past),
+        past.psnr_mean,
+        pursuit(hold),
+        hold.psnr_mean
+    );
+    assert!(
+        pursuit(past) < 2.0 * pursuit(exact) + 0.01,
+        "morph-past {:.4} against the exact motion's {:.4}",
+        pursuit(past),
+        pursuit(exact)
+    );
+    for m in [hold, exact, past] {
+        assert_eq!(m.added_latency_frames, 0.0, "{}", m.method.name());
+    }
+}
