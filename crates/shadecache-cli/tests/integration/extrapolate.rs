@@ -42,7 +42,7 @@ fn sliding_with(pixels: f32, options: Options) -> Option<(Report, Pictures, Scen
 }
 
 /// The extrapolated frames of `method` (α > 0).
-fn extrapolated<'a>(pictures: &'a Pictures, method: Method) -> Vec<&'a KeptFrame> {
+fn extrapolated(pictures: &Pictures, method: Method) -> Vec<&KeptFrame> {
     let frames: Vec<&KeptFrame> = kept(pictures, method)
         .into_iter()
         .filter(|f| f.alpha > 0.0)
