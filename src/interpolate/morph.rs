@@ -697,14 +697,22 @@ mod tests {
     /// and a pipeline per pass: the interpolation tests).
     #[test]
     fn morph_shaders_validate() {
-        let module = naga::front::wgsl::parse_str(super::MORPH_WGSL)
-            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(super::MORPH_WGSL)));
-        naga::valid::Validator::new(
+        let source = super::MORPH_WGSL;
+        let module = naga::front::wgsl::parse_str(source);
+        let Ok(module) = module else {
+            let error = module.err().map(|e| e.emit_to_string(source));
+            unreachable!("{}", error.unwrap_or_default())
+        };
+        let valid = naga::valid::Validator::new(
             naga::valid::ValidationFlags::all(),
             naga::valid::Capabilities::all(),
         )
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(super::MORPH_WGSL)));
+        .validate(&module);
+        assert!(
+            valid.is_ok(),
+            "{}",
+            valid.err().map(|e| e.emit_to_string(source)).unwrap_or_default()
+        );
     }
 
     #[test]
