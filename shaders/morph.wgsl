@@ -10,7 +10,8 @@
 //    motion discontinuity near it and where it is (the paper's argmax MIP).
 // 2. `fs_blur_down`: the rendered frame's low-pass pyramid.
 // 3. `fs_compensate`: the rendered frame as displayed, its high
-//    frequencies amplified so the group of N frames integrates to it.
+//    frequencies amplified so the group of N frames integrates to it, and
+//    the low-pass at full resolution for the in-between frames.
 // 4. `vs_morph` + `fs_morph`: one in-between frame, the grid snapped and
 //    moved by the motion, rasterised with the rendered frame's depth.
 //
@@ -71,6 +72,10 @@ override selective_blur: bool = false;
 @group(0) @binding(5) var snap: texture_2d<u32>;
 // The low-pass: the pyramid level the blur reads.
 @group(0) @binding(6) var low: texture_2d<f32>;
+// The same read back to full resolution (`fs_compensate`'s second
+// output), where selective blur leaves the frame sharp the frame itself:
+// what the in-between frames warp.
+@group(0) @binding(9) var low_full: texture_2d<f32>;
 // What the reduction and the pyramid passes halve.
 @group(0) @binding(7) var argmax_source: texture_2d<u32>;
 @group(0) @binding(8) var blur_source: texture_2d<f32>;
@@ -235,13 +240,23 @@ fn in_between(m: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
     return pow(shown, vec3<f32>(1.0 / g));
 }
 
+struct Compensated {
+    // The rendered frame as displayed.
+    @location(0) displayed: vec4<f32>,
+    // The low-pass it was compensated against.
+    @location(1) low: vec4<f32>,
+}
+
 @fragment
-fn fs_compensate(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
+fn fs_compensate(@builtin(position) position: vec4<f32>) -> Compensated {
     let texel = vec2<i32>(position.xy);
     let c = textureLoad(color, texel, 0);
     let i = clamp(c.rgb, vec3<f32>(0.0), vec3<f32>(1.0));
-    let l = clamp(low_pass(position.xy).rgb, vec3<f32>(0.0), vec3<f32>(1.0));
-    return vec4<f32>(compensated(i, select(i, l, blurs_at(texel))), c.a);
+    var l = i;
+    if blurs_at(texel) {
+        l = clamp(low_pass(position.xy).rgb, vec3<f32>(0.0), vec3<f32>(1.0));
+    }
+    return Compensated(vec4<f32>(compensated(i, l), c.a), vec4<f32>(l, c.a));
 }
 
 // ---- 4. The grid morph ----
@@ -337,10 +352,9 @@ fn fs_morph(in: Morphed) -> @location(0) vec4<f32> {
         return sharp;
     }
     let m = clamp(sharp.rgb, vec3<f32>(0.0), vec3<f32>(1.0));
-    var l = m;
-    if blurs_at(vec2<i32>(floor(in.source))) {
-        l = clamp(low_pass(in.source).rgb, vec3<f32>(0.0), vec3<f32>(1.0));
-    }
+    // The low-pass warped by the same grid: one bilinear tap of it at full
+    // resolution (smooth, so as good as the cubic read it was made with).
+    let l = textureSampleLevel(low_full, linear_clamp, in.source / params.viewport, 0.0).rgb;
     let shown = in_between(m, l);
     return vec4<f32>(mix(shown, l, smoothstep(params.distortion_from, params.distortion_to, d)), sharp.a);
 }

@@ -114,6 +114,8 @@ struct Reads<'a> {
     snap: bool,
     /// The low-pass level.
     low: bool,
+    /// The low-pass at full resolution.
+    low_full: bool,
     /// What a halving pass halves.
     argmax_source: Option<&'a wgpu::Texture>,
     blur_source: Option<&'a wgpu::Texture>,
@@ -142,6 +144,9 @@ pub struct Morph {
     /// The low-pass pyramid, levels 1 to `blur_level`.
     pyramid: Vec<wgpu::Texture>,
     displayed: wgpu::Texture,
+    /// The low-pass at full resolution, as the displayed frame was
+    /// compensated against it.
+    low_full: wgpu::Texture,
     color: wgpu::Texture,
     depth: wgpu::Texture,
     /// Bound where a pass reads nothing.
@@ -171,7 +176,7 @@ fn texture(sample_type: wgpu::TextureSampleType) -> wgpu::BindingType {
 }
 
 /// The morph's bindings, one layout for every pass.
-fn layout_entries() -> [wgpu::BindGroupLayoutEntry; 9] {
+fn layout_entries() -> [wgpu::BindGroupLayoutEntry; 10] {
     let both = wgpu::ShaderStages::VERTEX_FRAGMENT;
     let float = wgpu::TextureSampleType::Float { filterable: true };
     let uint = wgpu::TextureSampleType::Uint;
@@ -197,6 +202,7 @@ fn layout_entries() -> [wgpu::BindGroupLayoutEntry; 9] {
         entry(6, both, texture(float)),
         entry(7, both, texture(uint)),
         entry(8, both, texture(float)),
+        entry(9, both, texture(float)),
     ]
 }
 
@@ -234,7 +240,8 @@ impl Morph {
                     label: Some("shaders/morph.wgsl"),
                     source: wgpu::ShaderSource::Wgsl(MORPH_WGSL.into()),
                 });
-                let fullscreen = |entry: &str, format: wgpu::TextureFormat| {
+                let fullscreen = |entry: &str, formats: &[wgpu::TextureFormat]| {
+                    let targets: Vec<_> = formats.iter().map(|f| Some((*f).into())).collect();
                     super::bframe::fullscreen_pipeline(
                         device,
                         &module,
@@ -242,7 +249,7 @@ impl Morph {
                         &pipeline_layout,
                         entry,
                         &[selective],
-                        &[Some(format.into())],
+                        &targets,
                     )
                 };
                 let grid = |blur: bool| {
@@ -250,10 +257,10 @@ impl Morph {
                     grid_pipeline(device, &module, &pipeline_layout, &constants)
                 };
                 (
-                    fullscreen("fs_flow_edges", ARGMAX_FORMAT),
-                    fullscreen("fs_argmax_reduce", ARGMAX_FORMAT),
-                    fullscreen("fs_blur_down", COLOR_FORMAT),
-                    fullscreen("fs_compensate", COLOR_FORMAT),
+                    fullscreen("fs_flow_edges", &[ARGMAX_FORMAT]),
+                    fullscreen("fs_argmax_reduce", &[ARGMAX_FORMAT]),
+                    fullscreen("fs_blur_down", &[COLOR_FORMAT]),
+                    fullscreen("fs_compensate", &[COLOR_FORMAT, COLOR_FORMAT]),
                     grid(true),
                     grid(false),
                 )
@@ -303,6 +310,7 @@ impl Morph {
             argmax,
             pyramid,
             displayed: target("morph displayed frame", (width, height), COLOR_FORMAT),
+            low_full: target("morph low-pass", (width, height), COLOR_FORMAT),
             color: target("morph in-between frame", (width, height), COLOR_FORMAT),
             depth: target("morph depth", (width, height), DEPTH_FORMAT),
             no_argmax: target("no argmax", (1, 1), ARGMAX_FORMAT),
@@ -324,6 +332,7 @@ impl Morph {
             color(reads.low.then(|| self.pyramid.last()).flatten()),
             argmax(reads.argmax_source),
             color(reads.blur_source),
+            color(reads.low_full.then_some(&self.low_full)),
         ];
         let mut entries = vec![
             wgpu::BindGroupEntry {
@@ -421,7 +430,7 @@ impl Morph {
                 &mut profiler,
                 "compensate",
                 (&self.compensate, &group),
-                &[view(&self.displayed)],
+                &[view(&self.displayed), view(&self.low_full)],
             );
         }
         gpu.queue.submit([encoder.finish()]);
@@ -440,7 +449,7 @@ impl Morph {
             .write_buffer(&self.params, 0, &params.bytes(&self.setup));
         let reads = Reads {
             snap: params.snap,
-            low: params.blur,
+            low_full: params.blur,
             ..Reads::default()
         };
         let group = self.bind(gpu, source, reads);
@@ -711,7 +720,10 @@ mod tests {
         assert!(
             valid.is_ok(),
             "{}",
-            valid.err().map(|e| e.emit_to_string(source)).unwrap_or_default()
+            valid
+                .err()
+                .map(|e| e.emit_to_string(source))
+                .unwrap_or_default()
         );
     }
 

@@ -231,23 +231,35 @@ pub fn answer(methods: &[MethodReport], n: u32) -> String {
     }
 }
 
-/// The lag-free choice beside it: the extrapolator with the least pursuit
-/// error, its cost, and frame repetition's pursuit error.
+/// The lag-free choice beside it: of the methods that add no latency
+/// (frame repetition aside), the one an eye tracking the motion sees
+/// nearest the reference (least pursuit error) among those cheaper than
+/// rendering every frame, else the nearest of all; with frame
+/// repetition's pursuit error to weigh it against.
 fn lag_free(methods: &[MethodReport]) -> Option<String> {
-    let best = methods
+    let lag_free: Vec<(&MethodReport, f64)> = methods
         .iter()
-        .filter(|m| m.method.extrapolates())
+        .filter(|m| !matches!(m.method, Method::Reference | Method::SampleAndHold))
+        .filter(|m| m.added_latency_frames == 0.0)
         .filter_map(|m| Some((m, m.pursuit_error?)))
-        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        .collect();
+    let nearest = |cheaper_only: bool| {
+        lag_free
+            .iter()
+            .filter(|(m, _)| !cheaper_only || m.amortized_time_ratio < 1.0)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .copied()
+    };
+    let (best, error) = nearest(true).or_else(|| nearest(false))?;
     let hold = methods
         .iter()
         .find(|m| m.method == Method::SampleAndHold)
         .and_then(|m| m.pursuit_error);
     Some(format!(
         "with no added latency, {} costs {:.2}× with pursuit error {:.4}{}",
-        best.0.method.name(),
-        best.0.amortized_time_ratio,
-        best.1,
+        best.method.name(),
+        best.amortized_time_ratio,
+        error,
         hold.map_or(String::new(), |h| format!(" (frame repetition's: {h:.4})"))
     ))
 }
