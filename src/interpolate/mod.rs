@@ -111,6 +111,68 @@
 //! the group after the twins', which the runner leaves to its caller
 //! (`RunOptions::external_group`).
 //!
+//! # Extrapolation (seed 004: [`morph`], `shaders/morph.wgsl`)
+//!
+//! Didyk et al. build the n − 1 frames *after* a rendered frame from it
+//! alone, so nothing waits for the next one (no added latency), and hide
+//! what the warp gets wrong perceptually: on a display fast enough that
+//! the eye fuses the frames, blurred in-between frames alternating with a
+//! sharpened rendered frame look like the rendered frame moving.
+//! `design/seeds-001-004.md` Part B turns the paper into the passes this
+//! follows; what it leaves open is an option recorded in the report.
+//! - Motion: `morph` takes I-frame 0's flow to I-frame 1, the twin's exact
+//!   motion (the paper renders both clip positions: "perfect motion
+//!   flow"). A game does not know its next frame; `morph-past` takes the
+//!   flow to the I-frame before, negated: the motion of the last interval
+//!   carried on (the paper's warning: hard for fast and complex motion).
+//!   The report gives both, and their difference is the cost of not
+//!   knowing the future. Frame k of the interval moves k/n of it
+//!   ("a linear assumption proved sufficient"), damped by the eye-tracking
+//!   factor f(v) = 1 − smoothstep(70, 90 deg/s) where the eye could not
+//!   follow (speed from `--display-hz`, n and `--pixels-per-degree`).
+//! - Snapping: one vertex per `--grid` (8) pixels; vertex i searches the
+//!   non-overlapping neighbourhood [g·i − g/2, g·i + g/2) for the largest
+//!   motion gradient (the larger forward difference of the flow) through
+//!   the paper's argmax pyramid: a texel packs the gradient (16 bits) above
+//!   its place (8 + 8 bits), so an integer maximum of four is the argmax
+//!   with its place, log2(g) halvings give one texel per vertex (ties to
+//!   the larger y, then x; a brute-force CPU search agrees). A vertex
+//!   snaps only to a gradient of at least `--snap-threshold` (1 px per px),
+//!   so a smooth flow keeps the regular grid; it lands on the corner after
+//!   the pixel, on the discontinuity; border vertices stay put. Of the
+//!   four pixels around it, the nearest surface's motion and depth move
+//!   it: an occluding edge moves with the occluder, and the surface it
+//!   uncovers stretches behind it (no hole: the grid is connected).
+//! - The grid is drawn through an index buffer, two triangles per tile,
+//!   depth-tested with the I-frame's depth (nearer wins, either depth
+//!   convention), no culling (fold-overs flip the winding).
+//! - Blur and compensation: the I-frame's low-pass L is a pyramid of the
+//!   binomial [1 3 3 1]/8 (the paper's 3-tap binomial sits half a texel
+//!   off when it decimates) read at `--blur-level` (2) with a cubic
+//!   B-spline. The displayed I-frame is O = (n·I^γ − (n − 1)·L^γ)^(1/γ)
+//!   (γ = `--gamma`, 2.2), so the n frames integrate to I in light; an
+//!   in-between frame shows L warped, and where O^γ leaves [0, 1] it
+//!   clamps and the in-between frames take the rest, (n − 1) shares of
+//!   it (the paper's Fig. 5: the excess goes into the blurred frames,
+//!   and a shortfall likewise). Where I is darker than L (by luminance)
+//!   the original is kept in every frame: black stays black. The paper
+//!   blurs each morphed frame; here L is warped by the same grid as the
+//!   colour, which agrees wherever the grid moves as a translation, and
+//!   a tile that stretches or folds shows smoothstep(`--distortion-blur`)
+//!   of L by its distortion (the larger |s − 1| of the warp's singular
+//!   values): one pass per extrapolated frame. `--selective-blur`
+//!   blurs only where the motion is at least that fast (0.15 deg/s, the
+//!   drift limit below which the eye does not pursue): a still picture
+//!   stays sharp. `morph-warp` is the snapped morph alone.
+//! - The morph's preparation (the pyramids and the compensation) runs
+//!   once per I-frame and counts in its I-frame time; each extrapolated
+//!   frame is one pass.
+//!
+//! Every method is also measured by its pursuit error ([`pursuit`]): the
+//! stand-in for the paper's user study, what an eye tracking the motion
+//! integrates over each interval's n displayed frames on a hold-type
+//! display, against the same for the reference.
+//!
 //! # The run (`run.rs`)
 //!
 //! Displayed frame by displayed frame the reference is rendered and read
@@ -130,11 +192,11 @@
 //! # What is measured ([`report`])
 //!
 //! Per method: the I-frame's time over a reference frame (1 for the
-//! methods that need no flows: their I-frame is the original), one
-//! B-frame's, the amortised (T_I + (n − 1)·T_B) / (n·T_ref) (000's Table 3
+//! methods that need no flows: their I-frame is the original; the morph's
+//! preparation added for the extrapolators), one B-frame's, the amortised (T_I + (n − 1)·T_B) / (n·T_ref) (000's Table 3
 //! measure), and SSIM and PSNR of the B-frames against the reference
-//! rendered at the same time; for image-based the share of pixels that
-//! were double misses.
+//! rendered at the same time, the pursuit error, the latency added; for
+//! image-based the share of pixels that were double misses.
 //!
 //! The paper renders the forward flow in a geometry pass of its own (an
 //! interactive application knows t + 1's parameters only after drawing

@@ -1076,29 +1076,7 @@ impl Schedule<'_> {
                 .or_default()
                 .prepare_times
                 .push(prepare_ms);
-            if params.blur && measured.previous_end.is_some() {
-                let shown = read_linear(self.gpu, morph.displayed()).map_err(fail)?;
-                let reference = self.reference_at(0, pictures, measured)?;
-                let [width, height] = self.size;
-                let error = metrics::compare_frames(&reference, &shown, width, height, THRESHOLD);
-                let run = measured.methods.entry(method).or_default();
-                run.displayed_i_frame_psnr.push(error.psnr_frame);
-                if self.options.keep_frames {
-                    measured.kept.push(KeptFrame {
-                        method,
-                        frame: start,
-                        alpha: 0.0,
-                        error,
-                        reference: reference.clone(),
-                        result: shown.clone(),
-                        decisions: Vec::new(),
-                    });
-                }
-                measured
-                    .groups
-                    .entry(method)
-                    .or_insert_with(|| vec![None; n as usize])[0] = Some(shown);
-            }
+            self.displayed_iframe((morph, method, params.blur), at, measured)?;
         }
         // Extrapolated from I-frame 0 alone: α = 1 is no end point of it.
         for k in self.frames_of_interval(record, measured) {
@@ -1124,6 +1102,56 @@ impl Schedule<'_> {
                 self.keep(measured, method, sample, &reference);
             }
         }
+        Ok(())
+    }
+
+    /// What an extrapolator shows at its interval's I-frame: compensated
+    /// (with blur: [`Morph::displayed`]) or the I-frame itself. The
+    /// compensated one is compared with the reference, kept with
+    /// `keep_frames` and put in the pursuit group (the I-frame itself is
+    /// there by default); either joins the motion-blur composites.
+    fn displayed_iframe(
+        &self,
+        (morph, method, blur): (&Morph, Method, bool),
+        at: &IntervalAt,
+        measured: &mut Measured,
+    ) -> Result<(), Error> {
+        let start = at.start;
+        if !blur {
+            if let Some(composites) = measured.blur.as_mut() {
+                let shown = read_linear(self.gpu, at.textures.0.color).map_err(fail)?;
+                composites.add(Some(method), start, &shown);
+            }
+            return Ok(());
+        }
+        if measured.previous_end.is_none() {
+            return Ok(());
+        }
+        let shown = read_linear(self.gpu, morph.displayed()).map_err(fail)?;
+        let reference = self.reference_at(0, at.pictures, measured)?;
+        let [width, height] = self.size;
+        let error = metrics::compare_frames(&reference, &shown, width, height, THRESHOLD);
+        let run = measured.methods.entry(method).or_default();
+        run.displayed_i_frame_psnr.push(error.psnr_frame);
+        if let Some(composites) = measured.blur.as_mut() {
+            composites.add(Some(method), start, &shown);
+        }
+        if self.options.keep_frames {
+            measured.kept.push(KeptFrame {
+                method,
+                frame: start,
+                alpha: 0.0,
+                error,
+                reference,
+                result: shown.clone(),
+                decisions: Vec::new(),
+            });
+        }
+        let n = self.options.frames_per_interval as usize;
+        measured
+            .groups
+            .entry(method)
+            .or_insert_with(|| vec![None; n])[0] = Some(shown);
         Ok(())
     }
 

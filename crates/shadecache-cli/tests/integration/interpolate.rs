@@ -71,6 +71,9 @@ fn static_scene_with(latest_frame_init: bool) {
     let options = Options {
         frames: Some(4),
         latest_frame_init,
+        // The morph blurs what it may, moving or not, unless told to
+        // blur only what moves.
+        selective_blur: Some(0.15),
         ..Options::default()
     };
     let Some((report, _, _)) = run_interpolation(&marble(), &scene, options) else {
@@ -999,6 +1002,8 @@ fn motion_blur_composites_b_frames_around_each_i_frame() {
         let options = Options {
             frames: Some(12),
             motion_blur: true,
+            // A still picture stays the I-frame under the morph too.
+            selective_blur: Some(0.15),
             ..Options::default()
         };
         run_interpolation(
