@@ -116,6 +116,35 @@ pub(super) fn linear_clamp(device: &wgpu::Device) -> wgpu::Sampler {
     })
 }
 
+/// A fullscreen pass's bindings as the B-frame and morph shaders lay them
+/// out: the parameters at 0, the sampler at 1, `views` from 2 on.
+pub(super) fn parameters_sampler_and<'a>(
+    params: &'a wgpu::Buffer,
+    sampler: &'a wgpu::Sampler,
+    views: &'a [wgpu::TextureView],
+) -> Vec<wgpu::BindGroupEntry<'a>> {
+    let mut entries = vec![
+        wgpu::BindGroupEntry {
+            binding: 0,
+            resource: params.as_entire_binding(),
+        },
+        wgpu::BindGroupEntry {
+            binding: 1,
+            resource: wgpu::BindingResource::Sampler(sampler),
+        },
+    ];
+    entries.extend(
+        views
+            .iter()
+            .zip(2..)
+            .map(|(view, binding)| wgpu::BindGroupEntry {
+                binding,
+                resource: wgpu::BindingResource::TextureView(view),
+            }),
+    );
+    entries
+}
+
 /// A whole texture's view.
 pub(super) fn view(texture: &wgpu::Texture) -> wgpu::TextureView {
     texture.create_view(&wgpu::TextureViewDescriptor::default())
@@ -504,25 +533,7 @@ impl BFrames {
             view(moving.map_or(&self.no_moving, |m| m.now)),
             view(moving.map_or(&self.no_moving, |m| m.removed)),
         ];
-        let mut entries = vec![
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: self.params.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: wgpu::BindingResource::Sampler(&self.sampler),
-            },
-        ];
-        entries.extend(
-            views
-                .iter()
-                .zip(2..)
-                .map(|(view, binding)| wgpu::BindGroupEntry {
-                    binding,
-                    resource: wgpu::BindingResource::TextureView(view),
-                }),
-        );
+        let entries = parameters_sampler_and(&self.params, &self.sampler, &views);
         let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("B-frame"),
             layout: &self.layout,

@@ -17,7 +17,7 @@
 //! everywhere but the tiles that stretch or fold; those are blended to the
 //! low-pass by their distortion all the same.
 
-use super::bframe::{depth_view, fullscreen_pass, linear_clamp, view};
+use super::bframe::{depth_view, fullscreen_pass, linear_clamp, parameters_sampler_and, view};
 use crate::runtime::Gpu;
 
 /// The morph's shaders.
@@ -334,25 +334,7 @@ impl Morph {
             color(reads.blur_source),
             color(reads.low_full.then_some(&self.low_full)),
         ];
-        let mut entries = vec![
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: self.params.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: wgpu::BindingResource::Sampler(&self.sampler),
-            },
-        ];
-        entries.extend(
-            views
-                .iter()
-                .zip(2..)
-                .map(|(view, binding)| wgpu::BindGroupEntry {
-                    binding,
-                    resource: wgpu::BindingResource::TextureView(view),
-                }),
-        );
+        let entries = parameters_sampler_and(&self.params, &self.sampler, &views);
         gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("morph"),
             layout: &self.layout,

@@ -140,6 +140,22 @@ fn check_morph(options: &Options) -> Result<(), Error> {
     }
 }
 
+/// Seed 004's blurred and sharpened frames fuse only within Bloch's
+/// critical duration (about 40 ms): a longer group may be seen to flicker.
+fn flicker_note(options: &Options) -> Option<String> {
+    let blurs = options
+        .methods
+        .iter()
+        .any(|m| matches!(m, Method::Morph | Method::MorphPast));
+    let group_ms = 1000.0 * options.frames_per_interval as f32 / options.display_hz;
+    (blurs && group_ms > 40.0).then(|| {
+        format!(
+            "the morph's groups of {} frames at {} Hz last {group_ms:.0} ms, past the ~40 ms over which the eye fuses a sharpened frame with blurred ones (Bloch's law): the alternation may be seen to flicker",
+            options.frames_per_interval, options.display_hz
+        )
+    })
+}
+
 /// The morph's grid against the frame: a power of two from 2 to 128 that
 /// divides both sides (each vertex searches a grid × grid neighbourhood
 /// through a pyramid of halvings).
@@ -243,6 +259,9 @@ pub(super) fn run(
     } else {
         None
     };
+    if let Some(note) = flicker_note(options) {
+        notes.push(note);
+    }
     let morph_methods: Vec<Method> = options
         .methods
         .iter()

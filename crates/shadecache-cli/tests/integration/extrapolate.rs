@@ -503,3 +503,123 @@ fn acceleration_error_is_bounded() {
         assert_eq!(m.added_latency_frames, 0.0, "{}", m.method.name());
     }
 }
+
+/// Past the eye's tracking limit (seed 004 §6: none beyond 90 deg/s) the
+/// morph's motion is damped to nothing, f(v) = 0: the frames repeat the
+/// I-frame, as the eye could not follow anyway. At 4 pixels per degree
+/// the square's 8 pixels an interval at 60 rendered frames a second are
+/// 120 deg/s: the warp shows the I-frame. At the default 37 px/deg
+/// (13 deg/s) the same frames move.
+#[test]
+fn untrackable_motion_is_held() {
+    let run = |pixels_per_degree: f32| {
+        let options = Options {
+            methods: vec![Method::MorphWarp, Method::SampleAndHold],
+            frames_per_interval: 2,
+            frames: Some(4),
+            keep_frames: true,
+            pixels_per_degree,
+            ..Options::default()
+        };
+        sliding_with(4.0, options).map(|(_, pictures, _)| pictures)
+    };
+    let Some(untrackable) = run(4.0) else {
+        return;
+    };
+    let tracked = run(37.0).unwrap();
+    let largest_change = |pictures: &Pictures| {
+        let held = kept(pictures, Method::SampleAndHold);
+        extrapolated(pictures, Method::MorphWarp)
+            .iter()
+            .map(|frame| {
+                let hold = held.iter().find(|h| h.frame == frame.frame).unwrap();
+                frame
+                    .result
+                    .iter()
+                    .zip(&hold.result)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0f32, f32::max)
+            })
+            .fold(0.0f32, f32::max)
+    };
+    let (untrackable, tracked) = (largest_change(&untrackable), largest_change(&tracked));
+    assert!(
+        untrackable < 2e-3,
+        "untrackable: {untrackable} from the I-frame"
+    );
+    assert!(tracked > 0.3, "tracked: {tracked} from the I-frame");
+}
+
+/// The camera pans: what enters at the frame's edge was never rendered,
+/// and the border vertices stay where they are (seed 004 §5.1), so the
+/// edge shows the I-frame's border content stretched, never a black or
+/// unwritten strip (what the I-frame did not show there, beyond the
+/// floor's end, it cannot).
+#[test]
+fn pan_leaves_no_border_unwritten() {
+    let scene = crate::util::sphere_over_floor(
+        "size = [96, 96]\nframes = 6",
+        "\"camera-motion\"",
+        "pan_per_frame = [0.08, 0.0, 0.0]",
+        "",
+    );
+    let options = Options {
+        methods: vec![Method::Morph, Method::MorphWarp, Method::SampleAndHold],
+        frames_per_interval: 3,
+        frames: Some(6),
+        keep_frames: true,
+        ..Options::default()
+    };
+    let Some((_, pictures, _)) = run_interpolation(&marble(), &scene, options) else {
+        return;
+    };
+    let held = kept(&pictures, Method::SampleAndHold);
+    for method in [Method::Morph, Method::MorphWarp] {
+        for frame in extrapolated(&pictures, method) {
+            // The I-frame, which the border shows.
+            let iframe = &held.iter().find(|h| h.frame == frame.frame).unwrap().result;
+            let mut checked = 0;
+            for y in 0..SIZE {
+                for x in [0, 1, SIZE - 2, SIZE - 1] {
+                    let p = (y * SIZE + x) * 4;
+                    let there = &iframe[p..p + 4];
+                    if there[3] < 0.5 || there[..3].iter().all(|&v| v < 0.02) {
+                        continue;
+                    }
+                    let shown = &frame.result[p..p + 4];
+                    assert!(
+                        shown[3] > 0.5 && shown[..3].iter().any(|&v| v > 0.02),
+                        "{} frame {}: pixel ({x}, {y}) shows {shown:?} where the I-frame shows {there:?}",
+                        method.name(),
+                        frame.frame
+                    );
+                    checked += 1;
+                }
+            }
+            assert!(checked > 100, "{checked} border pixels checked");
+        }
+    }
+}
+
+/// A group longer than Bloch's ~40 ms (n = 3 at 60 Hz: 50 ms) is flagged
+/// in the report: the sharpened and blurred frames may be seen to
+/// alternate. The paper's 3 at 120 Hz (25 ms) is not.
+#[test]
+fn long_groups_are_flagged_for_flicker() {
+    let notes = |display_hz: f32| {
+        let options = Options {
+            methods: vec![Method::Morph],
+            frames_per_interval: 3,
+            frames: Some(3),
+            display_hz,
+            ..Options::default()
+        };
+        sliding_with(0.0, options).map(|(report, _, _)| report.notes)
+    };
+    let Some(slow) = notes(60.0) else {
+        return;
+    };
+    let flagged = |notes: &[String]| notes.iter().any(|n| n.contains("flicker"));
+    assert!(flagged(&slow), "{slow:?}");
+    assert!(!flagged(&notes(120.0).unwrap()));
+}
