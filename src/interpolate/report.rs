@@ -316,7 +316,7 @@ pub fn html(report: &Report) -> String {
     );
     let _ = write!(
         out,
-        "<h2>Methods</h2><p>Reference frame {:.3} ms; I-frame with flows {:.3} ms (worst PSNR against the reference {:.1} dB).</p>\
+        "<h2>Methods</h2><p>Reference frame {:.3} ms; I-frame with flows {:.3} ms (worst PSNR against the reference {:.1} dB). Latency: displayed frames a method delays the picture (the bidirectional ones wait for the next I-frame). Pursuit error: what an eye tracking the motion integrates over each interval's displayed frames on a hold-type display, against the same for the reference (RMS, display values; frame repetition's is the hold-type blur of rendering fewer frames).</p>\
          <table><tr><th>method</th><th>I-frame ×</th><th>B-frame ×</th><th>amortised ×</th><th>SSIM mean</th><th>SSIM min</th><th>PSNR mean</th><th>double misses</th><th>latency (frames)</th><th>pursuit error</th></tr>",
         report.reference_ms, report.i_frame_ms, report.i_frame_psnr_min
     );
