@@ -43,8 +43,9 @@ struct MethodRun {
     /// The extrapolators: what each interval's I-frame passes add (the
     /// morph's preparation), ms.
     prepare_times: Vec<f64>,
-    /// The extrapolators that compensate: their displayed I-frame's PSNR.
-    displayed_i_frame_psnr: Vec<f64>,
+    /// The extrapolators that compensate: their displayed I-frames
+    /// against the reference, by displayed frame.
+    displayed_iframes: Vec<(u32, FrameError)>,
     /// Its pursuit error per interval.
     pursuit: Vec<f64>,
 }
@@ -1151,7 +1152,7 @@ impl Schedule<'_> {
         let [width, height] = self.size;
         let error = metrics::compare_frames(&reference, &shown, width, height, THRESHOLD);
         let run = measured.methods.entry(method).or_default();
-        run.displayed_i_frame_psnr.push(error.psnr_frame);
+        run.displayed_iframes.push((start, error));
         if let Some(composites) = measured.blur.as_mut() {
             composites.add(Some(method), start, &shown);
         }
@@ -1566,9 +1567,14 @@ impl Schedule<'_> {
                 run.filter(|r| !r.pursuit.is_empty())
                     .map(|r| metrics::mean(&r.pursuit))
             },
-            displayed_i_frame_psnr: run
-                .filter(|r| !r.displayed_i_frame_psnr.is_empty())
-                .map(|r| metrics::mean(&r.displayed_i_frame_psnr)),
+            displayed_i_frame_psnr: run.filter(|r| !r.displayed_iframes.is_empty()).map(|r| {
+                let psnr: Vec<f64> = r
+                    .displayed_iframes
+                    .iter()
+                    .map(|(_, e)| e.psnr_frame)
+                    .collect();
+                metrics::mean(&psnr)
+            }),
         }
     }
 
@@ -1606,6 +1612,7 @@ impl Schedule<'_> {
         if !self.options.methods.contains(&Method::Reference) {
             notes.push("the reference is rendered every frame all the same: the errors and ratios are against it".into());
         }
+        notes.extend(report::motion_difference(&methods));
         let answer = report::answer(&methods, n);
         let report = Report {
             format: report::FORMAT,
@@ -1646,8 +1653,9 @@ impl Schedule<'_> {
 }
 
 /// SSIM of every displayed frame measured, per method: an I-frame's is
-/// the I-frame's against the reference (every method shows it), a
-/// B-frame's the method's; the reference's is 1.
+/// the I-frame's against the reference (every method shows it, but the
+/// extrapolators that compensate, which show their own), a B-frame's the
+/// method's; the reference's is 1.
 fn displayed_frames(methods: &[Method], measured: &Measured) -> Vec<DisplayedFrame> {
     let mut frames: BTreeMap<u32, DisplayedFrame> = BTreeMap::new();
     for &(frame, ref error) in &measured.iframe_errors {
@@ -1673,6 +1681,12 @@ fn displayed_frames(methods: &[Method], measured: &Measured) -> Vec<DisplayedFra
         let Some(run) = measured.methods.get(&method) else {
             continue;
         };
+        // The extrapolators that compensate show their own I-frames.
+        for &(frame, ref error) in &run.displayed_iframes {
+            if let Some(entry) = frames.get_mut(&frame) {
+                entry.ssim[i] = error.ssim;
+            }
+        }
         for &(frame, alpha, ref error) in &run.frames {
             let entry = frames.entry(frame).or_insert_with(|| DisplayedFrame {
                 frame,

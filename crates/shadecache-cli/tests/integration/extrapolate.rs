@@ -502,6 +502,14 @@ fn acceleration_error_is_bounded() {
     for m in [hold, exact, past] {
         assert_eq!(m.added_latency_frames, 0.0, "{}", m.method.name());
     }
+    assert!(
+        report
+            .notes
+            .iter()
+            .any(|n| n.starts_with("morph-past extrapolates")),
+        "the report states the two motions' difference: {:?}",
+        report.notes
+    );
 }
 
 /// Past the eye's tracking limit (seed 004 §6: none beyond 90 deg/s) the
