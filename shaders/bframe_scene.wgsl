@@ -22,7 +22,9 @@ struct SceneParams {
     // the image-based search is measured; 4: not a B-frame but the moving
     // objects alone (the host draws no other), each fragment's offset from
     // I-frame 0, (p - p0, 0, 1), where nothing still hides it (seed 003's
-    // dynamic-object velocity and mask).
+    // dynamic-object velocity and mask); 5: reverse reprojection from
+    // I-frame 0 whose misses are discarded here and shaded by the next
+    // pass (seed 000's baseline, Figs. 7-10).
     mode: u32,
 }
 
@@ -39,6 +41,7 @@ const SHADE_ON_MISS: u32 = 1u;
 const REVERSE_REPROJECTION: u32 = 2u;
 const CORRESPONDENCE: u32 = 3u;
 const MOVING_OBJECTS: u32 = 4u;
+const REVERSE_REPROJECTION_RESHADE: u32 = 5u;
 
 // As `shaders/bframe.wgsl`'s decisions.
 const SAME_SURFACE: u32 = 0u;
@@ -124,6 +127,13 @@ fn scene_assisted(frag_coord: vec4<f32>, previous_clip: vec4<f32>, next_clip: ve
     }
     if scene_params.mode == REVERSE_REPROJECTION {
         return SceneAssisted(c0, select(DOUBLE_MISS, SAME_SURFACE, seen_0));
+    }
+    if scene_params.mode == REVERSE_REPROJECTION_RESHADE {
+        // What I-frame 0 does not show is shaded again (the second pass).
+        if !seen_0 {
+            discard;
+        }
+        return SceneAssisted(c0, SAME_SURFACE);
     }
     if seen_0 & seen_1 {
         return SceneAssisted(mix(c0, c1, scene_params.alpha), SAME_SURFACE);

@@ -74,6 +74,10 @@ pub enum SceneMode {
     /// (p − p₀, 0, 1) where no still surface hides it, 0 elsewhere: seed
     /// 003's dynamic-object velocity, its w the dynamic-object mask.
     MovingObjects = 4,
+    /// I-frame 0 alone where it shows the point; elsewhere shaded by the
+    /// original fragment stage in a second pass (seed 000's baseline,
+    /// reverse reprojection with reshading, Figs. 7–10).
+    ReverseReprojectionReshade = 5,
 }
 
 impl SceneMode {
@@ -81,6 +85,15 @@ impl SceneMode {
     /// then `rgba16float`, whatever the user's colour format).
     fn writes_offsets(self) -> bool {
         matches!(self, SceneMode::Correspondence | SceneMode::MovingObjects)
+    }
+
+    /// Whether the pass discards what a second pass of the original
+    /// fragment stage shades.
+    pub fn reshades(self) -> bool {
+        matches!(
+            self,
+            SceneMode::ShadeOnMiss | SceneMode::ReverseReprojectionReshade
+        )
     }
 }
 
@@ -664,15 +677,19 @@ impl IFrameShader {
                     load: LoadOp::Clear,
                 },
             ],
-            discards: matches!(mode, SceneMode::ShadeOnMiss | SceneMode::MovingObjects),
+            discards: mode.reshades() || mode == SceneMode::MovingObjects,
             bindings: pass_bindings(true),
             ..iframe.clone()
         }];
-        if mode == SceneMode::ShadeOnMiss {
+        if mode.reshades() {
             let mut shade = iframe.clone();
             shade.name = "shade".into();
-            shade.role =
-                "the original fragment stage where neither I-frame shows the surface".into();
+            shade.role = if mode == SceneMode::ShadeOnMiss {
+                "the original fragment stage where neither I-frame shows the surface"
+            } else {
+                "the original fragment stage where I-frame 0 does not show the surface"
+            }
+            .into();
             shade.fragment_entry = self.original_entry.clone();
             shade
                 .color_targets

@@ -107,7 +107,10 @@
 //! the paper's choice); `scene-assisted-shade-on-miss` discards it and a
 //! second pass of the original fragment stage shades it (its depth test
 //! keeps it to those pixels); `reverse-reprojection` reads I-frame 0 alone
-//! and never reshades (a baseline). The I-frames' textures are bound in
+//! and never reshades (a baseline), and `reverse-reprojection-reshade`
+//! shades what I-frame 0 does not show in the same second pass (the
+//! paper's main baseline, Figs. 7–10: no added latency, as it reads I-frame
+//! 0 alone). The I-frames' textures are bound in
 //! the group after the twins', which the runner leaves to its caller
 //! (`RunOptions::external_group`).
 //!
@@ -249,6 +252,9 @@ pub enum Method {
     /// Single-direction reverse reprojection from the earlier I-frame, no
     /// reshading (a baseline).
     ReverseReprojection,
+    /// The same, its misses shaded by the original fragment stage (seed
+    /// 000's main baseline, Figs. 7–10).
+    ReverseReprojectionReshade,
     /// Seed 004: the frames after an I-frame extrapolated by the snapped
     /// grid morph with the twin's exact motion, blurred, the I-frame
     /// compensated.
@@ -262,7 +268,7 @@ pub enum Method {
 
 impl Method {
     /// Every method, in the report's order.
-    pub const ALL: [Method; 11] = [
+    pub const ALL: [Method; 12] = [
         Method::Reference,
         Method::SampleAndHold,
         Method::LinearBlend,
@@ -271,6 +277,7 @@ impl Method {
         Method::SceneAssisted,
         Method::SceneAssistedShadeOnMiss,
         Method::ReverseReprojection,
+        Method::ReverseReprojectionReshade,
         Method::Morph,
         Method::MorphPast,
         Method::MorphWarp,
@@ -287,6 +294,7 @@ impl Method {
             Method::SceneAssisted => "scene-assisted",
             Method::SceneAssistedShadeOnMiss => "scene-assisted-shade-on-miss",
             Method::ReverseReprojection => "reverse-reprojection",
+            Method::ReverseReprojectionReshade => "reverse-reprojection-reshade",
             Method::Morph => "morph",
             Method::MorphPast => "morph-past",
             Method::MorphWarp => "morph-warp",
@@ -300,6 +308,9 @@ impl Method {
             Method::SceneAssisted => Some(iframe::SceneMode::ClosestOnMiss),
             Method::SceneAssistedShadeOnMiss => Some(iframe::SceneMode::ShadeOnMiss),
             Method::ReverseReprojection => Some(iframe::SceneMode::ReverseReprojection),
+            Method::ReverseReprojectionReshade => {
+                Some(iframe::SceneMode::ReverseReprojectionReshade)
+            }
             _ => None,
         }
     }

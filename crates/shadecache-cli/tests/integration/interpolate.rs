@@ -375,6 +375,63 @@ fn double_miss_shade_on_miss_equals_the_reference() {
     assert!(misses > 20, "only {misses} double misses");
 }
 
+/// Reverse reprojection with reshading (seed 000's main baseline, Figs.
+/// 7–10): where I-frame 0 does not show the point (what the baseline
+/// without reshading marks a miss), the original fragment stage shades it
+/// at the B-frame's time, so those pixels are the reference's; elsewhere
+/// the two agree.
+#[test]
+fn reshade_on_miss_equals_reference_at_misses() {
+    let Some(pictures) = windmill_frames(
+        "standard",
+        vec![
+            Method::ReverseReprojection,
+            Method::ReverseReprojectionReshade,
+        ],
+    ) else {
+        return;
+    };
+    let plain = kept(&pictures, Method::ReverseReprojection);
+    let shaded = kept(&pictures, Method::ReverseReprojectionReshade);
+    assert_eq!(plain.len(), shaded.len());
+    let (mut misses, mut worse) = (0, 0usize);
+    for (plain, shaded) in plain.iter().zip(&shaded) {
+        assert_eq!(plain.frame, shaded.frame);
+        for p in double_misses(plain) {
+            misses += 1;
+            let error = error_at(shaded, p);
+            assert!(
+                error <= 1.0 / 255.0,
+                "frame {}, pixel {p}: the reshaded miss is {error} off the reference",
+                shaded.frame
+            );
+            if error_at(plain, p) > 0.05 {
+                worse += 1;
+            }
+        }
+    }
+    assert!(misses > 20, "only {misses} misses");
+    assert!(
+        worse > 10,
+        "the plain baseline was wrong at only {worse} of them"
+    );
+    let Some((report, _, _)) = run_interpolation(
+        DEPTH_SHADED,
+        &windmill("standard"),
+        Options {
+            frames: Some(4),
+            methods: vec![Method::ReverseReprojectionReshade],
+            ..Options::default()
+        },
+    ) else {
+        return;
+    };
+    assert_eq!(
+        method(&report, Method::ReverseReprojectionReshade).added_latency_frames,
+        0.0
+    );
+}
+
 /// Reversed Z (near at depth 1) changes what "nearer", "far" and the
 /// relative depth tests mean in every B-frame pass: each method's B-frames
 /// are as good as with standard depth, on a scene with occlusion and
@@ -464,6 +521,7 @@ fn every_interpolation_pass_is_valid_and_builds() {
         for mode in [
             interpolate::iframe::SceneMode::ClosestOnMiss,
             interpolate::iframe::SceneMode::ShadeOnMiss,
+            interpolate::iframe::SceneMode::ReverseReprojectionReshade,
             // Offsets into an rgba16float target, whatever the user's
             // colour format.
             interpolate::iframe::SceneMode::Correspondence,
