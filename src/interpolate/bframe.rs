@@ -57,6 +57,9 @@ pub struct BFrameParams {
     pub depth_epsilon: f32,
     pub far_depth: f32,
     pub dual_init: bool,
+    /// Of two converged starts the smaller residual wins, as seed 000
+    /// states it (else the nearer surface).
+    pub smaller_residual: bool,
     pub velocity_merge: bool,
     /// Half-velocity's moving objects are bound ([`BFrames::render`] sets
     /// it).
@@ -83,7 +86,8 @@ impl BFrameParams {
             self.far_depth.to_bits(),
             u32::from(self.dual_init)
                 | (u32::from(self.velocity_merge) << 1)
-                | (u32::from(self.moving_objects) << 2),
+                | (u32::from(self.moving_objects) << 2)
+                | (u32::from(self.smaller_residual) << 3),
             self.min_cosine.to_bits(),
             self.previous_alpha.unwrap_or(0.0).to_bits(),
             self.inpaint_delta,

@@ -375,6 +375,10 @@ pub struct Options {
     pub depth_epsilon: f32,
     /// Dual initialisation (000 eqs. 16–17) besides the default start.
     pub dual_init: bool,
+    /// Of two converged starts on different surfaces the smaller residual
+    /// wins, as seed 000 states it; else (the default) the nearer surface,
+    /// which the farther is hidden behind at the B-frame's time.
+    pub smaller_residual: bool,
     /// Latest-frame initialisation (000 eqs. 18–19): every image-based
     /// B-frame but an interval's first also starts from the offsets of
     /// the B-frame before it.
@@ -464,6 +468,7 @@ impl Default for Options {
             screen_epsilon: 1.0,
             depth_epsilon: crate::rewrite::DEFAULT_DEPTH_EPSILON,
             dual_init: true,
+            smaller_residual: false,
             latest_frame_init: false,
             latest_radius: 1,
             velocity_merge: true,

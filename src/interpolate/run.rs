@@ -1413,6 +1413,7 @@ impl Schedule<'_> {
             depth_epsilon: self.options.depth_epsilon,
             far_depth: self.far_depth,
             dual_init: self.options.dual_init,
+            smaller_residual: self.options.smaller_residual,
             velocity_merge: self.options.velocity_merge,
             moving_objects: false,
             min_cosine: self.options.min_cosine,

@@ -95,6 +95,13 @@ pub struct Args {
     #[arg(long)]
     pub latest_init: bool,
 
+    /// Image-based as seed 000 states it: dual and latest-frame
+    /// initialisation, and of two converged starts the smaller residual
+    /// (the defaults keep the nearer surface, and leave latest-frame
+    /// initialisation off: see docs/results-interpolation.md).
+    #[arg(long, conflicts_with_all = ["no_dual_init", "latest_init"])]
+    pub paper: bool,
+
     /// Latest-frame initialisation's neighbourhood: the pixel and its four
     /// diagonal neighbours this many pixels away, of which the nearest
     /// surface's offsets start the search.
@@ -232,7 +239,8 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         screen_epsilon: args.screen_epsilon,
         depth_epsilon: args.depth_epsilon,
         dual_init: !args.no_dual_init,
-        latest_frame_init: args.latest_init,
+        smaller_residual: args.paper,
+        latest_frame_init: args.latest_init || args.paper,
         latest_radius: args.latest_radius,
         motion_blur: args.motion_blur,
         velocity_merge: !args.no_velocity_merge,
