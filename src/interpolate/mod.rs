@@ -211,6 +211,7 @@
 #[doc(hidden)]
 pub mod bframe;
 mod blur;
+pub mod correspondence;
 #[doc(hidden)]
 pub mod iframe;
 #[doc(hidden)]

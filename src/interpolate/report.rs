@@ -129,13 +129,20 @@ pub struct MethodReport {
 }
 
 /// 000 Fig. 11's correspondence error, mean pixels over the B-frames.
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
 pub struct CorrespondenceError {
     /// Over every pixel the geometry covers (E_total^all).
     pub all: f64,
     /// Over those whose point I-frame 0 shows: where a correspondence
     /// exists (E_total^hit).
     pub hit: f64,
+    /// E_total over every covered pixel of every measured B-frame: mean,
+    /// 95th percentile, silhouettes and interiors, shares by range.
+    pub total: Option<super::correspondence::Spread>,
+    /// E_lin, the linear-motion assumption's error: I-frame 0's point
+    /// carried α of the way along its exact flow, against where it is at
+    /// the B-frame's time.
+    pub linear: Option<super::correspondence::Spread>,
 }
 
 #[derive(Clone, Debug, Serialize)]

@@ -6,6 +6,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
 use super::bframe::{BFrameParams, BFrames, Decision, IFrameTextures, MovingObjects};
+use super::correspondence::{FrameErrors, Samples};
 use super::iframe::{self, IFrameShader, SceneMode};
 use super::morph::{Morph, MorphParams, MorphSetup, Source};
 use super::report::{
@@ -604,17 +605,17 @@ struct Correspondence {
 }
 
 impl Correspondence {
-    /// The distances (pixels) between where image-based's forward search
-    /// found each covered pixel's point in I-frame 0 and where it is:
-    /// mean over every covered pixel, and over those whose point I-frame 0
-    /// shows (000 Fig. 11's E_total^all and E_total^hit).
+    /// Fig. 11's errors of one B-frame ([`super::correspondence`]): where
+    /// image-based's forward search found each covered pixel's point in
+    /// I-frame 0 against where it is (E_total), and where linear motion
+    /// along I-frame 0's exact flow puts it (E_lin).
     fn measure(
         &mut self,
         schedule: &Schedule,
         textures: &(IFrameTextures, IFrameTextures),
         params: &BFrameParams,
         inputs: &FrameInputs,
-    ) -> Result<(f64, f64), Error> {
+    ) -> Result<FrameErrors, Error> {
         let gpu = schedule.gpu;
         self.search
             .render(
@@ -635,31 +636,32 @@ impl Correspondence {
             .color_at(schedule.instrumented.scene_locations[0])
             .ok_or_else(|| fail("internal error: the correspondence pass has no colour".into()))?;
         let exact = read_linear(gpu, target).map_err(fail)?;
-        let (mut all, mut hit, mut covered, mut seen) = (0.0f64, 0.0f64, 0usize, 0usize);
-        for (e, f) in exact.chunks_exact(4).zip(found.chunks_exact(4)) {
-            if e[3] < 0.5 {
-                continue;
-            }
-            let distance = f64::from((e[0] - f[0]).hypot(e[1] - f[1]));
-            if !distance.is_finite() {
-                continue;
-            }
-            all += distance;
-            covered += 1;
-            if e[2] > 0.5 {
-                hit += distance;
-                seen += 1;
-            }
-        }
-        Ok((all / covered.max(1) as f64, hit / seen.max(1) as f64))
+        let flow = read_linear(gpu, textures.0.flow_next).map_err(fail)?;
+        Ok(super::correspondence::frame_errors(
+            &exact,
+            &found,
+            &flow,
+            schedule.size,
+            params.alpha,
+        ))
     }
+}
+
+/// Image-based's correspondence errors over the measured B-frames.
+#[derive(Default)]
+struct CorrespondenceErrors {
+    /// Per B-frame, the mean E_total over every covered pixel and over
+    /// those I-frame 0 shows.
+    means: Vec<(f64, f64)>,
+    total: Samples,
+    linear: Samples,
 }
 
 /// What the run keeps of the measured intervals.
 #[derive(Default)]
 struct Measured {
-    /// Image-based's correspondence errors (all, hit), per B-frame.
-    correspondence: Vec<(f64, f64)>,
+    /// Image-based's correspondence errors.
+    correspondence: CorrespondenceErrors,
     /// With `motion_blur`, the composites around each I-frame.
     blur: Option<super::blur::MotionBlur>,
     /// The reference at the last interval's end: the next one's start.
@@ -1014,7 +1016,11 @@ impl Schedule<'_> {
                 {
                     let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
                     let errors = c.measure(self, textures, &params, &inputs)?;
-                    measured.correspondence.push(errors);
+                    let ours = &mut measured.correspondence;
+                    ours.means
+                        .push((errors.total.mean(), errors.total_hit.mean()));
+                    ours.total.extend(errors.total);
+                    ours.linear.extend(errors.linear);
                 }
             }
         }
@@ -1545,13 +1551,16 @@ impl Schedule<'_> {
             },
             double_miss_rate,
             correspondence_error_px: (method == Method::ImageBased
-                && !measured.correspondence.is_empty())
+                && !measured.correspondence.means.is_empty())
             .then(|| {
-                let all: Vec<f64> = measured.correspondence.iter().map(|c| c.0).collect();
-                let hit: Vec<f64> = measured.correspondence.iter().map(|c| c.1).collect();
+                let c = &measured.correspondence;
+                let all: Vec<f64> = c.means.iter().map(|m| m.0).collect();
+                let hit: Vec<f64> = c.means.iter().map(|m| m.1).collect();
                 report::CorrespondenceError {
                     all: metrics::mean(&all),
                     hit: metrics::mean(&hit),
+                    total: c.total.spread(),
+                    linear: c.linear.spread(),
                 }
             }),
             added_latency_frames: if method.reads_later_frame() {

@@ -307,11 +307,17 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
             m.double_miss_rate
                 .map_or(String::new(), |r| format!(", double misses {:.2}%", r * 100.0))
         ));
-        if let Some(error) = m.correspondence_error_px {
+        if let Some(error) = &m.correspondence_error_px {
             summary.push_str(&format!(
                 "                   correspondences {:.3} px from the exact ones ({:.3} px where I-frame 0 shows the point)\n",
                 error.all, error.hit
             ));
+            if let Some(linear) = &error.linear {
+                summary.push_str(&format!(
+                    "                   linear motion {:.3} px from the exact points (95th percentile {:.3} px; silhouettes {:.3}, interiors {:.3})\n",
+                    linear.mean, linear.p95, linear.silhouette_mean, linear.interior_mean
+                ));
+            }
         }
         if let Some(error) = m.pursuit_error {
             summary.push_str(&format!(
