@@ -431,6 +431,64 @@ fn nonlinear_motion_error_reported() {
     assert!(total.mean > 0.0 && total.p95 >= total.mean, "{total:?}");
 }
 
+/// Half-velocity's direction test (003 slide 31): in a tail, where the
+/// earlier frame's velocity would be carried on, a direction that
+/// disagrees with the later frame's by more than `min_cosine` holds the
+/// pixel, showing I-frame 0 there (no worse than 30 fps). A square slides
+/// right over a wall sliding left: behind the square the velocity turns
+/// round, from the square's to the wall's. Accepting every direction
+/// (cosine −1) holds none.
+#[test]
+fn direction_change_holds_the_earlier_frame() {
+    let run = |min_cosine: f32| {
+        let options = Options {
+            methods: vec![Method::HalfVelocity],
+            frames_per_interval: 2,
+            frames: Some(6),
+            min_cosine,
+            moving_objects: false,
+            keep_frames: true,
+            ..Options::default()
+        };
+        let scene =
+            squares_before_wall(-square_speed(2.0), &[(0.8, [-0.6, 0.0], square_speed(4.0))]);
+        run_interpolation(SLIDING_SHADED, &scene, options).map(|(_, pictures, _)| pictures)
+    };
+    let Some(tested) = run(0.5) else {
+        return;
+    };
+    let held = |frame: &KeptFrame| -> Vec<usize> {
+        (0..frame.decisions.len())
+            .filter(|&p| frame.decisions[p] == Decision::OneDirection as u32)
+            .collect()
+    };
+    let mut checked = 0;
+    for frame in kept(&tested, Method::HalfVelocity) {
+        let start = frame.frame - (frame.alpha * 2.0).round() as u32;
+        let Some(iframe) = tested.iframes.iter().find(|i| i.frame == start) else {
+            continue;
+        };
+        for p in held(frame) {
+            for c in 0..3 {
+                let (shown, there) = (frame.result[p * 4 + c], iframe.color[p * 4 + c]);
+                assert!(
+                    (shown - there).abs() <= 1e-3,
+                    "frame {}, pixel {p}: held at {shown}, I-frame 0 shows {there}",
+                    frame.frame
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > 20, "{checked} held pixels checked");
+    let accepting = run(-1.0).unwrap();
+    let none: usize = kept(&accepting, Method::HalfVelocity)
+        .iter()
+        .map(|f| held(f).len())
+        .sum();
+    assert_eq!(none, 0);
+}
+
 /// Reverse reprojection with reshading (seed 000's main baseline, Figs.
 /// 7–10): where I-frame 0 does not show the point (what the baseline
 /// without reshading marks a miss), the original fragment stage shades it
