@@ -375,26 +375,36 @@ fn double_miss_shade_on_miss_equals_the_reference() {
     assert!(misses > 20, "only {misses} double misses");
 }
 
+/// Image-based's correspondence errors over `frames` displayed frames of
+/// `scene` drawn with `shader`; `None` only without a GPU adapter.
+fn image_based_correspondence(
+    shader: &str,
+    scene: &str,
+    frames: u32,
+) -> Option<interpolate::report::CorrespondenceError> {
+    let options = Options {
+        methods: vec![Method::ImageBased],
+        frames: Some(frames),
+        ..Options::default()
+    };
+    let (report, _, _) = run_interpolation(shader, scene, options)?;
+    let error = method(&report, Method::ImageBased)
+        .correspondence_error_px
+        .clone();
+    Some(error.expect("image-based's correspondences are measured"))
+}
+
 /// E_lin (000 Fig. 11): I-frame 0's points carried linearly along their
 /// exact flow against where they are at each B-frame's time. A square
 /// sliding at constant velocity moves linearly: no error but at its
 /// silhouette, where a pixel's point may lie on the other surface.
 #[test]
 fn linear_motion_error_is_zero_for_constant_velocity() {
-    let options = Options {
-        methods: vec![Method::ImageBased],
-        frames: Some(8),
-        ..Options::default()
-    };
-    let Some((report, _, _)) =
-        run_interpolation(SLIDING_SHADED, &sliding_square(square_speed(2.0)), options)
+    let Some(error) =
+        image_based_correspondence(SLIDING_SHADED, &sliding_square(square_speed(2.0)), 8)
     else {
         return;
     };
-    let error = method(&report, Method::ImageBased)
-        .correspondence_error_px
-        .clone()
-        .unwrap();
     let linear = error.linear.unwrap();
     assert!(
         linear.interior_mean < 0.02 && linear.p95 < 0.05,
@@ -409,19 +419,9 @@ fn linear_motion_error_is_zero_for_constant_velocity() {
 /// E_lin's spread, its silhouettes apart.
 #[test]
 fn nonlinear_motion_error_reported() {
-    let options = Options {
-        methods: vec![Method::ImageBased],
-        frames: Some(4),
-        ..Options::default()
-    };
-    let Some((report, _, _)) = run_interpolation(DEPTH_SHADED, &windmill("standard"), options)
-    else {
+    let Some(error) = image_based_correspondence(DEPTH_SHADED, &windmill("standard"), 4) else {
         return;
     };
-    let error = method(&report, Method::ImageBased)
-        .correspondence_error_px
-        .clone()
-        .unwrap();
     let linear = error.linear.unwrap();
     // Most of the frame is the still wall (no error); the blades, a few
     // per cent of it, are pixels off.
