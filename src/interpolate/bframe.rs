@@ -573,6 +573,23 @@ pub(super) fn fullscreen_pass(
     (pipeline, bind_group): (&wgpu::RenderPipeline, &wgpu::BindGroup),
     outputs: &[wgpu::TextureView],
 ) {
+    timed_pass(encoder, profiler, name, (outputs, None), |pass| {
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.draw(0..3, 0..1);
+    });
+}
+
+/// Records one render pass into `outputs` (cleared) and an optional depth
+/// buffer (cleared to 1, not kept), drawn by `draw`, timed as
+/// `<label>/<name>` when a profiler is given.
+pub(super) fn timed_pass(
+    encoder: &mut wgpu::CommandEncoder,
+    profiler: &mut Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+    name: &str,
+    (outputs, depth): (&[wgpu::TextureView], Option<&wgpu::TextureView>),
+    draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
+) {
     let query = profiler
         .as_mut()
         .map(|(profiler, label)| profiler.begin_pass_query(format!("{label}/{name}"), encoder));
@@ -594,16 +611,21 @@ pub(super) fn fullscreen_pass(
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(name),
             color_attachments: &attachments,
-            depth_stencil_attachment: None,
+            depth_stencil_attachment: depth.map(|view| wgpu::RenderPassDepthStencilAttachment {
+                view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
             timestamp_writes: query
                 .as_ref()
                 .and_then(|q| q.render_pass_timestamp_writes()),
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, bind_group, &[]);
-        pass.draw(0..3, 0..1);
+        draw(&mut pass);
     }
     if let (Some((profiler, _)), Some(query)) = (profiler.as_mut(), query) {
         profiler.end_query(encoder, query);

@@ -17,7 +17,9 @@
 //! everywhere but the tiles that stretch or fold; those are blended to the
 //! low-pass by their distortion all the same.
 
-use super::bframe::{depth_view, fullscreen_pass, linear_clamp, parameters_sampler_and, view};
+use super::bframe::{
+    depth_view, fullscreen_pass, linear_clamp, parameters_sampler_and, timed_pass, view,
+};
 use crate::runtime::Gpu;
 
 /// The morph's shaders.
@@ -149,7 +151,7 @@ pub struct Morph {
     low_full: wgpu::Texture,
     color: wgpu::Texture,
     depth: wgpu::Texture,
-    /// Bound where a pass reads nothing.
+    /// Bound to what a pass does not read (1×1).
     no_argmax: wgpu::Texture,
     no_color: wgpu::Texture,
 }
@@ -319,8 +321,8 @@ impl Morph {
     }
 
     /// A bind group of `source` and what the pass reads of the pyramids
-    /// (`Reads`; a placeholder for the rest: a texture a pass writes must
-    /// not be bound to it).
+    /// (`Reads`). The bindings it does not read get an unused 1×1
+    /// texture: one that the pass writes must not be bound to it.
     fn bind(&self, gpu: &Gpu, source: &Source, reads: Reads) -> wgpu::BindGroup {
         let argmax = |t: Option<&wgpu::Texture>| view(t.unwrap_or(&self.no_argmax));
         let color = |t: Option<&wgpu::Texture>| view(t.unwrap_or(&self.no_color));
@@ -384,11 +386,9 @@ impl Morph {
         }
         if params.blur {
             for level in 0..self.pyramid.len() {
-                let from = if level == 0 {
-                    source.color
-                } else {
-                    &self.pyramid[level - 1]
-                };
+                let from = level
+                    .checked_sub(1)
+                    .map_or(source.color, |l| &self.pyramid[l]);
                 let reads = Reads {
                     blur_source: Some(from),
                     ..Reads::default()
@@ -438,47 +438,21 @@ impl Morph {
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        let query = profiler.map(|(profiler, label)| {
-            let query = profiler.begin_pass_query(format!("{label}/morph"), &mut encoder);
-            (profiler, query)
-        });
-        {
-            let color = view(&self.color);
-            let depth = view(&self.depth);
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("morph"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &color,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: query
-                    .as_ref()
-                    .and_then(|(_, q)| q.render_pass_timestamp_writes()),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(if params.blur { &self.morph } else { &self.warp });
-            pass.set_bind_group(0, &group, &[]);
-            pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..self.index_count, 0, 0..1);
-        }
-        if let Some((profiler, query)) = query {
-            profiler.end_query(&mut encoder, query);
-            profiler.resolve_queries(&mut encoder);
-        }
+        let mut profiler = profiler;
+        let pipeline = if params.blur { &self.morph } else { &self.warp };
+        let (color, depth) = (view(&self.color), view(&self.depth));
+        timed_pass(
+            &mut encoder,
+            &mut profiler,
+            "morph",
+            (std::slice::from_ref(&color), Some(&depth)),
+            |pass| {
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, &group, &[]);
+                pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..self.index_count, 0, 0..1);
+            },
+        );
         gpu.queue.submit([encoder.finish()]);
     }
 

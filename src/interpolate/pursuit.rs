@@ -55,6 +55,23 @@ pub fn integrate(
     out
 }
 
+/// What the eye follows at each pixel of a frame whose flow to the next
+/// I-frame is `flow` (RGBA: Δx, Δy, Δz, valid): the flow, damped by
+/// [`tracking`] at its speed (deg/s per pixel: `speed_scale`), zero where
+/// it is not valid.
+pub fn tracked_motion(flow: &[f32], speed_scale: f32, ramp: [f32; 2]) -> Vec<[f32; 2]> {
+    flow.chunks_exact(4)
+        .map(|f| {
+            if f[3] > 0.0 {
+                let damping = tracking(f[0].hypot(f[1]) * speed_scale, ramp);
+                [f[0] * damping, f[1] * damping]
+            } else {
+                [0.0; 2]
+            }
+        })
+        .collect()
+}
+
 /// The RMS difference of two pursuit images.
 pub fn error(a: &[f32], b: &[f32]) -> f64 {
     let squared: f64 = a.iter().zip(b).map(|(x, y)| f64::from(x - y).powi(2)).sum();

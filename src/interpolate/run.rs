@@ -94,6 +94,10 @@ fn check(options: &Options) -> Result<(), Error> {
 /// [`check_grid`] once the size is known).
 fn check_morph(options: &Options) -> Result<(), Error> {
     let ramp = |[a, b]: [f32; 2]| a.is_finite() && b.is_finite() && a < b;
+    let positive = |flag: &str, value: f32| {
+        (!(value > 0.0 && value.is_finite()))
+            .then(|| format!("--{flag} must be positive, not {value}"))
+    };
     let problems = [
         (options.blur_level == 0 || options.blur_level > 6).then(|| {
             format!(
@@ -101,16 +105,9 @@ fn check_morph(options: &Options) -> Result<(), Error> {
                 options.blur_level
             )
         }),
-        (!(options.gamma > 0.0 && options.gamma.is_finite()))
-            .then(|| format!("--gamma must be positive, not {}", options.gamma)),
-        (!(options.display_hz > 0.0 && options.display_hz.is_finite()))
-            .then(|| format!("--display-hz must be positive, not {}", options.display_hz)),
-        (!(options.pixels_per_degree > 0.0 && options.pixels_per_degree.is_finite())).then(|| {
-            format!(
-                "--pixels-per-degree must be positive, not {}",
-                options.pixels_per_degree
-            )
-        }),
+        positive("gamma", options.gamma),
+        positive("display-hz", options.display_hz),
+        positive("pixels-per-degree", options.pixels_per_degree),
         (!ramp(options.tracking)).then(|| {
             format!(
                 "--tracking takes two speeds, the lower first, not {:?}",
@@ -612,10 +609,11 @@ impl Correspondence {
     fn measure(
         &mut self,
         schedule: &Schedule,
-        textures: &(IFrameTextures, IFrameTextures),
+        at: &IntervalAt,
         params: &BFrameParams,
         inputs: &FrameInputs,
     ) -> Result<FrameErrors, Error> {
+        let textures = at.textures;
         let gpu = schedule.gpu;
         self.search
             .render(
@@ -636,11 +634,10 @@ impl Correspondence {
             .color_at(schedule.instrumented.scene_locations[0])
             .ok_or_else(|| fail("internal error: the correspondence pass has no colour".into()))?;
         let exact = read_linear(gpu, target).map_err(fail)?;
-        let flow = read_linear(gpu, textures.0.flow_next).map_err(fail)?;
         Ok(super::correspondence::frame_errors(
             &exact,
             &found,
-            &flow,
+            at.flow_next_0(gpu)?,
             schedule.size,
             params.alpha,
         ))
@@ -702,6 +699,21 @@ struct IntervalAt<'a> {
     record: bool,
     pictures: &'a [LinearFrame],
     textures: &'a (IFrameTextures<'a>, IFrameTextures<'a>),
+    /// I-frame 0's flow to I-frame 1 read back, once an interval, for
+    /// what the CPU measures from it ([`IntervalAt::flow_next_0`]).
+    flow_next_0: std::cell::OnceCell<LinearFrame>,
+}
+
+impl IntervalAt<'_> {
+    /// I-frame 0's flow to I-frame 1, read back the first time it is
+    /// asked for in the interval.
+    fn flow_next_0(&self, gpu: &Gpu) -> Result<&LinearFrame, Error> {
+        if let Some(flow) = self.flow_next_0.get() {
+            return Ok(flow);
+        }
+        let flow = read_linear(gpu, self.textures.0.flow_next).map_err(fail)?;
+        Ok(self.flow_next_0.get_or_init(|| flow))
+    }
 }
 
 /// What every interval of the run shares.
@@ -912,6 +924,7 @@ impl Schedule<'_> {
             record,
             pictures: &pictures,
             textures: &textures,
+            flow_next_0: std::cell::OnceCell::new(),
         };
         for &method in self.methods {
             // Half-velocity's moving objects: wiped out of I-frame 0 once
@@ -1015,7 +1028,7 @@ impl Schedule<'_> {
                     (method, correspondence.as_deref_mut(), interior)
                 {
                     let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
-                    let errors = c.measure(self, textures, &params, &inputs)?;
+                    let errors = c.measure(self, at, &params, &inputs)?;
                     let ours = &mut measured.correspondence;
                     ours.means
                         .push((errors.total.mean(), errors.total_hit.mean()));
@@ -1219,20 +1232,11 @@ impl Schedule<'_> {
             return Ok(());
         };
         let rendered = read_linear(self.gpu, at.textures.0.color).map_err(fail)?;
-        let flow = read_linear(self.gpu, at.textures.0.flow_next).map_err(fail)?;
-        let scale = self.speed_scale();
-        let motion: Vec<[f32; 2]> = flow
-            .chunks_exact(4)
-            .map(|f| {
-                if f[3] > 0.0 {
-                    let damping =
-                        pursuit::tracking(f[0].hypot(f[1]) * scale, self.options.tracking);
-                    [f[0] * damping, f[1] * damping]
-                } else {
-                    [0.0; 2]
-                }
-            })
-            .collect();
+        let motion = pursuit::tracked_motion(
+            at.flow_next_0(self.gpu)?,
+            self.speed_scale(),
+            self.options.tracking,
+        );
         let integrate = |frames: &[&[f32]]| {
             pursuit::integrate(
                 frames,
