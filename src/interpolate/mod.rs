@@ -216,6 +216,7 @@ pub mod correspondence;
 pub mod iframe;
 #[doc(hidden)]
 pub mod morph;
+pub mod payload;
 pub mod pursuit;
 pub mod report;
 pub(crate) mod run;
@@ -265,11 +266,15 @@ pub enum Method {
     MorphPast,
     /// The snapped grid morph alone: no blur, no compensation.
     MorphWarp,
+    /// The cache's payload interpolated between the I-frames by
+    /// image-based's search, and shaded at each B-frame's time
+    /// ([`payload`]).
+    Payload,
 }
 
 impl Method {
     /// Every method, in the report's order.
-    pub const ALL: [Method; 12] = [
+    pub const ALL: [Method; 13] = [
         Method::Reference,
         Method::SampleAndHold,
         Method::LinearBlend,
@@ -282,6 +287,7 @@ impl Method {
         Method::Morph,
         Method::MorphPast,
         Method::MorphWarp,
+        Method::Payload,
     ];
 
     /// The method's name on the command line and in reports.
@@ -299,6 +305,7 @@ impl Method {
             Method::Morph => "morph",
             Method::MorphPast => "morph-past",
             Method::MorphWarp => "morph-warp",
+            Method::Payload => "payload",
         }
     }
 
@@ -331,7 +338,17 @@ impl Method {
     /// Whether its B-frames read the I-frames' flows (its I-frames are
     /// the instrumented pass; else the original shader).
     pub fn reads_flows(self) -> bool {
-        matches!(self, Method::ImageBased | Method::HalfVelocity) || self.extrapolates()
+        matches!(
+            self,
+            Method::ImageBased | Method::HalfVelocity | Method::Payload
+        ) || self.extrapolates()
+    }
+
+    /// Whether each I-frame of it adds passes of its own to the
+    /// instrumented one (the morph's preparation, the payload's pass),
+    /// which count in its I-frame time.
+    pub fn adds_iframe_passes(self) -> bool {
+        self.extrapolates() || self == Method::Payload
     }
 
     /// Whether it extrapolates from the earlier I-frame alone by the grid
@@ -352,6 +369,7 @@ impl Method {
                 | Method::ImageBased
                 | Method::SceneAssisted
                 | Method::SceneAssistedShadeOnMiss
+                | Method::Payload
         )
     }
 }
@@ -446,6 +464,11 @@ pub struct Options {
     /// The vertex entry point drawing with it; `None` infers it.
     #[serde(skip)]
     pub vertex_entry: Option<String>,
+    /// The node `payload` interpolates (an id from `shadecache
+    /// analyze`); `None` takes the highest-ranked candidate that reads no
+    /// per-frame input ([`payload::choose`]). The report's notes name it.
+    #[serde(skip)]
+    pub payload_node: Option<String>,
     /// Keep every measured B-frame whole ([`report::Pictures::kept`]).
     #[serde(skip)]
     pub keep_frames: bool,
@@ -492,6 +515,7 @@ impl Default for Options {
             frames: None,
             entry: None,
             vertex_entry: None,
+            payload_node: None,
             keep_frames: false,
             motion_blur: false,
             endpoints: false,

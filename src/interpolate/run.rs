@@ -236,6 +236,11 @@ pub(super) fn run(
             "half-velocity draws the {count} moving object(s) at each B-frame's time and wipes them out of the earlier I-frame (seed 003 slides 33–47): both count in its B-frame time (--no-moving-objects leaves them to the velocity)"
         ));
     }
+    let mut payload_run = if options.methods.contains(&Method::Payload) {
+        payload_run(&bench, shader, &plan, options, &mut notes)?
+    } else {
+        None
+    };
     let bframes = BFrames::new(
         &gpu,
         (size[0], size[1]),
@@ -284,9 +289,10 @@ pub(super) fn run(
         far_depth: scene.camera.depth.far_depth(),
         moving: &moving,
     };
+    let geometry_methods = scene_runs.len() + usize::from(payload_run.is_some());
     let total = u64::from(WARMUP_INTERVALS + plan.intervals)
         * u64::from(
-            n + 1 + (b_methods.len() + scene_runs.len() + morph_methods.len()) as u32 * (n - 1),
+            n + 1 + (b_methods.len() + geometry_methods + morph_methods.len()) as u32 * (n - 1),
         );
     progress.start(total);
     let measured = run.measure(
@@ -297,6 +303,7 @@ pub(super) fn run(
             scene: &mut scene_runs,
             correspondence: correspondence.as_mut(),
             moving: moving_runs.as_mut(),
+            payload: payload_run.as_mut(),
         },
         &|frame: u32| inputs.frame(scene, frame),
         plan.intervals,
@@ -470,6 +477,121 @@ fn geometry_runs(
         scene: scene_runs,
         correspondence,
         moving: moving_runs,
+    }
+}
+
+/// Payload interpolation's runners ([`super::payload`]): the payload pass
+/// at each I-frame (two, alternating as the I-frame slots do), the
+/// image-based search over the two I-frames' payloads, and the shade
+/// pass at each B-frame's time, which reads what the search wrote.
+struct PayloadRun {
+    slots: [Runner; 2],
+    search: BFrames,
+    shade: Runner,
+}
+
+impl PayloadRun {
+    /// The payload of the I-frame in `slot` as the search reads it: the
+    /// I-frame's depth and flows with the payload in place of its colour.
+    fn iframe<'r>(&'r self, slot: usize, iframe: &IFrameTextures<'r>) -> IFrameTextures<'r> {
+        IFrameTextures {
+            color: self.slots[slot].payload(),
+            ..*iframe
+        }
+    }
+}
+
+/// Payload interpolation's passes and runners, with a note naming its
+/// node; `None` with the reason in `notes` where the shader cannot have
+/// them. A node named on the command line that is not a candidate is an
+/// error.
+fn payload_run(
+    bench: &Bench,
+    shader: &Shader,
+    plan: &RunPlan,
+    options: &Options,
+    notes: &mut Vec<String>,
+) -> Result<Option<PayloadRun>, Error> {
+    let analysis = &plan.bindings.analysis;
+    let candidate = match &options.payload_node {
+        Some(id) => {
+            analysis.select(&shader.file, &crate::analysis::Nodes::Ids(vec![id.clone()]))?[0]
+        }
+        None => match super::payload::choose(analysis) {
+            Ok(candidate) => candidate,
+            Err(reason) => {
+                notes.push(format!("payload refused: {reason}"));
+                return Ok(None);
+            }
+        },
+    };
+    let made = super::payload::passes(
+        shader,
+        analysis,
+        candidate,
+        &plan.rewrite_options,
+        &plan.reference,
+    )
+    .map_err(|refusal| refusal.reason)
+    .and_then(|passes| {
+        let slot = || bench.runner(&passes.iframe, &passes.sources, false);
+        let slots = [slot()?, slot()?];
+        let search = BFrames::new(
+            bench.gpu,
+            (bench.size[0], bench.size[1]),
+            &[Method::ImageBased],
+            (
+                options.iterations,
+                options.latest_frame_init.then_some(options.latest_radius),
+            ),
+        )?;
+        let mut shade = bench.runner_with(
+            &passes.shade,
+            &passes.sources,
+            RunOptions {
+                external_group: Some(passes.payload_group),
+                ..RunOptions::default()
+            },
+        )?;
+        let layout = shade
+            .external_layout()
+            .ok_or("internal error: the shade pass has no payload group")?;
+        let view = super::bframe::view(search.color());
+        let bind_group = crate::runtime::validated(&bench.gpu.device, || {
+            bench
+                .gpu
+                .device
+                .create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("interpolated payload"),
+                    layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&view),
+                    }],
+                })
+        })
+        .map_err(|err| format!("the interpolated payload cannot be bound: {err}"))?;
+        shade.set_external_bind_group(bind_group);
+        Ok((
+            passes.node,
+            PayloadRun {
+                slots,
+                search,
+                shade,
+            },
+        ))
+    });
+    match made {
+        Ok(((id, text), run)) => {
+            notes.push(format!(
+                "payload interpolates node {id} (`{text}`) between the I-frames with image-based's search and shades each B-frame at its own time; its payload pass counts in its I-frame time"
+            ));
+            Ok(Some(run))
+        }
+        Err(reason) => {
+            notes.push(format!("payload refused: {reason}"));
+            Ok(None)
+        }
     }
 }
 
@@ -688,6 +810,7 @@ struct Runs<'r> {
     scene: &'r mut [SceneRun],
     correspondence: Option<&'r mut Correspondence>,
     moving: Option<&'r mut SceneRun>,
+    payload: Option<&'r mut PayloadRun>,
 }
 
 /// One interval as its B-frame methods see it: its first and closing
@@ -840,6 +963,9 @@ impl Schedule<'_> {
             "iframe",
         )
         .map_err(fail)?;
+        if let Some(payload) = runs.payload.as_deref_mut() {
+            timed(clock, &mut payload.slots[0], &inputs_of(0)?, "payload").map_err(fail)?;
+        }
         for interval in 0..WARMUP_INTERVALS + intervals {
             let record = interval >= WARMUP_INTERVALS;
             self.interval(
@@ -872,6 +998,7 @@ impl Schedule<'_> {
             scene: scene_runs,
             correspondence,
             moving,
+            payload,
         } = runs;
         let n = self.options.frames_per_interval;
         let start = interval * n;
@@ -903,7 +1030,11 @@ impl Schedule<'_> {
 
         // The closing I-frame, into the slot the opening one is not in.
         let (earlier, later) = ((interval % 2) as usize, ((interval + 1) % 2) as usize);
-        let scene_methods: Vec<Method> = scene_runs.iter().map(|r| r.method).collect();
+        let scene_methods: Vec<Method> = scene_runs
+            .iter()
+            .map(|r| r.method)
+            .chain(payload.is_some().then_some(Method::Payload))
+            .collect();
         self.closing_iframe(
             clock,
             &mut slots[later],
@@ -913,6 +1044,20 @@ impl Schedule<'_> {
             measured,
             progress,
         )?;
+
+        if let Some(payload) = payload.as_deref_mut() {
+            let (time, _, _) = timed(
+                clock,
+                &mut payload.slots[later],
+                &inputs_of(end)?,
+                "payload",
+            )
+            .map_err(fail)?;
+            if record {
+                let run = measured.methods.entry(Method::Payload).or_default();
+                run.prepare_times.push(time);
+            }
+        }
 
         let textures = (
             self.textures(&slots[earlier])?,
@@ -944,6 +1089,10 @@ impl Schedule<'_> {
         }
         for scene_run in scene_runs.iter_mut() {
             self.scene_method(clock, scene_run, inputs_of, &at, measured, progress)?;
+        }
+        if let Some(payload) = payload.as_deref_mut() {
+            let slots = (earlier, later);
+            self.payload_method(clock, (payload, slots), inputs_of, &at, measured, progress)?;
         }
         if let Some((morph, methods)) = self.morph {
             for &method in methods {
@@ -1073,6 +1222,54 @@ impl Schedule<'_> {
                     sample,
                     &self.reference_at(k, pictures, measured)?,
                 );
+            }
+        }
+        Ok(())
+    }
+
+    /// Payload interpolation's B-frames of the interval: the two
+    /// I-frames' payloads (in `slots`, earlier and later) interpolated by
+    /// image-based's search, shaded at each B-frame's time; timed
+    /// together, compared when recorded.
+    fn payload_method(
+        &self,
+        clock: &mut Clock,
+        (run, (earlier, later)): (&mut PayloadRun, (usize, usize)),
+        inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
+        at: &IntervalAt,
+        measured: &mut Measured,
+        progress: &mut dyn Progress,
+    ) -> Result<(), Error> {
+        let (start, record, pictures) = (at.start, at.record, at.pictures);
+        for k in self.frames_of_interval(record, measured) {
+            let params = self.params(k);
+            let inputs = inputs_of(start + k)?;
+            let (time, _, _) = timed_recording(clock, "bframe", |mut profiler| {
+                let payloads = (
+                    run.iframe(earlier, &at.textures.0),
+                    run.iframe(later, &at.textures.1),
+                );
+                run.search.render(
+                    self.gpu,
+                    Method::ImageBased,
+                    (&payloads.0, &payloads.1),
+                    &params,
+                    None,
+                    reborrow(&mut profiler),
+                )?;
+                run.shade.frame(self.gpu, &inputs, profiler)
+            })
+            .map_err(fail)?;
+            progress.step(Method::Payload.name());
+            if record {
+                let color = run
+                    .shade
+                    .color()
+                    .ok_or_else(|| fail("the payload's shade pass draws no colour".into()))?;
+                let sample =
+                    self.sample((start + k, &params, time), color, run.search.decisions())?;
+                let reference = self.reference_at(k, pictures, measured)?;
+                self.keep(measured, Method::Payload, sample, &reference);
             }
         }
         Ok(())
@@ -1505,7 +1702,7 @@ impl Schedule<'_> {
             _ => b.of(method),
         });
         let b_ms = run.map_or(0.0, |r| metrics::median(&r.times));
-        let i_ms = if method.extrapolates() {
+        let i_ms = if method.adds_iframe_passes() {
             iframe_ms + run.map_or(0.0, |r| metrics::median(&r.prepare_times))
         } else if method.reads_flows() {
             iframe_ms

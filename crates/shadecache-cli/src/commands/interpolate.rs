@@ -200,6 +200,12 @@ pub struct Args {
     #[arg(long, value_name = "S", default_value_t = 8)]
     pub pursuit_substeps: u32,
 
+    /// The node `payload` interpolates (an id from `shadecache analyze`);
+    /// by default the highest-ranked candidate that reads no per-frame
+    /// input (light, camera, time), which the report's notes name.
+    #[arg(long, alias = "nodes", value_name = "ID")]
+    pub node: Option<String>,
+
     /// Frame size (default: the scene's).
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<[u32; 2]>,
@@ -263,6 +269,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         frames: args.frames,
         entry: args.stages.entry.clone(),
         vertex_entry: args.stages.vertex_entry.clone(),
+        payload_node: args.node.clone(),
         ..Options::default()
     };
     let mut bar = Bar {

@@ -139,6 +139,7 @@ fn alpha_zero_and_one_are_the_i_frames() {
         Method::SceneAssistedShadeOnMiss,
         Method::HalfVelocity,
         Method::SampleAndHold,
+        Method::Payload,
     ] {
         let ends: Vec<&KeptFrame> = kept(&pictures, m)
             .into_iter()
@@ -154,8 +155,11 @@ fn alpha_zero_and_one_are_the_i_frames() {
                 if error <= 1.0 / 255.0 {
                     continue;
                 }
+                // Payload interpolation reads its payloads through
+                // image-based's search and decisions.
+                let searched = matches!(m, Method::ImageBased | Method::Payload);
                 assert!(
-                    m == Method::ImageBased && decision != Decision::SameSurface as u32,
+                    searched && decision != Decision::SameSurface as u32,
                     "{} at α = {}, pixel {p} (decision {decision}): error {error}",
                     m.name(),
                     end.alpha,
@@ -589,7 +593,8 @@ fn reversed_z_interpolation() {
 
 /// Every corpus shader's I-frame module (the I-frame pass, the
 /// scene-assisted pass and the original fragment stage for its
-/// shade-on-miss pass) and the fullscreen B-frame passes: valid under
+/// shade-on-miss pass), its payload interpolation's payload and shade
+/// passes, and the fullscreen B-frame passes: valid under
 /// naga with every flag (the instrumenting validates it) and Tint, no
 /// derivative after a `discard` (naga writes it as a termination), and a
 /// wgpu pipeline per pass of every plan.
@@ -657,6 +662,47 @@ fn every_interpolation_pass_is_valid_and_builds() {
             )
             .unwrap_or_else(|err| panic!("{}: {err}", path.display()));
         }
+        // Payload interpolation's payload and shade passes, where the
+        // shader has a node that reads no per-frame input.
+        let Ok(candidate) = interpolate::payload::choose(&analysis) else {
+            continue;
+        };
+        let options = shadecache::rewrite::Options::default();
+        let reference = shadecache::rewrite::plan::reference(&shader, &analysis, &options).unwrap();
+        let passes =
+            match interpolate::payload::passes(&shader, &analysis, candidate, &options, &reference)
+            {
+                Ok(passes) => passes,
+                Err(refusal) => {
+                    assert!(
+                        !refusal.is_internal(),
+                        "{}: {}",
+                        path.display(),
+                        refusal.reason
+                    );
+                    eprintln!("{}: payload refused: {}", path.display(), refusal.reason);
+                    continue;
+                }
+            };
+        for (name, text) in &passes.sources {
+            let file = dir.path().join(format!(
+                "{}_{name}",
+                path.file_stem().unwrap().to_string_lossy()
+            ));
+            std::fs::write(&file, text).unwrap();
+            files.push(file);
+        }
+        for plan in [&passes.iframe, &passes.shade] {
+            plan.check()
+                .unwrap_or_else(|err| panic!("{}: {err}", path.display()));
+            built += shadecache::runtime::build_passes(
+                &gpu,
+                plan,
+                |name| passes.sources.get(name).cloned(),
+                shadecache::runtime::PipelineOptions::default(),
+            )
+            .unwrap_or_else(|err| panic!("{}: {err}", path.display()));
+        }
     }
     for result in crate::util::tint_validate(&files) {
         assert!(result.ok, "{}: {:?}", result.file, result.messages);
@@ -696,6 +742,10 @@ fn interpolate_bad_input_is_an_error() {
         (vec!["--inpaint-passes", "0"], "inpaint-passes"),
         (vec!["--latest-radius", "0"], "latest-radius"),
         (vec!["--method", "morph", "--grid", "12"], "power of two"),
+        (
+            vec!["--method", "payload", "--node", "n00000000"],
+            "unknown node id `n00000000`",
+        ),
         (
             vec!["--method", "morph", "--size", "100x100"],
             "does not divide the 100×100 frame",
