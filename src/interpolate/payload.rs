@@ -26,8 +26,9 @@
 //! the node is the analysis's highest-ranked candidate that reads no
 //! per-frame input (`Candidate::depends_on` empty); `--node` names
 //! another. The B-frame search filters the payload bilinearly, so it is
-//! kept in `rgba16float`; a node the analysis cannot bound within it is
-//! refused with the reason.
+//! kept in `rgba16float`: of those candidates the first the analysis
+//! bounds within it is taken, and a node that may not fit is refused
+//! with the reason.
 //!
 //! The shade pass reads the payload texture the rewrite binds as "this
 //! frame's cache" in the cache's group; here it is moved, on IR, to a
@@ -65,14 +66,19 @@ pub struct PayloadPasses {
 }
 
 /// The node to interpolate when none is named: the highest-ranked
-/// candidate whose slice reads no per-frame input. (A named one is
+/// candidate whose slice reads no per-frame input, of those first whose
+/// value provably fits `rgba16float`. (A named one is
 /// `Analysis::select`'s, with its diagnostics.)
 pub fn choose(analysis: &Analysis) -> Result<&Candidate, String> {
-    analysis
-        .candidates
-        .iter()
-        .find(|c| c.depends_on.is_empty())
-        .ok_or_else(|| {
+    let steady = || {
+        analysis
+            .candidates
+            .iter()
+            .filter(|c| c.depends_on.is_empty())
+    };
+    // One the search can filter first (`passes` refuses the others).
+    let fits = steady().find(|c| c.fits_f16);
+    fits.or_else(|| steady().next()).ok_or_else(|| {
             let read: Vec<String> = analysis
                 .candidates
                 .iter()
