@@ -216,6 +216,7 @@ pub mod correspondence;
 pub mod iframe;
 #[doc(hidden)]
 pub mod morph;
+pub mod partition;
 pub mod payload;
 pub mod pursuit;
 pub mod report;
@@ -469,6 +470,11 @@ pub struct Options {
     /// per-frame input ([`payload::choose`]). The report's notes name it.
     #[serde(skip)]
     pub payload_node: Option<String>,
+    /// Partitioned rendering (000 §7): each I-frame drawn in n parts of
+    /// about equal measured cost, one per displayed frame
+    /// ([`partition`]); the report gives each method's displayed frames'
+    /// times either way.
+    pub partition: bool,
     /// Keep every measured B-frame whole ([`report::Pictures::kept`]).
     #[serde(skip)]
     pub keep_frames: bool,
@@ -516,6 +522,7 @@ impl Default for Options {
             entry: None,
             vertex_entry: None,
             payload_node: None,
+            partition: false,
             keep_frames: false,
             motion_blur: false,
             endpoints: false,

@@ -103,8 +103,13 @@ pub struct MethodReport {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub correspondence_error_px: Option<CorrespondenceError>,
     /// Latency it adds, in displayed frames: the B-frames of an interval
-    /// wait for its closing I-frame when the method reads it.
+    /// wait for its closing I-frame when the method reads it; with
+    /// `--partition` every method's I-frames are begun n − 1 frames
+    /// before they are shown.
     pub added_latency_frames: f64,
+    /// Its displayed frames' times: how even the frame rate is
+    /// ([`super::partition::IntervalWork`]).
+    pub displayed_frame_ms: FrameTimes,
     /// With `--motion-blur`: the motion-blurred composites around each
     /// I-frame against the reference's, mean SSIM and PSNR.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -126,6 +131,33 @@ pub struct MethodReport {
     /// over the intervals (dB).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub displayed_i_frame_psnr: Option<f64>,
+}
+
+/// The times of a method's displayed frames over the measured intervals.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct FrameTimes {
+    /// Median, ms.
+    pub median: f64,
+    /// The slowest, ms.
+    pub max: f64,
+    /// max / median: 1 where every displayed frame costs the same.
+    pub spread: f64,
+    /// Whether the I-frames were drawn in parts (`--partition`).
+    pub partitioned: bool,
+}
+
+impl FrameTimes {
+    /// The median, maximum and spread of `times`.
+    pub fn of(times: &[f64], partitioned: bool) -> FrameTimes {
+        let median = crate::measure::metrics::median(times);
+        let max = times.iter().copied().fold(0.0, f64::max);
+        FrameTimes {
+            median,
+            max,
+            spread: if median > 0.0 { max / median } else { 1.0 },
+            partitioned,
+        }
+    }
 }
 
 /// 000 Fig. 11's correspondence error, mean pixels over the B-frames.

@@ -10,7 +10,8 @@ use super::correspondence::{FrameErrors, Samples};
 use super::iframe::{self, IFrameShader, SceneMode};
 use super::morph::{Morph, MorphParams, MorphSetup, Source};
 use super::report::{
-    self, DisplayedFrame, KeptFrame, KeptIFrame, MethodReport, Parameters, Pictures, Report,
+    self, DisplayedFrame, FrameTimes, KeptFrame, KeptIFrame, MethodReport, Parameters, Pictures,
+    Report,
 };
 use super::{pursuit, Method, Options};
 use crate::diagnostic::Error;
@@ -21,7 +22,7 @@ use crate::measure::inputs::SceneInputs;
 use crate::measure::metrics::{self, FrameError, LinearFrame};
 use crate::measure::{fail, Progress, MEASURED_COLOR_FORMAT};
 use crate::rewrite::Options as RewriteOptions;
-use crate::runtime::{FrameInputs, Gpu, RunOptions, Runner};
+use crate::runtime::{DrawShare, FrameInputs, FramePart, Gpu, RunOptions, Runner};
 use crate::scene::Scene;
 
 /// Intervals drawn before the measured ones: the first I-frame has no
@@ -288,6 +289,26 @@ pub(super) fn run(
         size,
         far_depth: scene.camera.depth.far_depth(),
         moving: &moving,
+        partition: None,
+    };
+    let run = if options.partition {
+        let first = run.twinned_inputs(&|frame| inputs.frame(scene, frame), [0, 0, n])?;
+        let costs = run.draw_costs(&mut clock, &mut slots[0], &first)?;
+        let whole = slots[0].whole_draws(&first);
+        notes.push(format!(
+            "--partition: each I-frame is drawn in {n} parts, one per displayed frame, cut from the draws in order by each object's measured cost alone ({}) (seed 000 §7); its I-frame time is the parts' total, and the partitioning adds n − 1 displayed frames of latency to every method",
+            costs
+                .iter()
+                .map(|c| format!("{c:.3} ms"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+        Schedule {
+            partition: Some(super::partition::split(&whole, &costs, n)),
+            ..run
+        }
+    } else {
+        run
     };
     let geometry_methods = scene_runs.len() + usize::from(payload_run.is_some());
     let total = u64::from(WARMUP_INTERVALS + plan.intervals)
@@ -790,7 +811,13 @@ struct Measured {
     kept: Vec<KeptFrame>,
     iframes: Vec<KeptIFrame>,
     reference_times: Vec<f64>,
+    /// Per recorded interval, its closing I-frame's time (with
+    /// `--partition`, its parts' total).
     iframe_times: Vec<f64>,
+    /// With `--partition`, per recorded interval, the time of each part of
+    /// its closing I-frame, instrumented and original.
+    iframe_parts: Vec<Vec<f64>>,
+    reference_parts: Vec<Vec<f64>>,
     /// The I-frames against the reference at the same time.
     iframe_errors: Vec<(u32, FrameError)>,
     methods: BTreeMap<Method, MethodRun>,
@@ -853,6 +880,9 @@ struct Schedule<'a> {
     far_depth: f32,
     /// Which of the scene's objects move ([`Scene::moves`]).
     moving: &'a [bool],
+    /// With `--partition`, the parts each I-frame is drawn in
+    /// ([`super::partition`]).
+    partition: Option<Vec<FramePart>>,
 }
 
 impl Schedule<'_> {
@@ -921,6 +951,63 @@ impl Schedule<'_> {
             }
         }
         inputs
+    }
+
+    /// Each object's cost in `runner`'s frame of `inputs`, ms: its draw
+    /// alone over a frame that draws nothing, the median of three, for
+    /// [`super::partition::split`]. Untimed by the report.
+    fn draw_costs(
+        &self,
+        clock: &mut Clock,
+        runner: &mut Runner,
+        inputs: &FrameInputs,
+    ) -> Result<Vec<f64>, Error> {
+        let whole = runner.whole_draws(inputs);
+        let mut time_of = |draws: Vec<DrawShare>| -> Result<f64, Error> {
+            let part = FramePart { draws, more: false };
+            let times = (0..3)
+                .map(|_| {
+                    timed_recording(clock, "partition", |profiler| {
+                        runner.frame_part(self.gpu, inputs, Some(&part), profiler)
+                    })
+                    .map(|(time, _, _)| time)
+                    .map_err(fail)
+                })
+                .collect::<Result<Vec<f64>, Error>>()?;
+            Ok(metrics::median(&times))
+        };
+        let empty = time_of(Vec::new())?;
+        whole
+            .into_iter()
+            .map(|draw| Ok((time_of(vec![draw])? - empty).max(0.0)))
+            .collect()
+    }
+
+    /// Draws `inputs` with `runner`, timed: at once, or with `--partition`
+    /// part by part (each timed alone). Returns the total and the parts'
+    /// times.
+    fn draw_iframe(
+        &self,
+        clock: &mut Clock,
+        runner: &mut Runner,
+        inputs: &FrameInputs,
+        label: &str,
+    ) -> Result<(f64, Vec<f64>), Error> {
+        let Some(parts) = &self.partition else {
+            let (time, _, _) = timed(clock, runner, inputs, label).map_err(fail)?;
+            return Ok((time, Vec::new()));
+        };
+        let times = parts
+            .iter()
+            .map(|part| {
+                timed_recording(clock, label, |profiler| {
+                    runner.frame_part(self.gpu, inputs, Some(part), profiler)
+                })
+                .map(|(time, _, _)| time)
+                .map_err(fail)
+            })
+            .collect::<Result<Vec<f64>, Error>>()?;
+        Ok((times.iter().sum(), times))
     }
 
     fn textures<'r>(&self, runner: &'r Runner) -> Result<IFrameTextures<'r>, Error> {
@@ -1027,6 +1114,16 @@ impl Schedule<'_> {
             measured,
             progress,
         )?;
+
+        // With --partition, the original drawn in parts too at the
+        // closing I-frame's time: the I-frame of the methods that draw
+        // no flows.
+        if self.partition.is_some() {
+            let (_, parts) = self.draw_iframe(clock, reference, &inputs_of(end)?, "reference")?;
+            if record {
+                measured.reference_parts.push(parts);
+            }
+        }
 
         // The closing I-frame, into the slot the opening one is not in.
         let (earlier, later) = ((interval % 2) as usize, ((interval + 1) % 2) as usize);
@@ -1521,16 +1618,18 @@ impl Schedule<'_> {
         let n = self.options.frames_per_interval;
         let end = start + n;
         let [width, height] = self.size;
-        let (time, _, _) = timed(
+        let (time, parts) = self.draw_iframe(
             clock,
             slot,
             &self.twinned_inputs(inputs_of, [end, start, end + n])?,
             "iframe",
-        )
-        .map_err(fail)?;
+        )?;
         progress.step("iframe");
         if record {
             measured.iframe_times.push(time);
+            if !parts.is_empty() {
+                measured.iframe_parts.push(parts);
+            }
             let color = slot
                 .color()
                 .ok_or_else(|| fail("the I-frame draws no colour".into()))?;
@@ -1688,6 +1787,42 @@ impl Schedule<'_> {
         entry.frames.push((sample.displayed, sample.alpha, error));
     }
 
+    /// The time of each displayed frame `method` showed over the measured
+    /// intervals: its B-frames' passes and its I-frames' (the original's
+    /// for the methods that read no flows), with `--partition` the
+    /// I-frames' parts spread over the frames.
+    fn displayed_frame_times(&self, method: Method, measured: &Measured) -> Vec<f64> {
+        let n = self.options.frames_per_interval as usize;
+        if method == Method::Reference {
+            return measured.reference_times.clone();
+        }
+        let run = measured.methods.get(&method);
+        let bframes = run.map_or(&[][..], |r| &r.times[..]);
+        let mut times = Vec::new();
+        for (i, chunk) in bframes.chunks(n - 1).enumerate() {
+            let (iframe, parts) = if method.reads_flows() {
+                (measured.iframe_times.get(i), measured.iframe_parts.get(i))
+            } else {
+                (
+                    measured.reference_times.get(i * n + n - 1),
+                    measured.reference_parts.get(i),
+                )
+            };
+            let work = super::partition::IntervalWork {
+                bframes: chunk,
+                iframe: iframe.copied().unwrap_or(0.0),
+                parts: parts.map(|p| &p[..]),
+                added: run
+                    .filter(|_| method.adds_iframe_passes())
+                    .and_then(|r| r.prepare_times.get(i))
+                    .copied()
+                    .unwrap_or(0.0),
+            };
+            times.extend(work.frame_times());
+        }
+        times
+    }
+
     /// What `method` measured, as the report says it.
     fn method_report(
         &self,
@@ -1764,11 +1899,15 @@ impl Schedule<'_> {
                     linear: c.linear.spread(),
                 }
             }),
-            added_latency_frames: if method.reads_later_frame() {
+            added_latency_frames: if method.reads_later_frame() || self.partition.is_some() {
                 f64::from(n - 1)
             } else {
                 0.0
             },
+            displayed_frame_ms: FrameTimes::of(
+                &self.displayed_frame_times(method, measured),
+                self.partition.is_some(),
+            ),
             worst_frame: run.and_then(|r| r.worst.as_ref().map(|w| w.1)),
             motion_blur_ssim: blur.map(|b| b.0),
             motion_blur_psnr: blur.map(|b| b.1),

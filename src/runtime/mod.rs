@@ -19,5 +19,5 @@ mod textures;
 
 pub use frame::{build_passes, PipelineOptions, PlanFrame, RunOptions};
 pub use gpu::{validated, Gpu};
-pub use runner::{FrameInputs, Mesh, ObjectInputs, Runner};
+pub use runner::{DrawShare, FrameInputs, FramePart, Mesh, ObjectInputs, Runner};
 pub use textures::{read_depth, read_texture, DepthTexels, Texels, DEPTH_MAP_SIZE};

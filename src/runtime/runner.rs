@@ -6,13 +6,47 @@
 use std::collections::{BTreeMap, HashMap};
 
 use shadecache_host::toolchain::render_target;
-use shadecache_host::{CachedShader, Draw, PassTimer, Targets, TwinSources, Twins};
+use shadecache_host::{CachedShader, Draw, NoTimer, PassTimer, Targets, TwinSources, Twins};
 
 use super::frame::{cached_shader, RunOptions};
 use super::gpu::Gpu;
 use super::textures::scene_textures;
 use super::textures::Texels;
 use crate::plan::{Plan, ResourceKind};
+
+/// A share of an object's draw: the triangles of `indices` (a range of its
+/// index buffer) of the instances of `instances`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DrawShare {
+    /// The object, by its place in [`FrameInputs::objects`].
+    pub object: usize,
+    pub indices: std::ops::Range<u32>,
+    pub instances: std::ops::Range<u32>,
+}
+
+impl DrawShare {
+    /// Every object's draw whole, in order: a frame drawn at once.
+    /// `index_count` gives a mesh's count of indices.
+    pub fn whole(objects: &[ObjectInputs], index_count: impl Fn(usize) -> u32) -> Vec<DrawShare> {
+        objects
+            .iter()
+            .enumerate()
+            .map(|(object, draw)| DrawShare {
+                object,
+                indices: 0..index_count(draw.mesh),
+                instances: 0..draw.instances,
+            })
+            .collect()
+    }
+}
+
+/// A part of a frame ([`Runner::frame_part`]): its shares of the draws,
+/// and whether it adds to the last frame drawn (else it begins one).
+#[derive(Clone, Debug, Default)]
+pub struct FramePart {
+    pub draws: Vec<DrawShare>,
+    pub more: bool,
+}
 
 /// An indexed triangle mesh whose vertices are laid out as the plan's
 /// per-vertex inputs, packed in order.
@@ -275,6 +309,35 @@ impl Runner {
         inputs: &FrameInputs,
         profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
     ) -> Result<(), String> {
+        self.frame_part(gpu, inputs, None, profiler)
+    }
+
+    /// Every object's draw of `inputs` whole, in order: what
+    /// [`Runner::frame`] draws.
+    pub fn whole_draws(&self, inputs: &FrameInputs) -> Vec<DrawShare> {
+        DrawShare::whole(&inputs.objects, |mesh| {
+            self.meshes.get(mesh).map_or(0, |m| m.count)
+        })
+    }
+
+    /// Draws a part of a frame: only `part`'s shares of the objects' draws
+    /// (in its order), as a frame of its own or, with `part.more`, into
+    /// the last frame drawn ([`CachedShader::record_more_timed`]: its
+    /// colour and depth loaded). `None` draws every object whole.
+    pub fn frame_part(
+        &mut self,
+        gpu: &Gpu,
+        inputs: &FrameInputs,
+        part: Option<&FramePart>,
+        profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+    ) -> Result<(), String> {
+        if let Some(share) = part
+            .into_iter()
+            .flat_map(|p| &p.draws)
+            .find(|d| d.object >= inputs.objects.len())
+        {
+            return Err(format!("no object {} to draw a share of", share.object));
+        }
         if let Some(draw) = inputs.objects.iter().find(|d| d.mesh >= self.meshes.len()) {
             return Err(format!("no mesh {}", draw.mesh));
         }
@@ -313,9 +376,18 @@ impl Runner {
             .external
             .as_ref()
             .and_then(|(group, bound)| Some((*group, bound.as_ref()?)));
+        let whole: Vec<DrawShare>;
+        let shares = match part {
+            Some(part) => &part.draws,
+            None => {
+                whole = self.whole_draws(inputs);
+                &whole
+            }
+        };
         let draw = |pass: &mut Draw<'_, '_>| {
-            for (object, draw) in objects.iter().zip(&inputs.objects) {
-                let mesh = &meshes[draw.mesh];
+            for share in shares {
+                let object = &objects[share.object];
+                let mesh = &meshes[inputs.objects[share.object].mesh];
                 for (group, bind_group) in &object.bind_groups {
                     pass.set_bind_group(*group, bind_group, &[]);
                 }
@@ -327,19 +399,33 @@ impl Runner {
                     pass.set_vertex_buffer(1, instances.slice(..));
                 }
                 pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(&object.twins, 0..mesh.count, 0, 0..draw.instances);
+                pass.draw_indexed(
+                    &object.twins,
+                    share.indices.clone(),
+                    0,
+                    share.instances.clone(),
+                );
             }
         };
-        let recorded = match profiler {
-            Some((profiler, label)) => {
+        let more = part.is_some_and(|p| p.more);
+        let recorded = match (profiler, more) {
+            (Some((profiler, label)), more) => {
                 let mut timer = Profiled { profiler, label };
-                let recorded =
+                let recorded = if more {
                     self.cached
-                        .record_timed(&gpu.queue, &mut encoder, &targets, &mut timer, draw);
+                        .record_more_timed(&mut encoder, &targets, &mut timer, draw)
+                } else {
+                    self.cached
+                        .record_timed(&gpu.queue, &mut encoder, &targets, &mut timer, draw)
+                };
                 timer.profiler.resolve_queries(&mut encoder);
                 recorded
             }
-            None => self.cached.record(&gpu.queue, &mut encoder, &targets, draw),
+            (None, true) => {
+                self.cached
+                    .record_more_timed(&mut encoder, &targets, &mut NoTimer, draw)
+            }
+            (None, false) => self.cached.record(&gpu.queue, &mut encoder, &targets, draw),
         };
         recorded.map_err(|err| err.to_string())?;
         gpu.queue.submit([encoder.finish()]);

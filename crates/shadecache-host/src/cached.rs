@@ -488,6 +488,70 @@ impl CachedShader {
         for inner in self.pending.drain(..).filter_map(|weak| weak.upgrade()) {
             inner.copy(encoder);
         }
+        let used = self.record_passes(encoder, targets, timer, &mut draw, Part::Whole)?;
+        // This frame's contents are next frame's last-frame contents.
+        for inner in used.values() {
+            inner.copy(encoder);
+        }
+        self.current = previous;
+        self.fresh = false;
+        self.frame = self.frame.wrapping_add(1);
+        let period = self.plan.refresh.period;
+        self.phase = if period == 0 {
+            0
+        } else {
+            (self.phase + 1) % period
+        };
+        Ok(())
+    }
+
+    /// Records more draws into the last recorded frame: every pass of the
+    /// plan again, each loading what the frame's colour and depth hold
+    /// (`targets.clear` is ignored), calling `draw` once per pass. This
+    /// draws a frame in parts, one part a submission (seed 000 §7's
+    /// partitioned rendering: an I-frame spread over the displayed frames
+    /// before it is shown); the parts together are the frame drawn at
+    /// once, in the same order. Nothing of the frame's state moves on. A
+    /// plan with a cache is refused: its passes read last frame's cache
+    /// and write this frame's, which a part would mix.
+    pub fn record_more_timed<T: PassTimer>(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &Targets<'_>,
+        timer: &mut T,
+        mut draw: impl FnMut(&mut Draw<'_, '_>),
+    ) -> Result<(), Error> {
+        if self.cache_group.is_some() {
+            return Err(Error::Refused(
+                "a frame drawn in parts needs a plan without a cache: each pass reads last frame's cache and writes this frame's".into(),
+            ));
+        }
+        if self.fresh {
+            return Err(Error::Mismatch(
+                "no frame recorded to draw more into: record its first part with `record_timed`"
+                    .into(),
+            ));
+        }
+        self.check_targets(targets)?;
+        let targets = Targets {
+            clear: None,
+            ..targets.clone()
+        };
+        self.record_passes(encoder, &targets, timer, &mut draw, Part::More)?;
+        Ok(())
+    }
+
+    /// Records every pass of the plan (and the classification), each
+    /// timed by `timer`, calling `draw` once per pass; returns the twins
+    /// drawn with, by id.
+    fn record_passes<T: PassTimer>(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &Targets<'_>,
+        timer: &mut T,
+        draw: &mut impl FnMut(&mut Draw<'_, '_>),
+        part: Part,
+    ) -> Result<BTreeMap<u64, Arc<TwinsInner>>, Error> {
         let binder = Binder {
             shader: self,
             used: RefCell::new(BTreeMap::new()),
@@ -500,7 +564,7 @@ impl CachedShader {
                 let mut render = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some(&built.pass.name),
                     color_attachments: &attachments,
-                    depth_stencil_attachment: Some(self.depth_attachment(&built.pass)),
+                    depth_stencil_attachment: Some(self.depth_attachment(&built.pass, part)),
                     timestamp_writes: timer.timestamp_writes(&query),
                     ..wgpu::RenderPassDescriptor::default()
                 });
@@ -527,20 +591,7 @@ impl CachedShader {
             }
             timer.end(encoder, query);
         }
-        // This frame's contents are next frame's last-frame contents.
-        for inner in binder.used.into_inner().values() {
-            inner.copy(encoder);
-        }
-        self.current = previous;
-        self.fresh = false;
-        self.frame = self.frame.wrapping_add(1);
-        let period = self.plan.refresh.period;
-        self.phase = if period == 0 {
-            0
-        } else {
-            (self.phase + 1) % period
-        };
-        Ok(())
+        Ok(binder.used.into_inner())
     }
 
     fn check_targets(&self, targets: &Targets<'_>) -> Result<(), Error> {
@@ -634,10 +685,20 @@ impl CachedShader {
         attachments
     }
 
-    fn depth_attachment(&self, pass: &Pass) -> wgpu::RenderPassDepthStencilAttachment<'_> {
-        let load = match pass.depth.load {
-            LoadOp::Clear => wgpu::LoadOp::Clear(self.plan.clear.depth as f32),
-            LoadOp::Load => wgpu::LoadOp::Load,
+    /// The depth attachment of `pass`: this frame's depth buffer, or for
+    /// [`Part::More`] the last recorded frame's, loaded.
+    fn depth_attachment(
+        &self,
+        pass: &Pass,
+        part: Part,
+    ) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+        let (load, slot) = match (part, pass.depth.load) {
+            (Part::More, _) => (wgpu::LoadOp::Load, 1 - self.current),
+            (Part::Whole, LoadOp::Clear) => (
+                wgpu::LoadOp::Clear(self.plan.clear.depth as f32),
+                self.current,
+            ),
+            (Part::Whole, LoadOp::Load) => (wgpu::LoadOp::Load, self.current),
         };
         // The stencil holds the deferred variant's draw ordinals and reuse
         // marks from its geometry pass on; other plans do not use it.
@@ -645,16 +706,16 @@ impl CachedShader {
             .depth_format
             .has_stencil_aspect()
             .then_some(wgpu::Operations {
-                load: match pass.depth.load {
-                    LoadOp::Clear => wgpu::LoadOp::Clear(0),
-                    LoadOp::Load => wgpu::LoadOp::Load,
+                load: match load {
+                    wgpu::LoadOp::Clear(_) => wgpu::LoadOp::Clear(0),
+                    _ => wgpu::LoadOp::Load,
                 },
                 store: wgpu::StoreOp::Store,
             });
         // Lowres's samples have a depth buffer of their size.
         let view = match (&self.targets.lowres, pass.resolution_divisor) {
             (Some(lowres), d) if d > 1 => &lowres.depth,
-            _ => &self.targets.depth_views[self.current],
+            _ => &self.targets.depth_views[slot],
         };
         wgpu::RenderPassDepthStencilAttachment {
             view,
@@ -752,6 +813,15 @@ impl CachedShader {
     pub fn classes(&self) -> &wgpu::Texture {
         &self.targets.classes
     }
+}
+
+/// Which part of a frame a recording is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Part {
+    /// A frame (or its first part): its passes start as the plan says.
+    Whole,
+    /// More draws into the last recorded frame: every target loads.
+    More,
 }
 
 /// Numbers the shaders of a process, so that a draw can tell its own

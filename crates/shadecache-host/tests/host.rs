@@ -567,6 +567,33 @@ fn what_a_cache_cannot_do_is_refused() {
     refused(&|frame| frame.color_targets = blended, "blending");
 }
 
+/// A frame drawn in parts (`record_more_timed`) needs a plan without a
+/// cache, and a frame recorded first to add to.
+#[test]
+fn more_draws_into_a_cache_frame_are_refused() {
+    let Some(gpu) = gpu() else { return };
+    let mut cached = make(&gpu, "one-pass", |_| {}).unwrap();
+    let texture = target(&gpu, SIZE, wgpu::TextureFormat::Rgba8Unorm);
+    let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+    let color = [Some(&view)];
+    let targets = shadecache_host::Targets {
+        color: &color,
+        clear: None,
+    };
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    match cached.record_more_timed(
+        &mut encoder,
+        &targets,
+        &mut shadecache_host::NoTimer,
+        |_| {},
+    ) {
+        Err(Error::Refused(text)) => assert!(text.contains("without a cache"), "{text}"),
+        other => panic!("{other:?}"),
+    }
+}
+
 /// The first frame computes everything; a still frame reuses everything
 /// inside the square; `reset()` and `resize()` compute everything again.
 #[test]

@@ -206,6 +206,13 @@ pub struct Args {
     #[arg(long, alias = "nodes", value_name = "ID")]
     pub node: Option<String>,
 
+    /// Partitioned rendering (seed 000 §7): draw each I-frame in n parts
+    /// of about equal measured cost, one per displayed frame, so that
+    /// every displayed frame costs about the same (at n − 1 frames of
+    /// added latency).
+    #[arg(long)]
+    pub partition: bool,
+
     /// Frame size (default: the scene's).
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<[u32; 2]>,
@@ -270,6 +277,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         entry: args.stages.entry.clone(),
         vertex_entry: args.stages.vertex_entry.clone(),
         payload_node: args.node.clone(),
+        partition: args.partition,
         ..Options::default()
     };
     let mut bar = Bar {
@@ -326,6 +334,14 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
                 ));
             }
         }
+        let frames = &m.displayed_frame_ms;
+        summary.push_str(&format!(
+            "                   displayed frames {:.3} ms median, {:.3} ms slowest (spread {:.2}×{})\n",
+            frames.median,
+            frames.max,
+            frames.spread,
+            if frames.partitioned { ", I-frames in parts" } else { "" }
+        ));
         if let Some(error) = m.pursuit_error {
             summary.push_str(&format!(
                 "                   pursuit error {error:.4}, {} frame(s) of added latency{}\n",

@@ -19,6 +19,7 @@ mod hard_runs;
 mod instanced;
 mod interpolate;
 mod lowres;
+mod partition;
 mod payload;
 mod profile;
 mod real_shaders;
