@@ -176,7 +176,8 @@ pub struct BFrames {
     offsets: [(wgpu::Texture, wgpu::Texture); 2],
     /// Which of `offsets` the next image-based B-frame writes.
     turn: std::cell::Cell<usize>,
-    /// Whether the image-based pass writes `offsets`.
+    /// Whether the image-based pass writes `offsets` (with latest-frame
+    /// initialisation, or for the depths it chose).
     latest: bool,
     /// Character removal (`fs_inpaint`): its pipeline and layout, and the
     /// two targets its passes write in turn.
@@ -305,7 +306,22 @@ impl BFrames {
         methods: &[Method],
         (iterations, latest_radius): (u32, Option<u32>),
     ) -> Result<BFrames, String> {
-        let latest = latest_radius.is_some();
+        BFrames::writing_depth(gpu, size, methods, (iterations, latest_radius), false)
+    }
+
+    /// [`BFrames::new`], with image-based writing its offsets and chosen
+    /// depths whatever the initialisation when `chosen_depth` holds
+    /// ([`BFrames::chosen_depth`]: what objects drawn every frame are
+    /// depth-tested against).
+    pub fn writing_depth(
+        gpu: &Gpu,
+        size: (u32, u32),
+        methods: &[Method],
+        (iterations, latest_radius): (u32, Option<u32>),
+        chosen_depth: bool,
+    ) -> Result<BFrames, String> {
+        let latest = latest_radius.is_some() || chosen_depth;
+        let latest_init = latest_radius.is_some();
         let device = &gpu.device;
         let float = wgpu::TextureSampleType::Float { filterable: true };
         let entries = layout_entries();
@@ -338,7 +354,7 @@ impl BFrames {
                 let constants: Vec<(&str, f64)> = if latest_pass {
                     vec![
                         iterations,
-                        ("latest_init", 1.0),
+                        ("latest_init", f64::from(u8::from(latest_init))),
                         ("latest_radius", f64::from(latest_radius.unwrap_or(1))),
                     ]
                 } else {
@@ -433,6 +449,12 @@ impl BFrames {
     /// initialisation.
     pub fn written_offsets(&self) -> &wgpu::Texture {
         &self.offsets[1 - self.turn.get()].0
+    }
+
+    /// The depth the last image-based B-frame chose at each pixel (I-frame
+    /// 0's or 1's depth of the surface it shows), when made writing it.
+    pub fn chosen_depth(&self) -> &wgpu::Texture {
+        &self.offsets[1 - self.turn.get()].1
     }
 
     /// The last B-frame's decisions ([`Decision`] per pixel).
@@ -562,6 +584,13 @@ impl BFrames {
         gpu.queue.submit([encoder.finish()]);
         Ok(())
     }
+}
+
+/// The profiler of a timed recording, lent to one of its passes.
+pub(super) fn reborrow<'a>(
+    profiler: &'a mut Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+) -> Option<(&'a mut wgpu_profiler::GpuProfiler, &'a str)> {
+    profiler.as_mut().map(|(p, label)| (&mut **p, *label))
 }
 
 /// Records one fullscreen pass of `pipeline` into `outputs` (cleared),

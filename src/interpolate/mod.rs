@@ -223,6 +223,7 @@ pub mod report;
 pub(crate) mod run;
 #[cfg(test)]
 mod search;
+mod thin;
 
 pub use bframe::Decision;
 

@@ -5,7 +5,7 @@
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
-use super::bframe::{BFrameParams, BFrames, Decision, IFrameTextures, MovingObjects};
+use super::bframe::{reborrow, BFrameParams, BFrames, Decision, IFrameTextures, MovingObjects};
 use super::correspondence::{FrameErrors, Samples};
 use super::iframe::{self, IFrameShader, SceneMode};
 use super::morph::{Morph, MorphParams, MorphSetup, Source};
@@ -13,6 +13,7 @@ use super::report::{
     self, DisplayedFrame, FrameTimes, KeptFrame, KeptIFrame, MethodReport, Parameters, Pictures,
     Report,
 };
+use super::thin::{FrameDepth, ThinObjects};
 use super::{pursuit, Method, Options};
 use crate::diagnostic::Error;
 use crate::front::Shader;
@@ -237,12 +238,23 @@ pub(super) fn run(
             "half-velocity draws the {count} moving object(s) at each B-frame's time and wipes them out of the earlier I-frame (seed 003 slides 33–47): both count in its B-frame time (--no-moving-objects leaves them to the velocity)"
         ));
     }
+    let every_frame: Vec<bool> = scene.objects.iter().map(|o| o.every_frame).collect();
+    let thin = if every_frame.contains(&true) {
+        let runner = bench::reference(&bench, shader, &plan.reference)?;
+        let count = every_frame.iter().filter(|t| **t).count();
+        notes.push(format!(
+            "{count} object(s) drawn at every displayed frame (`every_frame`) and left out of the I-frames, depth-tested into each method's frames through the Z-buffer bridge (seed 000 Fig. 4(d)): against the depth the frame was drawn with (image-based: the depth its search chose), or I-frame 0's for the methods that keep none (sample-and-hold, linear blending, half-velocity, the morphs); the bridge and the draw count in every displayed frame's time"
+        ));
+        Some(ThinObjects::new(&gpu, runner, every_frame.clone()).map_err(fail)?)
+    } else {
+        None
+    };
     let mut payload_run = if options.methods.contains(&Method::Payload) {
         payload_run(&bench, shader, &plan, options, &mut notes)?
     } else {
         None
     };
-    let bframes = BFrames::new(
+    let bframes = BFrames::writing_depth(
         &gpu,
         (size[0], size[1]),
         &options.methods,
@@ -250,6 +262,7 @@ pub(super) fn run(
             options.iterations,
             options.latest_frame_init.then_some(options.latest_radius),
         ),
+        thin.is_some(),
     )
     .map_err(fail)?;
     let morph = if options.methods.iter().any(|m| m.extrapolates()) {
@@ -290,6 +303,8 @@ pub(super) fn run(
         far_depth: scene.camera.depth.far_depth(),
         moving: &moving,
         partition: None,
+        every_frame: &every_frame,
+        thin: std::cell::RefCell::new(thin),
     };
     let run = if options.partition {
         let first = run.twinned_inputs(&|frame| inputs.frame(scene, frame), [0, 0, n])?;
@@ -624,13 +639,6 @@ fn instance_records(inputs: &FrameInputs, index: usize) -> &[u8] {
         .map_or(&[][..], |o| o.instance_inputs.as_slice())
 }
 
-/// The profiler of a timed recording, lent to one of its passes.
-fn reborrow<'a>(
-    profiler: &'a mut Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
-) -> Option<(&'a mut wgpu_profiler::GpuProfiler, &'a str)> {
-    profiler.as_mut().map(|(p, label)| (&mut **p, *label))
-}
-
 /// A B-frame read back: when it is, its time (ms), its colour and its
 /// decisions.
 struct BFrameSample {
@@ -883,6 +891,10 @@ struct Schedule<'a> {
     /// With `--partition`, the parts each I-frame is drawn in
     /// ([`super::partition`]).
     partition: Option<Vec<FramePart>>,
+    /// Which of the scene's objects are drawn every displayed frame and
+    /// left out of the I-frames (`every_frame`), and their drawing.
+    every_frame: &'a [bool],
+    thin: std::cell::RefCell<Option<ThinObjects>>,
 }
 
 impl Schedule<'_> {
@@ -940,7 +952,18 @@ impl Schedule<'_> {
                     .map_err(fail)?;
             }
         }
-        Ok(now)
+        Ok(self.interpolated(now))
+    }
+
+    /// `inputs` without the objects drawn every displayed frame: what the
+    /// I-frames and the passes at B-frame times draw.
+    fn interpolated(&self, mut inputs: FrameInputs) -> FrameInputs {
+        for (object, thin) in inputs.objects.iter_mut().zip(self.every_frame) {
+            if *thin {
+                object.instances = 0;
+            }
+        }
+        inputs
     }
 
     /// `inputs` with only the moving objects drawn.
@@ -1051,7 +1074,23 @@ impl Schedule<'_> {
         )
         .map_err(fail)?;
         if let Some(payload) = runs.payload.as_deref_mut() {
-            timed(clock, &mut payload.slots[0], &inputs_of(0)?, "payload").map_err(fail)?;
+            let inputs = self.interpolated(inputs_of(0)?);
+            timed(clock, &mut payload.slots[0], &inputs, "payload").map_err(fail)?;
+        }
+        // The Z-buffer bridge's first frames, from either kind of depth,
+        // untimed: a software rasteriser compiles a pipeline on its first
+        // draw.
+        if self.thin.borrow().is_some() {
+            let first = &runs.slots[0];
+            let color = first
+                .color()
+                .ok_or_else(|| fail("the I-frame draws no colour".into()))?;
+            for depth in [
+                FrameDepth::Buffer(first.depth()),
+                FrameDepth::Chosen(self.bframes.chosen_depth()),
+            ] {
+                self.shown(clock, inputs_of, 0, (color, depth))?;
+            }
         }
         for interval in 0..WARMUP_INTERVALS + intervals {
             let record = interval >= WARMUP_INTERVALS;
@@ -1143,13 +1182,9 @@ impl Schedule<'_> {
         )?;
 
         if let Some(payload) = payload.as_deref_mut() {
-            let (time, _, _) = timed(
-                clock,
-                &mut payload.slots[later],
-                &inputs_of(end)?,
-                "payload",
-            )
-            .map_err(fail)?;
+            let inputs = self.interpolated(inputs_of(end)?);
+            let (time, _, _) =
+                timed(clock, &mut payload.slots[later], &inputs, "payload").map_err(fail)?;
             if record {
                 let run = measured.methods.entry(Method::Payload).or_default();
                 run.prepare_times.push(time);
@@ -1193,7 +1228,7 @@ impl Schedule<'_> {
         }
         if let Some((morph, methods)) = self.morph {
             for &method in methods {
-                self.morph_method(clock, (morph, method), &at, measured, progress)?;
+                self.morph_method(clock, (morph, method), inputs_of, &at, measured, progress)?;
             }
         }
         if record {
@@ -1262,10 +1297,16 @@ impl Schedule<'_> {
             .map_err(fail)?;
             progress.step(method.name());
             if record {
+                let depth = match method {
+                    Method::ImageBased => FrameDepth::Chosen(self.bframes.chosen_depth()),
+                    _ => FrameDepth::Buffer(textures.0.depth),
+                };
                 let sample = self.sample(
-                    (start + k, &params, time),
-                    self.bframes.color(),
-                    self.bframes.decisions(),
+                    clock,
+                    inputs_of,
+                    (start + k, params.alpha, time),
+                    (self.bframes.color(), depth),
+                    Some(self.bframes.decisions()),
                 )?;
                 let reference = self.reference_at(k, pictures, measured)?;
                 self.keep(measured, method, sample, &reference);
@@ -1309,9 +1350,14 @@ impl Schedule<'_> {
             if record {
                 let [color, decision] = self.instrumented.scene_locations;
                 let sample = self.sample(
-                    (start + k, &params, time),
-                    scene_run.output(color).map_err(fail)?,
-                    scene_run.output(decision).map_err(fail)?,
+                    clock,
+                    inputs_of,
+                    (start + k, params.alpha, time),
+                    (
+                        scene_run.output(color).map_err(fail)?,
+                        FrameDepth::Buffer(scene_run.runner.depth()),
+                    ),
+                    Some(scene_run.output(decision).map_err(fail)?),
                 )?;
                 self.keep(
                     measured,
@@ -1340,7 +1386,7 @@ impl Schedule<'_> {
         let (start, record, pictures) = (at.start, at.record, at.pictures);
         for k in self.frames_of_interval(record, measured) {
             let params = self.params(k);
-            let inputs = inputs_of(start + k)?;
+            let inputs = self.interpolated(inputs_of(start + k)?);
             let (time, _, _) = timed_recording(clock, "bframe", |mut profiler| {
                 let payloads = (
                     run.iframe(earlier, &at.textures.0),
@@ -1363,8 +1409,13 @@ impl Schedule<'_> {
                     .shade
                     .color()
                     .ok_or_else(|| fail("the payload's shade pass draws no colour".into()))?;
-                let sample =
-                    self.sample((start + k, &params, time), color, run.search.decisions())?;
+                let sample = self.sample(
+                    clock,
+                    inputs_of,
+                    (start + k, params.alpha, time),
+                    (color, FrameDepth::Buffer(run.shade.depth())),
+                    Some(run.search.decisions()),
+                )?;
                 let reference = self.reference_at(k, pictures, measured)?;
                 self.keep(measured, Method::Payload, sample, &reference);
             }
@@ -1380,6 +1431,7 @@ impl Schedule<'_> {
         &self,
         clock: &mut Clock,
         (morph, method): (&Morph, Method),
+        inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
         at: &IntervalAt,
         measured: &mut Measured,
         progress: &mut dyn Progress,
@@ -1424,13 +1476,13 @@ impl Schedule<'_> {
             .map_err(fail)?;
             progress.step(method.name());
             if record {
-                let sample = BFrameSample {
-                    displayed: start + k,
-                    alpha: f64::from(params.step),
-                    time,
-                    frame: read_linear(self.gpu, morph.color()).map_err(fail)?,
-                    decisions: Vec::new(),
-                };
+                let sample = self.sample(
+                    clock,
+                    inputs_of,
+                    (start + k, params.step, time),
+                    (morph.color(), FrameDepth::Buffer(earlier.depth)),
+                    None,
+                )?;
                 let reference = self.reference_at(k, pictures, measured)?;
                 self.keep(measured, method, sample, &reference);
             }
@@ -1626,14 +1678,20 @@ impl Schedule<'_> {
         )?;
         progress.step("iframe");
         if record {
-            measured.iframe_times.push(time);
-            if !parts.is_empty() {
-                measured.iframe_parts.push(parts);
-            }
             let color = slot
                 .color()
                 .ok_or_else(|| fail("the I-frame draws no colour".into()))?;
-            let frame = read_linear(self.gpu, color).map_err(fail)?;
+            // As displayed: with the objects drawn every frame.
+            let (frame, added) = self.shown(
+                clock,
+                inputs_of,
+                end,
+                (color, FrameDepth::Buffer(slot.depth())),
+            )?;
+            measured.iframe_times.push(time + added);
+            if !parts.is_empty() {
+                measured.iframe_parts.push(parts);
+            }
             let error = metrics::compare_frames(reference, &frame, width, height, THRESHOLD);
             measured.iframe_errors.push((end, error));
             if let Some(blur) = measured.blur.as_mut() {
@@ -1658,25 +1716,58 @@ impl Schedule<'_> {
         Ok(())
     }
 
-    /// A B-frame read back from its colour and decision targets.
+    /// What a method shows at `displayed` (α `alpha`, its pass taking
+    /// `time` ms), read back: its frame `color`, and with objects drawn
+    /// every frame, them composited into it by `depth` at that frame's
+    /// time ([`ThinObjects::composite`], its time added); and its
+    /// `decisions`, when it makes some.
     fn sample(
         &self,
-        (displayed, params, time): (u32, &BFrameParams, f64),
-        color: &wgpu::Texture,
-        decisions: &wgpu::Texture,
+        clock: &mut Clock,
+        inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
+        (displayed, alpha, time): (u32, f32, f64),
+        (color, depth): (&wgpu::Texture, FrameDepth),
+        decisions: Option<&wgpu::Texture>,
     ) -> Result<BFrameSample, Error> {
-        let decisions = crate::runtime::read_texture(self.gpu, decisions, 4)
-            .map_err(fail)?
-            .chunks_exact(4)
-            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
-            .collect();
+        let decisions = match decisions {
+            Some(texture) => crate::runtime::read_texture(self.gpu, texture, 4)
+                .map_err(fail)?
+                .chunks_exact(4)
+                .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+                .collect(),
+            None => Vec::new(),
+        };
+        let (frame, added) = self.shown(clock, inputs_of, displayed, (color, depth))?;
         Ok(BFrameSample {
             displayed,
-            alpha: f64::from(params.alpha),
-            time,
-            frame: read_linear(self.gpu, color).map_err(fail)?,
+            alpha: f64::from(alpha),
+            time: time + added,
+            frame,
             decisions,
         })
+    }
+
+    /// The frame `color` (depth `depth`) as displayed at `displayed`, read
+    /// back, and what showing it added (ms): with objects drawn every
+    /// frame, them composited into it at that frame's time.
+    fn shown(
+        &self,
+        clock: &mut Clock,
+        inputs_of: &dyn Fn(u32) -> Result<FrameInputs, Error>,
+        displayed: u32,
+        (color, depth): (&wgpu::Texture, FrameDepth),
+    ) -> Result<(LinearFrame, f64), Error> {
+        let mut thin = self.thin.borrow_mut();
+        let Some(thin) = thin.as_mut() else {
+            return Ok((read_linear(self.gpu, color).map_err(fail)?, 0.0));
+        };
+        let inputs = inputs_of(displayed)?;
+        let (time, _, _) = timed_recording(clock, "every frame", |profiler| {
+            thin.composite(self.gpu, &inputs, (color, depth), profiler)
+        })
+        .map_err(fail)?;
+        let frame = read_linear(self.gpu, thin.color().map_err(fail)?).map_err(fail)?;
+        Ok((frame, time))
     }
 
     /// The frames of an interval each method builds: 1 to n − 1; with

@@ -364,6 +364,13 @@ pub struct Object {
     /// scene's `[storage]`.
     #[serde(default)]
     pub storage: BTreeMap<String, toml::Spanned<StorageTable>>,
+    /// Whole-frame reuse (`interpolate`): draw this object at every
+    /// displayed frame, depth-tested into the interpolated frames, and
+    /// leave it out of the I-frames (seed 000 Fig. 4(d): thin, fast
+    /// geometry no interpolation follows). The cache's runs draw it as
+    /// any other.
+    #[serde(default)]
+    pub every_frame: bool,
 }
 
 impl Object {
@@ -524,6 +531,7 @@ impl Scene {
             skin: None,
             instances: None,
             storage: BTreeMap::new(),
+            every_frame: false,
         });
         self.description = "default scene with a game's motion: the camera orbits at 1° a frame (60°/s at 60 Hz) around a turning sphere, and a small sphere crosses in front of it at 0.025 units a frame (1.5 units/s)".into();
         self

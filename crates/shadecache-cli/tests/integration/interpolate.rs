@@ -605,6 +605,7 @@ fn every_interpolation_pass_is_valid_and_builds() {
     let mut files = vec![
         root().join("shaders/bframe.wgsl"),
         root().join("shaders/morph.wgsl"),
+        root().join("shaders/bridge.wgsl"),
     ];
     let mut built = 0;
     for path in crate::util::corpus() {

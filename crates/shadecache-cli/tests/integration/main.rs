@@ -12,6 +12,7 @@ mod cost;
 mod default_scene;
 mod deferred;
 mod errors;
+mod every_frame;
 mod extrapolate;
 mod gpu;
 mod hard_cases;
