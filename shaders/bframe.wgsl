@@ -243,12 +243,13 @@ fn carried(found: Found, own: texture_2d<f32>, other: texture_2d<f32>, other_dep
 
 // What the image-based pass writes: besides the colour and decision, the
 // offsets it found and the depth it chose, for the next B-frame's
-// latest-frame initialisation.
+// latest-frame initialisation, and which direction it took (1 forward,
+// into I-frame 0; 0 backward), which Fig. 11's E_total reads.
 struct ImageBased {
     @location(0) color: vec4<f32>,
     @location(1) decision: u32,
     @location(2) offsets: vec4<f32>,
-    @location(3) depth: f32,
+    @location(3) depth: vec2<f32>,
 }
 
 // The diagonal neighbours of latest-frame initialisation's neighbourhood,
@@ -342,7 +343,8 @@ fn image_based(p: vec2<f32>) -> ImageBased {
         color = carried(backward, color_1, color_0, depth_0, 1.0 - params.alpha);
         depth = backward.depth;
     }
-    return ImageBased(color, decision, vec4<f32>(p - forward.point, p - backward.point), depth);
+    let direction = select(0.0, 1.0, use_forward);
+    return ImageBased(color, decision, vec4<f32>(p - forward.point, p - backward.point), vec2<f32>(depth, direction));
 }
 
 // Seed 003: the earlier I-frame sampled back along the velocity,

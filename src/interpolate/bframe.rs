@@ -22,8 +22,9 @@ pub const DECISION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// next B-frame's latest-frame initialisation.
 pub const OFFSETS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
-/// The depth the image-based pass chose, beside its offsets.
-pub const CHOSEN_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+/// The depth the image-based pass chose, beside its offsets, and the
+/// direction it took (1 forward, 0 backward).
+pub const CHOSEN_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
 /// I-frame 0 with its moving objects wiped out, at half its width and
 /// height, and what became of each pixel in alpha (`fs_inpaint`).

@@ -1,7 +1,10 @@
 //! Seed 000 Fig. 11's errors, from a B-frame's exact correspondences (the
 //! scene-assisted pass in its correspondence mode: each covered pixel's
-//! offset p − p₀ to where its surface point is in I-frame 0):
-//! - E_total: how far image-based's forward search lands from p₀;
+//! offset p − p₀ to where its surface point is in I-frame 0, and, drawn
+//! with the I-frames swapped, p − p₁ into I-frame 1):
+//! - E_total: how far image-based's forward search lands from p₀; and of
+//!   the correspondence it used (either direction, as §5.2 chose), how
+//!   far that lands from the exact point in that I-frame;
 //! - E_lin: how far the linear-motion assumption every warping method
 //!   makes lands from it: I-frame 0's point p₀ carried α of the way along
 //!   its exact flow to I-frame 1, against where it is at the B-frame's
@@ -34,6 +37,9 @@ pub struct FrameErrors {
     pub total: Samples,
     /// E_total over the covered pixels whose point I-frame 0 shows.
     pub total_hit: Samples,
+    /// E_total of the correspondence used, forward or backward, over
+    /// every covered pixel.
+    pub used: Samples,
     /// E_lin over every covered pixel whose point I-frame 0 shows, with a
     /// valid flow.
     pub linear: Samples,
@@ -41,12 +47,15 @@ pub struct FrameErrors {
 
 /// Fig. 11's errors of one B-frame at `alpha` (`size` pixels): `exact`
 /// the correspondence pass's RGBA (p − p₀, seen in I-frame 0, covered),
-/// `found` image-based's written offsets (p − q into I-frame 0 first),
-/// `flow_next` I-frame 0's flow to I-frame 1 (Δx, Δy, Δz, valid).
+/// `found` image-based's written offsets (p − q₀, p − q₁), `flow_next`
+/// I-frame 0's flow to I-frame 1 (Δx, Δy, Δz, valid); `used`, when
+/// given, the correspondence pass's RGBA into I-frame 1 (p − p₁, …) and
+/// per pixel the direction image-based took (1 forward, 0 backward).
 pub fn frame_errors(
     exact: &[f32],
     found: &[f32],
     flow_next: &[f32],
+    used: Option<(&[f32], &[f32])>,
     [width, height]: [u32; 2],
     alpha: f32,
 ) -> FrameErrors {
@@ -75,6 +84,19 @@ pub fn frame_errors(
                 out.total.values.push((total, silhouette));
                 if exact[p + 2] > 0.5 {
                     out.total_hit.values.push((total, silhouette));
+                }
+            }
+            if let Some((later, directions)) = used {
+                let pixel = (y * w + x) as usize;
+                let forward = directions.get(pixel).is_none_or(|d| *d > 0.5);
+                let error = if forward {
+                    total
+                } else {
+                    let e = &later[p..p + 2];
+                    (e[0] - found[p + 2]).hypot(e[1] - found[p + 3])
+                };
+                if error.is_finite() {
+                    out.used.values.push((error, silhouette));
                 }
             }
             // Where the point is in I-frame 0, and its flow there: only
@@ -174,10 +196,35 @@ mod tests {
         let exact: Vec<f32> = (0..4).flat_map(|_| [1.0, 0.0, 1.0, 1.0]).collect();
         let found: Vec<f32> = (0..4).flat_map(|_| [1.5, 0.0, 0.0, 0.0]).collect();
         let flow: Vec<f32> = (0..4).flat_map(|_| [2.0, 0.0, 0.0, 1.0]).collect();
-        let errors = frame_errors(&exact, &found, &flow, [4, 1], 0.5);
+        let errors = frame_errors(&exact, &found, &flow, None, [4, 1], 0.5);
         assert!(errors.linear.values.iter().all(|v| v.0 < 1e-6));
         assert!(errors.total.values.iter().all(|v| (v.0 - 0.5).abs() < 1e-6));
+        assert!(errors.used.values.is_empty());
         let spread = errors.total.spread().unwrap();
         assert_eq!(spread.ranges, [0.0, 1.0, 0.0, 0.0, 0.0]);
+    }
+
+    /// The error of the correspondence used is the forward search's where
+    /// it took the forward direction, the backward search's against the
+    /// exact point in I-frame 1 where it took that.
+    #[test]
+    fn used_correspondence_follows_the_chosen_direction() {
+        // Exact: 1 px into I-frame 0, −1 px into I-frame 1. Found: 1.5 px
+        // and −1.25 px. Pixels 0 and 1 went forward, 2 and 3 backward.
+        let exact: Vec<f32> = (0..4).flat_map(|_| [1.0, 0.0, 1.0, 1.0]).collect();
+        let later: Vec<f32> = (0..4).flat_map(|_| [-1.0, 0.0, 1.0, 1.0]).collect();
+        let found: Vec<f32> = (0..4).flat_map(|_| [1.5, 0.0, -1.25, 0.0]).collect();
+        let flow: Vec<f32> = (0..4).flat_map(|_| [2.0, 0.0, 0.0, 1.0]).collect();
+        let directions = [1.0, 1.0, 0.0, 0.0];
+        let errors = frame_errors(
+            &exact,
+            &found,
+            &flow,
+            Some((&later, &directions)),
+            [4, 1],
+            0.5,
+        );
+        let used: Vec<f32> = errors.used.values.iter().map(|v| v.0).collect();
+        assert_eq!(used, vec![0.5, 0.5, 0.25, 0.25]);
     }
 }

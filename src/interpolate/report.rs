@@ -171,6 +171,9 @@ pub struct CorrespondenceError {
     /// E_total over every covered pixel of every measured B-frame: mean,
     /// 95th percentile, silhouettes and interiors, shares by range.
     pub total: Option<super::correspondence::Spread>,
+    /// E_total of the correspondence image-based used, forward or
+    /// backward as §5.2 chose, against the exact point in that I-frame.
+    pub used: Option<super::correspondence::Spread>,
     /// E_lin, the linear-motion assumption's error: I-frame 0's point
     /// carried α of the way along its exact flow, against where it is at
     /// the B-frame's time.

@@ -484,11 +484,17 @@ fn geometry_runs(
     let mut correspondence = None;
     if options.methods.contains(&Method::ImageBased) {
         let made = scene_run(Method::ImageBased, SceneMode::Correspondence).and_then(|exact| {
-            let search = BFrames::new(
+            // The method's own search, writing what it found and the
+            // direction it took.
+            let search = BFrames::writing_depth(
                 gpu,
                 (bench.size[0], bench.size[1]),
                 &[Method::ImageBased],
-                (options.iterations, Some(options.latest_radius)),
+                (
+                    options.iterations,
+                    options.latest_frame_init.then_some(options.latest_radius),
+                ),
+                true,
             )?;
             Ok(Correspondence { exact, search })
         });
@@ -762,7 +768,7 @@ impl Correspondence {
         schedule: &Schedule,
         at: &IntervalAt,
         params: &BFrameParams,
-        inputs: &FrameInputs,
+        (inputs, swapped): (&FrameInputs, &FrameInputs),
     ) -> Result<FrameErrors, Error> {
         let textures = at.textures;
         let gpu = schedule.gpu;
@@ -777,18 +783,39 @@ impl Correspondence {
             )
             .map_err(fail)?;
         let found = read_linear(gpu, self.search.written_offsets()).map_err(fail)?;
-        self.exact.bind(gpu, textures, params)?;
-        self.exact.runner.frame(gpu, inputs, None).map_err(fail)?;
-        let target = self
-            .exact
-            .runner
-            .color_at(schedule.instrumented.scene_locations[0])
-            .ok_or_else(|| fail("internal error: the correspondence pass has no colour".into()))?;
-        let exact = read_linear(gpu, target).map_err(fail)?;
+        // The chosen depths' second channel: the direction taken.
+        let directions: Vec<f32> = crate::runtime::read_texture(gpu, self.search.chosen_depth(), 8)
+            .map_err(fail)?
+            .chunks_exact(8)
+            .map(|t| f32::from_le_bytes([t[4], t[5], t[6], t[7]]))
+            .collect();
+        let mut exact_into = |textures: (&IFrameTextures, &IFrameTextures),
+                              params: &BFrameParams,
+                              inputs: &FrameInputs|
+         -> Result<LinearFrame, Error> {
+            self.exact.bind(gpu, &(*textures.0, *textures.1), params)?;
+            self.exact.runner.frame(gpu, inputs, None).map_err(fail)?;
+            let target = self
+                .exact
+                .runner
+                .color_at(schedule.instrumented.scene_locations[0])
+                .ok_or_else(|| {
+                    fail("internal error: the correspondence pass has no colour".into())
+                })?;
+            read_linear(gpu, target).map_err(fail)
+        };
+        let exact = exact_into((&textures.0, &textures.1), params, inputs)?;
+        // With the I-frames swapped: the exact points in I-frame 1.
+        let later = BFrameParams {
+            alpha: 1.0 - params.alpha,
+            ..*params
+        };
+        let exact_later = exact_into((&textures.1, &textures.0), &later, swapped)?;
         Ok(super::correspondence::frame_errors(
             &exact,
             &found,
             at.flow_next_0(gpu)?,
+            Some((&exact_later, &directions)),
             schedule.size,
             params.alpha,
         ))
@@ -802,6 +829,7 @@ struct CorrespondenceErrors {
     /// those I-frame 0 shows.
     means: Vec<(f64, f64)>,
     total: Samples,
+    used: Samples,
     linear: Samples,
 }
 
@@ -1315,11 +1343,13 @@ impl Schedule<'_> {
                     (method, correspondence.as_deref_mut(), interior)
                 {
                     let inputs = self.twinned_inputs(inputs_of, [start + k, start, end])?;
-                    let errors = c.measure(self, at, &params, &inputs)?;
+                    let swapped = self.twinned_inputs(inputs_of, [start + k, end, start])?;
+                    let errors = c.measure(self, at, &params, (&inputs, &swapped))?;
                     let ours = &mut measured.correspondence;
                     ours.means
                         .push((errors.total.mean(), errors.total_hit.mean()));
                     ours.total.extend(errors.total);
+                    ours.used.extend(errors.used);
                     ours.linear.extend(errors.linear);
                 }
             }
@@ -1987,6 +2017,7 @@ impl Schedule<'_> {
                     all: metrics::mean(&all),
                     hit: metrics::mean(&hit),
                     total: c.total.spread(),
+                    used: c.used.spread(),
                     linear: c.linear.spread(),
                 }
             }),

@@ -327,6 +327,12 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
                 "                   correspondences {:.3} px from the exact ones ({:.3} px where I-frame 0 shows the point)\n",
                 error.all, error.hit
             ));
+            if let Some(used) = &error.used {
+                summary.push_str(&format!(
+                    "                   the correspondences used (either direction) {:.3} px from the exact ones (95th percentile {:.3} px; silhouettes {:.3}, interiors {:.3})\n",
+                    used.mean, used.p95, used.silhouette_mean, used.interior_mean
+                ));
+            }
             if let Some(linear) = &error.linear {
                 summary.push_str(&format!(
                     "                   linear motion {:.3} px from the exact points (95th percentile {:.3} px; silhouettes {:.3}, interiors {:.3})\n",

@@ -415,6 +415,15 @@ fn linear_motion_error_is_zero_for_constant_velocity() {
         "{linear:?}"
     );
     assert!(linear.ranges[0] > 0.99, "{linear:?}");
+    // The correspondences the search used, either direction, against the
+    // exact points in the I-frame each reads: found exactly, where the
+    // forward search alone misses what I-frame 0 does not show (the
+    // uncovered band behind the square).
+    let (used, forward) = (error.used.unwrap(), error.total.unwrap());
+    assert!(
+        used.mean < 0.01 && used.mean < forward.mean / 2.0,
+        "used {used:?}, forward {forward:?}"
+    );
 }
 
 /// The windmill's blades turn 45° a frame: their points move on circles,
