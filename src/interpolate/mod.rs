@@ -171,6 +171,33 @@
 //!   once per I-frame and counts in its I-frame time; each extrapolated
 //!   frame is one pass.
 //!
+//! # Payload interpolation ([`payload`])
+//!
+//! What none of the papers does: the reprojection cache's three-pass
+//! split of the fragment stage at a node (one that reads no per-frame
+//! input: the marble's albedo) gives a payload pass, drawn at each
+//! I-frame, and a shade pass. `payload` interpolates the two I-frames'
+//! payloads with image-based's search and decisions and shades every
+//! B-frame at its own time, with its own uniforms: a moving light or
+//! highlight stays where it is, which every method that warps colours
+//! drags along the flow (000 §6's limitation).
+//!
+//! # The frames each displayed frame costs ([`partition`])
+//!
+//! The amortised ratio spreads an I-frame's cost over its interval for
+//! free. With `--partition` the run draws each I-frame in n parts of about
+//! equal measured cost, one per displayed frame (000 §7), each loading the
+//! colour and depth the part before left (the host's `record_more_timed`),
+//! so the parts together are the I-frame drawn at once. Either way each
+//! method reports its displayed frames' median and slowest time.
+//!
+//! # Objects drawn every frame ([`thin`])
+//!
+//! A scene object marked `every_frame` (thin, fast geometry: the
+//! windmill's blades) is left out of the I-frames and drawn with the
+//! original shader at every displayed frame, depth-tested into what each
+//! method shows through a Z-buffer bridge (000 §6, Fig. 4(d)).
+//!
 //! Every method is also measured by its pursuit error ([`pursuit`]): the
 //! stand-in for the paper's user study, what an eye tracking the motion
 //! integrates over each interval's n displayed frames on a hold-type
@@ -223,7 +250,8 @@ pub mod report;
 pub(crate) mod run;
 #[cfg(test)]
 mod search;
-mod thin;
+#[doc(hidden)]
+pub mod thin;
 
 pub use bframe::Decision;
 

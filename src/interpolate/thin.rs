@@ -9,7 +9,7 @@
 //! interpolated frame's depth goes into the Z-buffer the blades are
 //! depth-tested against. A scene marks such objects `every_frame`; then
 //! - the I-frames (and every pass that draws the geometry at a B-frame's
-//!   time) leave them out ([`ThinObjects::without`]);
+//!   time) leave them out;
 //! - each displayed frame, interpolated or not, is bridged into the
 //!   targets of the original shader's pass (`shaders/bridge.wgsl`: its
 //!   colour, and its depth: the depth buffer of the pass that drew it, or
@@ -38,6 +38,7 @@ pub enum FrameDepth<'a> {
 }
 
 /// The objects drawn at every displayed frame, and how they are drawn.
+#[derive(Debug)]
 pub struct ThinObjects {
     /// Per scene object, whether it is drawn every frame.
     every_frame: Vec<bool>,
