@@ -64,16 +64,7 @@ impl ThinObjects {
                 label: Some("shaders/bridge.wgsl"),
                 source: wgpu::ShaderSource::Wgsl(BRIDGE_WGSL.into()),
             });
-            let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type,
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            };
+            let texture = super::bframe::texture_entry;
             let color = texture(0, wgpu::TextureSampleType::Float { filterable: false });
             [
                 (

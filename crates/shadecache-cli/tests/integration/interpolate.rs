@@ -617,6 +617,30 @@ fn every_interpolation_pass_is_valid_and_builds() {
         root().join("shaders/bridge.wgsl"),
     ];
     let mut built = 0;
+    // A refusal is the shader's limit, never the toolchain's failure.
+    let refused = |path: &std::path::Path, what: &str, refusal: &shadecache::rewrite::Refusal| {
+        assert!(
+            !refusal.is_internal(),
+            "{}: {}",
+            path.display(),
+            refusal.reason
+        );
+        eprintln!("{}: {what} refused: {}", path.display(), refusal.reason);
+    };
+    // Each plan checked and each of its passes built as a wgpu pipeline.
+    let build = |path: &std::path::Path,
+                 plan: &shadecache::plan::Plan,
+                 source: &dyn Fn(&str) -> Option<String>| {
+        plan.check()
+            .unwrap_or_else(|err| panic!("{}: {err}", path.display()));
+        shadecache::runtime::build_passes(
+            &gpu,
+            plan,
+            source,
+            shadecache::runtime::PipelineOptions::default(),
+        )
+        .unwrap_or_else(|err| panic!("{}: {err}", path.display()))
+    };
     for path in crate::util::corpus() {
         let text = std::fs::read_to_string(root().join(&path)).unwrap();
         let (shader, analysis) = crate::util::analyzed(&path.display().to_string(), &text);
@@ -628,22 +652,14 @@ fn every_interpolation_pass_is_valid_and_builds() {
         ) {
             Ok(instrumented) => instrumented,
             Err(refusal) => {
-                assert!(
-                    !refusal.is_internal(),
-                    "{}: {}",
-                    path.display(),
-                    refusal.reason
-                );
-                eprintln!("{}: refused: {}", path.display(), refusal.reason);
+                refused(&path, "the I-frame pass", &refusal);
                 continue;
             }
         };
         shadecache::rewrite::uniformity::check_kills(&instrumented.module)
             .unwrap_or_else(|err| panic!("{}: {err:?}", path.display()));
-        let file = dir.path().join(format!(
-            "{}.wgsl",
-            path.file_stem().unwrap().to_string_lossy()
-        ));
+        let stem = path.file_stem().unwrap().to_string_lossy().to_string();
+        let file = dir.path().join(format!("{stem}.wgsl"));
         std::fs::write(&file, &instrumented.text).unwrap();
         files.push(file);
         let mut plans = vec![instrumented.plan.clone()];
@@ -662,15 +678,7 @@ fn every_interpolation_pass_is_valid_and_builds() {
             }
         }
         for plan in plans {
-            plan.check()
-                .unwrap_or_else(|err| panic!("{}: {err}", path.display()));
-            built += shadecache::runtime::build_passes(
-                &gpu,
-                &plan,
-                |_| Some(instrumented.text.clone()),
-                shadecache::runtime::PipelineOptions::default(),
-            )
-            .unwrap_or_else(|err| panic!("{}: {err}", path.display()));
+            built += build(&path, &plan, &|_| Some(instrumented.text.clone()));
         }
         // Payload interpolation's payload and shade passes, where the
         // shader has a node that reads no per-frame input.
@@ -684,34 +692,17 @@ fn every_interpolation_pass_is_valid_and_builds() {
             {
                 Ok(passes) => passes,
                 Err(refusal) => {
-                    assert!(
-                        !refusal.is_internal(),
-                        "{}: {}",
-                        path.display(),
-                        refusal.reason
-                    );
-                    eprintln!("{}: payload refused: {}", path.display(), refusal.reason);
+                    refused(&path, "payload", &refusal);
                     continue;
                 }
             };
         for (name, text) in &passes.sources {
-            let file = dir.path().join(format!(
-                "{}_{name}",
-                path.file_stem().unwrap().to_string_lossy()
-            ));
+            let file = dir.path().join(format!("{stem}_{name}"));
             std::fs::write(&file, text).unwrap();
             files.push(file);
         }
         for plan in [&passes.iframe, &passes.shade] {
-            plan.check()
-                .unwrap_or_else(|err| panic!("{}: {err}", path.display()));
-            built += shadecache::runtime::build_passes(
-                &gpu,
-                plan,
-                |name| passes.sources.get(name).cloned(),
-                shadecache::runtime::PipelineOptions::default(),
-            )
-            .unwrap_or_else(|err| panic!("{}: {err}", path.display()));
+            built += build(&path, plan, &|name| passes.sources.get(name).cloned());
         }
     }
     for result in crate::util::tint_validate(&files) {
