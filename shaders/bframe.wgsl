@@ -162,8 +162,10 @@ struct Found {
     flow: vec4<f32>,
 }
 
-// The fixed-point search of seed 000 §5.1: q <- p - s·V(q) for m
-// iterations (no early exit, as the paper), V the I-frame's flow towards
+// The fixed-point search of seed 000 §5.1: q <- p - s·V(q) for at most m
+// iterations (the paper always runs m; this stops early where a step
+// stays in its texel, which gives the same point: see the loop), V the
+// I-frame's flow towards
 // the other I-frame and s the share of it the B-frame is away. It starts
 // at `start`, whose flow `start_flow` the caller has read (the default
 // start's is shared with the dual start of the other direction).

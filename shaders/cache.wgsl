@@ -405,8 +405,8 @@ fn cache_nearest(previous_clip: vec4<f32>) -> CacheNearest {
 // every tap with the slope-corrected depth. A footprint straddling a
 // silhouette still misses unless the far side's weight w is below
 // ε·|e − far|/|Δd|: at most that share of the other surface's payload
-// blends in (the conservative behaviour near depth boundaries seed 002
-// attributes to filtered depth).
+// blends in (the more conservative hit/miss tests near depth boundaries
+// that seed 002 §2 cites from Nehab et al. 2007 for filtered depth).
 fn cache_pack(cache: vec4<f32>, frag_coord: vec4<f32>) -> vec4<f32> {
     return vec4<f32>(cache.xyz, frag_coord.z - cache_params.far_depth);
 }

@@ -3,7 +3,8 @@
 //!
 //! The analysis ranks cache candidates by P/T, the estimated cost of the
 //! payload's backward slice (P) over the cost of the whole fragment entry
-//! point (T), as seed 002 §4 ranks AST nodes. Measured costs replace these
+//! point (T). Seed 002 (§4.1, Fig. 8) sorts AST nodes by P/T measured on
+//! its GPU; this static estimate is ours. Measured costs replace these
 //! estimates once the profiler has run the shader; until then the model only
 //! has to order candidates sensibly.
 //!

@@ -11,7 +11,9 @@
 //!
 //! 1. **By the cost model.** A refresh period Δn recomputes at least 1/Δn
 //!    of the pixels, so with the node's estimated P/T = f no configuration
-//!    can beat the ideal bound 1 / (1 − (1 − 1/Δn)·f) (seed 002, §4). A
+//!    can beat the ideal bound 1 / (1 − (1 − 1/Δn)·f) (ours: Amdahl's law
+//!    for a reused share ρ = 1 − 1/Δn of a payload costing f; seed 002
+//!    gives no such formula). A
 //!    (node, Δn) whose bound is below [`MIN_IDEAL_SPEEDUP`] cannot pay for
 //!    the passes a cache adds and is not measured; a node left with no Δn
 //!    is dropped.

@@ -14,7 +14,9 @@
 //! P/T is measured too: the payload pass of three-pass, drawn over every
 //! pixel, times the node's slice alone; over the reference time it is f,
 //! and with ρ the measured reuse fraction the ideal speed-up is
-//! 1 / (1 − ρ·f) (seed 002, §4), which every result is compared with.
+//! 1 / (1 − ρ·f) (ours: Amdahl's law for the reused share of the payload;
+//! seed 002 gives no formula, its §4.1 sorts nodes by measured P/T), which
+//! every result is compared with.
 //!
 //! The stages, in order: the scene's inputs (`inputs`: textures,
 //! meshes, each frame's buffers); the configurations the [`grid`] keeps,
