@@ -1,0 +1,79 @@
+#!/usr/bin/env bash
+# One command for a GPU run: the figures this project quotes, measured on
+# whatever adapter wgpu picks here, written as one markdown file under
+# docs/runs/ (adapter, driver, every figure with its interval where the
+# run has one). Needs only what the README's set-up installs (a Rust
+# toolchain, a Vulkan/Metal/DX12 driver, Node.js for the table).
+#
+#   scripts/gpu-run.sh            # the full run
+#   GPU_RUN_QUICK=1 scripts/gpu-run.sh   # a smoke run: small frames, few
+#                                        # frames (to check the script)
+#
+# What it runs, in order (each a command of README.md or docs/):
+#   1. README's profile (the marble sphere);
+#   2. docs/results.md's headline: the profile at 256² and 512²;
+#   3. seed 002 fig. 8 at 1024×768: one-, two-, three-pass and deferred
+#      for nodes spanning the marble's P/T range (one octave, the partial
+#      octave sums, the turbulence's marble, the albedo, the lit colour),
+#      Δn = 32, k = 4 (the paper's setting);
+#   4. seed 002 fig. 9 at 1024×768: Δn ∈ {8, 16, 32, 64} × k ∈ {1, 2, 4}
+#      for every variant, with the paper's kind of node (two octaves of
+#      noise, object-space: `s2`) and with the lit colour;
+#   5. `interpolate` on every bundled interpolation scene at 256².
+# Budget: minutes on a discrete GPU; under an hour on lavapipe (2 cores).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+quick=${GPU_RUN_QUICK:-}
+if [ -n "$quick" ]; then
+  big=128x96; small=64x64; mid=96x96; frames=(--frames 8 --warmup 8); iframes=(--frames 8)
+else
+  big=1024x768; small=256x256; mid=512x512; frames=(--frames 32); iframes=()
+fi
+
+cargo build --release --locked -p shadecache-cli
+bin=target/release/shadecache
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+manifest="$work/runs.tsv"
+: > "$manifest"
+
+# run NAME ARGS...: one shadecache command into $work/NAME, listed in the
+# manifest with its command line and its wall time.
+run() {
+  local name=$1; shift
+  local start end
+  start=$(date +%s)
+  echo "== $name: shadecache $*" >&2
+  "$bin" "$@" --out "$work/$name" --quiet > "$work/$name.log" 2>&1 || {
+    echo "$name failed:" >&2; tail -20 "$work/$name.log" >&2; exit 1; }
+  end=$(date +%s)
+  printf '%s\t%s\t%s\n' "$name" "$((end - start))" "shadecache $*" >> "$manifest"
+}
+
+marble=(corpus/noise_marble.wgsl --scene corpus/scenes/marble_sphere.toml)
+# The marble's nodes across its P/T range (ids from `shadecache analyze
+# corpus/noise_marble.wgsl`): one octave, the partial sums of two to five
+# octaves, the marble stripes, the albedo, the lit colour.
+one_octave=n04bcefa2
+two_octaves=n6223a6b5
+fig8_nodes=$one_octave,$two_octaves,n5913d8f1,nb4278c81,nb0c12cc4,n648ad2bd,nc36c801b,n5c3eb6af
+lit=n5c3eb6af
+
+run readme-profile profile "${marble[@]}" "${frames[@]}"
+run results-256 profile "${marble[@]}" --size "$small" "${frames[@]}"
+run results-512 profile "${marble[@]}" --size "$mid" "${frames[@]}"
+run fig8 profile "${marble[@]}" --size "$big" "${frames[@]}" --nodes "$fig8_nodes" \
+  --variant one-pass,two-pass,three-pass,deferred --refresh-period 32 --refresh-quad 4
+run fig9 profile "${marble[@]}" --size "$big" "${frames[@]}" --nodes "$two_octaves,$lit" \
+  --variant one-pass,two-pass,three-pass,deferred --refresh-period 8,16,32,64 --refresh-quad 1,2,4
+for scene in walking_floor globe windmill windmill_every_frame moving_light; do
+  run "interpolate-$scene" interpolate corpus/noise_marble.wgsl --scene "corpus/scenes/$scene.toml" \
+    --size "$small" "${iframes[@]}"
+done
+run interpolate-terrain_flyover interpolate corpus/terrain_slope_branch.wgsl \
+  --scene corpus/scenes/terrain_flyover.toml --size "$small" "${iframes[@]}"
+
+mkdir -p docs/runs
+out=$(node scripts/runs-table.mjs "$work" "$manifest" ${quick:+--quick})
+echo "wrote $out" >&2
