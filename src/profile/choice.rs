@@ -7,13 +7,16 @@ use crate::report::{Budget, Choice, Confirmation, Report, ResultRow};
 /// against SSIM: those no other configuration beats on one without losing
 /// on the other. The unmodified shader counts as a point (its time, an
 /// exact image), so a configuration slower than the original is never on
-/// a front.
-pub fn mark_pareto_fronts(reference_ms: f64, rows: &mut [ResultRow]) {
+/// a front. Time is each row's against its own reference (1 / speed-up):
+/// within one run the same order as its milliseconds, and across the
+/// shards of a sweep ([`super::merge`]), each run on its own machine, the
+/// only comparable one.
+pub fn mark_pareto_fronts(rows: &mut [ResultRow]) {
     let front = |metric: fn(&ResultRow) -> f64, exact: f64| -> Vec<bool> {
         let points: Vec<(f64, f64)> = rows
             .iter()
-            .map(|r| (r.time_ms, metric(r)))
-            .chain([(reference_ms, exact)])
+            .map(|r| (1.0 / r.speedup, metric(r)))
+            .chain([(1.0, exact)])
             .collect();
         let dominated = |&(t, m): &(f64, f64)| {
             points
@@ -38,8 +41,10 @@ impl Report {
     pub fn choose(&self, budget: Budget, budget_given: bool) -> Choice {
         let rows = &self.results;
         let faster = |i: &usize| rows[*i].speedup_ci[0] > 1.0;
+        // The fastest by speed-up: within one run the least time, and
+        // across merged shards the only comparable measure.
         let fastest = |among: &mut dyn Iterator<Item = usize>| {
-            among.min_by(|&a, &b| rows[a].time_ms.total_cmp(&rows[b].time_ms))
+            among.min_by(|&a, &b| rows[b].speedup.total_cmp(&rows[a].speedup))
         };
         let within: Vec<usize> = (0..rows.len())
             .filter(|&i| budget.admits(&rows[i]))
@@ -209,7 +214,7 @@ mod tests {
             row(8.0, 35.0, 0.99),
             row(12.0, 40.0, 0.999),
         ];
-        mark_pareto_fronts(10.0, &mut rows);
+        mark_pareto_fronts(&mut rows);
         let psnr: Vec<bool> = rows.iter().map(|r| r.pareto_psnr).collect();
         assert_eq!(psnr, [true, false, true, false, false]);
         let ssim: Vec<bool> = rows.iter().map(|r| r.pareto_ssim).collect();
@@ -219,7 +224,7 @@ mod tests {
     #[test]
     fn equal_points_are_both_on_the_front() {
         let mut rows = vec![row(5.0, 30.0, 0.9), row(5.0, 30.0, 0.9)];
-        mark_pareto_fronts(10.0, &mut rows);
+        mark_pareto_fronts(&mut rows);
         assert!(rows.iter().all(|r| r.pareto_psnr && r.pareto_ssim));
     }
 
@@ -255,6 +260,8 @@ mod tests {
             warnings: Vec::new(),
             grid: None,
             upsampling: None,
+            shard: None,
+            merged_from: Vec::new(),
             reference_check: None,
             choice: None,
         }

@@ -30,6 +30,7 @@
 pub(crate) mod bench;
 mod choice;
 pub mod grid;
+pub mod merge;
 pub(crate) mod reference_check;
 pub(crate) mod run;
 pub(crate) mod setup;
@@ -114,6 +115,9 @@ pub struct Options {
     pub entry: Option<String>,
     /// The vertex entry point that draws with it; `None` infers it.
     pub vertex_entry: Option<String>,
+    /// Measure only this slice of the grid (`--shard K/N`), for a sweep
+    /// spread over machines and joined by [`merge`].
+    pub shard: Option<crate::report::Shard>,
 }
 
 impl Options {
@@ -173,6 +177,7 @@ impl Default for Options {
             command: String::new(),
             entry: None,
             vertex_entry: None,
+            shard: None,
         }
     }
 }
@@ -381,7 +386,7 @@ pub fn profile(
         ),
         &prepared.base,
         &|plan, sources| bench.runner(plan, sources, true),
-        (size, options.error_threshold),
+        (size, options.error_threshold, options.shard),
         progress,
     )?;
 
@@ -505,7 +510,7 @@ fn rows(
         .collect();
     rows.sort_by(|a, b| b.0.speedup.total_cmp(&a.0.speedup));
     let (mut results, pictures): (Vec<_>, Vec<_>) = rows.into_iter().unzip();
-    choice::mark_pareto_fronts(baseline.reference_ms, &mut results);
+    choice::mark_pareto_fronts(&mut results);
     (results, pictures)
 }
 
@@ -595,6 +600,8 @@ impl RunContext<'_> {
                 .variants
                 .contains(&Variant::Lowres)
                 .then(|| self.prepared.defaults.upsampling.clone()),
+            shard: self.options.shard,
+            merged_from: Vec::new(),
         }
     }
 }
@@ -714,12 +721,15 @@ fn configurations(
     (variants, lowres): (&[Variant], (&[Reconstruction], &[bool])),
     base: &RewriteOptions,
     new_runner: &NewRunner,
-    (size, error_threshold): ([u32; 2], f64),
+    (size, error_threshold, shard): ([u32; 2], f64, Option<crate::report::Shard>),
     progress: &mut dyn Progress,
 ) -> Result<Vec<Config>, Error> {
     let mut configs = Vec::new();
     // Configurations set up, to measure each once.
     let mut seen = Vec::new();
+    // The grid's configurations in order, whether measured here or not:
+    // what `--shard` slices.
+    let mut index = 0usize;
     for (node, (candidate, settings)) in nodes.iter().enumerate() {
         for &variant in variants {
             let settings = match variant {
@@ -727,6 +737,10 @@ fn configurations(
                 _ => adaptive_settings(settings, lowres.1, base),
             };
             for setting in settings.iter() {
+                index += 1;
+                if shard.is_some_and(|s| !s.takes(index - 1)) {
+                    continue;
+                }
                 let what = format!(
                     "{} {variant} Δn={} k={} {} {} ε={}{}",
                     candidate.node.id,

@@ -92,6 +92,69 @@ pub struct Report {
     /// reconstruction and adaptive refresh are their own).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub upsampling: Option<crate::rewrite::Upsampling>,
+    /// With `--shard K/N`: the slice of the grid this run measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<Shard>,
+    /// A report `shadecache merge` joined from shards: each shard's run
+    /// (its rows' speed-ups are against its own reference).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub merged_from: Vec<MergedShard>,
+}
+
+/// The K-th of N deterministic slices of a profile's configurations
+/// (`profile --shard K/N`): configuration i of the grid, in the order the
+/// profile walks it (nodes, variants, settings), is shard (i mod N) + 1's.
+/// Each shard runs its own reference, so its rows are ratios within one
+/// run wherever it ran.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    /// K, from 1.
+    pub index: u32,
+    /// N.
+    pub count: u32,
+}
+
+impl Shard {
+    /// `K/N`, 1 ≤ K ≤ N.
+    pub fn parse(text: &str) -> Result<Shard, String> {
+        let bad = || format!("`{text}` is not K/N with 1 ≤ K ≤ N (e.g. 2/4)");
+        let (k, n) = text.split_once('/').ok_or_else(bad)?;
+        let (index, count): (u32, u32) = (
+            k.trim().parse().map_err(|_| bad())?,
+            n.trim().parse().map_err(|_| bad())?,
+        );
+        if index == 0 || index > count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+
+    /// Whether the grid's configuration `i` (from 0) is this shard's.
+    pub fn takes(self, i: usize) -> bool {
+        i % self.count as usize == (self.index - 1) as usize
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+/// One shard of a merged report: where its report was, which slice it
+/// measured, its reference, and its adapter.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct MergedShard {
+    /// The shard's `report.json`.
+    pub report: String,
+    /// Its slice (`None`: an unsharded run merged in).
+    pub shard: Option<Shard>,
+    /// Its reference's median frame time, ms.
+    pub reference_ms: f64,
+    /// Its adapter.
+    pub device: Device,
+    /// Rows it measured.
+    pub results: usize,
 }
 
 /// The reference's measured frames, looked at.

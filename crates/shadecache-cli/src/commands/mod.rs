@@ -2,6 +2,7 @@
 
 pub mod analyze;
 pub mod interpolate;
+pub mod merge;
 pub mod profile;
 pub mod rewrite;
 pub mod scene;
@@ -25,6 +26,8 @@ pub enum Command {
     Interpolate(interpolate::Args),
     /// Scenes for `profile`: `scene init SHADER > scene.toml` writes the default scene to edit.
     Scene(scene::Args),
+    /// Join the reports of a sweep's shards (`profile --shard K/N`) into one report and one Pareto front.
+    Merge(merge::Args),
 }
 
 pub fn exec(command: Command, color: Color) -> Result<(), Error> {
@@ -34,6 +37,7 @@ pub fn exec(command: Command, color: Color) -> Result<(), Error> {
         Command::Profile(args) => profile::exec(args, color),
         Command::Interpolate(args) => interpolate::exec(args, color),
         Command::Scene(args) => scene::exec(args, color),
+        Command::Merge(args) => merge::exec(args, color),
     }
 }
 

@@ -80,6 +80,12 @@ pub struct Args {
     #[arg(long)]
     pub sweep: bool,
 
+    /// Measure only the K-th of N deterministic slices of the grid (each
+    /// with its own reference run), for a sweep spread over machines;
+    /// `shadecache merge` joins the shards' reports.
+    #[arg(long, value_name = "K/N", value_parser = shadecache::report::Shard::parse)]
+    pub shard: Option<shadecache::report::Shard>,
+
     /// An error budget, `psnr:DB` or `ssim:S` (mean over the measured
     /// frames): pick the fastest configuration within it and write its
     /// shaders and plan to DIR/choice.
@@ -336,6 +342,7 @@ fn options(args: &Args, stages: &super::StageArgs) -> Result<Options, Error> {
             defaults.adaptive_refresh
         },
         max_error: args.max_error,
+        shard: args.shard,
         frames: args.frames,
         warmup: args.warmup,
         size: args.size,

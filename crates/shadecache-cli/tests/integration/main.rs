@@ -20,6 +20,7 @@ mod hard_runs;
 mod instanced;
 mod interpolate;
 mod lowres;
+mod merge;
 mod partition;
 mod payload;
 mod profile;

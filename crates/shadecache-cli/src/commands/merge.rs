@@ -1,0 +1,68 @@
+//! `shadecache merge`: the shards of a sweep (`profile --shard K/N`, each
+//! run where it was scheduled) joined into one report and one Pareto front
+//! (`shadecache::profile::merge`).
+
+use std::path::PathBuf;
+
+use shadecache::diagnostic::{Color, Diagnostic, Error};
+use shadecache::profile::merge;
+use shadecache::report;
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The shards' report folders (or their report.json files).
+    #[arg(required = true, value_name = "DIR")]
+    pub shards: Vec<PathBuf>,
+
+    /// Where to write the merged report.json and report.html.
+    #[arg(long, value_name = "DIR", default_value = "shadecache-merged")]
+    pub out: PathBuf,
+
+    /// Shards of different shaders, scenes, grids or adapters: a merged
+    /// report per group of alike shards (in DIR/1, DIR/2...) instead of an
+    /// error.
+    #[arg(long)]
+    pub keep_apart: bool,
+}
+
+pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
+    let plain = |message: String| Error::plain(Diagnostic::error(message));
+    let shards = args
+        .shards
+        .iter()
+        .map(|path| merge::read(path))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(plain)?;
+    let count = shards.len();
+    let merged = merge::merge(shards, args.keep_apart).map_err(plain)?;
+    let single = merged.len() == 1;
+    for (i, report) in merged.iter().enumerate() {
+        let out = if single {
+            args.out.clone()
+        } else {
+            args.out.join((i + 1).to_string())
+        };
+        super::write_report(
+            &out,
+            report,
+            || Ok(Vec::new()),
+            || report::html(report, &out),
+        )?;
+        let best = report
+            .results
+            .first()
+            .map(|r| format!("; fastest {} {} at {:.2}×", r.node, r.variant, r.speedup))
+            .unwrap_or_default();
+        println!(
+            "{} shard(s) into {} rows{best}; the answer: {}\nreport: {}",
+            report.merged_from.len(),
+            report.results.len(),
+            report.choice.as_ref().map_or("none", |c| c.reason.as_str()),
+            out.join("report.html").display()
+        );
+    }
+    if !single {
+        println!("{count} shard(s) kept apart in {} reports", merged.len());
+    }
+    Ok(())
+}
