@@ -29,10 +29,12 @@ pub struct ShardReport {
 }
 
 /// What must agree for shards to make one report: (what, its value).
-/// Files by their names, not their paths: a shard's checkout may be
+type Identity = Vec<(&'static str, String)>;
+
+/// A report's [`Identity`]. Files by their names, not their paths: a shard's checkout may be
 /// anywhere. The nodes' ids (hashes of each node's source text) tell one
 /// shader from another of the same name.
-fn identity(report: &Report) -> Vec<(&'static str, String)> {
+fn identity(report: &Report) -> Identity {
     let name = |path: &str| {
         Path::new(path)
             .file_name()
@@ -81,7 +83,7 @@ fn identity(report: &Report) -> Vec<(&'static str, String)> {
 /// that disagree are an error naming the first difference, without
 /// `keep_apart`.
 pub fn merge(shards: Vec<ShardReport>, keep_apart: bool) -> Result<Vec<Report>, String> {
-    let mut groups: Vec<(Vec<(&'static str, String)>, Vec<ShardReport>)> = Vec::new();
+    let mut groups: Vec<(Identity, Vec<ShardReport>)> = Vec::new();
     for shard in shards {
         let id = identity(&shard.report);
         match groups.iter_mut().find(|(key, _)| *key == id) {
