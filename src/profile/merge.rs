@@ -31,9 +31,9 @@ pub struct ShardReport {
 /// What must agree for shards to make one report: (what, its value).
 type Identity = Vec<(&'static str, String)>;
 
-/// A report's [`Identity`]. Files by their names, not their paths: a shard's checkout may be
-/// anywhere. The nodes' ids (hashes of each node's source text) tell one
-/// shader from another of the same name.
+/// A report's [`Identity`]. Files by their names, not their paths: a
+/// shard's checkout may be anywhere. The nodes' ids (hashes of each node's
+/// source text) tell one shader from another of the same name.
 fn identity(report: &Report) -> Identity {
     let name = |path: &str| {
         Path::new(path)
