@@ -110,7 +110,7 @@ pub fn passes(
     let rewritten = rewrite::rewrite(shader, analysis, candidate, Variant::ThreePass, &options)?;
     if rewritten.plan.cache.format != CacheFormat::Rgba16float {
         return Err(Refusal::new(format!(
-            "the payload (node {}) may not fit rgba16float, which the B-frame search filters: {}",
+            "the payload (node {}) may not fit rgba16float, the format the B-frame search filters (the rewrite says: {})",
             candidate.node.id,
             rewritten
                 .plan
