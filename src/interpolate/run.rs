@@ -595,25 +595,15 @@ fn payload_run(
                 ..RunOptions::default()
             },
         )?;
-        let layout = shade
-            .external_layout()
-            .ok_or("internal error: the shade pass has no payload group")?;
         let view = super::bframe::view(search.color());
-        let bind_group = crate::runtime::validated(&bench.gpu.device, || {
-            bench
-                .gpu
-                .device
-                .create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("interpolated payload"),
-                    layout,
-                    entries: &[wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&view),
-                    }],
-                })
-        })
-        .map_err(|err| format!("the interpolated payload cannot be bound: {err}"))?;
-        shade.set_external_bind_group(bind_group);
+        shade.bind_external(
+            bench.gpu,
+            "interpolated payload",
+            &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&view),
+            }],
+        )?;
         Ok((
             passes.node,
             PayloadRun {
@@ -710,9 +700,6 @@ impl SceneRun {
         ];
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
         gpu.queue.write_buffer(&self.params, 0, &bytes);
-        let layout = self.runner.external_layout().ok_or_else(|| {
-            fail("internal error: the scene-assisted plan has no I-frame group".into())
-        })?;
         let (color, depth) = (super::bframe::view, super::bframe::depth_view);
         let views = [
             color(earlier.color),
@@ -737,15 +724,9 @@ impl SceneRun {
             binding: 5,
             resource: wgpu::BindingResource::Sampler(&self.sampler),
         });
-        let bind_group = crate::runtime::validated(&gpu.device, || {
-            gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("I-frames"),
-                layout,
-                entries: &entries,
-            })
-        })
-        .map_err(|err| fail(format!("the I-frames cannot be bound: {err}")))?;
-        self.runner.set_external_bind_group(bind_group);
+        self.runner
+            .bind_external(gpu, "I-frames", &entries)
+            .map_err(fail)?;
         Ok(())
     }
 }

@@ -29,7 +29,7 @@ pub struct RunOptions {
     pub classify: bool,
     /// A bind group of the plan's the caller binds itself (textures other
     /// runs rendered): the runner makes its layout, not its contents
-    /// (`Runner::set_external_bind_group`).
+    /// (`Runner::bind_external`).
     pub external_group: Option<u32>,
 }
 

@@ -241,17 +241,31 @@ impl Runner {
         })
     }
 
-    /// The layout of the group the caller binds (`RunOptions::external_group`).
-    pub fn external_layout(&self) -> Option<&wgpu::BindGroupLayout> {
-        self.layouts.get(&self.external.as_ref()?.0)
-    }
-
-    /// Binds `bind_group` at the caller's group in every pass from the
-    /// next frame on.
-    pub fn set_external_bind_group(&mut self, bind_group: wgpu::BindGroup) {
-        if let Some((_, bound)) = self.external.as_mut() {
-            *bound = Some(bind_group);
-        }
+    /// Binds `entries` at the caller's group (`RunOptions::external_group`)
+    /// in every pass from the next frame on, as a bind group of the layout
+    /// the plan implies for it; `label` names it in errors.
+    pub fn bind_external(
+        &mut self,
+        gpu: &Gpu,
+        label: &str,
+        entries: &[wgpu::BindGroupEntry],
+    ) -> Result<(), String> {
+        let (group, bound) = self.external.as_mut().ok_or_else(|| {
+            format!("internal error: {label}: the runner binds no group of the caller's")
+        })?;
+        let layout = self.layouts.get(group).ok_or_else(|| {
+            format!("internal error: {label}: the plan puts nothing in group {group}")
+        })?;
+        let bind_group = super::validated(&gpu.device, || {
+            gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(label),
+                layout,
+                entries,
+            })
+        })
+        .map_err(|err| format!("the {label} cannot be bound: {err}"))?;
+        *bound = Some(bind_group);
+        Ok(())
     }
 
     /// Sets the frame counter c (see [`CachedShader::set_frame_counter`]).
