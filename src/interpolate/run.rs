@@ -245,7 +245,7 @@ pub(super) fn run(
         notes.push(format!(
             "{count} object(s) drawn at every displayed frame (`every_frame`) and left out of the I-frames, depth-tested into each method's frames through the Z-buffer bridge (seed 000 Fig. 4(d)): against the depth the frame was drawn with (image-based: the depth its search chose), or I-frame 0's for the methods that keep none (sample-and-hold, linear blending, half-velocity, the morphs); the bridge and the draw count in every displayed frame's time"
         ));
-        Some(ThinObjects::new(&gpu, runner, every_frame.clone()).map_err(fail)?)
+        Some(ThinObjects::new(&gpu, runner).map_err(fail)?)
     } else {
         None
     };
@@ -998,13 +998,7 @@ impl Schedule<'_> {
         let mut time_of = |draws: Vec<DrawShare>| -> Result<f64, Error> {
             let part = FramePart { draws, more: false };
             let times = (0..3)
-                .map(|_| {
-                    timed_recording(clock, "partition", |profiler| {
-                        runner.frame_part(self.gpu, inputs, Some(&part), profiler)
-                    })
-                    .map(|(time, _, _)| time)
-                    .map_err(fail)
-                })
+                .map(|_| self.time_part(clock, runner, inputs, &part, "partition"))
                 .collect::<Result<Vec<f64>, Error>>()?;
             Ok(metrics::median(&times))
         };
@@ -1031,15 +1025,25 @@ impl Schedule<'_> {
         };
         let times = parts
             .iter()
-            .map(|part| {
-                timed_recording(clock, label, |profiler| {
-                    runner.frame_part(self.gpu, inputs, Some(part), profiler)
-                })
-                .map(|(time, _, _)| time)
-                .map_err(fail)
-            })
+            .map(|part| self.time_part(clock, runner, inputs, part, label))
             .collect::<Result<Vec<f64>, Error>>()?;
         Ok((times.iter().sum(), times))
+    }
+
+    /// One part of `runner`'s frame of `inputs`, timed (ms).
+    fn time_part(
+        &self,
+        clock: &mut Clock,
+        runner: &mut Runner,
+        inputs: &FrameInputs,
+        part: &FramePart,
+        label: &str,
+    ) -> Result<f64, Error> {
+        timed_recording(clock, label, |profiler| {
+            runner.frame_part(self.gpu, inputs, Some(part), profiler)
+        })
+        .map(|(time, _, _)| time)
+        .map_err(fail)
     }
 
     fn textures<'r>(&self, runner: &'r Runner) -> Result<IFrameTextures<'r>, Error> {
@@ -1774,7 +1778,12 @@ impl Schedule<'_> {
         };
         let inputs = inputs_of(displayed)?;
         let (time, _, _) = timed_recording(clock, "every frame", |profiler| {
-            thin.composite(self.gpu, &inputs, (color, depth), profiler)
+            thin.composite(
+                self.gpu,
+                (&inputs, self.every_frame),
+                (color, depth),
+                profiler,
+            )
         })
         .map_err(fail)?;
         let frame = read_linear(self.gpu, thin.color().map_err(fail)?).map_err(fail)?;

@@ -40,8 +40,6 @@ pub enum FrameDepth<'a> {
 /// The objects drawn at every displayed frame, and how they are drawn.
 #[derive(Debug)]
 pub struct ThinObjects {
-    /// Per scene object, whether it is drawn every frame.
-    every_frame: Vec<bool>,
     /// The original shader, drawing them into a bridged frame.
     runner: Runner,
     /// The bridging pipelines and layouts: from a depth buffer, from a
@@ -50,9 +48,8 @@ pub struct ThinObjects {
 }
 
 impl ThinObjects {
-    /// `runner` draws with the original shader; `every_frame` marks the
-    /// objects drawn every frame.
-    pub fn new(gpu: &Gpu, runner: Runner, every_frame: Vec<bool>) -> Result<ThinObjects, String> {
+    /// `runner` draws with the original shader.
+    pub fn new(gpu: &Gpu, runner: Runner) -> Result<ThinObjects, String> {
         let device = &gpu.device;
         let depth_format = runner.depth().format();
         let color_format = runner
@@ -118,20 +115,16 @@ impl ThinObjects {
             })
         })
         .map_err(|err| format!("the Z-buffer bridge does not build: {err}"))?;
-        Ok(ThinObjects {
-            every_frame,
-            runner,
-            bridge,
-        })
+        Ok(ThinObjects { runner, bridge })
     }
 
-    /// Draws the objects drawn every frame, at the time of `inputs` (a
+    /// Draws the objects `every_frame` marks, at the time of `inputs` (a
     /// displayed frame's, every object in it), over the frame `color`
     /// whose depth is `depth`; the result is [`ThinObjects::color`].
     pub fn composite(
         &mut self,
         gpu: &Gpu,
-        inputs: &FrameInputs,
+        (inputs, every_frame): (&FrameInputs, &[bool]),
         (color, depth): (&wgpu::Texture, FrameDepth),
         mut profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
     ) -> Result<(), String> {
@@ -145,7 +138,7 @@ impl ThinObjects {
             .runner
             .whole_draws(inputs)
             .into_iter()
-            .filter(|d| self.every_frame.get(d.object).copied().unwrap_or(false))
+            .filter(|d| every_frame.get(d.object).copied().unwrap_or(false))
             .collect();
         let part = FramePart { draws, more: true };
         self.runner.frame_part(gpu, inputs, Some(&part), profiler)
