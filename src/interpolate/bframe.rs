@@ -615,13 +615,16 @@ pub(super) fn fullscreen_pass(
 }
 
 /// Records one render pass into `outputs` (cleared) and an optional depth
-/// buffer (cleared to 1, not kept), drawn by `draw`, timed as
-/// `<label>/<name>` when a profiler is given.
+/// buffer (cleared to 1; kept or not as its store op says), drawn by
+/// `draw`, timed as `<label>/<name>` when a profiler is given.
 pub(super) fn timed_pass(
     encoder: &mut wgpu::CommandEncoder,
     profiler: &mut Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
     name: &str,
-    (outputs, depth): (&[wgpu::TextureView], Option<&wgpu::TextureView>),
+    (outputs, depth): (
+        &[wgpu::TextureView],
+        Option<(&wgpu::TextureView, wgpu::StoreOp)>,
+    ),
     draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
 ) {
     let query = profiler
@@ -645,13 +648,15 @@ pub(super) fn timed_pass(
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(name),
             color_attachments: &attachments,
-            depth_stencil_attachment: depth.map(|view| wgpu::RenderPassDepthStencilAttachment {
-                view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
-                stencil_ops: None,
+            depth_stencil_attachment: depth.map(|(view, store)| {
+                wgpu::RenderPassDepthStencilAttachment {
+                    view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store,
+                    }),
+                    stencil_ops: None,
+                }
             }),
             timestamp_writes: query
                 .as_ref()

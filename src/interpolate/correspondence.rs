@@ -48,14 +48,14 @@ pub struct FrameErrors {
 /// Fig. 11's errors of one B-frame at `alpha` (`size` pixels): `exact`
 /// the correspondence pass's RGBA (p − p₀, seen in I-frame 0, covered),
 /// `found` image-based's written offsets (p − q₀, p − q₁), `flow_next`
-/// I-frame 0's flow to I-frame 1 (Δx, Δy, Δz, valid); `used`, when
-/// given, the correspondence pass's RGBA into I-frame 1 (p − p₁, …) and
-/// per pixel the direction image-based took (1 forward, 0 backward).
+/// I-frame 0's flow to I-frame 1 (Δx, Δy, Δz, valid); `used` the
+/// correspondence pass's RGBA into I-frame 1 (p − p₁, …) and per pixel the
+/// direction image-based took (1 forward, 0 backward).
 pub fn frame_errors(
     exact: &[f32],
     found: &[f32],
     flow_next: &[f32],
-    used: Option<(&[f32], &[f32])>,
+    (later, directions): (&[f32], &[f32]),
     [width, height]: [u32; 2],
     alpha: f32,
 ) -> FrameErrors {
@@ -86,18 +86,17 @@ pub fn frame_errors(
                     out.total_hit.values.push((total, silhouette));
                 }
             }
-            if let Some((later, directions)) = used {
-                let pixel = (y * w + x) as usize;
-                let forward = directions.get(pixel).is_none_or(|d| *d > 0.5);
-                let error = if forward {
-                    total
-                } else {
-                    let e = &later[p..p + 2];
-                    (e[0] - found[p + 2]).hypot(e[1] - found[p + 3])
-                };
-                if error.is_finite() {
-                    out.used.values.push((error, silhouette));
-                }
+            let forward = directions
+                .get((y * w + x) as usize)
+                .is_none_or(|d| *d > 0.5);
+            let used = if forward {
+                total
+            } else {
+                let e = &later[p..p + 2];
+                (e[0] - found[p + 2]).hypot(e[1] - found[p + 3])
+            };
+            if used.is_finite() {
+                out.used.values.push((used, silhouette));
             }
             // Where the point is in I-frame 0, and its flow there: only
             // where I-frame 0 shows it (else the flow there is another
@@ -196,10 +195,12 @@ mod tests {
         let exact: Vec<f32> = (0..4).flat_map(|_| [1.0, 0.0, 1.0, 1.0]).collect();
         let found: Vec<f32> = (0..4).flat_map(|_| [1.5, 0.0, 0.0, 0.0]).collect();
         let flow: Vec<f32> = (0..4).flat_map(|_| [2.0, 0.0, 0.0, 1.0]).collect();
-        let errors = frame_errors(&exact, &found, &flow, None, [4, 1], 0.5);
+        let forward = [1.0; 4];
+        let errors = frame_errors(&exact, &found, &flow, (&exact, &forward), [4, 1], 0.5);
         assert!(errors.linear.values.iter().all(|v| v.0 < 1e-6));
         assert!(errors.total.values.iter().all(|v| (v.0 - 0.5).abs() < 1e-6));
-        assert!(errors.used.values.is_empty());
+        // Every pixel went forward: what it used is the forward search.
+        assert_eq!(errors.used.values, errors.total.values);
         let spread = errors.total.spread().unwrap();
         assert_eq!(spread.ranges, [0.0, 1.0, 0.0, 0.0, 0.0]);
     }
@@ -216,14 +217,7 @@ mod tests {
         let found: Vec<f32> = (0..4).flat_map(|_| [1.5, 0.0, -1.25, 0.0]).collect();
         let flow: Vec<f32> = (0..4).flat_map(|_| [2.0, 0.0, 0.0, 1.0]).collect();
         let directions = [1.0, 1.0, 0.0, 0.0];
-        let errors = frame_errors(
-            &exact,
-            &found,
-            &flow,
-            Some((&later, &directions)),
-            [4, 1],
-            0.5,
-        );
+        let errors = frame_errors(&exact, &found, &flow, (&later, &directions), [4, 1], 0.5);
         let used: Vec<f32> = errors.used.values.iter().map(|v| v.0).collect();
         assert_eq!(used, vec![0.5, 0.5, 0.25, 0.25]);
     }

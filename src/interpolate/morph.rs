@@ -445,7 +445,10 @@ impl Morph {
             &mut encoder,
             &mut profiler,
             "morph",
-            (std::slice::from_ref(&color), Some(&depth)),
+            (
+                std::slice::from_ref(&color),
+                Some((&depth, wgpu::StoreOp::Discard)),
+            ),
             |pass| {
                 pass.set_pipeline(pipeline);
                 pass.set_bind_group(0, &group, &[]);
@@ -547,34 +550,30 @@ pub fn argmax_on_gpu(
 ) -> Result<Vec<u32>, String> {
     let morph = Morph::new(gpu, setup)?;
     let size = (setup.size[0], setup.size[1]);
-    let flow = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("motion"),
-        size: wgpu::Extent3d {
-            width: size.0,
-            height: size.1,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: COLOR_FORMAT,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
     let texels: Vec<u8> = motion
         .iter()
         .flat_map(|m| [m[0], m[1], 0.0, 1.0])
         .flat_map(|v| half::f16::from_f32(v).to_le_bytes())
         .collect();
-    gpu.queue.write_texture(
-        flow.as_image_copy(),
-        &texels,
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(size.0 * 8),
-            rows_per_image: None,
+    let flow = wgpu::util::DeviceExt::create_texture_with_data(
+        &gpu.device,
+        &gpu.queue,
+        &wgpu::TextureDescriptor {
+            label: Some("motion"),
+            size: wgpu::Extent3d {
+                width: size.0,
+                height: size.1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: COLOR_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
         },
-        flow.size(),
+        wgpu::util::TextureDataOrder::LayerMajor,
+        &texels,
     );
     let target =
         |label, format| shadecache_host::toolchain::render_target(&gpu.device, label, size, format);

@@ -796,7 +796,7 @@ impl Correspondence {
             &exact,
             &found,
             at.flow_next_0(gpu)?,
-            Some((&exact_later, &directions)),
+            (&exact_later, &directions),
             schedule.size,
             params.alpha,
         ))

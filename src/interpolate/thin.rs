@@ -182,6 +182,8 @@ impl ThinObjects {
                 ],
             })
         })?;
+        // The bridge writes every pixel's colour and depth (the depth test
+        // off): what the targets held before does not matter.
         let target = view(self.color()?);
         let depth_target = self
             .runner
@@ -190,48 +192,20 @@ impl ThinObjects {
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        let query = profiler
-            .as_mut()
-            .map(|(p, label)| p.begin_pass_query(format!("{label}/bridge"), &mut encoder));
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("bridge"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &target,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_target,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: self.runner.depth().format().has_stencil_aspect().then_some(
-                        wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        },
-                    ),
-                }),
-                timestamp_writes: query
-                    .as_ref()
-                    .and_then(|q| q.render_pass_timestamp_writes()),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &bind_group, &[]);
-            pass.draw(0..3, 0..1);
-        }
-        if let (Some((profiler, _)), Some(query)) = (profiler.as_mut(), query) {
-            profiler.end_query(&mut encoder, query);
-            profiler.resolve_queries(&mut encoder);
-        }
+        super::bframe::timed_pass(
+            &mut encoder,
+            &mut profiler,
+            "bridge",
+            (
+                std::slice::from_ref(&target),
+                Some((&depth_target, wgpu::StoreOp::Store)),
+            ),
+            |pass| {
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.draw(0..3, 0..1);
+            },
+        );
         gpu.queue.submit([encoder.finish()]);
         Ok(())
     }
