@@ -187,9 +187,10 @@ impl Build {
         self
     }
 
-    /// A folder the last shader's `#import`s are searched in (naga_oil
-    /// modules, each with `#define_import_path`); call again for more.
-    /// Relative to the manifest's folder.
+    /// A folder the last shader's imports are searched in: naga_oil
+    /// modules (each with `#define_import_path`) for `#import`, or WESL
+    /// packages (one folder each, `name::…`) for `import`; call again for
+    /// more. Relative to the manifest's folder.
     pub fn import_path(mut self, dir: impl AsRef<Path>) -> Self {
         self.last()
             .composition
@@ -198,9 +199,18 @@ impl Build {
         self
     }
 
-    /// A shader def for the last shader's `#ifdef`s.
+    /// A shader def for the last shader's `#ifdef`s (naga_oil), or a
+    /// feature for its `@if`s or a `constants::` value (WESL).
     pub fn def(mut self, name: impl Into<String>, value: front::compose::ShaderDef) -> Self {
         self.last().composition.defs.push((name.into(), value));
+        self
+    }
+
+    /// Which composer puts the last shader together, where the file does
+    /// not tell (a `.wesl` file or WESL syntax is WESL, which needs this
+    /// crate's `wesl` feature; `#import`s are naga_oil's).
+    pub fn composer(mut self, composer: front::compose::ComposerKind) -> Self {
+        self.last().composition.composer = Some(composer);
         self
     }
 
@@ -301,6 +311,7 @@ impl Build {
                     .map(|p| resolve(p))
                     .collect(),
                 defs: job.composition.defs.clone(),
+                composer: job.composition.composer,
             };
             if !self.quiet {
                 // Printed first, so a failing shader is watched too (a

@@ -35,6 +35,45 @@ pub struct Composition {
     /// `#ifdef` defines: `NAME` (true) or `NAME=VALUE` (a bool, an i32 or,
     /// with a `u` suffix, a u32).
     pub defs: Vec<(String, ShaderDef)>,
+    /// Which composer puts the shader together; `None`: told from the
+    /// file ([`ComposerKind::detect`]).
+    pub composer: Option<ComposerKind>,
+}
+
+/// The two ways engines compose WGSL from modules.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ComposerKind {
+    /// naga_oil: `#import`, `#define_import_path`, `#ifdef` (Bevy ≤ 0.19).
+    NagaOil,
+    /// WESL: `import …;`, `@if` (Bevy 0.20), through the `wesl` crate.
+    Wesl,
+}
+
+impl ComposerKind {
+    /// Parses `--composer`'s value.
+    pub fn parse(text: &str) -> Result<ComposerKind, String> {
+        match text {
+            "naga-oil" | "naga_oil" => Ok(ComposerKind::NagaOil),
+            "wesl" => Ok(ComposerKind::Wesl),
+            _ => Err(format!("`{text}`: the composer is `wesl` or `naga-oil`")),
+        }
+    }
+
+    /// The composer a shader file needs, `None` when it is plain WGSL: a
+    /// `.wesl` file or WESL syntax is WESL; naga_oil's directives, or
+    /// import paths or defs given for a plain file, are naga_oil.
+    pub fn detect(path: &std::path::Path, text: &str, composition: &Composition) -> Option<Self> {
+        if let Some(kind) = composition.composer {
+            return Some(kind);
+        }
+        if path.extension().is_some_and(|e| e == "wesl") || uses_wesl(text) {
+            Some(ComposerKind::Wesl)
+        } else if uses_directives(text) || !composition.is_empty() {
+            Some(ComposerKind::NagaOil)
+        } else {
+            None
+        }
+    }
 }
 
 /// A shader def's value.
@@ -82,9 +121,9 @@ impl ShaderDef {
 }
 
 impl Composition {
-    /// Whether nothing is composed: no import paths and no defs.
+    /// Whether nothing is composed: no import paths, no defs, no composer.
     pub fn is_empty(&self) -> bool {
-        self.import_paths.is_empty() && self.defs.is_empty()
+        self.import_paths.is_empty() && self.defs.is_empty() && self.composer.is_none()
     }
 
     fn shader_defs(&self) -> HashMap<String, ShaderDefValue> {
@@ -110,6 +149,15 @@ pub fn uses_directives(text: &str) -> bool {
         ]
         .iter()
         .any(|d| line.starts_with(d))
+    })
+}
+
+/// Whether WGSL text is WESL: it has `import …;` statements or `@if`
+/// attributes (naga_oil's `#import` is not).
+pub fn uses_wesl(text: &str) -> bool {
+    text.lines().any(|line| {
+        let line = line.trim_start();
+        line.starts_with("import ") || line.contains("@if(")
     })
 }
 
@@ -151,7 +199,14 @@ pub fn compose(top: SourceFile, composition: &Composition) -> Result<Shader, Err
             additional_imports: &[],
         })
         .map_err(|err| composer_error(&composer, &err))?;
-    undecorate(&mut module);
+    rename(&mut module, readable);
+    finish(&top, module)
+}
+
+/// Validates a composed module, writes it as WGSL and parses that: the
+/// analysis names nodes by their source text, and the composed module has
+/// one text only once it is written.
+pub(super) fn finish(top: &Arc<SourceFile>, module: naga::Module) -> Result<Shader, Error> {
     let info = super::validate(&module).map_err(|err| {
         Error::in_file(
             top.clone(),
@@ -358,9 +413,9 @@ fn composer_error(composer: &Composer, err: &ComposerError) -> Error {
     )
 }
 
-/// Renames naga_oil's decorated names (`itemX_naga_oil_mod_X<base32>X`) to
-/// `module__item`, `module` the last segment of the module's path.
-fn undecorate(module: &mut naga::Module) {
+/// Renames the module's functions, globals, constants and types that
+/// `readable` has a name for (a composer's decorated names).
+pub(super) fn rename(module: &mut naga::Module, readable: impl Fn(&str) -> Option<String>) {
     let rename = |name: &mut Option<String>| {
         if let Some(n) = name.as_mut() {
             if let Some(readable) = readable(n) {
@@ -380,7 +435,7 @@ fn undecorate(module: &mut naga::Module) {
     let handles: Vec<_> = module.types.iter().map(|(h, _)| h).collect();
     for handle in handles {
         let ty = &module.types[handle];
-        if let Some(name) = ty.name.as_deref().and_then(readable) {
+        if let Some(name) = ty.name.as_deref().and_then(&readable) {
             let renamed = naga::Type {
                 name: Some(name),
                 inner: ty.inner.clone(),
@@ -392,7 +447,9 @@ fn undecorate(module: &mut naga::Module) {
 
 const DECORATION: &str = "X_naga_oil_mod_X";
 
-/// `module__item` for a decorated name; `None` for a plain one.
+/// `module__item` for a naga_oil decorated name
+/// (`itemX_naga_oil_mod_X<base32>X`, `module` the last segment of the
+/// module's path); `None` for a plain one.
 fn readable(name: &str) -> Option<String> {
     let at = name.find(DECORATION)?;
     let encoded = name[at + DECORATION.len()..].strip_suffix('X')?;
@@ -432,6 +489,36 @@ mod tests {
         );
         assert!(ShaderDef::parse("X=1.5").is_err());
         assert!(ShaderDef::parse("=1").is_err());
+    }
+
+    #[test]
+    fn wesl_text_is_told_from_naga_oil_text() {
+        assert!(uses_wesl("import package::noise::fbm;\nfn f() {}"));
+        assert!(uses_wesl("fn f() { @if(FOG) { } }"));
+        assert!(!uses_wesl("#import engine::view\nfn f() {}"));
+        assert!(!uses_wesl("fn important() {}"));
+        let plain = Composition::default();
+        let at = |p: &str| std::path::PathBuf::from(p);
+        assert_eq!(
+            ComposerKind::detect(&at("m.wesl"), "fn f() {}", &plain),
+            Some(ComposerKind::Wesl)
+        );
+        assert_eq!(
+            ComposerKind::detect(&at("m.wgsl"), "fn f() {}", &plain),
+            None
+        );
+        assert_eq!(
+            ComposerKind::detect(&at("m.wgsl"), "#ifdef A\n#endif", &plain),
+            Some(ComposerKind::NagaOil)
+        );
+        let told = Composition {
+            composer: Some(ComposerKind::NagaOil),
+            ..Composition::default()
+        };
+        assert_eq!(
+            ComposerKind::detect(&at("m.wesl"), "fn f() {}", &told),
+            Some(ComposerKind::NagaOil)
+        );
     }
 
     #[test]

@@ -15,6 +15,8 @@
 
 pub mod compose;
 pub mod vertex;
+#[cfg(feature = "wesl")]
+pub mod wesl;
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
@@ -357,7 +359,7 @@ pub fn with_vertex_module(
 
 /// Loads the shader at `path`, composing it with naga_oil when it uses
 /// `#import`/`#ifdef` or `composition` says where its imports are
-/// ([`compose`]), and, when `vertex` names a separate vertex module (also
+/// ([`compose`]), or with wesl when it is WESL ([`wesl`]), and, when `vertex` names a separate vertex module (also
 /// composed), gives it that module's vertex stage ([`with_vertex_module`];
 /// `vertex_entry` names the entry point there when it has several).
 pub fn load_with(
@@ -368,10 +370,18 @@ pub fn load_with(
 ) -> Result<Shader, Error> {
     let load_one = |path: &Path| -> Result<Shader, Error> {
         let file = read_source(path)?;
-        if composition.is_empty() && !compose::uses_directives(&file.text) {
-            parse(file)
-        } else {
-            compose::compose(file, composition)
+        match compose::ComposerKind::detect(path, &file.text, composition) {
+            None => parse(file),
+            Some(compose::ComposerKind::NagaOil) => compose::compose(file, composition),
+            #[cfg(feature = "wesl")]
+            Some(compose::ComposerKind::Wesl) => wesl::compose(file, path, composition),
+            #[cfg(not(feature = "wesl"))]
+            Some(compose::ComposerKind::Wesl) => Err(Error::in_file(
+                Arc::new(file),
+                Diagnostic::error("a WESL shader, and shadecache was built without WESL support")
+                    .with_label(0..0, "this shader")
+                    .with_note("turn on the `wesl` feature of the shadecache crate"),
+            )),
         }
     };
     let shader = load_one(path)?;

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use shadecache::diagnostic::Color;
 use shadecache::diagnostic::Error;
-use shadecache::front::compose::{Composition, ShaderDef};
+use shadecache::front::compose::{ComposerKind, Composition, ShaderDef};
 use shadecache::front::{self, Shader};
 
 #[derive(Debug, clap::Subcommand)]
@@ -95,18 +95,28 @@ pub fn write_report(
 }
 
 /// How to put a shader together from modules: naga_oil's `#import`s and
-/// shader defs.
+/// shader defs, or WESL's `import`s and features.
 #[derive(Debug, Clone, clap::Args)]
 pub struct ComposeArgs {
-    /// A folder searched (recursively) for the modules the shader's
-    /// `#import`s name (each with `#define_import_path`); repeatable.
+    /// Where imports are found; repeatable. naga_oil: a folder searched
+    /// (recursively) for the modules `#import`s name (each with
+    /// `#define_import_path`). WESL: a folder of packages, each folder
+    /// under it the package of its name (`import name::a::b;` reads
+    /// `DIR/name/a/b.wesl`); `package::` is the shader's own folder.
     #[arg(long = "import-path", value_name = "DIR")]
     pub import_paths: Vec<PathBuf>,
 
-    /// A shader def for `#ifdef`: NAME, or NAME=VALUE (true, false, an i32,
-    /// or a u32 as `3u`); repeatable.
+    /// A shader def for `#ifdef` (naga_oil) or a feature for `@if` (WESL):
+    /// NAME, or NAME=VALUE (true, false, an i32, or a u32 as `3u`; a WESL
+    /// number is `constants::NAME`); repeatable.
     #[arg(long = "def", value_name = "NAME[=VALUE]", value_parser = ShaderDef::parse)]
     pub defs: Vec<(String, ShaderDef)>,
+
+    /// The composer: `wesl` or `naga-oil`. Default: told from the file (a
+    /// `.wesl` file, `import …;` or `@if` is WESL; `#import`/`#ifdef`,
+    /// or --import-path/--def with a plain file, naga_oil).
+    #[arg(long, value_name = "wesl|naga-oil", value_parser = ComposerKind::parse)]
+    pub composer: Option<ComposerKind>,
 }
 
 impl ComposeArgs {
@@ -114,6 +124,7 @@ impl ComposeArgs {
         Composition {
             import_paths: self.import_paths.clone(),
             defs: self.defs.clone(),
+            composer: self.composer,
         }
     }
 }

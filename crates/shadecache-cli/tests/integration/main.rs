@@ -29,3 +29,5 @@ mod report_page;
 mod rewrite;
 mod skinned;
 mod util;
+#[cfg(feature = "wesl")]
+mod wesl;

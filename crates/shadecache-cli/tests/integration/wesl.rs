@@ -1,0 +1,232 @@
+//! Shaders composed from WESL modules, as Bevy 0.20 composes its own
+//! (`corpus/wesl/`): a fragment-only material that imports the engine
+//! package's view bindings, vertex output and PBR helpers, its own
+//! package's noise, and the engine's vertex module.
+
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+
+use shadecache::analysis::{self, Analysis};
+use shadecache::front::compose::{Composition, ShaderDef};
+use shadecache::front::{self, Shader};
+use shadecache::rewrite::{self, Options, Variant};
+
+use crate::gpu::{build_pipelines, wgsl_sources};
+use crate::util::{root, shadecache, stderr, tint_validate};
+
+const MATERIAL: &str = "corpus/wesl/lava_material.wesl";
+const PACKAGES: &str = "corpus/wesl/packages";
+const MESH: &str = "corpus/wesl/packages/engine_pbr/mesh.wesl";
+
+fn composition(root: &Path, defs: &[(&str, ShaderDef)]) -> Composition {
+    Composition {
+        import_paths: vec![root.join(PACKAGES)],
+        defs: defs.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
+        composer: None,
+    }
+}
+
+fn load(defs: &[(&str, ShaderDef)]) -> Shader {
+    front::load_with(
+        &root().join(MATERIAL),
+        &composition(&root(), defs),
+        Some(&root().join(MESH)),
+        None,
+    )
+    .unwrap_or_else(|e| panic!("{}", e.render()))
+}
+
+fn analysed(shader: &Shader) -> Analysis {
+    analysis::analyze(shader, &analysis::Options::default())
+        .unwrap_or_else(|e| panic!("{}", e.render()))
+}
+
+/// The material composes through wesl with its engine's vertex module:
+/// imported names read `module__item` (naga writes them with one
+/// underscore), `@if(FOG)` follows `--def FOG`, the object-space crust is
+/// a candidate, and every variant of the top nodes and of the crust is
+/// emitted valid under naga (in the rewrite) and Tint and builds a wgpu
+/// render pipeline.
+#[test]
+fn wesl_composed_material_analyses_and_rewrites() {
+    let plain = load(&[]);
+    let fog = load(&[("FOG", ShaderDef::Bool(true))]);
+    assert!(
+        plain
+            .file
+            .text
+            .contains("fn pbr_functions_apply_pbr_lighting("),
+        "{}",
+        plain.file.text
+    );
+    assert!(plain.file.text.contains("fn noise_fbm("));
+    assert!(plain.module.entry_points.iter().any(|e| e.name == "vertex"));
+    let mixes_fog = |s: &Shader| s.file.text.contains("vec3<f32>(0.6f, 0.65f, 0.7f)");
+    assert!(!mixes_fog(&plain) && mixes_fog(&fog));
+
+    let analysis = analysed(&fog);
+    let crust = analysis
+        .candidates
+        .iter()
+        .find(|c| {
+            c.node
+                .text
+                .starts_with("noise_fbm((in.world_position * 3f), 6i)")
+        })
+        .expect("the crust's six octaves are a candidate");
+    let mut nodes: Vec<_> = analysis.candidates.iter().take(3).collect();
+    nodes.push(crust);
+
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    let mut pipelines = 0;
+    for candidate in nodes {
+        for variant in Variant::CACHE {
+            let rewritten =
+                rewrite::rewrite(&fog, &analysis, candidate, variant, &Options::default())
+                    .unwrap_or_else(|r| panic!("{} {variant}: {r}", candidate.node.id));
+            let what = format!("{} {variant}", candidate.node.id);
+            pipelines += build_pipelines(&rewritten, &what).unwrap_or(0);
+            for (name, text) in wgsl_sources(&rewritten) {
+                let path = dir
+                    .path()
+                    .join(format!("{}-{variant}-{name}", candidate.node.id));
+                std::fs::write(&path, text).unwrap();
+                files.push(path);
+            }
+        }
+    }
+    assert!(files.len() >= 4 * Variant::CACHE.len());
+    eprintln!("{} passes, {pipelines} pipelines", files.len());
+    for result in tint_validate(&files) {
+        assert!(result.ok, "{}: {:?}", result.file, result.messages);
+    }
+}
+
+/// A copy of `corpus/wesl` in a temporary folder, with `edit` applied to
+/// the file at `file` (relative to `corpus/wesl`).
+fn edited(file: &str, edit: impl Fn(&str) -> String) -> (tempfile::TempDir, PathBuf) {
+    fn copy(from: &Path, to: &Path) {
+        std::fs::create_dir_all(to).unwrap();
+        for entry in std::fs::read_dir(from).unwrap() {
+            let path = entry.unwrap().path();
+            let target = to.join(path.file_name().unwrap());
+            if path.is_dir() {
+                copy(&path, &target);
+            } else {
+                std::fs::copy(&path, &target).unwrap();
+            }
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let wesl = dir.path().join("wesl");
+    copy(&root().join("corpus/wesl"), &wesl);
+    let path = wesl.join(file);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let changed = edit(&text);
+    assert_ne!(changed, text, "the edit changes {file}");
+    std::fs::write(&path, changed).unwrap();
+    (dir, wesl)
+}
+
+/// `shadecache analyze` on the copy's material; its stderr, after
+/// checking the exit status is 1.
+fn analyze_error(wesl: &Path) -> String {
+    let output = shadecache([
+        "analyze".as_ref(),
+        wesl.join("lava_material.wesl").as_os_str(),
+        "--import-path".as_ref(),
+        wesl.join("packages").as_os_str(),
+    ] as [&OsStr; 4]);
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(1), "{err}");
+    err
+}
+
+/// `file:line:col` of the first occurrence of `needle` in `wesl/file`, as
+/// codespan prints it.
+fn place(wesl: &Path, file: &str, needle: &str) -> String {
+    let text = std::fs::read_to_string(wesl.join(file)).unwrap();
+    let at = text.find(needle).expect("the needle is in the file");
+    let line = text[..at].matches('\n').count() + 1;
+    let col = at - text[..at].rfind('\n').map_or(0, |n| n + 1) + 1;
+    format!("{file}:{line}:{col}")
+}
+
+/// An import that resolves to nothing is an error at the `import`
+/// statement that names it, in the module that has it: an imported
+/// package module, the entry module, and a package no import path has.
+/// An error inside an imported module points into that module, not into
+/// the entry shader (where the wesl crate's own report puts it).
+#[test]
+fn wesl_bad_import_points_into_the_module() {
+    // In a package module.
+    let (_dir, wesl) = edited("packages/engine_pbr/pbr_functions.wesl", |text| {
+        text.replacen(
+            "import package::view_bindings::view;",
+            "import package::view_bindings::view;\nimport package::lights::shade;",
+            1,
+        )
+        .replacen(
+            "let ambient = 0.03 * in.base_color;",
+            "let ambient = shade(in.base_color);",
+            1,
+        )
+    });
+    let err = analyze_error(&wesl);
+    assert!(
+        err.contains("`import engine_pbr::lights` does not resolve"),
+        "{err}"
+    );
+    assert!(err.contains("lights.wesl"), "{err}");
+    let at = place(
+        &wesl,
+        "packages/engine_pbr/pbr_functions.wesl",
+        "lights::shade",
+    );
+    assert!(err.contains(&at), "{at} in {err}");
+
+    // In the entry module, from a package that is not there.
+    let (_dir, wesl) = edited("lava_material.wesl", |text| {
+        text.replacen(
+            "import package::noise::fbm;",
+            "import package::noise::fbm;\nimport engine_sky::atmosphere::sky;",
+            1,
+        )
+        .replacen(
+            "let lit = apply_pbr_lighting(pbr)",
+            "let lit = sky(pbr.base_color)",
+            1,
+        )
+    });
+    let err = analyze_error(&wesl);
+    assert!(err.contains("no package `engine_sky`"), "{err}");
+    let at = place(&wesl, "lava_material.wesl", "atmosphere::sky");
+    assert!(err.contains(&at), "{at} in {err}");
+
+    // A name no module declares, inside the material's own noise module.
+    let (_dir, wesl) = edited("noise.wesl", |text| {
+        text.replacen("mix(hash3(i), ", "mix(hash4(i), ", 1)
+    });
+    let err = analyze_error(&wesl);
+    assert!(err.contains("hash4"), "{err}");
+    let at = place(&wesl, "noise.wesl", "hash4(i)");
+    assert!(err.contains(&at), "{at} in {err}");
+
+    // A syntax error in a package module.
+    let (_dir, wesl) = edited("packages/engine_pbr/pbr_functions.wesl", |text| {
+        text.replacen(
+            "let n = normalize(in.world_normal);",
+            "let n = normalize(in.world_normal;",
+            1,
+        )
+    });
+    let err = analyze_error(&wesl);
+    let at = place(
+        &wesl,
+        "packages/engine_pbr/pbr_functions.wesl",
+        "let n = normalize",
+    );
+    let line = at.rsplit_once(':').unwrap().0.rsplit_once(':').unwrap().0;
+    assert!(err.contains(&format!("{line}:")), "{line} in {err}");
+}
