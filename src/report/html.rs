@@ -351,25 +351,46 @@ fn highlight(source: &str, start: [usize; 2], end: [usize; 2]) -> String {
     out
 }
 
+/// Nodes the fig. 8 chart names one by one on its x axis; with more (as
+/// `--nodes all` gives) the axis is the measured P/T itself.
+const NAMED_NODES: usize = 16;
+
 /// Seed 002 fig. 8: render time per node, nodes in order of measured P/T,
-/// one line per variant and the reference.
+/// one line per variant and the reference. Up to [`NAMED_NODES`] nodes,
+/// each has a category of its own, as in the paper's figure; with more,
+/// each sits at its measured P/T on an axis over the whole range (the
+/// reference drawn from 0 to 1), so hundreds of nodes stay readable and
+/// the gaps between their P/Ts show.
 fn time_per_node(report: &Report) -> String {
     let mut nodes = report.nodes.clone();
     nodes.sort_by(|a, b| a.p_over_t.total_cmp(&b.p_over_t));
-    let labels: Vec<String> = nodes
-        .iter()
-        .map(|n| format!("{} ({:.2})", n.id, n.p_over_t))
-        .collect();
+    if nodes.len() < 2 {
+        return String::new();
+    }
+    let by_value = nodes.len() > NAMED_NODES;
+    let x = |i: usize| {
+        if by_value {
+            nodes[i].p_over_t
+        } else {
+            i as f64
+        }
+    };
+    let reference_xs: Vec<f64> = if by_value {
+        vec![0f64.min(x(0)), 1f64.max(x(nodes.len() - 1))]
+    } else {
+        (0..nodes.len()).map(|i| i as f64).collect()
+    };
     let mut series = vec![Series {
         name: "reference".into(),
-        points: (0..nodes.len())
-            .map(|i| (i as f64, report.reference.time_ms))
+        points: reference_xs
+            .into_iter()
+            .map(|x| (x, report.reference.time_ms))
             .collect(),
         line: true,
         ..Series::default()
     }];
     for variant in Variant::ALL {
-        let points: Vec<(f64, f64)> = nodes
+        let (points, titles): (Vec<(f64, f64)>, Vec<String>) = nodes
             .iter()
             .enumerate()
             .filter_map(|(i, node)| {
@@ -379,28 +400,82 @@ fn time_per_node(report: &Report) -> String {
                     .filter(|r| r.node == node.id && r.variant == variant)
                     .map(|r| r.time_ms)
                     .min_by(f64::total_cmp)
-                    .map(|t| (i as f64, t))
+                    .map(|t| {
+                        let title =
+                            format!("{variant} {}: P/T {:.3}, {t:.3} ms", node.id, node.p_over_t);
+                        ((x(i), t), title)
+                    })
             })
-            .collect();
+            .unzip();
         if !points.is_empty() {
             series.push(Series {
                 name: variant.to_string(),
                 points,
                 line: true,
+                titles,
                 ..Series::default()
             });
         }
     }
-    if nodes.len() < 2 {
-        return String::new();
+    if by_value {
+        chart(
+            &format!(
+                "Render time per node ({} nodes at their measured P/T)",
+                nodes.len()
+            ),
+            "measured P/T",
+            "ms per frame",
+            &series,
+            None,
+        )
+    } else {
+        let labels: Vec<String> = nodes
+            .iter()
+            .map(|n| format!("{} ({:.2})", n.id, n.p_over_t))
+            .collect();
+        chart(
+            "Render time per node (nodes by measured P/T)",
+            "node (P/T)",
+            "ms per frame",
+            &series,
+            Some(&labels),
+        )
     }
-    chart(
-        "Render time per node (nodes by measured P/T)",
-        "node (P/T)",
-        "ms per frame",
-        &series,
-        Some(&labels),
-    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A report with `n` nodes at P/T 0.1 to 0.9 and one two-pass result
+    /// each.
+    fn report_with_nodes(n: usize) -> Report {
+        use crate::report::fixtures::{node, report, row};
+        let mut report = report(Vec::new());
+        for i in 0..n {
+            let node = node(&format!("n{i:08x}"), 0.1 + 0.8 * i as f64 / (n - 1) as f64);
+            let mut row = row(1.0 + node.p_over_t, 30.0, 0.9);
+            row.node = node.id.clone();
+            row.variant = Variant::TwoPass;
+            report.nodes.push(node);
+            report.results.push(row);
+        }
+        report
+    }
+
+    #[test]
+    fn fig8_with_all_nodes_spans_the_whole_p_over_t_range() {
+        let few = time_per_node(&report_with_nodes(4));
+        assert!(few.contains("nodes by measured P/T"), "{few}");
+        assert!(few.contains("n00000003 (0.90)"), "{few}");
+        let many = time_per_node(&report_with_nodes(300));
+        assert!(many.contains("300 nodes at their measured P/T"));
+        // No node is named on the axis, every one is in a point's title.
+        assert!(!many.contains("n00000001 (0.10)"));
+        assert!(many.contains("two-pass n0000012b: P/T 0.900"));
+        // The axis runs from P/T 0 to 1: its first and last ticks.
+        assert!(many.contains(">0.000<") && many.contains(">1.00<"));
+    }
 }
 
 /// Seed 002 fig. 9: speed-up against Δn, one line per k, for the best

@@ -680,3 +680,114 @@ impl Report {
         out
     }
 }
+
+/// Reports and rows made by hand, for the tests of what reads them.
+#[cfg(test)]
+pub(crate) mod fixtures {
+    use super::*;
+    use crate::plan::{CacheFormat, Reconstruction, Variant};
+
+    /// A row of a three-pass result taking `time_ms` with these errors
+    /// (the node named after its time).
+    pub(crate) fn row(time_ms: f64, psnr: f64, ssim: f64) -> ResultRow {
+        ResultRow {
+            node: format!("n{time_ms}"),
+            node_text: String::new(),
+            variant: Variant::ThreePass,
+            refresh_period: 32,
+            refresh_quad: 4,
+            reconstruction: Reconstruction::Bilinear,
+            cache_format: CacheFormat::Rgba16float,
+            depth_epsilon: 1e-3,
+            adaptive: false,
+            time_ms,
+            passes: Vec::new(),
+            speedup: 10.0 / time_ms,
+            speedup_ci: [9.0 / time_ms, 11.0 / time_ms],
+            psnr,
+            ssim,
+            psnr_frame: psnr,
+            worst_psnr: psnr,
+            flicker: 0.0,
+            max_abs_error: 0.0,
+            above_threshold: 0.0,
+            coverage: 1.0,
+            hit_rate: 0.0,
+            miss_rate: 0.0,
+            offscreen_rate: 0.0,
+            disocclusion_rate: 0.0,
+            invalid_rate: 0.0,
+            refresh_rate: 0.0,
+            max_age: 0,
+            age_histogram: Vec::new(),
+            p_over_t: 0.0,
+            ideal_speedup: 1.0,
+            fixed_cost_ms: Vec::new(),
+            bound_with_fixed_costs: 1.0,
+            share_of_ideal: 1.0,
+            pareto_psnr: false,
+            pareto_ssim: false,
+            frame_stats: Vec::new(),
+        }
+    }
+
+    /// A report of `results` against a 10 ms reference, with no nodes.
+    pub(crate) fn report(results: Vec<ResultRow>) -> Report {
+        Report {
+            format: 1,
+            shader: String::new(),
+            entry: String::new(),
+            scene: String::new(),
+            scene_description: String::new(),
+            defaulted: Vec::new(),
+            effects: Vec::new(),
+            size: [8, 8],
+            frames: 1,
+            warmup: 0,
+            steady_state: true,
+            device: Device {
+                name: String::new(),
+                backend: String::new(),
+                driver: String::new(),
+            },
+            timing: String::new(),
+            command: String::new(),
+            reference: Reference {
+                time_ms: 10.0,
+                spread_ms: [10.0, 10.0],
+                fixed_ms: 0.0,
+                frame_ms: vec![10.0],
+            },
+            nodes: Vec::new(),
+            results,
+            miss_causes: Vec::new(),
+            warnings: Vec::new(),
+            grid: None,
+            upsampling: None,
+            shard: None,
+            merged_from: Vec::new(),
+            reference_check: None,
+            choice: None,
+        }
+    }
+
+    /// A node at measured P/T `p_over_t`.
+    pub(crate) fn node(id: &str, p_over_t: f64) -> NodeReport {
+        NodeReport {
+            id: id.to_string(),
+            text: String::new(),
+            start: [1, 1],
+            end: [1, 2],
+            ty: "f32".into(),
+            source: String::new(),
+            estimated_p_over_t: p_over_t,
+            p_over_t,
+            payload_ms: 0.0,
+            payload_fixed_ms: 0.0,
+            range: [None, None],
+            fits_f16: false,
+            function: "fs_main".into(),
+            depends_on: Vec::new(),
+        }
+    }
+}
