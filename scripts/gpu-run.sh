@@ -8,6 +8,9 @@
 #   scripts/gpu-run.sh            # the full run
 #   GPU_RUN_QUICK=1 scripts/gpu-run.sh   # a smoke run: small frames, few
 #                                        # frames (to check the script)
+#   GPU_RUN_REPRODUCTION=1 scripts/gpu-run.sh   # docs/reproduction.md's
+#       experiments at 256² and 512² instead (below; about two hours on
+#       lavapipe, minutes on a GPU)
 #
 # What it runs, in order (each a command of README.md or docs/):
 #   1. README's profile (the marble sphere);
@@ -21,6 +24,13 @@
 #      noise, object-space: `s2`) and with the lit colour;
 #   5. `interpolate` on every bundled interpolation scene at 256².
 # Budget: minutes on a discrete GPU; under an hour on lavapipe (2 cores).
+#
+# With GPU_RUN_REPRODUCTION=1 it runs docs/reproduction.md's experiments
+# instead, at 256² and 512²: figs. 8 and 9 on the marble sphere and on the
+# 77k-triangle torus (the paper's geometry load), fig. 8 over every
+# candidate of the marble (256², 16 frames), the 25-tap environment map
+# on the heavy torus, and fig. 7's overlap outlier beside the partial
+# octave sums of like P/T.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -59,6 +69,38 @@ one_octave=n04bcefa2
 two_octaves=n6223a6b5
 fig8_nodes=$one_octave,$two_octaves,n5913d8f1,nb4278c81,nb0c12cc4,n648ad2bd,nc36c801b,n5c3eb6af
 lit=n5c3eb6af
+
+if [ -n "${GPU_RUN_REPRODUCTION:-}" ]; then
+  heavy=(corpus/noise_marble.wgsl --scene corpus/scenes/heavy_marble_torus.toml)
+  envmap=(corpus/envmap_gauss.wgsl --scene corpus/scenes/heavy_envmap_torus.toml)
+  # The lit colour's direct-light term: overlap 2977 of 3098 (fig. 7's
+  # outliers have hits and misses both costly), beside the partial sums
+  # of like P/T, which have none.
+  overlapping=n75f9cb00
+  for size in "$small" "$mid"; do
+    for scene in marble heavy; do
+      declare -n args=$scene
+      run "fig8-$scene-$size" profile "${args[@]}" --size "$size" "${frames[@]}" --nodes "$fig8_nodes" \
+        --variant one-pass,two-pass,three-pass,deferred --refresh-period 32 --refresh-quad 4
+      run "fig9-$scene-$size" profile "${args[@]}" --size "$size" "${frames[@]}" --nodes "$two_octaves,$lit" \
+        --variant one-pass,two-pass,three-pass,deferred --refresh-period 8,16,32,64 --refresh-quad 1,2,4
+      unset -n args
+    done
+    run "envmap-$size" profile "${envmap[@]}" --size "$size" "${frames[@]}" --nodes top:3 \
+      --variant one-pass,two-pass,three-pass,deferred --refresh-period 32 --refresh-quad 4
+    run "fig7-overlap-$size" profile "${marble[@]}" --size "$size" "${frames[@]}" \
+      --nodes "$overlapping,nb4278c81,nb0c12cc4,n648ad2bd" \
+      --variant one-pass,two-pass,three-pass,deferred --refresh-period 32 --refresh-quad 4
+  done
+  # Every candidate (459); a smoke run takes the first dozen.
+  every=all; if [ -n "$quick" ]; then every=top:12; fi
+  run fig8-all-candidates profile "${marble[@]}" --size "$small" --frames 16 --nodes "$every" \
+    --variant one-pass,two-pass,three-pass,deferred --refresh-period 32 --refresh-quad 4
+  mkdir -p docs/runs
+  out=$(node scripts/runs-table.mjs "$work" "$manifest" ${quick:+--quick})
+  echo "wrote $out" >&2
+  exit 0
+fi
 
 run readme-profile profile "${marble[@]}" "${frames[@]}"
 run results-256 profile "${marble[@]}" --size "$small" "${frames[@]}"

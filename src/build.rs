@@ -206,6 +206,16 @@ impl Build {
         self
     }
 
+    /// A WESL package of the last shader by name: `name::a::b` is
+    /// `dir/a/b.wesl`. Relative to the manifest's folder.
+    pub fn package(mut self, name: impl Into<String>, dir: impl AsRef<Path>) -> Self {
+        self.last()
+            .composition
+            .packages
+            .push((name.into(), dir.as_ref().to_path_buf()));
+        self
+    }
+
     /// Which composer puts the last shader together, where the file does
     /// not tell (a `.wesl` file or WESL syntax is WESL, which needs this
     /// crate's `wesl` feature; `#import`s are naga_oil's).
@@ -309,6 +319,12 @@ impl Build {
                     .import_paths
                     .iter()
                     .map(|p| resolve(p))
+                    .collect(),
+                packages: job
+                    .composition
+                    .packages
+                    .iter()
+                    .map(|(name, dir)| (name.clone(), resolve(dir)))
                     .collect(),
                 defs: job.composition.defs.clone(),
                 composer: job.composition.composer,

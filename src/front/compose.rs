@@ -30,8 +30,13 @@ use crate::diagnostic::{Diagnostic, Error, SourceFile};
 /// Where a composed shader's imports come from, and its shader defs.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Composition {
-    /// Folders searched (recursively) for the modules `#import` names.
+    /// Folders searched (recursively) for the modules `#import` names;
+    /// for WESL, folders of packages (each folder under one is the
+    /// package of its name).
     pub import_paths: Vec<PathBuf>,
+    /// WESL packages named one by one: `name::` is the folder (as an
+    /// engine's crate keeps its shaders under `src/`).
+    pub packages: Vec<(String, PathBuf)>,
     /// `#ifdef` defines: `NAME` (true) or `NAME=VALUE` (a bool, an i32 or,
     /// with a `u` suffix, a u32).
     pub defs: Vec<(String, ShaderDef)>,
@@ -66,7 +71,8 @@ impl ComposerKind {
         if let Some(kind) = composition.composer {
             return Some(kind);
         }
-        if path.extension().is_some_and(|e| e == "wesl") || uses_wesl(text) {
+        let wesl_file = path.extension().is_some_and(|e| e == "wesl");
+        if wesl_file || uses_wesl(text) || !composition.packages.is_empty() {
             Some(ComposerKind::Wesl)
         } else if uses_directives(text) || !composition.is_empty() {
             Some(ComposerKind::NagaOil)
@@ -123,7 +129,10 @@ impl ShaderDef {
 impl Composition {
     /// Whether nothing is composed: no import paths, no defs, no composer.
     pub fn is_empty(&self) -> bool {
-        self.import_paths.is_empty() && self.defs.is_empty() && self.composer.is_none()
+        self.import_paths.is_empty()
+            && self.packages.is_empty()
+            && self.defs.is_empty()
+            && self.composer.is_none()
     }
 
     fn shader_defs(&self) -> HashMap<String, ShaderDefValue> {

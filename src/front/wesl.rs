@@ -4,15 +4,18 @@
 //! `bevy_shader` uses).
 //!
 //! Where modules come from (the WESL spec's packages):
-//! - `package::a::b` (and `super::`) is a module of the entry shader's own
-//!   package: `a/b.wesl` (or `.wgsl`) under the entry shader's folder;
 //! - `name::a::b` is a module of the external package `name`: `a/b.wesl`
-//!   under the folder `name` of an `--import-path` (so an engine's shader
-//!   folders, one per package, are given by their parent).
+//!   (or `.wgsl`) under the folder `--package name=DIR` names, or else
+//!   under the folder `name` of an `--import-path` (a folder of packages);
+//! - `package::a::b` (and `super::`) is a module of the entry shader's own
+//!   package: the package whose folder the entry shader is under (Bevy's
+//!   `bevy_pbr/src/render/pbr.wesl` is `bevy_pbr::render::pbr`, its
+//!   `package::` is `bevy_pbr/src`), else the entry shader's folder.
 //!
-//! `--def NAME` (or `NAME=true|false`) sets the feature `NAME` for `@if`;
-//! unset features are false. `--def NAME=3` or `NAME=3u` is a numeric
-//! constant the shader imports as `constants::NAME`.
+//! Defs follow Bevy 0.20's shader cache: `--def NAME` (or
+//! `NAME=true|false`) sets the feature `NAME` for `@if`, unset features
+//! are false; `--def NAME=3` or `NAME=3u` turns `NAME` on and is the
+//! constant `constants::NAME`.
 //!
 //! The composed WGSL is parsed by naga; its mangled names
 //! (`_1engine_pbr__1pbr_functions_apply_fog`) are renamed `module__item`
@@ -34,7 +37,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use wesl::error::ResolveError;
-use wesl::resolver::{FileResolver, Resolver, Router};
+use wesl::resolver::{FileResolver, Resolver, Router, VirtualResolver};
 use wesl::sourcemap::SourceMap;
 use wesl::syntax::{
     GlobalDeclaration, Import, ImportContent, ModulePath, PathOrigin, TranslationUnit,
@@ -48,14 +51,15 @@ use crate::diagnostic::{Diagnostic, Error, SourceFile};
 /// Composes the WESL shader at `path` (read into `top`) with `composition`.
 pub fn compose(top: SourceFile, path: &Path, composition: &Composition) -> Result<Shader, Error> {
     let top = Arc::new(top);
+    let packages = packages(composition)?;
+    let main = main_module(path, &packages);
     let root = path.parent().unwrap_or(Path::new("."));
-    let stem = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let (router, packages) = router(root, &composition.import_paths)?;
+    let mut router = router(root, &packages);
+    router.mount_resolver(
+        ModulePath::new(PathOrigin::Package("constants".into()), vec![]),
+        constants(composition),
+    );
     let resolver = Recording::new(router, packages);
-    let main = ModulePath::new(PathOrigin::Absolute, vec![stem]);
     let result = wesl::compile(&main, &options(composition), &resolver)
         .map_err(|err| located(err, &resolver, &top, composition))?;
     let composed = Arc::new(SourceFile::new(
@@ -84,59 +88,122 @@ pub fn compose(top: SourceFile, path: &Path, composition: &Composition) -> Resul
     super::compose::finish(&top, module)
 }
 
-/// `package::` at the entry shader's folder; each folder under an import
-/// path as the external package of its name (whose names come back too).
-fn router(root: &Path, import_paths: &[PathBuf]) -> Result<(Router, Vec<String>), Error> {
+/// The entry shader's module path: in the package whose folder it is
+/// under (the innermost), else `package::stem` of its own folder.
+fn main_module(path: &Path, packages: &[(String, PathBuf)]) -> ModulePath {
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let within = packages
+        .iter()
+        .filter_map(|(name, dir)| {
+            let dir = std::path::absolute(dir).ok()?;
+            let relative = absolute.strip_prefix(&dir).ok()?.with_extension("");
+            let components: Vec<String> = relative
+                .components()
+                .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                .collect();
+            Some((name, components))
+        })
+        .min_by_key(|(_, components)| components.len());
+    match within {
+        Some((name, components)) => ModulePath::new(PathOrigin::Package(name.clone()), components),
+        None => {
+            let stem = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            ModulePath::new(PathOrigin::Absolute, vec![stem])
+        }
+    }
+}
+
+/// `package::` at the entry shader's folder; each package at its folder.
+fn router(root: &Path, packages: &[(String, PathBuf)]) -> Router {
     let mut router = Router::new();
-    let mut names = Vec::new();
     router.mount_resolver(
         ModulePath::new(PathOrigin::Absolute, vec![]),
         FileResolver::new(root),
     );
-    for dir in import_paths {
-        for package in packages(dir)? {
-            let name = package
+    for (name, dir) in packages {
+        router.mount_resolver(
+            ModulePath::new(PathOrigin::Package(name.clone()), vec![]),
+            FileResolver::new(dir),
+        );
+    }
+    router
+}
+
+/// The packages: those named by `--package`, then each folder under an
+/// import path (a name given twice keeps its first folder).
+fn packages(composition: &Composition) -> Result<Vec<(String, PathBuf)>, Error> {
+    let mut found: Vec<(String, PathBuf)> = Vec::new();
+    for (name, dir) in &composition.packages {
+        if !dir.is_dir() {
+            return Err(Error::plain(Diagnostic::error(format!(
+                "`--package {name}={}`: no such folder",
+                dir.display()
+            ))));
+        }
+        found.push((name.clone(), dir.clone()));
+    }
+    for dir in &composition.import_paths {
+        let entries = std::fs::read_dir(dir).map_err(|err| {
+            Error::plain(Diagnostic::error(format!(
+                "cannot read import path `{}`: {err}",
+                dir.display()
+            )))
+        })?;
+        let mut folders: Vec<PathBuf> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.is_dir())
+            .collect();
+        folders.sort();
+        for folder in folders {
+            let name = folder
                 .file_name()
                 .map(|n| n.to_string_lossy().into_owned())
                 .unwrap_or_default();
-            router.mount_resolver(
-                ModulePath::new(PathOrigin::Package(name.clone()), vec![]),
-                FileResolver::new(&package),
-            );
-            names.push(name);
+            if !found.iter().any(|(n, _)| *n == name) {
+                found.push((name, folder));
+            }
         }
     }
-    Ok((router, names))
-}
-
-/// The package folders under `dir`, in name order.
-fn packages(dir: &Path) -> Result<Vec<PathBuf>, Error> {
-    let entries = std::fs::read_dir(dir).map_err(|err| {
-        Error::plain(Diagnostic::error(format!(
-            "cannot read import path `{}`: {err}",
-            dir.display()
-        )))
-    })?;
-    let mut found: Vec<PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_dir())
-        .collect();
-    found.sort();
     Ok(found)
 }
 
-/// Features for `@if` and the `constants::` package, from the defs.
+/// The options Bevy 0.20 composes with (`bevy_shader`'s shader cache):
+/// imports and `@if` on, `public`/`private` ignored (Bevy's modules do
+/// not write them), each def a feature (a number's is on), unset features
+/// off.
 fn options(composition: &Composition) -> CompileOptions {
-    let mut options = CompileOptions::default();
+    let mut options = CompileOptions {
+        imports: true,
+        condcomp: true,
+        visibility: false,
+        ..CompileOptions::default()
+    };
     options.features.default = Feature::Disable;
     for (name, def) in &composition.defs {
-        match *def {
-            ShaderDef::Bool(on) => options.features.set(name, on),
-            ShaderDef::Int(i) => options.constants.set(name, i),
-            ShaderDef::UInt(u) => options.constants.set(name, u),
-        }
+        let on = !matches!(def, ShaderDef::Bool(false));
+        options.features.set(name, on);
     }
     options
+}
+
+/// The `constants` package, as Bevy serves it: `const NAME = VALUE;` for
+/// each numeric def (`constants::MATERIAL_BIND_GROUP`).
+fn constants(composition: &Composition) -> VirtualResolver<'static> {
+    let text: String = composition
+        .defs
+        .iter()
+        .filter_map(|(name, def)| match def {
+            ShaderDef::Bool(_) => None,
+            ShaderDef::Int(i) => Some(format!("const {name} = {i};\n")),
+            ShaderDef::UInt(u) => Some(format!("const {name} = {u};\n")),
+        })
+        .collect();
+    let mut resolver = VirtualResolver::new();
+    resolver.add_module(ModulePath::new(PathOrigin::Absolute, vec![]), text.into());
+    resolver
 }
 
 /// `module__item` for a name wesl mangled from another module than the
@@ -169,13 +236,13 @@ struct Read {
 /// be put in their module (module comment).
 struct Recording<R> {
     inner: R,
-    /// The external packages `inner` has.
-    packages: Vec<String>,
+    /// The external packages `inner` has, and their folders.
+    packages: Vec<(String, PathBuf)>,
     reads: RefCell<Vec<Read>>,
 }
 
 impl<R: Resolver> Recording<R> {
-    fn new(inner: R, packages: Vec<String>) -> Self {
+    fn new(inner: R, packages: Vec<(String, PathBuf)>) -> Self {
         Recording {
             inner,
             packages,
@@ -187,13 +254,31 @@ impl<R: Resolver> Recording<R> {
         self.reads
             .borrow()
             .iter()
-            .find(|read| read.path == *path)
+            .find(|read| read.path == *flattened(path))
             .and_then(|read| read.found.as_ref().map(|(_, file)| file.clone()))
+    }
+}
+
+/// A package's import of another package: wesl names the package
+/// `outer/inner`; every package here is top-level, as in Bevy's shader
+/// cache, so it is `inner`.
+fn flattened(path: &ModulePath) -> Cow<'_, ModulePath> {
+    match &path.origin {
+        PathOrigin::Package(name) if name.contains('/') => {
+            let inner = name.rsplit('/').next().unwrap_or(name);
+            Cow::Owned(ModulePath::new(
+                PathOrigin::Package(inner.to_string()),
+                path.components.clone(),
+            ))
+        }
+        _ => Cow::Borrowed(path),
     }
 }
 
 impl<R: Resolver> Resolver for Recording<R> {
     fn resolve_source<'a>(&'a self, path: &ModulePath) -> Result<Cow<'a, str>, ResolveError> {
+        let path = flattened(path);
+        let path = path.as_ref();
         let outcome = self.inner.resolve_source(path);
         let found = outcome.as_ref().ok().map(|text| {
             let shown = self
@@ -210,10 +295,10 @@ impl<R: Resolver> Resolver for Recording<R> {
         outcome
     }
     fn display_name(&self, path: &ModulePath) -> Option<String> {
-        self.inner.display_name(path)
+        self.inner.display_name(&flattened(path))
     }
     fn fs_path(&self, path: &ModulePath) -> Result<PathBuf, ResolveError> {
-        self.inner.fs_path(path)
+        self.inner.fs_path(&flattened(path))
     }
 }
 
@@ -230,7 +315,7 @@ fn located<R: Resolver>(
         return unresolved_import(&missing, reads, top, composition);
     }
     let span = diagnostic.detail.span.map(|s| s.range());
-    let file = diagnostic
+    let (file, range) = match diagnostic
         .detail
         .module_path
         .as_ref()
@@ -238,16 +323,42 @@ fn located<R: Resolver>(
         .or_else(|| {
             let (decl, span) = (diagnostic.detail.declaration.as_deref()?, span.clone()?);
             declaring(reads, decl, &span)
-        })
-        .unwrap_or_else(|| top.clone());
-    let range = span
-        .map(|r| r.start.min(file.text.len())..r.end.min(file.text.len()))
-        .unwrap_or(0..0);
+        }) {
+        Some(file) => (file, span.unwrap_or(0..0)),
+        None if span.is_none() => {
+            missing_item_use(&diagnostic.error, reads).unwrap_or_else(|| (top.clone(), 0..0))
+        }
+        None => (top.clone(), span.unwrap_or(0..0)),
+    };
+    let range = range.start.min(file.text.len())..range.end.min(file.text.len());
     Error::in_file(
         file,
         Diagnostic::error(format!("cannot compose the shader: {message}"))
             .with_label(range, "here"),
     )
+}
+
+/// Where a module read uses an item its module does not declare (wesl
+/// gives that error no place): the first `module::item` in a read text.
+fn missing_item_use<R: Resolver>(
+    err: &wesl::Error,
+    reads: &Recording<R>,
+) -> Option<(Arc<SourceFile>, std::ops::Range<usize>)> {
+    let wesl::Error::UsageError(wesl::error::UsageError::NotFound(module, item)) = err else {
+        return None;
+    };
+    let module = flattened(module);
+    let last = match (module.components.last(), &module.origin) {
+        (Some(last), _) => last.clone(),
+        (None, PathOrigin::Package(name)) => name.clone(),
+        (None, _) => return None,
+    };
+    let qualified = format!("{last}::{item}");
+    reads.reads.borrow().iter().find_map(|read| {
+        let (_, file) = read.found.as_ref()?;
+        let at = file.text.find(&qualified)?;
+        Some((file.clone(), at..at + qualified.len()))
+    })
 }
 
 /// The one module read that declares `decl` around `span`.
@@ -311,14 +422,14 @@ fn unresolved_import<R: Resolver>(
     composition: &Composition,
 ) -> Error {
     let searched = match &missing.origin {
-        PathOrigin::Package(name) if !reads.packages.contains(name) => {
+        PathOrigin::Package(name) if !reads.packages.iter().any(|(n, _)| n == name) => {
             let dirs: Vec<String> = composition
                 .import_paths
                 .iter()
                 .map(|p| format!("`{}`", p.display()))
                 .collect();
             if dirs.is_empty() {
-                format!("no package `{name}`: no --import-path was given")
+                format!("no package `{name}`: neither --package {name}=DIR nor an --import-path was given")
             } else {
                 format!(
                     "no package `{name}`: no folder `{name}` under {}",
@@ -349,7 +460,7 @@ fn unresolved_import<R: Resolver>(
         Diagnostic::error(format!("`import {missing}` does not resolve: {searched}"))
             .with_label(at, "imported here")
             .with_note(
-                "`package::` modules are under the entry shader's folder; a package `name::` is the folder `name` under an --import-path",
+                "a package `name::` is the folder --package name=DIR gives, or the folder `name` under an --import-path; `package::` is the entry shader's own package",
             ),
     )
 }
@@ -368,7 +479,7 @@ fn import_site(
         };
         imported_modules(base, &statement.content)
             .into_iter()
-            .any(|module| at.join_path(&module) == *missing)
+            .any(|module| *flattened(&at.join_path(&module)) == *missing)
     });
     if !names {
         return None;

@@ -158,6 +158,24 @@ impl ReferenceStats {
     }
 }
 
+/// Defaulted inputs named in a reference problem's cause.
+const LISTED_INPUTS: usize = 8;
+
+/// " Defaulted inputs to look at: …." for the first [`LISTED_INPUTS`] of
+/// `inputs`, saying how many more there are (an engine's shader defaults
+/// thousands: every element of its mesh and light arrays).
+fn listed_inputs(inputs: &[String]) -> String {
+    if inputs.is_empty() {
+        return String::new();
+    }
+    let shown = &inputs[..inputs.len().min(LISTED_INPUTS)];
+    let more = match inputs.len() - shown.len() {
+        0 => String::new(),
+        n => format!("; and {n} more (`shadecache scene init` writes every one)"),
+    };
+    format!(" Defaulted inputs to look at: {}{more}.", shown.join("; "))
+}
+
 /// What makes a reference's figures meaningless, each with its likely
 /// cause.
 fn problems(check: &ReferenceCheck, scene: &Scene, defaulted: &[String]) -> Vec<ReferenceProblem> {
@@ -179,13 +197,7 @@ fn problems(check: &ReferenceCheck, scene: &Scene, defaulted: &[String]) -> Vec<
             .cloned()
             .collect()
     };
-    let listed = |inputs: Vec<String>| {
-        if inputs.is_empty() {
-            String::new()
-        } else {
-            format!(" Defaulted inputs to look at: {}.", inputs.join("; "))
-        }
-    };
+    let listed = |inputs: Vec<String>| listed_inputs(&inputs);
     if check.coverage == 0.0 {
         add(
             "empty",
@@ -297,6 +309,24 @@ mod tests {
         assert_eq!(check.coverage, 0.5);
         let kinds: Vec<&str> = check.problems.iter().map(|p| p.kind.as_str()).collect();
         assert_eq!(kinds, ["nearly-black"]);
+    }
+
+    #[test]
+    fn an_engine_shaders_thousand_defaulted_inputs_are_listed_in_part() {
+        let inputs: Vec<String> = (0..1000)
+            .map(|i| format!("uniform `mesh[{i}].world`"))
+            .collect();
+        let listed = listed_inputs(&inputs);
+        assert!(
+            listed.contains("mesh[7]") && !listed.contains("mesh[8]"),
+            "{listed}"
+        );
+        assert!(listed.contains("and 992 more"), "{listed}");
+        assert_eq!(
+            listed_inputs(&inputs[..2]),
+            " Defaulted inputs to look at: uniform `mesh[0].world`; uniform `mesh[1].world`."
+        );
+        assert_eq!(listed_inputs(&[]), "");
     }
 
     #[test]

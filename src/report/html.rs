@@ -443,41 +443,6 @@ fn time_per_node(report: &Report) -> String {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A report with `n` nodes at P/T 0.1 to 0.9 and one two-pass result
-    /// each.
-    fn report_with_nodes(n: usize) -> Report {
-        use crate::report::fixtures::{node, report, row};
-        let mut report = report(Vec::new());
-        for i in 0..n {
-            let node = node(&format!("n{i:08x}"), 0.1 + 0.8 * i as f64 / (n - 1) as f64);
-            let mut row = row(1.0 + node.p_over_t, 30.0, 0.9);
-            row.node = node.id.clone();
-            row.variant = Variant::TwoPass;
-            report.nodes.push(node);
-            report.results.push(row);
-        }
-        report
-    }
-
-    #[test]
-    fn fig8_with_all_nodes_spans_the_whole_p_over_t_range() {
-        let few = time_per_node(&report_with_nodes(4));
-        assert!(few.contains("nodes by measured P/T"), "{few}");
-        assert!(few.contains("n00000003 (0.90)"), "{few}");
-        let many = time_per_node(&report_with_nodes(300));
-        assert!(many.contains("300 nodes at their measured P/T"));
-        // No node is named on the axis, every one is in a point's title.
-        assert!(!many.contains("n00000001 (0.10)"));
-        assert!(many.contains("two-pass n0000012b: P/T 0.900"));
-        // The axis runs from P/T 0 to 1: its first and last ticks.
-        assert!(many.contains(">0.000<") && many.contains(">1.00<"));
-    }
-}
-
 /// Seed 002 fig. 9: speed-up against Δn, one line per k, for the best
 /// node and variant.
 fn speedup_per_period(report: &Report) -> String {
@@ -785,3 +750,38 @@ fn grid_section(report: &Report) -> String {
 }
 
 const STYLE: &str = "body{font-family:sans-serif;margin:2em;max-width:1200px}table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:3px 6px;text-align:right}th{background:#eee}tr.reference{background:#f6f6f6}code{background:#f3f3f3;padding:0 3px}pre{background:#f8f8f8;padding:8px;overflow-x:auto}mark{background:#ffe08a}.answer{font-size:15px;background:#eef7ee;padding:10px;border-left:4px solid #2a2}.meta{color:#555}.pictures{display:flex;flex-wrap:wrap;gap:12px}figure{margin:0}figure img{image-rendering:pixelated;width:256px;border:1px solid #ccc}svg{display:block;margin:12px 0}.reference{background:#f4f6fb;border-left:4px solid #58a;padding:10px;margin:12px 0}.degenerate{background:#fdf0ee;border-left-color:#c33}.wide{max-width:100%;overflow-x:auto}td:nth-child(4){white-space:nowrap}svg{max-width:100%;height:auto}";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A report with `n` nodes at P/T 0.1 to 0.9 and one two-pass result
+    /// each.
+    fn report_with_nodes(n: usize) -> Report {
+        use crate::report::fixtures::{node, report, row};
+        let mut report = report(Vec::new());
+        for i in 0..n {
+            let node = node(&format!("n{i:08x}"), 0.1 + 0.8 * i as f64 / (n - 1) as f64);
+            let mut row = row(1.0 + node.p_over_t, 30.0, 0.9);
+            row.node = node.id.clone();
+            row.variant = Variant::TwoPass;
+            report.nodes.push(node);
+            report.results.push(row);
+        }
+        report
+    }
+
+    #[test]
+    fn fig8_with_all_nodes_spans_the_whole_p_over_t_range() {
+        let few = time_per_node(&report_with_nodes(4));
+        assert!(few.contains("nodes by measured P/T"), "{few}");
+        assert!(few.contains("n00000003 (0.90)"), "{few}");
+        let many = time_per_node(&report_with_nodes(300));
+        assert!(many.contains("300 nodes at their measured P/T"));
+        // No node is named on the axis, every one is in a point's title.
+        assert!(!many.contains("n00000001 (0.10)"));
+        assert!(many.contains("two-pass n0000012b: P/T 0.900"));
+        // The axis runs from P/T 0 to 1: its first and last ticks.
+        assert!(many.contains(">0.000<") && many.contains(">1.00<"));
+    }
+}

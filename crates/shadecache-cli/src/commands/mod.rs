@@ -106,6 +106,12 @@ pub struct ComposeArgs {
     #[arg(long = "import-path", value_name = "DIR")]
     pub import_paths: Vec<PathBuf>,
 
+    /// A WESL package by name: `name::a::b` is `DIR/a/b.wesl` (Bevy's
+    /// `bevy_pbr=…/bevy_pbr-0.20.1/src`); repeatable. The shader is WESL
+    /// when one is given.
+    #[arg(long = "package", value_name = "NAME=DIR", value_parser = parse_package)]
+    pub packages: Vec<(String, PathBuf)>,
+
     /// A shader def for `#ifdef` (naga_oil) or a feature for `@if` (WESL):
     /// NAME, or NAME=VALUE (true, false, an i32, or a u32 as `3u`; a WESL
     /// number is `constants::NAME`); repeatable.
@@ -119,10 +125,20 @@ pub struct ComposeArgs {
     pub composer: Option<ComposerKind>,
 }
 
+fn parse_package(text: &str) -> Result<(String, PathBuf), String> {
+    match text.split_once('=') {
+        Some((name, dir)) if !name.is_empty() && !dir.is_empty() => {
+            Ok((name.to_string(), PathBuf::from(dir)))
+        }
+        _ => Err(format!("`{text}`: a package is NAME=DIR")),
+    }
+}
+
 impl ComposeArgs {
     pub fn composition(&self) -> Composition {
         Composition {
             import_paths: self.import_paths.clone(),
+            packages: self.packages.clone(),
             defs: self.defs.clone(),
             composer: self.composer,
         }

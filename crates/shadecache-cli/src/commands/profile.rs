@@ -440,12 +440,22 @@ fn summary(report: &report::Report) -> String {
         ));
     }
     if !report.defaulted.is_empty() {
+        // An engine's shader defaults thousands (every element of its mesh
+        // and light arrays): the summary names the first few.
+        const SHOWN: usize = 24;
+        let shown = &report.defaulted[..report.defaulted.len().min(SHOWN)];
+        let more = report.defaulted.len() - shown.len();
         summary.push_str(&format!(
             "  defaulted (nothing said what they are; `shadecache scene init` writes them out to edit):
     {}
 ",
-            report.defaulted.join("\n    ")
+            shown.join("\n    ")
         ));
+        if more > 0 {
+            summary.push_str(&format!(
+                "    … and {more} more (report.json's `defaulted` lists every one)\n"
+            ));
+        }
     }
     if !report.steady_state {
         summary.push_str(&format!(

@@ -316,7 +316,7 @@ fn composition(defs: &[(&str, ShaderDef)]) -> Composition {
     Composition {
         import_paths: vec![root().join(MODULES)],
         defs: defs.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
-        composer: None,
+        ..Composition::default()
     }
 }
 

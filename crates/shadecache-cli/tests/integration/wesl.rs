@@ -16,13 +16,23 @@ use crate::util::{root, shadecache, stderr, tint_validate};
 
 const MATERIAL: &str = "corpus/wesl/lava_material.wesl";
 const PACKAGES: &str = "corpus/wesl/packages";
-const MESH: &str = "corpus/wesl/packages/engine_pbr/mesh.wesl";
+/// The engine's vertex stage: the module `engine_pbr::render::mesh`,
+/// whose `package::render::…` imports resolve only when its package is
+/// known to be the folder above `render/` (as Bevy's crates lay out
+/// theirs).
+const MESH: &str = "corpus/wesl/packages/engine_pbr/render/mesh.wesl";
+
+/// The material's bind group, which it reads as `constants::`.
+const GROUP: (&str, ShaderDef) = ("MATERIAL_BIND_GROUP", ShaderDef::Int(2));
 
 fn composition(root: &Path, defs: &[(&str, ShaderDef)]) -> Composition {
     Composition {
         import_paths: vec![root.join(PACKAGES)],
-        defs: defs.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
-        composer: None,
+        defs: std::iter::once(&GROUP)
+            .chain(defs)
+            .map(|(n, v)| (n.to_string(), *v))
+            .collect(),
+        ..Composition::default()
     }
 }
 
@@ -43,10 +53,10 @@ fn analysed(shader: &Shader) -> Analysis {
 
 /// The material composes through wesl with its engine's vertex module:
 /// imported names read `module__item` (naga writes them with one
-/// underscore), `@if(FOG)` follows `--def FOG`, the object-space crust is
-/// a candidate, and every variant of the top nodes and of the crust is
-/// emitted valid under naga (in the rewrite) and Tint and builds a wgpu
-/// render pipeline.
+/// underscore), `@if(FOG)` follows `--def FOG`, `constants::` takes a
+/// numeric def, the object-space crust is a candidate, and every variant
+/// of the top nodes and of the crust is emitted valid under naga (in the
+/// rewrite) and Tint and builds a wgpu render pipeline.
 #[test]
 fn wesl_composed_material_analyses_and_rewrites() {
     let plain = load(&[]);
@@ -63,6 +73,14 @@ fn wesl_composed_material_analyses_and_rewrites() {
     assert!(plain.module.entry_points.iter().any(|e| e.name == "vertex"));
     let mixes_fog = |s: &Shader| s.file.text.contains("vec3<f32>(0.6f, 0.65f, 0.7f)");
     assert!(!mixes_fog(&plain) && mixes_fog(&fog));
+    assert!(
+        plain
+            .file
+            .text
+            .contains("@group(2) @binding(1) \nvar<uniform> material"),
+        "{}",
+        plain.file.text
+    );
 
     let analysis = analysed(&fog);
     let crust = analysis
@@ -135,9 +153,11 @@ fn analyze_error(wesl: &Path) -> String {
     let output = shadecache([
         "analyze".as_ref(),
         wesl.join("lava_material.wesl").as_os_str(),
-        "--import-path".as_ref(),
-        wesl.join("packages").as_os_str(),
-    ] as [&OsStr; 4]);
+        "--package".as_ref(),
+        format!("engine_pbr={}", wesl.join("packages/engine_pbr").display()).as_ref(),
+        "--def".as_ref(),
+        "MATERIAL_BIND_GROUP=2".as_ref(),
+    ] as [&OsStr; 6]);
     let err = stderr(&output);
     assert_eq!(output.status.code(), Some(1), "{err}");
     err
@@ -157,14 +177,15 @@ fn place(wesl: &Path, file: &str, needle: &str) -> String {
 /// statement that names it, in the module that has it: an imported
 /// package module, the entry module, and a package no import path has.
 /// An error inside an imported module points into that module, not into
-/// the entry shader (where the wesl crate's own report puts it).
+/// the entry shader (where the wesl crate's own report puts it), and so
+/// does a `constants::` no def gives.
 #[test]
 fn wesl_bad_import_points_into_the_module() {
     // In a package module.
-    let (_dir, wesl) = edited("packages/engine_pbr/pbr_functions.wesl", |text| {
+    let (_dir, wesl) = edited("packages/engine_pbr/render/pbr_functions.wesl", |text| {
         text.replacen(
-            "import package::view_bindings::view;",
-            "import package::view_bindings::view;\nimport package::lights::shade;",
+            "import package::render::view_bindings::view;",
+            "import package::render::view_bindings::view;\nimport package::render::lights::shade;",
             1,
         )
         .replacen(
@@ -175,13 +196,13 @@ fn wesl_bad_import_points_into_the_module() {
     });
     let err = analyze_error(&wesl);
     assert!(
-        err.contains("`import engine_pbr::lights` does not resolve"),
+        err.contains("`import engine_pbr::render::lights` does not resolve"),
         "{err}"
     );
     assert!(err.contains("lights.wesl"), "{err}");
     let at = place(
         &wesl,
-        "packages/engine_pbr/pbr_functions.wesl",
+        "packages/engine_pbr/render/pbr_functions.wesl",
         "lights::shade",
     );
     assert!(err.contains(&at), "{at} in {err}");
@@ -213,8 +234,21 @@ fn wesl_bad_import_points_into_the_module() {
     let at = place(&wesl, "noise.wesl", "hash4(i)");
     assert!(err.contains(&at), "{at} in {err}");
 
+    // A constant no def gives, used in a package module.
+    let (_dir, wesl) = edited("packages/engine_pbr/render/view_bindings.wesl", |text| {
+        text.replacen("@group(0)", "@group(constants::VIEW_BIND_GROUP)", 1)
+    });
+    let err = analyze_error(&wesl);
+    assert!(err.contains("no declaration `VIEW_BIND_GROUP`"), "{err}");
+    let at = place(
+        &wesl,
+        "packages/engine_pbr/render/view_bindings.wesl",
+        "constants::VIEW",
+    );
+    assert!(err.contains(&at), "{at} in {err}");
+
     // A syntax error in a package module.
-    let (_dir, wesl) = edited("packages/engine_pbr/pbr_functions.wesl", |text| {
+    let (_dir, wesl) = edited("packages/engine_pbr/render/pbr_functions.wesl", |text| {
         text.replacen(
             "let n = normalize(in.world_normal);",
             "let n = normalize(in.world_normal;",
@@ -224,7 +258,7 @@ fn wesl_bad_import_points_into_the_module() {
     let err = analyze_error(&wesl);
     let at = place(
         &wesl,
-        "packages/engine_pbr/pbr_functions.wesl",
+        "packages/engine_pbr/render/pbr_functions.wesl",
         "let n = normalize",
     );
     let line = at.rsplit_once(':').unwrap().0.rsplit_once(':').unwrap().0;
