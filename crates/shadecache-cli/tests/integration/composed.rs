@@ -10,7 +10,7 @@ use shadecache::front::compose::{Composition, ShaderDef};
 use shadecache::front::{self, Shader};
 use shadecache::rewrite::{self, Options, Variant};
 
-use crate::gpu::wgsl_sources;
+use crate::gpu::write_wgsl;
 use crate::util::{root, shadecache, stderr, temp_file, tint_validate};
 
 const FRAGMENT: &str = "corpus/split/toon_material.wgsl";
@@ -87,13 +87,11 @@ fn a_fragment_only_module_emits_fragment_passes_and_says_what_the_vertex_stage_m
                 .iter()
                 .filter(|p| p.draw == shadecache::plan::DrawKind::Geometry)
                 .all(|p| p.vertex_entry.is_empty()));
-            for (name, text) in wgsl_sources(&rewritten) {
-                let path = dir
-                    .path()
-                    .join(format!("{}-{variant}-{name}", candidate.node.id));
-                std::fs::write(&path, text).unwrap();
-                files.push(path);
-            }
+            files.extend(write_wgsl(
+                dir.path(),
+                &format!("{}-{variant}", candidate.node.id),
+                &rewritten,
+            ));
             emitted += 1;
         }
     }
@@ -358,13 +356,11 @@ fn a_module_with_imports_is_composed_through_naga_oil() {
             let rewritten =
                 rewrite::rewrite(&fog, &fog_analysis, candidate, variant, &Options::default())
                     .unwrap_or_else(|r| panic!("{} {variant}: {r}", candidate.node.id));
-            for (name, text) in wgsl_sources(&rewritten) {
-                let path = dir
-                    .path()
-                    .join(format!("{}-{variant}-{name}", candidate.node.id));
-                std::fs::write(&path, text).unwrap();
-                files.push(path);
-            }
+            files.extend(write_wgsl(
+                dir.path(),
+                &format!("{}-{variant}", candidate.node.id),
+                &rewritten,
+            ));
         }
     }
     for result in tint_validate(&files) {

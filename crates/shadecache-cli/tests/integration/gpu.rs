@@ -45,6 +45,23 @@ pub(crate) fn wgsl_sources(rewritten: &rewrite::Rewritten) -> HashMap<String, St
         .collect()
 }
 
+/// Writes each pass's WGSL into `dir` as `<label>-<file name>`; their
+/// paths, for [`crate::util::tint_validate`].
+pub(crate) fn write_wgsl(
+    dir: &std::path::Path,
+    label: &str,
+    rewritten: &rewrite::Rewritten,
+) -> Vec<std::path::PathBuf> {
+    wgsl_sources(rewritten)
+        .into_iter()
+        .map(|(name, text)| {
+            let path = dir.join(format!("{label}-{name}"));
+            std::fs::write(&path, text).unwrap();
+            path
+        })
+        .collect()
+}
+
 /// Builds a wgpu render pipeline from every pass of `rewritten` (None
 /// without a GPU); panics naming `what` when one does not build.
 pub fn build_pipelines(rewritten: &rewrite::Rewritten, what: &str) -> Option<usize> {

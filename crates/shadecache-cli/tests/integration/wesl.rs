@@ -11,7 +11,7 @@ use shadecache::front::compose::{Composition, ShaderDef};
 use shadecache::front::{self, Shader};
 use shadecache::rewrite::{self, Options, Variant};
 
-use crate::gpu::{build_pipelines, wgsl_sources};
+use crate::gpu::{build_pipelines, write_wgsl};
 use crate::util::{root, shadecache, stderr, tint_validate};
 
 const MATERIAL: &str = "corpus/wesl/lava_material.wesl";
@@ -105,13 +105,11 @@ fn wesl_composed_material_analyses_and_rewrites() {
                     .unwrap_or_else(|r| panic!("{} {variant}: {r}", candidate.node.id));
             let what = format!("{} {variant}", candidate.node.id);
             pipelines += build_pipelines(&rewritten, &what).unwrap_or(0);
-            for (name, text) in wgsl_sources(&rewritten) {
-                let path = dir
-                    .path()
-                    .join(format!("{}-{variant}-{name}", candidate.node.id));
-                std::fs::write(&path, text).unwrap();
-                files.push(path);
-            }
+            files.extend(write_wgsl(
+                dir.path(),
+                &format!("{}-{variant}", candidate.node.id),
+                &rewritten,
+            ));
         }
     }
     assert!(files.len() >= 4 * Variant::CACHE.len());
@@ -163,14 +161,34 @@ fn analyze_error(wesl: &Path) -> String {
     err
 }
 
-/// `file:line:col` of the first occurrence of `needle` in `wesl/file`, as
-/// codespan prints it.
-fn place(wesl: &Path, file: &str, needle: &str) -> String {
+/// Where an error must point: at a text's first characters, or only at
+/// its line (a parse error's column is the parser's).
+enum At<'a> {
+    Text(&'a str),
+    Line(&'a str),
+}
+
+/// Edits `file` (relative to `corpus/wesl`) in a copy with `edit`, runs
+/// `analyze` on the copy's material, and checks the error says `says` and
+/// points into `file` at `at`, as codespan prints it (`file:line:col`).
+fn assert_error_at(file: &str, edit: impl Fn(&str) -> String, says: &str, at: At) {
+    let (_dir, wesl) = edited(file, edit);
+    let err = analyze_error(&wesl);
+    assert!(err.contains(says), "`{says}` in {err}");
+    let (needle, with_column) = match at {
+        At::Text(needle) => (needle, true),
+        At::Line(needle) => (needle, false),
+    };
     let text = std::fs::read_to_string(wesl.join(file)).unwrap();
-    let at = text.find(needle).expect("the needle is in the file");
-    let line = text[..at].matches('\n').count() + 1;
-    let col = at - text[..at].rfind('\n').map_or(0, |n| n + 1) + 1;
-    format!("{file}:{line}:{col}")
+    let offset = text.find(needle).expect("the needle is in the file");
+    let line = text[..offset].matches('\n').count() + 1;
+    let col = offset - text[..offset].rfind('\n').map_or(0, |n| n + 1) + 1;
+    let place = if with_column {
+        format!("{file}:{line}:{col}")
+    } else {
+        format!("{file}:{line}:")
+    };
+    assert!(err.contains(&place), "{place} in {err}");
 }
 
 /// An import that resolves to nothing is an error at the `import`
@@ -181,86 +199,68 @@ fn place(wesl: &Path, file: &str, needle: &str) -> String {
 /// does a `constants::` no def gives.
 #[test]
 fn wesl_bad_import_points_into_the_module() {
+    let functions = "packages/engine_pbr/render/pbr_functions.wesl";
     // In a package module.
-    let (_dir, wesl) = edited("packages/engine_pbr/render/pbr_functions.wesl", |text| {
-        text.replacen(
-            "import package::render::view_bindings::view;",
-            "import package::render::view_bindings::view;\nimport package::render::lights::shade;",
-            1,
-        )
-        .replacen(
-            "let ambient = 0.03 * in.base_color;",
-            "let ambient = shade(in.base_color);",
-            1,
-        )
-    });
-    let err = analyze_error(&wesl);
-    assert!(
-        err.contains("`import engine_pbr::render::lights` does not resolve"),
-        "{err}"
+    assert_error_at(
+        functions,
+        |text| {
+            text.replacen(
+                "import package::render::view_bindings::view;",
+                "import package::render::view_bindings::view;\nimport package::render::lights::shade;",
+                1,
+            )
+            .replacen(
+                "let ambient = 0.03 * in.base_color;",
+                "let ambient = shade(in.base_color);",
+                1,
+            )
+        },
+        "`import engine_pbr::render::lights` does not resolve: no file",
+        At::Text("lights::shade"),
     );
-    assert!(err.contains("lights.wesl"), "{err}");
-    let at = place(
-        &wesl,
-        "packages/engine_pbr/render/pbr_functions.wesl",
-        "lights::shade",
-    );
-    assert!(err.contains(&at), "{at} in {err}");
-
     // In the entry module, from a package that is not there.
-    let (_dir, wesl) = edited("lava_material.wesl", |text| {
-        text.replacen(
-            "import package::noise::fbm;",
-            "import package::noise::fbm;\nimport engine_sky::atmosphere::sky;",
-            1,
-        )
-        .replacen(
-            "let lit = apply_pbr_lighting(pbr)",
-            "let lit = sky(pbr.base_color)",
-            1,
-        )
-    });
-    let err = analyze_error(&wesl);
-    assert!(err.contains("no package `engine_sky`"), "{err}");
-    let at = place(&wesl, "lava_material.wesl", "atmosphere::sky");
-    assert!(err.contains(&at), "{at} in {err}");
-
+    assert_error_at(
+        "lava_material.wesl",
+        |text| {
+            text.replacen(
+                "import package::noise::fbm;",
+                "import package::noise::fbm;\nimport engine_sky::atmosphere::sky;",
+                1,
+            )
+            .replacen(
+                "let lit = apply_pbr_lighting(pbr)",
+                "let lit = sky(pbr.base_color)",
+                1,
+            )
+        },
+        "no package `engine_sky`",
+        At::Text("atmosphere::sky"),
+    );
     // A name no module declares, inside the material's own noise module.
-    let (_dir, wesl) = edited("noise.wesl", |text| {
-        text.replacen("mix(hash3(i), ", "mix(hash4(i), ", 1)
-    });
-    let err = analyze_error(&wesl);
-    assert!(err.contains("hash4"), "{err}");
-    let at = place(&wesl, "noise.wesl", "hash4(i)");
-    assert!(err.contains(&at), "{at} in {err}");
-
+    assert_error_at(
+        "noise.wesl",
+        |text| text.replacen("mix(hash3(i), ", "mix(hash4(i), ", 1),
+        "hash4",
+        At::Text("hash4(i)"),
+    );
     // A constant no def gives, used in a package module.
-    let (_dir, wesl) = edited("packages/engine_pbr/render/view_bindings.wesl", |text| {
-        text.replacen("@group(0)", "@group(constants::VIEW_BIND_GROUP)", 1)
-    });
-    let err = analyze_error(&wesl);
-    assert!(err.contains("no declaration `VIEW_BIND_GROUP`"), "{err}");
-    let at = place(
-        &wesl,
+    assert_error_at(
         "packages/engine_pbr/render/view_bindings.wesl",
-        "constants::VIEW",
+        |text| text.replacen("@group(0)", "@group(constants::VIEW_BIND_GROUP)", 1),
+        "no declaration `VIEW_BIND_GROUP`",
+        At::Text("constants::VIEW"),
     );
-    assert!(err.contains(&at), "{at} in {err}");
-
     // A syntax error in a package module.
-    let (_dir, wesl) = edited("packages/engine_pbr/render/pbr_functions.wesl", |text| {
-        text.replacen(
-            "let n = normalize(in.world_normal);",
-            "let n = normalize(in.world_normal;",
-            1,
-        )
-    });
-    let err = analyze_error(&wesl);
-    let at = place(
-        &wesl,
-        "packages/engine_pbr/render/pbr_functions.wesl",
-        "let n = normalize",
+    assert_error_at(
+        functions,
+        |text| {
+            text.replacen(
+                "let n = normalize(in.world_normal);",
+                "let n = normalize(in.world_normal;",
+                1,
+            )
+        },
+        "cannot compose the shader",
+        At::Line("let n = normalize"),
     );
-    let line = at.rsplit_once(':').unwrap().0.rsplit_once(':').unwrap().0;
-    assert!(err.contains(&format!("{line}:")), "{line} in {err}");
 }
