@@ -9,8 +9,9 @@
 #   GPU_RUN_QUICK=1 scripts/gpu-run.sh   # a smoke run: small frames, few
 #                                        # frames (to check the script)
 #   GPU_RUN_REPRODUCTION=1 scripts/gpu-run.sh   # docs/reproduction.md's
-#       experiments at 256² and 512² instead (below; about two hours on
-#       lavapipe, minutes on a GPU)
+#       experiments at 256² and 512² instead (below; about 65 minutes on
+#       lavapipe, minutes on a GPU); GPU_RUN_EVERY_CANDIDATE=1 adds fig. 8
+#       over all 459 candidates (hours on lavapipe)
 #
 # What it runs, in order (each a command of README.md or docs/):
 #   1. README's profile (the marble sphere);
@@ -27,7 +28,7 @@
 #
 # With GPU_RUN_REPRODUCTION=1 it runs docs/reproduction.md's experiments
 # instead, at 256² and 512²: figs. 8 and 9 on the marble sphere and on the
-# 77k-triangle torus (the paper's geometry load), fig. 8 over every
+# 77k-triangle torus (the paper's geometry load), fig. 8 over every fifth
 # candidate of the marble (256², 16 frames), the 25-tap environment map
 # on the heavy torus, and fig. 7's overlap outlier beside the partial
 # octave sums of like P/T.
@@ -48,17 +49,24 @@ trap 'rm -rf "$work"' EXIT
 manifest="$work/runs.tsv"
 : > "$manifest"
 
-# run NAME ARGS...: one shadecache command into $work/NAME, listed in the
-# manifest with its command line and its wall time.
-run() {
+# measure NAME ARGS...: one shadecache command into $work/NAME; its wall
+# time in seconds in $elapsed.
+measure() {
   local name=$1; shift
-  local start end
+  local start
   start=$(date +%s)
   echo "== $name: shadecache $*" >&2
   "$bin" "$@" --out "$work/$name" --quiet > "$work/$name.log" 2>&1 || {
     echo "$name failed:" >&2; tail -20 "$work/$name.log" >&2; exit 1; }
-  end=$(date +%s)
-  printf '%s\t%s\t%s\n' "$name" "$((end - start))" "shadecache $*" >> "$manifest"
+  elapsed=$(( $(date +%s) - start ))
+}
+
+# run NAME ARGS...: `measure`, listed in the manifest with its command
+# line and its wall time.
+run() {
+  local name=$1
+  measure "$@"; shift
+  printf '%s\t%s\t%s\n' "$name" "$elapsed" "shadecache $*" >> "$manifest"
 }
 
 marble=(corpus/noise_marble.wgsl --scene corpus/scenes/marble_sphere.toml)
@@ -92,12 +100,38 @@ if [ -n "${GPU_RUN_REPRODUCTION:-}" ]; then
       --nodes "$overlapping,nb4278c81,nb0c12cc4,n648ad2bd" \
       --variant one-pass,two-pass,three-pass,deferred --refresh-period 32 --refresh-quad 4
   done
-  # Every candidate (459); a smoke run takes the first dozen.
-  every=all; if [ -n "$quick" ]; then every=top:12; fi
-  run fig8-all-candidates profile "${marble[@]}" --size "$small" --frames 16 --nodes "$every" \
+  # Fig. 8 over the candidates: every fifth of the marble's 459 in their
+  # ranking (92; a smoke run, every fifth of the first 60), every variant,
+  # in one process.
+  ranked=$("$bin" analyze corpus/noise_marble.wgsl --format json | node -e '
+    const c = JSON.parse(require("fs").readFileSync(0, "utf8")).candidates;
+    const n = process.argv[1] ? Number(process.argv[1]) : c.length;
+    console.log(c.slice(0, n).filter((_, i) => i % 5 === 0).map((x) => x.id).join(","));
+  ' "${quick:+60}")
+  run fig8-fifth-candidates profile "${marble[@]}" --size "$small" --frames 16 --nodes "$ranked" \
     --variant one-pass,two-pass,three-pass,deferred --refresh-period 32 --refresh-quad 4
+  # Every candidate (GPU_RUN_EVERY_CANDIDATE=1): 1836 configurations, more
+  # pipelines than lavapipe keeps in one process's memory (a single run was
+  # killed at 24 GiB, and a sixth of it had reached 15 GiB after 7 minutes
+  # when it was stopped), so in shards (`profile --shard K/N`, each a
+  # process with its own reference run) joined by `shadecache merge`.
+  if [ -n "${GPU_RUN_EVERY_CANDIDATE:-}" ]; then
+    every=all; shards=6
+    if [ -n "$quick" ]; then every=top:12; shards=2; fi
+    all=(profile "${marble[@]}" --size "$small" --frames 16 --nodes "$every"
+      --variant one-pass,two-pass,three-pass,deferred --refresh-period 32 --refresh-quad 4)
+    total=0
+    for k in $(seq 1 "$shards"); do
+      measure "fig8-all-shard-$k" "${all[@]}" --shard "$k/$shards"
+      total=$((total + elapsed))
+    done
+    "$bin" merge "$work"/fig8-all-shard-*/ --out "$work/fig8-all-candidates" > "$work/merge.log" 2>&1 || {
+      echo "merge failed:" >&2; tail -20 "$work/merge.log" >&2; exit 1; }
+    printf '%s\t%s\t%s\n' fig8-all-candidates "$total" \
+      "shadecache ${all[*]} --shard K/$shards (K = 1..$shards), then shadecache merge of the $shards" >> "$manifest"
+  fi
   mkdir -p docs/runs
-  out=$(node scripts/runs-table.mjs "$work" "$manifest" ${quick:+--quick})
+  out=$(node scripts/runs-table.mjs "$work" "$manifest" ${quick:+--quick} --reproduction)
   echo "wrote $out" >&2
   exit 0
 fi

@@ -3,7 +3,7 @@
 // every figure and its interval (the profile's bootstrap interval of the
 // speed-up; `interpolate` runs once and gives none, which the table says).
 //
-//   node scripts/runs-table.mjs WORK_DIR MANIFEST [--quick]
+//   node scripts/runs-table.mjs WORK_DIR MANIFEST [--quick] [--reproduction]
 //
 // MANIFEST lines: name <TAB> wall seconds <TAB> command. Prints the path
 // written.
@@ -12,6 +12,7 @@ import { join } from "node:path";
 
 const [work, manifest, ...flags] = process.argv.slice(2);
 const quick = flags.includes("--quick");
+const reproduction = flags.includes("--reproduction");
 const runs = readFileSync(manifest, "utf8")
   .trim()
   .split("\n")
@@ -79,7 +80,7 @@ const slug = (device?.name ?? "adapter").toLowerCase().replace(/[^a-z0-9]+/g, "-
 const out = [
   `# GPU run: ${adapter}${quick ? " (smoke run)" : ""}`,
   "",
-  `Adapter: ${adapter}. Driver: ${driver}. Date: ${date}. Made by \`scripts/gpu-run.sh\`${quick ? " with GPU_RUN_QUICK=1 (small frames: a check of the script, not figures)" : ""}; total ${reports.reduce((s, r) => s + r.seconds, 0)} s.`,
+  `Adapter: ${adapter}. Driver: ${driver}. Date: ${date}. Made by \`${reproduction ? "GPU_RUN_REPRODUCTION=1 " : ""}scripts/gpu-run.sh\`${quick ? " with GPU_RUN_QUICK=1 (small frames: a check of the script, not figures)" : ""}; total ${reports.reduce((s, r) => s + r.seconds, 0)} s.`,
   "",
 ];
 for (const r of reports) {
@@ -87,6 +88,10 @@ for (const r of reports) {
   const table = r.report.methods ? interpolateTable(r.report) : profileTable(r.report);
   out.push(...table, "");
 }
-const file = join("docs", "runs", `${date}-${slug}${quick ? "-smoke" : ""}.md`);
+const file = join(
+  "docs",
+  "runs",
+  `${date}-${slug}${reproduction ? "-reproduction" : ""}${quick ? "-smoke" : ""}.md`,
+);
 writeFileSync(file, out.join("\n"));
 console.log(file);
