@@ -229,7 +229,7 @@ fn readable(map: &impl SourceMap, main: &ModulePath, name: &str) -> Option<Strin
 /// it is nowhere.
 struct Read {
     path: ModulePath,
-    found: Option<(String, Arc<SourceFile>)>,
+    found: Option<Arc<SourceFile>>,
 }
 
 /// A resolver that keeps what it was asked and what it gave, so errors can
@@ -255,7 +255,7 @@ impl<R: Resolver> Recording<R> {
             .borrow()
             .iter()
             .find(|read| read.path == *flattened(path))
-            .and_then(|read| read.found.as_ref().map(|(_, file)| file.clone()))
+            .and_then(|read| read.found.clone())
     }
 }
 
@@ -285,8 +285,7 @@ impl<R: Resolver> Resolver for Recording<R> {
                 .inner
                 .display_name(path)
                 .unwrap_or_else(|| path.to_string());
-            let file = Arc::new(SourceFile::new(shown.clone(), text.to_string()));
-            (shown, file)
+            Arc::new(SourceFile::new(shown, text.to_string()))
         });
         self.reads.borrow_mut().push(Read {
             path: path.clone(),
@@ -355,7 +354,7 @@ fn missing_item_use<R: Resolver>(
     };
     let qualified = format!("{last}::{item}");
     reads.reads.borrow().iter().find_map(|read| {
-        let (_, file) = read.found.as_ref()?;
+        let file = read.found.as_ref()?;
         let at = file.text.find(&qualified)?;
         Some((file.clone(), at..at + qualified.len()))
     })
@@ -369,7 +368,7 @@ fn declaring<R: Resolver>(
 ) -> Option<Arc<SourceFile>> {
     let reads = reads.reads.borrow();
     let mut matches = reads.iter().filter_map(|read| {
-        let (_, file) = read.found.as_ref()?;
+        let file = read.found.as_ref()?;
         let unit: TranslationUnit = file.text.parse().ok()?;
         unit.global_declarations
             .iter()
@@ -449,7 +448,7 @@ fn unresolved_import<R: Resolver>(
         .borrow()
         .iter()
         .filter_map(|read| {
-            let (_, file) = read.found.as_ref()?;
+            let file = read.found.as_ref()?;
             let at = import_site(&file.text, &read.path, missing)?;
             Some((file.clone(), at))
         })
