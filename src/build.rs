@@ -332,10 +332,7 @@ impl Build {
             if !self.quiet {
                 // Printed first, so a failing shader is watched too (a
                 // folder is watched whole).
-                let watched = std::iter::once(&path)
-                    .chain(&vertex)
-                    .chain(&composition.import_paths);
-                for watched in watched {
+                for watched in watched(&path, vertex.as_deref(), &composition) {
                     println!("cargo::rerun-if-changed={}", watched.display());
                 }
             }
@@ -522,4 +519,40 @@ macro_rules! include_variant {
             $file
         ))
     };
+}
+
+/// What a job's outputs depend on, for cargo to watch: the shader, its
+/// vertex module, and the folders its imports come from (import paths,
+/// WESL packages).
+fn watched<'a>(
+    path: &'a Path,
+    vertex: Option<&'a Path>,
+    composition: &'a front::compose::Composition,
+) -> Vec<&'a Path> {
+    std::iter::once(path)
+        .chain(vertex)
+        .chain(composition.import_paths.iter().map(PathBuf::as_path))
+        .chain(composition.packages.iter().map(|(_, dir)| dir.as_path()))
+        .collect()
+}
+
+#[cfg(test)]
+mod watch_tests {
+    use super::*;
+
+    #[test]
+    fn a_jobs_import_folders_and_packages_are_watched() {
+        let composition = front::compose::Composition {
+            import_paths: vec![PathBuf::from("modules")],
+            packages: vec![("engine".into(), PathBuf::from("engine/src"))],
+            ..Default::default()
+        };
+        let paths = watched(
+            Path::new("m.wesl"),
+            Some(Path::new("mesh.wesl")),
+            &composition,
+        );
+        let shown: Vec<_> = paths.iter().map(|p| p.to_str().unwrap()).collect();
+        assert_eq!(shown, ["m.wesl", "mesh.wesl", "modules", "engine/src"]);
+    }
 }

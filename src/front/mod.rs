@@ -357,11 +357,13 @@ pub fn with_vertex_module(
     })
 }
 
-/// Loads the shader at `path`, composing it with naga_oil when it uses
-/// `#import`/`#ifdef` or `composition` says where its imports are
-/// ([`compose`]), or with wesl when it is WESL ([`wesl`]), and, when `vertex` names a separate vertex module (also
-/// composed), gives it that module's vertex stage ([`with_vertex_module`];
-/// `vertex_entry` names the entry point there when it has several).
+/// Loads the shader at `path`, composed as [`compose::ComposerKind::detect`]
+/// tells: with naga_oil when it uses `#import`/`#ifdef` or `composition`
+/// says where its imports are ([`compose`]), with wesl when it is WESL
+/// (`wesl`, the `wesl` feature). When `vertex` names a separate vertex
+/// module (composed the same way), the shader gets that module's vertex
+/// stage ([`with_vertex_module`]; `vertex_entry` names the entry point
+/// there when it has several).
 pub fn load_with(
     path: &Path,
     composition: &compose::Composition,

@@ -54,12 +54,7 @@ pub fn compose(top: SourceFile, path: &Path, composition: &Composition) -> Resul
     let packages = packages(composition)?;
     let main = main_module(path, &packages);
     let root = path.parent().unwrap_or(Path::new("."));
-    let mut router = router(root, &packages);
-    router.mount_resolver(
-        ModulePath::new(PathOrigin::Package("constants".into()), vec![]),
-        constants(composition),
-    );
-    let resolver = Recording::new(router, packages);
+    let resolver = Recording::new(router(root, &packages, composition), packages);
     let result = wesl::compile(&main, &options(composition), &resolver)
         .map_err(|err| located(err, &resolver, &top, composition))?;
     let composed = Arc::new(SourceFile::new(
@@ -116,12 +111,17 @@ fn main_module(path: &Path, packages: &[(String, PathBuf)]) -> ModulePath {
     }
 }
 
-/// `package::` at the entry shader's folder; each package at its folder.
-fn router(root: &Path, packages: &[(String, PathBuf)]) -> Router {
+/// `package::` at the entry shader's folder; each package at its folder;
+/// `constants::` from the numeric defs.
+fn router(root: &Path, packages: &[(String, PathBuf)], composition: &Composition) -> Router {
     let mut router = Router::new();
     router.mount_resolver(
         ModulePath::new(PathOrigin::Absolute, vec![]),
         FileResolver::new(root),
+    );
+    router.mount_resolver(
+        ModulePath::new(PathOrigin::Package("constants".into()), vec![]),
+        constants(composition),
     );
     for (name, dir) in packages {
         router.mount_resolver(

@@ -390,6 +390,30 @@ fn quality(row: &report::ResultRow) -> String {
     )
 }
 
+/// Defaulted inputs shown in the summary; an engine's shader defaults
+/// thousands (every element of its mesh and light arrays).
+const DEFAULTED_SHOWN: usize = 24;
+
+/// The summary's lines naming the inputs nothing said the value of: the
+/// first [`DEFAULTED_SHOWN`] and how many more (none when none).
+fn defaulted_lines(defaulted: &[String]) -> String {
+    if defaulted.is_empty() {
+        return String::new();
+    }
+    let shown = &defaulted[..defaulted.len().min(DEFAULTED_SHOWN)];
+    let mut lines = format!(
+        "  defaulted (nothing said what they are; `shadecache scene init` writes them out to edit):\n    {}\n",
+        shown.join("\n    ")
+    );
+    let more = defaulted.len() - shown.len();
+    if more > 0 {
+        lines.push_str(&format!(
+            "    … and {more} more (report.json's `defaulted` lists every one)\n"
+        ));
+    }
+    lines
+}
+
 fn summary(report: &report::Report) -> String {
     let mut summary = format!(
         "{} on {} ({}×{}, {} frames after {} warm-up, {}): reference {:.3} ms (frames {:.3}–{:.3})\n",
@@ -439,24 +463,7 @@ fn summary(report: &report::Report) -> String {
             quality(row)
         ));
     }
-    if !report.defaulted.is_empty() {
-        // An engine's shader defaults thousands (every element of its mesh
-        // and light arrays): the summary names the first few.
-        const SHOWN: usize = 24;
-        let shown = &report.defaulted[..report.defaulted.len().min(SHOWN)];
-        let more = report.defaulted.len() - shown.len();
-        summary.push_str(&format!(
-            "  defaulted (nothing said what they are; `shadecache scene init` writes them out to edit):
-    {}
-",
-            shown.join("\n    ")
-        ));
-        if more > 0 {
-            summary.push_str(&format!(
-                "    … and {more} more (report.json's `defaulted` lists every one)\n"
-            ));
-        }
-    }
+    summary.push_str(&defaulted_lines(&report.defaulted));
     if !report.steady_state {
         summary.push_str(&format!(
             "  note: {} warm-up frames are fewer than the longest refresh period: the errors are those of a younger cache than in its steady state (leave --warmup out to measure that)\n",
@@ -556,4 +563,22 @@ fn profile_entry(
     }
     summary.push_str(&format!("report: {}\n", out.join("report.html").display()));
     Ok((Box::new(report), summary))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_engine_shaders_defaulted_inputs_are_summarised_in_part() {
+        let many: Vec<String> = (0..1000).map(|i| format!("uniform `mesh[{i}]`")).collect();
+        let lines = defaulted_lines(&many);
+        assert_eq!(lines.lines().count(), 1 + DEFAULTED_SHOWN + 1, "{lines}");
+        assert!(lines.contains("`mesh[23]`") && !lines.contains("`mesh[24]`"));
+        assert!(lines.contains("… and 976 more"), "{lines}");
+        let few = defaulted_lines(&many[..2]);
+        assert_eq!(few.lines().count(), 3, "{few}");
+        assert!(!few.contains("more"));
+        assert_eq!(defaulted_lines(&[]), "");
+    }
 }
