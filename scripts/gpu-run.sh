@@ -11,7 +11,8 @@
 #   GPU_RUN_REPRODUCTION=1 scripts/gpu-run.sh   # docs/reproduction.md's
 #       experiments at 256² and 512² instead (below; about 65 minutes on
 #       lavapipe, minutes on a GPU); GPU_RUN_EVERY_CANDIDATE=1 adds fig. 8
-#       over all 459 candidates (hours on lavapipe)
+#       over all 459 candidates (about 50 minutes more on lavapipe);
+#       GPU_RUN_EVERY_CANDIDATE=only runs that step alone
 #
 # What it runs, in order (each a command of README.md or docs/):
 #   1. README's profile (the marble sphere);
@@ -85,7 +86,9 @@ if [ -n "${GPU_RUN_REPRODUCTION:-}" ]; then
   # outliers have hits and misses both costly), beside the partial sums
   # of like P/T, which have none.
   overlapping=n75f9cb00
-  for size in "$small" "$mid"; do
+  sizes=("$small" "$mid")
+  if [ "${GPU_RUN_EVERY_CANDIDATE:-}" = only ]; then sizes=(); fi
+  for size in "${sizes[@]}"; do
     for scene in marble heavy; do
       declare -n args=$scene
       run "fig8-$scene-$size" profile "${args[@]}" --size "$size" "${frames[@]}" --nodes "$fig8_nodes" \
@@ -103,6 +106,7 @@ if [ -n "${GPU_RUN_REPRODUCTION:-}" ]; then
   # Fig. 8 over the candidates: every fifth of the marble's 459 in their
   # ranking (92; a smoke run, every fifth of the first 60), every variant,
   # in one process.
+  if [ "${GPU_RUN_EVERY_CANDIDATE:-}" != only ]; then
   ranked=$("$bin" analyze corpus/noise_marble.wgsl --format json | node -e '
     const c = JSON.parse(require("fs").readFileSync(0, "utf8")).candidates;
     const n = process.argv[1] ? Number(process.argv[1]) : c.length;
@@ -110,11 +114,13 @@ if [ -n "${GPU_RUN_REPRODUCTION:-}" ]; then
   ' "${quick:+60}")
   run fig8-fifth-candidates profile "${marble[@]}" --size "$small" --frames 16 --nodes "$ranked" \
     --variant one-pass,two-pass,three-pass,deferred --refresh-period 32 --refresh-quad 4
-  # Every candidate (GPU_RUN_EVERY_CANDIDATE=1): 1836 configurations, more
-  # pipelines than lavapipe keeps in one process's memory (a single run was
-  # killed at 24 GiB, and a sixth of it had reached 15 GiB after 7 minutes
-  # when it was stopped), so in shards (`profile --shard K/N`, each a
-  # process with its own reference run) joined by `shadecache merge`.
+  fi
+  # Every candidate (GPU_RUN_EVERY_CANDIDATE=1): 1836 configurations and
+  # six fixed-cost runs per node, more pipelines than lavapipe keeps in one
+  # process's memory (a single run was killed at 24 GiB), so in shards
+  # (`profile --shard K/N`: each a process with its own reference run,
+  # setting up only the nodes of its contiguous slice) joined by
+  # `shadecache merge`.
   if [ -n "${GPU_RUN_EVERY_CANDIDATE:-}" ]; then
     every=all; shards=6
     if [ -n "$quick" ]; then every=top:12; shards=2; fi

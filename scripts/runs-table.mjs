@@ -80,7 +80,7 @@ const slug = (device?.name ?? "adapter").toLowerCase().replace(/[^a-z0-9]+/g, "-
 const out = [
   `# GPU run: ${adapter}${quick ? " (smoke run)" : ""}`,
   "",
-  `Adapter: ${adapter}. Driver: ${driver}. Date: ${date}. Made by \`${reproduction ? "GPU_RUN_REPRODUCTION=1 " : ""}scripts/gpu-run.sh\`${quick ? " with GPU_RUN_QUICK=1 (small frames: a check of the script, not figures)" : ""}; total ${reports.reduce((s, r) => s + r.seconds, 0)} s.`,
+  `Adapter: ${adapter}. Driver: ${driver}. Date: ${date}. Made by \`${reproduction ? "GPU_RUN_REPRODUCTION=1 " : ""}${process.env.GPU_RUN_EVERY_CANDIDATE ? `GPU_RUN_EVERY_CANDIDATE=${process.env.GPU_RUN_EVERY_CANDIDATE} ` : ""}scripts/gpu-run.sh\`${quick ? " with GPU_RUN_QUICK=1 (small frames: a check of the script, not figures)" : ""}; total ${reports.reduce((s, r) => s + r.seconds, 0)} s.`,
   "",
 ];
 for (const r of reports) {

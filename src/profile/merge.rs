@@ -32,15 +32,20 @@ pub struct ShardReport {
 type Identity = Vec<(&'static str, String)>;
 
 /// A report's [`Identity`]. Files by their names, not their paths: a
-/// shard's checkout may be anywhere. The nodes' ids (hashes of each node's
-/// source text) tell one shader from another of the same name.
+/// shard's checkout may be anywhere. The grid's nodes' ids (hashes of each
+/// node's source text) tell one shader from another of the same name; a
+/// shard reports only the nodes its slice touched, and names them all in
+/// `grid_nodes`.
 fn identity(report: &Report) -> Identity {
     let name = |path: &str| {
         Path::new(path)
             .file_name()
             .map_or(path.to_string(), |n| n.to_string_lossy().into_owned())
     };
-    let nodes: Vec<&str> = report.nodes.iter().map(|n| n.id.as_str()).collect();
+    let nodes: Vec<&str> = match report.grid_nodes.is_empty() {
+        true => report.nodes.iter().map(|n| n.id.as_str()).collect(),
+        false => report.grid_nodes.iter().map(String::as_str).collect(),
+    };
     vec![
         ("shader", name(&report.shader)),
         ("entry point", report.entry.clone()),
@@ -143,7 +148,13 @@ fn joined(members: Vec<ShardReport>) -> Result<Report, String> {
         grid.measured = results.len();
     }
     base.results = results;
+    // The nodes in the grid's order, as an unsharded run lists them.
+    let order = |id: &str| base.grid_nodes.iter().position(|n| n == id);
+    if !base.grid_nodes.is_empty() {
+        base.nodes.sort_by_key(|n| order(&n.id));
+    }
     base.shard = None;
+    base.grid_nodes.clear();
     base.merged_from = merged_from;
     base.miss_causes.clear();
     base.warnings.push(format!(

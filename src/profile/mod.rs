@@ -348,7 +348,20 @@ pub fn profile(
     refuse_fragment_only(shader)?;
     let prepared = setup::prepare(shader, scene, options)?;
     rewrite::check_entry_point(shader, &prepared.analysis)?;
-    let nodes = prepared.nodes();
+    let all_nodes = prepared.nodes();
+    let lowres = (
+        options.lowres_reconstructions.as_slice(),
+        options.adaptive_refresh.as_slice(),
+    );
+    let grid_nodes: Vec<String> = match options.shard {
+        Some(_) => all_nodes.iter().map(|(c, _)| c.node.id.clone()).collect(),
+        None => Vec::new(),
+    };
+    let configurations_of = |(_, settings): &GridNode| {
+        let of_variant = |&v: &Variant| variant_settings(settings, v, &prepared.base, lowres).len();
+        options.variants.iter().map(of_variant).sum()
+    };
+    let (nodes, takes) = shard_nodes(all_nodes, configurations_of, options.shard);
     let (size, warmup, frames) = (prepared.size, prepared.warmup, prepared.frames);
     let reference_plan =
         rewrite::plan::reference(shader, &prepared.analysis, &prepared.base).map_err(fail)?;
@@ -379,14 +392,11 @@ pub fn profile(
         bench::fixed_cost_runs(&bench, shader, &prepared, &nodes, &options.variants)?;
     let mut configs = configurations(
         (shader, &prepared.analysis),
-        &nodes,
-        (
-            &options.variants,
-            (&options.lowres_reconstructions, &options.adaptive_refresh),
-        ),
+        (&nodes, &takes),
+        (&options.variants, lowres),
         &prepared.base,
         &|plan, sources| bench.runner(plan, sources, true),
-        (size, options.error_threshold, options.shard),
+        (size, options.error_threshold),
         progress,
     )?;
 
@@ -452,6 +462,7 @@ pub fn profile(
         nodes: node_reports,
         results,
         miss_causes,
+        grid_nodes,
     });
 
     // The answer, and its winner measured again before it is given.
@@ -536,6 +547,8 @@ struct Findings {
     warnings: Vec<String>,
     defaulted: Vec<String>,
     reference_check: ReferenceCheck,
+    /// A shard's: every node of the grid, its own or not.
+    grid_nodes: Vec<String>,
 }
 
 impl RunContext<'_> {
@@ -601,6 +614,7 @@ impl RunContext<'_> {
                 .contains(&Variant::Lowres)
                 .then(|| self.prepared.defaults.upsampling.clone()),
             shard: self.options.shard,
+            grid_nodes: findings.grid_nodes,
             merged_from: Vec::new(),
         }
     }
@@ -710,35 +724,83 @@ fn view_warnings(scene: &Scene, aspect: f32, warmup: u32, results: &[ResultRow])
 /// scene's meshes and textures at the profile's size.
 type NewRunner<'a> = dyn Fn(&Plan, &HashMap<String, String>) -> Result<Runner, String> + 'a;
 
+/// A node of the grid and the settings it is measured at.
+type GridNode<'a> = (&'a Candidate, &'a [Setting]);
+
+/// The settings the grid walks for one variant of a node, in order.
+fn variant_settings(
+    settings: &[Setting],
+    variant: Variant,
+    base: &RewriteOptions,
+    lowres: (&[Reconstruction], &[bool]),
+) -> Vec<Setting> {
+    match variant {
+        Variant::Lowres => lowres_settings(settings, base, lowres),
+        _ => adaptive_settings(settings, lowres.1, base),
+    }
+}
+
+/// The nodes a run measures, each with the part of its configurations
+/// (numbered from 0 within the node, in the order the grid walks them:
+/// variants, then settings; `configurations_of` counts them) that is the
+/// run's. Unsharded, every node and
+/// all of each. A shard (`--shard K/N`) takes a contiguous slice of the
+/// grid's configurations ([`crate::report::Shard::slice`]), so it touches
+/// about 1/N of the nodes, and sets up and times the fixed-cost runs of
+/// those alone: the payload and probe runs of every node in every shard
+/// are what kept a sharded sweep over hundreds of nodes from fitting in
+/// memory.
+fn shard_nodes<T>(
+    nodes: Vec<T>,
+    configurations_of: impl Fn(&T) -> usize,
+    shard: Option<crate::report::Shard>,
+) -> (Vec<T>, Vec<std::ops::Range<usize>>) {
+    let Some(shard) = shard else {
+        let all = nodes.iter().map(|_| 0..usize::MAX).collect();
+        return (nodes, all);
+    };
+    let counts: Vec<usize> = nodes.iter().map(configurations_of).collect();
+    let slice = shard.slice(counts.iter().sum());
+    let mut first = 0;
+    let mut kept = (Vec::new(), Vec::new());
+    for (node, count) in nodes.into_iter().zip(counts) {
+        let (start, end) = (slice.start.max(first), slice.end.min(first + count));
+        if start < end {
+            kept.0.push(node);
+            kept.1.push(start - first..end - first);
+        }
+        first += count;
+    }
+    kept
+}
+
 /// Every node × variant × setting the grid keeps, rewritten and with its
 /// runner from `new_runner`; a refusal, or a setting that runs as another
 /// one (an rgba16float three-pass cache widened to rgba32float), is told
-/// to `progress` and skipped. Each compares its frames at `size` with
+/// to `progress` and skipped. Of node i's configurations, only those in
+/// `takes[i]` ([`shard_nodes`]). Each compares its frames at `size` with
 /// `error_threshold`.
 fn configurations(
     (shader, analysis): (&Shader, &analysis::Analysis),
-    nodes: &[(&Candidate, &[Setting])],
+    (nodes, takes): (&[GridNode], &[std::ops::Range<usize>]),
     (variants, lowres): (&[Variant], (&[Reconstruction], &[bool])),
     base: &RewriteOptions,
     new_runner: &NewRunner,
-    (size, error_threshold, shard): ([u32; 2], f64, Option<crate::report::Shard>),
+    (size, error_threshold): ([u32; 2], f64),
     progress: &mut dyn Progress,
 ) -> Result<Vec<Config>, Error> {
     let mut configs = Vec::new();
     // Configurations set up, to measure each once.
     let mut seen = Vec::new();
-    // The grid's configurations in order, whether measured here or not:
-    // what `--shard` slices.
-    let mut index = 0usize;
-    for (node, (candidate, settings)) in nodes.iter().enumerate() {
+    for (node, ((candidate, settings), takes)) in nodes.iter().zip(takes).enumerate() {
+        // The node's configurations in order, whether measured here or
+        // not: what `takes` counts.
+        let mut index = 0usize;
         for &variant in variants {
-            let settings = match variant {
-                Variant::Lowres => lowres_settings(settings, base, lowres),
-                _ => adaptive_settings(settings, lowres.1, base),
-            };
+            let settings = variant_settings(settings, variant, base, lowres);
             for setting in settings.iter() {
                 index += 1;
-                if shard.is_some_and(|s| !s.takes(index - 1)) {
+                if !takes.contains(&(index - 1)) {
                     continue;
                 }
                 let what = format!(
@@ -1148,5 +1210,41 @@ fn node_report(
         fits_f16: candidate.fits_f16,
         function: node.function.clone(),
         depends_on: candidate.depends_on.clone(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::shard_nodes;
+    use crate::report::Shard;
+
+    /// Shards deal the grid's configurations out in contiguous slices: N
+    /// shards take each configuration once between them, and a shard
+    /// keeps only the nodes its slice touches (so it times only their
+    /// fixed costs), a node split between two shards kept by both.
+    #[test]
+    fn a_shard_keeps_only_the_nodes_its_slice_touches() {
+        // Ten nodes of four configurations each (4 variants, 1 setting).
+        let nodes: Vec<usize> = (0..10).collect();
+        let count = |_: &usize| 4;
+        let (all, takes) = shard_nodes(nodes.clone(), count, None);
+        assert_eq!(all, nodes);
+        assert!(takes.iter().all(|t| t.contains(&0) && t.contains(&3)));
+
+        let mut dealt = vec![0; 40];
+        for index in 1..=6 {
+            let shard = Shard { index, count: 6 };
+            let (kept, takes) = shard_nodes(nodes.clone(), count, Some(shard));
+            assert!(kept.len() <= 3, "shard {index} kept {kept:?}");
+            for (node, take) in kept.iter().zip(&takes) {
+                assert!(!take.is_empty() && take.end <= 4);
+                take.clone().for_each(|i| dealt[node * 4 + i] += 1);
+            }
+        }
+        assert!(dealt.iter().all(|&n| n == 1), "{dealt:?}");
+
+        // More shards than configurations: some shards measure nothing.
+        let (kept, _) = shard_nodes(vec![0], |_| 2, Some(Shard { index: 1, count: 3 }));
+        assert!(kept.is_empty());
     }
 }

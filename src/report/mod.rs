@@ -95,6 +95,11 @@ pub struct Report {
     /// With `--shard K/N`: the slice of the grid this run measured.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shard: Option<Shard>,
+    /// With `--shard K/N`: the ids of every node of the grid, in order.
+    /// `nodes` holds only those the shard's slice touched; this is what
+    /// tells shards of one sweep from shards of another.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub grid_nodes: Vec<String>,
     /// A report `shadecache merge` joined from shards: each shard's run
     /// (its rows' speed-ups are against its own reference).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -102,10 +107,11 @@ pub struct Report {
 }
 
 /// The K-th of N deterministic slices of a profile's configurations
-/// (`profile --shard K/N`): configuration i of the grid, in the order the
-/// profile walks it (nodes, variants, settings), is shard (i mod N) + 1's.
-/// Each shard runs its own reference, so its rows are ratios within one
-/// run wherever it ran.
+/// (`profile --shard K/N`): of the grid's T configurations, in the order
+/// the profile walks them (nodes, variants, settings), shard K takes the
+/// contiguous run [⌊T(K−1)/N⌋, ⌊TK/N⌋). Contiguous, so that a shard
+/// touches few nodes and times only their fixed costs. Each shard runs its
+/// own reference, so its rows are ratios within one run wherever it ran.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Shard {
     /// K, from 1.
@@ -129,9 +135,11 @@ impl Shard {
         Ok(Shard { index, count })
     }
 
-    /// Whether the grid's configuration `i` (from 0) is this shard's.
-    pub fn takes(self, i: usize) -> bool {
-        i % self.count as usize == (self.index - 1) as usize
+    /// The configurations (from 0) of a grid of `total` that are this
+    /// shard's.
+    pub fn slice(self, total: usize) -> std::ops::Range<usize> {
+        let at = |k: u32| total * k as usize / self.count as usize;
+        at(self.index - 1)..at(self.index)
     }
 }
 
@@ -765,6 +773,7 @@ pub(crate) mod fixtures {
             grid: None,
             upsampling: None,
             shard: None,
+            grid_nodes: Vec::new(),
             merged_from: Vec::new(),
             reference_check: None,
             choice: None,

@@ -12,10 +12,10 @@ use crate::profile::{marble_scene, run};
 use crate::util::{shadecache, stderr, temp_file};
 
 /// A small sweep: the sweep's pruned planes over two periods, two block
-/// sizes and two reconstructions, two variants of the top node.
+/// sizes and two reconstructions, two variants of the top two nodes.
 fn sweep(shard: Option<Shard>) -> Option<Report> {
     let options = Options {
-        nodes: Nodes::Top(1),
+        nodes: Nodes::Top(2),
         variants: vec![Variant::TwoPass, Variant::ThreePass],
         refresh_periods: vec![8, 32],
         refresh_quads: vec![1, 4],
@@ -49,8 +49,9 @@ fn shard_report(name: &str, report: Report) -> ShardReport {
 }
 
 /// Two shards measure, between them, exactly the unsharded sweep's
-/// configurations, neither twice; merged they are one report of those
-/// configurations. The merge marks the fronts from the merged rows with the
+/// configurations, neither twice; each reports (and times the fixed costs
+/// of) only the nodes its slice touches; merged they are one report of
+/// those configurations and of the sweep's nodes, in its order. The merge marks the fronts from the merged rows with the
 /// function a single run uses: one run's rows split into shards and merged
 /// again give that run's fronts back, row for row. Shards of another
 /// shader are refused, naming it, unless kept apart.
@@ -70,6 +71,12 @@ fn merged_shards_equal_the_unsharded_sweep() {
     assert!(first.is_disjoint(&second), "{first:?} {second:?}");
     assert_eq!(&first | &second, all);
     assert_eq!(shards[0].shard, Some(Shard { index: 1, count: 2 }));
+    let ids =
+        |report: &Report| -> Vec<String> { report.nodes.iter().map(|n| n.id.clone()).collect() };
+    assert_eq!(whole.nodes.len(), 2);
+    assert_eq!(ids(&shards[0]), ids(&whole)[..1]);
+    assert_eq!(ids(&shards[1]), ids(&whole)[1..]);
+    assert_eq!(shards[1].grid_nodes, ids(&whole));
 
     let merged = merge::merge(
         shards
@@ -82,6 +89,8 @@ fn merged_shards_equal_the_unsharded_sweep() {
     .unwrap();
     assert_eq!(merged.len(), 1);
     assert_eq!(configurations(&merged[0]), all);
+    assert_eq!(ids(&merged[0]), ids(&whole));
+    assert!(merged[0].grid_nodes.is_empty());
     assert_eq!(merged[0].merged_from.len(), 2);
     assert!(merged[0].choice.is_some());
 
