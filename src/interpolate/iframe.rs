@@ -183,11 +183,13 @@ pub fn instrument(
             name: "previous",
             group: slot.group,
             first_binding: first,
+            own_previous: false,
         },
         TwinTime {
             name: "next",
             group: slot.group,
             first_binding: first + twinned,
+            own_previous: false,
         },
     ];
     let stage = vertex::instrument_times(

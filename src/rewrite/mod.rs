@@ -28,6 +28,7 @@ pub(crate) mod gbuffer;
 pub(crate) mod gradients;
 mod helpers;
 pub mod lowres;
+pub(crate) mod member_twins;
 pub(crate) mod path;
 pub mod plan;
 pub mod reprojection;

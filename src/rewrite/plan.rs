@@ -124,6 +124,7 @@ pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
         bindings: Bindings {
             original,
             previous,
+            previous_members: previous_members(module, &vertex.member_twins),
             cache,
         },
         cache: Cache {
@@ -533,6 +534,33 @@ fn what_to_bind(name: &str) -> &'static str {
     }
 }
 
+/// The resources read through their own `previous_` members, by name.
+fn previous_members(
+    module: &Module,
+    twins: &[crate::rewrite::member_twins::MemberTwin],
+) -> Vec<shadecache_plan::PreviousMembers> {
+    let name = |ty: naga::Handle<naga::Type>, index: u32| match &module.types[ty].inner {
+        naga::TypeInner::Struct { members, .. } => members
+            .get(index as usize)
+            .and_then(|m| m.name.clone())
+            .unwrap_or_default(),
+        _ => String::new(),
+    };
+    twins
+        .iter()
+        .filter_map(|twin| {
+            Some(shadecache_plan::PreviousMembers {
+                resource: resource(module, &module.global_variables[twin.global], None)?,
+                members: twin
+                    .swaps
+                    .iter()
+                    .map(|&(ty, from, to)| [name(ty, from), name(ty, to)])
+                    .collect(),
+            })
+        })
+        .collect()
+}
+
 fn resource(
     module: &Module,
     global: &naga::GlobalVariable,
@@ -749,6 +777,7 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
         bindings: Bindings {
             original,
             previous: Vec::new(),
+            previous_members: Vec::new(),
             cache: Vec::new(),
         },
         cache: Cache {

@@ -18,6 +18,7 @@ use naga::{Binding, BuiltIn, Expression, Function, Handle, Module, Statement, Ty
 use super::builder::Builder;
 use super::copy::FunctionCopy;
 use super::fragment::is_position;
+use super::member_twins::{self, MemberTwin};
 use super::Refusal;
 use crate::analysis::graph::ExprSet;
 
@@ -32,6 +33,10 @@ pub(crate) struct VertexStage {
     pub previous_location: u32,
     /// (original, twin) global variables.
     pub twins: Vec<(Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>)>,
+    /// Resources whose last-frame values are their own `previous_`
+    /// members, which the previous position reads instead of a twin
+    /// ([`super::member_twins`]).
+    pub member_twins: Vec<MemberTwin>,
     /// (input's location, twin's location) of each vertex input the
     /// position reads that changes between frames (per-instance inputs,
     /// and per-vertex ones the application deforms): the new entry point
@@ -175,6 +180,7 @@ pub(crate) fn instrument(
         name: "previous",
         group,
         first_binding,
+        own_previous: true,
     };
     let deforming = input_locations(module, entry_index, deforming)?;
     let mut stage = instrument_times(
@@ -185,12 +191,15 @@ pub(crate) fn instrument(
         &deforming,
     )?;
     let TimedPosition {
-        location, twins, ..
+        location,
+        twins,
+        member_twins,
     } = stage.times.remove(0);
     Ok(VertexStage {
         entry_index: Some(entry_index),
         previous_location: location,
         twins,
+        member_twins,
         instance_twins: stage.instance_twins.remove(0),
         plain: Some(stage.plain),
     })
@@ -236,6 +245,10 @@ pub(crate) struct TwinTime {
     pub name: &'static str,
     pub group: u32,
     pub first_binding: u32,
+    /// Whether a resource's own `previous_` members hold this time's
+    /// values ([`super::member_twins`]): last frame's, for the cache; not
+    /// an I-frame's several frames back.
+    pub own_previous: bool,
 }
 
 /// The position at one [`TwinTime`]: the output's location and the
@@ -244,6 +257,8 @@ pub(crate) struct TwinTime {
 pub(crate) struct TimedPosition {
     pub location: u32,
     pub twins: Vec<(Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>)>,
+    /// The resources read through their own `previous_` members instead.
+    pub member_twins: Vec<MemberTwin>,
 }
 
 /// What [`instrument_times`] made of the vertex entry point.
@@ -296,11 +311,23 @@ pub(crate) fn instrument_times(
     let mut twins_per_time = Vec::new();
     let mut twin_maps = Vec::new();
     for time in times {
-        let twins = twin_resources(module, entry_index, time);
+        let members = match time.own_previous {
+            true => {
+                let candidates = twinned(module, entry_index);
+                member_twins::member_twins(module, entry_index, position_member, &candidates)
+            }
+            false => Vec::new(),
+        };
+        let twins = twin_resources(module, entry_index, time, &members);
         let twin_map: GlobalTwins = twins.iter().copied().collect();
-        let function_twins = twin_helpers(module, function, &twin_map, time.name);
-        twins_per_time.push(twins);
-        twin_maps.push((time.name, twin_map, function_twins));
+        let function_twins = twin_helpers(module, function, (&twin_map, &members), time.name);
+        twins_per_time.push((twins, members.clone()));
+        twin_maps.push(TimeTwins {
+            time: time.name,
+            globals: twin_map,
+            members,
+            functions: function_twins,
+        });
     }
     let helpers = PositionHelpers::add(
         module,
@@ -369,7 +396,11 @@ pub(crate) fn instrument_times(
         times: locations
             .into_iter()
             .zip(twins_per_time)
-            .map(|(location, twins)| TimedPosition { location, twins })
+            .map(|(location, (twins, member_twins))| TimedPosition {
+                location,
+                twins,
+                member_twins,
+            })
             .collect(),
         instance_twins,
         plain: plain_entry(function, helpers.current),
@@ -380,6 +411,14 @@ pub(crate) fn instrument_times(
 type GlobalTwins = HashMap<Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>>;
 /// Each helper that reads a twinned resource, and its twin.
 type FunctionTwins = HashMap<Handle<Function>, Handle<Function>>;
+
+/// How the position at one other time reads that time's values.
+struct TimeTwins {
+    time: &'static str,
+    globals: GlobalTwins,
+    members: Vec<MemberTwin>,
+    functions: FunctionTwins,
+}
 
 /// The result member that is `@builtin(position)`; `None` when the
 /// result is the position itself.
@@ -399,7 +438,8 @@ fn position_member(
     }
 }
 
-/// A twin for `time` of each resource the position computation may read:
+/// A twin for `time` of each resource the position computation may read
+/// (but those in `members`, which keep their own previous values):
 /// uniforms and read-only storage, in the entry point or any helper it
 /// calls, bound in the time's group from its first binding on. (In handle
 /// order, so twins get the same bindings on every run.)
@@ -407,9 +447,14 @@ fn twin_resources(
     module: &mut Module,
     entry_index: usize,
     time: &TwinTime,
+    members: &[MemberTwin],
 ) -> Vec<(Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>)> {
     let mut twins = Vec::new();
-    for (binding, g) in (time.first_binding..).zip(twinned(module, entry_index)) {
+    let own: Vec<_> = members.iter().map(|m| m.global).collect();
+    let needed = twinned(module, entry_index)
+        .into_iter()
+        .filter(|g| !own.contains(g));
+    for (binding, g) in (time.first_binding..).zip(needed) {
         let global = module.global_variables[g].clone();
         let twin = module.global_variables.append(
             naga::GlobalVariable {
@@ -448,7 +493,7 @@ pub(crate) fn twinned(module: &Module, entry_index: usize) -> Vec<Handle<naga::G
 fn twin_helpers(
     module: &mut Module,
     function: &Function,
-    twin_map: &GlobalTwins,
+    (twin_map, members): (&GlobalTwins, &[MemberTwin]),
     time: &str,
 ) -> FunctionTwins {
     let mut reachable = Vec::new();
@@ -456,10 +501,10 @@ fn twin_helpers(
     let mut function_twins = FunctionTwins::new();
     for &f in &reachable {
         let source = module.functions[f].clone();
-        let reads_twinned =
-            source.expressions.iter().any(
-                |(_, e)| matches!(*e, Expression::GlobalVariable(g) if twin_map.contains_key(&g)),
-            ) || calls_any(&source.body, &function_twins);
+        let reads_twinned = source.expressions.iter().any(|(_, e)| {
+            matches!(*e, Expression::GlobalVariable(g)
+                if twin_map.contains_key(&g) || members.iter().any(|m| m.global == g))
+        }) || calls_any(&source.body, &function_twins);
         if !reads_twinned {
             continue;
         }
@@ -481,6 +526,7 @@ fn twin_helpers(
         for (&from, &to) in &function_twins {
             copy.replace_function(from, to);
         }
+        member_twins::swap_members(module, &mut copy, &source, members);
         let twin = copy.run();
         let handle = module.functions.append(twin, naga::Span::UNDEFINED);
         function_twins.insert(f, handle);
@@ -502,7 +548,7 @@ impl PositionHelpers {
         module: &mut Module,
         (name, function): (&str, &Function),
         result_ty: Handle<naga::Type>,
-        times: &[(&str, GlobalTwins, FunctionTwins)],
+        times: &[TimeTwins],
         position_member: Option<u32>,
     ) -> PositionHelpers {
         let stripped_arguments = super::without_bindings(&function.arguments);
@@ -525,13 +571,13 @@ impl PositionHelpers {
         let vec4 = super::builder::vec4_type(module);
         let current = module.functions.append(current, naga::Span::UNDEFINED);
         let mut others = Vec::new();
-        for (time, twin_map, function_twins) in times {
+        for twins in times {
             let mut other = FunctionCopy::new(
                 module,
                 function,
                 &all,
                 Function {
-                    name: Some(format!("{name}_{time}")),
+                    name: Some(format!("{name}_{}", twins.time)),
                     arguments: stripped_arguments.clone(),
                     result: Some(naga::FunctionResult {
                         ty: vec4,
@@ -540,12 +586,13 @@ impl PositionHelpers {
                     ..Function::default()
                 },
             );
-            for (&from, &to) in twin_map {
+            for (&from, &to) in &twins.globals {
                 other.replace_global(from, to);
             }
-            for (&from, &to) in function_twins {
+            for (&from, &to) in &twins.functions {
                 other.replace_function(from, to);
             }
+            member_twins::swap_members(module, &mut other, function, &twins.members);
             if let Some(index) = position_member {
                 other.return_member(index);
             }
@@ -792,6 +839,7 @@ pub(crate) fn fragment_only(module: &Module, fragment: usize) -> VertexStage {
         entry_index: None,
         previous_location: locations.iter().map(|l| l + 1).max().unwrap_or(0),
         twins: Vec::new(),
+        member_twins: Vec::new(),
         instance_twins: Vec::new(),
         plain: None,
     }

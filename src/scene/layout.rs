@@ -18,6 +18,11 @@ pub const SIMULATED: &[&str] = &[
     "light_clip_from_world",
     "time",
     "resolution",
+    "previous_clip_from_world",
+    "previous_clip_from_view",
+    "previous_view_from_world",
+    "previous_world_from_local",
+    "previous_clip_from_local",
 ];
 
 /// What the simulation can fill: each role with the shapes of member it
@@ -58,6 +63,26 @@ pub const ROLES: &[(&str, &str)] = &[
     ),
     ("time", "seconds since the first frame (f32)"),
     ("resolution", "the frame's size in pixels (vec2<f32>)"),
+    (
+        "previous_clip_from_world",
+        "last frame's view-projection (mat4x4<f32>)",
+    ),
+    (
+        "previous_clip_from_view",
+        "last frame's projection (mat4x4<f32>)",
+    ),
+    (
+        "previous_view_from_world",
+        "last frame's view matrix (mat4x4<f32>)",
+    ),
+    (
+        "previous_world_from_local",
+        "the object's (or instance's) model matrix last frame (mat4x4<f32>), as engines keep it beside this frame's",
+    ),
+    (
+        "previous_clip_from_local",
+        "last frame's view-projection times model (mat4x4<f32>)",
+    ),
     (
         "joint_matrices",
         "a skinned object's joints' matrices, element i the model matrix times joint i's pose (an array of mat4x4<f32>, uniform or storage)",
@@ -218,14 +243,23 @@ fn scalar_shape(scalar: naga::Scalar, n: u32) -> Shape {
 #[derive(Clone, Copy, Debug)]
 pub struct Placement {
     pub world_from_local: Mat4,
+    /// The same placement in the frame before.
+    pub previous_world_from_local: Mat4,
     pub object: usize,
     pub element: usize,
 }
 
 /// The value of a simulated member `name` in frame `state`, for a draw
 /// placed by `world_from_local`; `None` when the simulation does not fill
-/// `name`.
+/// `name`. `previous_<name>` is `<name>` in the frame before.
 pub fn simulated(name: &str, state: &FrameState, at: Placement) -> Option<Vec<f32>> {
+    if let Some(now) = name.strip_prefix("previous_") {
+        let before = Placement {
+            world_from_local: at.previous_world_from_local,
+            ..at
+        };
+        return simulated(now, state.before(), before);
+    }
     let world_from_local = at.world_from_local;
     Some(match name {
         "joint_matrices" => {

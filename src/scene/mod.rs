@@ -436,9 +436,20 @@ pub struct FrameState {
     /// an object without a skin): a skinning matrix is the object's
     /// `world_from_local` times its joint's pose.
     pub joints: Vec<Vec<Mat4>>,
+    /// The frame before (`None` on the first frame, and within that state
+    /// itself): what a `previous_` member holds, as engines keep last
+    /// frame's transforms beside this frame's (Bevy's
+    /// `previous_world_from_local`).
+    pub previous: Option<Box<FrameState>>,
 }
 
 impl FrameState {
+    /// The frame before, or this one on the first frame (as a twin holds
+    /// this frame's contents on the first frame).
+    pub fn before(&self) -> &FrameState {
+        self.previous.as_deref().unwrap_or(self)
+    }
+
     /// Object `object`'s instances' whole world transforms: its placement
     /// times each instance's within it.
     pub fn instance_worlds(&self, object: usize) -> Vec<Mat4> {
@@ -683,13 +694,26 @@ impl Scene {
     /// the scene's own).
     pub fn frame_sized(&self, n: u32, size: [u32; 2]) -> FrameState {
         let mut state = self.frame(n, size[0] as f32 / size[1].max(1) as f32);
-        state.resolution = glam::Vec2::new(size[0] as f32, size[1] as f32);
+        let resolution = glam::Vec2::new(size[0] as f32, size[1] as f32);
+        state.resolution = resolution;
+        if let Some(previous) = state.previous.as_mut() {
+            previous.resolution = resolution;
+        }
         state
     }
 
     /// The state of frame `n` (0-based, warm-up included), simulating only
-    /// the declared effects.
+    /// the declared effects, with the frame before it.
     pub fn frame(&self, n: u32, aspect: f32) -> FrameState {
+        let mut state = self.frame_alone(n, aspect);
+        if n > 0 {
+            state.previous = Some(Box::new(self.frame_alone(n - 1, aspect)));
+        }
+        state
+    }
+
+    /// Frame `n`'s state without the frame before.
+    fn frame_alone(&self, n: u32, aspect: f32) -> FrameState {
         let t = n as f32;
         let camera = &self.camera;
         let (mut eye, mut target) = (Vec3::from(camera.eye), Vec3::from(camera.target));
@@ -771,6 +795,7 @@ impl Scene {
             objects,
             instances,
             joints: self.joint_poses(t),
+            previous: None,
         }
     }
 
@@ -813,7 +838,7 @@ mod tests {
     #[test]
     fn only_declared_effects_move() {
         let still = scene("");
-        assert_eq!(still.frame(0, 1.0), still.frame(10, 1.0));
+        assert_eq!(still.frame_alone(0, 1.0), still.frame_alone(10, 1.0));
         let mesh = still.objects[0].mesh.build(Path::new(".")).unwrap();
         assert!(still.deformed(0, &mesh, 10).is_none());
 
@@ -831,7 +856,7 @@ mod tests {
         let deforming = scene("\"deformation\"");
         let moved = deforming.deformed(0, &mesh, 3).unwrap();
         assert_ne!(moved.positions, mesh.positions);
-        assert_eq!(deforming.frame(0, 1.0), deforming.frame(3, 1.0));
+        assert_eq!(deforming.frame_alone(0, 1.0), deforming.frame_alone(3, 1.0));
     }
 
     /// Depth of a point `distance` in front of the camera.
@@ -918,7 +943,7 @@ mod tests {
             format!("effects = [{effects}]\n[[objects]]\nmesh = {{ kind = \"cube\" }}\ninstances = {{ count = 4, layout = \"ring\", orbit_degrees_per_frame = [1, -1, 2, 0], spin_degrees_per_frame = [0, 3, 0] }}\n[[objects]]\nmesh = {{ kind = \"cube\" }}\n")
         };
         let still = Scene::parse(Arc::new(SourceFile::new("s.toml", text("")))).unwrap();
-        assert_eq!(still.frame(0, 1.0), still.frame(5, 1.0));
+        assert_eq!(still.frame_alone(0, 1.0), still.frame_alone(5, 1.0));
         let state = still.frame(0, 1.0);
         assert_eq!(state.instances[0].len(), 4);
         assert_eq!(state.instances[1], [Mat4::IDENTITY]);

@@ -368,19 +368,22 @@ pub fn fill(
         for element in 0..len {
             let base = (element * buffer.stride) as usize;
             // A joint's element is no instance: the object's placement.
-            let instance = state.instances[object]
-                .get(element as usize)
-                .copied()
-                .filter(|_| !joints)
-                .unwrap_or(glam::Mat4::IDENTITY);
-            let world_from_local = if relative {
-                instance
-            } else {
-                state.objects[object] * instance
+            let placed = |state: &FrameState| {
+                let instance = state.instances[object]
+                    .get(element as usize)
+                    .copied()
+                    .filter(|_| !joints)
+                    .unwrap_or(glam::Mat4::IDENTITY);
+                if relative {
+                    instance
+                } else {
+                    state.objects[object] * instance
+                }
             };
             let role = scene.role(&buffer.name, &member.name);
             let at = layout::Placement {
-                world_from_local,
+                world_from_local: placed(state),
+                previous_world_from_local: placed(state.before()),
                 object,
                 element: element as usize,
             };

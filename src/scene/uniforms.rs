@@ -121,6 +121,7 @@ pub fn fill(
         let role = scene.role(&buffer.name, &member.name);
         let at = layout::Placement {
             world_from_local: state.objects[object],
+            previous_world_from_local: state.before().objects[object],
             object,
             element: layout::element_index(&member.name),
         };

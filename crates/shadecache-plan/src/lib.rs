@@ -687,8 +687,28 @@ pub struct Bindings {
     /// Previous-frame twins: same type as the binding they shadow, filled
     /// with last frame's contents (this frame's on the first frame).
     pub previous: Vec<Twin>,
+    /// Resources that keep last frame's values themselves, in `previous_`
+    /// members beside the members the position reads (Bevy's mesh
+    /// `previous_world_from_local`): the previous position reads those,
+    /// the resource has no twin, and the host keeps the `previous_`
+    /// members up to date as it writes the rest (this frame's values on
+    /// the first frame).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub previous_members: Vec<PreviousMembers>,
     /// The cache's own resources.
     pub cache: Vec<Resource>,
+}
+
+/// A resource the previous position reads through its own `previous_`
+/// members.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PreviousMembers {
+    /// The resource, as in [`Bindings::original`].
+    pub resource: Resource,
+    /// Each member the position reads, and the member that holds its
+    /// value last frame (`["world_from_local",
+    /// "previous_world_from_local"]`).
+    pub members: Vec<[String; 2]>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

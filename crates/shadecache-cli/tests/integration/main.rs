@@ -23,6 +23,7 @@ mod lowres;
 mod merge;
 mod partition;
 mod payload;
+mod previous_members;
 mod profile;
 mod real_shaders;
 mod report_page;
