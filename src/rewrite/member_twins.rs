@@ -320,10 +320,11 @@ fn fragment(in: Out) -> @location(0) vec4<f32> { return vec4(in.normal, 1.0); }
     fn instrumented(position: &str) -> (Vec<String>, Vec<String>) {
         let text = MESHES.replace("POSITION", position);
         let shader = crate::front::parse(SourceFile::new("t.wgsl", text))
-            .unwrap_or_else(|e| panic!("{}", e.render()));
+            .map_err(|e| e.render())
+            .unwrap();
         let mut module = shader.module.clone();
         let stage = super::super::vertex::instrument(&mut module, 0, (3, 0), &[]).unwrap();
-        crate::front::validate(&module).unwrap_or_else(|e| panic!("{e:?}"));
+        crate::front::validate(&module).unwrap();
         let name = |g: naga::Handle<naga::GlobalVariable>| {
             module.global_variables[g].name.clone().unwrap_or_default()
         };
