@@ -45,6 +45,8 @@ struct ShaderJob {
     deforming_inputs: Vec<String>,
     vertex: Option<PathBuf>,
     composition: front::compose::Composition,
+    /// WESL packages by their crate's name, found at `run`.
+    crate_packages: Vec<String>,
     nodes: Nodes,
     variants: Vec<Variant>,
 }
@@ -59,6 +61,7 @@ impl ShaderJob {
             deforming_inputs: Vec::new(),
             vertex: None,
             composition: front::compose::Composition::default(),
+            crate_packages: Vec::new(),
             nodes: Nodes::Top(1),
             variants: Variant::ALL.to_vec(),
         }
@@ -216,6 +219,17 @@ impl Build {
         self
     }
 
+    /// A WESL package of the last shader that ships in a crate's `src/`,
+    /// as Bevy's do (`bevy_pbr::render::pbr` is bevy_pbr's
+    /// `src/render/pbr.wesl`): `name` is the crate, looked up among the
+    /// dependencies of this package with `cargo metadata --offline`, so the
+    /// version the game builds with is the one composed. Needs the `wesl`
+    /// feature.
+    pub fn crate_package(mut self, name: impl Into<String>) -> Self {
+        self.last().crate_packages.push(name.into());
+        self
+    }
+
     /// Which composer puts the last shader together, where the file does
     /// not tell (a `.wesl` file or WESL syntax is WESL, which needs this
     /// crate's `wesl` feature; `#import`s are naga_oil's).
@@ -313,6 +327,26 @@ impl Build {
         for job in &self.jobs {
             let path = resolve(&job.path);
             let vertex = job.vertex.as_deref().map(resolve);
+            let mut packages: Vec<(String, PathBuf)> = job
+                .composition
+                .packages
+                .iter()
+                .map(|(name, dir)| (name.clone(), resolve(dir)))
+                .collect();
+            let mut missing = false;
+            for name in &job.crate_packages {
+                match crate_package(name, &resolve(Path::new("."))) {
+                    Ok(dir) => packages.push((name.clone(), dir)),
+                    Err(err) => {
+                        errors.push(err);
+                        missing = true;
+                    }
+                }
+            }
+            if missing {
+                // Its imports would only fail again, less clearly.
+                continue;
+            }
             let composition = front::compose::Composition {
                 import_paths: job
                     .composition
@@ -320,12 +354,7 @@ impl Build {
                     .iter()
                     .map(|p| resolve(p))
                     .collect(),
-                packages: job
-                    .composition
-                    .packages
-                    .iter()
-                    .map(|(name, dir)| (name.clone(), resolve(dir)))
-                    .collect(),
+                packages,
                 defs: job.composition.defs.clone(),
                 composer: job.composition.composer,
             };
@@ -489,6 +518,29 @@ impl Build {
         }
         Ok(())
     }
+}
+
+/// The folder of the WESL package a crate ships (its `src/`).
+#[cfg(feature = "wesl")]
+fn crate_package(name: &str, manifest: &Path) -> Result<PathBuf, Error> {
+    // Cargo gives a build script its target; elsewhere, the host's.
+    let platform = std::env::var("TARGET")
+        .ok()
+        .or_else(front::crate_package::host_triple);
+    let lookup = front::crate_package::Lookup {
+        from: manifest,
+        offline: true,
+        platform: platform.as_deref(),
+    };
+    front::crate_package::source_dir(name, lookup)
+        .map_err(|message| Error::plain(Diagnostic::error(message)))
+}
+
+#[cfg(not(feature = "wesl"))]
+fn crate_package(name: &str, _manifest: &Path) -> Result<PathBuf, Error> {
+    Err(Error::plain(Diagnostic::error(format!(
+        ".crate_package(\"{name}\"): WESL packages need shadecache's `wesl` feature"
+    ))))
 }
 
 /// The folder a job's files go in: its `.name()`, else its file stem.

@@ -14,6 +14,8 @@
 #![warn(missing_docs)]
 
 pub mod compose;
+#[cfg(feature = "wesl")]
+pub mod crate_package;
 pub mod vertex;
 #[cfg(feature = "wesl")]
 pub mod wesl;

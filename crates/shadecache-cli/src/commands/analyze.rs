@@ -47,7 +47,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         Some(path) => read_weights(path)?,
         None => Weights::default(),
     };
-    let shader = front::load_with(&args.shader, &args.compose.composition(), None, None)?;
+    let shader = front::load_with(&args.shader, &args.compose.composition()?, None, None)?;
     // Every fragment entry point in turn, unless `--entry` names one.
     let analyses = analysis::analyze_entries(
         &shader,

@@ -10,7 +10,7 @@ pub mod scene;
 use std::path::{Path, PathBuf};
 
 use shadecache::diagnostic::Color;
-use shadecache::diagnostic::Error;
+use shadecache::diagnostic::{Diagnostic, Error};
 use shadecache::front::compose::{ComposerKind, Composition, ShaderDef};
 use shadecache::front::{self, Shader};
 
@@ -106,11 +106,13 @@ pub struct ComposeArgs {
     #[arg(long = "import-path", value_name = "DIR")]
     pub import_paths: Vec<PathBuf>,
 
-    /// A WESL package by name: `name::a::b` is `DIR/a/b.wesl` (Bevy's
-    /// `bevy_pbr=…/bevy_pbr-0.20.1/src`); repeatable. The shader is WESL
-    /// when one is given.
-    #[arg(long = "package", value_name = "NAME=DIR", value_parser = parse_package)]
-    pub packages: Vec<(String, PathBuf)>,
+    /// A WESL package by name: `name::a::b` is `DIR/a/b.wesl`; repeatable.
+    /// A NAME alone is the `src/` of the crate of that name among the
+    /// dependencies of the Cargo workspace here (Bevy's: `--package
+    /// bevy_pbr`), found with `cargo metadata`. The shader is WESL when
+    /// one is given.
+    #[arg(long = "package", value_name = "NAME[=DIR]", value_parser = parse_package)]
+    pub packages: Vec<(String, Option<PathBuf>)>,
 
     /// A shader def for `#ifdef` (naga_oil) or a feature for `@if` (WESL):
     /// NAME, or NAME=VALUE (true, false, an i32, or a u32 as `3u`; a WESL
@@ -125,23 +127,64 @@ pub struct ComposeArgs {
     pub composer: Option<ComposerKind>,
 }
 
-fn parse_package(text: &str) -> Result<(String, PathBuf), String> {
+fn parse_package(text: &str) -> Result<(String, Option<PathBuf>), String> {
     match text.split_once('=') {
         Some((name, dir)) if !name.is_empty() && !dir.is_empty() => {
-            Ok((name.to_string(), PathBuf::from(dir)))
+            Ok((name.to_string(), Some(PathBuf::from(dir))))
         }
-        _ => Err(format!("`{text}`: a package is NAME=DIR")),
+        None if !text.is_empty() => Ok((text.to_string(), None)),
+        _ => Err(format!(
+            "`{text}`: a package is NAME=DIR, or a crate's NAME"
+        )),
     }
 }
 
+/// The folder of a package given by its crate's name alone.
+#[cfg(feature = "wesl")]
+fn crate_package(name: &str) -> Result<PathBuf, Error> {
+    let here = std::env::current_dir().map_err(|err| {
+        Error::plain(Diagnostic::error(format!(
+            "cannot read the current folder to find the crate `{name}`: {err}"
+        )))
+    })?;
+    let host = front::crate_package::host_triple();
+    let lookup = front::crate_package::Lookup {
+        from: &here,
+        offline: false,
+        platform: host.as_deref(),
+    };
+    front::crate_package::source_dir(name, lookup)
+        .map_err(|message| Error::plain(Diagnostic::error(message)))
+}
+
+#[cfg(not(feature = "wesl"))]
+fn crate_package(name: &str) -> Result<PathBuf, Error> {
+    Err(Error::plain(Diagnostic::error(format!(
+        "--package {name}: WESL packages need this build's `wesl` feature (cargo install shadecache-cli --features wesl)"
+    ))))
+}
+
 impl ComposeArgs {
-    pub fn composition(&self) -> Composition {
-        Composition {
+    /// The composition asked for, each package given by a crate's name
+    /// found in the Cargo workspace here.
+    pub fn composition(&self) -> Result<Composition, Error> {
+        let packages = self
+            .packages
+            .iter()
+            .map(|(name, dir)| {
+                let dir = match dir {
+                    Some(dir) => dir.clone(),
+                    None => crate_package(name)?,
+                };
+                Ok((name.clone(), dir))
+            })
+            .collect::<Result<_, Error>>()?;
+        Ok(Composition {
             import_paths: self.import_paths.clone(),
-            packages: self.packages.clone(),
+            packages,
             defs: self.defs.clone(),
             composer: self.composer,
-        }
+        })
     }
 }
 
@@ -221,7 +264,7 @@ impl StageArgs {
     pub fn load(&self, shader: &Path) -> Result<Shader, Error> {
         front::load_with(
             shader,
-            &self.compose.composition(),
+            &self.compose.composition()?,
             self.vertex.as_deref(),
             self.vertex_entry.as_deref(),
         )

@@ -264,3 +264,112 @@ fn wesl_bad_import_points_into_the_module() {
         At::Line("let n = normalize"),
     );
 }
+
+/// `shadecache` run in `dir`.
+fn shadecache_in(dir: &Path, args: &[&OsStr]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_shadecache"))
+        .args(args)
+        .current_dir(dir)
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("the shadecache binary runs")
+}
+
+/// A game's material imports an engine's shaders by the engine crate's
+/// name, as a Bevy 0.20 material imports `bevy_pbr::…`; `--package NAME`
+/// alone finds that crate's `src/` among the game's dependencies with
+/// `cargo metadata`, so the user never spells a registry path. Here the
+/// engine is a path dependency laid out as Bevy's crates are (its
+/// shaders under `src/render/`). A crate the game does not depend on is an
+/// error that says what to give instead.
+#[test]
+fn a_wesl_package_is_found_by_its_crates_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let (engine, game) = (dir.path().join("engine_pbr"), dir.path().join("game"));
+    let corpus = root().join("corpus/wesl");
+    std::fs::create_dir_all(engine.join("src/render")).unwrap();
+    std::fs::create_dir_all(game.join("src")).unwrap();
+    std::fs::write(
+        engine.join("Cargo.toml"),
+        "[package]\nname = \"engine_pbr\"\nversion = \"0.1.0\"\nedition = \"2021\"\n",
+    )
+    .unwrap();
+    std::fs::write(engine.join("src/lib.rs"), "").unwrap();
+    for module in std::fs::read_dir(corpus.join("packages/engine_pbr/render")).unwrap() {
+        let module = module.unwrap().path();
+        std::fs::copy(
+            &module,
+            engine.join("src/render").join(module.file_name().unwrap()),
+        )
+        .unwrap();
+    }
+    std::fs::write(
+        game.join("Cargo.toml"),
+        "[package]\nname = \"game\"\nversion = \"0.1.0\"\nedition = \"2021\"\n\n[dependencies]\nengine_pbr = { path = \"../engine_pbr\" }\n",
+    )
+    .unwrap();
+    std::fs::write(game.join("src/main.rs"), "fn main() {}\n").unwrap();
+    for file in ["lava_material.wesl", "noise.wesl"] {
+        std::fs::copy(corpus.join(file), game.join(file)).unwrap();
+    }
+
+    let analyze = |package: &str| {
+        shadecache_in(
+            &game,
+            &[
+                "analyze".as_ref(),
+                "lava_material.wesl".as_ref(),
+                "--package".as_ref(),
+                package.as_ref(),
+                "--def".as_ref(),
+                "MATERIAL_BIND_GROUP=2".as_ref(),
+                "--format".as_ref(),
+                "json".as_ref(),
+            ],
+        )
+    };
+    let found = analyze("engine_pbr");
+    assert_eq!(found.status.code(), Some(0), "{}", stderr(&found));
+    let by_dir = analyze(&format!("engine_pbr={}", engine.join("src").display()));
+    assert_eq!(
+        found.stdout, by_dir.stdout,
+        "the crate's src/ is the package"
+    );
+
+    let missing = analyze("engine_sky");
+    let err = stderr(&missing);
+    assert_eq!(missing.status.code(), Some(1), "{err}");
+    assert!(err.contains("no crate `engine_sky`"), "{err}");
+    assert!(err.contains("engine_sky=DIR"), "{err}");
+}
+
+/// A build script names a package by its crate (`.crate_package`): found
+/// among the dependencies of the package being built (here this test's
+/// own, whose graph has `shadecache_plan`), and a crate not among them
+/// fails the build with the way out, before the shader is composed.
+#[test]
+fn a_build_script_finds_a_wesl_package_by_its_crate() {
+    use shadecache::build::Build;
+    let dir = tempfile::tempdir().unwrap();
+    let job = |package: &str| {
+        Build::new()
+            .shader(root().join(MATERIAL))
+            .import_path(root().join(PACKAGES))
+            .crate_package(package)
+            .def(GROUP.0, GROUP.1)
+            .vertex_shader(root().join(MESH))
+            .variant(Variant::TwoPass)
+            .out_dir(dir.path())
+            .quiet()
+            .run()
+    };
+    let outputs = job("shadecache_plan").unwrap_or_else(|e| panic!("{:?}", e.errors));
+    assert!(!outputs.files.is_empty(), "{outputs:?}");
+    let err = job("engine_sky").unwrap_err();
+    assert_eq!(err.errors.len(), 1, "{:?}", err.errors);
+    let said = err.errors[0].render();
+    assert!(
+        said.contains("no crate `engine_sky`") && said.contains("engine_sky=DIR"),
+        "{said}"
+    );
+}

@@ -1,0 +1,180 @@
+//! WESL packages that ship inside a Rust crate, found by the crate's name.
+//!
+//! Bevy 0.20 keeps each crate's shaders under its `src/`, and its shader
+//! cache names them by crate: `bevy_pbr::render::pbr` is
+//! `bevy_pbr/src/render/pbr.wesl`. A game's material imports them the
+//! same way, so composing it needs each of those crates' `src/` folders,
+//! which lie in cargo's registry at paths that differ per machine and per
+//! version. `--package bevy_pbr` (and [`crate::build::Build::crate_package`])
+//! asks cargo instead: the crate of that name in the dependency graph of
+//! the Cargo workspace around a folder (the current one for the CLI, the
+//! manifest's for a build script), through `cargo metadata`.
+
+use std::path::{Path, PathBuf};
+
+use cargo_metadata::{MetadataCommand, Package, PackageId};
+
+/// Where `cargo metadata` runs, and how.
+#[derive(Clone, Copy, Debug)]
+pub struct Lookup<'a> {
+    /// A folder inside the workspace whose dependencies are searched.
+    pub from: &'a Path,
+    /// No network: a build script's dependencies are downloaded already,
+    /// and a cargo that updated its index under the build holding the
+    /// package cache would wait on it.
+    pub offline: bool,
+    /// The target triple whose dependencies count (a build script's
+    /// `TARGET`; the host's, [`host_triple`], for the CLI). Without it
+    /// cargo reads every platform's dependencies, which offline it may
+    /// not have downloaded.
+    pub platform: Option<&'a str>,
+}
+
+/// The triple of the toolchain's host, from `rustc -vV` (`$RUSTC` where
+/// cargo set it); `None` where that does not run.
+pub fn host_triple() -> Option<String> {
+    let rustc = std::env::var_os("RUSTC").unwrap_or_else(|| "rustc".into());
+    let output = std::process::Command::new(rustc).arg("-vV").output().ok()?;
+    String::from_utf8(output.stdout)
+        .ok()?
+        .lines()
+        .find_map(|line| line.strip_prefix("host: "))
+        .map(|host| host.trim().to_string())
+}
+
+/// The `src/` folder of the crate `name` in the dependency graph of the
+/// workspace around `lookup.from`: the WESL package `name::`. An error
+/// says what is missing and what to give instead (`NAME=DIR`).
+pub fn source_dir(name: &str, lookup: Lookup) -> Result<PathBuf, String> {
+    let mut command = MetadataCommand::new();
+    command.current_dir(lookup.from);
+    let mut options = Vec::new();
+    if lookup.offline {
+        options.push("--offline".to_string());
+    }
+    if let Some(platform) = lookup.platform {
+        options.extend(["--filter-platform".to_string(), platform.to_string()]);
+    }
+    command.other_options(options);
+    let metadata = command.exec().map_err(|err| {
+        format!(
+            "cannot find the crate `{name}` for its WESL package: `cargo metadata` in {} failed: {}; give the package's folder as {name}=DIR",
+            lookup.from.display(),
+            first_line(&err.to_string())
+        )
+    })?;
+    let crate_name = name.replace('-', "_");
+    let named: Vec<&Package> = metadata
+        .packages
+        .iter()
+        .filter(|p| p.name.replace('-', "_") == crate_name)
+        .collect();
+    let package = match named.as_slice() {
+        [] => {
+            return Err(format!(
+                "no crate `{name}` in the dependencies of the Cargo workspace at {}; add it as a dependency, or give the package's folder as {name}=DIR",
+                metadata.workspace_root
+            ))
+        }
+        [one] => *one,
+        several => pick(several, metadata.resolve.as_ref()).ok_or_else(|| {
+            let versions: Vec<String> = several.iter().map(|p| p.version.to_string()).collect();
+            format!(
+                "the Cargo workspace at {} depends on several versions of `{name}` ({}); give the package's folder as {name}=DIR",
+                metadata.workspace_root,
+                versions.join(", ")
+            )
+        })?,
+    };
+    let dir = package
+        .manifest_path
+        .parent()
+        .map(|root| root.join("src").into_std_path_buf())
+        .ok_or_else(|| format!("`{}` has no folder", package.manifest_path))?;
+    if dir.is_dir() {
+        Ok(dir)
+    } else {
+        Err(format!(
+            "the crate `{name}` {} has no `src/` folder at {}; give the package's folder as {name}=DIR",
+            package.version,
+            dir.display()
+        ))
+    }
+}
+
+/// Of several versions of one crate, the one the workspace's root package
+/// depends on directly, where there is one such.
+fn pick<'a>(
+    several: &[&'a Package],
+    resolve: Option<&cargo_metadata::Resolve>,
+) -> Option<&'a Package> {
+    let resolve = resolve?;
+    let root = resolve.root.as_ref()?;
+    let deps: Vec<&PackageId> = resolve
+        .nodes
+        .iter()
+        .find(|node| &node.id == root)?
+        .dependencies
+        .iter()
+        .collect();
+    let direct: Vec<&&Package> = several.iter().filter(|p| deps.contains(&&p.id)).collect();
+    match direct.as_slice() {
+        [one] => Some(**one),
+        _ => None,
+    }
+}
+
+fn first_line(text: &str) -> &str {
+    text.lines()
+        .find(|line| !line.trim().is_empty())
+        .unwrap_or(text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn host() -> &'static str {
+        static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+        HOST.get_or_init(|| host_triple().expect("rustc -vV names the host"))
+    }
+
+    fn lookup() -> Lookup<'static> {
+        Lookup {
+            from: Path::new(env!("CARGO_MANIFEST_DIR")),
+            offline: true,
+            platform: Some(host()),
+        }
+    }
+
+    /// A crate of the graph is found by its name (a dash or an underscore
+    /// alike), and its package is its `src/`.
+    #[test]
+    fn a_dependency_crates_source_folder_is_its_package() {
+        let dir = source_dir("shadecache-plan", lookup()).unwrap();
+        assert!(dir.ends_with("crates/shadecache-plan/src"), "{dir:?}");
+        assert!(dir.join("lib.rs").is_file());
+        assert_eq!(source_dir("shadecache_plan", lookup()).unwrap(), dir);
+    }
+
+    /// A crate the workspace does not depend on, and a folder outside any
+    /// workspace, are errors that say what to give instead.
+    #[test]
+    fn a_crate_not_in_the_graph_is_an_error_naming_the_way_out() {
+        let err = source_dir("bevy_not_a_dependency", lookup()).unwrap_err();
+        assert!(err.contains("no crate `bevy_not_a_dependency`"), "{err}");
+        assert!(err.contains("bevy_not_a_dependency=DIR"), "{err}");
+        let outside = std::env::temp_dir();
+        let err = source_dir(
+            "bevy_pbr",
+            Lookup {
+                from: &outside,
+                offline: true,
+                platform: Some(host()),
+            },
+        )
+        .unwrap_err();
+        assert!(err.contains("`cargo metadata`"), "{err}");
+        assert!(err.contains("bevy_pbr=DIR"), "{err}");
+    }
+}
