@@ -29,6 +29,36 @@ pub fn reads_arguments(exprs: &[&Expression], set: &ExprSet) -> bool {
 /// pointer stored through, or a condition under which the store runs (for
 /// a local, only the stores that reach the load: [`proc::reaching_definitions`]); or
 /// `a` is a call result and `b` one of the call's arguments.
+/// The constant member path of a pointer from its variable (`None` for a
+/// dynamic index), outermost first.
+fn member_path(function: &naga::Function, mut pointer: Handle<Expression>) -> Vec<Option<u32>> {
+    let mut path = Vec::new();
+    loop {
+        match function.expressions[pointer] {
+            Expression::AccessIndex { base, index } => {
+                path.push(Some(index));
+                pointer = base;
+            }
+            Expression::Access { base, .. } => {
+                path.push(None);
+                pointer = base;
+            }
+            _ => break,
+        }
+    }
+    path.reverse();
+    path
+}
+
+/// Whether two pointers into one variable reach parts that cannot
+/// overlap: their paths part at a constant index.
+fn disjoint(function: &naga::Function, a: Handle<Expression>, b: Handle<Expression>) -> bool {
+    member_path(function, a)
+        .iter()
+        .zip(&member_path(function, b))
+        .any(|pair| matches!(pair, (Some(x), Some(y)) if x != y))
+}
+
 #[derive(Debug)]
 pub struct ExprGraph {
     graph: DiGraph<Handle<Expression>, ()>,
@@ -37,6 +67,21 @@ pub struct ExprGraph {
 
 impl ExprGraph {
     pub fn new(function: &naga::Function, layout: &FunctionLayout) -> Self {
+        Self::build(function, layout, false)
+    }
+
+    /// As [`ExprGraph::new`], but a load of a local's member needs no
+    /// store to another member: `out.position` computed from
+    /// `out.world_position` does not need what was stored in
+    /// `out.world_normal`. (Only constant member paths are told apart; a
+    /// dynamic index may write any element.) The cache's analysis keeps
+    /// [`ExprGraph::new`], whose per-variable slices its figures were
+    /// measured with; what needs the position alone uses this.
+    pub fn member_precise(function: &naga::Function, layout: &FunctionLayout) -> Self {
+        Self::build(function, layout, true)
+    }
+
+    fn build(function: &naga::Function, layout: &FunctionLayout, precise: bool) -> Self {
         let mut graph = DiGraph::with_capacity(function.expressions.len(), 0);
         for (handle, _) in function.expressions.iter() {
             graph.add_node(handle);
@@ -84,12 +129,18 @@ impl ExprGraph {
                         local: Handle<naga::LocalVariable>|
          -> Option<Vec<Handle<Expression>>> {
             let definitions = reaching_definitions.get(&load)?;
+            let loaded = match function.expressions[load] {
+                Expression::Load { pointer } => pointer,
+                _ => load,
+            };
             let mut needed = Vec::new();
             for definition in definitions {
                 match *definition {
                     proc::Definition::Init => {
                         needed.extend(function.local_variables[local].init);
                     }
+                    proc::Definition::Store(index)
+                        if precise && disjoint(function, loaded, layout.stores[index].pointer) => {}
                     proc::Definition::Store(index) => {
                         store_needs(&layout.stores[index], &mut needed)
                     }

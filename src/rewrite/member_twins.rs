@@ -87,7 +87,7 @@ fn sliced_reads<'m>(
     seen: &mut HashSet<Handle<Function>>,
 ) {
     let layout = crate::proc::layout(module, function, 8.0);
-    let graph = ExprGraph::new(function, &layout);
+    let graph = ExprGraph::member_precise(function, &layout);
     let mut slice = ExprSet::with_capacity(function.expressions.len());
     for value in crate::proc::output_values(function, &layout, member) {
         slice.union_with(&graph.slice(value));
@@ -342,6 +342,22 @@ fn fragment(in: Out) -> @location(0) vec4<f32> { return vec4(in.normal, 1.0); }
     fn an_array_element_with_previous_siblings_needs_no_twin() {
         let (twins, members) = instrumented(
             "out.position = view.clip_from_world * world_from_local(i) * vec4(p, 1.0);",
+        );
+        assert_eq!(twins, ["view"]);
+        assert_eq!(members, ["mesh"]);
+    }
+
+    /// As Bevy's vertex stage: the position computed from a member of a
+    /// local struct whose other member (the normal) reads the mesh's
+    /// members without siblings. The slice goes by member, so the normal's
+    /// reads do not count.
+    #[test]
+    fn a_local_structs_other_members_are_outside_the_position() {
+        let (twins, members) = instrumented(
+            "var w: Out;
+    w.normal = (transpose(mesh[i].local_from_world) * vec4(n, 0.0)).xyz;
+    w.position = world_from_local(i) * vec4(p, 1.0);
+    out.position = view.clip_from_world * w.position;",
         );
         assert_eq!(twins, ["view"]);
         assert_eq!(members, ["mesh"]);
