@@ -91,10 +91,16 @@ fn an_engines_previous_members_replace_the_twin() {
     }
 
     // Without the siblings: the twin, as before.
-    let plain = parsed(&std::fs::read_to_string(root().join("corpus/noise_marble.wgsl")).unwrap());
-    let analysis = analysis::analyze(&plain, &analysis::Options::default()).unwrap();
+    assert_twinned(&std::fs::read_to_string(root().join("corpus/noise_marble.wgsl")).unwrap());
+}
+
+/// The two-pass rewrite of `text`'s top node twins its frame uniform and
+/// reads no `previous_` members.
+fn assert_twinned(text: &str) {
+    let shader = parsed(text);
+    let analysis = analysis::analyze(&shader, &analysis::Options::default()).unwrap();
     let rewritten = rewrite::rewrite(
-        &plain,
+        &shader,
         &analysis,
         &analysis.candidates[0],
         Variant::TwoPass,
@@ -116,18 +122,7 @@ fn a_member_without_a_sibling_keeps_the_twin() {
         "    let world = frame.world_from_local * vec4<f32>(in.position * (1.0 + 0.01 * sin(frame.time)), 1.0);",
         1,
     );
-    let shader = parsed(&text);
-    let analysis = analysis::analyze(&shader, &analysis::Options::default()).unwrap();
-    let rewritten = rewrite::rewrite(
-        &shader,
-        &analysis,
-        &analysis.candidates[0],
-        Variant::TwoPass,
-        &Default::default(),
-    )
-    .unwrap();
-    assert_eq!(rewritten.plan.bindings.previous.len(), 1);
-    assert!(rewritten.plan.bindings.previous_members.is_empty());
+    assert_twinned(&text);
 }
 
 /// The scene fills a `previous_` member with last frame's value, so the
