@@ -9,6 +9,10 @@
 //! twin would be a second copy of what the engine has, and one the engine
 //! may not let the host make (Bevy's mesh buffer cannot be copied from).
 //!
+//! The same slice tells which resources the position does not read at
+//! all (the vertex stage reads them only for its other outputs): those
+//! need no twin either.
+//!
 //! So: where every member the position computation reads of a resource
 //! has a sibling `previous_<member>` of the same type, the previous
 //! position reads the siblings instead, and the resource gets no twin. The
@@ -36,13 +40,13 @@ pub(crate) struct MemberTwin {
 
 /// Of `candidates` (the resources that would get twins), those whose
 /// previous values the vertex entry point at `entry_index` can read from
-/// their own `previous_` members.
-pub(crate) fn member_twins(
+/// their own `previous_` members, and those its position does not read.
+pub(crate) fn position_reads(
     module: &Module,
     entry_index: usize,
     position_member: Option<u32>,
     candidates: &[Handle<naga::GlobalVariable>],
-) -> Vec<MemberTwin> {
+) -> PositionReads {
     let entry = &module.entry_points[entry_index].function;
     let mut reads = Vec::new();
     sliced_reads(
@@ -53,25 +57,45 @@ pub(crate) fn member_twins(
         &mut HashSet::new(),
     );
 
-    candidates
-        .iter()
-        .filter_map(|&global| {
-            let mut swaps = Vec::new();
-            for (function, exprs) in &reads {
-                let chains = chains(module, function, &[global]);
-                if !swappable(function, &chains, exprs) {
-                    return None;
-                }
-                swaps.extend(chains.iter().filter_map(|c| match *c {
-                    Some(Chain::Swap { ty, from, to, .. }) => Some((ty, from, to)),
-                    _ => None,
-                }));
+    let mut found = PositionReads::default();
+    'candidates: for &global in candidates {
+        let mut swaps = Vec::new();
+        let mut read = false;
+        for (function, exprs) in &reads {
+            let chains = chains(module, function, &[global]);
+            read |= exprs.iter().any(|h| chains[h.index()].is_some());
+            if !swappable(function, &chains, exprs) {
+                continue 'candidates;
             }
-            swaps.sort();
-            swaps.dedup();
-            (!swaps.is_empty()).then_some(MemberTwin { global, swaps })
-        })
-        .collect()
+            swaps.extend(chains.iter().filter_map(|c| match *c {
+                Some(Chain::Swap { ty, from, to, .. }) => Some((ty, from, to)),
+                _ => None,
+            }));
+        }
+        swaps.sort();
+        swaps.dedup();
+        match (read, swaps.is_empty()) {
+            (false, _) => found.unread.push(global),
+            (true, false) => found.members.push(MemberTwin { global, swaps }),
+            // Read, but only at the top (a whole value, swappable by no
+            // member): impossible for a resource read at all, as a read
+            // ends at a load or a member; the twin, to be safe.
+            (true, true) => {}
+        }
+    }
+    found
+}
+
+/// What the position computation reads of the resources that would get
+/// twins.
+#[derive(Debug, Default)]
+pub(crate) struct PositionReads {
+    /// Read only through members with `previous_` siblings.
+    pub members: Vec<MemberTwin>,
+    /// Not read at all: only outputs other than the position read them
+    /// (Bevy's mesh metadata, for compressed UVs), so last frame's value
+    /// of them is never needed.
+    pub unread: Vec<Handle<naga::GlobalVariable>>,
 }
 
 /// The expressions of `function` that its output `member` (its result, for
@@ -298,6 +322,7 @@ struct Mesh {
 struct View { clip_from_world: mat4x4<f32> }
 @group(0) @binding(0) var<uniform> view: View;
 @group(1) @binding(0) var<storage, read> mesh: array<Mesh>;
+@group(0) @binding(1) var<uniform> tint: vec4<f32>;
 struct Out {
     @builtin(position) position: vec4<f32>,
     @location(0) normal: vec3<f32>,
@@ -308,7 +333,7 @@ fn model_of(m: Mesh) -> mat4x4<f32> { return m.world_from_local; }
 fn vertex(@location(0) p: vec3<f32>, @location(1) n: vec3<f32>, @builtin(instance_index) i: u32) -> Out {
     var out: Out;
     POSITION
-    out.normal = (transpose(mesh[i].local_from_world) * vec4(n, 0.0)).xyz * f32(mesh[i].flags & 1u);
+    out.normal = (transpose(mesh[i].local_from_world) * vec4(n, 0.0)).xyz * f32(mesh[i].flags & 1u) * tint.xyz;
     return out;
 }
 @fragment
@@ -345,6 +370,18 @@ fn fragment(in: Out) -> @location(0) vec4<f32> { return vec4(in.normal, 1.0); }
         );
         assert_eq!(twins, ["view"]);
         assert_eq!(members, ["mesh"]);
+    }
+
+    /// A resource the vertex stage reads only for another output (`tint`,
+    /// for the normal) needs no twin: last frame's value of it never
+    /// reaches the position. Read by the position, it gets one.
+    #[test]
+    fn a_resource_only_other_outputs_read_needs_no_twin() {
+        let plain = "out.position = view.clip_from_world * world_from_local(i) * vec4(p, 1.0);";
+        assert_eq!(instrumented(plain).0, ["view"]);
+        let tinted =
+            "out.position = view.clip_from_world * world_from_local(i) * vec4(p * tint.w, 1.0);";
+        assert_eq!(instrumented(tinted).0, ["view", "tint"]);
     }
 
     /// As Bevy's vertex stage: the position computed from a member of a

@@ -6,7 +6,10 @@
 //! Nothing about the user's matrices is assumed. Every uniform and
 //! read-only storage buffer the vertex entry point reads, directly or
 //! through helper functions, gets a *previous-frame twin*: a new binding of
-//! the same type that the host fills with last frame's contents. The whole
+//! the same type that the host fills with last frame's contents. For the
+//! cache (last frame), two kinds need none ([`super::member_twins`]): one
+//! the position does not read (only other outputs do), and one that keeps
+//! last frame's values in `previous_` siblings of what the position reads. The whole
 //! vertex function is copied twice into helper functions — once as it is,
 //! once reading the twins — and the new entry point calls both, so the
 //! position is computed by identical code in every pass.
@@ -311,14 +314,15 @@ pub(crate) fn instrument_times(
     let mut twins_per_time = Vec::new();
     let mut twin_maps = Vec::new();
     for time in times {
-        let members = match time.own_previous {
+        let reads = match time.own_previous {
             true => {
                 let candidates = twinned(module, entry_index);
-                member_twins::member_twins(module, entry_index, position_member, &candidates)
+                member_twins::position_reads(module, entry_index, position_member, &candidates)
             }
-            false => Vec::new(),
+            false => member_twins::PositionReads::default(),
         };
-        let twins = twin_resources(module, entry_index, time, &members);
+        let twins = twin_resources(module, entry_index, time, &reads);
+        let members = reads.members;
         let twin_map: GlobalTwins = twins.iter().copied().collect();
         let function_twins = twin_helpers(module, function, (&twin_map, &members), time.name);
         twins_per_time.push((twins, members.clone()));
@@ -439,7 +443,8 @@ fn position_member(
 }
 
 /// A twin for `time` of each resource the position computation may read
-/// (but those in `members`, which keep their own previous values):
+/// (but those in `reads`: read through their own previous values, or not
+/// by the position at all):
 /// uniforms and read-only storage, in the entry point or any helper it
 /// calls, bound in the time's group from its first binding on. (In handle
 /// order, so twins get the same bindings on every run.)
@@ -447,13 +452,13 @@ fn twin_resources(
     module: &mut Module,
     entry_index: usize,
     time: &TwinTime,
-    members: &[MemberTwin],
+    reads: &member_twins::PositionReads,
 ) -> Vec<(Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>)> {
     let mut twins = Vec::new();
-    let own: Vec<_> = members.iter().map(|m| m.global).collect();
+    let own: Vec<_> = reads.members.iter().map(|m| m.global).collect();
     let needed = twinned(module, entry_index)
         .into_iter()
-        .filter(|g| !own.contains(g));
+        .filter(|g| !own.contains(g) && !reads.unread.contains(g));
     for (binding, g) in (time.first_binding..).zip(needed) {
         let global = module.global_variables[g].clone();
         let twin = module.global_variables.append(
