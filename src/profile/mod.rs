@@ -743,13 +743,12 @@ fn variant_settings(
 /// The nodes a run measures, each with the part of its configurations
 /// (numbered from 0 within the node, in the order the grid walks them:
 /// variants, then settings; `configurations_of` counts them) that is the
-/// run's. Unsharded, every node and
-/// all of each. A shard (`--shard K/N`) takes a contiguous slice of the
-/// grid's configurations ([`crate::report::Shard::slice`]), so it touches
-/// about 1/N of the nodes, and sets up and times the fixed-cost runs of
-/// those alone: the payload and probe runs of every node in every shard
-/// are what kept a sharded sweep over hundreds of nodes from fitting in
-/// memory.
+/// run's. Unsharded, every node and all of each. A shard (`--shard K/N`)
+/// takes a contiguous slice of the grid's configurations
+/// ([`crate::report::Shard::slice`]), so it touches about 1/N of the
+/// nodes, and sets up and times the fixed-cost runs of those alone: the
+/// payload and probe runs of every node in every shard are what kept a
+/// sharded sweep over hundreds of nodes from fitting in memory.
 fn shard_nodes<T>(
     nodes: Vec<T>,
     configurations_of: impl Fn(&T) -> usize,

@@ -1,26 +1,29 @@
-//! Resources that keep last frame's values themselves.
+//! Which resources the previous position needs no twin of.
 //!
 //! The vertex stage's twins ([`super::vertex`]) are copies of whole
-//! resources that the host fills with last frame's contents. Engines often
-//! keep those values already, beside this frame's, in the same struct:
-//! Bevy's `Mesh` has `previous_world_from_local` next to
-//! `world_from_local` (what its motion-vector prepass reads), Unity's
-//! per-draw constants have `unity_MatrixPreviousM`. For such a resource a
-//! twin would be a second copy of what the engine has, and one the engine
-//! may not let the host make (Bevy's mesh buffer cannot be copied from).
+//! resources that the host fills with last frame's contents. Two kinds of
+//! resource need none:
 //!
-//! The same slice tells which resources the position does not read at
-//! all (the vertex stage reads them only for its other outputs): those
-//! need no twin either.
+//! - One that keeps last frame's values itself, beside this frame's, in
+//!   the same struct: Bevy's `Mesh` has `previous_world_from_local` next to
+//!   `world_from_local` (what its motion-vector prepass reads), Unity's
+//!   per-draw constants have `unity_MatrixPreviousM`. A twin would be a
+//!   second copy of what the engine has, and one the engine may not let
+//!   the host make (Bevy's mesh buffer cannot be copied from). Where every
+//!   member the position reads of it has a sibling `previous_<member>` of
+//!   the same type, the previous position reads the siblings instead.
+//! - One the position does not read at all: the vertex stage reads it for
+//!   its other outputs only (Bevy's mesh metadata, for compressed UVs).
 //!
-//! So: where every member the position computation reads of a resource
-//! has a sibling `previous_<member>` of the same type, the previous
-//! position reads the siblings instead, and the resource gets no twin. The
-//! position computation is the vertex entry point's slice of its
-//! `@builtin(position)` output and every helper that slice calls (whole:
-//! a helper's reads all count). A read the rule cannot see through — the
-//! resource or an element of it loaded whole and passed on, a member with
-//! no sibling, `arrayLength` — keeps the resource's twin, as before.
+//! Both are told from the position computation: the vertex entry point's
+//! slice of its `@builtin(position)` output, member by member through
+//! local structs ([`ExprGraph::member_precise`]), and, for each helper
+//! whose result that slice uses, the slice of the helper's result; a
+//! helper called for its effect counts whole. A read the rule cannot see
+//! through — the resource or an element of it loaded whole and passed on,
+//! a member with no sibling, `arrayLength` — keeps the resource's twin,
+//! as before. Only the cache's previous time (last frame) uses this: an
+//! I-frame several frames back is not what `previous_` members hold.
 
 use std::collections::HashSet;
 
