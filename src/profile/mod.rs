@@ -361,6 +361,16 @@ pub fn profile(
         let of_variant = |&v: &Variant| variant_settings(settings, v, &prepared.base, lowres).len();
         options.variants.iter().map(of_variant).sum()
     };
+    if let Some(shard) = options.shard {
+        let total: usize = all_nodes.iter().map(configurations_of).sum();
+        if shard.slice(total).is_empty() {
+            return Err(Error::plain(Diagnostic::error(format!(
+                "shard {shard} has nothing to measure: the grid has {total} configuration{}, fewer than the {} shards; use at most {total}",
+                if total == 1 { "" } else { "s" },
+                shard.count
+            ))));
+        }
+    }
     let (nodes, takes) = shard_nodes(all_nodes, configurations_of, options.shard);
     let (size, warmup, frames) = (prepared.size, prepared.warmup, prepared.frames);
     let reference_plan =

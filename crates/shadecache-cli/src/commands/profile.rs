@@ -481,14 +481,19 @@ fn summary(report: &report::Report) -> String {
     }
     if let Some(grid) = &report.grid {
         let pruned: usize = grid.pruned.iter().map(|p| p.configurations).sum();
-        if grid.measured < grid.full {
-            summary.push_str(&format!(
+        match report.shard {
+            Some(shard) => summary.push_str(&format!(
+                "  shard {shard}: measured {} of the grid's {} configurations; the others are pruned ({pruned}), other shards', or refused (see the report); `shadecache merge` joins the shards\n",
+                grid.measured, grid.full,
+            )),
+            None if grid.measured < grid.full => summary.push_str(&format!(
                 "  measured {} of the grid's {} configurations: {} pruned, {} refused (see the report)\n",
                 grid.measured,
                 grid.full,
                 pruned,
                 grid.full.saturating_sub(pruned + grid.measured)
-            ));
+            )),
+            None => {}
         }
     }
     summary

@@ -149,8 +149,9 @@ fn merged_shards_equal_the_unsharded_sweep() {
     assert_eq!(apart.len(), 2);
 }
 
-/// The command line: `--shard` takes K/N with 1 ≤ K ≤ N, and `merge`
-/// says which file is not a report, exiting 1.
+/// The command line: `--shard` takes K/N with 1 ≤ K ≤ N, a shard of a
+/// grid too small to have one is an error, and `merge` says which file is
+/// not a report, exiting 1.
 #[test]
 fn shard_and_merge_bad_input_is_an_error() {
     for bad in ["0/2", "3/2", "2", "a/b"] {
@@ -158,6 +159,33 @@ fn shard_and_merge_bad_input_is_an_error() {
         assert_eq!(out.status.code(), Some(1), "{bad}");
         assert!(stderr(&out).contains("K/N"), "{bad}: {}", stderr(&out));
     }
+    // More shards than configurations: a shard with none is told so,
+    // before anything runs or is written.
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("shard");
+    let out = shadecache([
+        "profile",
+        "corpus/noise_marble.wgsl",
+        "--nodes",
+        "top:1",
+        "--variant",
+        "two-pass",
+        "--refresh-period",
+        "8",
+        "--refresh-quad",
+        "2",
+        "--shard",
+        "1/3",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let said = stderr(&out);
+    assert!(
+        said.contains("shard 1/3 has nothing to measure") && said.contains("use at most 1"),
+        "{said}"
+    );
+    assert!(!out_dir.exists());
     let (_dir, path) = temp_file("report.json", b"{\"format\": 1}");
     let out = shadecache(["merge", path.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));
