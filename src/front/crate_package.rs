@@ -19,9 +19,10 @@ use cargo_metadata::{MetadataCommand, Package, PackageId};
 pub struct Lookup<'a> {
     /// A folder inside the workspace whose dependencies are searched.
     pub from: &'a Path,
-    /// No network: a build script's dependencies are downloaded already,
-    /// and a cargo that updated its index under the build holding the
-    /// package cache would wait on it.
+    /// Try without the network first: a build script's dependencies are
+    /// downloaded already, and a cargo that fetched while the build holds
+    /// the package cache would wait on it. What offline cannot read is
+    /// fetched then ([`metadata`]).
     pub offline: bool,
     /// The target triple whose dependencies count (a build script's
     /// `TARGET`; the host's, [`host_triple`], for the CLI). Without it
@@ -46,17 +47,7 @@ pub fn host_triple() -> Option<String> {
 /// workspace around `lookup.from`: the WESL package `name::`. An error
 /// says what is missing and what to give instead (`NAME=DIR`).
 pub fn source_dir(name: &str, lookup: Lookup) -> Result<PathBuf, String> {
-    let mut command = MetadataCommand::new();
-    command.current_dir(lookup.from);
-    let mut options = Vec::new();
-    if lookup.offline {
-        options.push("--offline".to_string());
-    }
-    if let Some(platform) = lookup.platform {
-        options.extend(["--filter-platform".to_string(), platform.to_string()]);
-    }
-    command.other_options(options);
-    let metadata = command.exec().map_err(|err| {
+    let metadata = metadata(lookup).map_err(|err| {
         format!(
             "cannot find the crate `{name}` for its WESL package: `cargo metadata` in {} failed: {}; give the package's folder as {name}=DIR",
             lookup.from.display(),
@@ -99,6 +90,31 @@ pub fn source_dir(name: &str, lookup: Lookup) -> Result<PathBuf, String> {
             package.version,
             dir.display()
         ))
+    }
+}
+
+/// `cargo metadata` for `lookup`. Offline first; where that fails, once
+/// more with the network: cargo's metadata lists packages a build never
+/// downloads (a dependency under a `cfg` it cannot decide without the
+/// build's own flags, such as rustix's `errno`), and offline it cannot
+/// read their manifests.
+fn metadata(lookup: Lookup) -> Result<cargo_metadata::Metadata, cargo_metadata::Error> {
+    let run = |offline: bool| {
+        let mut command = MetadataCommand::new();
+        command.current_dir(lookup.from);
+        let mut options = Vec::new();
+        if offline {
+            options.push("--offline".to_string());
+        }
+        if let Some(platform) = lookup.platform {
+            options.extend(["--filter-platform".to_string(), platform.to_string()]);
+        }
+        command.other_options(options);
+        command.exec()
+    };
+    match lookup.offline {
+        true => run(true).or_else(|_| run(false)),
+        false => run(false),
     }
 }
 
