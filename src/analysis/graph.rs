@@ -29,36 +29,6 @@ pub fn reads_arguments(exprs: &[&Expression], set: &ExprSet) -> bool {
 /// pointer stored through, or a condition under which the store runs (for
 /// a local, only the stores that reach the load: [`proc::reaching_definitions`]); or
 /// `a` is a call result and `b` one of the call's arguments.
-/// The constant member path of a pointer from its variable (`None` for a
-/// dynamic index), outermost first.
-fn member_path(function: &naga::Function, mut pointer: Handle<Expression>) -> Vec<Option<u32>> {
-    let mut path = Vec::new();
-    loop {
-        match function.expressions[pointer] {
-            Expression::AccessIndex { base, index } => {
-                path.push(Some(index));
-                pointer = base;
-            }
-            Expression::Access { base, .. } => {
-                path.push(None);
-                pointer = base;
-            }
-            _ => break,
-        }
-    }
-    path.reverse();
-    path
-}
-
-/// Whether two pointers into one variable reach parts that cannot
-/// overlap: their paths part at a constant index.
-fn disjoint(function: &naga::Function, a: Handle<Expression>, b: Handle<Expression>) -> bool {
-    member_path(function, a)
-        .iter()
-        .zip(&member_path(function, b))
-        .any(|pair| matches!(pair, (Some(x), Some(y)) if x != y))
-}
-
 #[derive(Debug)]
 pub struct ExprGraph {
     graph: DiGraph<Handle<Expression>, ()>,
@@ -248,6 +218,36 @@ impl ExprGraph {
         }
         set
     }
+}
+
+/// The constant member path of a pointer from its variable (`None` for a
+/// dynamic index), outermost first.
+fn member_path(function: &naga::Function, mut pointer: Handle<Expression>) -> Vec<Option<u32>> {
+    let mut path = Vec::new();
+    loop {
+        match function.expressions[pointer] {
+            Expression::AccessIndex { base, index } => {
+                path.push(Some(index));
+                pointer = base;
+            }
+            Expression::Access { base, .. } => {
+                path.push(None);
+                pointer = base;
+            }
+            _ => break,
+        }
+    }
+    path.reverse();
+    path
+}
+
+/// Whether two pointers into one variable reach parts that cannot
+/// overlap: their paths part at a constant index.
+fn disjoint(function: &naga::Function, a: Handle<Expression>, b: Handle<Expression>) -> bool {
+    member_path(function, a)
+        .iter()
+        .zip(&member_path(function, b))
+        .any(|pair| matches!(pair, (Some(x), Some(y)) if x != y))
 }
 
 /// A fact about an expression that a slice has when any of its
