@@ -25,7 +25,7 @@
 //! as before. Only the cache's previous time (last frame) uses this: an
 //! I-frame several frames back is not what `previous_` members hold.
 
-use std::collections::HashSet;
+use std::collections::{BTreeSet, HashSet};
 
 use naga::{Expression, Function, Handle, Module, Statement, TypeInner};
 
@@ -57,7 +57,7 @@ pub(crate) fn position_reads(
         entry,
         position_member,
         &mut reads,
-        &mut HashSet::new(),
+        &mut BTreeSet::new(),
     );
 
     let mut found = PositionReads::default();
@@ -111,7 +111,7 @@ fn sliced_reads<'m>(
     function: &'m Function,
     member: Option<u32>,
     reads: &mut Vec<(&'m Function, Vec<Handle<Expression>>)>,
-    seen: &mut HashSet<Handle<Function>>,
+    seen: &mut BTreeSet<Handle<Function>>,
 ) {
     let layout = crate::proc::layout(module, function, 8.0);
     let graph = ExprGraph::member_precise(function, &layout);
@@ -156,23 +156,14 @@ fn whole_reads<'m>(
     module: &'m Module,
     f: Handle<Function>,
     reads: &mut Vec<(&'m Function, Vec<Handle<Expression>>)>,
-    seen: &mut HashSet<Handle<Function>>,
+    seen: &mut BTreeSet<Handle<Function>>,
 ) {
-    let function = &module.functions[f];
-    reads.push((
-        function,
-        function.expressions.iter().map(|(h, _)| h).collect(),
-    ));
-    let mut called = Vec::new();
-    crate::proc::each_statement(&function.body, &mut |s| {
-        if let Statement::Call { function, .. } = *s {
-            called.push(function);
-        }
-    });
-    for f in called {
-        if seen.insert(f) {
-            whole_reads(module, f, reads, seen);
-        }
+    let mut functions = vec![f];
+    super::vertex::collect_callees(module, &module.functions[f].body, &mut functions, seen);
+    for f in functions {
+        let function = &module.functions[f];
+        let all = function.expressions.iter().map(|(h, _)| h).collect();
+        reads.push((function, all));
     }
 }
 

@@ -311,21 +311,21 @@ pub(crate) fn instrument_times(
         max_vertex_attributes,
     )?;
 
+    // The resources the entry point reads: the twins added below are not
+    // among them, so this holds for every time.
+    let candidates = twinned(module, entry_index);
     let mut twins_per_time = Vec::new();
     let mut twin_maps = Vec::new();
     for time in times {
         let reads = match time.own_previous {
-            true => {
-                let candidates = twinned(module, entry_index);
-                member_twins::position_reads(module, entry_index, position_member, &candidates)
-            }
+            true => member_twins::position_reads(module, entry_index, position_member, &candidates),
             false => member_twins::PositionReads::default(),
         };
-        let twins = twin_resources(module, entry_index, time, &reads);
+        let twins = twin_resources(module, time, &candidates, &reads);
         let members = reads.members;
         let twin_map: GlobalTwins = twins.iter().copied().collect();
         let function_twins = twin_helpers(module, function, (&twin_map, &members), time.name);
-        twins_per_time.push((twins, members.clone()));
+        twins_per_time.push(twins);
         twin_maps.push(TimeTwins {
             time: time.name,
             globals: twin_map,
@@ -400,10 +400,11 @@ pub(crate) fn instrument_times(
         times: locations
             .into_iter()
             .zip(twins_per_time)
-            .map(|(location, (twins, member_twins))| TimedPosition {
+            .zip(twin_maps)
+            .map(|((location, twins), time)| TimedPosition {
                 location,
                 twins,
-                member_twins,
+                member_twins: time.members,
             })
             .collect(),
         instance_twins,
@@ -442,22 +443,23 @@ fn position_member(
     }
 }
 
-/// A twin for `time` of each resource the position computation may read
-/// (but those in `reads`: read through their own previous values, or not
-/// by the position at all):
+/// A twin for `time` of each of `candidates` ([`twinned`]), the resources
+/// the position computation may read (but those in `reads`: read through
+/// their own previous values, or not by the position at all):
 /// uniforms and read-only storage, in the entry point or any helper it
 /// calls, bound in the time's group from its first binding on. (In handle
 /// order, so twins get the same bindings on every run.)
 fn twin_resources(
     module: &mut Module,
-    entry_index: usize,
     time: &TwinTime,
+    candidates: &[Handle<naga::GlobalVariable>],
     reads: &member_twins::PositionReads,
 ) -> Vec<(Handle<naga::GlobalVariable>, Handle<naga::GlobalVariable>)> {
     let mut twins = Vec::new();
     let own: Vec<_> = reads.members.iter().map(|m| m.global).collect();
-    let needed = twinned(module, entry_index)
-        .into_iter()
+    let needed = candidates
+        .iter()
+        .copied()
         .filter(|g| !own.contains(g) && !reads.unread.contains(g));
     for (binding, g) in (time.first_binding..).zip(needed) {
         let global = module.global_variables[g].clone();
@@ -862,7 +864,9 @@ fn everything(function: &Function) -> ExprSet {
     set
 }
 
-fn collect_callees(
+/// The helpers `block` calls, directly or not, callees first; `seen`
+/// holds those already collected.
+pub(super) fn collect_callees(
     module: &Module,
     block: &naga::Block,
     out: &mut Vec<Handle<Function>>,
