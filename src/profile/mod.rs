@@ -361,17 +361,14 @@ pub fn profile(
         let of_variant = |&v: &Variant| variant_settings(settings, v, &prepared.base, lowres).len();
         options.variants.iter().map(of_variant).sum()
     };
-    if let Some(shard) = options.shard {
-        let total: usize = all_nodes.iter().map(configurations_of).sum();
-        if shard.slice(total).is_empty() {
-            return Err(Error::plain(Diagnostic::error(format!(
-                "shard {shard} has nothing to measure: the grid has {total} configuration{}, fewer than the {} shards; use at most {total}",
-                if total == 1 { "" } else { "s" },
-                shard.count
-            ))));
-        }
+    let (nodes, takes, total) = shard_nodes(all_nodes, configurations_of, options.shard);
+    if let (Some(shard), true) = (options.shard, nodes.is_empty()) {
+        return Err(Error::plain(Diagnostic::error(format!(
+            "shard {shard} has nothing to measure: the grid has {total} configuration{}, fewer than the {} shards; use at most {total}",
+            if total == 1 { "" } else { "s" },
+            shard.count
+        ))));
     }
-    let (nodes, takes) = shard_nodes(all_nodes, configurations_of, options.shard);
     let (size, warmup, frames) = (prepared.size, prepared.warmup, prepared.frames);
     let reference_plan =
         rewrite::plan::reference(shader, &prepared.analysis, &prepared.base).map_err(fail)?;
@@ -753,7 +750,8 @@ fn variant_settings(
 /// The nodes a run measures, each with the part of its configurations
 /// (numbered from 0 within the node, in the order the grid walks them:
 /// variants, then settings; `configurations_of` counts them) that is the
-/// run's. Unsharded, every node and all of each. A shard (`--shard K/N`)
+/// run's, and how many the grid has. Unsharded, every node and all of
+/// each. A shard (`--shard K/N`)
 /// takes a contiguous slice of the grid's configurations
 /// ([`crate::report::Shard::slice`]), so it touches about 1/N of the
 /// nodes, and sets up and times the fixed-cost runs of those alone: the
@@ -763,24 +761,23 @@ fn shard_nodes<T>(
     nodes: Vec<T>,
     configurations_of: impl Fn(&T) -> usize,
     shard: Option<crate::report::Shard>,
-) -> (Vec<T>, Vec<std::ops::Range<usize>>) {
-    let Some(shard) = shard else {
-        let all = nodes.iter().map(|_| 0..usize::MAX).collect();
-        return (nodes, all);
-    };
+) -> (Vec<T>, Vec<std::ops::Range<usize>>, usize) {
     let counts: Vec<usize> = nodes.iter().map(configurations_of).collect();
-    let slice = shard.slice(counts.iter().sum());
+    let total = counts.iter().sum();
+    let slice = shard.map_or(0..total, |s| s.slice(total));
     let mut first = 0;
-    let mut kept = (Vec::new(), Vec::new());
+    let (mut kept, mut takes) = (Vec::new(), Vec::new());
     for (node, count) in nodes.into_iter().zip(counts) {
         let (start, end) = (slice.start.max(first), slice.end.min(first + count));
-        if start < end {
-            kept.0.push(node);
-            kept.1.push(start - first..end - first);
+        // Unsharded, every node stays, as its payload is measured whatever
+        // its configurations.
+        if start < end || shard.is_none() {
+            kept.push(node);
+            takes.push(start - first..end - first);
         }
         first += count;
     }
-    kept
+    (kept, takes, total)
 }
 
 /// Every node × variant × setting the grid keeps, rewritten and with its
@@ -1236,14 +1233,14 @@ mod tests {
         // Ten nodes of four configurations each (4 variants, 1 setting).
         let nodes: Vec<usize> = (0..10).collect();
         let count = |_: &usize| 4;
-        let (all, takes) = shard_nodes(nodes.clone(), count, None);
-        assert_eq!(all, nodes);
-        assert!(takes.iter().all(|t| t.contains(&0) && t.contains(&3)));
+        let (all, takes, total) = shard_nodes(nodes.clone(), count, None);
+        assert_eq!((all, total), (nodes.clone(), 40));
+        assert!(takes.iter().all(|t| *t == (0..4)));
 
         let mut dealt = vec![0; 40];
         for index in 1..=6 {
             let shard = Shard { index, count: 6 };
-            let (kept, takes) = shard_nodes(nodes.clone(), count, Some(shard));
+            let (kept, takes, _) = shard_nodes(nodes.clone(), count, Some(shard));
             assert!(kept.len() <= 3, "shard {index} kept {kept:?}");
             for (node, take) in kept.iter().zip(&takes) {
                 assert!(!take.is_empty() && take.end <= 4);
@@ -1253,7 +1250,7 @@ mod tests {
         assert!(dealt.iter().all(|&n| n == 1), "{dealt:?}");
 
         // More shards than configurations: some shards measure nothing.
-        let (kept, _) = shard_nodes(vec![0], |_| 2, Some(Shard { index: 1, count: 3 }));
+        let (kept, _, _) = shard_nodes(vec![0], |_| 2, Some(Shard { index: 1, count: 3 }));
         assert!(kept.is_empty());
     }
 }
