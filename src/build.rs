@@ -222,9 +222,9 @@ impl Build {
     /// A WESL package of the last shader that ships in a crate's `src/`,
     /// as Bevy's do (`bevy_pbr::render::pbr` is bevy_pbr's
     /// `src/render/pbr.wesl`): `name` is the crate, looked up among the
-    /// dependencies of this package with `cargo metadata --offline`, so the
-    /// version the game builds with is the one composed. Needs the `wesl`
-    /// feature.
+    /// dependencies of this package with `cargo metadata` (one run for all
+    /// of them, offline first), so the version the game builds with is
+    /// the one composed. Needs the `wesl` feature.
     pub fn crate_package(mut self, name: impl Into<String>) -> Self {
         self.last().crate_packages.push(name.into());
         self
@@ -324,6 +324,14 @@ impl Build {
             Some(root) if path.is_relative() => root.join(path),
             _ => path.to_path_buf(),
         };
+        // One `cargo metadata` for every job's crate packages, run when
+        // the first is looked up.
+        #[cfg(feature = "wesl")]
+        let package_root = resolve(Path::new("."));
+        #[cfg(feature = "wesl")]
+        let crate_lookup = front::crate_package::Lookup::build_script(&package_root);
+        #[cfg(not(feature = "wesl"))]
+        let crate_lookup = ();
         for job in &self.jobs {
             let path = resolve(&job.path);
             let vertex = job.vertex.as_deref().map(resolve);
@@ -335,7 +343,7 @@ impl Build {
                 .collect();
             let mut missing = false;
             for name in &job.crate_packages {
-                match crate_package(name, &resolve(Path::new("."))) {
+                match crate_package(name, &crate_lookup) {
                     Ok(dir) => packages.push((name.clone(), dir)),
                     Err(err) => {
                         errors.push(err);
@@ -522,22 +530,13 @@ impl Build {
 
 /// The folder of the WESL package a crate ships (its `src/`).
 #[cfg(feature = "wesl")]
-fn crate_package(name: &str, manifest: &Path) -> Result<PathBuf, Error> {
-    // Cargo gives a build script its target; elsewhere, the host's.
-    let platform = std::env::var("TARGET")
-        .ok()
-        .or_else(front::crate_package::host_triple);
-    let lookup = front::crate_package::Lookup {
-        from: manifest,
-        offline: true,
-        platform: platform.as_deref(),
-    };
+fn crate_package(name: &str, lookup: &front::crate_package::Lookup) -> Result<PathBuf, Error> {
     front::crate_package::source_dir(name, lookup)
         .map_err(|message| Error::plain(Diagnostic::error(message)))
 }
 
 #[cfg(not(feature = "wesl"))]
-fn crate_package(name: &str, _manifest: &Path) -> Result<PathBuf, Error> {
+fn crate_package(name: &str, _lookup: &()) -> Result<PathBuf, Error> {
     Err(Error::plain(Diagnostic::error(format!(
         ".crate_package(\"{name}\"): WESL packages need shadecache's `wesl` feature"
     ))))

@@ -10,25 +10,69 @@
 //! the Cargo workspace around a folder (the current one for the CLI, the
 //! manifest's for a build script), through `cargo metadata`.
 
+use std::cell::OnceCell;
 use std::path::{Path, PathBuf};
 
-use cargo_metadata::{MetadataCommand, Package, PackageId};
+use cargo_metadata::{Metadata, MetadataCommand, Package, PackageId};
 
-/// Where `cargo metadata` runs, and how.
-#[derive(Clone, Copy, Debug)]
+/// Where `cargo metadata` runs, and how; it runs once, however many crates
+/// are looked up.
+#[derive(Debug)]
 pub struct Lookup<'a> {
     /// A folder inside the workspace whose dependencies are searched.
-    pub from: &'a Path,
+    from: &'a Path,
     /// Try without the network first: a build script's dependencies are
     /// downloaded already, and a cargo that fetched while the build holds
     /// the package cache would wait on it. What offline cannot read is
-    /// fetched then ([`metadata`]).
-    pub offline: bool,
+    /// fetched then ([`run_metadata`]).
+    offline: bool,
     /// The target triple whose dependencies count (a build script's
     /// `TARGET`; the host's, [`host_triple`], for the CLI). Without it
     /// cargo reads every platform's dependencies, which offline it may
     /// not have downloaded.
-    pub platform: Option<&'a str>,
+    platform: Option<String>,
+    /// The metadata, once read.
+    metadata: OnceCell<Result<Metadata, String>>,
+}
+
+impl<'a> Lookup<'a> {
+    /// For a build script in `manifest`: offline first, for cargo's
+    /// `TARGET` (the host's outside a build script).
+    pub fn build_script(manifest: &'a Path) -> Self {
+        let platform = std::env::var("TARGET").ok().or_else(host_triple);
+        Lookup::new(manifest, true, platform)
+    }
+
+    /// For the command line in `folder`: the host's dependencies, with the
+    /// network.
+    pub fn command_line(folder: &'a Path) -> Self {
+        Lookup::new(folder, false, host_triple())
+    }
+
+    fn new(from: &'a Path, offline: bool, platform: Option<String>) -> Self {
+        Lookup {
+            from,
+            offline,
+            platform,
+            metadata: OnceCell::new(),
+        }
+    }
+
+    /// The workspace's metadata, read on first use.
+    fn metadata(&self) -> Result<&Metadata, String> {
+        self.metadata
+            .get_or_init(|| {
+                run_metadata(self).map_err(|err| {
+                    format!(
+                        "`cargo metadata` in {} failed: {}",
+                        self.from.display(),
+                        first_line(&err.to_string())
+                    )
+                })
+            })
+            .as_ref()
+            .map_err(Clone::clone)
+    }
 }
 
 /// The triple of the toolchain's host, from `rustc -vV` (`$RUSTC` where
@@ -46,13 +90,9 @@ pub fn host_triple() -> Option<String> {
 /// The `src/` folder of the crate `name` in the dependency graph of the
 /// workspace around `lookup.from`: the WESL package `name::`. An error
 /// says what is missing and what to give instead (`NAME=DIR`).
-pub fn source_dir(name: &str, lookup: Lookup) -> Result<PathBuf, String> {
-    let metadata = metadata(lookup).map_err(|err| {
-        format!(
-            "cannot find the crate `{name}` for its WESL package: `cargo metadata` in {} failed: {}; give the package's folder as {name}=DIR",
-            lookup.from.display(),
-            first_line(&err.to_string())
-        )
+pub fn source_dir(name: &str, lookup: &Lookup) -> Result<PathBuf, String> {
+    let metadata = lookup.metadata().map_err(|err| {
+        format!("cannot find the crate `{name}` for its WESL package: {err}; give the package's folder as {name}=DIR")
     })?;
     let crate_name = name.replace('-', "_");
     let named: Vec<&Package> = metadata
@@ -93,12 +133,12 @@ pub fn source_dir(name: &str, lookup: Lookup) -> Result<PathBuf, String> {
     }
 }
 
-/// `cargo metadata` for `lookup`. Offline first; where that fails, once
+/// `cargo metadata` for `lookup`. Offline first (for a build script); where that fails, once
 /// more with the network: cargo's metadata lists packages a build never
 /// downloads (a dependency under a `cfg` it cannot decide without the
 /// build's own flags, such as rustix's `errno`), and offline it cannot
 /// read their manifests.
-fn metadata(lookup: Lookup) -> Result<cargo_metadata::Metadata, cargo_metadata::Error> {
+fn run_metadata(lookup: &Lookup) -> Result<Metadata, cargo_metadata::Error> {
     let run = |offline: bool| {
         let mut command = MetadataCommand::new();
         command.current_dir(lookup.from);
@@ -106,8 +146,8 @@ fn metadata(lookup: Lookup) -> Result<cargo_metadata::Metadata, cargo_metadata::
         if offline {
             options.push("--offline".to_string());
         }
-        if let Some(platform) = lookup.platform {
-            options.extend(["--filter-platform".to_string(), platform.to_string()]);
+        if let Some(platform) = &lookup.platform {
+            options.extend(["--filter-platform".to_string(), platform.clone()]);
         }
         command.other_options(options);
         command.exec()
@@ -150,46 +190,30 @@ fn first_line(text: &str) -> &str {
 mod tests {
     use super::*;
 
-    fn host() -> &'static str {
-        static HOST: std::sync::OnceLock<String> = std::sync::OnceLock::new();
-        HOST.get_or_init(|| host_triple().expect("rustc -vV names the host"))
-    }
-
     fn lookup() -> Lookup<'static> {
-        Lookup {
-            from: Path::new(env!("CARGO_MANIFEST_DIR")),
-            offline: true,
-            platform: Some(host()),
-        }
+        Lookup::build_script(Path::new(env!("CARGO_MANIFEST_DIR")))
     }
 
     /// A crate of the graph is found by its name (a dash or an underscore
     /// alike), and its package is its `src/`.
     #[test]
     fn a_dependency_crates_source_folder_is_its_package() {
-        let dir = source_dir("shadecache-plan", lookup()).unwrap();
+        let lookup = lookup();
+        let dir = source_dir("shadecache-plan", &lookup).unwrap();
         assert!(dir.ends_with("crates/shadecache-plan/src"), "{dir:?}");
         assert!(dir.join("lib.rs").is_file());
-        assert_eq!(source_dir("shadecache_plan", lookup()).unwrap(), dir);
+        assert_eq!(source_dir("shadecache_plan", &lookup).unwrap(), dir);
     }
 
     /// A crate the workspace does not depend on, and a folder outside any
     /// workspace, are errors that say what to give instead.
     #[test]
     fn a_crate_not_in_the_graph_is_an_error_naming_the_way_out() {
-        let err = source_dir("bevy_not_a_dependency", lookup()).unwrap_err();
+        let err = source_dir("bevy_not_a_dependency", &lookup()).unwrap_err();
         assert!(err.contains("no crate `bevy_not_a_dependency`"), "{err}");
         assert!(err.contains("bevy_not_a_dependency=DIR"), "{err}");
         let outside = std::env::temp_dir();
-        let err = source_dir(
-            "bevy_pbr",
-            Lookup {
-                from: &outside,
-                offline: true,
-                platform: Some(host()),
-            },
-        )
-        .unwrap_err();
+        let err = source_dir("bevy_pbr", &Lookup::build_script(&outside)).unwrap_err();
         assert!(err.contains("`cargo metadata`"), "{err}");
         assert!(err.contains("bevy_pbr=DIR"), "{err}");
     }

@@ -139,28 +139,28 @@ fn parse_package(text: &str) -> Result<(String, Option<PathBuf>), String> {
     }
 }
 
-/// The folder of a package given by its crate's name alone.
+/// The folders of packages given by their crates' names alone, found in
+/// the Cargo workspace here with one `cargo metadata`.
 #[cfg(feature = "wesl")]
-fn crate_package(name: &str) -> Result<PathBuf, Error> {
+fn crate_packages(names: &[&str]) -> Result<Vec<PathBuf>, Error> {
+    let fail = |message: String| Error::plain(Diagnostic::error(message));
     let here = std::env::current_dir().map_err(|err| {
-        Error::plain(Diagnostic::error(format!(
-            "cannot read the current folder to find the crate `{name}`: {err}"
-        )))
+        fail(format!(
+            "cannot read the current folder to find crates: {err}"
+        ))
     })?;
-    let host = front::crate_package::host_triple();
-    let lookup = front::crate_package::Lookup {
-        from: &here,
-        offline: false,
-        platform: host.as_deref(),
-    };
-    front::crate_package::source_dir(name, lookup)
-        .map_err(|message| Error::plain(Diagnostic::error(message)))
+    let lookup = front::crate_package::Lookup::command_line(&here);
+    names
+        .iter()
+        .map(|name| front::crate_package::source_dir(name, &lookup).map_err(fail))
+        .collect()
 }
 
 #[cfg(not(feature = "wesl"))]
-fn crate_package(name: &str) -> Result<PathBuf, Error> {
+fn crate_packages(names: &[&str]) -> Result<Vec<PathBuf>, Error> {
     Err(Error::plain(Diagnostic::error(format!(
-        "--package {name}: WESL packages need this build's `wesl` feature (cargo install shadecache-cli --features wesl)"
+        "--package {}: WESL packages need this build's `wesl` feature (cargo install shadecache-cli --features wesl)",
+        names.join(", ")
     ))))
 }
 
@@ -168,17 +168,27 @@ impl ComposeArgs {
     /// The composition asked for, each package given by a crate's name
     /// found in the Cargo workspace here.
     pub fn composition(&self) -> Result<Composition, Error> {
+        let by_crate: Vec<&str> = self
+            .packages
+            .iter()
+            .filter(|(_, dir)| dir.is_none())
+            .map(|(name, _)| name.as_str())
+            .collect();
+        let mut found = match by_crate.is_empty() {
+            true => Vec::new(),
+            false => crate_packages(&by_crate)?,
+        }
+        .into_iter();
         let packages = self
             .packages
             .iter()
             .map(|(name, dir)| {
-                let dir = match dir {
-                    Some(dir) => dir.clone(),
-                    None => crate_package(name)?,
-                };
-                Ok((name.clone(), dir))
+                (
+                    name.clone(),
+                    dir.clone().or_else(|| found.next()).unwrap_or_default(),
+                )
             })
-            .collect::<Result<_, Error>>()?;
+            .collect();
         Ok(Composition {
             import_paths: self.import_paths.clone(),
             packages,
