@@ -345,16 +345,17 @@ fn a_wesl_package_is_found_by_its_crates_name() {
 
 /// A build script names a package by its crate (`.crate_package`): found
 /// among the dependencies of the package being built (here this test's
-/// own, whose graph has `shadecache_plan`), and a crate not among them
-/// fails the build with the way out, before the shader is composed.
+/// own, whose graph has `shadecache_plan`) as that crate's `src/` (a
+/// material importing from it is looked for there), and a crate not among
+/// them fails the build with the way out, before the shader is composed.
 #[test]
 fn a_build_script_finds_a_wesl_package_by_its_crate() {
     use shadecache::build::Build;
     let dir = tempfile::tempdir().unwrap();
-    let job = |package: &str| {
+    let job = |material: &Path, packages: &Path, package: &str| {
         Build::new()
-            .shader(root().join(MATERIAL))
-            .import_path(root().join(PACKAGES))
+            .shader(material)
+            .import_path(packages)
             .crate_package(package)
             .def(GROUP.0, GROUP.1)
             .vertex_shader(root().join(MESH))
@@ -363,9 +364,33 @@ fn a_build_script_finds_a_wesl_package_by_its_crate() {
             .quiet()
             .run()
     };
-    let outputs = job("shadecache_plan").unwrap_or_else(|e| panic!("{:?}", e.errors));
+    let (material, packages) = (root().join(MATERIAL), root().join(PACKAGES));
+    let outputs =
+        job(&material, &packages, "shadecache_plan").unwrap_or_else(|e| panic!("{:?}", e.errors));
     assert!(!outputs.files.is_empty(), "{outputs:?}");
-    let err = job("engine_sky").unwrap_err();
+
+    // Importing from the crate's package reads its `src/`.
+    let (_copy, wesl) = edited("lava_material.wesl", |text| {
+        text.replacen("import ", "import shadecache_plan::probe::x;\nimport ", 1)
+            .replacen(
+                "fbm(in.world_position * 3.0, 6)",
+                "fbm(in.world_position * 3.0, 6) + x",
+                1,
+            )
+    });
+    let err = job(
+        &wesl.join("lava_material.wesl"),
+        &wesl.join("packages"),
+        "shadecache_plan",
+    )
+    .unwrap_err();
+    let said = err.errors[0].render();
+    assert!(
+        said.contains("crates/shadecache-plan/src/probe.wesl`"),
+        "{said}"
+    );
+
+    let err = job(&material, &packages, "engine_sky").unwrap_err();
     assert_eq!(err.errors.len(), 1, "{:?}", err.errors);
     let said = err.errors[0].render();
     assert!(
