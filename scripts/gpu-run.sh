@@ -13,6 +13,8 @@
 #       lavapipe, minutes on a GPU); GPU_RUN_EVERY_CANDIDATE=1 adds fig. 8
 #       over all 459 candidates (about 50 minutes more on lavapipe);
 #       GPU_RUN_EVERY_CANDIDATE=only runs that step alone
+#   GPU_RUN_KEEP=DIR keeps every run's report folder in DIR (else only the
+#       table under docs/runs/ remains)
 #
 # What it runs, in order (each a command of README.md or docs/):
 #   1. README's profile (the marble sphere);
@@ -46,7 +48,16 @@ fi
 cargo build --release --locked -p shadecache-cli
 bin=target/release/shadecache
 work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+# GPU_RUN_KEEP=DIR keeps every run's report (report.json, report.html,
+# images) there, for what the table leaves out: the fig. 8 chart, the
+# P/T bins of scripts/fig8-bins.mjs.
+keep() {
+  if [ -n "${GPU_RUN_KEEP:-}" ]; then
+    mkdir -p "$GPU_RUN_KEEP" && cp -r "$work"/. "$GPU_RUN_KEEP"/ && echo "reports kept in $GPU_RUN_KEEP" >&2
+  fi
+  rm -rf "$work"
+}
+trap keep EXIT
 manifest="$work/runs.tsv"
 : > "$manifest"
 

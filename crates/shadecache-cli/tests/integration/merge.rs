@@ -51,10 +51,11 @@ fn shard_report(name: &str, report: Report) -> ShardReport {
 /// Two shards measure, between them, exactly the unsharded sweep's
 /// configurations, neither twice; each reports (and times the fixed costs
 /// of) only the nodes its slice touches; merged they are one report of
-/// those configurations and of the sweep's nodes, in its order. The merge marks the fronts from the merged rows with the
-/// function a single run uses: one run's rows split into shards and merged
-/// again give that run's fronts back, row for row. Shards of another
-/// shader are refused, naming it, unless kept apart.
+/// those configurations and of the sweep's nodes, in its order. The merge
+/// marks the fronts from the merged rows with the function a single run
+/// uses: one run's rows split into shards and merged again give that
+/// run's fronts back, row for row. Shards of another shader are refused,
+/// naming it, unless kept apart.
 #[test]
 fn merged_shards_equal_the_unsharded_sweep() {
     let Some(whole) = sweep(None) else { return };
