@@ -467,20 +467,93 @@ impl CachedShader {
         mut draw: impl FnMut(&mut Draw<'_, '_>),
     ) -> Result<(), Error> {
         self.check_targets(targets)?;
+        self.begin_frame(queue, encoder)?;
+        let used = self.record_passes(
+            encoder,
+            targets,
+            timer,
+            Part::Whole,
+            &mut |built, binder, mut render| draw_pass(built, binder, &mut render, &mut draw),
+        )?;
+        self.end_frame(encoder, used);
+        Ok(())
+    }
+
+    /// Records one frame whose draws an engine's own render commands
+    /// record (Bevy's render phases, which need the render pass itself),
+    /// as [`CachedShader::record_timed`] does otherwise: the host begins
+    /// each pass with its pipeline, and the cache's group and vertex twins
+    /// of `twins` bound, and hands it to `draw` to record the pass's draws
+    /// (the engine sets its own bind groups and buffers, and never the
+    /// cache's group or the twins' slots). A screen-space pass is the
+    /// host's own triangle and is not handed over. Every draw of the frame
+    /// reads the same twins, so only a plan whose twins are per frame
+    /// (a camera's view, not each object's transforms) is right here; the
+    /// deferred variant, which tells draws apart in the stencil, is
+    /// refused. An `Err` from `draw` ends the frame with [`Error::Draw`].
+    pub fn record_engine_timed<T: PassTimer>(
+        &mut self,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &Targets<'_>,
+        timer: &mut T,
+        twins: &Twins,
+        mut draw: impl FnMut(&Pass, wgpu::RenderPass<'static>) -> Result<(), String>,
+    ) -> Result<(), Error> {
+        if let Some(pass) = self
+            .passes
+            .iter()
+            .chain(&self.classify)
+            .find(|built| built.per_draw || built.pass.stencil.is_some())
+        {
+            return Err(Error::Refused(format!(
+                "pass `{}` tells each draw apart (its stencil reference or its draw ordinal), which an engine's own draw commands do not give",
+                pass.pass.name
+            )));
+        }
+        self.check_targets(targets)?;
+        self.begin_frame(queue, encoder)?;
+        let used = self.record_passes(
+            encoder,
+            targets,
+            timer,
+            Part::Whole,
+            &mut |built, binder, mut render| {
+                let mut draws = Draw::new(&mut render, built, binder);
+                let own = draws.next_draw(twins);
+                if let Some(err) = draws.error.take() {
+                    return Err(err);
+                }
+                if own {
+                    draw(&built.pass, render).map_err(Error::Draw)?;
+                }
+                Ok(())
+            },
+        )?;
+        self.end_frame(encoder, used);
+        Ok(())
+    }
+
+    /// The start of a frame: the refresh uniform, last frame's depth at the
+    /// far plane when there is no last frame, and new twins filled.
+    fn begin_frame(
+        &mut self,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(), Error> {
         let state = params::FrameState {
             size: self.size,
             frame: self.frame,
             phase: self.phase,
         };
         queue.write_buffer(&self.params, 0, &params::bytes(&self.plan, state)?);
-        let previous = 1 - self.current;
         if self.fresh {
             // No previous frame: a depth at the far plane makes every
             // pixel miss (the depth test's tolerance, ε·|expected − far|,
             // is below the distance of anything in front of it).
             clear_depth(
                 encoder,
-                &self.targets.depth_views[previous],
+                &self.targets.depth_views[1 - self.current],
                 self.plan.clear.depth as f32,
             );
         }
@@ -488,12 +561,21 @@ impl CachedShader {
         for inner in self.pending.drain(..).filter_map(|weak| weak.upgrade()) {
             inner.copy(encoder);
         }
-        let used = self.record_passes(encoder, targets, timer, &mut draw, Part::Whole)?;
+        Ok(())
+    }
+
+    /// The end of a frame: the twins drawn with copy this frame's
+    /// contents, and the frame's state moves on.
+    fn end_frame(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        used: BTreeMap<u64, Arc<TwinsInner>>,
+    ) {
         // This frame's contents are next frame's last-frame contents.
         for inner in used.values() {
             inner.copy(encoder);
         }
-        self.current = previous;
+        self.current = 1 - self.current;
         self.fresh = false;
         self.frame = self.frame.wrapping_add(1);
         let period = self.plan.refresh.period;
@@ -502,7 +584,6 @@ impl CachedShader {
         } else {
             (self.phase + 1) % period
         };
-        Ok(())
     }
 
     /// Records more draws into the last recorded frame: every pass of the
@@ -537,20 +618,26 @@ impl CachedShader {
             clear: None,
             ..targets.clone()
         };
-        self.record_passes(encoder, &targets, timer, &mut draw, Part::More)?;
+        self.record_passes(
+            encoder,
+            &targets,
+            timer,
+            Part::More,
+            &mut |built, binder, mut render| draw_pass(built, binder, &mut render, &mut draw),
+        )?;
         Ok(())
     }
 
     /// Records every pass of the plan (and the classification), each
-    /// timed by `timer`, calling `draw` once per pass; returns the twins
-    /// drawn with, by id.
+    /// timed by `timer`, handing each render pass, begun with its pipeline,
+    /// to `record`; returns the twins drawn with, by id.
     fn record_passes<T: PassTimer>(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &Targets<'_>,
         timer: &mut T,
-        draw: &mut impl FnMut(&mut Draw<'_, '_>),
         part: Part,
+        record: &mut dyn FnMut(&Built, &Binder<'_>, wgpu::RenderPass<'static>) -> Result<(), Error>,
     ) -> Result<BTreeMap<u64, Arc<TwinsInner>>, Error> {
         let binder = Binder {
             shader: self,
@@ -560,35 +647,19 @@ impl CachedShader {
         for built in built {
             let attachments = self.attachments(&built.pass, targets);
             let query = timer.begin(encoder, &built.pass.name);
-            {
-                let mut render = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            let mut render = encoder
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some(&built.pass.name),
                     color_attachments: &attachments,
                     depth_stencil_attachment: Some(self.depth_attachment(&built.pass, part)),
                     timestamp_writes: timer.timestamp_writes(&query),
                     ..wgpu::RenderPassDescriptor::default()
-                });
-                render.set_pipeline(&built.pipeline);
-                let mut draws = Draw {
-                    render: &mut render,
-                    built,
-                    binder: &binder,
-                    error: None,
-                    drawn: 0,
-                    bound: None,
-                    per_draw: None,
-                };
-                draw(&mut draws);
-                if let Some(err) = draws.error.take() {
-                    return Err(err);
-                }
-                if built.pass.stencil.is_some() && draws.drawn == 0 {
-                    return Err(Error::Mismatch(format!(
-                        "pass `{}` marks each draw's pixels in the stencil, and the callback drew nothing in it",
-                        built.pass.name
-                    )));
-                }
-            }
+                })
+                // The pass ends (is dropped) inside `record`, before the
+                // encoder is used again; wgpu checks that it is.
+                .forget_lifetime();
+            render.set_pipeline(&built.pipeline);
+            record(built, &binder, render)?;
             timer.end(encoder, query);
         }
         Ok(binder.used.into_inner())
@@ -1113,6 +1184,27 @@ impl CachedShader {
     }
 }
 
+/// Records one pass's draws through the application's callback.
+fn draw_pass(
+    built: &Built,
+    binder: &Binder<'_>,
+    render: &mut wgpu::RenderPass<'static>,
+    draw: &mut impl FnMut(&mut Draw<'_, '_>),
+) -> Result<(), Error> {
+    let mut draws = Draw::new(render, built, binder);
+    draw(&mut draws);
+    if let Some(err) = draws.error.take() {
+        return Err(err);
+    }
+    if built.pass.stencil.is_some() && draws.drawn == 0 {
+        return Err(Error::Mismatch(format!(
+            "pass `{}` marks each draw's pixels in the stencil, and the callback drew nothing in it",
+            built.pass.name
+        )));
+    }
+    Ok(())
+}
+
 /// One pass being recorded: the application sets its bind groups and
 /// buffers as in its original pass, and draws with [`Draw::draw_indexed`]
 /// or [`Draw::draw`], each with the draw's [`Twins`]. There is no raw
@@ -1152,7 +1244,19 @@ pub struct Draw<'r, 'e> {
     per_draw: Option<(u32, wgpu::BindGroup)>,
 }
 
-impl Draw<'_, '_> {
+impl<'r, 'e> Draw<'r, 'e> {
+    fn new(render: &'r mut wgpu::RenderPass<'e>, built: &'r Built, binder: &'r Binder<'r>) -> Self {
+        Draw {
+            render,
+            built,
+            binder,
+            error: None,
+            drawn: 0,
+            bound: None,
+            per_draw: None,
+        }
+    }
+
     /// The plan's pass being recorded (its name and role).
     pub fn pass(&self) -> &Pass {
         &self.built.pass
