@@ -168,7 +168,8 @@ pub(crate) fn user_groups<'a>(
 
 /// Whether a layout entry's type can hold what WGSL declares as `kind`:
 /// the same binding type, up to what WGSL does not say (a texture's float
-/// filterability, a sampler's filtering).
+/// filterability, a sampler's filtering, a buffer's dynamic offset and
+/// least size).
 fn compatible(kind: ResourceKind, ty: &wgpu::BindingType) -> bool {
     use wgpu::BindingType as B;
     use ResourceKind as K;
@@ -188,6 +189,10 @@ fn compatible(kind: ResourceKind, ty: &wgpu::BindingType) -> bool {
             binding_type(kind),
             Some((B::Texture { sample_type: want, view_dimension: dimension, .. }, _))
                 if dimension == *view_dimension && is_depth(&want) == is_depth(sample_type)
+        ),
+        (kind, B::Buffer { ty, .. }) => matches!(
+            binding_type(kind),
+            Some((B::Buffer { ty: want, .. }, _)) if want == *ty
         ),
         (kind, ty) => binding_type(kind).is_some_and(|(want, _)| want == *ty),
     }
