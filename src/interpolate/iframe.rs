@@ -170,7 +170,7 @@ pub fn instrument(
     let entry_index = analysis.entry_index;
     let entry = original.entry_points[entry_index].clone();
     let (result, vertex_index) = instrumentable(original, &entry, entry_index, options)?;
-    let slot = CacheSlot::for_module(original);
+    let slot = CacheSlot::for_module(original, options.max_bind_groups);
     let mut module = original.clone();
     let (flow_to, params_global) = import_helpers(&mut module, slot)?;
 

@@ -133,6 +133,14 @@ pub struct Options {
     /// compute the payload then reproject, to compare. Lowres's own is
     /// [`Upsampling::reshade`].
     pub adaptive_refresh: bool,
+    /// The bind groups the host's device has ([`DEFAULT_MAX_BIND_GROUPS`]
+    /// is WebGPU's default). The cache takes the first group the shader
+    /// leaves free; a shader that uses all of them shares its last with
+    /// the cache, and the host then binds that group itself. An engine
+    /// that binds every group of its own (Bevy: view, binding arrays,
+    /// mesh, material) on a device with more gives the device's count, so
+    /// the cache gets a group of its own.
+    pub max_bind_groups: u32,
 }
 
 impl Default for Options {
@@ -150,6 +158,7 @@ impl Default for Options {
             deforming_inputs: Vec::new(),
             upsampling: DEFAULT_UPSAMPLING,
             adaptive_refresh: false,
+            max_bind_groups: DEFAULT_MAX_BIND_GROUPS,
         }
     }
 }
@@ -233,7 +242,7 @@ pub struct Rewritten {
 }
 
 /// WebGPU's default limit on bind groups.
-const MAX_BIND_GROUPS: u32 = 4;
+pub const DEFAULT_MAX_BIND_GROUPS: u32 = 4;
 
 /// Where the cache's own resources and the previous-frame twins are bound:
 /// the cache's at `first_binding +` their bindings in `shaders/cache.wgsl`,
@@ -248,22 +257,23 @@ pub struct CacheSlot {
 
 impl CacheSlot {
     /// The first bind group `module` leaves free, from binding 0; when it
-    /// uses all of WebGPU's four (engines bind view, material, mesh and
-    /// more), its last group after the last binding there.
-    pub fn for_module(module: &naga::Module) -> CacheSlot {
+    /// uses all `max_bind_groups` (WebGPU's default is four; engines bind
+    /// view, material, mesh and more), its last group after the last
+    /// binding there.
+    pub fn for_module(module: &naga::Module, max_bind_groups: u32) -> CacheSlot {
         let bindings: Vec<naga::ResourceBinding> = module
             .global_variables
             .iter()
             .filter_map(|(_, g)| g.binding)
             .collect();
         let free = bindings.iter().map(|b| b.group + 1).max().unwrap_or(0);
-        if free < MAX_BIND_GROUPS {
+        if free < max_bind_groups {
             return CacheSlot {
                 group: free,
                 first_binding: 0,
             };
         }
-        let group = MAX_BIND_GROUPS - 1;
+        let group = max_bind_groups.max(1) - 1;
         let last = bindings
             .iter()
             .filter(|b| b.group == group)
@@ -421,7 +431,7 @@ fn rewrite_at(
     // Where the cache's resources go: the first bind group the user's
     // shader leaves free; when it uses all four WebGPU allows, after its
     // last binding in the last one.
-    let slot = CacheSlot::for_module(original);
+    let slot = CacheSlot::for_module(original, options.max_bind_groups);
     let mut module = original.clone();
     let helpers = helpers::CacheHelpers::import(
         &mut module,
