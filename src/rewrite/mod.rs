@@ -808,3 +808,34 @@ pub(crate) fn without_bindings(
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A shader binding all four of WebGPU's groups (as Bevy's materials
+    /// do) shares its last with the cache on a four-group device, and
+    /// leaves the material's group alone on a device with more.
+    #[test]
+    fn a_shader_using_every_group_gets_a_group_of_its_own_when_the_device_has_more() {
+        let module = naga::front::wgsl::parse_str(
+            "@group(0) @binding(0) var<uniform> view: vec4<f32>;
+             @group(3) @binding(2) var<uniform> material: vec4<f32>;
+             @fragment fn f() -> @location(0) vec4<f32> { return view + material; }",
+        )
+        .unwrap();
+        let shared = CacheSlot {
+            group: 3,
+            first_binding: 3,
+        };
+        let own = CacheSlot {
+            group: 4,
+            first_binding: 0,
+        };
+        assert_eq!(
+            CacheSlot::for_module(&module, DEFAULT_MAX_BIND_GROUPS),
+            shared
+        );
+        assert_eq!(CacheSlot::for_module(&module, 8), own);
+    }
+}

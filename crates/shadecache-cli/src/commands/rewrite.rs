@@ -70,6 +70,13 @@ pub struct Args {
     #[arg(long)]
     pub adaptive_refresh: bool,
 
+    /// The bind groups the host's device has: the cache takes the first
+    /// group the shader leaves free, and shares the last with a shader
+    /// that uses them all. Bevy binds four of its own, so its materials
+    /// want 5 or more (every Vulkan, Metal and D3D12 device has 8).
+    #[arg(long, default_value_t = shadecache::rewrite::DEFAULT_MAX_BIND_GROUPS, value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_bind_groups: u32,
+
     /// Per-vertex inputs (by name, separated by commas) that the
     /// application changes every frame, deforming the mesh on the CPU:
     /// the position gets last frame's value of each from a twin of its
@@ -337,6 +344,7 @@ fn rewrite_entry(
         deforming_inputs: args.deforming_input.clone(),
         upsampling: args.upsampling.upsampling()?,
         adaptive_refresh: args.adaptive_refresh,
+        max_bind_groups: args.max_bind_groups,
         ..Options::default()
     };
     // A reconstruction named is lowres's upsampling for lowres, the
