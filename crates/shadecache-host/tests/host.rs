@@ -349,6 +349,40 @@ impl App {
             .expect("the frame records");
     }
 
+    /// [`App::frame`] with the draws recorded by the application itself
+    /// into the passes the host begins, as an engine's render commands do
+    /// (`record_engine_timed`).
+    fn engine_frame(&mut self, gpu: &Gpu, x: f32) -> Result<(), Error> {
+        gpu.queue.write_buffer(&self.object, 0, &bytes(&matrix(x)));
+        let view = self.targets[0].create_view(&wgpu::TextureViewDescriptor::default());
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        let color = [Some(&view)];
+        let targets = Targets {
+            color: &color,
+            clear: Some(wgpu::Color::BLACK),
+        };
+        let (groups, vertices, indices) = (&self.groups, &self.vertices, &self.indices);
+        self.cached.record_engine_timed(
+            &gpu.queue,
+            &mut encoder,
+            &targets,
+            &mut shadecache_host::NoTimer,
+            &self.twins,
+            |_, mut pass| {
+                pass.set_bind_group(0, &groups[0], &[]);
+                pass.set_bind_group(1, &groups[1], &[]);
+                pass.set_vertex_buffer(0, vertices.slice(..));
+                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..6, 0, 0..1);
+                Ok(())
+            },
+        )?;
+        gpu.queue.submit([encoder.finish()]);
+        Ok(())
+    }
+
     /// [`App::frame`], drawing as `drawn` says; the error `record` gives.
     fn record(&mut self, gpu: &Gpu, x: f32, drawn: Drawn) -> Result<(), Error> {
         gpu.queue.write_buffer(&self.object, 0, &bytes(&matrix(x)));
@@ -845,4 +879,31 @@ fn host_without_default_features_has_no_blocking_dependency() {
     assert!(!lean.contains("pollster"), "{lean}");
     // The check can fail: with the default features it is there.
     assert!(tree(&[]).contains("pollster"));
+}
+
+/// An engine that records its own draws into the passes the host begins
+/// (Bevy's render phases) gets the frames the host's own draw callback
+/// gives, frame after frame under motion (so the twins are bound and
+/// copied as for `record`).
+#[test]
+fn an_engines_own_draws_give_the_frames_of_the_hosts() {
+    let Some(gpu) = gpu() else { return };
+    for name in ["three-pass", "one-pass"] {
+        let mut through_host = App::new(&gpu, name);
+        let mut engine = App::new(&gpu, name);
+        for x in [-0.25, 0.0, 0.1, 0.1] {
+            through_host.frame(&gpu, x);
+            engine.engine_frame(&gpu, x).expect("the frame records");
+            assert_eq!(
+                read(&gpu, &through_host.targets[0], 4),
+                read(&gpu, &engine.targets[0], 4),
+                "{name}, x = {x}"
+            );
+            assert_eq!(
+                through_host.ages(&gpu),
+                engine.ages(&gpu),
+                "{name}, x = {x}"
+            );
+        }
+    }
 }
