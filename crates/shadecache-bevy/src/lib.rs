@@ -1,0 +1,200 @@
+//! Draws a Bevy 0.20 material through a shadecache reprojection-cache
+//! variant, in Bevy's own render graph, with Bevy's own bindings.
+//!
+//! shadecache rewrites a material's fragment shader (composed with Bevy's
+//! WESL packages, by a build script) into cache variants: passes that
+//! reuse last frame's payload where the surface point was visible, and
+//! compute it afresh elsewhere and on a refresh pattern. Each variant comes
+//! with a plan (`plan.json`). This crate runs one in a Bevy app:
+//!
+//! - **What the user writes.** [`ShadecachePlugin`] with the variant
+//!   ([`CachedVariant`], from the files the build script wrote), a
+//!   [`CachedMaterial`] on each mesh entity whose material the variant was
+//!   made from (the entity keeps its `MeshMaterial3d`), and a
+//!   [`ReprojectionCache`] on each camera that caches.
+//! - **Where it draws.** Each caching view has a render phase of its
+//!   cached meshes ([`phase`]), queued from Bevy's visibility and batched
+//!   by Bevy's mesh batching, and removed from Bevy's opaque phase so Bevy
+//!   does not draw them too. After the main opaque pass, the host crate
+//!   ([`shadecache_host`]) records the variant's passes into the view's
+//!   target; each pass draws the phase with Bevy's own render commands:
+//!   the view bind group, the mesh bind group, the material's bind group,
+//!   `DrawMesh` (so GPU preprocessing, indirect draws and Bevy's mesh
+//!   slabs are Bevy's own).
+//! - **Last frame.** The variant reads last frame's transforms. The mesh's
+//!   are Bevy's own `previous_world_from_local` (the rewrite reads the
+//!   sibling member, `plan.json`'s `previous_members`, so the mesh array
+//!   needs no copy). The view's are a copy of the view's uniform kept by
+//!   the host: each frame the plugin copies the view's slice of Bevy's view
+//!   buffer into a buffer of its own, whose copy the host keeps for the
+//!   next frame.
+//! - **The cache's targets** (payload, age, depth, double-buffered) are
+//!   the host's, per view, sized as the view's target: a resize makes them
+//!   again and the next frame misses everywhere, as does a camera cut
+//!   ([`ReprojectionCache::cut`]) and the first frame.
+//! - **Failures** are Bevy errors in the log (and in [`CacheStats`]),
+//!   never a panic in the game:
+//!   a plan that does not match the view's layouts, a mesh with other
+//!   vertex attributes than the plan reads, what the host refuses. The
+//!   view then leaves the meshes to Bevy's own material, and says why
+//!   once.
+//!
+//! What it does not do (yet): more than one cached variant per app; meshes
+//! of several vertex layouts in one view; MSAA (the cache holds one value
+//! per pixel, and the host refuses it); occlusion by meshes Bevy draws
+//! itself: the variant's passes have their own depth buffer, so the
+//! cached meshes are drawn over the opaque pass's meshes.
+
+mod phase;
+mod view_cache;
+
+use std::sync::Arc;
+
+use bevy::prelude::*;
+use bevy::render::extract_component::{ExtractComponent, ExtractComponentPlugin};
+use bevy::render::RenderApp;
+use shadecache_host::Plan;
+
+pub use shadecache_host;
+pub use view_cache::CacheStats;
+
+/// A variant's plan and its pass shaders, as the build script wrote them
+/// (`plan.json` and the WGSL files it names).
+#[derive(Clone, Resource)]
+pub struct CachedVariant(Arc<VariantFiles>);
+
+struct VariantFiles {
+    plan: Plan,
+    shaders: Vec<(String, String)>,
+}
+
+impl CachedVariant {
+    /// Reads a plan and its pass shaders (each by the file name the plan
+    /// uses). A plan that does not parse, is inconsistent or names a
+    /// shader not given is an error here, before the app starts.
+    pub fn new<N: Into<String>, S: Into<String>>(
+        plan_json: &str,
+        shaders: impl IntoIterator<Item = (N, S)>,
+    ) -> Result<CachedVariant, shadecache_host::Error> {
+        let plan: Plan = serde_json::from_str(plan_json)
+            .map_err(|err| shadecache_host::Error::Plan(format!("plan.json: {err}")))?;
+        plan.check().map_err(shadecache_host::Error::Plan)?;
+        let shaders: Vec<(String, String)> = shaders
+            .into_iter()
+            .map(|(name, source)| (name.into(), source.into()))
+            .collect();
+        for pass in plan.passes.iter().chain(&plan.classify) {
+            if !shaders.iter().any(|(name, _)| *name == pass.shader) {
+                return Err(shadecache_host::Error::Mismatch(format!(
+                    "pass `{}` is drawn with `{}`, which was not given",
+                    pass.name, pass.shader
+                )));
+            }
+        }
+        Ok(CachedVariant(Arc::new(VariantFiles { plan, shaders })))
+    }
+
+    /// The plan.
+    pub fn plan(&self) -> &Plan {
+        &self.0.plan
+    }
+
+    /// A pass shader's WGSL, by the file name the plan uses.
+    pub fn shader(&self, name: &str) -> Option<&str> {
+        self.0
+            .shaders
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, source)| source.as_str())
+    }
+}
+
+/// Marks a mesh entity whose material the variant is drawn for. The entity
+/// keeps its `MeshMaterial3d`: the variant's passes bind that material's
+/// bind group, and with the cache off Bevy draws it as before.
+#[derive(Component, Clone, Copy, Debug, Default, ExtractComponent)]
+#[extract_app(RenderApp)]
+pub struct CachedMaterial;
+
+/// A camera whose view draws its [`CachedMaterial`] meshes through the
+/// variant. With `enabled` false Bevy draws them with their material, as
+/// without the plugin.
+#[derive(Component, Clone, Copy, Debug, ExtractComponent)]
+#[extract_app(RenderApp)]
+pub struct ReprojectionCache {
+    /// Whether the view draws through the cache.
+    pub enabled: bool,
+    /// The refresh pattern's period Δn, in place of the plan's: every
+    /// pixel is computed afresh at least every Δn frames. `None` keeps the
+    /// plan's; 1 computes every pixel every frame (the cache is then the
+    /// uncached frame, up to its format's rounding).
+    pub refresh_period: Option<u32>,
+    /// Set for one frame when the camera cuts ([`ReprojectionCache::cut`]):
+    /// that frame misses everywhere. The plugin clears it as the next
+    /// frame begins.
+    pub cut: bool,
+}
+
+impl Default for ReprojectionCache {
+    fn default() -> Self {
+        ReprojectionCache {
+            enabled: true,
+            refresh_period: None,
+            cut: false,
+        }
+    }
+}
+
+impl ReprojectionCache {
+    /// Marks this frame as a camera cut (a teleport, a new shot): nothing
+    /// of last frame is reused.
+    pub fn cut(&mut self) {
+        self.cut = true;
+    }
+
+    /// Whether this frame is marked as a cut.
+    pub fn is_cut(&self) -> bool {
+        self.cut
+    }
+}
+
+/// Draws [`CachedMaterial`] meshes through a [`CachedVariant`] in the views
+/// of cameras with a [`ReprojectionCache`].
+pub struct ShadecachePlugin {
+    variant: CachedVariant,
+}
+
+impl ShadecachePlugin {
+    /// The plugin for one variant.
+    pub fn new(variant: CachedVariant) -> Self {
+        ShadecachePlugin { variant }
+    }
+}
+
+impl Plugin for ShadecachePlugin {
+    fn build(&self, app: &mut App) {
+        app.add_plugins((
+            ExtractComponentPlugin::<CachedMaterial>::default(),
+            ExtractComponentPlugin::<ReprojectionCache>::default(),
+            phase::CachedPhasePlugin,
+        ))
+        .add_systems(First, clear_cuts);
+        let stats = CacheStats::default();
+        app.insert_resource(stats.clone());
+        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+            return;
+        };
+        render_app.insert_resource(self.variant.clone());
+        view_cache::build(render_app, stats);
+    }
+}
+
+/// A cut is one frame's: it was extracted at the end of the frame it
+/// was set in, and is cleared as the next begins.
+fn clear_cuts(mut caches: Query<&mut ReprojectionCache>) {
+    for mut cache in &mut caches {
+        if cache.cut {
+            cache.cut = false;
+        }
+    }
+}

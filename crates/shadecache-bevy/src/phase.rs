@@ -1,0 +1,282 @@
+//! The cached meshes of each caching view, as a render phase of their own.
+//!
+//! Bevy draws a mesh through a render phase: the phase's items are queued
+//! from the view's visible meshes, Bevy's mesh batching writes their mesh
+//! uniforms (on the GPU, where it preprocesses) and indirect parameters,
+//! and `DrawMesh` draws them. The variant's passes draw the same meshes
+//! with Bevy's own bindings, so they are queued into a phase of their own
+//! (a sorted phase, as Bevy's own custom-phase example does, batched by
+//! Bevy's `MeshPipeline` batching), drawn once per pass. While a view
+//! caches, its cached meshes are taken out of Bevy's opaque phase; when it
+//! stops, the view is marked for respecialisation, so Bevy queues them
+//! again.
+
+use std::ops::Range;
+
+use bevy::core_pipeline::core_3d::Opaque3d;
+use bevy::ecs::entity::EntityHash;
+use bevy::mesh::MeshVertexBufferLayoutRef;
+use bevy::pbr::{
+    DrawMesh, MeshPipeline, RenderMeshInstances, SetMaterialBindGroup, SetMeshBindGroup,
+    SetMeshViewBindGroup, SetMeshViewBindingArrayBindGroup, MATERIAL_BIND_GROUP_INDEX,
+};
+use bevy::platform::collections::{HashMap, HashSet};
+use bevy::prelude::*;
+use bevy::render::batching::gpu_preprocessing::batch_and_prepare_sorted_render_phase;
+use bevy::render::camera::DirtySpecializations;
+use bevy::render::mesh::RenderMesh;
+use bevy::render::render_asset::RenderAssets;
+use bevy::render::render_phase::{
+    sort_phase_system, AddRenderCommand, CachedRenderPipelinePhaseItem, DrawFunctionId,
+    DrawFunctions, PhaseItem, PhaseItemExtraIndex, SortedPhaseItem, SortedRenderPhasePlugin,
+    ViewBinnedRenderPhases, ViewSortedRenderPhases,
+};
+use bevy::render::render_resource::CachedRenderPipelineId;
+use bevy::render::sync_world::MainEntity;
+use bevy::render::view::{ExtractedView, RenderVisibleEntities, RetainedViewEntity};
+use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderDebugFlags, RenderSystems};
+use indexmap::IndexMap;
+
+use crate::{CachedMaterial, ReprojectionCache};
+
+/// What each pass draws per cached mesh: Bevy's material draw, without its
+/// pipeline (each pass's pipeline is the host's, set before).
+pub(crate) type DrawCachedMesh = (
+    SetMeshViewBindGroup<0>,
+    SetMeshViewBindingArrayBindGroup<1>,
+    SetMeshBindGroup<2>,
+    SetMaterialBindGroup<MATERIAL_BIND_GROUP_INDEX>,
+    DrawMesh,
+);
+
+/// One cached mesh in a view.
+pub(crate) struct CachedMesh3d {
+    entity: (Entity, MainEntity),
+    draw_function: DrawFunctionId,
+    batch_range: Range<u32>,
+    extra_index: PhaseItemExtraIndex,
+    indexed: bool,
+}
+
+impl PhaseItem for CachedMesh3d {
+    fn entity(&self) -> Entity {
+        self.entity.0
+    }
+
+    fn main_entity(&self) -> MainEntity {
+        self.entity.1
+    }
+
+    fn draw_function(&self) -> DrawFunctionId {
+        self.draw_function
+    }
+
+    fn batch_range(&self) -> &Range<u32> {
+        &self.batch_range
+    }
+
+    fn batch_range_mut(&mut self) -> &mut Range<u32> {
+        &mut self.batch_range
+    }
+
+    fn extra_index(&self) -> PhaseItemExtraIndex {
+        self.extra_index.clone()
+    }
+
+    fn batch_range_and_extra_index_mut(&mut self) -> (&mut Range<u32>, &mut PhaseItemExtraIndex) {
+        (&mut self.batch_range, &mut self.extra_index)
+    }
+}
+
+impl SortedPhaseItem for CachedMesh3d {
+    // The passes depth-test, so the order changes no pixel: the items
+    // stay in the order they were queued.
+    type SortKey = ();
+
+    fn sort_key(&self) -> Self::SortKey {}
+
+    fn sort(_: &mut IndexMap<(Entity, MainEntity), CachedMesh3d, EntityHash>) {}
+
+    fn recalculate_sort_keys(
+        _: &mut IndexMap<(Entity, MainEntity), Self, EntityHash>,
+        _: &ExtractedView,
+    ) {
+    }
+
+    fn indexed(&self) -> bool {
+        self.indexed
+    }
+}
+
+impl CachedRenderPipelinePhaseItem for CachedMesh3d {
+    /// The pass's pipeline is the host's, not one of Bevy's pipeline cache:
+    /// the draw function sets none.
+    fn cached_pipeline(&self) -> CachedRenderPipelineId {
+        CachedRenderPipelineId::INVALID
+    }
+}
+
+/// The vertex layouts of each view's cached meshes, as queued: the host
+/// makes its pipelines for one.
+#[derive(Resource, Default)]
+pub(crate) struct QueuedLayouts(pub HashMap<RetainedViewEntity, Vec<MeshVertexBufferLayoutRef>>);
+
+/// The views whose cached meshes were taken out of Bevy's opaque phase.
+#[derive(Resource, Default)]
+pub(crate) struct TakenViews(pub HashSet<RetainedViewEntity>);
+
+/// Whether a view draws through the cache this frame: it caches, and its
+/// cache was made (a view whose cache failed leaves its meshes to Bevy).
+#[derive(Resource, Default)]
+pub(crate) struct CachingViews(pub HashSet<RetainedViewEntity>);
+
+pub(crate) struct CachedPhasePlugin;
+
+impl Plugin for CachedPhasePlugin {
+    fn build(&self, app: &mut App) {
+        app.add_plugins(SortedRenderPhasePlugin::<CachedMesh3d, MeshPipeline>::new(
+            RenderDebugFlags::default(),
+        ));
+        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+            return;
+        };
+        render_app
+            .init_resource::<DrawFunctions<CachedMesh3d>>()
+            .add_render_command::<CachedMesh3d, DrawCachedMesh>()
+            .init_resource::<ViewSortedRenderPhases<CachedMesh3d>>()
+            .init_resource::<QueuedLayouts>()
+            .init_resource::<TakenViews>()
+            .init_resource::<CachingViews>()
+            .add_systems(ExtractSchedule, extract_cached_phases)
+            .add_systems(
+                Render,
+                (
+                    respecialize_switched_views.in_set(RenderSystems::PrepareAssets),
+                    (queue_cached_meshes, take_from_opaque_phase)
+                        .chain()
+                        .in_set(RenderSystems::QueueMeshes)
+                        .after(bevy::pbr::queue_material_meshes),
+                    sort_phase_system::<CachedMesh3d>.in_set(RenderSystems::PhaseSort),
+                    batch_and_prepare_sorted_render_phase::<CachedMesh3d, MeshPipeline>
+                        .in_set(RenderSystems::PrepareResources),
+                ),
+            );
+    }
+}
+
+/// The 3D cameras with a cache.
+type CachingCameras<'w, 's> =
+    Query<'w, 's, (Entity, &'static Camera, &'static ReprojectionCache), With<Camera3d>>;
+
+/// Gives each caching camera's view its phase, and drops the phases of
+/// views that went away.
+fn extract_cached_phases(
+    mut phases: ResMut<ViewSortedRenderPhases<CachedMesh3d>>,
+    cameras: Extract<CachingCameras>,
+    mut live: Local<HashSet<RetainedViewEntity>>,
+) {
+    live.clear();
+    for (main_entity, camera, cache) in &cameras {
+        if !camera.is_active || !cache.enabled {
+            continue;
+        }
+        let view = RetainedViewEntity::new(main_entity.into(), None, 0);
+        phases.prepare_for_new_frame(view);
+        live.insert(view);
+    }
+    phases.retain(|view, _| live.contains(view));
+}
+
+/// A view that starts or stops caching has its meshes specialised and
+/// queued again by Bevy, so that they return to its opaque phase.
+fn respecialize_switched_views(
+    phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
+    mut taken: ResMut<TakenViews>,
+    mut dirty: ResMut<DirtySpecializations>,
+) {
+    let gone: Vec<RetainedViewEntity> = taken
+        .0
+        .iter()
+        .filter(|view| !phases.contains_key(*view))
+        .copied()
+        .collect();
+    for view in gone {
+        taken.0.remove(&view);
+        dirty.views.insert(view);
+    }
+}
+
+/// Queues the view's visible cached meshes into its phase, every frame
+/// (the phase is small: the meshes of one material), and notes their
+/// vertex layouts.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn queue_cached_meshes(
+    draw_functions: Res<DrawFunctions<CachedMesh3d>>,
+    render_meshes: Res<RenderAssets<RenderMesh>>,
+    render_mesh_instances: Res<RenderMeshInstances>,
+    mut phases: ResMut<ViewSortedRenderPhases<CachedMesh3d>>,
+    views: Query<(&ExtractedView, &RenderVisibleEntities)>,
+    cached: Query<(), With<CachedMaterial>>,
+    mut layouts: ResMut<QueuedLayouts>,
+) {
+    let draw = draw_functions.read().id::<DrawCachedMesh>();
+    layouts.0.clear();
+    for (view, visible) in &views {
+        let Some(phase) = phases.get_mut(&view.retained_view_entity) else {
+            continue;
+        };
+        phase.clear();
+        let Some(meshes) = visible.get::<Mesh3d>() else {
+            continue;
+        };
+        let view_layouts = layouts.0.entry(view.retained_view_entity).or_default();
+        let gpu_culled = meshes
+            .entities_gpu_culling
+            .iter()
+            .map(|(main, render)| (render, main));
+        let cpu_culled = meshes.entities_cpu_culling.iter().map(|(r, m)| (r, m));
+        for (render_entity, main_entity) in cpu_culled.chain(gpu_culled) {
+            if cached.get(*render_entity).is_err() {
+                continue;
+            }
+            let Some(instance) = render_mesh_instances.render_mesh_queue_data(*main_entity) else {
+                continue;
+            };
+            let Some(mesh) = render_meshes.get(instance.mesh_asset_id()) else {
+                continue;
+            };
+            if !view_layouts.contains(&mesh.layout) {
+                view_layouts.push(mesh.layout.clone());
+            }
+            phase.add_transient(CachedMesh3d {
+                entity: (*render_entity, *main_entity),
+                draw_function: draw,
+                batch_range: 0..1,
+                extra_index: PhaseItemExtraIndex::None,
+                indexed: mesh.indexed(),
+            });
+        }
+    }
+}
+
+/// Takes the cached meshes of a caching view out of Bevy's opaque phase:
+/// the variant draws them.
+pub(crate) fn take_from_opaque_phase(
+    phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
+    caching: Res<CachingViews>,
+    mut opaque: ResMut<ViewBinnedRenderPhases<Opaque3d>>,
+    mut taken: ResMut<TakenViews>,
+) {
+    for (view, phase) in phases.iter() {
+        if !caching.0.contains(view) {
+            continue;
+        }
+        let Some(opaque) = opaque.get_mut(view) else {
+            continue;
+        };
+        for (_, main_entity) in phase.items.keys() {
+            opaque.remove(*main_entity);
+        }
+        taken.0.insert(*view);
+    }
+}

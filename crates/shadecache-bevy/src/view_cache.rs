@@ -1,0 +1,514 @@
+//! Each caching view's variant on the host crate: made from Bevy's layouts
+//! for the view, its cached meshes and their material, kept at the view's
+//! size, and recorded after the main opaque pass.
+
+use std::sync::{Arc, Mutex};
+
+use bevy::core_pipeline::core_3d::main_opaque_pass_3d;
+use bevy::core_pipeline::{schedule::Core3d, Core3dSystems};
+use bevy::log::error;
+use bevy::pbr::{
+    MeshPipeline, MeshPipelineViewLayoutKey, PreparedMaterial, RenderMaterialInstances,
+    RenderMeshInstances, ViewKeyCache,
+};
+use bevy::platform::collections::HashMap;
+use bevy::prelude::*;
+use bevy::render::camera::{DirtySpecializations, ExtractedCamera};
+use bevy::render::diagnostic::RecordDiagnostics;
+use bevy::render::erased_render_asset::ErasedRenderAssets;
+use bevy::render::render_phase::{TrackedRenderPass, ViewSortedRenderPhases};
+use bevy::render::render_resource::{BufferUsages, ShaderType};
+use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
+use bevy::render::view::{
+    ExtractedView, RetainedViewEntity, ViewTarget, ViewUniform, ViewUniformOffset, ViewUniforms,
+};
+use bevy::render::{Render, RenderSystems};
+use shadecache_host::plan::ResourceKind;
+use shadecache_host::{
+    CachedShader, FrameLayout, NoTimer, Options, Plan, Targets, TwinSources, Twins,
+};
+
+use crate::phase::{CachedMesh3d, CachingViews, QueuedLayouts};
+use crate::{CachedVariant, ReprojectionCache};
+
+/// Bevy's view uniform: group 0, binding 0 of the mesh view bind group.
+const VIEW_BINDING: [u32; 2] = [0, 0];
+
+/// What a view's cache was made for; a change makes it again.
+#[derive(Clone, Debug, PartialEq)]
+struct CacheKey {
+    view_layout: MeshPipelineViewLayoutKey,
+    color_format: wgpu::TextureFormat,
+    mesh_layout: bevy::mesh::MeshVertexBufferLayoutRef,
+    material_layout: Vec<wgpu::BindGroupLayoutEntry>,
+    refresh_period: Option<u32>,
+}
+
+/// One view's variant and what it draws with.
+struct ViewCache {
+    key: CacheKey,
+    shader: CachedShader,
+    /// This frame's view uniform, copied from Bevy's view buffer at the
+    /// view's offset; the host keeps last frame's copy of it.
+    view_now: wgpu::Buffer,
+    twins: Twins,
+}
+
+/// A view's cache, or why it has none.
+enum Slot {
+    Ready(Box<ViewCache>),
+    /// The error, logged once; the view leaves its meshes to Bevy until
+    /// what the cache was made for changes.
+    Failed(CacheKey),
+}
+
+/// Every caching view's cache.
+#[derive(Resource, Default)]
+struct ViewCaches(HashMap<RetainedViewEntity, Mutex<Slot>>);
+
+/// What the plugin did, shared by the main world and the render world
+/// (both hold a clone): frames drawn through the cache, and every error
+/// logged (a cache that cannot be made, a frame that failed), for a game's
+/// readout or its tests.
+#[derive(Resource, Clone, Default, Debug)]
+pub struct CacheStats(Arc<Mutex<StatsInner>>);
+
+#[derive(Default, Debug)]
+struct StatsInner {
+    frames: u64,
+    errors: Vec<String>,
+}
+
+impl CacheStats {
+    /// Frames drawn through the cache, over every view.
+    pub fn frames_drawn(&self) -> u64 {
+        self.lock().frames
+    }
+
+    /// Every error logged, in order.
+    pub fn errors(&self) -> Vec<String> {
+        self.lock().errors.clone()
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, StatsInner> {
+        self.0
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    fn drew(&self) {
+        self.lock().frames += 1;
+    }
+
+    /// Logs `err` and keeps it.
+    fn error(&self, err: String) {
+        error!("shadecache: {err}");
+        self.lock().errors.push(err);
+    }
+}
+
+pub(crate) fn build(render_app: &mut SubApp, stats: CacheStats) {
+    render_app
+        .insert_resource(stats)
+        .init_resource::<ViewCaches>()
+        .add_systems(
+            Render,
+            copyable_view_uniforms
+                .in_set(RenderSystems::PrepareResources)
+                .before(bevy::render::view::prepare_view_uniforms),
+        )
+        .add_systems(
+            Render,
+            prepare_view_caches
+                .in_set(RenderSystems::QueueMeshes)
+                .after(crate::phase::queue_cached_meshes)
+                .before(crate::phase::take_from_opaque_phase),
+        )
+        .add_systems(
+            Core3d,
+            draw_cached_passes
+                .after(main_opaque_pass_3d)
+                .in_set(Core3dSystems::MainPass),
+        );
+}
+
+/// The plugin copies the view's uniform out of Bevy's view buffer each
+/// frame, which needs the buffer to be a copy source. Asked for whenever
+/// the buffer is not one (it is made again with the usage when next
+/// written): at the first frame, and after the render world is made
+/// again.
+fn copyable_view_uniforms(mut uniforms: ResMut<ViewUniforms>) {
+    let copyable = uniforms
+        .uniforms
+        .buffer()
+        .is_some_and(|buffer| buffer.usage().contains(BufferUsages::COPY_SRC));
+    if !copyable {
+        uniforms.uniforms.add_usages(BufferUsages::COPY_SRC);
+    }
+}
+
+/// Makes, keeps or drops each caching view's cache, before the cached
+/// meshes are taken from Bevy's opaque phase (only views with a cache
+/// draw them).
+#[allow(clippy::too_many_arguments)]
+fn prepare_view_caches(
+    variant: Res<CachedVariant>,
+    device: Res<RenderDevice>,
+    mesh_pipeline: Res<MeshPipeline>,
+    view_keys: Res<ViewKeyCache>,
+    layouts: Res<QueuedLayouts>,
+    phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
+    mesh_instances: Res<RenderMeshInstances>,
+    material_instances: Res<RenderMaterialInstances>,
+    materials: Res<ErasedRenderAssets<PreparedMaterial>>,
+    views: Query<(&ExtractedView, &ExtractedCamera, &ReprojectionCache)>,
+    mut caches: ResMut<ViewCaches>,
+    mut caching: ResMut<CachingViews>,
+    mut dirty: ResMut<DirtySpecializations>,
+    stats: Res<CacheStats>,
+) {
+    let was_caching = std::mem::take(&mut caching.0);
+    caches.0.retain(|view, _| phases.contains_key(view));
+    for (view, camera, settings) in &views {
+        let id = view.retained_view_entity;
+        let Some(phase) = phases.get(&id) else {
+            continue;
+        };
+        let Some(first) = phase.items.values().next() else {
+            // Nothing cached is visible: nothing to make yet.
+            if was_caching.contains(&id) {
+                caching.0.insert(id);
+            }
+            continue;
+        };
+        let key = match cache_key(
+            &id,
+            first,
+            settings,
+            (&view_keys, &layouts, &mesh_instances),
+            (&material_instances, &materials),
+        ) {
+            Ok(Some(key)) => key,
+            // The material or the view is not prepared yet.
+            Ok(None) => continue,
+            Err(err) => {
+                stats.error(err);
+                continue;
+            }
+        };
+        let size = camera
+            .physical_target_size
+            .map(|s| (s.x, s.y))
+            .unwrap_or((1, 1));
+        let slot = caches.0.entry(id).or_insert_with(|| {
+            Mutex::new(make_cache(
+                &variant,
+                &device,
+                &mesh_pipeline,
+                key.clone(),
+                size,
+                &stats,
+            ))
+        });
+        let slot = slot
+            .get_mut()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        let current = match slot {
+            Slot::Ready(cache) => &cache.key,
+            Slot::Failed(key) => key,
+        };
+        if *current != key {
+            *slot = make_cache(&variant, &device, &mesh_pipeline, key, size, &stats);
+        }
+        if matches!(slot, Slot::Ready(_)) {
+            caching.0.insert(id);
+        } else if was_caching.contains(&id) {
+            // Its meshes were taken from the opaque phase: Bevy queues them
+            // again.
+            dirty.views.insert(id);
+        }
+    }
+}
+
+/// What the view's cache is made for, from Bevy's prepared view, mesh and
+/// material; `None` while one of them is not prepared yet.
+fn cache_key(
+    view: &RetainedViewEntity,
+    first: &CachedMesh3d,
+    settings: &ReprojectionCache,
+    (view_keys, layouts, mesh_instances): (&ViewKeyCache, &QueuedLayouts, &RenderMeshInstances),
+    (material_instances, materials): (
+        &RenderMaterialInstances,
+        &ErasedRenderAssets<PreparedMaterial>,
+    ),
+) -> Result<Option<CacheKey>, String> {
+    use bevy::render::render_phase::PhaseItem;
+    let Some(view_key) = view_keys.get(view).copied() else {
+        return Ok(None);
+    };
+    let Some(mesh_layouts) = layouts.0.get(view) else {
+        return Ok(None);
+    };
+    let mesh_layout = match mesh_layouts.as_slice() {
+        [] => return Ok(None),
+        [one] => one.clone(),
+        _ => {
+            return Err(format!(
+                "the view's cached meshes have {} vertex layouts; a view's cached meshes must share one (the same vertex attributes), as the variant's pipelines are made for one",
+                mesh_layouts.len()
+            ))
+        }
+    };
+    let _ = mesh_instances;
+    let Some(instance) = material_instances.instances.get(&first.main_entity()) else {
+        return Ok(None);
+    };
+    let Some(material) = materials.get(instance.asset_id) else {
+        return Ok(None);
+    };
+    let material_layout = material
+        .properties
+        .material_layout
+        .as_ref()
+        .map(|layout| layout.entries.clone())
+        .unwrap_or_default();
+    let color_format = view_key.target_format();
+    Ok(Some(CacheKey {
+        view_layout: MeshPipelineViewLayoutKey::from(view_key),
+        color_format,
+        mesh_layout,
+        material_layout,
+        refresh_period: settings.refresh_period,
+    }))
+}
+
+/// Makes a view's cache: the host's pipelines from Bevy's layouts, the
+/// view's copy and its twin. A failure is logged once.
+fn make_cache(
+    variant: &CachedVariant,
+    device: &RenderDevice,
+    mesh_pipeline: &MeshPipeline,
+    key: CacheKey,
+    size: (u32, u32),
+    stats: &CacheStats,
+) -> Slot {
+    match try_make_cache(variant, device, mesh_pipeline, &key, size) {
+        Ok(cache) => Slot::Ready(Box::new(cache)),
+        Err(err) => {
+            stats.error(format!(
+                "the view's cache cannot be made, so Bevy draws its material: {err}"
+            ));
+            Slot::Failed(key)
+        }
+    }
+}
+
+fn try_make_cache(
+    variant: &CachedVariant,
+    device: &RenderDevice,
+    mesh_pipeline: &MeshPipeline,
+    key: &CacheKey,
+    size: (u32, u32),
+) -> Result<ViewCache, String> {
+    let mut plan: Plan = variant.plan().clone();
+    if let Some(period) = key.refresh_period {
+        if period == 0 {
+            return Err("a refresh period of 0 never refreshes: give 1 or more".into());
+        }
+        plan.refresh.period = period;
+    }
+    check_twins(&plan)?;
+    let view_layout = mesh_pipeline.get_view_layout(key.view_layout);
+    let mesh_layout = &mesh_pipeline.mesh_layouts.model_only;
+    let groups: [(u32, &[wgpu::BindGroupLayoutEntry]); 4] = [
+        (0, &view_layout.main_layout.entries),
+        (1, &view_layout.binding_array_layout.entries),
+        (2, &mesh_layout.entries),
+        (3, &key.material_layout),
+    ];
+    let attributes = vertex_attributes(&plan)?;
+    let buffer = key
+        .mesh_layout
+        .0
+        .get_layout(&attributes)
+        .map_err(|err| format!("the cached meshes lack what the variant reads: {err}"))?;
+    let vertex = [Some(wgpu::VertexBufferLayout {
+        array_stride: buffer.array_stride,
+        step_mode: buffer.step_mode,
+        attributes: &buffer.attributes,
+    })];
+    let colors = [Some(wgpu::ColorTargetState::from(key.color_format))];
+    let mut frame = FrameLayout::new(&vertex, &groups, &colors);
+    frame.primitive = wgpu::PrimitiveState {
+        cull_mode: Some(wgpu::Face::Back),
+        ..Default::default()
+    };
+    let wgpu_device = device.wgpu_device();
+    let mut shader = CachedShader::new(
+        wgpu_device,
+        &plan,
+        |name| variant.shader(name),
+        &frame,
+        size,
+        Options::default(),
+    )
+    .map_err(|err| err.to_string())?;
+    let view_size = ViewUniform::min_size().get().next_multiple_of(16);
+    let view_now = wgpu_device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("shadecache view uniform, this frame"),
+        size: view_size,
+        usage: wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::UNIFORM,
+        mapped_at_creation: false,
+    });
+    let twins = shader
+        .twins(&TwinSources {
+            buffers: &[(VIEW_BINDING, &view_now)],
+            ..Default::default()
+        })
+        .map_err(|err| err.to_string())?;
+    Ok(ViewCache {
+        key: key.clone(),
+        shader,
+        view_now,
+        twins,
+    })
+}
+
+/// The plugin keeps last frame's copy of the view only; the mesh's
+/// previous transforms are Bevy's own members.
+fn check_twins(plan: &Plan) -> Result<(), String> {
+    for twin in &plan.bindings.previous {
+        let original = &twin.shadows;
+        if [original.group, original.binding] != VIEW_BINDING
+            || original.kind != ResourceKind::Uniform
+        {
+            return Err(format!(
+                "the variant reads last frame's `{}` (group {}, binding {}), and the plugin keeps last frame's view only (group 0, binding 0): Bevy's mesh transforms are read through their `previous_` members, so compose the material with Bevy's own mesh bindings",
+                original.name, original.group, original.binding
+            ));
+        }
+    }
+    if plan.vertex_layout.iter().any(|a| a.previous_of.is_some()) {
+        return Err("the variant reads last frame's vertex buffers (a deforming mesh), which the plugin does not keep".into());
+    }
+    Ok(())
+}
+
+/// The mesh attributes at the variant's vertex input locations, by Bevy's
+/// mesh pipeline's convention.
+fn vertex_attributes(plan: &Plan) -> Result<Vec<bevy::mesh::VertexAttributeDescriptor>, String> {
+    plan.vertex_layout
+        .iter()
+        .filter(|input| input.previous_of.is_none())
+        .map(|input| {
+            let attribute = match input.location {
+                0 => Mesh::ATTRIBUTE_POSITION,
+                1 => Mesh::ATTRIBUTE_NORMAL,
+                2 => Mesh::ATTRIBUTE_UV_0,
+                3 => Mesh::ATTRIBUTE_UV_1,
+                4 => Mesh::ATTRIBUTE_TANGENT,
+                5 => Mesh::ATTRIBUTE_COLOR,
+                other => {
+                    return Err(format!(
+                        "vertex input `{}` at @location({other}) is not one of Bevy's mesh attributes (0 to 5: position, normal, uv, uv_b, tangent, colour)",
+                        input.name
+                    ))
+                }
+            };
+            Ok(attribute.at_shader_location(input.location))
+        })
+        .collect()
+}
+
+/// Records the view's variant after Bevy's opaque pass: the view's
+/// uniform copied for next frame's twin, then each pass drawing the view's
+/// cached meshes with Bevy's render commands.
+#[allow(clippy::too_many_arguments)]
+fn draw_cached_passes(
+    world: &World,
+    view: ViewQuery<(
+        &ExtractedView,
+        &ViewTarget,
+        &ViewUniformOffset,
+        &ReprojectionCache,
+    )>,
+    phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
+    caches: Res<ViewCaches>,
+    caching: Res<CachingViews>,
+    view_uniforms: Res<ViewUniforms>,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+    stats: Res<CacheStats>,
+    mut ctx: RenderContext,
+) {
+    let view_entity = view.entity();
+    let (extracted, target, offset, settings) = view.into_inner();
+    let id = extracted.retained_view_entity;
+    if !caching.0.contains(&id) {
+        return;
+    }
+    let (Some(phase), Some(slot), Some(uniforms)) = (
+        phases.get(&id),
+        caches.0.get(&id),
+        view_uniforms
+            .uniforms
+            .buffer()
+            .filter(|buffer| buffer.usage().contains(BufferUsages::COPY_SRC)),
+    ) else {
+        return;
+    };
+    let mut slot = slot.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    let Slot::Ready(cache) = &mut *slot else {
+        return;
+    };
+    let texture = target.main_texture();
+    let size = (texture.width(), texture.height());
+    if let Err(err) = cache.shader.resize(size) {
+        stats.error(err.to_string());
+        return;
+    }
+    if settings.is_cut() {
+        cache.shader.reset();
+    }
+    // The passes' GPU time, as Bevy's own passes record theirs
+    // (`render/shadecache/elapsed_gpu` with `RenderDiagnosticsPlugin`).
+    let diagnostics = ctx.diagnostic_recorder();
+    let encoder = ctx.command_encoder();
+    let span = diagnostics
+        .as_ref()
+        .map(|diagnostics| diagnostics.time_span(encoder, "shadecache"));
+    encoder.copy_buffer_to_buffer(
+        uniforms,
+        offset.offset as u64,
+        &cache.view_now,
+        0,
+        cache.view_now.size(),
+    );
+    let color = [Some(&**target.main_texture_view())];
+    let targets = Targets {
+        color: &color,
+        clear: None,
+    };
+    let result = cache.shader.record_engine_timed(
+        &queue,
+        encoder,
+        &targets,
+        &mut NoTimer,
+        &cache.twins,
+        |_, pass| {
+            let mut pass = TrackedRenderPass::new(&device, pass);
+            phase
+                .render(&mut pass, world, view_entity)
+                .map_err(|err| format!("{err:?}"))
+        },
+    );
+    if let Some(span) = span {
+        span.end(encoder);
+    }
+    match result {
+        Ok(()) => stats.drew(),
+        Err(err) => stats.error(err.to_string()),
+    }
+}

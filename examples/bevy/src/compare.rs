@@ -1,0 +1,232 @@
+//! Each frame drawn through the cache and as Bevy draws it, compared.
+
+use std::sync::{Arc, Mutex};
+
+use bevy::app::AppExit;
+use bevy::camera::RenderTarget;
+use bevy::prelude::*;
+use bevy::render::gpu_readback::{Readback, ReadbackComplete};
+use shadecache_bevy::{CacheStats, ReprojectionCache};
+
+use crate::scene::{self, FrameCount, Step};
+use crate::{drawn_pixels, headless_app, target_image};
+
+/// What a comparison run does.
+#[derive(Clone, Debug)]
+pub struct Headless {
+    /// The images' side, in pixels.
+    pub size: u32,
+    /// Frames compared, after Bevy's pipelines are ready.
+    pub frames: u32,
+    /// The cache's refresh period, in place of the plan's.
+    pub refresh_period: Option<u32>,
+    /// Degrees the camera moves a frame.
+    pub step_degrees: f32,
+    /// After `resize.0` compared frames, both images change to `resize.1`
+    /// pixels a side, and `frames` more are compared.
+    pub resize: Option<(u32, u32)>,
+}
+
+/// One compared frame: the cached image against Bevy's.
+#[derive(Clone, Debug)]
+pub struct Compared {
+    /// The images' side.
+    pub size: u32,
+    /// PSNR of the cached image against Bevy's, in dB (∞ when equal).
+    pub psnr: f64,
+    /// The largest difference of a channel, out of 1.
+    pub max_error: f64,
+    /// Pixels Bevy drew lava in (not the clear colour).
+    pub lava_pixels: usize,
+}
+
+/// What a comparison run saw.
+#[derive(Clone, Debug)]
+pub struct HeadlessRun {
+    /// The frames compared, in order.
+    pub compared: Vec<Compared>,
+    /// Frames the plugin drew through the cache.
+    pub frames_drawn: u64,
+    /// Errors the plugin logged.
+    pub errors: Vec<String>,
+}
+
+/// Which image a camera draws.
+#[derive(Component, Clone, Copy, PartialEq, Eq)]
+enum Role {
+    Cached,
+    Reference,
+}
+
+/// The images read back, by the frame they arrived in.
+#[derive(Resource, Default)]
+struct Capture {
+    cached: Vec<(u32, Vec<u8>)>,
+    reference: Vec<(u32, Vec<u8>)>,
+    compared: Vec<Compared>,
+}
+
+#[derive(Resource, Clone)]
+struct Run(Headless, Arc<Mutex<Vec<Compared>>>);
+
+/// Runs the game headless with two cameras on the same path, one caching
+/// and one drawing as Bevy does, each into an image read back every frame;
+/// returns the comparisons of the frames Bevy's own image has lava in (its
+/// pipelines compile asynchronously, for the first frames).
+pub fn run_headless(settings: Headless) -> HeadlessRun {
+    // The runner takes the app: the comparisons come back through this.
+    let results = Arc::new(Mutex::new(Vec::new()));
+    let mut app = headless_app(false);
+    app.insert_resource(Run(settings.clone(), results.clone()))
+        .insert_resource(Step(settings.step_degrees))
+        .init_resource::<FrameCount>()
+        .init_resource::<Capture>()
+        .add_systems(Startup, setup)
+        .add_systems(
+            Update,
+            (scene::move_cameras, compare, resize, finish).chain(),
+        );
+    let stats = app.world().resource::<CacheStats>().clone();
+    app.run();
+    let compared = std::mem::take(&mut *results.lock().unwrap_or_else(|p| p.into_inner()));
+    HeadlessRun {
+        compared,
+        frames_drawn: stats.frames_drawn(),
+        errors: stats.errors(),
+    }
+}
+
+fn setup(
+    mut commands: Commands,
+    run: Res<Run>,
+    mut images: ResMut<Assets<Image>>,
+    mut meshes: ResMut<Assets<Mesh>>,
+    mut materials: ResMut<Assets<scene::LavaMaterial>>,
+) {
+    scene::spawn_meshes(&mut commands, &mut meshes, &mut materials);
+    let settings = &run.0;
+    for role in [Role::Cached, Role::Reference] {
+        let target = target_image(&mut images, settings.size);
+        let mut camera =
+            commands.spawn((scene::camera(target.clone(), settings.step_degrees), role));
+        if role == Role::Cached {
+            camera.insert(ReprojectionCache {
+                refresh_period: settings.refresh_period,
+                ..default()
+            });
+        }
+        spawn_readback(&mut commands, target, role);
+    }
+}
+
+/// Reads `target` back every frame into the capture of `role`.
+fn spawn_readback(commands: &mut Commands, target: Handle<Image>, role: Role) {
+    commands.spawn(Readback::texture(target)).observe(
+        move |event: On<ReadbackComplete>, mut capture: ResMut<Capture>, frame: Res<FrameCount>| {
+            let list = match role {
+                Role::Cached => &mut capture.cached,
+                Role::Reference => &mut capture.reference,
+            };
+            list.push((frame.0, event.data.clone()));
+        },
+    );
+}
+
+/// Pairs the images both cameras drew and compares them. The two
+/// readbacks of a frame arrive in the same update: they are paired by it
+/// (and by size, across a resize); one without its pair (one of the old
+/// images', after a resize) is dropped.
+fn compare(mut capture: ResMut<Capture>) {
+    let mut pairs = Vec::new();
+    for (frame, cached) in std::mem::take(&mut capture.cached) {
+        if let Some(at) = capture
+            .reference
+            .iter()
+            .position(|(f, r)| *f == frame && r.len() == cached.len())
+        {
+            pairs.push((cached, capture.reference.remove(at).1));
+        }
+    }
+    capture.reference.clear();
+    for (cached, reference) in pairs {
+        let lava_pixels = drawn_pixels(&reference);
+        if lava_pixels == 0 {
+            continue;
+        }
+        let (psnr, max_error) = image_error(&cached, &reference);
+        capture.compared.push(Compared {
+            size: ((cached.len() / 4) as f64).sqrt() as u32,
+            psnr,
+            max_error,
+            lava_pixels,
+        });
+    }
+}
+
+/// Once `resize.0` frames are compared, gives both cameras new images of
+/// the new size, read back in place of the old.
+fn resize(
+    mut commands: Commands,
+    run: Res<Run>,
+    capture: Res<Capture>,
+    mut images: ResMut<Assets<Image>>,
+    cameras: Query<(Entity, &Role, &RenderTarget)>,
+    readbacks: Query<Entity, With<Readback>>,
+    mut done: Local<bool>,
+) {
+    let Some((after, size)) = run.0.resize else {
+        return;
+    };
+    if *done || (capture.compared.len() as u32) < after {
+        return;
+    }
+    *done = true;
+    for readback in &readbacks {
+        commands.entity(readback).despawn();
+    }
+    for (camera, role, _) in &cameras {
+        let target = target_image(&mut images, size);
+        commands
+            .entity(camera)
+            .insert(RenderTarget::Image(target.clone().into()));
+        spawn_readback(&mut commands, target, *role);
+    }
+}
+
+/// Ends the run once enough frames are compared (or Bevy never drew).
+fn finish(
+    run: Res<Run>,
+    capture: Res<Capture>,
+    frame: Res<FrameCount>,
+    mut exit: MessageWriter<AppExit>,
+) {
+    let settings = &run.0;
+    let wanted = settings.frames + settings.resize.map_or(0, |(after, _)| after);
+    if capture.compared.len() as u32 >= wanted || frame.0 > wanted + 600 {
+        *run.1.lock().unwrap_or_else(|p| p.into_inner()) = capture.compared.clone();
+        exit.write(AppExit::Success);
+    }
+}
+
+/// PSNR (dB) and largest channel difference (out of 1) of two RGBA8
+/// images, over their colour channels.
+pub fn image_error(a: &[u8], b: &[u8]) -> (f64, f64) {
+    let mut squared = 0.0f64;
+    let mut max = 0u8;
+    let mut count = 0usize;
+    for (pa, pb) in a.chunks(4).zip(b.chunks(4)) {
+        for c in 0..3 {
+            let d = pa[c].abs_diff(pb[c]);
+            max = max.max(d);
+            squared += (d as f64 / 255.0).powi(2);
+            count += 1;
+        }
+    }
+    let mse = squared / count.max(1) as f64;
+    let psnr = if mse == 0.0 {
+        f64::INFINITY
+    } else {
+        10.0 * (1.0 / mse).log10()
+    };
+    (psnr, max as f64 / 255.0)
+}

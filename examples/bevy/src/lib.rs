@@ -1,0 +1,53 @@
+//! A Bevy 0.20 game whose lava material is drawn through a shadecache
+//! reprojection-cache variant.
+//!
+//! - [`scene`]: the material (a Bevy `Material` with `assets/lava.wesl`),
+//!   the meshes marked for the cache, the camera's path.
+//! - [`compare`]: a headless run that draws each frame twice, through the
+//!   cache and as Bevy draws the material, and compares the two (the
+//!   plugin's tests).
+//! - [`measure`]: a headless run of one camera, cached or not, that reads
+//!   the GPU time of the material's passes from Bevy's render
+//!   diagnostics (the figures in `docs/bevy.md`).
+
+pub mod compare;
+pub mod measure;
+pub mod scene;
+
+use bevy::prelude::*;
+use bevy::render::render_resource::{TextureFormat, TextureUsages};
+
+pub use compare::{run_headless, Compared, Headless, HeadlessRun};
+pub use measure::{measure, Measure, Measured};
+
+/// Bevy with the game's assets, its material and the cache, run headless
+/// as fast as frames come; with `diagnostics`, Bevy's render diagnostics
+/// (GPU time per pass), which must be added with Bevy's plugins.
+fn headless_app(diagnostics: bool) -> App {
+    let mut app = App::new();
+    app.add_plugins(DefaultPlugins.set(AssetPlugin {
+        file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/assets").into(),
+        ..default()
+    }));
+    if diagnostics {
+        app.add_plugins(bevy::render::diagnostic::RenderDiagnosticsPlugin);
+    }
+    app.add_plugins((
+        bevy::app::ScheduleRunnerPlugin::run_loop(std::time::Duration::ZERO),
+        MaterialPlugin::<scene::LavaMaterial>::default(),
+        shadecache_bevy::ShadecachePlugin::new(scene::lava_variant()),
+    ));
+    app
+}
+
+/// An image a camera draws into and the readback copies from.
+fn target_image(images: &mut Assets<Image>, size: u32) -> Handle<Image> {
+    let mut image = Image::new_target_texture(size, size, TextureFormat::Rgba8UnormSrgb, None);
+    image.texture_descriptor.usage |= TextureUsages::COPY_SRC;
+    images.add(image)
+}
+
+/// Pixels drawn (not the black clear colour) in an RGBA8 image.
+fn drawn_pixels(data: &[u8]) -> usize {
+    data.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count()
+}

@@ -1,0 +1,123 @@
+//! The example game, headless.
+//!
+//! ```sh
+//! # Each frame through the cache and as Bevy draws it, compared:
+//! cargo run --ignore-rust-version -p shadecache-bevy-example -- compare --size 256 --frames 60
+//! # The material's GPU time, cached and as Bevy draws it:
+//! cargo run --release --ignore-rust-version -p shadecache-bevy-example -- measure --size 512 --frames 100
+//! ```
+
+use shadecache_bevy_example::{measure, run_headless, Headless, Measure};
+
+struct Args {
+    size: u32,
+    frames: u32,
+    refresh_period: Option<u32>,
+    step_degrees: f32,
+}
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let mode = args
+        .next()
+        .unwrap_or_else(|| usage("give `compare` or `measure`"));
+    let mut settings = Args {
+        size: 256,
+        frames: 60,
+        refresh_period: None,
+        step_degrees: 0.5,
+    };
+    while let Some(arg) = args.next() {
+        let mut value = |name: &str| -> f64 {
+            args.next()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or_else(|| usage(&format!("{name} takes a number")))
+        };
+        match arg.as_str() {
+            "--size" => settings.size = value("--size") as u32,
+            "--frames" => settings.frames = value("--frames") as u32,
+            "--refresh-period" => settings.refresh_period = Some(value("--refresh-period") as u32),
+            "--step" => settings.step_degrees = value("--step") as f32,
+            other => usage(&format!("unknown argument `{other}`")),
+        }
+    }
+    match mode.as_str() {
+        "compare" => compare(settings),
+        "measure" => time(settings),
+        other => usage(&format!("unknown mode `{other}`")),
+    }
+}
+
+fn compare(args: Args) {
+    let run = run_headless(Headless {
+        size: args.size,
+        frames: args.frames,
+        refresh_period: args.refresh_period,
+        step_degrees: args.step_degrees,
+        resize: None,
+    });
+    for err in &run.errors {
+        eprintln!("error: {err}");
+    }
+    for (n, frame) in run.compared.iter().enumerate() {
+        println!(
+            "frame {n}: {}², PSNR {:.2} dB, max error {:.4}, {} lava pixels",
+            frame.size, frame.psnr, frame.max_error, frame.lava_pixels
+        );
+    }
+    let steady = &run.compared[run.compared.len() / 2..];
+    if steady.is_empty() {
+        eprintln!("no frame was compared: Bevy's pipelines were not ready in time");
+        std::process::exit(1);
+    }
+    let mean = steady.iter().map(|f| f.psnr.min(99.0)).sum::<f64>() / steady.len() as f64;
+    let worst = steady.iter().map(|f| f.psnr).fold(f64::INFINITY, f64::min);
+    println!(
+        "steady state (last {} frames): mean PSNR {mean:.2} dB (∞ counted as 99), worst {worst:.2} dB; {} frames drawn through the cache",
+        steady.len(),
+        run.frames_drawn
+    );
+}
+
+fn time(args: Args) {
+    let mut medians = Vec::new();
+    for cached in [false, true] {
+        let run = measure(Measure {
+            size: args.size,
+            frames: args.frames,
+            cached,
+            step_degrees: args.step_degrees,
+        });
+        for err in &run.errors {
+            eprintln!("error: {err}");
+        }
+        let label = if cached { "cached" } else { "uncached" };
+        match run.median_and_interval() {
+            Some((median, low, high)) => {
+                println!(
+                    "{label}: material passes {median:.3} ms GPU per frame [{low:.3}, {high:.3}] (median, 2.5–97.5th percentile, {} frames, {}²)",
+                    run.material_ms.len(),
+                    args.size
+                );
+                medians.push(median);
+            }
+            None => {
+                eprintln!(
+                    "{label}: no GPU time was recorded (does the device have timestamp queries?)"
+                );
+                std::process::exit(1);
+            }
+        }
+    }
+    println!(
+        "speed-up: {:.2}× (uncached over cached medians)",
+        medians[0] / medians[1]
+    );
+}
+
+fn usage(problem: &str) -> ! {
+    eprintln!(
+        "{problem}\nusage: shadecache-bevy-example compare|measure [--size N] [--frames N] [--refresh-period N] [--step DEGREES]"
+    );
+    std::process::exit(2);
+}

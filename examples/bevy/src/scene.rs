@@ -1,0 +1,136 @@
+//! The scene: the lava material, its meshes, the camera's path.
+
+use bevy::camera::RenderTarget;
+use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
+use bevy::prelude::*;
+use bevy::render::render_resource::{AsBindGroup, ShaderType};
+use bevy::shader::ShaderRef;
+use shadecache_bevy::{CachedMaterial, CachedVariant};
+
+/// The directory of the variant the build script wrote.
+macro_rules! variant_file {
+    ($name:literal) => {
+        include_str!(concat!(
+            env!("OUT_DIR"),
+            "/shadecache/lava/nfe927310/one-pass/",
+            $name
+        ))
+    };
+}
+
+/// The one-pass variant of `assets/lava.wesl`, as the build script made it.
+pub fn lava_variant() -> CachedVariant {
+    CachedVariant::new(
+        variant_file!("plan.json"),
+        [
+            ("pass1.wgsl", variant_file!("pass1.wgsl")),
+            ("classify.wgsl", variant_file!("classify.wgsl")),
+        ],
+    )
+    .unwrap_or_else(|err| panic!("the build script's variant does not load: {err}"))
+}
+
+/// The material: Bevy draws it with `assets/lava.wesl`.
+#[derive(Asset, TypePath, AsBindGroup, Clone, Debug)]
+pub struct LavaMaterial {
+    /// Its uniform, `material` in the shader.
+    #[uniform(0)]
+    pub params: LavaParams,
+}
+
+/// `LavaMaterial` in the shader.
+#[derive(ShaderType, Clone, Debug)]
+pub struct LavaParams {
+    /// The crust's colour.
+    pub cool_color: Vec4,
+    /// The glow's colour.
+    pub hot_color: Vec4,
+    /// x: how fast the glow flows; y: how far the light wraps around.
+    pub flow: Vec4,
+}
+
+impl Material for LavaMaterial {
+    fn fragment_shader() -> ShaderRef {
+        "lava.wesl".into()
+    }
+}
+
+/// Places the lava meshes: a sphere, a torus and a box, each marked for
+/// the cache.
+pub fn spawn_meshes(
+    commands: &mut Commands,
+    meshes: &mut Assets<Mesh>,
+    materials: &mut Assets<LavaMaterial>,
+) {
+    let lava = materials.add(LavaMaterial {
+        params: LavaParams {
+            cool_color: Vec4::new(0.25, 0.12, 0.08, 1.0),
+            hot_color: Vec4::new(1.0, 0.35, 0.05, 1.0),
+            flow: Vec4::new(0.6, 0.3, 0.0, 0.0),
+        },
+    });
+    let shapes = [
+        (
+            meshes.add(Sphere::new(0.8).mesh().uv(48, 32)),
+            Vec3::new(-1.2, 0.0, 0.0),
+        ),
+        (meshes.add(Torus::new(0.35, 0.75)), Vec3::new(1.2, 0.0, 0.0)),
+        (
+            meshes.add(Cuboid::new(0.9, 0.9, 0.9)),
+            Vec3::new(0.0, 0.0, -1.6),
+        ),
+    ];
+    for (mesh, at) in shapes {
+        commands.spawn((
+            Mesh3d(mesh),
+            MeshMaterial3d(lava.clone()),
+            Transform::from_translation(at),
+            CachedMaterial,
+        ));
+    }
+}
+
+/// Where the camera is at frame `n`: on a circle around the meshes, a
+/// fixed step a frame, so that runs are alike whatever their speed.
+pub fn orbit(n: u32, step_degrees: f32) -> Transform {
+    let angle = (n as f32 * step_degrees).to_radians();
+    Transform::from_xyz(4.5 * angle.sin(), 1.6, 4.5 * angle.cos()).looking_at(Vec3::ZERO, Vec3::Y)
+}
+
+/// A camera on the path, drawing into `target`: single-sampled and
+/// without post-processing, so its image is the material's own output (a
+/// cache holds one value per pixel).
+pub fn camera(target: Handle<Image>, step_degrees: f32) -> impl Bundle {
+    (
+        Camera3d::default(),
+        Camera {
+            clear_color: ClearColorConfig::Custom(Color::BLACK),
+            ..default()
+        },
+        RenderTarget::Image(target.into()),
+        Msaa::Off,
+        Tonemapping::None,
+        DebandDither::Disabled,
+        orbit(0, step_degrees),
+    )
+}
+
+/// The frame counter the camera's path follows.
+#[derive(Resource, Default)]
+pub struct FrameCount(pub u32);
+
+/// Moves every 3D camera one step along the path.
+pub fn move_cameras(
+    mut frame: ResMut<FrameCount>,
+    step: Res<Step>,
+    mut cameras: Query<&mut Transform, With<Camera3d>>,
+) {
+    frame.0 += 1;
+    for mut transform in &mut cameras {
+        *transform = orbit(frame.0, step.0);
+    }
+}
+
+/// Degrees the camera moves a frame.
+#[derive(Resource, Clone, Copy)]
+pub struct Step(pub f32);

@@ -1,0 +1,99 @@
+//! The shadecache Bevy plugin in a headless Bevy app on the example's
+//! scene: each frame is drawn twice, through the cache and as Bevy draws
+//! the material itself, and the two images are compared. Bevy apps own
+//! the process's render thread and device, so the runs take turns.
+
+use std::sync::Mutex;
+
+use shadecache_bevy_example::{run_headless, Compared, Headless};
+
+static ONE_APP_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+/// The frames compared; the run must have drawn every one through the
+/// cache, without an error.
+fn run(settings: Headless) -> Vec<Compared> {
+    let _turn = ONE_APP_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
+    let run = run_headless(settings);
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    assert!(
+        run.frames_drawn >= run.compared.len() as u64,
+        "{} frames drawn through the cache, {} compared",
+        run.frames_drawn,
+        run.compared.len()
+    );
+    run.compared
+}
+
+fn settings() -> Headless {
+    Headless {
+        size: 128,
+        frames: 24,
+        refresh_period: None,
+        step_degrees: 0.5,
+        resize: None,
+    }
+}
+
+/// With Δn = 1 every pixel is computed every frame, so the variant's pass,
+/// drawn with Bevy's view, mesh and material bind groups and Bevy's
+/// `DrawMesh`, is Bevy's own frame: the one-pass variant writes what it
+/// computes, so equal to the bit.
+#[test]
+fn bevy_plugin_at_refresh_period_one_equals_the_uncached_frame() {
+    let compared = run(Headless {
+        refresh_period: Some(1),
+        ..settings()
+    });
+    assert!(compared.len() >= 24, "{} frames compared", compared.len());
+    for frame in &compared {
+        assert!(frame.lava_pixels > 1000, "{frame:?}");
+        assert!(frame.max_error <= 1.0 / 255.0, "{frame:?}");
+    }
+}
+
+/// With the plan's Δn (32) under an orbiting camera the cache reuses last
+/// frame's crust: the frames differ from Bevy's where a reprojected value
+/// is off (silhouettes, the crust's filtering), and stay close to it.
+#[test]
+fn bevy_plugin_reuses_under_camera_motion() {
+    let compared = run(settings());
+    assert!(compared.len() >= 24, "{} frames compared", compared.len());
+    let steady = &compared[compared.len() / 2..];
+    assert!(
+        steady.iter().any(|f| f.max_error > 2.0 / 255.0),
+        "no frame differs from Bevy's: nothing was reused\n{steady:?}"
+    );
+    let mean = steady.iter().map(|f| f.psnr.min(99.0)).sum::<f64>() / steady.len() as f64;
+    assert!(mean > 30.0, "mean PSNR {mean:.2} dB\n{steady:?}");
+}
+
+/// When the view's target changes size, the cache's targets are made
+/// again at the new size and the first frame the view draws at it misses
+/// everywhere, with the plan's Δn: it is Bevy's own frame. (Bevy's camera
+/// takes the new image's size a frame after its target changes: the first
+/// image at the new size can still be the old view's, scaled.)
+#[test]
+fn bevy_plugin_resets_on_resize() {
+    let compared = run(Headless {
+        frames: 4,
+        resize: Some((12, 192)),
+        ..settings()
+    });
+    let first_resized = compared
+        .iter()
+        .position(|f| f.size == 192)
+        .unwrap_or_else(|| panic!("no frame at the new size: {compared:?}"));
+    assert!(first_resized >= 12, "{compared:?}");
+    let after = &compared[first_resized..];
+    assert!(after.len() >= 3, "{after:?}");
+    let exact = after[..2]
+        .iter()
+        .position(|f| f.max_error <= 1.0 / 255.0)
+        .unwrap_or_else(|| panic!("no frame after the resize misses everywhere: {after:?}"));
+    assert!(after[exact].lava_pixels > 1000, "{after:?}");
+    // And the cache reuses again after it.
+    assert!(
+        after[exact + 1..].iter().any(|f| f.max_error > 2.0 / 255.0),
+        "{after:?}"
+    );
+}
