@@ -38,6 +38,9 @@ const VIEW_BINDING: [u32; 2] = [0, 0];
 #[derive(Clone, Debug, PartialEq)]
 struct CacheKey {
     view_layout: MeshPipelineViewLayoutKey,
+    /// The view's samples per pixel (`Msaa`): the host refuses more than
+    /// one, as a cache holds one value per pixel.
+    samples: u32,
     color_format: wgpu::TextureFormat,
     mesh_layout: bevy::mesh::MeshVertexBufferLayoutRef,
     material_layout: Vec<wgpu::BindGroupLayoutEntry>,
@@ -275,6 +278,7 @@ fn cache_key(
     let color_format = view_key.target_format();
     Ok(Some(CacheKey {
         view_layout: MeshPipelineViewLayoutKey::from(view_key),
+        samples: view_key.msaa_samples(),
         color_format,
         mesh_layout,
         material_layout,
@@ -339,6 +343,7 @@ fn try_make_cache(
     })];
     let colors = [Some(wgpu::ColorTargetState::from(key.color_format))];
     let mut frame = FrameLayout::new(&vertex, &groups, &colors);
+    frame.sample_count = key.samples;
     frame.primitive = wgpu::PrimitiveState {
         cull_mode: Some(wgpu::Face::Back),
         ..Default::default()

@@ -25,6 +25,12 @@ pub struct Headless {
     /// After `resize.0` compared frames, both images change to `resize.1`
     /// pixels a side, and `frames` more are compared.
     pub resize: Option<(u32, u32)>,
+    /// After this many compared frames, the caching camera marks a cut
+    /// (it moves on smoothly: only the cut says to forget last frame), and
+    /// `frames` more are compared.
+    pub cut_after: Option<u32>,
+    /// Both cameras with 4× MSAA, which a cache cannot do.
+    pub msaa: bool,
 }
 
 /// One compared frame: the cached image against Bevy's.
@@ -38,6 +44,8 @@ pub struct Compared {
     pub max_error: f64,
     /// Pixels Bevy drew lava in (not the clear colour).
     pub lava_pixels: usize,
+    /// The frame (of the camera's path) the images came back in.
+    pub frame: u32,
 }
 
 /// What a comparison run saw.
@@ -49,6 +57,8 @@ pub struct HeadlessRun {
     pub frames_drawn: u64,
     /// Errors the plugin logged.
     pub errors: Vec<String>,
+    /// The frame the cut was marked in, if one was.
+    pub cut_frame: Option<u32>,
 }
 
 /// Which image a camera draws.
@@ -64,10 +74,18 @@ struct Capture {
     cached: Vec<(u32, Vec<u8>)>,
     reference: Vec<(u32, Vec<u8>)>,
     compared: Vec<Compared>,
+    cut_frame: Option<u32>,
+}
+
+/// What comes back from the app (its runner takes it).
+#[derive(Default)]
+struct Outcome {
+    compared: Vec<Compared>,
+    cut_frame: Option<u32>,
 }
 
 #[derive(Resource, Clone)]
-struct Run(Headless, Arc<Mutex<Vec<Compared>>>);
+struct Run(Headless, Arc<Mutex<Outcome>>);
 
 /// Runs the game headless with two cameras on the same path, one caching
 /// and one drawing as Bevy does, each into an image read back every frame;
@@ -75,7 +93,7 @@ struct Run(Headless, Arc<Mutex<Vec<Compared>>>);
 /// pipelines compile asynchronously, for the first frames).
 pub fn run_headless(settings: Headless) -> HeadlessRun {
     // The runner takes the app: the comparisons come back through this.
-    let results = Arc::new(Mutex::new(Vec::new()));
+    let results = Arc::new(Mutex::new(Outcome::default()));
     let mut app = headless_app(false);
     app.insert_resource(Run(settings.clone(), results.clone()))
         .insert_resource(Step(settings.step_degrees))
@@ -84,15 +102,16 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
         .add_systems(Startup, setup)
         .add_systems(
             Update,
-            (scene::move_cameras, compare, resize, finish).chain(),
+            (scene::move_cameras, compare, resize, cut, finish).chain(),
         );
     let stats = app.world().resource::<CacheStats>().clone();
     app.run();
-    let compared = std::mem::take(&mut *results.lock().unwrap_or_else(|p| p.into_inner()));
+    let outcome = std::mem::take(&mut *results.lock().unwrap_or_else(|p| p.into_inner()));
     HeadlessRun {
-        compared,
+        compared: outcome.compared,
         frames_drawn: stats.frames_drawn(),
         errors: stats.errors(),
+        cut_frame: outcome.cut_frame,
     }
 }
 
@@ -109,6 +128,9 @@ fn setup(
         let target = target_image(&mut images, settings.size);
         let mut camera =
             commands.spawn((scene::camera(target.clone(), settings.step_degrees), role));
+        if settings.msaa {
+            camera.insert(Msaa::Sample4);
+        }
         if role == Role::Cached {
             camera.insert(ReprojectionCache {
                 refresh_period: settings.refresh_period,
@@ -136,7 +158,7 @@ fn spawn_readback(commands: &mut Commands, target: Handle<Image>, role: Role) {
 /// readbacks of a frame arrive in the same update: they are paired by it
 /// (and by size, across a resize); one without its pair (one of the old
 /// images', after a resize) is dropped.
-fn compare(mut capture: ResMut<Capture>) {
+fn compare(mut capture: ResMut<Capture>, frame: Res<FrameCount>) {
     let mut pairs = Vec::new();
     for (frame, cached) in std::mem::take(&mut capture.cached) {
         if let Some(at) = capture
@@ -159,8 +181,29 @@ fn compare(mut capture: ResMut<Capture>) {
             psnr,
             max_error,
             lava_pixels,
+            frame: frame.0,
         });
     }
+}
+
+/// Once `cut_after` frames are compared, marks a cut on the caching
+/// camera, once.
+fn cut(
+    run: Res<Run>,
+    frame: Res<FrameCount>,
+    mut capture: ResMut<Capture>,
+    mut caches: Query<&mut ReprojectionCache>,
+) {
+    let Some(after) = run.0.cut_after else {
+        return;
+    };
+    if capture.cut_frame.is_some() || (capture.compared.len() as u32) < after {
+        return;
+    }
+    for mut cache in &mut caches {
+        cache.cut();
+    }
+    capture.cut_frame = Some(frame.0);
 }
 
 /// Once `resize.0` frames are compared, gives both cameras new images of
@@ -201,9 +244,14 @@ fn finish(
     mut exit: MessageWriter<AppExit>,
 ) {
     let settings = &run.0;
-    let wanted = settings.frames + settings.resize.map_or(0, |(after, _)| after);
+    let wanted = settings.frames
+        + settings.resize.map_or(0, |(after, _)| after)
+        + settings.cut_after.unwrap_or(0);
     if capture.compared.len() as u32 >= wanted || frame.0 > wanted + 600 {
-        *run.1.lock().unwrap_or_else(|p| p.into_inner()) = capture.compared.clone();
+        *run.1.lock().unwrap_or_else(|p| p.into_inner()) = Outcome {
+            compared: capture.compared.clone(),
+            cut_frame: capture.cut_frame,
+        };
         exit.write(AppExit::Success);
     }
 }

@@ -5,6 +5,8 @@
 //! cargo run --ignore-rust-version -p shadecache-bevy-example -- compare --size 256 --frames 60
 //! # The material's GPU time, cached and as Bevy draws it:
 //! cargo run --release --ignore-rust-version -p shadecache-bevy-example -- measure --size 512 --frames 100
+//! # In a window (space toggles the cache):
+//! cargo run --ignore-rust-version -p shadecache-bevy-example --features window -- window
 //! ```
 
 use shadecache_bevy_example::{measure, run_headless, Headless, Measure};
@@ -44,6 +46,10 @@ fn main() {
     match mode.as_str() {
         "compare" => compare(settings),
         "measure" => time(settings),
+        #[cfg(feature = "window")]
+        "window" => shadecache_bevy_example::window::run(),
+        #[cfg(not(feature = "window"))]
+        "window" => usage("the window needs the `window` feature: --features window"),
         other => usage(&format!("unknown mode `{other}`")),
     }
 }
@@ -55,6 +61,8 @@ fn compare(args: Args) {
         refresh_period: args.refresh_period,
         step_degrees: args.step_degrees,
         resize: None,
+        cut_after: None,
+        msaa: false,
     });
     for err in &run.errors {
         eprintln!("error: {err}");
@@ -117,7 +125,7 @@ fn time(args: Args) {
 
 fn usage(problem: &str) -> ! {
     eprintln!(
-        "{problem}\nusage: shadecache-bevy-example compare|measure [--size N] [--frames N] [--refresh-period N] [--step DEGREES]"
+        "{problem}\nusage: shadecache-bevy-example compare|measure|window [--size N] [--frames N] [--refresh-period N] [--step DEGREES]"
     );
     std::process::exit(2);
 }

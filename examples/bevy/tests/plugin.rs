@@ -12,6 +12,11 @@ static ONE_APP_AT_A_TIME: Mutex<()> = Mutex::new(());
 /// The frames compared; the run must have drawn every one through the
 /// cache, without an error.
 fn run(settings: Headless) -> Vec<Compared> {
+    run_with_cut(settings).0
+}
+
+/// [`run`], and the frame a cut was marked in.
+fn run_with_cut(settings: Headless) -> (Vec<Compared>, Option<u32>) {
     let _turn = ONE_APP_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
     let run = run_headless(settings);
     assert!(run.errors.is_empty(), "{:?}", run.errors);
@@ -21,7 +26,7 @@ fn run(settings: Headless) -> Vec<Compared> {
         run.frames_drawn,
         run.compared.len()
     );
-    run.compared
+    (run.compared, run.cut_frame)
 }
 
 fn settings() -> Headless {
@@ -31,6 +36,8 @@ fn settings() -> Headless {
         refresh_period: None,
         step_degrees: 0.5,
         resize: None,
+        cut_after: None,
+        msaa: false,
     }
 }
 
@@ -96,4 +103,63 @@ fn bevy_plugin_resets_on_resize() {
         after[exact + 1..].iter().any(|f| f.max_error > 2.0 / 255.0),
         "{after:?}"
     );
+}
+
+/// A camera cut forgets last frame: the frame drawn after it, with the
+/// plan's Δn, is Bevy's own, though the camera moved on smoothly (so
+/// without the cut the cache would reuse), and reuse resumes after it.
+#[test]
+fn bevy_plugin_resets_on_camera_cut() {
+    let (compared, cut) = run_with_cut(Headless {
+        frames: 6,
+        cut_after: Some(12),
+        ..settings()
+    });
+    let cut = cut.expect("the cut was marked");
+    let before: Vec<&Compared> = compared.iter().filter(|f| f.frame < cut).collect();
+    assert!(
+        before
+            .iter()
+            .rev()
+            .take(4)
+            .all(|f| f.max_error > 1.0 / 255.0),
+        "the frames before the cut reuse: {before:?}"
+    );
+    // The cut's frame comes back a few frames after it was marked.
+    let after: Vec<&Compared> = compared.iter().filter(|f| f.frame >= cut).collect();
+    let exact = after
+        .iter()
+        .take(4)
+        .position(|f| f.max_error <= 1.0 / 255.0)
+        .unwrap_or_else(|| panic!("no frame after the cut misses everywhere: {after:?}"));
+    assert!(
+        after[exact + 1..].iter().any(|f| f.max_error > 1.0 / 255.0),
+        "{after:?}"
+    );
+}
+
+/// What the host refuses is an error at start-up, never a panic in the
+/// game: with MSAA (a cache holds one value per pixel) the view's cache
+/// is not made, the error says why, and Bevy draws the material as
+/// without the plugin.
+#[test]
+fn bevy_plugin_refuses_msaa_and_leaves_the_material_to_bevy() {
+    let _turn = ONE_APP_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
+    let run = run_headless(Headless {
+        frames: 8,
+        msaa: true,
+        ..settings()
+    });
+    assert_eq!(run.frames_drawn, 0);
+    assert!(
+        run.errors
+            .iter()
+            .any(|e| e.contains("cannot be made") && e.contains("4 samples per pixel")),
+        "{:?}",
+        run.errors
+    );
+    assert!(run.compared.len() >= 8, "{:?}", run.compared);
+    for frame in &run.compared {
+        assert!(frame.max_error <= 1.0 / 255.0, "{frame:?}");
+    }
 }
