@@ -9,10 +9,14 @@
 //! - [`measure`]: a headless run of one camera, cached or not, that reads
 //!   the GPU time of the material's passes from Bevy's render
 //!   diagnostics (the figures in `docs/bevy.md`).
+//! - `window` (feature `window`): the game in a window, space toggling
+//!   the cache, with a readout of the GPU time.
 
 pub mod compare;
 pub mod measure;
 pub mod scene;
+#[cfg(feature = "window")]
+pub mod window;
 
 use bevy::prelude::*;
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
@@ -25,10 +29,20 @@ pub use measure::{measure, Measure, Measured};
 /// (GPU time per pass), which must be added with Bevy's plugins.
 fn headless_app(diagnostics: bool) -> App {
     let mut app = App::new();
-    app.add_plugins(DefaultPlugins.set(AssetPlugin {
+    let plugins = DefaultPlugins.set(AssetPlugin {
         file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/assets").into(),
         ..default()
-    }));
+    });
+    // Built with the window, the headless runs still open none.
+    #[cfg(feature = "window")]
+    let plugins = plugins
+        .set(bevy::window::WindowPlugin {
+            primary_window: None,
+            exit_condition: bevy::window::ExitCondition::DontExit,
+            ..default()
+        })
+        .disable::<bevy::winit::WinitPlugin>();
+    app.add_plugins(plugins);
     if diagnostics {
         app.add_plugins(bevy::render::diagnostic::RenderDiagnosticsPlugin);
     }

@@ -1,0 +1,105 @@
+//! The game in a window: the lava meshes under an orbiting camera, space
+//! toggles the cache, and a readout shows the GPU time of the material's
+//! passes (Bevy's opaque pass plus the plugin's), cached or not.
+
+use bevy::diagnostic::{DiagnosticPath, DiagnosticsStore};
+use bevy::prelude::*;
+use bevy::render::diagnostic::RenderDiagnosticsPlugin;
+use shadecache_bevy::{CacheStats, ReprojectionCache, ShadecachePlugin};
+
+use crate::scene::{self, LavaMaterial};
+
+const OPAQUE: &str = "render/main_opaque_pass_3d/elapsed_gpu";
+const CACHE: &str = "render/shadecache/elapsed_gpu";
+
+/// The readout's text.
+#[derive(Component)]
+struct Readout;
+
+/// Opens the window and runs the game until it is closed.
+pub fn run() {
+    App::new()
+        .add_plugins(DefaultPlugins.set(AssetPlugin {
+            file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/assets").into(),
+            ..default()
+        }))
+        .add_plugins((
+            RenderDiagnosticsPlugin,
+            MaterialPlugin::<LavaMaterial>::default(),
+            ShadecachePlugin::new(scene::lava_variant()),
+        ))
+        .add_systems(Startup, setup)
+        .add_systems(Update, (orbit, toggle, readout))
+        .run();
+}
+
+fn setup(
+    mut commands: Commands,
+    mut meshes: ResMut<Assets<Mesh>>,
+    mut materials: ResMut<Assets<LavaMaterial>>,
+) {
+    scene::spawn_meshes(&mut commands, &mut meshes, &mut materials);
+    commands.spawn((
+        Camera3d::default(),
+        // The cache holds one value per pixel.
+        Msaa::Off,
+        ReprojectionCache::default(),
+        scene::orbit(0, 0.0),
+    ));
+    commands.spawn((
+        Text::new("…"),
+        Node {
+            position_type: PositionType::Absolute,
+            top: px(12),
+            left: px(12),
+            ..default()
+        },
+        Readout,
+    ));
+}
+
+/// A quarter turn every ten seconds.
+fn orbit(time: Res<Time>, mut cameras: Query<&mut Transform, With<Camera3d>>) {
+    for mut transform in &mut cameras {
+        *transform = scene::orbit(1, time.elapsed_secs() * 9.0);
+    }
+}
+
+fn toggle(keys: Res<ButtonInput<KeyCode>>, mut caches: Query<&mut ReprojectionCache>) {
+    if keys.just_pressed(KeyCode::Space) {
+        for mut cache in &mut caches {
+            cache.enabled = !cache.enabled;
+        }
+    }
+}
+
+fn readout(
+    store: Res<DiagnosticsStore>,
+    stats: Res<CacheStats>,
+    caches: Query<&ReprojectionCache>,
+    mut text: Query<&mut Text, With<Readout>>,
+) {
+    let smoothed = |path: &'static str| {
+        store
+            .get(&DiagnosticPath::const_new(path))
+            .and_then(|d| d.smoothed())
+    };
+    let enabled = caches.iter().any(|c| c.enabled);
+    let opaque = smoothed(OPAQUE).unwrap_or(0.0);
+    let cache = if enabled {
+        smoothed(CACHE).unwrap_or(0.0)
+    } else {
+        0.0
+    };
+    let mut line = format!(
+        "cache {} (space toggles)\nmaterial passes: {:.2} ms GPU (opaque {opaque:.2} + cache {cache:.2})",
+        if enabled { "on" } else { "off" },
+        opaque + cache
+    );
+    if let Some(err) = stats.errors().last() {
+        line.push_str(&format!("\nerror: {err}"));
+    }
+    for mut text in &mut text {
+        text.0.clone_from(&line);
+    }
+}
