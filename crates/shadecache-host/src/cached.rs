@@ -466,17 +466,13 @@ impl CachedShader {
         timer: &mut T,
         mut draw: impl FnMut(&mut Draw<'_, '_>),
     ) -> Result<(), Error> {
-        self.check_targets(targets)?;
-        self.begin_frame(queue, encoder)?;
-        let used = self.record_passes(
+        self.record_frame(
+            queue,
             encoder,
             targets,
             timer,
-            Part::Whole,
             &mut |built, binder, mut render| draw_pass(built, binder, &mut render, &mut draw),
-        )?;
-        self.end_frame(encoder, used);
-        Ok(())
+        )
     }
 
     /// Records one frame whose draws an engine's own render commands
@@ -511,13 +507,11 @@ impl CachedShader {
                 pass.pass.name
             )));
         }
-        self.check_targets(targets)?;
-        self.begin_frame(queue, encoder)?;
-        let used = self.record_passes(
+        self.record_frame(
+            queue,
             encoder,
             targets,
             timer,
-            Part::Whole,
             &mut |built, binder, mut render| {
                 let mut draws = Draw::new(&mut render, built, binder);
                 let own = draws.next_draw(twins);
@@ -529,7 +523,22 @@ impl CachedShader {
                 }
                 Ok(())
             },
-        )?;
+        )
+    }
+
+    /// One whole frame: the targets checked, the frame begun, every pass
+    /// recorded by `record`, the frame ended.
+    fn record_frame<T: PassTimer>(
+        &mut self,
+        queue: &wgpu::Queue,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &Targets<'_>,
+        timer: &mut T,
+        record: &mut dyn FnMut(&Built, &Binder<'_>, wgpu::RenderPass<'static>) -> Result<(), Error>,
+    ) -> Result<(), Error> {
+        self.check_targets(targets)?;
+        self.begin_frame(queue, encoder)?;
+        let used = self.record_passes(encoder, targets, timer, Part::Whole, record)?;
         self.end_frame(encoder, used);
         Ok(())
     }
