@@ -6,10 +6,10 @@ use bevy::app::AppExit;
 use bevy::camera::RenderTarget;
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
-use shadecache_bevy::{CacheStats, ReprojectionCache};
+use shadecache_bevy::ReprojectionCache;
 
 use crate::scene::{self, FrameCount, Step};
-use crate::{drawn_pixels, headless_app, target_image};
+use crate::{drawn_pixels, headless_app, run_to_exit, target_image};
 
 /// What a comparison run does.
 #[derive(Clone, Debug)]
@@ -104,9 +104,7 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
             Update,
             (scene::move_cameras, compare, resize, cut, finish).chain(),
         );
-    let stats = app.world().resource::<CacheStats>().clone();
-    app.run();
-    let outcome = std::mem::take(&mut *results.lock().unwrap_or_else(|p| p.into_inner()));
+    let (outcome, stats) = run_to_exit(app, &results);
     HeadlessRun {
         compared: outcome.compared,
         frames_drawn: stats.frames_drawn(),

@@ -20,6 +20,7 @@ pub mod window;
 
 use bevy::prelude::*;
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
+use shadecache_bevy::CacheStats;
 
 pub use compare::{run_headless, Compared, Headless, HeadlessRun};
 pub use measure::{measure, Measure, Measured};
@@ -52,6 +53,15 @@ fn headless_app(diagnostics: bool) -> App {
         shadecache_bevy::ShadecachePlugin::new(scene::lava_variant()),
     ));
     app
+}
+
+/// Runs `app` until a system exits it (its runner takes it); what its
+/// systems left in `results`, and the plugin's stats.
+fn run_to_exit<T: Default>(mut app: App, results: &std::sync::Mutex<T>) -> (T, CacheStats) {
+    let stats = app.world().resource::<CacheStats>().clone();
+    app.run();
+    let left = std::mem::take(&mut *results.lock().unwrap_or_else(|p| p.into_inner()));
+    (left, stats)
 }
 
 /// An image a camera draws into and the readback copies from.

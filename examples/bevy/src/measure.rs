@@ -15,10 +15,10 @@ use bevy::app::AppExit;
 use bevy::diagnostic::{DiagnosticPath, DiagnosticsStore};
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
-use shadecache_bevy::{CacheStats, ReprojectionCache};
+use shadecache_bevy::ReprojectionCache;
 
 use crate::scene::{self, FrameCount, Step};
-use crate::{drawn_pixels, headless_app, target_image};
+use crate::{drawn_pixels, headless_app, run_to_exit, target_image};
 
 /// What a timing run does.
 #[derive(Clone, Debug)]
@@ -82,9 +82,7 @@ pub fn measure(settings: Measure) -> Measured {
         .init_resource::<Timing>()
         .add_systems(Startup, setup)
         .add_systems(Update, (scene::move_cameras, take_times).chain());
-    let stats = app.world().resource::<CacheStats>().clone();
-    app.run();
-    let material_ms = std::mem::take(&mut *results.lock().unwrap_or_else(|p| p.into_inner()));
+    let (material_ms, stats) = run_to_exit(app, &results);
     Measured {
         material_ms,
         frames_drawn: stats.frames_drawn(),

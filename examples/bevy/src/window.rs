@@ -16,8 +16,16 @@ const CACHE: &str = "render/shadecache/elapsed_gpu";
 #[derive(Component)]
 struct Readout;
 
-/// Opens the window and runs the game until it is closed.
+/// Opens the window and runs the game until it is closed. Without a
+/// display, says so and exits (Bevy's window would panic).
 pub fn run() {
+    #[cfg(all(unix, not(target_os = "macos")))]
+    if std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none() {
+        eprintln!(
+            "error: no display (neither DISPLAY nor WAYLAND_DISPLAY is set): run `compare` or `measure`, which are headless"
+        );
+        std::process::exit(2);
+    }
     App::new()
         .add_plugins(DefaultPlugins.set(AssetPlugin {
             file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/assets").into(),
@@ -43,6 +51,8 @@ fn setup(
         Camera3d::default(),
         // The cache holds one value per pixel.
         Msaa::Off,
+        // Bevy's default tonemapper needs the `tonemapping_luts` feature.
+        bevy::core_pipeline::tonemapping::Tonemapping::None,
         ReprojectionCache::default(),
         scene::orbit(0, 0.0),
     ));
