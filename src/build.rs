@@ -44,6 +44,9 @@ struct ShaderJob {
     vertex_entry: Option<String>,
     deforming_inputs: Vec<String>,
     vertex: Option<PathBuf>,
+    /// The vertex stage's module in a crate's WESL package: the crate and
+    /// the path under its `src/`, found at `run`.
+    crate_vertex: Option<(String, PathBuf)>,
     composition: front::compose::Composition,
     /// WESL packages by their crate's name, found at `run`.
     crate_packages: Vec<String>,
@@ -60,6 +63,7 @@ impl ShaderJob {
             vertex_entry: None,
             deforming_inputs: Vec::new(),
             vertex: None,
+            crate_vertex: None,
             composition: front::compose::Composition::default(),
             crate_packages: Vec::new(),
             nodes: Nodes::Top(1),
@@ -187,6 +191,18 @@ impl Build {
     /// `host_vertex`).
     pub fn vertex_shader(mut self, path: impl AsRef<Path>) -> Self {
         self.last().vertex = Some(path.as_ref().to_path_buf());
+        self.last().crate_vertex = None;
+        self
+    }
+
+    /// [`Build::vertex_shader`] from a crate's WESL package: `path` under
+    /// the `src/` of the crate `name` this package depends on, found as
+    /// [`Build::crate_package`] finds it. A Bevy material without a vertex
+    /// shader of its own is drawn with `("bevy_pbr", "render/mesh.wesl")`.
+    /// Needs the `wesl` feature.
+    pub fn crate_vertex_shader(mut self, name: impl Into<String>, path: impl AsRef<Path>) -> Self {
+        self.last().crate_vertex = Some((name.into(), path.as_ref().to_path_buf()));
+        self.last().vertex = None;
         self
     }
 
@@ -334,7 +350,16 @@ impl Build {
         let crate_lookup = ();
         for job in &self.jobs {
             let path = resolve(&job.path);
-            let vertex = job.vertex.as_deref().map(resolve);
+            let vertex = match &job.crate_vertex {
+                Some((name, under)) => match crate_package(name, &crate_lookup) {
+                    Ok(dir) => Some(dir.join(under)),
+                    Err(err) => {
+                        errors.push(err);
+                        continue;
+                    }
+                },
+                None => job.vertex.as_deref().map(resolve),
+            };
             let mut packages: Vec<(String, PathBuf)> = job
                 .composition
                 .packages

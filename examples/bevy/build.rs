@@ -5,18 +5,14 @@
 //! own mesh vertex shader, as for any material without one of its own.
 
 use shadecache::front::compose::ShaderDef;
-use shadecache::front::crate_package::{source_dir, Lookup};
 use shadecache::rewrite::{DepthConvention, Options, Variant};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let manifest = std::path::PathBuf::from(std::env::var("CARGO_MANIFEST_DIR")?);
-    let lookup = Lookup::build_script(&manifest);
-    let bevy_pbr = source_dir("bevy_pbr", &lookup)?;
     let mut build = shadecache::build::Build::new()
         .shader("assets/lava.wesl")
         .crate_package("bevy_pbr")
         .crate_package("bevy_render")
-        .vertex_shader(bevy_pbr.join("render/mesh.wesl"))
+        .crate_vertex_shader("bevy_pbr", "render/mesh.wesl")
         // The crust: six octaves of object-space noise, the same every
         // frame (`shadecache analyze` ranks it first of the nodes that
         // read no per-frame input).
