@@ -15,7 +15,7 @@ use std::ops::Range;
 
 use bevy::core_pipeline::core_3d::Opaque3d;
 use bevy::ecs::entity::EntityHash;
-use bevy::mesh::MeshVertexBufferLayoutRef;
+use bevy::mesh::{BaseMeshPipelineKey, MeshVertexBufferLayoutRef};
 use bevy::pbr::{
     DrawMesh, MeshPipeline, RenderMeshInstances, SetMaterialBindGroup, SetMeshBindGroup,
     SetMeshViewBindGroup, SetMeshViewBindingArrayBindGroup, MATERIAL_BIND_GROUP_INDEX,
@@ -37,7 +37,7 @@ use bevy::render::view::{ExtractedView, RenderVisibleEntities, RetainedViewEntit
 use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderDebugFlags, RenderSystems};
 use indexmap::IndexMap;
 
-use crate::{CachedMaterial, ReprojectionCache};
+use crate::{CacheStats, CachedMaterial, ReprojectionCache};
 
 /// What each pass draws per cached mesh: Bevy's material draw, without its
 /// pipeline (each pass's pipeline is the host's, set before).
@@ -218,6 +218,8 @@ pub(crate) fn queue_cached_meshes(
     views: Query<(&ExtractedView, &RenderVisibleEntities)>,
     cached: Query<(), With<CachedMaterial>>,
     mut layouts: ResMut<QueuedLayouts>,
+    stats: Res<CacheStats>,
+    mut refused: Local<HashSet<MainEntity>>,
 ) {
     let draw = draw_functions.read().id::<DrawCachedMesh>();
     layouts.0.clear();
@@ -245,6 +247,20 @@ pub(crate) fn queue_cached_meshes(
             let Some(mesh) = render_meshes.get(instance.mesh_asset_id()) else {
                 continue;
             };
+            // Their mesh bind group has another layout (joints, morph
+            // weights), and their previous positions need last frame's
+            // joints and weights: Bevy draws them.
+            let skinned = mesh.layout.0.contains(Mesh::ATTRIBUTE_JOINT_INDEX);
+            let morphed = mesh.key_bits.contains(BaseMeshPipelineKey::MORPH_TARGETS);
+            if skinned || morphed {
+                if refused.insert(*main_entity) {
+                    stats.error(format!(
+                        "mesh entity {main_entity:?} is {}, which the plugin does not draw through the cache yet: Bevy draws it with its material",
+                        if skinned { "skinned" } else { "morphed" }
+                    ));
+                }
+                continue;
+            }
             if !view_layouts.contains(&mesh.layout) {
                 view_layouts.push(mesh.layout.clone());
             }

@@ -9,7 +9,7 @@ use bevy::core_pipeline::{schedule::Core3d, Core3dSystems};
 use bevy::log::error;
 use bevy::pbr::{
     MeshPipeline, MeshPipelineViewLayoutKey, PreparedMaterial, RenderMaterialInstances,
-    RenderMeshInstances, ViewKeyCache,
+    ViewKeyCache,
 };
 use bevy::platform::collections::HashMap;
 use bevy::prelude::*;
@@ -104,7 +104,7 @@ impl CacheStats {
     }
 
     /// Logs `err` and keeps it.
-    fn error(&self, err: String) {
+    pub(crate) fn error(&self, err: String) {
         error!("shadecache: {err}");
         self.lock().errors.push(err);
     }
@@ -161,7 +161,6 @@ fn prepare_view_caches(
     view_keys: Res<ViewKeyCache>,
     layouts: Res<QueuedLayouts>,
     phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
-    mesh_instances: Res<RenderMeshInstances>,
     material_instances: Res<RenderMaterialInstances>,
     materials: Res<ErasedRenderAssets<PreparedMaterial>>,
     views: Query<(&ExtractedView, &ExtractedCamera, &ReprojectionCache)>,
@@ -169,6 +168,7 @@ fn prepare_view_caches(
     mut caching: ResMut<CachingViews>,
     mut dirty: ResMut<DirtySpecializations>,
     stats: Res<CacheStats>,
+    mut refusals: Local<HashMap<RetainedViewEntity, String>>,
 ) {
     let was_caching = std::mem::take(&mut caching.0);
     caches.0.retain(|view, _| phases.contains_key(view));
@@ -177,28 +177,39 @@ fn prepare_view_caches(
         let Some(phase) = phases.get(&id) else {
             continue;
         };
-        let Some(first) = phase.items.values().next() else {
+        let items: Vec<&CachedMesh3d> = phase.items.values().collect();
+        if items.is_empty() {
             // Nothing cached is visible: nothing to make yet.
             if was_caching.contains(&id) {
                 caching.0.insert(id);
             }
             continue;
-        };
+        }
         let key = match cache_key(
             &id,
-            first,
+            &items,
             settings,
-            (&view_keys, &layouts, &mesh_instances),
+            (&view_keys, &layouts),
             (&material_instances, &materials),
         ) {
             Ok(Some(key)) => key,
             // The material or the view is not prepared yet.
             Ok(None) => continue,
             Err(err) => {
-                stats.error(err);
+                // Said once while it lasts; the view's meshes go back to
+                // Bevy.
+                if refusals.insert(id, err.clone()).as_ref() != Some(&err) {
+                    stats.error(format!(
+                        "the view does not cache, so Bevy draws its material: {err}"
+                    ));
+                }
+                if was_caching.contains(&id) {
+                    dirty.views.insert(id);
+                }
                 continue;
             }
         };
+        refusals.remove(&id);
         let size = camera
             .physical_target_size
             .map(|s| (s.x, s.y))
@@ -237,9 +248,9 @@ fn prepare_view_caches(
 /// material; `None` while one of them is not prepared yet.
 fn cache_key(
     view: &RetainedViewEntity,
-    first: &CachedMesh3d,
+    items: &[&CachedMesh3d],
     settings: &ReprojectionCache,
-    (view_keys, layouts, mesh_instances): (&ViewKeyCache, &QueuedLayouts, &RenderMeshInstances),
+    (view_keys, layouts): (&ViewKeyCache, &QueuedLayouts),
     (material_instances, materials): (
         &RenderMaterialInstances,
         &ErasedRenderAssets<PreparedMaterial>,
@@ -262,19 +273,36 @@ fn cache_key(
             ))
         }
     };
-    let _ = mesh_instances;
-    let Some(instance) = material_instances.instances.get(&first.main_entity()) else {
+    // The material group's layout, which every cached mesh's material
+    // must have: each pass binds each mesh's own material.
+    let mut material_layout: Option<Vec<wgpu::BindGroupLayoutEntry>> = None;
+    for item in items {
+        let Some(instance) = material_instances.instances.get(&item.main_entity()) else {
+            return Ok(None);
+        };
+        let Some(material) = materials.get(instance.asset_id) else {
+            return Ok(None);
+        };
+        let layout = material
+            .properties
+            .material_layout
+            .as_ref()
+            .map(|layout| layout.entries.clone())
+            .unwrap_or_default();
+        match &material_layout {
+            Some(first) if *first != layout => {
+                return Err(
+                    "the view's cached meshes have materials of different bind group layouts; mark only meshes with the material the variant was made from"
+                        .into(),
+                )
+            }
+            Some(_) => {}
+            None => material_layout = Some(layout),
+        }
+    }
+    let Some(material_layout) = material_layout else {
         return Ok(None);
     };
-    let Some(material) = materials.get(instance.asset_id) else {
-        return Ok(None);
-    };
-    let material_layout = material
-        .properties
-        .material_layout
-        .as_ref()
-        .map(|layout| layout.entries.clone())
-        .unwrap_or_default();
     let color_format = view_key.target_format();
     Ok(Some(CacheKey {
         view_layout: MeshPipelineViewLayoutKey::from(view_key),

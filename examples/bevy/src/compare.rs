@@ -6,7 +6,7 @@ use bevy::app::AppExit;
 use bevy::camera::RenderTarget;
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
-use shadecache_bevy::ReprojectionCache;
+use shadecache_bevy::{CachedMaterial, ReprojectionCache};
 
 use crate::scene::{self, FrameCount, Step};
 use crate::{drawn_pixels, headless_app, run_to_exit, target_image};
@@ -31,6 +31,9 @@ pub struct Headless {
     pub cut_after: Option<u32>,
     /// Both cameras with 4× MSAA, which a cache cannot do.
     pub msaa: bool,
+    /// A box with Bevy's `StandardMaterial` marked for the cache too,
+    /// which the variant was not made from.
+    pub foreign_material: bool,
 }
 
 /// One compared frame: the cached image against Bevy's.
@@ -119,9 +122,18 @@ fn setup(
     mut images: ResMut<Assets<Image>>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<scene::LavaMaterial>>,
+    mut standard: ResMut<Assets<StandardMaterial>>,
 ) {
     scene::spawn_meshes(&mut commands, &mut meshes, &mut materials);
     let settings = &run.0;
+    if settings.foreign_material {
+        commands.spawn((
+            Mesh3d(meshes.add(Cuboid::new(0.6, 0.6, 0.6))),
+            MeshMaterial3d(standard.add(StandardMaterial::from(Color::srgb(0.2, 0.5, 0.9)))),
+            Transform::from_xyz(0.0, 1.0, 0.6),
+            CachedMaterial,
+        ));
+    }
     for role in [Role::Cached, Role::Reference] {
         let target = target_image(&mut images, settings.size);
         let mut camera =

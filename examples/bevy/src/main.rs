@@ -63,6 +63,7 @@ fn compare(args: Args) {
         resize: None,
         cut_after: None,
         msaa: false,
+        foreign_material: false,
     });
     for err in &run.errors {
         eprintln!("error: {err}");

@@ -38,6 +38,7 @@ fn settings() -> Headless {
         resize: None,
         cut_after: None,
         msaa: false,
+        foreign_material: false,
     }
 }
 
@@ -158,6 +159,31 @@ fn bevy_plugin_refuses_msaa_and_leaves_the_material_to_bevy() {
         "{:?}",
         run.errors
     );
+    assert!(run.compared.len() >= 8, "{:?}", run.compared);
+    for frame in &run.compared {
+        assert!(frame.max_error <= 1.0 / 255.0, "{frame:?}");
+    }
+}
+
+/// A mesh marked for the cache whose material is not the one the variant
+/// was made from (Bevy's `StandardMaterial`, another bind group layout):
+/// the view does not cache, the error says why, once, and Bevy draws
+/// every mesh as without the plugin.
+#[test]
+fn bevy_plugin_refuses_meshes_of_another_material() {
+    let _turn = ONE_APP_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
+    let run = run_headless(Headless {
+        frames: 8,
+        foreign_material: true,
+        ..settings()
+    });
+    assert_eq!(run.frames_drawn, 0);
+    let refusals: Vec<&String> = run
+        .errors
+        .iter()
+        .filter(|e| e.contains("different bind group layouts"))
+        .collect();
+    assert_eq!(refusals.len(), 1, "{:?}", run.errors);
     assert!(run.compared.len() >= 8, "{:?}", run.compared);
     for frame in &run.compared {
         assert!(frame.max_error <= 1.0 / 255.0, "{frame:?}");
