@@ -13,7 +13,7 @@
 //!   made from (the entity keeps its `MeshMaterial3d`), and a
 //!   [`ReprojectionCache`] on each camera that caches.
 //! - **Where it draws.** Each caching view has a render phase of its
-//!   cached meshes ([`phase`]), queued from Bevy's visibility and batched
+//!   cached meshes (`phase.rs`), queued from Bevy's visibility and batched
 //!   by Bevy's mesh batching, and removed from Bevy's opaque phase so Bevy
 //!   does not draw them too. After the main opaque pass, the host crate
 //!   ([`shadecache_host`]) records the variant's passes into the view's
@@ -34,16 +34,18 @@
 //!   ([`ReprojectionCache::cut`]) and the first frame.
 //! - **Failures** are Bevy errors in the log (and in [`CacheStats`]),
 //!   never a panic in the game:
-//!   a plan that does not match the view's layouts, a mesh with other
-//!   vertex attributes than the plan reads, what the host refuses. The
+//!   a plan that does not match the view's layouts, meshes with other
+//!   vertex attributes than the plan reads or of another material, what
+//!   the host refuses (MSAA: the cache holds one value per pixel). The
 //!   view then leaves the meshes to Bevy's own material, and says why
-//!   once.
+//!   once. Skinned and morphed meshes are left to Bevy the same way.
 //!
 //! What it does not do (yet): more than one cached variant per app; meshes
-//! of several vertex layouts in one view; MSAA (the cache holds one value
-//! per pixel, and the host refuses it); occlusion by meshes Bevy draws
-//! itself: the variant's passes have their own depth buffer, so the
-//! cached meshes are drawn over the opaque pass's meshes.
+//! of several vertex layouts in one view; skinned, morphed or lightmapped
+//! meshes (their mesh bind group has another layout; lightmaps are not
+//! checked); occlusion by meshes Bevy draws itself: the variant's passes
+//! have their own depth buffer, so the cached meshes are drawn over the
+//! opaque pass's meshes.
 
 mod phase;
 mod view_cache;

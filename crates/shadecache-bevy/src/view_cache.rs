@@ -193,8 +193,15 @@ fn prepare_view_caches(
             (&material_instances, &materials),
         ) {
             Ok(Some(key)) => key,
-            // The material or the view is not prepared yet.
-            Ok(None) => continue,
+            // The material or the view is not prepared yet (or again, after
+            // a change): a view that cached goes on with the cache it has,
+            // as its meshes are out of Bevy's opaque phase.
+            Ok(None) => {
+                if was_caching.contains(&id) {
+                    caching.0.insert(id);
+                }
+                continue;
+            }
             Err(err) => {
                 // Said once while it lasts; the view's meshes go back to
                 // Bevy.
