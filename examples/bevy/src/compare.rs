@@ -8,7 +8,7 @@ use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use shadecache_bevy::{CachedMaterial, ReprojectionCache};
 
-use crate::scene::{self, FrameCount, Step};
+use crate::scene::{self, FrameCount};
 use crate::{drawn_pixels, headless_app, run_to_exit, target_image};
 
 /// What a comparison run does.
@@ -97,10 +97,8 @@ struct Run(Headless, Arc<Mutex<Outcome>>);
 pub fn run_headless(settings: Headless) -> HeadlessRun {
     // The runner takes the app: the comparisons come back through this.
     let results = Arc::new(Mutex::new(Outcome::default()));
-    let mut app = headless_app(false);
+    let mut app = headless_app(false, settings.step_degrees);
     app.insert_resource(Run(settings.clone(), results.clone()))
-        .insert_resource(Step(settings.step_degrees))
-        .init_resource::<FrameCount>()
         .init_resource::<Capture>()
         .add_systems(Startup, setup)
         .add_systems(

@@ -26,9 +26,11 @@ pub use compare::{run_headless, Compared, Headless, HeadlessRun};
 pub use measure::{measure, Measure, Measured};
 
 /// Bevy with the game's assets, its material and the cache, run headless
-/// as fast as frames come; with `diagnostics`, Bevy's render diagnostics
-/// (GPU time per pass), which must be added with Bevy's plugins.
-fn headless_app(diagnostics: bool) -> App {
+/// as fast as frames come, its cameras' path `step_degrees` a frame (the
+/// runs move them with [`scene::move_cameras`]); with `diagnostics`, Bevy's
+/// render diagnostics (GPU time per pass), which must be added with Bevy's
+/// plugins.
+fn headless_app(diagnostics: bool, step_degrees: f32) -> App {
     let mut app = App::new();
     let plugins = DefaultPlugins.set(AssetPlugin {
         file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/assets").into(),
@@ -51,7 +53,9 @@ fn headless_app(diagnostics: bool) -> App {
         bevy::app::ScheduleRunnerPlugin::run_loop(std::time::Duration::ZERO),
         MaterialPlugin::<scene::LavaMaterial>::default(),
         shadecache_bevy::ShadecachePlugin::new(scene::lava_variant()),
-    ));
+    ))
+    .insert_resource(scene::Step(step_degrees))
+    .init_resource::<scene::FrameCount>();
     app
 }
 

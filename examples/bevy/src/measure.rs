@@ -17,7 +17,7 @@ use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use shadecache_bevy::ReprojectionCache;
 
-use crate::scene::{self, FrameCount, Step};
+use crate::scene::{self, FrameCount};
 use crate::{drawn_pixels, headless_app, run_to_exit, target_image};
 
 /// What a timing run does.
@@ -75,10 +75,8 @@ struct Timing {
 /// material's GPU time per frame.
 pub fn measure(settings: Measure) -> Measured {
     let results = Arc::new(Mutex::new(Vec::new()));
-    let mut app = headless_app(true);
+    let mut app = headless_app(true, settings.step_degrees);
     app.insert_resource(Run(settings.clone(), results.clone()))
-        .insert_resource(Step(settings.step_degrees))
-        .init_resource::<FrameCount>()
         .init_resource::<Timing>()
         .add_systems(Startup, setup)
         .add_systems(Update, (scene::move_cameras, take_times).chain());
