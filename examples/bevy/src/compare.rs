@@ -9,7 +9,7 @@ use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use shadecache_bevy::{CachedMaterial, ReprojectionCache};
 
 use crate::scene::{self, FrameCount};
-use crate::{drawn_pixels, headless_app, run_to_exit, target_image};
+use crate::{drawn_pixels, headless_app, run_to_exit, target_image, Deadline};
 
 /// What a comparison run does.
 #[derive(Clone, Debug)]
@@ -244,18 +244,18 @@ fn resize(
     }
 }
 
-/// Ends the run once enough frames are compared (or Bevy never drew).
+/// Ends the run once enough frames are compared (or at the deadline).
 fn finish(
     run: Res<Run>,
     capture: Res<Capture>,
-    frame: Res<FrameCount>,
+    deadline: Res<Deadline>,
     mut exit: MessageWriter<AppExit>,
 ) {
     let settings = &run.0;
     let wanted = settings.frames
         + settings.resize.map_or(0, |(after, _)| after)
         + settings.cut_after.unwrap_or(0);
-    if capture.compared.len() as u32 >= wanted || frame.0 > wanted + 600 {
+    if capture.compared.len() as u32 >= wanted || deadline.passed() {
         *run.1.lock().unwrap_or_else(|p| p.into_inner()) = Outcome {
             compared: capture.compared.clone(),
             cut_frame: capture.cut_frame,

@@ -18,6 +18,8 @@ pub mod scene;
 #[cfg(feature = "window")]
 pub mod window;
 
+use std::time::{Duration, Instant};
+
 use bevy::prelude::*;
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
 use shadecache_bevy::CacheStats;
@@ -55,8 +57,24 @@ fn headless_app(diagnostics: bool, step_degrees: f32) -> App {
         shadecache_bevy::ShadecachePlugin::new(scene::lava_variant()),
     ))
     .insert_resource(scene::Step(step_degrees))
-    .init_resource::<scene::FrameCount>();
+    .init_resource::<scene::FrameCount>()
+    .insert_resource(Deadline(Instant::now() + GIVE_UP_AFTER));
     app
+}
+
+/// How long a headless run waits for what it needs (Bevy's pipelines
+/// compile asynchronously, slowly on a loaded CPU rasteriser) before it
+/// ends with what it has.
+const GIVE_UP_AFTER: Duration = Duration::from_secs(300);
+
+/// When a headless run gives up.
+#[derive(Resource, Clone, Copy)]
+struct Deadline(Instant);
+
+impl Deadline {
+    fn passed(&self) -> bool {
+        Instant::now() > self.0
+    }
 }
 
 /// Runs `app` until a system exits it (its runner takes it); what its
