@@ -236,6 +236,10 @@ fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
     let key_words = crate::analysis::name_words(key);
     let has_word = |words: &[&str]| key_words.iter().any(|w| words.contains(&w.as_str()));
     let role = if shape == Shape::Matrix(4, 4) {
+        if let Some(named) = matrix_named_from_to(&member) {
+            // Named by its spaces: exactly that matrix, or none.
+            return named;
+        }
         // A matrix of a light (`s_lights[i].proj`) is the light's.
         if whole.contains("light") {
             "light_clip_from_world"
@@ -268,6 +272,38 @@ fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
         return None;
     };
     fits_role(role, shape).then_some(role)
+}
+
+/// A matrix named in the `a_from_b` convention (Bevy's `clip_from_world`,
+/// `world_from_view`): the role that is exactly that transform, or
+/// `Some(None)` when no role is (`world_from_view` is the inverse of the
+/// view matrix, and taking it for `view_from_world`, by its word `view`,
+/// filled the inverse); `None` when the name is not of that form.
+fn matrix_named_from_to(member: &str) -> Option<Option<&'static str>> {
+    let words = crate::analysis::name_words(member);
+    let at = words.iter().position(|w| w == "from")?;
+    let space = |word: Option<&String>| match word.map(String::as_str) {
+        Some("clip") => Some("clip"),
+        Some("view" | "camera" | "eye") => Some("view"),
+        Some("world") => Some("world"),
+        Some("local" | "model" | "object") => Some("local"),
+        _ => None,
+    };
+    let to = space(at.checked_sub(1).and_then(|i| words.get(i)))?;
+    let from = space(words.get(at + 1))?;
+    let role = format!("{to}_from_{from}");
+    let previous = words.iter().any(|w| w == "previous" || w == "prev");
+    let role = if previous {
+        format!("previous_{role}")
+    } else {
+        role
+    };
+    Some(
+        ROLES
+            .iter()
+            .map(|(name, _)| *name)
+            .find(|name| *name == role),
+    )
 }
 
 /// Whether a member is named for the viewer alone (`eye`, `u_eye`,
@@ -603,6 +639,32 @@ mod tests {
             ("lights.directional_lights[0].color", None),
         ] {
             assert_eq!(role_by_name(key, Shape::F32(3)), role, "{key}");
+        }
+    }
+
+    /// A matrix named `a_from_b` (Bevy's `View`) is exactly that transform
+    /// or no role: `world_from_view`, the inverse view matrix, took the
+    /// view matrix's role by its word `view`, and the scene filled the
+    /// inverse of what the shader reads.
+    #[test]
+    fn a_matrix_named_from_space_to_space_is_that_transform_or_none() {
+        for (member, role) in [
+            ("view.clip_from_world", Some("clip_from_world")),
+            ("view.view_from_world", Some("view_from_world")),
+            ("view.world_from_view", None),
+            ("view.world_from_clip", None),
+            ("view.view_from_clip", Some("view_from_clip")),
+            ("view.unjittered_clip_from_world", Some("clip_from_world")),
+            ("mesh.world_from_local", Some("world_from_local")),
+            (
+                "u.previous_clip_from_world",
+                Some("previous_clip_from_world"),
+            ),
+            // Not of the form: the words decide, as before.
+            ("camera.view_proj", Some("clip_from_world")),
+            ("u.view", Some("view_from_world")),
+        ] {
+            assert_eq!(role_by_name(member, Shape::Matrix(4, 4)), role, "{member}");
         }
     }
 }
