@@ -8,8 +8,8 @@
 //! (a sorted phase, as Bevy's own custom-phase example does, batched by
 //! Bevy's `MeshPipeline` batching), drawn once per pass. While a view
 //! caches, its cached meshes are taken out of Bevy's opaque phase; when it
-//! stops, the view is marked for respecialisation, so Bevy queues them
-//! again.
+//! stops (switched off, or its cache failed), the view is marked for
+//! respecialisation, so Bevy queues them again.
 
 use std::ops::Range;
 
@@ -121,9 +121,14 @@ impl CachedRenderPipelinePhaseItem for CachedMesh3d {
 #[derive(Resource, Default)]
 pub(crate) struct QueuedLayouts(pub HashMap<RetainedViewEntity, Vec<MeshVertexBufferLayoutRef>>);
 
-/// The views whose cached meshes were taken out of Bevy's opaque phase.
+/// The views whose cached meshes were taken out of Bevy's opaque phase
+/// this frame, and those whose were taken before and no longer are: Bevy
+/// queues the meshes of those again.
 #[derive(Resource, Default)]
-pub(crate) struct TakenViews(pub HashSet<RetainedViewEntity>);
+pub(crate) struct TakenViews {
+    taken: HashSet<RetainedViewEntity>,
+    handed_back: HashSet<RetainedViewEntity>,
+}
 
 /// Whether a view draws through the cache this frame: it caches, and its
 /// cache was made (a view whose cache failed leaves its meshes to Bevy).
@@ -151,7 +156,7 @@ impl Plugin for CachedPhasePlugin {
             .add_systems(
                 Render,
                 (
-                    respecialize_switched_views.in_set(RenderSystems::PrepareAssets),
+                    respecialize_handed_back_views.in_set(RenderSystems::PrepareAssets),
                     (queue_cached_meshes, take_from_opaque_phase)
                         .chain()
                         .in_set(RenderSystems::QueueMeshes)
@@ -187,23 +192,15 @@ fn extract_cached_phases(
     phases.retain(|view, _| live.contains(view));
 }
 
-/// A view that starts or stops caching has its meshes specialised and
-/// queued again by Bevy, so that they return to its opaque phase.
-fn respecialize_switched_views(
-    phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
+/// A view that stopped caching (switched off, its cache failed) has its
+/// meshes specialised and queued again by Bevy, so that they return to its
+/// opaque phase. Bevy clears its dirty views as each frame is extracted,
+/// so they are marked here, after that, for the frame that queues them.
+fn respecialize_handed_back_views(
     mut taken: ResMut<TakenViews>,
     mut dirty: ResMut<DirtySpecializations>,
 ) {
-    let gone: Vec<RetainedViewEntity> = taken
-        .0
-        .iter()
-        .filter(|view| !phases.contains_key(*view))
-        .copied()
-        .collect();
-    for view in gone {
-        taken.0.remove(&view);
-        dirty.views.insert(view);
-    }
+    dirty.views.extend(taken.handed_back.drain());
 }
 
 /// Queues the view's visible cached meshes into its phase, every frame
@@ -224,10 +221,10 @@ pub(crate) fn queue_cached_meshes(
     let draw = draw_functions.read().id::<DrawCachedMesh>();
     layouts.0.clear();
     for (view, visible) in &views {
+        // Extraction emptied it of last frame's (transient) items.
         let Some(phase) = phases.get_mut(&view.retained_view_entity) else {
             continue;
         };
-        phase.clear();
         let Some(meshes) = visible.get::<Mesh3d>() else {
             continue;
         };
@@ -276,13 +273,15 @@ pub(crate) fn queue_cached_meshes(
 }
 
 /// Takes the cached meshes of a caching view out of Bevy's opaque phase:
-/// the variant draws them.
+/// the variant draws them. A view that took them before and does not now
+/// hands them back.
 pub(crate) fn take_from_opaque_phase(
     phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
     caching: Res<CachingViews>,
     mut opaque: ResMut<ViewBinnedRenderPhases<Opaque3d>>,
     mut taken: ResMut<TakenViews>,
 ) {
+    let mut now = HashSet::default();
     for (view, phase) in phases.iter() {
         if !caching.0.contains(view) {
             continue;
@@ -293,6 +292,9 @@ pub(crate) fn take_from_opaque_phase(
         for (_, main_entity) in phase.items.keys() {
             opaque.remove(*main_entity);
         }
-        taken.0.insert(*view);
+        now.insert(*view);
     }
+    let TakenViews { taken, handed_back } = &mut *taken;
+    handed_back.extend(taken.difference(&now).copied());
+    *taken = now;
 }

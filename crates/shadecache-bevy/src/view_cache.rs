@@ -13,7 +13,7 @@ use bevy::pbr::{
 };
 use bevy::platform::collections::HashMap;
 use bevy::prelude::*;
-use bevy::render::camera::{DirtySpecializations, ExtractedCamera};
+use bevy::render::camera::ExtractedCamera;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::erased_render_asset::ErasedRenderAssets;
 use bevy::render::render_phase::{TrackedRenderPass, ViewSortedRenderPhases};
@@ -166,7 +166,6 @@ fn prepare_view_caches(
     views: Query<(&ExtractedView, &ExtractedCamera, &ReprojectionCache)>,
     mut caches: ResMut<ViewCaches>,
     mut caching: ResMut<CachingViews>,
-    mut dirty: ResMut<DirtySpecializations>,
     stats: Res<CacheStats>,
     mut refusals: Local<HashMap<RetainedViewEntity, String>>,
 ) {
@@ -204,14 +203,11 @@ fn prepare_view_caches(
             }
             Err(err) => {
                 // Said once while it lasts; the view's meshes go back to
-                // Bevy.
+                // Bevy (`phase::take_from_opaque_phase`).
                 if refusals.insert(id, err.clone()).as_ref() != Some(&err) {
                     stats.error(format!(
                         "the view does not cache, so Bevy draws its material: {err}"
                     ));
-                }
-                if was_caching.contains(&id) {
-                    dirty.views.insert(id);
                 }
                 continue;
             }
@@ -243,10 +239,6 @@ fn prepare_view_caches(
         }
         if matches!(slot, Slot::Ready(_)) {
             caching.0.insert(id);
-        } else if was_caching.contains(&id) {
-            // Its meshes were taken from the opaque phase: Bevy queues them
-            // again.
-            dirty.views.insert(id);
         }
     }
 }

@@ -34,6 +34,10 @@ pub struct Headless {
     /// A box with Bevy's `StandardMaterial` marked for the cache too,
     /// which the variant was not made from.
     pub foreign_material: bool,
+    /// After this many compared frames, the caching camera switches its
+    /// cache off (Bevy draws the meshes again), and `frames` more are
+    /// compared.
+    pub switch_off_after: Option<u32>,
 }
 
 /// One compared frame: the cached image against Bevy's.
@@ -62,6 +66,8 @@ pub struct HeadlessRun {
     pub errors: Vec<String>,
     /// The frame the cut was marked in, if one was.
     pub cut_frame: Option<u32>,
+    /// The frame the cache was switched off in, if it was.
+    pub switch_off_frame: Option<u32>,
 }
 
 /// Which image a camera draws.
@@ -78,6 +84,7 @@ struct Capture {
     reference: Vec<(u32, Vec<u8>)>,
     compared: Vec<Compared>,
     cut_frame: Option<u32>,
+    switch_off_frame: Option<u32>,
 }
 
 /// What comes back from the app (its runner takes it).
@@ -85,6 +92,7 @@ struct Capture {
 struct Outcome {
     compared: Vec<Compared>,
     cut_frame: Option<u32>,
+    switch_off_frame: Option<u32>,
 }
 
 #[derive(Resource, Clone)]
@@ -103,7 +111,14 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
         .add_systems(Startup, setup)
         .add_systems(
             Update,
-            (scene::move_cameras, compare, resize, cut, finish).chain(),
+            (
+                scene::move_cameras,
+                compare,
+                resize,
+                cut_or_switch_off,
+                finish,
+            )
+                .chain(),
         );
     let (outcome, stats) = run_to_exit(app, &results);
     HeadlessRun {
@@ -111,6 +126,7 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
         frames_drawn: stats.frames_drawn(),
         errors: stats.errors(),
         cut_frame: outcome.cut_frame,
+        switch_off_frame: outcome.switch_off_frame,
     }
 }
 
@@ -195,23 +211,29 @@ fn compare(mut capture: ResMut<Capture>, frame: Res<FrameCount>) {
 }
 
 /// Once `cut_after` frames are compared, marks a cut on the caching
-/// camera, once.
-fn cut(
+/// camera, once; once `switch_off_after` are, switches its cache off.
+fn cut_or_switch_off(
     run: Res<Run>,
     frame: Res<FrameCount>,
     mut capture: ResMut<Capture>,
     mut caches: Query<&mut ReprojectionCache>,
 ) {
-    let Some(after) = run.0.cut_after else {
-        return;
+    let compared = capture.compared.len() as u32;
+    let due = |after: Option<u32>, done: Option<u32>| {
+        done.is_none() && after.is_some_and(|after| compared >= after)
     };
-    if capture.cut_frame.is_some() || (capture.compared.len() as u32) < after {
-        return;
+    if due(run.0.cut_after, capture.cut_frame) {
+        for mut cache in &mut caches {
+            cache.cut();
+        }
+        capture.cut_frame = Some(frame.0);
     }
-    for mut cache in &mut caches {
-        cache.cut();
+    if due(run.0.switch_off_after, capture.switch_off_frame) {
+        for mut cache in &mut caches {
+            cache.enabled = false;
+        }
+        capture.switch_off_frame = Some(frame.0);
     }
-    capture.cut_frame = Some(frame.0);
 }
 
 /// Once `resize.0` frames are compared, gives both cameras new images of
@@ -221,7 +243,7 @@ fn resize(
     run: Res<Run>,
     capture: Res<Capture>,
     mut images: ResMut<Assets<Image>>,
-    cameras: Query<(Entity, &Role, &RenderTarget)>,
+    cameras: Query<(Entity, &Role)>,
     readbacks: Query<Entity, With<Readback>>,
     mut done: Local<bool>,
 ) {
@@ -235,7 +257,7 @@ fn resize(
     for readback in &readbacks {
         commands.entity(readback).despawn();
     }
-    for (camera, role, _) in &cameras {
+    for (camera, role) in &cameras {
         let target = target_image(&mut images, size);
         commands
             .entity(camera)
@@ -254,11 +276,13 @@ fn finish(
     let settings = &run.0;
     let wanted = settings.frames
         + settings.resize.map_or(0, |(after, _)| after)
-        + settings.cut_after.unwrap_or(0);
+        + settings.cut_after.unwrap_or(0)
+        + settings.switch_off_after.unwrap_or(0);
     if capture.compared.len() as u32 >= wanted || deadline.passed() {
         *run.1.lock().unwrap_or_else(|p| p.into_inner()) = Outcome {
             compared: capture.compared.clone(),
             cut_frame: capture.cut_frame,
+            switch_off_frame: capture.switch_off_frame,
         };
         exit.write(AppExit::Success);
     }

@@ -64,6 +64,7 @@ fn compare(args: Args) {
         cut_after: None,
         msaa: false,
         foreign_material: false,
+        switch_off_after: None,
     });
     for err in &run.errors {
         eprintln!("error: {err}");
