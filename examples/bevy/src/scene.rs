@@ -93,7 +93,12 @@ pub fn spawn_meshes(
 /// Where the camera is at frame `n`: on a circle around the meshes, a
 /// fixed step a frame, so that runs are alike whatever their speed.
 pub fn orbit(n: u32, step_degrees: f32) -> Transform {
-    let angle = (n as f32 * step_degrees).to_radians();
+    orbit_at(n as f32 * step_degrees)
+}
+
+/// The camera `degrees` along its circle around the meshes.
+pub fn orbit_at(degrees: f32) -> Transform {
+    let angle = degrees.to_radians();
     Transform::from_xyz(4.5 * angle.sin(), 1.6, 4.5 * angle.cos()).looking_at(Vec3::ZERO, Vec3::Y)
 }
 

@@ -54,7 +54,7 @@ fn setup(
         // Bevy's default tonemapper needs the `tonemapping_luts` feature.
         bevy::core_pipeline::tonemapping::Tonemapping::None,
         ReprojectionCache::default(),
-        scene::orbit(0, 0.0),
+        scene::orbit_at(0.0),
     ));
     commands.spawn((
         Text::new("…"),
@@ -71,7 +71,7 @@ fn setup(
 /// A quarter turn every ten seconds.
 fn orbit(time: Res<Time>, mut cameras: Query<&mut Transform, With<Camera3d>>) {
     for mut transform in &mut cameras {
-        *transform = scene::orbit(1, time.elapsed_secs() * 9.0);
+        *transform = scene::orbit_at(time.elapsed_secs() * 9.0);
     }
 }
 
