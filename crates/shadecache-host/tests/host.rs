@@ -907,3 +907,27 @@ fn an_engines_own_draws_give_the_frames_of_the_hosts() {
         }
     }
 }
+
+/// What WGSL does not say of a buffer binding — a dynamic offset, a least
+/// size — is the application's: a frame whose uniforms have them (as
+/// engines' view and material uniforms do) matches the plan, where
+/// another kind of buffer does not.
+#[test]
+fn a_uniform_with_a_dynamic_offset_and_a_least_size_matches_its_binding() {
+    let Some(gpu) = gpu() else { return };
+    let engines = [wgpu::BindGroupLayoutEntry {
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: true,
+            min_binding_size: wgpu::BufferSize::new(64),
+        },
+        ..uniform_entry()[0]
+    }];
+    let engines: &'static [wgpu::BindGroupLayoutEntry] = Box::leak(Box::new(engines));
+    let groups: &'static [(u32, &[wgpu::BindGroupLayoutEntry])] =
+        Box::leak(Box::new([(0, engines), (1, engines)]));
+    for name in ["three-pass", "one-pass"] {
+        let made = make(&gpu, name, |frame| frame.bind_group_layouts = groups);
+        assert!(made.is_ok(), "{name}: {:?}", made.err());
+    }
+}
