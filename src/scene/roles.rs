@@ -246,6 +246,11 @@ fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
         } else if has(&["mvp"]) {
             "clip_from_local"
         } else if has(&["proj"]) && has(&["inv"]) {
+            // The inverse projection; the inverse view-projection (Bevy's
+            // older `inverse_view_proj`, world from clip) is no role's.
+            if has(&["viewproj", "view_proj"]) {
+                return None;
+            }
             "view_from_clip"
         } else if has(&["viewproj", "view_proj", "vp", "clip"]) {
             "clip_from_world"
@@ -645,7 +650,8 @@ mod tests {
     /// A matrix named `a_from_b` (Bevy's `View`) is exactly that transform
     /// or no role: `world_from_view`, the inverse view matrix, took the
     /// view matrix's role by its word `view`, and the scene filled the
-    /// inverse of what the shader reads.
+    /// inverse of what the shader reads. Older names likewise:
+    /// `inverse_view_proj` took the inverse projection's.
     #[test]
     fn a_matrix_named_from_space_to_space_is_that_transform_or_none() {
         for (member, role) in [
@@ -663,6 +669,10 @@ mod tests {
             // Not of the form: the words decide, as before.
             ("camera.view_proj", Some("clip_from_world")),
             ("u.view", Some("view_from_world")),
+            ("view.inverse_projection", Some("view_from_clip")),
+            // The inverse of the view-projection, which no role is (it
+            // was taken for the inverse projection).
+            ("view.inverse_view_proj", None),
         ] {
             assert_eq!(role_by_name(member, Shape::Matrix(4, 4)), role, "{member}");
         }
