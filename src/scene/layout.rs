@@ -23,6 +23,8 @@ pub const SIMULATED: &[&str] = &[
     "previous_view_from_world",
     "previous_world_from_local",
     "previous_clip_from_local",
+    "local_from_world_transpose_a",
+    "local_from_world_transpose_b",
 ];
 
 /// What the simulation can fill: each role with the shapes of member it
@@ -84,6 +86,14 @@ pub const ROLES: &[(&str, &str)] = &[
         "last frame's view-projection times model (mat4x4<f32>)",
     ),
     (
+        "local_from_world_transpose_a",
+        "the first eight numbers of the model matrix's inverse transpose (the normals' matrix), packed column by column as Bevy packs them (mat2x4<f32>)",
+    ),
+    (
+        "local_from_world_transpose_b",
+        "the ninth number of that packing (f32)",
+    ),
+    (
         "joint_matrices",
         "a skinned object's joints' matrices, element i the model matrix times joint i's pose (an array of mat4x4<f32>, uniform or storage)",
     ),
@@ -126,6 +136,14 @@ pub fn fits_role(role: &str, shape: Shape) -> bool {
         "camera_position" | "light_position" => matches!(shape, Shape::F32(3 | 4)),
         "time" => shape == Shape::F32(1),
         "resolution" => shape == Shape::F32(2),
+        "local_from_world_transpose_a" => shape == Shape::Matrix(2, 4),
+        "local_from_world_transpose_b" => shape == Shape::F32(1),
+        // A model matrix is affine: engines that pack it keep its top
+        // three rows, as a `mat4x3` (column by column) or transposed, as a
+        // `mat3x4` (Bevy's mesh storage, unpacked by `affine3_to_square`).
+        "world_from_local" | "previous_world_from_local" => {
+            matches!(shape, Shape::Matrix(4, 4 | 3) | Shape::Matrix(3, 4))
+        }
         _ => shape == Shape::Matrix(4, 4),
     }
 }
@@ -276,6 +294,17 @@ pub fn simulated(name: &str, state: &FrameState, at: Placement) -> Option<Vec<f3
         "view_from_world" => state.view_from_world.to_cols_array().to_vec(),
         "view_from_clip" => state.clip_from_view.inverse().to_cols_array().to_vec(),
         "world_from_local" => world_from_local.to_cols_array().to_vec(),
+        "local_from_world_transpose_a" | "local_from_world_transpose_b" => {
+            let [x, y, z] = glam::Mat3::from_mat4(world_from_local)
+                .inverse()
+                .transpose()
+                .to_cols_array_2d();
+            if name.ends_with("_a") {
+                vec![x[0], x[1], x[2], y[0], y[1], y[2], z[0], z[1]]
+            } else {
+                vec![z[2]]
+            }
+        }
         "clip_from_local" => (state.clip_from_world * world_from_local)
             .to_cols_array()
             .to_vec(),
@@ -360,10 +389,16 @@ pub fn write_floats(
         }
         Shape::Matrix(columns, rows) => {
             let stride = column_stride(rows);
-            // Simulated matrices are 4×4; a smaller member takes its top-left.
+            // Simulated matrices are 4×4; a smaller member takes its
+            // top-left, but for a `mat3x4`: only an affine matrix fits one
+            // (`fits_role`), transposed, its top three rows as columns (the
+            // first three columns would drop its translation).
+            let transposed = floats.len() == 16 && (columns, rows) == (3, 4);
             for c in 0..columns as usize {
                 for r in 0..rows as usize {
-                    let value = if floats.len() == 16 {
+                    let value = if transposed {
+                        floats[r * 4 + c]
+                    } else if floats.len() == 16 {
                         floats[c * 4 + r]
                     } else {
                         floats.get(c * rows as usize + r).copied().unwrap_or(0.0)

@@ -526,6 +526,65 @@ fn vs_main(@builtin(instance_index) i: u32) -> @builtin(position) vec4<f32> {
         );
     }
 
+    /// Bevy's mesh storage keeps each mesh's model matrix as a transposed
+    /// affine (`mat3x4`, unpacked by `affine3_to_square`), last frame's
+    /// beside it, and the normals' matrix packed into a `mat2x4` and an
+    /// `f32`: unpacked as Bevy's shaders unpack them, they are the
+    /// object's model matrix, last frame's, and its inverse transpose.
+    #[test]
+    fn bevys_packed_mesh_transforms_unpack_to_the_objects() {
+        let module = module(
+            r#"
+struct Mesh {
+    world_from_local: mat3x4<f32>,
+    previous_world_from_local: mat3x4<f32>,
+    local_from_world_transpose_a: mat2x4<f32>,
+    local_from_world_transpose_b: f32,
+    flags: u32,
+}
+@group(2) @binding(0) var<storage> mesh: array<Mesh>;
+@vertex
+fn vs_main(@builtin(instance_index) i: u32) -> @builtin(position) vec4<f32> {
+    let m = mesh[i];
+    return m.world_from_local[0] + m.previous_world_from_local[0] + m.local_from_world_transpose_a[0] * m.local_from_world_transpose_b;
+}
+"#,
+        );
+        let buffers = buffers(&module);
+        let text = "effects = [\"object-motion\"]\n[[objects]]\nmesh = { kind = \"cube\" }\nposition = [1.0, 2.0, 3.0]\nrotation_degrees = [10.0, 30.0, 0.0]\nscale = 2.0\nrotation_degrees_per_frame = [0.0, 5.0, 0.0]\n[storage.mesh]\nflags = 0\n";
+        let bevy = scene(text);
+        check(&buffers, &bevy).map_err(|e| e.render()).unwrap();
+        let state = bevy.frame(1, 1.0);
+        let bytes = fill(&buffers[0], &bevy, &state, 0).unwrap();
+        let column = |offset: usize| {
+            glam::Vec4::from_array(std::array::from_fn(|r| f32_at(&bytes, offset + 4 * r)))
+        };
+        // `affine3_to_square`: the three columns are the matrix's rows.
+        let square = |offset: usize| {
+            glam::Mat4::from_cols(
+                column(offset),
+                column(offset + 16),
+                column(offset + 32),
+                glam::Vec4::W,
+            )
+            .transpose()
+        };
+        let close = |a: glam::Mat4, b: glam::Mat4| a.abs_diff_eq(b, 1e-5);
+        assert!(close(square(0), state.objects[0]), "{}", square(0));
+        let before = state.before().objects[0];
+        assert!(close(square(48), before), "{}", square(48));
+        assert!(!close(square(0), square(48)), "the object turned");
+        // `mat2x4_f32_to_mat3x3_unpack`.
+        let (a0, a1, b) = (column(96), column(112), f32_at(&bytes, 128));
+        let normals = glam::Mat3::from_cols(
+            a0.truncate(),
+            glam::Vec3::new(a0.w, a1.x, a1.y),
+            glam::Vec3::new(a1.z, a1.w, b),
+        );
+        let expected = glam::Mat3::from_mat4(state.objects[0]).inverse().transpose();
+        assert!(normals.abs_diff_eq(expected, 1e-5), "{normals} {expected}");
+    }
+
     #[test]
     fn what_the_scene_does_not_give_is_an_error_naming_it() {
         let module = module(SHADER);
