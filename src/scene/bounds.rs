@@ -23,6 +23,10 @@ use crate::diagnostic::{Diagnostic, Error, SourceFile};
 /// thousand is a minute per configuration.
 pub const MAX_FRAMES: u32 = 10_000;
 
+/// The latest frame of its motion a scene can start at: an hour at 60 Hz,
+/// where a frame's f32 time still steps exactly enough (2⁻¹¹ s at 3600 s).
+pub const MAX_START_FRAME: u32 = 216_000;
+
 /// The most quads a procedural mesh has (rings × segments, or
 /// subdivisions²): 2 million triangles, about 100 MB of vertices and
 /// indices. A finer mesh only costs memory and time.
@@ -93,6 +97,15 @@ pub(super) fn check(scene: &Scene, file: &Arc<SourceFile>) -> Result<(), Error> 
         return fail(
             format!("warmup = {} is above {MAX_FRAMES}", scene.warmup),
             &["warmup"],
+        );
+    }
+    if scene.start_frame > MAX_START_FRAME {
+        return fail(
+            format!(
+                "start_frame = {} is above {MAX_START_FRAME}",
+                scene.start_frame
+            ),
+            &["start_frame"],
         );
     }
     if scene.seconds_per_frame < 0.0 {

@@ -89,6 +89,13 @@ pub struct Scene {
     /// Frames rendered first and not measured.
     #[serde(default = "default_warmup")]
     pub warmup: u32,
+    /// The frame of the scene's motion a run starts at: its first frame
+    /// (warm-up included) shows the camera, objects, light and time as
+    /// they are `start_frame` frames into the motion, with a cold cache.
+    /// What an application's cache sees when it starts (or is reset)
+    /// partway through its motion.
+    #[serde(default)]
+    pub start_frame: u32,
     /// What moves: only the effects declared are simulated.
     #[serde(default)]
     pub effects: Vec<Effect>,
@@ -682,7 +689,7 @@ impl Scene {
         if !self.has(Effect::Deformation) {
             return None;
         }
-        let phase = ripple.speed * n as f32;
+        let phase = ripple.speed * self.motion_frame(n);
         let mut out = mesh.clone();
         for (p, normal) in out.positions.iter_mut().zip(&mesh.normals) {
             *p += *normal * (ripple.amplitude * (ripple.frequency * p.y + phase).sin());
@@ -712,9 +719,14 @@ impl Scene {
         state
     }
 
+    /// The frame of the motion run frame `n` shows.
+    fn motion_frame(&self, n: u32) -> f32 {
+        (u64::from(n) + u64::from(self.start_frame)) as f32
+    }
+
     /// Frame `n`'s state without the frame before.
     fn frame_alone(&self, n: u32, aspect: f32) -> FrameState {
-        let t = n as f32;
+        let t = self.motion_frame(n);
         let camera = &self.camera;
         let (mut eye, mut target) = (Vec3::from(camera.eye), Vec3::from(camera.target));
         if self.has(Effect::CameraMotion) {
@@ -857,6 +869,27 @@ mod tests {
         let moved = deforming.deformed(0, &mesh, 3).unwrap();
         assert_ne!(moved.positions, mesh.positions);
         assert_eq!(deforming.frame_alone(0, 1.0), deforming.frame_alone(3, 1.0));
+    }
+
+    /// A scene started `start_frame` frames into its motion shows at run
+    /// frame n what the scene from its start shows at n + start_frame:
+    /// camera, light, objects, time and deformation alike. Its first
+    /// frame has no frame before it (the cache starts cold there).
+    #[test]
+    fn a_scene_started_later_shows_that_frame_of_its_motion() {
+        let all = "\"camera-motion\", \"object-motion\", \"light-motion\", \"time\", \"deformation\"";
+        let from_start = scene(all);
+        let mut later = scene(all);
+        later.start_frame = 7;
+        assert_eq!(later.frame_alone(0, 1.0), from_start.frame_alone(7, 1.0));
+        assert_eq!(later.frame(3, 1.0), from_start.frame(10, 1.0));
+        assert!(later.frame(0, 1.0).previous.is_none());
+        assert_ne!(later.frame_alone(0, 1.0), from_start.frame_alone(0, 1.0));
+        let mesh = later.objects[0].mesh.build(Path::new(".")).unwrap();
+        assert_eq!(
+            later.deformed(0, &mesh, 2).unwrap().positions,
+            from_start.deformed(0, &mesh, 9).unwrap().positions
+        );
     }
 
     /// Depth of a point `distance` in front of the camera.
