@@ -333,8 +333,56 @@ impl Build {
             ))]))
             }
         };
-        let manifest = std::env::var_os("CARGO_MANIFEST_DIR").map(PathBuf::from);
         let mut outputs = Outputs::default();
+        let errors = self.each_job(|job, sources| {
+            if !self.quiet {
+                // Printed first, so a failing shader is watched too (a
+                // folder is watched whole).
+                for watched in watched(sources.path, sources.vertex, sources.composition) {
+                    println!("cargo::rerun-if-changed={}", watched.display());
+                }
+            }
+            self.job(job, sources, &out_dir, &mut outputs)
+        });
+        if errors.is_empty() {
+            Ok(outputs)
+        } else {
+            Err(self.fail(errors))
+        }
+    }
+
+    /// Each shader as [`Build::run`] composes it (its WESL or naga_oil
+    /// modules, its vertex stage), without rewriting it: what a test
+    /// profiles to measure the variants the build writes on the shader
+    /// the build reads. Errors are not printed (they are in
+    /// [`BuildError::errors`]). Paths resolve against `CARGO_MANIFEST_DIR`
+    /// as in a build script (cargo sets it for tests too).
+    pub fn composed(self) -> Result<Vec<front::Shader>, BuildError> {
+        let mut shaders = Vec::new();
+        let errors = self.each_job(|job, sources| {
+            shaders.push(front::load_with(
+                sources.path,
+                sources.composition,
+                sources.vertex,
+                job.vertex_entry.as_deref(),
+            )?);
+            Ok(())
+        });
+        if errors.is_empty() {
+            Ok(shaders)
+        } else {
+            Err(Build::failure(true, errors))
+        }
+    }
+
+    /// Calls `each` with every job and where its shader comes from (paths
+    /// resolved against the manifest, crate packages found in the
+    /// dependency graph); the errors of the jobs that failed.
+    fn each_job(
+        &self,
+        mut each: impl FnMut(&ShaderJob, &Sources) -> Result<(), Error>,
+    ) -> Vec<Error> {
+        let manifest = std::env::var_os("CARGO_MANIFEST_DIR").map(PathBuf::from);
         let mut errors = Vec::new();
         let resolve = |path: &Path| match &manifest {
             Some(root) if path.is_relative() => root.join(path),
@@ -391,27 +439,16 @@ impl Build {
                 defs: job.composition.defs.clone(),
                 composer: job.composition.composer,
             };
-            if !self.quiet {
-                // Printed first, so a failing shader is watched too (a
-                // folder is watched whole).
-                for watched in watched(&path, vertex.as_deref(), &composition) {
-                    println!("cargo::rerun-if-changed={}", watched.display());
-                }
-            }
             let sources = Sources {
                 path: &path,
                 vertex: vertex.as_deref(),
                 composition: &composition,
             };
-            if let Err(err) = self.job(job, &sources, &out_dir, &mut outputs) {
+            if let Err(err) = each(job, &sources) {
                 errors.push(err);
             }
         }
-        if errors.is_empty() {
-            Ok(outputs)
-        } else {
-            Err(self.fail(errors))
-        }
+        errors
     }
 
     /// What no shader needs to be read to see: the reference asked for as

@@ -34,6 +34,39 @@ fn build_writes_the_chosen_variants() {
     assert_eq!(outputs.files.len(), 4 + 2 * 5);
 }
 
+/// `composed` gives each shader as `run` reads it, in order, without
+/// writing anything: what a test profiles to measure the variants a build
+/// writes. A shader that cannot be read is an error, as for `run`.
+#[test]
+fn build_composes_the_shaders_it_rewrites() {
+    let shaders = Build::new()
+        .shader(root().join("corpus/noise_marble.wgsl"))
+        .node("nb0c12cc4")
+        .shader(root().join("corpus/shadow_pcf.wgsl"))
+        .quiet()
+        .composed()
+        .unwrap_or_else(|e| panic!("{:?}", e.errors));
+    assert_eq!(shaders.len(), 2);
+    assert!(shaders[0].file.path.ends_with("noise_marble.wgsl"));
+    assert!(shaders[1].file.path.ends_with("shadow_pcf.wgsl"));
+    for shader in &shaders {
+        assert!(shader
+            .module
+            .entry_points
+            .iter()
+            .any(|e| e.stage == naga::ShaderStage::Fragment));
+    }
+    let err = Build::new()
+        .shader(root().join("corpus/no_such_shader.wgsl"))
+        .composed()
+        .unwrap_err();
+    assert!(
+        err.errors[0].render().contains("no_such_shader.wgsl"),
+        "{:?}",
+        err.errors
+    );
+}
+
 #[test]
 fn build_fails_short_on_a_bad_node() {
     let dir = tempfile::tempdir().unwrap();
