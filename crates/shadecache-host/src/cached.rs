@@ -807,8 +807,8 @@ impl CachedShader {
         }
     }
 
-    /// Makes the cache's targets at a new size: the next frame misses
-    /// everywhere, as the first. A size of zero or past the device's
+    /// Makes the cache's targets at a new size: the cache starts over as
+    /// after [`CachedShader::reset`], its next frame missing everywhere. A size of zero or past the device's
     /// largest 2D texture is an error, and the cache keeps its size.
     pub fn resize(&mut self, size: (u32, u32)) -> Result<(), Error> {
         if size == self.size {
@@ -824,14 +824,19 @@ impl CachedShader {
             (&self.gbuffer_formats, lowres_divisor(&self.plan)),
         );
         self.generation += 1;
-        self.fresh = true;
+        self.reset();
         Ok(())
     }
 
-    /// Forgets last frame (a camera cut, a teleport): the next frame
-    /// misses everywhere.
+    /// Forgets last frame (a camera cut, a teleport): the cache starts
+    /// over as one just made. The next frame misses everywhere, and the
+    /// frame counter and refresh phase start again from 0, so the frames
+    /// after a reset are those of a new cache (what a profile of a cold
+    /// start measures). An application that keeps its own count calls
+    /// [`CachedShader::set_frame_counter`] after it.
     pub fn reset(&mut self) {
         self.fresh = true;
+        self.set_frame_counter(0);
     }
 
     /// Sets the frame counter c, as if that many frames had been run, and

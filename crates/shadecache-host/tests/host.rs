@@ -667,6 +667,26 @@ fn resize_and_reset_give_misses_not_stale_reuse() {
     assert!(share_at(&app.ages(&gpu), inside(0.0, small), 1.0) > REUSED);
 }
 
+/// After `reset()` the cache starts over as one just made: the frames
+/// after it, ages and refreshed blocks included, are a new cache's (the
+/// refresh pattern starts from its first frame again), so a profile of a
+/// cold start is what an application sees after a camera cut.
+#[test]
+fn a_reset_cache_starts_over_as_one_just_made() {
+    let Some(gpu) = gpu() else { return };
+    let mut used = App::new(&gpu, "three-pass");
+    for _ in 0..5 {
+        used.frame(&gpu, 0.0);
+    }
+    used.cached.reset();
+    let mut new = App::new(&gpu, "three-pass");
+    for n in 0..4 {
+        used.frame(&gpu, 0.0);
+        new.frame(&gpu, 0.0);
+        assert_eq!(used.ages(&gpu), new.ages(&gpu), "frame {n} after the reset");
+    }
+}
+
 /// A square moving right reprojects into where it was: every pixel inside
 /// it hits, the band it moved onto included. That holds only when the
 /// object's twin holds last frame's matrix when the next frame runs: the
