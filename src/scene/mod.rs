@@ -877,7 +877,8 @@ mod tests {
     /// frame has no frame before it (the cache starts cold there).
     #[test]
     fn a_scene_started_later_shows_that_frame_of_its_motion() {
-        let all = "\"camera-motion\", \"object-motion\", \"light-motion\", \"time\", \"deformation\"";
+        let all =
+            "\"camera-motion\", \"object-motion\", \"light-motion\", \"time\", \"deformation\"";
         let from_start = scene(all);
         let mut later = scene(all);
         later.start_frame = 7;

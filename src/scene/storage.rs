@@ -581,7 +581,9 @@ fn vs_main(@builtin(instance_index) i: u32) -> @builtin(position) vec4<f32> {
             glam::Vec3::new(a0.w, a1.x, a1.y),
             glam::Vec3::new(a1.z, a1.w, b),
         );
-        let expected = glam::Mat3::from_mat4(state.objects[0]).inverse().transpose();
+        let expected = glam::Mat3::from_mat4(state.objects[0])
+            .inverse()
+            .transpose();
         assert!(normals.abs_diff_eq(expected, 1e-5), "{normals} {expected}");
     }
 
