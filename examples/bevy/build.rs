@@ -1,51 +1,10 @@
 //! Rewrites the lava material into its one-pass cache variant at build
-//! time, composed with Bevy's own WESL packages: `bevy_pbr::` and
-//! `bevy_render::` are the `src/` folders of the crates this game builds
-//! against (found in its dependency graph), and the vertex stage is Bevy's
-//! own mesh vertex shader, as for any material without one of its own.
+//! time ([`lava_build`] says how).
 
-use shadecache::front::compose::ShaderDef;
-use shadecache::rewrite::{DepthConvention, Options, Variant};
+#[path = "lava_build.rs"]
+mod lava_build;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let mut build = shadecache::build::Build::new()
-        .shader("assets/lava.wesl")
-        .crate_package("bevy_pbr")
-        .crate_package("bevy_render")
-        .crate_vertex_shader("bevy_pbr", "render/mesh.wesl")
-        // The crust: six octaves of object-space noise, the same every
-        // frame (`shadecache analyze` ranks it first of the nodes that
-        // read no per-frame input).
-        .node(NODE)
-        .variant(Variant::OnePass)
-        .options(Options {
-            // Bevy renders with reversed Z.
-            depth: DepthConvention::Reversed,
-            color_format: shadecache::plan::TextureFormat::Rgba8UnormSrgb,
-            // Bevy binds four groups of its own (view, binding arrays,
-            // mesh, material); the cache takes a fifth, which every
-            // Vulkan, Metal and D3D12 device has.
-            max_bind_groups: 8,
-            ..Options::default()
-        });
-    // What Bevy's mesh pipeline defines for a mesh with positions, normals
-    // and UVs on a view without MSAA or prepasses, on a device with storage
-    // buffers.
-    for (name, value) in [
-        ("MATERIAL_BIND_GROUP", ShaderDef::UInt(3)),
-        ("MAX_DIRECTIONAL_LIGHTS", ShaderDef::UInt(10)),
-        ("MAX_CASCADES_PER_LIGHT", ShaderDef::UInt(4)),
-        ("VERTEX_POSITIONS", ShaderDef::Bool(true)),
-        ("VERTEX_NORMALS", ShaderDef::Bool(true)),
-        ("VERTEX_UVS", ShaderDef::Bool(true)),
-        ("VERTEX_UVS_A", ShaderDef::Bool(true)),
-        ("VERTEX_OUTPUT_INSTANCE_INDEX", ShaderDef::Bool(true)),
-    ] {
-        build = build.def(name, value);
-    }
-    build.run()?;
+    lava_build::lava_build().run()?;
     Ok(())
 }
-
-/// The node the variant caches, from `shadecache analyze` on the material.
-const NODE: &str = "nfe927310";

@@ -38,6 +38,12 @@ pub struct Headless {
     /// cache off (Bevy draws the meshes again), and `frames` more are
     /// compared.
     pub switch_off_after: Option<u32>,
+    /// Both cameras draw in linear HDR (`Hdr`, no tonemapping) into
+    /// `rgba16float` images read back as they are, and the frames compare
+    /// as `shadecache profile` compares them: PSNR over RGB in linear float,
+    /// peak 1, the whole frame (its `psnr_frame`). Otherwise the images are
+    /// `rgba8unorm-srgb`, as a game displays them, compared as stored.
+    pub linear: bool,
 }
 
 /// One compared frame: the cached image against Bevy's.
@@ -45,7 +51,9 @@ pub struct Headless {
 pub struct Compared {
     /// The images' side.
     pub size: u32,
-    /// PSNR of the cached image against Bevy's, in dB (∞ when equal).
+    /// PSNR of the cached image against Bevy's over RGB, the whole frame,
+    /// in dB (∞ when equal): of the stored sRGB values, or with `linear`
+    /// of the linear ones.
     pub psnr: f64,
     /// The largest difference of a channel, out of 1.
     pub max_error: f64,
@@ -149,11 +157,14 @@ fn setup(
         ));
     }
     for role in [Role::Cached, Role::Reference] {
-        let target = target_image(&mut images, settings.size);
+        let target = target_image(&mut images, settings.size, settings.linear);
         let mut camera =
             commands.spawn((scene::camera(target.clone(), settings.step_degrees), role));
         if settings.msaa {
             camera.insert(Msaa::Sample4);
+        }
+        if settings.linear {
+            camera.insert(bevy::camera::Hdr);
         }
         if role == Role::Cached {
             camera.insert(ReprojectionCache {
@@ -182,7 +193,7 @@ fn spawn_readback(commands: &mut Commands, target: Handle<Image>, role: Role) {
 /// readbacks of a frame arrive in the same update: they are paired by it
 /// (and by size, across a resize); one without its pair (one of the old
 /// images', after a resize) is dropped.
-fn compare(mut capture: ResMut<Capture>, frame: Res<FrameCount>) {
+fn compare(mut capture: ResMut<Capture>, frame: Res<FrameCount>, run: Res<Run>) {
     let mut pairs = Vec::new();
     for (frame, cached) in std::mem::take(&mut capture.cached) {
         if let Some(at) = capture
@@ -195,6 +206,8 @@ fn compare(mut capture: ResMut<Capture>, frame: Res<FrameCount>) {
     }
     capture.reference.clear();
     for (cached, reference) in pairs {
+        let linear = run.0.linear;
+        let (cached, reference) = (channels(&cached, linear), channels(&reference, linear));
         let lava_pixels = drawn_pixels(&reference);
         if lava_pixels == 0 {
             continue;
@@ -258,7 +271,7 @@ fn resize(
         commands.entity(readback).despawn();
     }
     for (camera, role) in &cameras {
-        let target = target_image(&mut images, size);
+        let target = target_image(&mut images, size, run.0.linear);
         commands
             .entity(camera)
             .insert(RenderTarget::Image(target.clone().into()));
@@ -288,17 +301,29 @@ fn finish(
     }
 }
 
-/// PSNR (dB) and largest channel difference (out of 1) of two RGBA8
+/// The channels of an image read back, RGBA, out of 1: an `rgba16float`
+/// image's (`linear`) decoded, an RGBA8 one's as stored.
+pub(crate) fn channels(data: &[u8], linear: bool) -> Vec<f32> {
+    if linear {
+        data.chunks_exact(2)
+            .map(|b| half::f16::from_le_bytes([b[0], b[1]]).to_f32())
+            .collect()
+    } else {
+        data.iter().map(|&v| f32::from(v) / 255.0).collect()
+    }
+}
+
+/// PSNR (dB, peak 1) and largest channel difference (out of 1) of two RGBA
 /// images, over their colour channels.
-pub fn image_error(a: &[u8], b: &[u8]) -> (f64, f64) {
+pub fn image_error(a: &[f32], b: &[f32]) -> (f64, f64) {
     let mut squared = 0.0f64;
-    let mut max = 0u8;
+    let mut max = 0.0f64;
     let mut count = 0usize;
     for (pa, pb) in a.chunks(4).zip(b.chunks(4)) {
         for c in 0..3 {
-            let d = pa[c].abs_diff(pb[c]);
+            let d = f64::from((pa[c] - pb[c]).abs());
             max = max.max(d);
-            squared += (d as f64 / 255.0).powi(2);
+            squared += d * d;
             count += 1;
         }
     }
@@ -308,5 +333,5 @@ pub fn image_error(a: &[u8], b: &[u8]) -> (f64, f64) {
     } else {
         10.0 * (1.0 / mse).log10()
     };
-    (psnr, max as f64 / 255.0)
+    (psnr, max)
 }

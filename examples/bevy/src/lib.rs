@@ -56,6 +56,12 @@ fn headless_app(diagnostics: bool, step_degrees: f32) -> App {
         MaterialPlugin::<scene::LavaMaterial>::default(),
         shadecache_bevy::ShadecachePlugin::new(scene::lava_variant()),
     ))
+    // Time steps a 60 Hz frame each frame, whatever the frame took, as
+    // `shadecache profile` steps its `time` uniform: the glow flows alike
+    // in every run.
+    .insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(
+        std::time::Duration::from_secs_f64(1.0 / 60.0),
+    ))
     .insert_resource(scene::Step(step_degrees))
     .init_resource::<scene::FrameCount>()
     .insert_resource(Deadline(Instant::now() + GIVE_UP_AFTER));
@@ -86,14 +92,20 @@ fn run_to_exit<T: Default>(mut app: App, results: &std::sync::Mutex<T>) -> (T, C
     (left, stats)
 }
 
-/// An image a camera draws into and the readback copies from.
-fn target_image(images: &mut Assets<Image>, size: u32) -> Handle<Image> {
-    let mut image = Image::new_target_texture(size, size, TextureFormat::Rgba8UnormSrgb, None);
+/// An image a camera draws into and the readback copies from: RGBA8 in
+/// sRGB, as displayed, or `linear` (`rgba16float`).
+fn target_image(images: &mut Assets<Image>, size: u32, linear: bool) -> Handle<Image> {
+    let format = if linear {
+        TextureFormat::Rgba16Float
+    } else {
+        TextureFormat::Rgba8UnormSrgb
+    };
+    let mut image = Image::new_target_texture(size, size, format, None);
     image.texture_descriptor.usage |= TextureUsages::COPY_SRC;
     images.add(image)
 }
 
-/// Pixels drawn (not the black clear colour) in an RGBA8 image.
-fn drawn_pixels(data: &[u8]) -> usize {
-    data.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count()
+/// Pixels drawn (not the black clear colour) in an RGBA image.
+fn drawn_pixels(data: &[f32]) -> usize {
+    data.chunks(4).filter(|p| p[..3] != [0.0; 3]).count()
 }

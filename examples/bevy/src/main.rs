@@ -3,6 +3,8 @@
 //! ```sh
 //! # Each frame through the cache and as Bevy draws it, compared:
 //! cargo run --ignore-rust-version -p shadecache-bevy-example -- compare --size 256 --frames 60
+//! # The same in linear HDR, PSNR as `shadecache profile` measures it:
+//! cargo run --ignore-rust-version -p shadecache-bevy-example -- compare --size 256 --frames 60 --linear
 //! # The material's GPU time, cached and as Bevy draws it:
 //! cargo run --release --ignore-rust-version -p shadecache-bevy-example -- measure --size 512 --frames 100
 //! # In a window (space toggles the cache):
@@ -16,6 +18,7 @@ struct Args {
     frames: u32,
     refresh_period: Option<u32>,
     step_degrees: f32,
+    linear: bool,
 }
 
 fn main() {
@@ -28,6 +31,7 @@ fn main() {
         frames: 60,
         refresh_period: None,
         step_degrees: 0.5,
+        linear: false,
     };
     while let Some(arg) = args.next() {
         let mut value = |name: &str| -> f64 {
@@ -40,6 +44,7 @@ fn main() {
             "--frames" => settings.frames = value("--frames") as u32,
             "--refresh-period" => settings.refresh_period = Some(value("--refresh-period") as u32),
             "--step" => settings.step_degrees = value("--step") as f32,
+            "--linear" => settings.linear = true,
             other => usage(&format!("unknown argument `{other}`")),
         }
     }
@@ -65,14 +70,15 @@ fn compare(args: Args) {
         msaa: false,
         foreign_material: false,
         switch_off_after: None,
+        linear: args.linear,
     });
     for err in &run.errors {
         eprintln!("error: {err}");
     }
     for (n, frame) in run.compared.iter().enumerate() {
         println!(
-            "frame {n}: {}², PSNR {:.2} dB, max error {:.4}, {} lava pixels",
-            frame.size, frame.psnr, frame.max_error, frame.lava_pixels
+            "compared frame {n} (camera frame {}): {}², PSNR {:.2} dB, max error {:.4}, {} lava pixels",
+            frame.frame, frame.size, frame.psnr, frame.max_error, frame.lava_pixels
         );
     }
     let steady = &run.compared[run.compared.len() / 2..];
@@ -127,7 +133,7 @@ fn time(args: Args) {
 
 fn usage(problem: &str) -> ! {
     eprintln!(
-        "{problem}\nusage: shadecache-bevy-example compare|measure|window [--size N] [--frames N] [--refresh-period N] [--step DEGREES]"
+        "{problem}\nusage: shadecache-bevy-example compare|measure|window [--size N] [--frames N] [--refresh-period N] [--step DEGREES] [--linear]"
     );
     std::process::exit(2);
 }

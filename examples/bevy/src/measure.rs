@@ -97,7 +97,7 @@ fn setup(
 ) {
     scene::spawn_meshes(&mut commands, &mut meshes, &mut materials);
     let settings = &run.0;
-    let target = target_image(&mut images, settings.size);
+    let target = target_image(&mut images, settings.size, false);
     commands.spawn((
         scene::camera(target.clone(), settings.step_degrees),
         ReprojectionCache {
@@ -109,7 +109,9 @@ fn setup(
     // first image with lava in it.
     commands.spawn(Readback::texture(target)).observe(
         |event: On<ReadbackComplete>, mut timing: ResMut<Timing>, frame: Res<FrameCount>| {
-            if timing.ready_at.is_none() && drawn_pixels(&event.data) > 0 {
+            if timing.ready_at.is_none()
+                && drawn_pixels(&crate::compare::channels(&event.data, false)) > 0
+            {
                 timing.ready_at = Some(frame.0);
             }
         },
