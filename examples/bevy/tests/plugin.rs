@@ -1,7 +1,9 @@
 //! The shadecache Bevy plugin in a headless Bevy app on the example's
 //! scene: each frame is drawn twice, through the cache and as Bevy draws
 //! the material itself, and the two images are compared. Bevy apps own
-//! the process's render thread and device, so the runs take turns.
+//! the process's render thread and device, so the runs take turns. They
+//! need a GPU adapter (lavapipe will do), unless
+//! `SHADECACHE_SKIP_GPU_TESTS=1` says to skip them where there is none.
 
 use std::path::Path;
 use std::sync::Mutex;
@@ -12,6 +14,20 @@ use shadecache_bevy_example::{run_headless, Compared, Headless};
 mod lava_build;
 
 static ONE_APP_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+/// Whether the test `name` is skipped: no GPU adapter, and
+/// `SHADECACHE_SKIP_GPU_TESTS=1` (without it, no adapter is a failure
+/// that says so, as in the other crates' tests).
+fn skipped(name: &str) -> bool {
+    if shadecache::runtime::Gpu::new().is_ok_and(|gpu| gpu.is_some()) {
+        return false;
+    }
+    if std::env::var_os("SHADECACHE_SKIP_GPU_TESTS").is_some_and(|v| v == "1") {
+        eprintln!("{name}: SKIPPED (no GPU adapter, SHADECACHE_SKIP_GPU_TESTS=1)");
+        return true;
+    }
+    panic!("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers), or set SHADECACHE_SKIP_GPU_TESTS=1");
+}
 
 /// The frames compared; the run must have drawn every one through the
 /// cache, without an error.
@@ -54,6 +70,9 @@ fn settings() -> Headless {
 /// computes, so equal to the bit.
 #[test]
 fn bevy_plugin_at_refresh_period_one_equals_the_uncached_frame() {
+    if skipped("bevy_plugin_at_refresh_period_one_equals_the_uncached_frame") {
+        return;
+    }
     let compared = run(Headless {
         refresh_period: Some(1),
         ..settings()
@@ -83,6 +102,9 @@ const MEASURED: u32 = 32;
 /// HDR), mean over the same frames of the path.
 #[test]
 fn bevy_plugin_reuses_under_camera_motion() {
+    if skipped("bevy_plugin_reuses_under_camera_motion") {
+        return;
+    }
     // A cut once both images show lava: the plugin's cache starts cold at
     // a known frame of the camera's path.
     let (compared, cut) = run_with_cut(Headless {
@@ -175,6 +197,9 @@ fn profile_from(start_frame: u32) -> Vec<f64> {
 /// image at the new size can still be the old view's, scaled.)
 #[test]
 fn bevy_plugin_resets_on_resize() {
+    if skipped("bevy_plugin_resets_on_resize") {
+        return;
+    }
     let compared = run(Headless {
         frames: 4,
         resize: Some((12, 192)),
@@ -204,6 +229,9 @@ fn bevy_plugin_resets_on_resize() {
 /// without the cut the cache would reuse), and reuse resumes after it.
 #[test]
 fn bevy_plugin_resets_on_camera_cut() {
+    if skipped("bevy_plugin_resets_on_camera_cut") {
+        return;
+    }
     let (compared, cut) = run_with_cut(Headless {
         frames: 6,
         cut_after: Some(12),
@@ -238,6 +266,9 @@ fn bevy_plugin_resets_on_camera_cut() {
 /// without the plugin.
 #[test]
 fn bevy_plugin_refuses_msaa_and_leaves_the_material_to_bevy() {
+    if skipped("bevy_plugin_refuses_msaa_and_leaves_the_material_to_bevy") {
+        return;
+    }
     let _turn = ONE_APP_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
     let run = run_headless(Headless {
         frames: 8,
@@ -264,6 +295,9 @@ fn bevy_plugin_refuses_msaa_and_leaves_the_material_to_bevy() {
 /// every mesh as without the plugin.
 #[test]
 fn bevy_plugin_refuses_meshes_of_another_material() {
+    if skipped("bevy_plugin_refuses_meshes_of_another_material") {
+        return;
+    }
     let _turn = ONE_APP_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
     let run = run_headless(Headless {
         frames: 8,
@@ -288,6 +322,9 @@ fn bevy_plugin_refuses_meshes_of_another_material() {
 /// left out of the opaque phase would be missing from the image).
 #[test]
 fn bevy_plugin_hands_the_meshes_back_when_switched_off() {
+    if skipped("bevy_plugin_hands_the_meshes_back_when_switched_off") {
+        return;
+    }
     let _turn = ONE_APP_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
     let run = run_headless(Headless {
         frames: 12,
