@@ -808,8 +808,9 @@ impl CachedShader {
     }
 
     /// Makes the cache's targets at a new size: the cache starts over as
-    /// after [`CachedShader::reset`], its next frame missing everywhere. A size of zero or past the device's
-    /// largest 2D texture is an error, and the cache keeps its size.
+    /// after [`CachedShader::reset`], its next frame missing everywhere. A
+    /// size of zero or past the device's largest 2D texture is an error,
+    /// and the cache keeps its size.
     pub fn resize(&mut self, size: (u32, u32)) -> Result<(), Error> {
         if size == self.size {
             return Ok(());

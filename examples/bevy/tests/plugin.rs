@@ -8,7 +8,7 @@
 use std::path::Path;
 use std::sync::Mutex;
 
-use shadecache_bevy_example::{run_headless, Compared, Headless};
+use shadecache_bevy_example::{run_headless, Compared, Headless, HeadlessRun};
 
 #[path = "../lava_build.rs"]
 mod lava_build;
@@ -37,8 +37,7 @@ fn run(settings: Headless) -> Vec<Compared> {
 
 /// [`run`], and the frame a cut was marked in.
 fn run_with_cut(settings: Headless) -> (Vec<Compared>, Option<u32>) {
-    let _turn = ONE_APP_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
-    let run = run_headless(settings);
+    let run = in_turn(settings);
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     assert!(
         run.frames_drawn >= run.compared.len() as u64,
@@ -47,6 +46,21 @@ fn run_with_cut(settings: Headless) -> (Vec<Compared>, Option<u32>) {
         run.compared.len()
     );
     (run.compared, run.cut_frame)
+}
+
+/// The headless run, once no other test's app is running.
+fn in_turn(settings: Headless) -> HeadlessRun {
+    let _turn = ONE_APP_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
+    run_headless(settings)
+}
+
+/// Every frame of `frames` has the lava in it and is Bevy's own (to
+/// within 8-bit rounding).
+fn all_bevys_own<'a>(frames: impl IntoIterator<Item = &'a Compared>) {
+    for frame in frames {
+        assert!(frame.lava_pixels > 1000, "{frame:?}");
+        assert!(frame.max_error <= 1.0 / 255.0, "{frame:?}");
+    }
 }
 
 fn settings() -> Headless {
@@ -78,10 +92,7 @@ fn bevy_plugin_at_refresh_period_one_equals_the_uncached_frame() {
         ..settings()
     });
     assert!(compared.len() >= 24, "{} frames compared", compared.len());
-    for frame in &compared {
-        assert!(frame.lava_pixels > 1000, "{frame:?}");
-        assert!(frame.max_error <= 1.0 / 255.0, "{frame:?}");
-    }
+    all_bevys_own(&compared);
 }
 
 /// Frames the cache runs after its cold start before its error is
@@ -269,8 +280,7 @@ fn bevy_plugin_refuses_msaa_and_leaves_the_material_to_bevy() {
     if skipped("bevy_plugin_refuses_msaa_and_leaves_the_material_to_bevy") {
         return;
     }
-    let _turn = ONE_APP_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
-    let run = run_headless(Headless {
+    let run = in_turn(Headless {
         frames: 8,
         msaa: true,
         ..settings()
@@ -284,9 +294,7 @@ fn bevy_plugin_refuses_msaa_and_leaves_the_material_to_bevy() {
         run.errors
     );
     assert!(run.compared.len() >= 8, "{:?}", run.compared);
-    for frame in &run.compared {
-        assert!(frame.max_error <= 1.0 / 255.0, "{frame:?}");
-    }
+    all_bevys_own(&run.compared);
 }
 
 /// A mesh marked for the cache whose material is not the one the variant
@@ -298,8 +306,7 @@ fn bevy_plugin_refuses_meshes_of_another_material() {
     if skipped("bevy_plugin_refuses_meshes_of_another_material") {
         return;
     }
-    let _turn = ONE_APP_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
-    let run = run_headless(Headless {
+    let run = in_turn(Headless {
         frames: 8,
         foreign_material: true,
         ..settings()
@@ -312,9 +319,7 @@ fn bevy_plugin_refuses_meshes_of_another_material() {
         .collect();
     assert_eq!(refusals.len(), 1, "{:?}", run.errors);
     assert!(run.compared.len() >= 8, "{:?}", run.compared);
-    for frame in &run.compared {
-        assert!(frame.max_error <= 1.0 / 255.0, "{frame:?}");
-    }
+    all_bevys_own(&run.compared);
 }
 
 /// Switching the cache off hands the meshes back to Bevy's opaque pass:
@@ -325,8 +330,7 @@ fn bevy_plugin_hands_the_meshes_back_when_switched_off() {
     if skipped("bevy_plugin_hands_the_meshes_back_when_switched_off") {
         return;
     }
-    let _turn = ONE_APP_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
-    let run = run_headless(Headless {
+    let run = in_turn(Headless {
         frames: 12,
         switch_off_after: Some(12),
         ..settings()
@@ -342,8 +346,5 @@ fn bevy_plugin_hands_the_meshes_back_when_switched_off() {
     // again and a few for the images to come back.
     let after: Vec<&Compared> = run.compared.iter().filter(|f| f.frame >= off + 4).collect();
     assert!(after.len() >= 6, "{:?}", run.compared);
-    for frame in after {
-        assert!(frame.lava_pixels > 1000, "{frame:?}");
-        assert!(frame.max_error <= 1.0 / 255.0, "{frame:?}");
-    }
+    all_bevys_own(after);
 }
