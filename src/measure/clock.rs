@@ -23,6 +23,7 @@ pub(crate) struct Clock<'a> {
 
 impl<'a> Clock<'a> {
     pub fn new(gpu: &'a Gpu) -> Result<Clock<'a>, crate::diagnostic::Error> {
+        super::watch::tell(super::watch::Step::Opened(&gpu.adapter));
         let timestamps = gpu
             .device
             .features()
@@ -57,18 +58,41 @@ pub(crate) fn timed(
     label: &str,
 ) -> Result<Timed, String> {
     let gpu = clock.gpu;
-    timed_recording(clock, label, |profiler| runner.frame(gpu, inputs, profiler))
+    // What a supervisor reports should the driver die in this frame: the
+    // runner and the passes it submits together.
+    let passes: Vec<&str> = runner
+        .plan()
+        .passes
+        .iter()
+        .map(|pass| pass.name.as_str())
+        .collect();
+    let what = format!("{label} (its passes {})", passes.join(", "));
+    timed_as(clock, label, &what, |profiler| {
+        runner.frame(gpu, inputs, profiler)
+    })
 }
 
 /// Times what `record` submits, as [`timed`] times a runner's frame:
 /// `record` gets the profiler and the label to scope its passes with
 /// (`<label>/<pass>`) when the device has timestamp queries.
+#[cfg(feature = "interpolate")]
 pub(crate) fn timed_recording(
     clock: &mut Clock,
     label: &str,
     record: impl FnOnce(Option<(&mut wgpu_profiler::GpuProfiler, &str)>) -> Result<(), String>,
 ) -> Result<Timed, String> {
+    timed_as(clock, label, label, record)
+}
+
+/// [`timed_recording`], telling the watch it draws `what`.
+fn timed_as(
+    clock: &mut Clock,
+    label: &str,
+    what: &str,
+    record: impl FnOnce(Option<(&mut wgpu_profiler::GpuProfiler, &str)>) -> Result<(), String>,
+) -> Result<Timed, String> {
     let (gpu, profiler, timestamps) = (clock.gpu, &mut clock.profiler, clock.timestamps);
+    super::watch::tell(super::watch::Step::Drawing(what));
     let start = std::time::Instant::now();
     record(timestamps.then_some((&mut *profiler, label)))?;
     if timestamps {
@@ -77,6 +101,9 @@ pub(crate) fn timed_recording(
     gpu.device
         .poll(wgpu::PollType::wait_indefinitely())
         .map_err(|err| err.to_string())?;
+    gpu.fault()
+        .map_err(|fault| format!("while drawing {label}: {fault}"))?;
+    super::watch::tell(super::watch::Step::Idle);
     let wall = start.elapsed().as_secs_f64() * 1e3;
     if !timestamps {
         return Ok((wall, Vec::new(), Vec::new()));

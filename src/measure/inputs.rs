@@ -157,6 +157,7 @@ impl<'a> SceneInputs<'a> {
             })
             .collect::<Result<_, String>>()
             .map_err(fail)?;
+        super::watch::tell(super::watch::Step::Defaulted(&defaulted));
         Ok(SceneInputs {
             textures,
             meshes,

@@ -29,6 +29,7 @@ pub(crate) mod clock;
 pub(crate) mod inputs;
 pub mod metrics;
 pub(crate) mod setup;
+pub mod watch;
 
 use crate::diagnostic::{Diagnostic, Error};
 use crate::runtime::Gpu;

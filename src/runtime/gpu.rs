@@ -1,11 +1,17 @@
 //! A headless wgpu device.
 
+use std::sync::{Arc, Mutex};
+
 /// A headless wgpu device.
 #[derive(Debug)]
 pub struct Gpu {
     pub adapter: wgpu::AdapterInfo,
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
+    /// What went wrong outside an error scope (out of memory, a lost
+    /// device, a command wgpu rejected), kept for [`Gpu::fault`] rather
+    /// than wgpu's default of a panic.
+    faults: Arc<Mutex<Vec<String>>>,
 }
 
 impl Gpu {
@@ -51,12 +57,61 @@ impl Gpu {
             ..wgpu::DeviceDescriptor::default()
         }))
         .map_err(|err| format!("cannot open a device on {}: {err}", adapter.get_info().name))?;
+        let faults = Arc::new(Mutex::new(Vec::new()));
+        let uncaptured = faults.clone();
+        device.on_uncaptured_error(Arc::new(move |err: wgpu::Error| {
+            let fault = match err {
+                wgpu::Error::OutOfMemory { .. } => "the device ran out of memory".to_string(),
+                other => format!("wgpu rejected a command: {other}"),
+            };
+            if let Ok(mut faults) = uncaptured.lock() {
+                faults.push(fault);
+            }
+        }));
+        let lost = faults.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            // Dropping the device at the end of a run loses it too.
+            if reason != wgpu::DeviceLostReason::Destroyed {
+                if let Ok(mut faults) = lost.lock() {
+                    faults.push(format!("the device was lost: {message}"));
+                }
+            }
+        });
         Ok(Some(Gpu {
             adapter: adapter.get_info(),
             device,
             queue,
+            faults,
         }))
     }
+
+    /// The adapter and its driver as one line: `llvmpipe (LLVM 15.0.6,
+    /// 256 bits), llvmpipe Mesa 25.0.7 (LLVM 15.0.6), Vulkan`.
+    pub fn describe(&self) -> String {
+        describe_adapter(&self.adapter)
+    }
+
+    /// The first fault since the device was opened, if any: what the
+    /// driver or wgpu said outside an error scope.
+    pub fn fault(&self) -> Result<(), String> {
+        let faults = self.faults.lock().map_err(|_| "a fault handler panicked".to_string())?;
+        match faults.first() {
+            None => Ok(()),
+            Some(fault) => Err(format!("{fault} on {}", self.describe())),
+        }
+    }
+}
+
+/// An adapter and its driver as one line, for reports and diagnostics.
+pub fn describe_adapter(adapter: &wgpu::AdapterInfo) -> String {
+    let driver = [adapter.driver.as_str(), adapter.driver_info.as_str()]
+        .iter()
+        .filter(|part| !part.is_empty())
+        .copied()
+        .collect::<Vec<_>>()
+        .join(" ");
+    let driver = if driver.is_empty() { "driver unnamed".to_string() } else { driver };
+    format!("{}, {driver}, {:?}", adapter.name, adapter.backend)
 }
 
 /// What `make` creates on `device`, or what wgpu's validation said of it:

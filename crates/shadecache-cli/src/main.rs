@@ -3,13 +3,16 @@
 //! the library's options and calls it.
 //!
 //! Exit codes: 0 success; 1 bad input or refused work (a diagnostic was
-//! printed); 2 internal error (a bug in shadecache).
+//! printed); 2 internal error (a bug in shadecache); 3 the GPU driver
+//! ended or hung the measured run (a diagnostic says what was drawing,
+//! `supervise`).
 
 use std::process::ExitCode;
 
 use clap::Parser;
 
 mod commands;
+mod supervise;
 
 use commands::Command;
 
@@ -59,6 +62,12 @@ fn main() -> ExitCode {
     };
     let color = cli.color.into();
     quiet_headless_wayland();
+    // The commands that draw run in a child that this process watches.
+    if supervise::is_child() {
+        supervise::install_watch();
+    } else if let Some(shader) = cli.command.draws() {
+        return supervise::run_child(shader, color);
+    }
     // naga's parser and lowering recurse over the expression tree; a long
     // chain like `x + x + ... + x` is valid WGSL but deeper than the main
     // thread's stack in an unoptimised build. Run the work on a thread with

@@ -30,6 +30,19 @@ pub enum Command {
     Merge(merge::Args),
 }
 
+impl Command {
+    /// The shader a command draws on the GPU, for the commands that do.
+    pub fn draws(&self) -> Option<&Path> {
+        match self {
+            Command::Profile(args) => Some(&args.shader),
+            Command::Interpolate(args) => Some(&args.shader),
+            Command::Analyze(_) | Command::Rewrite(_) | Command::Scene(_) | Command::Merge(_) => {
+                None
+            }
+        }
+    }
+}
+
 pub fn exec(command: Command, color: Color) -> Result<(), Error> {
     match command {
         Command::Analyze(args) => analyze::exec(args, color),

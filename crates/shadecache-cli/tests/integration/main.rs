@@ -11,6 +11,7 @@ mod corpus_rewrites;
 mod cost;
 mod default_scene;
 mod deferred;
+mod drivers;
 mod errors;
 mod every_frame;
 mod extrapolate;
