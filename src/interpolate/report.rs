@@ -30,6 +30,10 @@ pub struct Report {
     pub scene_description: String,
     /// The adapter the run drew on.
     pub adapter: String,
+    /// Its driver and the driver's version (`llvmpipe Mesa 25.0.7 (LLVM
+    /// 15.0.6)`): a software driver's figures are that driver's.
+    #[serde(default)]
+    pub driver: String,
     /// `gpu-timestamps`, or `cpu` where the device has no timestamp
     /// queries (then times include submission).
     pub timing: String,
@@ -360,7 +364,7 @@ pub fn html(report: &Report) -> String {
         out,
         "<!doctype html><meta charset=utf-8><title>shadecache interpolate: {}</title>\
          <style>body{{font-family:sans-serif;max-width:960px;margin:2em auto}}table{{border-collapse:collapse}}td,th{{padding:2px 8px;border-bottom:1px solid #ddd;text-align:right}}th:first-child,td:first-child{{text-align:left}}img{{image-rendering:pixelated;width:256px}}</style>\
-         <h1>{} on {}</h1><p>{}{}×{}, n = {}, {} interval(s) measured, {} ({}).</p><p><b>Answer:</b> {}</p>",
+         <h1>{} on {}</h1><p>{}{}×{}, n = {}, {} interval(s) measured, {}, {} ({}).</p><p><b>Answer:</b> {}</p>",
         esc(&report.shader),
         esc(&report.shader),
         esc(&report.scene),
@@ -374,6 +378,7 @@ pub fn html(report: &Report) -> String {
         report.frames_per_interval,
         report.intervals,
         esc(&report.adapter),
+        esc(&report.driver),
         esc(&report.timing),
         esc(&report.answer),
     );

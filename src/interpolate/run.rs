@@ -235,7 +235,7 @@ pub(super) fn run(
     if moving_runs.is_some() {
         let count = moving.iter().filter(|m| **m).count();
         notes.push(format!(
-            "half-velocity draws the {count} moving object(s) at each B-frame's time and wipes them out of the earlier I-frame (seed 003 slides 33–47): both count in its B-frame time (--no-moving-objects leaves them to the velocity)"
+            "half-velocity draws the {count} moving object(s) at each B-frame's time and wipes them out of the earlier I-frame (Andreev 2010 slides 33–47): both count in its B-frame time (--no-moving-objects leaves them to the velocity)"
         ));
     }
     let every_frame: Vec<bool> = scene.objects.iter().map(|o| o.every_frame).collect();
@@ -243,7 +243,7 @@ pub(super) fn run(
         let runner = bench::reference(&bench, shader, &plan.reference)?;
         let count = every_frame.iter().filter(|t| **t).count();
         notes.push(format!(
-            "{count} object(s) drawn at every displayed frame (`every_frame`) and left out of the I-frames, depth-tested into each method's frames through the Z-buffer bridge (seed 000 Fig. 4(d)): against the depth the frame was drawn with (image-based: the depth its search chose), or I-frame 0's for the methods that keep none (sample-and-hold, linear blending, half-velocity, the morphs); the bridge and the draw count in every displayed frame's time"
+            "{count} object(s) drawn at every displayed frame (`every_frame`) and left out of the I-frames, depth-tested into each method's frames through the Z-buffer bridge (Yang et al. 2011 Fig. 4(d)): against the depth the frame was drawn with (image-based: the depth its search chose), or I-frame 0's for the methods that keep none (sample-and-hold, linear blending, half-velocity, the morphs); the bridge and the draw count in every displayed frame's time"
         ));
         Some(ThinObjects::new(&gpu, runner).map_err(fail)?)
     } else {
@@ -311,7 +311,7 @@ pub(super) fn run(
         let costs = run.draw_costs(&mut clock, &mut slots[0], &first)?;
         let whole = slots[0].whole_draws(&first);
         notes.push(format!(
-            "--partition: each I-frame is drawn in {n} parts, one per displayed frame, cut from the draws in order by each object's measured cost alone ({}) (seed 000 §7); its I-frame time is the parts' total, and the partitioning adds n − 1 displayed frames of latency to every method",
+            "--partition: each I-frame is drawn in {n} parts, one per displayed frame, cut from the draws in order by each object's measured cost alone ({}) (Yang et al. 2011 §7); its I-frame time is the parts' total, and the partitioning adds n − 1 displayed frames of latency to every method",
             costs
                 .iter()
                 .map(|c| format!("{c:.3} ms"))
@@ -2082,6 +2082,9 @@ impl Schedule<'_> {
             scene: scene_path.display().to_string(),
             scene_description: scene_description.to_string(),
             adapter: format!("{} ({:?})", self.gpu.adapter.name, self.gpu.adapter.backend),
+            driver: format!("{} {}", self.gpu.adapter.driver, self.gpu.adapter.driver_info)
+                .trim()
+                .to_string(),
             timing: if clock.timestamps {
                 "gpu-timestamps"
             } else {

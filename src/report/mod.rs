@@ -317,6 +317,19 @@ pub struct Device {
     pub driver: String,
 }
 
+impl Device {
+    /// The adapter with its driver and version, as the summary and the
+    /// page name it: `llvmpipe (LLVM 15.0.6, 256 bits), llvmpipe Mesa
+    /// 25.0.7 (LLVM 15.0.6)`.
+    pub fn describe(&self) -> String {
+        if self.driver.is_empty() {
+            format!("{}, driver unnamed", self.name)
+        } else {
+            format!("{}, {}", self.name, self.driver)
+        }
+    }
+}
+
 #[derive(Clone, Debug, Serialize, Deserialize)]
 /// The unmodified shader's measured frames.
 pub struct Reference {

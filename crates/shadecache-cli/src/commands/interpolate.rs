@@ -89,13 +89,13 @@ pub struct Args {
     pub no_dual_init: bool,
 
     /// Also start the image-based search from the previous B-frame's
-    /// offsets (latest-frame initialisation, seed 000 eqs. 18–19; off by
+    /// offsets (latest-frame initialisation, Yang et al. 2011 eqs. 18–19; off by
     /// default: measured worse and dearer on the bundled scenes, see
     /// docs/results-interpolation.md).
     #[arg(long)]
     pub latest_init: bool,
 
-    /// Image-based as seed 000 states it: dual and latest-frame
+    /// Image-based as Yang et al. 2011 states it: dual and latest-frame
     /// initialisation, and of two converged starts the smaller residual
     /// (the defaults keep the nearer surface, and leave latest-frame
     /// initialisation off: see docs/results-interpolation.md).
@@ -124,7 +124,7 @@ pub struct Args {
     )]
     pub min_cosine: f32,
 
-    /// Half-velocity without its moving-object handling (seed 003 slides
+    /// Half-velocity without its moving-object handling (Andreev 2010 slides
     /// 33–47): the objects that move are then not drawn at each B-frame's
     /// time for their exact offsets, nor wiped out of the earlier frame
     /// where they have left.
@@ -141,12 +141,12 @@ pub struct Args {
     pub inpaint_delta: u32,
 
     /// Also average each method's frames around every I-frame into a
-    /// motion-blurred frame (seed 000 §9) and compare it with the
+    /// motion-blurred frame (Yang et al. 2011 §9) and compare it with the
     /// reference's; use with a large n (the paper: 10).
     #[arg(long)]
     pub motion_blur: bool,
 
-    /// The morph's grid spacing in pixels (seed 004: 8): a power of two
+    /// The morph's grid spacing in pixels (Didyk et al. 2010: 8): a power of two
     /// that divides the frame's width and height.
     #[arg(long, value_name = "PX", default_value_t = 8)]
     pub grid: u32,
@@ -206,7 +206,7 @@ pub struct Args {
     #[arg(long, alias = "nodes", value_name = "ID")]
     pub node: Option<String>,
 
-    /// Partitioned rendering (seed 000 §7): draw each I-frame in n parts
+    /// Partitioned rendering (Yang et al. 2011 §7): draw each I-frame in n parts
     /// of about equal measured cost, one per displayed frame, so that
     /// every displayed frame costs about the same (at n − 1 frames of
     /// added latency).
@@ -295,7 +295,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     )?;
 
     let mut summary = format!(
-        "{} on {} ({}×{}, n = {}, {} interval(s) measured, {}): reference {:.3} ms, I-frame with flows {:.3} ms\n",
+        "{} on {} ({}×{}, n = {}, {} interval(s) measured, {}, {}): reference {:.3} ms, I-frame with flows {:.3} ms\n",
         report.shader,
         report.scene,
         report.size[0],
@@ -303,6 +303,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         report.frames_per_interval,
         report.intervals,
         report.adapter,
+        report.driver,
         report.reference_ms,
         report.i_frame_ms
     );

@@ -423,7 +423,7 @@ fn summary(report: &report::Report) -> String {
         report.size[1],
         report.frames,
         report.warmup,
-        report.device.name,
+        report.device.describe(),
         report.reference.time_ms,
         report.reference.spread_ms[0],
         report.reference.spread_ms[1]
