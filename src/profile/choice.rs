@@ -88,10 +88,23 @@ impl Report {
         } else {
             fastest(&mut within.iter().copied())
         };
-        let closest = choice
+        let mut closest = choice
             .closest
-            .map(|i| format!(" Closest: {}.", self.measured(&rows[i])))
+            .map(|i| format!(" Closest: {}.", self.how_far(&rows[i], budget)))
             .unwrap_or_default();
+        // Within the budget but slower: the next thing to try is the most
+        // accurate of those reliably faster, with how far it falls short.
+        if !within.is_empty() {
+            let faster_over_budget = (0..rows.len())
+                .filter(faster)
+                .max_by(|&a, &b| budget.metric(&rows[a]).total_cmp(&budget.metric(&rows[b])));
+            if let Some(i) = faster_over_budget {
+                closest.push_str(&format!(
+                    " Faster but over the budget: {}.",
+                    self.how_far(&rows[i], budget)
+                ));
+            }
+        }
         choice.reason = if rows.is_empty() {
             "no configuration could be measured: keep the original shader".into()
         } else if within.is_empty() {
@@ -106,6 +119,30 @@ impl Report {
             )
         };
         choice
+    }
+
+    /// A row in words, with how far it is from an answer: slower than the
+    /// original by how much, short of the budget by how much.
+    fn how_far(&self, row: &ResultRow, budget: Budget) -> String {
+        let mut words = self.measured(row);
+        let mut gaps = Vec::new();
+        if row.speedup_ci[0] <= 1.0 {
+            gaps.push(if row.speedup < 1.0 && row.speedup > 0.0 {
+                format!("{:.1}× slower than the original", 1.0 / row.speedup)
+            } else {
+                "not reliably faster than the original".to_string()
+            });
+        }
+        if !budget.admits(row) {
+            gaps.push(match budget {
+                Budget::Psnr(db) => format!("{:.1} dB short of {budget}", db - row.psnr),
+                Budget::Ssim(ssim) => format!("SSIM {:.4} short of {budget}", ssim - row.ssim),
+            });
+        }
+        if !gaps.is_empty() {
+            words.push_str(&format!(" ({})", gaps.join("; ")));
+        }
+        words
     }
 
     /// A row in words: node, variant, knobs, speed-up with its interval,
@@ -228,6 +265,30 @@ mod tests {
         assert_eq!(choice.result, None);
         assert!(
             choice.reason.contains("beyond this run's noise"),
+            "{}",
+            choice.reason
+        );
+    }
+
+    /// A slow configuration named as closest says how much slower it is,
+    /// and the faster one over the budget is offered beside it with how
+    /// far it falls short: never a bare 0.17×.
+    #[test]
+    fn closest_says_how_far_it_is_from_an_answer() {
+        // Reference 10 ms: 58.8 ms is 0.17×, within SSIM ≥ 0.95; 4 ms is
+        // 2.5×, at SSIM 0.87.
+        let r = report(vec![row(58.8, 45.0, 0.99), row(4.0, 36.6, 0.87)]);
+        let choice = r.choose(Budget::DEFAULT, false);
+        assert_eq!(choice.result, None);
+        assert_eq!(choice.closest, Some(0));
+        assert!(
+            choice.reason.contains("5.9× slower than the original"),
+            "{}",
+            choice.reason
+        );
+        assert!(
+            choice.reason.contains("Faster but over the budget")
+                && choice.reason.contains("SSIM 0.0800 short of SSIM ≥ 0.95"),
             "{}",
             choice.reason
         );
