@@ -45,7 +45,9 @@ fn slot() -> &'static RwLock<Option<Arc<Watch>>> {
 
 /// Installs the process's watch, replacing any other.
 pub fn set_watch(watch: Box<Watch>) {
-    let mut slot = slot().write().unwrap_or_else(|poisoned| poisoned.into_inner());
+    let mut slot = slot()
+        .write()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
     *slot = Some(Arc::from(watch));
 }
 

@@ -94,7 +94,10 @@ impl Gpu {
     /// The first fault since the device was opened, if any: what the
     /// driver or wgpu said outside an error scope.
     pub fn fault(&self) -> Result<(), String> {
-        let faults = self.faults.lock().map_err(|_| "a fault handler panicked".to_string())?;
+        let faults = self
+            .faults
+            .lock()
+            .map_err(|_| "a fault handler panicked".to_string())?;
         match faults.first() {
             None => Ok(()),
             Some(fault) => Err(format!("{fault} on {}", self.describe())),
@@ -110,7 +113,11 @@ pub fn describe_adapter(adapter: &wgpu::AdapterInfo) -> String {
         .copied()
         .collect::<Vec<_>>()
         .join(" ");
-    let driver = if driver.is_empty() { "driver unnamed".to_string() } else { driver };
+    let driver = if driver.is_empty() {
+        "driver unnamed".to_string()
+    } else {
+        driver
+    };
     format!("{}, {driver}, {:?}", adapter.name, adapter.backend)
 }
 

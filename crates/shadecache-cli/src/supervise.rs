@@ -315,7 +315,10 @@ fn report(diagnostic: &Diagnostic, color: Color) {
 }
 
 fn internal(message: &str, color: Color) -> ExitCode {
-    report(&Diagnostic::error(format!("internal error: {message}")), color);
+    report(
+        &Diagnostic::error(format!("internal error: {message}")),
+        color,
+    );
     ExitCode::from(2)
 }
 

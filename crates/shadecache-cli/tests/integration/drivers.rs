@@ -21,28 +21,32 @@ fn shadecache_with(env: &[(&str, &str)], args: &[&str]) -> Output {
     command.output().expect("the shadecache binary runs")
 }
 
+/// `profile SHADER --nodes top:1 --quiet --out OUT EXTRA...`.
+fn profile(shader: &str, out: &std::path::Path, extra: &[&str]) -> Vec<String> {
+    ["profile", shader, "--nodes", "top:1", "--quiet", "--out"]
+        .iter()
+        .map(|s| s.to_string())
+        .chain([out.display().to_string()])
+        .chain(extra.iter().map(|s| s.to_string()))
+        .collect()
+}
+
 /// The smallest profile: one node, one variant, one frame.
 fn tiny_profile(shader: &str, out: &std::path::Path) -> Vec<String> {
-    [
-        "profile",
+    profile(
         shader,
-        "--size",
-        "16x16",
-        "--frames",
-        "1",
-        "--warmup",
-        "0",
-        "--nodes",
-        "top:1",
-        "--variant",
-        "one-pass",
-        "--quiet",
-        "--out",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .chain([out.display().to_string()])
-    .collect()
+        out,
+        &[
+            "--size",
+            "16x16",
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--variant",
+            "one-pass",
+        ],
+    )
 }
 
 fn args(list: &[String]) -> Vec<&str> {
@@ -136,23 +140,20 @@ fn lavapipe_22_reproducer_profiles() {
     let out = tempfile::tempdir().unwrap();
     let output = shadecache_with(
         &[],
-        &[
-            "profile",
+        &args(&profile(
             "tests/drivers/lavapipe-22.3.6-crash.wgsl",
-            "--size",
-            "8x8",
-            "--frames",
-            "1",
-            "--warmup",
-            "0",
-            "--nodes",
-            "top:1",
-            "--variant",
-            "two-pass",
-            "--quiet",
-            "--out",
-            &out.path().display().to_string(),
-        ],
+            out.path(),
+            &[
+                "--size",
+                "8x8",
+                "--frames",
+                "1",
+                "--warmup",
+                "0",
+                "--variant",
+                "two-pass",
+            ],
+        )),
     );
     assert!(output.status.success(), "{}", stderr(&output));
     assert!(out.path().join("report.json").is_file());
@@ -162,13 +163,7 @@ fn lavapipe_22_reproducer_profiles() {
 /// copy (`cargo metadata`, offline: the build has fetched it).
 fn package_dir(name: &str) -> PathBuf {
     let output = Command::new(env!("CARGO"))
-        .args([
-            "metadata",
-            "--format-version",
-            "1",
-            "--locked",
-            "--offline",
-        ])
+        .args(["metadata", "--format-version", "1", "--locked", "--offline"])
         .current_dir(root())
         .output()
         .expect("cargo runs");
@@ -194,33 +189,57 @@ fn bevy_pbr_profiles() {
     let Some(_gpu) = gpu() else { return };
     let example = package_dir("naga_oil").join("examples/bevy_pbr_wgsl");
     let out = tempfile::tempdir().unwrap();
+    let import_path = example.display().to_string();
     let output = shadecache_with(
         &[],
-        &[
-            "profile",
+        &args(&profile(
             &example.join("pbr.wgsl").display().to_string(),
-            "--import-path",
-            &example.display().to_string(),
-            "--def",
-            "VERTEX_UVS",
-            "--size",
-            "64x64",
-            "--frames",
-            "4",
-            "--nodes",
-            "top:1",
-            "--quiet",
-            "--out",
-            &out.path().display().to_string(),
-        ],
+            out.path(),
+            &[
+                "--import-path",
+                &import_path,
+                "--def",
+                "VERTEX_UVS",
+                "--size",
+                "64x64",
+                "--frames",
+                "4",
+            ],
+        )),
     );
     assert!(output.status.success(), "{}", stderr(&output));
-    let report: Value =
-        serde_json::from_slice(&std::fs::read(out.path().join("report.json")).unwrap()).unwrap();
+    let report = report_json(out.path());
     assert!(
         !report["results"].as_array().unwrap().is_empty(),
         "no configuration measured: {report}"
     );
+}
+
+/// report.json of a report folder.
+fn report_json(out: &std::path::Path) -> Value {
+    serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap()
+}
+
+/// A run's summary line and its page name `version`; its report.json's
+/// `pointer` field contains it.
+fn names_the_driver(output: &Output, out: &std::path::Path, pointer: &str, version: &str) {
+    assert!(output.status.success(), "{}", stderr(output));
+    let first = stdout(output)
+        .lines()
+        .next()
+        .unwrap_or_default()
+        .to_string();
+    assert!(first.contains(version), "{first}");
+    let driver = report_json(out)
+        .pointer(pointer)
+        .cloned()
+        .unwrap_or_default();
+    assert!(
+        driver.as_str().unwrap_or_default().contains(version),
+        "{driver}"
+    );
+    let page = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(page.contains(version), "the page does not name {version}");
 }
 
 /// A figure belongs to its driver: `profile`'s and `interpolate`'s
@@ -237,18 +256,7 @@ fn reports_name_the_driver_version() {
         &[],
         &args(&tiny_profile("corpus/noise_marble.wgsl", out.path())),
     );
-    assert!(output.status.success(), "{}", stderr(&output));
-    let first = stdout(&output).lines().next().unwrap_or_default().to_string();
-    assert!(first.contains(&version), "{first}");
-    let report: Value =
-        serde_json::from_slice(&std::fs::read(out.path().join("report.json")).unwrap()).unwrap();
-    assert!(
-        report["device"]["driver"].as_str().unwrap().contains(&version),
-        "{}",
-        report["device"]
-    );
-    let page = std::fs::read_to_string(out.path().join("report.html")).unwrap();
-    assert!(page.contains(&version));
+    names_the_driver(&output, out.path(), "/device/driver", &version);
 
     let out = tempfile::tempdir().unwrap();
     let output = shadecache_with(
@@ -269,16 +277,5 @@ fn reports_name_the_driver_version() {
             &out.path().display().to_string(),
         ],
     );
-    assert!(output.status.success(), "{}", stderr(&output));
-    let first = stdout(&output).lines().next().unwrap_or_default().to_string();
-    assert!(first.contains(&version), "{first}");
-    let report: Value =
-        serde_json::from_slice(&std::fs::read(out.path().join("report.json")).unwrap()).unwrap();
-    assert!(
-        report["driver"].as_str().unwrap().contains(&version),
-        "{}",
-        report["driver"]
-    );
-    let page = std::fs::read_to_string(out.path().join("report.html")).unwrap();
-    assert!(page.contains(&version));
+    names_the_driver(&output, out.path(), "/driver", &version);
 }
