@@ -225,6 +225,28 @@ fn build_script_example_builds_and_runs() {
     assert!(stdout.contains("last frame's `frame`"), "{stdout}");
 }
 
+/// The names of the packages `cargo tree ARGS` lists from the root,
+/// offline and locked.
+fn cargo_tree(args: &[&str]) -> std::collections::BTreeSet<String> {
+    let output = Command::new(env!("CARGO"))
+        .args(["tree", "--offline", "--locked"])
+        .args(["--prefix", "none", "--format", "{p}"])
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("cargo runs");
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    // "name vX.Y.Z (...)" per line: the names.
+    String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .filter_map(|line| line.split_whitespace().next().map(str::to_owned))
+        .collect()
+}
+
 /// What a build script compiles: the library's default features (read,
 /// analyse, rewrite, write back) bring naga and naga_oil and nothing that
 /// runs a GPU or serves only the command line; the `profile` feature
@@ -232,31 +254,9 @@ fn build_script_example_builds_and_runs() {
 #[test]
 fn build_script_feature_set_has_no_gpu_dependencies() {
     let tree = |features: &[&str]| {
-        let output = Command::new(env!("CARGO"))
-            .args([
-                "tree",
-                "--offline",
-                "--locked",
-                "-p",
-                "shadecache",
-                "-e",
-                "normal",
-            ])
-            .args(["--prefix", "none", "--format", "{p}"])
-            .args(features)
-            .current_dir(root())
-            .output()
-            .expect("cargo runs");
-        assert!(
-            output.status.success(),
-            "{}",
-            String::from_utf8_lossy(&output.stderr)
-        );
-        // "name vX.Y.Z (...)" per line: the names.
-        String::from_utf8_lossy(&output.stdout)
-            .lines()
-            .filter_map(|line| line.split_whitespace().next().map(str::to_owned))
-            .collect::<std::collections::BTreeSet<String>>()
+        let mut args = vec!["-p", "shadecache", "-e", "normal"];
+        args.extend(features);
+        cargo_tree(&args)
     };
     let lean = tree(&["--no-default-features"]);
     assert_eq!(
@@ -287,4 +287,34 @@ fn build_script_feature_set_has_no_gpu_dependencies() {
     }
     let full = tree(&["--features", "profile"]);
     assert!(full.contains("wgpu") && full.contains("image"), "{full:?}");
+}
+
+/// The packages `cargo build`, `cargo run` and `cargo test` compile at the
+/// workspace root (its default members, dev-dependencies and build
+/// scripts included): the toolchain, its command and the crates
+/// applications link, and nothing of Bevy, which compiles only when its
+/// crates are named (`-p shadecache-bevy`, or `--workspace`).
+#[test]
+fn default_members_compile_no_bevy() {
+    let packages = |selection: &[&str]| {
+        let mut args = vec!["-e", "normal,build,dev"];
+        args.extend(selection);
+        cargo_tree(&args)
+    };
+    let default = packages(&[]);
+    for member in [
+        "shadecache",
+        "shadecache-cli",
+        "shadecache-host",
+        "shadecache-plan",
+    ] {
+        assert!(default.contains(member), "{member} not built: {default:?}");
+    }
+    let bevy: Vec<&String> = default
+        .iter()
+        .filter(|name| name.starts_with("bevy") || name.starts_with("shadecache-bevy"))
+        .collect();
+    assert!(bevy.is_empty(), "the default members compile {bevy:?}");
+    // The whole workspace does compile Bevy: the check can fail.
+    assert!(packages(&["--workspace"]).contains("bevy"));
 }
