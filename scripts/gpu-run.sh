@@ -17,13 +17,17 @@
 #       table under docs/runs/ remains)
 #
 # What it runs, in order (each a command of README.md or docs/):
-#   1. README's profile (the marble sphere);
+#   1. README's two profiles: the environment map (its first command,
+#      which pays) and the marble sphere (its second, which does not);
 #   2. docs/results.md's headline: the profile at 256² and 512²;
-#   3. seed 002 fig. 8 at 1024×768: one-, two-, three-pass and deferred
+#   2b. docs/results.md's upsampling table (Herzog et al. 2010): every
+#      lowres reconstruction beside two-, three-pass and deferred, on the
+#      environment map at 256² and the marble at 256² and 512²;
+#   3. Sitthi-amorn et al. 2008 fig. 8 at 1024×768: one-, two-, three-pass and deferred
 #      for nodes spanning the marble's P/T range (one octave, the partial
 #      octave sums, the turbulence's marble, the albedo, the lit colour),
 #      Δn = 32, k = 4 (the paper's setting);
-#   4. seed 002 fig. 9 at 1024×768: Δn ∈ {8, 16, 32, 64} × k ∈ {1, 2, 4}
+#   4. Sitthi-amorn et al. 2008 fig. 9 at 1024×768: Δn ∈ {8, 16, 32, 64} × k ∈ {1, 2, 4}
 #      for every variant, with the paper's kind of node (two octaves of
 #      noise, object-space: `s2`) and with the lit colour;
 #   5. `interpolate` on every bundled interpolation scene at 256².
@@ -153,9 +157,16 @@ if [ -n "${GPU_RUN_REPRODUCTION:-}" ]; then
   exit 0
 fi
 
+envmap_sphere=(corpus/envmap_gauss.wgsl --scene corpus/scenes/envmap_sphere.toml)
+run readme-first profile "${envmap_sphere[@]}" --max-error psnr:35 "${frames[@]}"
 run readme-profile profile "${marble[@]}" "${frames[@]}"
 run results-256 profile "${marble[@]}" --size "$small" "${frames[@]}"
 run results-512 profile "${marble[@]}" --size "$mid" "${frames[@]}"
+upsampling=(--variant two-pass,three-pass,deferred,lowres
+  --lowres-reconstruction nearest,bilinear,spatial,temporal,spatio-temporal --nodes top:1)
+run upsampling-envmap-256 profile "${envmap_sphere[@]}" --size "$small" "${frames[@]}" "${upsampling[@]}"
+run upsampling-marble-256 profile "${marble[@]}" --size "$small" "${frames[@]}" "${upsampling[@]}"
+run upsampling-marble-512 profile "${marble[@]}" --size "$mid" "${frames[@]}" "${upsampling[@]}"
 run fig8 profile "${marble[@]}" --size "$big" "${frames[@]}" --nodes "$fig8_nodes" \
   --variant one-pass,two-pass,three-pass,deferred --refresh-period 32 --refresh-quad 4
 run fig9 profile "${marble[@]}" --size "$big" "${frames[@]}" --nodes "$two_octaves,$lit" \

@@ -31,17 +31,18 @@ function profileTable(report) {
       (pt[a.node] ?? 0) - (pt[b.node] ?? 0) ||
       a.variant.localeCompare(b.variant) ||
       a.refresh_period - b.refresh_period ||
-      a.refresh_quad - b.refresh_quad,
+      a.refresh_quad - b.refresh_quad ||
+      String(a.reconstruction).localeCompare(String(b.reconstruction)),
   );
   const lines = [
     `Reference ${fixed(report.reference.time_ms, 3)} ms; ${report.size[0]}×${report.size[1]}, ${report.frames} frames after ${report.warmup} of warm-up; timing: ${report.timing}.`,
     "",
-    "| node | P/T (measured) | variant | Δn | k | time ms | speed-up [95% interval] | PSNR dB (worst frame) | SSIM |",
-    "|---|---|---|---|---|---|---|---|---|",
+    "| node | P/T (measured) | variant | read-back | Δn | k | time ms | speed-up [95% interval] | PSNR dB (worst frame) | SSIM |",
+    "|---|---|---|---|---|---|---|---|---|---|",
   ];
   for (const r of rows) {
     lines.push(
-      `| \`${r.node}\` | ${fixed(pt[r.node], 3)} | ${r.variant} | ${r.refresh_period} | ${r.refresh_quad} | ${fixed(r.time_ms, 3)} | ${fixed(r.speedup, 2)}× ${interval(r.speedup_ci)} | ${fixed(r.psnr, 1)} (${fixed(r.worst_psnr, 1)}) | ${fixed(r.ssim, 4)} |`,
+      `| \`${r.node}\` | ${fixed(pt[r.node], 3)} | ${r.variant} | ${r.reconstruction} | ${r.refresh_period} | ${r.refresh_quad} | ${fixed(r.time_ms, 3)} | ${fixed(r.speedup, 2)}× ${interval(r.speedup_ci)} | ${fixed(r.psnr, 1)} (${fixed(r.worst_psnr, 1)}) | ${fixed(r.ssim, 4)} |`,
     );
   }
   return lines;
@@ -75,7 +76,13 @@ const device = reports.find((r) => r.report.device)?.report.device;
 const adapter = device ? `${device.name} (${device.backend})` : reports[0].report.adapter;
 const driver = device ? device.driver : "—";
 const date = new Date().toISOString().slice(0, 16).replace(":", "") + "Z";
-const slug = (device?.name ?? "adapter").toLowerCase().replace(/[^a-z0-9]+/g, "-").replace(/^-|-$/g, "");
+// The file names the adapter and, where the driver says it, its Mesa
+// version: one adapter's figures differ from driver to driver.
+const mesa = /Mesa (\d+(?:\.\d+)*)/.exec(driver ?? "")?.[1];
+const slug = (mesa && /llvmpipe/i.test(device?.name ?? "") ? `llvmpipe mesa ${mesa}` : `${device?.name ?? "adapter"}${mesa ? ` mesa ${mesa}` : ""}`)
+  .toLowerCase()
+  .replace(/[^a-z0-9]+/g, "-")
+  .replace(/^-|-$/g, "");
 
 const out = [
   `# GPU run: ${adapter}${quick ? " (smoke run)" : ""}`,
