@@ -72,7 +72,7 @@ fn header(report: &Report) -> String {
     if let Some(u) = &report.upsampling {
         let _ = write!(
             page,
-            "<p>Lowres (seed 001): one pixel of each {s}×{s} window shaded per frame (Δn = {}, k = {s} in the tables), σn = {}, σz = {} of the depth, a = {}. In its maps blue is a pixel shaded this frame, green one whose history was reused, red and orange one whose history was missing.</p>",
+            "<p>Lowres (Herzog et al. 2010): one pixel of each {s}×{s} window shaded per frame (Δn = {}, k = {s} in the tables), σn = {}, σz = {} of the depth, a = {}. In its maps blue is a pixel shaded this frame, green one whose history was reused, red and orange one whose history was missing.</p>",
             u.factor * u.factor,
             u.sigma_normal,
             u.sigma_depth,

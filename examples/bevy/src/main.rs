@@ -2,13 +2,13 @@
 //!
 //! ```sh
 //! # Each frame through the cache and as Bevy draws it, compared:
-//! cargo run --ignore-rust-version -p shadecache-bevy-example -- compare --size 256 --frames 60
+//! cargo run -p shadecache-bevy-example -- compare --size 256 --frames 60
 //! # The same in linear HDR, PSNR as `shadecache profile` measures it:
-//! cargo run --ignore-rust-version -p shadecache-bevy-example -- compare --size 256 --frames 60 --linear
+//! cargo run -p shadecache-bevy-example -- compare --size 256 --frames 60 --linear
 //! # The material's GPU time, cached and as Bevy draws it:
-//! cargo run --release --ignore-rust-version -p shadecache-bevy-example -- measure --size 512 --frames 100
+//! cargo run --release -p shadecache-bevy-example -- measure --size 512 --frames 100
 //! # In a window (space toggles the cache):
-//! cargo run --ignore-rust-version -p shadecache-bevy-example --features window -- window
+//! cargo run -p shadecache-bevy-example --features window -- window
 //! ```
 
 use shadecache_bevy_example::{measure, run_headless, Headless, Measure};

@@ -106,18 +106,18 @@ pub enum VariantArg {
     Deferred,
     /// The payload shaded at 1/s × 1/s of the pixels on a jittered
     /// lattice, rebuilt at full resolution from the samples and the
-    /// reprojected history (seed 001).
+    /// reprojected history (Herzog et al. 2010).
     Lowres,
     All,
 }
 
-/// The lowres variant's knobs (seed 001); the paper's values by default.
+/// The lowres variant's knobs (Herzog et al. 2010); the paper's values by default.
 #[derive(Clone, Debug, clap::Args)]
 pub struct UpsamplingArgs {
     /// s: lowres shades one pixel of each S×S window per frame (2 or 4).
     #[arg(long, value_name = "S", default_value_t = rewrite::DEFAULT_UPSAMPLING.factor)]
     pub upsample_factor: u32,
-    /// σn of lowres's normal weight (eq. 2 of seed 001).
+    /// σn of lowres's normal weight (eq. 2 of Herzog et al. 2010).
     #[arg(long, value_name = "SIGMA", default_value_t = rewrite::DEFAULT_UPSAMPLING.sigma_normal)]
     pub sigma_normal: f32,
     /// σz of lowres's depth weight, relative to the depth.
