@@ -53,7 +53,7 @@ impl Bench<'_> {
             variant => format!("{variant} of node {} `{}`", plan.node.id, plan.node.text),
         };
         super::watch::tell(super::watch::Step::Building(&what));
-        Runner::new(
+        let runner = Runner::new(
             self.gpu,
             plan,
             |name| sources.get(name).cloned(),
@@ -67,7 +67,9 @@ impl Bench<'_> {
                 },
                 ..options
             },
-        )
+        );
+        super::watch::tell(super::watch::Step::Idle);
+        runner
     }
 }
 

@@ -7,7 +7,7 @@
 //! [`std::panic::set_hook`], the watch is one per process: the command
 //! installs one that keeps the last step where a supervising process can
 //! read it after a crash (`shadecache-cli`'s `supervise`); a library user
-//! installs nothing and pays one atomic load per frame.
+//! installs nothing and pays an uncontended lock read per step.
 //!
 //! The steps, in the order a run takes them: the device is opened
 //! ([`Step::Opened`]), the scene's inputs are known with what they left at

@@ -8,9 +8,9 @@ pub struct Gpu {
     pub adapter: wgpu::AdapterInfo,
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
-    /// What went wrong outside an error scope (out of memory, a lost
-    /// device, a command wgpu rejected), kept for [`Gpu::fault`] rather
-    /// than wgpu's default of a panic.
+    /// What the device met outside an error scope that is not a bug of
+    /// ours (out of memory, a driver's internal error, a lost device),
+    /// kept for [`Gpu::fault`] rather than wgpu's default of a panic.
     faults: Arc<Mutex<Vec<String>>>,
 }
 
@@ -62,7 +62,17 @@ impl Gpu {
         device.on_uncaptured_error(Arc::new(move |err: wgpu::Error| {
             let fault = match err {
                 wgpu::Error::OutOfMemory { .. } => "the device ran out of memory".to_string(),
-                other => format!("wgpu rejected a command: {other}"),
+                wgpu::Error::Internal { description, .. } => {
+                    format!("the driver failed: {description}")
+                }
+                // A command wgpu rejects outside an error scope is a bug
+                // of ours, as it is to wgpu's own default handler, which
+                // panics: so does this one (the command reports it as an
+                // internal error).
+                #[allow(clippy::panic)]
+                wgpu::Error::Validation { description, .. } => {
+                    panic!("wgpu rejected a command: {description}")
+                }
             };
             if let Ok(mut faults) = uncaptured.lock() {
                 faults.push(fault);

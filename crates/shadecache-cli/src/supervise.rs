@@ -59,6 +59,8 @@ struct Breadcrumb {
     defaulted_count: usize,
     /// `building`, `drawing` or `idle`.
     step: String,
+    /// The step in words (`drawing a frame of reference (its passes
+    /// pass1)`), or for `idle` the last busy one.
     what: String,
     /// When the step began, ms since the Unix epoch.
     since_ms: u128,
@@ -101,11 +103,11 @@ pub fn install_watch() {
             }
             Step::Building(what) => {
                 crumb.step = "building".into();
-                crumb.what = what.to_string();
+                crumb.what = format!("making the pipelines of {what}");
             }
             Step::Drawing(what) => {
                 crumb.step = "drawing".into();
-                crumb.what = what.to_string();
+                crumb.what = format!("drawing a frame of {what}");
             }
             Step::Idle => crumb.step = "idle".into(),
         }
@@ -250,10 +252,9 @@ fn signal_name(signal: i32) -> String {
 /// What the step was, in words.
 fn step_words(crumb: &Breadcrumb) -> String {
     match crumb.step.as_str() {
-        "building" => format!("making the pipelines of {}", crumb.what),
-        "drawing" => format!("drawing a frame of {}", crumb.what),
+        "building" | "drawing" => crumb.what.clone(),
         "idle" if !crumb.what.is_empty() => {
-            format!("between GPU steps, after a frame of {}", crumb.what)
+            format!("between GPU steps, after {}", crumb.what)
         }
         _ => "before the first GPU step".into(),
     }
@@ -332,7 +333,7 @@ mod tests {
             defaulted: vec!["`view_proj`: the camera's".into()],
             defaulted_count: 12,
             step: step.into(),
-            what: what.into(),
+            what: format!("drawing a frame of {what}"),
             since_ms: 0,
         }
     }
