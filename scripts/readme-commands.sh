@@ -32,9 +32,12 @@ for file in "${files[@]}"; do
     }' "$file")
   prelude=""
   for command in "${commands[@]}"; do
+    if [[ "$command" =~ ^[A-Za-z_][A-Za-z0-9_]*= ]]; then
+      prelude+="$command; "
+      continue
+    fi
     case "$command" in
       cargo\ run*|shadecache\ *) ;;
-      [A-Za-z_]*=*) prelude+="$command; "; continue ;;
       *) continue ;;
     esac
     if [[ "$command" == shadecache\ * ]] && [ ! -x "$bin_dir/shadecache" ]; then
