@@ -50,6 +50,28 @@ pub const DRIVER_FAILED: u8 = 3;
 
 const DEFAULT_TIMEOUT: Duration = Duration::from_secs(120);
 
+/// Where the child's measured run is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+enum Phase {
+    /// No GPU step yet.
+    #[default]
+    Starting,
+    /// Making pipelines: the driver compiles the shaders.
+    Building,
+    /// A frame submitted and waited for.
+    Drawing,
+    /// Between GPU steps (comparing frames, writing the report).
+    Idle,
+}
+
+impl Phase {
+    /// Whether the GPU has the step: only then can it hang.
+    fn busy(self) -> bool {
+        matches!(self, Phase::Building | Phase::Drawing)
+    }
+}
+
 /// What the child last told: the file's content.
 #[derive(Debug, Default, Serialize, Deserialize)]
 struct Breadcrumb {
@@ -57,8 +79,7 @@ struct Breadcrumb {
     /// What the scene left at a neutral value (the first few).
     defaulted: Vec<String>,
     defaulted_count: usize,
-    /// `building`, `drawing` or `idle`.
-    step: String,
+    step: Phase,
     /// The step in words (`drawing a frame of reference (its passes
     /// pass1)`), or for `idle` the last busy one.
     what: String,
@@ -102,14 +123,14 @@ pub fn install_watch() {
                 return;
             }
             Step::Building(what) => {
-                crumb.step = "building".into();
+                crumb.step = Phase::Building;
                 crumb.what = format!("making the pipelines of {what}");
             }
             Step::Drawing(what) => {
-                crumb.step = "drawing".into();
+                crumb.step = Phase::Drawing;
                 crumb.what = format!("drawing a frame of {what}");
             }
-            Step::Idle => crumb.step = "idle".into(),
+            Step::Idle => crumb.step = Phase::Idle,
         }
         crumb.since_ms = now_ms();
         if let Ok(text) = serde_json::to_vec(&*crumb) {
@@ -166,9 +187,8 @@ pub fn run_child(shader: &Path, color: Color) -> ExitCode {
         }
         std::thread::sleep(poll_interval(started.elapsed()));
         if let Some(crumb) = read(&file) {
-            let busy = crumb.step == "drawing" || crumb.step == "building";
             let elapsed = now_ms().saturating_sub(crumb.since_ms);
-            if busy && elapsed > timeout.as_millis() {
+            if crumb.step.busy() && elapsed > timeout.as_millis() {
                 let _ = child.kill();
                 let _ = child.wait();
                 break Ended::TimedOut(crumb, timeout);
@@ -251,12 +271,12 @@ fn signal_name(signal: i32) -> String {
 
 /// What the step was, in words.
 fn step_words(crumb: &Breadcrumb) -> String {
-    match crumb.step.as_str() {
-        "building" | "drawing" => crumb.what.clone(),
-        "idle" if !crumb.what.is_empty() => {
+    match crumb.step {
+        Phase::Building | Phase::Drawing => crumb.what.clone(),
+        Phase::Idle if !crumb.what.is_empty() => {
             format!("between GPU steps, after {}", crumb.what)
         }
-        _ => "before the first GPU step".into(),
+        Phase::Idle | Phase::Starting => "before the first GPU step".into(),
     }
 }
 
@@ -327,12 +347,12 @@ fn internal(message: &str, color: Color) -> ExitCode {
 mod tests {
     use super::*;
 
-    fn crumb(step: &str, what: &str) -> Breadcrumb {
+    fn crumb(step: Phase, what: &str) -> Breadcrumb {
         Breadcrumb {
             adapter: Some("llvmpipe (LLVM 15.0.6, 256 bits), llvmpipe Mesa 22.3.6, Vulkan".into()),
             defaulted: vec!["`view_proj`: the camera's".into()],
             defaulted_count: 12,
-            step: step.into(),
+            step,
             what: format!("drawing a frame of {what}"),
             since_ms: 0,
         }
@@ -347,7 +367,7 @@ mod tests {
             &ended_by(
                 &signal_name(11),
                 Path::new("pbr.wgsl"),
-                Some(&crumb("drawing", "reference")),
+                Some(&crumb(Phase::Drawing, "reference")),
             ),
         );
         for part in [
@@ -360,6 +380,31 @@ mod tests {
         ] {
             assert!(text.contains(part), "{part} not in {text}");
         }
+    }
+
+    /// The file the parent reads is the one the child writes, and only a
+    /// step the GPU has can run past the bound: a child comparing frames
+    /// on the CPU for minutes is not a hung driver.
+    #[test]
+    fn only_a_gpu_step_can_time_out() {
+        for phase in [
+            Phase::Starting,
+            Phase::Building,
+            Phase::Drawing,
+            Phase::Idle,
+        ] {
+            let text = serde_json::to_vec(&crumb(phase, "reference")).unwrap();
+            let read: Breadcrumb = serde_json::from_slice(&text).unwrap();
+            assert_eq!(read.step, phase);
+            assert_eq!(
+                read.step.busy(),
+                matches!(phase, Phase::Building | Phase::Drawing)
+            );
+        }
+        assert_eq!(
+            step_words(&crumb(Phase::Idle, "reference")),
+            "between GPU steps, after drawing a frame of reference"
+        );
     }
 
     #[test]
