@@ -2082,12 +2082,7 @@ impl Schedule<'_> {
             scene: scene_path.display().to_string(),
             scene_description: scene_description.to_string(),
             adapter: format!("{} ({:?})", self.gpu.adapter.name, self.gpu.adapter.backend),
-            driver: format!(
-                "{} {}",
-                self.gpu.adapter.driver, self.gpu.adapter.driver_info
-            )
-            .trim()
-            .to_string(),
+            driver: crate::runtime::driver_line(&self.gpu.adapter),
             timing: if clock.timestamps {
                 "gpu-timestamps"
             } else {

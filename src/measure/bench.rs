@@ -48,11 +48,13 @@ impl Bench<'_> {
         sources: &HashMap<String, String>,
         options: RunOptions,
     ) -> Result<Runner, String> {
-        let what = match plan.variant {
-            crate::plan::Variant::Reference => "the reference".to_string(),
-            variant => format!("{variant} of node {} `{}`", plan.node.id, plan.node.text),
-        };
-        super::watch::tell(super::watch::Step::Building(&what));
+        if super::watch::watching() {
+            let what = match plan.variant {
+                crate::plan::Variant::Reference => "the reference".to_string(),
+                variant => format!("{variant} of node {} `{}`", plan.node.id, plan.node.text),
+            };
+            super::watch::tell(super::watch::Step::Building(&what));
+        }
         let runner = Runner::new(
             self.gpu,
             plan,

@@ -59,14 +59,19 @@ pub(crate) fn timed(
 ) -> Result<Timed, String> {
     let gpu = clock.gpu;
     // What a supervisor reports should the driver die in this frame: the
-    // runner and the passes it submits together.
-    let passes: Vec<&str> = runner
-        .plan()
-        .passes
-        .iter()
-        .map(|pass| pass.name.as_str())
-        .collect();
-    let what = format!("{label} (its passes {})", passes.join(", "));
+    // runner and the passes it submits together (made only when watched:
+    // this runs every frame).
+    let what = if super::watch::watching() {
+        let passes: Vec<&str> = runner
+            .plan()
+            .passes
+            .iter()
+            .map(|pass| pass.name.as_str())
+            .collect();
+        format!("{label} (its passes {})", passes.join(", "))
+    } else {
+        String::new()
+    };
     timed_as(clock, label, &what, |profiler| {
         runner.frame(gpu, inputs, profiler)
     })

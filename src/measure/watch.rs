@@ -51,6 +51,15 @@ pub fn set_watch(watch: Box<Watch>) {
     *slot = Some(Arc::from(watch));
 }
 
+/// Whether a watch is installed: what a step's words cost to make need
+/// not be paid otherwise.
+pub(crate) fn watching() -> bool {
+    slot()
+        .read()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+        .is_some()
+}
+
 /// Tells the watch, if there is one, of `step`.
 pub(crate) fn tell(step: Step) {
     let watch = slot()

@@ -581,9 +581,7 @@ impl RunContext<'_> {
             device: Device {
                 name: adapter.name.clone(),
                 backend: format!("{:?}", adapter.backend),
-                driver: format!("{} {}", adapter.driver, adapter.driver_info)
-                    .trim()
-                    .to_string(),
+                driver: crate::runtime::driver_line(adapter),
             },
             timing: if self.clock.timestamps {
                 "gpu-timestamps"

@@ -8,10 +8,11 @@ pub struct Gpu {
     pub adapter: wgpu::AdapterInfo,
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
-    /// What the device met outside an error scope that is not a bug of
-    /// ours (out of memory, a driver's internal error, a lost device),
-    /// kept for [`Gpu::fault`] rather than wgpu's default of a panic.
-    faults: Arc<Mutex<Vec<String>>>,
+    /// The first thing the device met outside an error scope that is not
+    /// a bug of ours (out of memory, a driver's internal error, a lost
+    /// device), kept for [`Gpu::fault`] rather than wgpu's default of a
+    /// panic.
+    fault: Arc<Mutex<Option<String>>>,
 }
 
 impl Gpu {
@@ -57,8 +58,15 @@ impl Gpu {
             ..wgpu::DeviceDescriptor::default()
         }))
         .map_err(|err| format!("cannot open a device on {}: {err}", adapter.get_info().name))?;
-        let faults = Arc::new(Mutex::new(Vec::new()));
-        let uncaptured = faults.clone();
+        let fault: Arc<Mutex<Option<String>>> = Arc::default();
+        // The first fault is the one to report: what follows it is its
+        // consequence.
+        let keep_first = |slot: &Mutex<Option<String>>, fault: String| {
+            if let Ok(mut slot) = slot.lock() {
+                slot.get_or_insert(fault);
+            }
+        };
+        let uncaptured = fault.clone();
         device.on_uncaptured_error(Arc::new(move |err: wgpu::Error| {
             let fault = match err {
                 wgpu::Error::OutOfMemory { .. } => "the device ran out of memory".to_string(),
@@ -74,24 +82,20 @@ impl Gpu {
                     panic!("wgpu rejected a command: {description}")
                 }
             };
-            if let Ok(mut faults) = uncaptured.lock() {
-                faults.push(fault);
-            }
+            keep_first(&uncaptured, fault);
         }));
-        let lost = faults.clone();
+        let lost = fault.clone();
         device.set_device_lost_callback(move |reason, message| {
             // Dropping the device at the end of a run loses it too.
             if reason != wgpu::DeviceLostReason::Destroyed {
-                if let Ok(mut faults) = lost.lock() {
-                    faults.push(format!("the device was lost: {message}"));
-                }
+                keep_first(&lost, format!("the device was lost: {message}"));
             }
         });
         Ok(Some(Gpu {
             adapter: adapter.get_info(),
             device,
             queue,
-            faults,
+            fault,
         }))
     }
 
@@ -104,29 +108,33 @@ impl Gpu {
     /// The first fault since the device was opened, if any: what the
     /// driver or wgpu said outside an error scope.
     pub fn fault(&self) -> Result<(), String> {
-        let faults = self
-            .faults
+        let fault = self
+            .fault
             .lock()
             .map_err(|_| "a fault handler panicked".to_string())?;
-        match faults.first() {
+        match fault.as_ref() {
             None => Ok(()),
             Some(fault) => Err(format!("{fault} on {}", self.describe())),
         }
     }
 }
 
-/// An adapter and its driver as one line, for reports and diagnostics.
+/// An adapter's driver and its version as one line (`llvmpipe Mesa 25.0.7
+/// (LLVM 15.0.6)`), empty where the adapter names neither: what every
+/// report and diagnostic says of the driver.
+pub fn driver_line(adapter: &wgpu::AdapterInfo) -> String {
+    format!("{} {}", adapter.driver, adapter.driver_info)
+        .trim()
+        .to_string()
+}
+
+/// An adapter and its driver as one line, for diagnostics.
 pub fn describe_adapter(adapter: &wgpu::AdapterInfo) -> String {
-    let driver = [adapter.driver.as_str(), adapter.driver_info.as_str()]
-        .iter()
-        .filter(|part| !part.is_empty())
-        .copied()
-        .collect::<Vec<_>>()
-        .join(" ");
+    let driver = driver_line(adapter);
     let driver = if driver.is_empty() {
-        "driver unnamed".to_string()
+        "driver unnamed"
     } else {
-        driver
+        driver.as_str()
     };
     format!("{}, {driver}, {:?}", adapter.name, adapter.backend)
 }

@@ -18,6 +18,6 @@ mod runner;
 mod textures;
 
 pub use frame::{build_passes, PipelineOptions, PlanFrame, RunOptions};
-pub use gpu::{describe_adapter, validated, Gpu};
+pub use gpu::{describe_adapter, driver_line, validated, Gpu};
 pub use runner::{DrawShare, FrameInputs, FramePart, Mesh, ObjectInputs, Runner};
 pub use textures::{read_depth, read_texture, DepthTexels, Texels, DEPTH_MAP_SIZE};
