@@ -6,7 +6,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use crate::util::root;
+use crate::util::{cargo_tree, root};
 
 /// Runs the app with `args`; its stdout.
 fn run_app(args: &[&str], out: &Path) -> String {
@@ -187,22 +187,9 @@ fn host_crate_fixtures_are_what_rewrite_writes() {
 
 /// The crates in `cargo tree -p PACKAGE -e normal EXTRA...`.
 fn tree(package: &str, extra: &[&str]) -> Vec<String> {
-    let output = Command::new(env!("CARGO"))
-        .current_dir(root())
-        .args(["tree", "-p", package, "-e", "normal", "--prefix", "none"])
-        .arg("--locked")
-        .args(extra)
-        .output()
-        .expect("cargo runs");
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    String::from_utf8_lossy(&output.stdout)
-        .lines()
-        .filter_map(|l| l.split(' ').next().map(str::to_string))
-        .collect()
+    let mut args = vec!["-p", package, "-e", "normal"];
+    args.extend(extra);
+    cargo_tree(&args)
 }
 
 /// An application links the host crate without the toolchain: its

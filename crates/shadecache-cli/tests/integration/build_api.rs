@@ -5,7 +5,7 @@ use std::process::Command;
 use shadecache::build::{Build, Nodes};
 use shadecache::rewrite::Variant;
 
-use crate::util::root;
+use crate::util::{cargo_tree, root};
 
 #[test]
 fn build_writes_the_chosen_variants() {
@@ -225,28 +225,6 @@ fn build_script_example_builds_and_runs() {
     assert!(stdout.contains("last frame's `frame`"), "{stdout}");
 }
 
-/// The names of the packages `cargo tree ARGS` lists from the root,
-/// offline and locked.
-fn cargo_tree(args: &[&str]) -> std::collections::BTreeSet<String> {
-    let output = Command::new(env!("CARGO"))
-        .args(["tree", "--offline", "--locked"])
-        .args(["--prefix", "none", "--format", "{p}"])
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("cargo runs");
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    // "name vX.Y.Z (...)" per line: the names.
-    String::from_utf8_lossy(&output.stdout)
-        .lines()
-        .filter_map(|line| line.split_whitespace().next().map(str::to_owned))
-        .collect()
-}
-
 /// What a build script compiles: the library's default features (read,
 /// analyse, rewrite, write back) bring naga and naga_oil and nothing that
 /// runs a GPU or serves only the command line; the `profile` feature
@@ -257,6 +235,8 @@ fn build_script_feature_set_has_no_gpu_dependencies() {
         let mut args = vec!["-p", "shadecache", "-e", "normal"];
         args.extend(features);
         cargo_tree(&args)
+            .into_iter()
+            .collect::<std::collections::BTreeSet<_>>()
     };
     let lean = tree(&["--no-default-features"]);
     assert_eq!(
@@ -300,6 +280,8 @@ fn default_members_compile_no_bevy() {
         let mut args = vec!["-e", "normal,build,dev"];
         args.extend(selection);
         cargo_tree(&args)
+            .into_iter()
+            .collect::<std::collections::BTreeSet<_>>()
     };
     let default = packages(&[]);
     for member in [

@@ -40,6 +40,24 @@ where
         .expect("the shadecache binary runs")
 }
 
+/// The package names `cargo tree ARGS` lists from the root, in its order
+/// (offline and locked: the build has fetched them).
+pub fn cargo_tree(args: &[&str]) -> Vec<String> {
+    let output = Command::new(env!("CARGO"))
+        .args(["tree", "--offline", "--locked"])
+        .args(["--prefix", "none", "--format", "{p}"])
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("cargo runs");
+    assert!(output.status.success(), "{}", stderr(&output));
+    // "name vX.Y.Z (...)" per line: the names.
+    stdout(&output)
+        .lines()
+        .filter_map(|line| line.split_whitespace().next().map(str::to_owned))
+        .collect()
+}
+
 pub fn stdout(output: &Output) -> String {
     String::from_utf8_lossy(&output.stdout).into_owned()
 }
