@@ -50,12 +50,12 @@ use std::ops::Range;
 use naga::{Expression, Handle};
 use serde::Serialize;
 
+pub use crate::proc::name_words;
 pub use calls::CallStep;
 pub(crate) use candidates::type_name;
 pub use candidates::RejectReason;
 pub use entry::{fragment_entry, stage_name};
 pub use id::node_id;
-pub use per_frame::name_words;
 
 use crate::cost::{CostModel, Weights};
 use crate::diagnostic::{Diagnostic, Error};

@@ -48,8 +48,8 @@ pub(super) fn per_frame_slots(name: &str) -> Vec<usize> {
         Some((buffer, member)) => (buffer, Some(member)),
         None => (name, None),
     };
-    let member_words = member.map(name_words).unwrap_or_default();
-    let buffer_word = name_words(buffer).pop();
+    let member_words = member.map(crate::proc::name_words).unwrap_or_default();
+    let buffer_word = crate::proc::name_words(buffer).pop();
     let places = member.is_none() || member_words.iter().any(|w| PLACES.contains(&w.as_str()));
     PER_FRAME_INPUTS
         .iter()
@@ -60,37 +60,6 @@ pub(super) fn per_frame_slots(name: &str) -> Vec<usize> {
         })
         .map(|(slot, _)| slot)
         .collect()
-}
-
-/// The words of a name, lowercase, a plural as its singular:
-/// `sunDirection` gives `sun`, `direction`; `point_lights[0].color` gives
-/// `point`, `light`, `color`.
-pub fn name_words(name: &str) -> Vec<String> {
-    let mut out = vec![String::new()];
-    let mut previous_lower = false;
-    for c in name.chars() {
-        if !c.is_ascii_alphabetic() {
-            out.push(String::new());
-            previous_lower = false;
-            continue;
-        }
-        if c.is_uppercase() && previous_lower {
-            out.push(String::new());
-        }
-        previous_lower = c.is_lowercase();
-        if let Some(last) = out.last_mut() {
-            last.push(c.to_ascii_lowercase());
-        }
-    }
-    out.retain(|w| !w.is_empty());
-    for word in &mut out {
-        // `lights` and `counts`, not `axis`, `radius` or `class`.
-        let singular = ["ss", "is", "us"].iter().all(|end| !word.ends_with(end));
-        if word.len() > 3 && word.ends_with('s') && singular {
-            word.pop();
-        }
-    }
-    out
 }
 
 /// The `buffer.member` (or `buffer`) of a uniform or storage buffer that

@@ -122,7 +122,7 @@ fn vertex_source(module: &Module, fragment: usize) -> Result<(String, Vec<String
 /// The value a generated vertex stage writes into input `name` of WGSL
 /// type `wgsl`, and what it is in words.
 fn feed(name: &str, wgsl: &str) -> (String, &'static str) {
-    let words = crate::analysis::name_words(name);
+    let words = crate::proc::name_words(name);
     let has = |list: &[&str]| words.iter().any(|w| list.contains(&w.as_str()));
     let float = |n: usize| {
         wgsl == if n == 1 {

@@ -444,7 +444,7 @@ fn flow_entry(
     }
     let output = module.types.insert(
         naga::Type {
-            name: Some(format!("{}IFrameOutput", vertex::pascal(&entry.name))),
+            name: Some(format!("{}IFrameOutput", crate::proc::pascal(&entry.name))),
             inner: TypeInner::Struct {
                 members,
                 span: offset,

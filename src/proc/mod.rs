@@ -20,6 +20,7 @@
 pub(crate) mod import;
 pub(crate) mod inline;
 mod kind;
+mod names;
 mod operands;
 mod placement;
 mod reaching;
@@ -27,10 +28,11 @@ pub(crate) mod remap;
 mod stages;
 
 pub use kind::{kind, takes_derivatives, ExpressionKind};
+pub use names::{name_words, pascal};
 pub use operands::{operands, pointer_root, PointerRoot};
 pub use placement::{
-    each_spanned_statement, each_statement, has_effects, layout, CallSite, ExitSite,
-    FunctionLayout, LoopBound, Placement, Store,
+    collect_callees, each_spanned_statement, each_statement, has_effects, layout, CallSite,
+    ExitSite, FunctionLayout, LoopBound, Placement, Store,
 };
 pub use reaching::{reaching_definitions, Definition};
 pub use stages::{

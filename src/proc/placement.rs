@@ -1,4 +1,6 @@
-use naga::{Block, Expression, Handle, Statement};
+use std::collections::BTreeSet;
+
+use naga::{Block, Expression, Function, Handle, Module, Statement};
 
 use super::{const_int, pointer_root, PointerRoot};
 
@@ -398,6 +400,24 @@ pub fn has_effects(module: &naga::Module, function: Handle<naga::Function>) -> b
 /// order.
 pub fn each_statement(block: &Block, visit: &mut impl FnMut(&Statement)) {
     each_spanned_statement(block, &mut |statement, _| visit(statement));
+}
+
+/// The helpers `block` calls, directly or not, callees first; `seen`
+/// holds those already collected.
+pub fn collect_callees(
+    module: &Module,
+    block: &naga::Block,
+    out: &mut Vec<Handle<Function>>,
+    seen: &mut BTreeSet<Handle<Function>>,
+) {
+    each_statement(block, &mut |statement| {
+        if let Statement::Call { function, .. } = *statement {
+            if seen.insert(function) {
+                collect_callees(module, &module.functions[function].body, out, seen);
+                out.push(function);
+            }
+        }
+    });
 }
 
 /// Calls `visit` on every statement of `block` and its span, nested ones

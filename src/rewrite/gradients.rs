@@ -174,7 +174,7 @@ fn gradients_struct(
     }
     Ok(module.types.insert(
         naga::Type {
-            name: Some(format!("{}Gradients", super::vertex::pascal(name))),
+            name: Some(format!("{}Gradients", crate::proc::pascal(name))),
             inner: TypeInner::Struct {
                 members: struct_members,
                 span: offset.div_ceil(16).max(1) * 16,

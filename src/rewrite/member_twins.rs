@@ -159,7 +159,7 @@ fn whole_reads<'m>(
     seen: &mut BTreeSet<Handle<Function>>,
 ) {
     let mut functions = vec![f];
-    super::vertex::collect_callees(module, &module.functions[f].body, &mut functions, seen);
+    crate::proc::collect_callees(module, &module.functions[f].body, &mut functions, seen);
     for f in functions {
         let function = &module.functions[f];
         let all = function.expressions.iter().map(|(h, _)| h).collect();

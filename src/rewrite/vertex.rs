@@ -504,7 +504,7 @@ fn twin_helpers(
     time: &str,
 ) -> FunctionTwins {
     let mut reachable = Vec::new();
-    collect_callees(module, &function.body, &mut reachable, &mut BTreeSet::new());
+    crate::proc::collect_callees(module, &function.body, &mut reachable, &mut BTreeSet::new());
     let mut function_twins = FunctionTwins::new();
     for &f in &reachable {
         let source = module.functions[f].clone();
@@ -674,7 +674,7 @@ fn timed_output(
     };
     let ty = module.types.insert(
         naga::Type {
-            name: Some(format!("{}{kind}", pascal(entry_name))),
+            name: Some(format!("{}{kind}", crate::proc::pascal(entry_name))),
             inner: TypeInner::Struct {
                 members: new_members,
                 span: offset,
@@ -864,24 +864,6 @@ fn everything(function: &Function) -> ExprSet {
     set
 }
 
-/// The helpers `block` calls, directly or not, callees first; `seen`
-/// holds those already collected.
-pub(super) fn collect_callees(
-    module: &Module,
-    block: &naga::Block,
-    out: &mut Vec<Handle<Function>>,
-    seen: &mut BTreeSet<Handle<Function>>,
-) {
-    crate::proc::each_statement(block, &mut |statement| {
-        if let Statement::Call { function, .. } = *statement {
-            if seen.insert(function) {
-                collect_callees(module, &module.functions[function].body, out, seen);
-                out.push(function);
-            }
-        }
-    });
-}
-
 fn calls_any(block: &naga::Block, functions: &HashMap<Handle<Function>, Handle<Function>>) -> bool {
     let mut found = false;
     crate::proc::each_statement(block, &mut |statement| {
@@ -890,18 +872,4 @@ fn calls_any(block: &naga::Block, functions: &HashMap<Handle<Function>, Handle<F
         }
     });
     found
-}
-
-/// `vs_main` → `VsMain`.
-pub(crate) fn pascal(name: &str) -> String {
-    name.split('_')
-        .filter(|part| !part.is_empty())
-        .map(|part| {
-            let mut chars = part.chars();
-            chars
-                .next()
-                .map(|c| c.to_uppercase().chain(chars).collect::<String>())
-                .unwrap_or_default()
-        })
-        .collect()
 }

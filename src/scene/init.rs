@@ -466,7 +466,7 @@ fn scalar_by_name(words: &[String], integer: bool) -> Option<(f64, &'static str)
 /// matrices the identity. `None` for a shape a scene cannot write.
 fn neutral(binding: &str, member: &Member) -> Option<(String, String)> {
     // The binding's name counts too: `radius` of `light` is a light's.
-    let words = crate::analysis::name_words(&roles::key(binding, &member.name));
+    let words = crate::proc::name_words(&roles::key(binding, &member.name));
     let has = |list: &[&str]| words.iter().any(|w| list.contains(&w.as_str()));
     let direction = has(&["dir", "direction", "normal", "axis"]);
     let resolution = has(&["resolution", "viewport", "screen"]);

@@ -233,7 +233,7 @@ fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
     let has = |words: &[&str]| words.iter().any(|w| name.contains(w));
     // Whole words, where a part would mislead: the `dir` of
     // `directional_lights[0].color` is no direction.
-    let key_words = crate::analysis::name_words(key);
+    let key_words = crate::proc::name_words(key);
     let has_word = |words: &[&str]| key_words.iter().any(|w| words.contains(&w.as_str()));
     let role = if shape == Shape::Matrix(4, 4) {
         if let Some(named) = matrix_named_from_to(&member) {
@@ -285,7 +285,7 @@ fn role_by_name(key: &str, shape: Shape) -> Option<&'static str> {
 /// view matrix, and taking it for `view_from_world`, by its word `view`,
 /// filled the inverse); `None` when the name is not of that form.
 fn matrix_named_from_to(member: &str) -> Option<Option<&'static str>> {
-    let words = crate::analysis::name_words(member);
+    let words = crate::proc::name_words(member);
     let at = words.iter().position(|w| w == "from")?;
     let space = |word: Option<&String>| match word.map(String::as_str) {
         Some("clip") => Some("clip"),
@@ -314,7 +314,7 @@ fn matrix_named_from_to(member: &str) -> Option<Option<&'static str>> {
 /// Whether a member is named for the viewer alone (`eye`, `u_eye`,
 /// `camera`, `viewer`): a point, when its type fits, is where it stands.
 fn viewer_alone(member: &str) -> bool {
-    let words = crate::analysis::name_words(member);
+    let words = crate::proc::name_words(member);
     let words: Vec<&str> = words
         .iter()
         .map(String::as_str)
