@@ -17,48 +17,9 @@
 use naga::{Binding, Expression, Function, Handle, Module, Statement, TypeInner};
 
 use super::builder::{location, Builder};
+use super::helpers::Pieces;
+use super::stage::{Stage, Writes};
 use super::Refusal;
-
-/// The pieces every fragment entry point is built from.
-#[derive(Debug)]
-pub struct Pieces {
-    /// The original fragment entry point's arguments.
-    pub arguments: Vec<naga::FunctionArgument>,
-    /// Its result.
-    pub result: naga::FunctionResult,
-    pub name: String,
-    pub payload: Handle<Function>,
-    /// One-pass with derivatives in the payload: computes them before the
-    /// branch; the payload function then takes its result as a last
-    /// argument (see [`super::gradients`]).
-    pub gradients: Option<Handle<Function>>,
-    pub shade: Handle<Function>,
-    /// The payload's type and component count.
-    pub payload_ty: Handle<naga::Type>,
-    pub components: u32,
-    pub previous_location: u32,
-    pub lookup: Handle<Function>,
-    pub refresh: Handle<Function>,
-    pub current: Handle<Function>,
-    pub classify: Handle<Function>,
-    /// The age written beside a payload (`cache_age_written`).
-    pub age_written: Handle<Function>,
-    /// For a node under branches ([`super::path`]): whether the original
-    /// computes it at this pixel, and the helper that marks the pixels
-    /// where it does not (`cache_classify_absent`).
-    pub presence: Option<(Handle<Function>, Handle<Function>)>,
-    /// Applied to every payload written to the cache (`cache_encode`).
-    pub encode: Handle<Function>,
-    /// With a packed reconstruction, puts the fragment's depth into the
-    /// cache's fourth channel (`cache_pack`), before `encode`.
-    pub pack: Option<Handle<Function>>,
-    pub vec4: Handle<naga::Type>,
-    /// The lowres variant's helpers.
-    pub lowres: super::lowres::LowresHelpers,
-    /// With adaptive refresh, the age a computed value starts from
-    /// (`cache_adaptive_age`).
-    pub adaptive: Option<Handle<Function>>,
-}
 
 /// Whether the pass of `stage` reprojects: the stages that look the
 /// fragment up, and with adaptive refresh those that compute the payload
@@ -66,107 +27,6 @@ pub struct Pieces {
 pub(super) fn reprojects_in(stage: Stage, pieces: &Pieces) -> bool {
     stage.reprojects()
         || (pieces.adaptive.is_some() && matches!(stage, Stage::Full | Stage::Payload))
-}
-
-/// What a pass's fragment stage writes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Writes {
-    /// The original outputs plus the cache and its age at the next two
-    /// free locations.
-    ColorAndCache,
-    /// The cache alone, at location 0, and its age at location 1.
-    Cache,
-    /// The original outputs alone.
-    Color,
-    /// The cache's decision as a colour, at location 0.
-    Classes,
-    /// The G-buffer's textures, at locations from 0.
-    GBuffer,
-    /// Lowres's samples at location 0 and their geometry at 1.
-    Samples,
-    /// The original outputs plus the upsampled payload and its history at
-    /// the next two free locations.
-    ColorAndHistory,
-}
-
-/// The fragment entry point of one pass.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Stage {
-    /// The deferred variant's geometry pass: depth, and the fragment's
-    /// inputs and previous clip position into the G-buffer.
-    GBuffer,
-    /// One-pass: hit → shade from the cache; miss or refresh → payload.
-    OnePass,
-    /// Two-pass, pass 1: hit → colour + cache; miss or refresh → discard.
-    ReuseOrDiscard,
-    /// The original computation, writing colour and cache (two-pass pass 2).
-    Full,
-    /// Three-pass, pass 1: hit → cache; miss or refresh → discard.
-    ReprojectOrDiscard,
-    /// Three-pass, pass 2: the payload into the cache.
-    Payload,
-    /// Three-pass, pass 3: shade from the cache at the pixel itself.
-    ShadeFromCache,
-    /// A diagnostic pass, drawn after a frame: the cache's decision at each
-    /// visible pixel as a colour (reuse, refresh, off-screen, disoccluded).
-    Classify,
-    /// Lowres, pass 1: the payload at 1/s × 1/s of the pixels, jittered,
-    /// and the samples' geometry ([`super::lowres`]).
-    Samples,
-    /// Lowres, pass 2: the payload rebuilt at every pixel from the samples
-    /// and the history, and the shading from it.
-    Upsample,
-    /// Lowres with adaptive refresh, pass 3: the original computation at
-    /// the pixels the upsampling left (its unreliable ones), writing
-    /// colour, the payload and an exact history.
-    Reshade,
-}
-
-impl Stage {
-    pub fn writes(self) -> Writes {
-        match self {
-            Stage::OnePass | Stage::ReuseOrDiscard | Stage::Full => Writes::ColorAndCache,
-            Stage::ReprojectOrDiscard | Stage::Payload => Writes::Cache,
-            Stage::ShadeFromCache => Writes::Color,
-            Stage::Classify => Writes::Classes,
-            Stage::GBuffer => Writes::GBuffer,
-            Stage::Samples => Writes::Samples,
-            Stage::Upsample | Stage::Reshade => Writes::ColorAndHistory,
-        }
-    }
-
-    pub fn discards(self) -> bool {
-        matches!(self, Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard)
-    }
-
-    /// Whether the pass looks the fragment up in last frame's cache, and
-    /// so reads the previous clip position. The others are drawn with the
-    /// vertex stage as the original has it (no previous-frame twin, no
-    /// extra varying).
-    pub fn reprojects(self) -> bool {
-        matches!(
-            self,
-            Stage::OnePass
-                | Stage::ReuseOrDiscard
-                | Stage::ReprojectOrDiscard
-                | Stage::Classify
-                | Stage::GBuffer
-                | Stage::Samples
-                | Stage::Upsample
-        )
-    }
-
-    /// Whether the screen shows the cached value itself (not recomputed
-    /// where it cannot be held): what a cache format must hold exactly.
-    pub fn shows_cached_value(self) -> bool {
-        matches!(self, Stage::ShadeFromCache)
-    }
-
-    /// Whether the payload is computed in the miss branch, in non-uniform
-    /// control flow: its derivatives must be taken before it.
-    pub fn computes_payload_on_miss(self) -> bool {
-        matches!(self, Stage::OnePass)
-    }
 }
 
 /// The `@location`s of a fragment result (a struct's members or the value).

@@ -40,7 +40,8 @@ use naga::{
 };
 
 use super::builder::{scalar_type, vector_type, Builder};
-use super::fragment::{self, Fragment, Pieces};
+use super::fragment::{self, Fragment};
+use super::helpers::Pieces;
 use super::Refusal;
 use crate::plan::TextureFormat;
 

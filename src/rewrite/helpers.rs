@@ -4,12 +4,66 @@
 
 use naga::{Function, Handle, Module};
 
-use super::fragment::Pieces;
-use super::lowres::LowresHelpers;
 use super::split::Split;
 use super::{cache_helpers, CacheSlot, Options, Refusal};
 use crate::analysis::Candidate;
 use crate::plan::{CacheFormat, Reconstruction};
+
+/// The pieces every fragment entry point is built from.
+#[derive(Debug)]
+pub struct Pieces {
+    /// The original fragment entry point's arguments.
+    pub arguments: Vec<naga::FunctionArgument>,
+    /// Its result.
+    pub result: naga::FunctionResult,
+    pub name: String,
+    pub payload: Handle<Function>,
+    /// One-pass with derivatives in the payload: computes them before the
+    /// branch; the payload function then takes its result as a last
+    /// argument (see [`super::gradients`]).
+    pub gradients: Option<Handle<Function>>,
+    pub shade: Handle<Function>,
+    /// The payload's type and component count.
+    pub payload_ty: Handle<naga::Type>,
+    pub components: u32,
+    pub previous_location: u32,
+    pub lookup: Handle<Function>,
+    pub refresh: Handle<Function>,
+    pub current: Handle<Function>,
+    pub classify: Handle<Function>,
+    /// The age written beside a payload (`cache_age_written`).
+    pub age_written: Handle<Function>,
+    /// For a node under branches ([`super::path`]): whether the original
+    /// computes it at this pixel, and the helper that marks the pixels
+    /// where it does not (`cache_classify_absent`).
+    pub presence: Option<(Handle<Function>, Handle<Function>)>,
+    /// Applied to every payload written to the cache (`cache_encode`).
+    pub encode: Handle<Function>,
+    /// With a packed reconstruction, puts the fragment's depth into the
+    /// cache's fourth channel (`cache_pack`), before `encode`.
+    pub pack: Option<Handle<Function>>,
+    pub vec4: Handle<naga::Type>,
+    /// The lowres variant's helpers.
+    pub lowres: LowresHelpers,
+    /// With adaptive refresh, the age a computed value starts from
+    /// (`cache_adaptive_age`).
+    pub adaptive: Option<Handle<Function>>,
+}
+
+/// The imported helpers the lowres passes call.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LowresHelpers {
+    pub jitter: Handle<Function>,
+    pub sample_texel: Handle<Function>,
+    pub upsample: Handle<Function>,
+    pub unit_normal: Handle<Function>,
+    pub geometric_normal: Handle<Function>,
+    /// The history's lookup (`cache_history`, or `cache_history_loads`
+    /// for an rgba32float cache).
+    pub history: Handle<Function>,
+    /// The history of a pixel shaded at full resolution.
+    pub exact_history: Handle<Function>,
+}
 
 /// The imported helpers a variant's passes call.
 pub(super) struct CacheHelpers {

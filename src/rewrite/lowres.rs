@@ -25,25 +25,11 @@ use naga::{Binding, Expression, Function, Handle, Module, Statement, TypeInner};
 
 use super::builder::{location, Builder};
 use super::copy::FunctionCopy;
-use super::fragment::{self, Pieces};
+use super::fragment;
+use super::helpers::{LowresHelpers, Pieces};
 use super::Refusal;
 use crate::analysis::graph::ExprSet;
 use crate::plan::Reconstruction;
-
-/// The imported helpers the lowres passes call.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct LowresHelpers {
-    pub jitter: Handle<Function>,
-    pub sample_texel: Handle<Function>,
-    pub upsample: Handle<Function>,
-    pub unit_normal: Handle<Function>,
-    pub geometric_normal: Handle<Function>,
-    /// The history's lookup (`cache_history`, or `cache_history_loads`
-    /// for an rgba32float cache).
-    pub history: Handle<Function>,
-    /// The history of a pixel shaded at full resolution.
-    pub exact_history: Handle<Function>,
-}
 
 /// Whether a reconstruction reads the history (and so the samples pass
 /// takes their temporal gradient): temporal and spatio-temporal.

@@ -33,6 +33,7 @@ pub(crate) mod path;
 pub mod plan;
 pub mod reprojection;
 mod split;
+pub(crate) mod stage;
 pub mod uniformity;
 pub mod vertex;
 
@@ -44,7 +45,8 @@ use crate::analysis::graph::ExprGraph;
 use crate::analysis::{Analysis, Candidate};
 use crate::front::Shader;
 use crate::plan::Plan;
-use fragment::{Pieces, Stage};
+use helpers::Pieces;
+use stage::Stage;
 
 /// The toolchain's cache helpers, imported into every rewritten module.
 pub const CACHE_WGSL: &str = include_str!("../../shaders/cache.wgsl");

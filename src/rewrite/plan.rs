@@ -5,7 +5,8 @@
 
 use naga::{Binding, Module, TypeInner};
 
-use super::fragment::{self, Stage, Writes};
+use super::fragment;
+use super::stage::{Stage, Writes};
 use super::vertex::VertexStage;
 use super::{Options, PassModule, Variant};
 use crate::analysis::{Analysis, Candidate};

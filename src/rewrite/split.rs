@@ -46,7 +46,7 @@ impl PayloadSlice {
         // shader itself would cut out after the node, unless a G-buffer
         // pass has decided coverage before it (the stencil holds it).
         let passes = stages(variant);
-        let coverage_decided = passes.contains(&super::fragment::Stage::GBuffer);
+        let coverage_decided = passes.contains(&super::stage::Stage::GBuffer);
         if discards_after && !coverage_decided && passes.iter().any(|s| s.discards()) {
             return Err(Refusal::new(
                 "the shader may discard after the node is computed, so the payload pass cannot know which pixels are cut out",
