@@ -17,7 +17,7 @@
 //! everywhere but the tiles that stretch or fold; those are blended to the
 //! low-pass by their distortion all the same.
 
-use super::bframe::{
+use super::gpu::{
     depth_view, fullscreen_pass, linear_clamp, parameters_sampler_and, timed_pass, view,
 };
 use crate::runtime::Gpu;
@@ -27,7 +27,7 @@ pub const MORPH_WGSL: &str = include_str!("../../shaders/morph.wgsl");
 
 /// The in-between frames' and the displayed rendered frame's format: the
 /// measured colour format.
-const COLOR_FORMAT: wgpu::TextureFormat = super::bframe::COLOR_FORMAT;
+const COLOR_FORMAT: wgpu::TextureFormat = super::gpu::COLOR_FORMAT;
 
 /// The argmax pyramid's texels (`fs_flow_edges`).
 const ARGMAX_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
@@ -244,7 +244,7 @@ impl Morph {
                 });
                 let fullscreen = |entry: &str, formats: &[wgpu::TextureFormat]| {
                     let targets: Vec<_> = formats.iter().map(|f| Some((*f).into())).collect();
-                    super::bframe::fullscreen_pipeline(
+                    super::gpu::fullscreen_pipeline(
                         device,
                         &module,
                         entry,

@@ -1,8 +1,9 @@
 //! Pursuit error: what an eye tracking the motion sees of a group of
 //! displayed frames, against what it sees of the reference's.
 //!
-//! Seed 004's claims rest on a user study of perceived blur; this is the
-//! stand-in the design note proposes (`seeds-001-004.md` §B.9, metric 2).
+//! Didyk et al. 2010 rest their claims on a user study of perceived blur;
+//! this is the measurable stand-in (docs/interpolation-design.md).
+//!
 //! A hold-type display shows displayed frame k of a group of n for
 //! [k, k + 1) (in displayed frames). An eye tracking the surface seen at
 //! pixel p of the group's first frame is, at time τ ∈ [0, n), at
@@ -17,6 +18,12 @@
 //! pursuit error the RMS difference over RGB of a method's P and the
 //! reference's (display values, 0 to 1). Frame repetition's error is the
 //! hold-type blur a 1/n rate adds; the reference's is zero.
+
+use super::frames::{Frames, IntervalAt};
+use super::measured::Measured;
+use crate::diagnostic::Error;
+use crate::measure::clock::read_linear;
+use crate::measure::fail;
 
 /// The pursuit image of `frames` (RGBA linear frames of `size`, the
 /// group's displayed frames in order) along `motion` (per pixel, over the
@@ -151,4 +158,64 @@ mod tests {
         assert_eq!(tracking(80.0, [70.0, 90.0]), 0.5);
         assert_eq!(tracking(95.0, [70.0, 90.0]), 0.0);
     }
+}
+
+/// Each method's pursuit error over the interval just built: the
+/// interval's displayed frames integrated along I-frame 0's exact
+/// motion (damped where the eye cannot track), against the same of
+/// the reference ([`integrate`], [`error`]).
+pub(super) fn interval_errors(
+    frames: &Frames,
+    at: &IntervalAt,
+    measured: &mut Measured,
+) -> Result<(), Error> {
+    let groups = std::mem::take(&mut measured.groups);
+    let n = frames.options.frames_per_interval as usize;
+    let Some(first) = measured.previous_end.as_ref() else {
+        return Ok(());
+    };
+    let rendered = read_linear(frames.gpu, at.textures.0.color).map_err(fail)?;
+    let motion = tracked_motion(
+        at.flow_next_0(frames.gpu)?,
+        frames.speed_scale(),
+        frames.options.tracking,
+    );
+    let (size, options) = (frames.size, frames.options);
+    let seen_of = |shown: &[&[f32]]| {
+        integrate(
+            shown,
+            &motion,
+            size,
+            options.gamma,
+            options.pursuit_substeps,
+        )
+    };
+    let reference: Vec<&[f32]> = std::iter::once(first.as_slice())
+        .chain(at.pictures.iter().take(n - 1).map(Vec::as_slice))
+        .collect();
+    let seen = seen_of(&reference);
+    let mut errors = Vec::new();
+    for (method, group) in &groups {
+        let shown: Option<Vec<&[f32]>> = group
+            .iter()
+            .enumerate()
+            .map(|(k, frame)| match (k, frame) {
+                (_, Some(frame)) => Some(frame.as_slice()),
+                (0, None) => Some(rendered.as_slice()),
+                _ => None,
+            })
+            .collect();
+        if let Some(shown) = shown {
+            errors.push((*method, error(&seen_of(&shown), &seen)));
+        }
+    }
+    for (method, error) in errors {
+        measured
+            .methods
+            .entry(method)
+            .or_default()
+            .pursuit
+            .push(error);
+    }
+    Ok(())
 }

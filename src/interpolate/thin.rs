@@ -23,6 +23,11 @@
 //! (the report's note says so). The bridge and the draw count in each
 //! displayed frame's time.
 
+use super::setup::RunPlan;
+use crate::diagnostic::Error;
+use crate::front::Shader;
+use crate::measure::bench::{self, Bench};
+use crate::measure::fail;
 use crate::runtime::{DrawShare, FrameInputs, FramePart, Gpu, Runner};
 
 /// The bridging shader.
@@ -48,6 +53,27 @@ pub struct ThinObjects {
 }
 
 impl ThinObjects {
+    /// The objects drawn at every displayed frame (`every_frame`) and their
+    /// drawing, with a note saying how they are shown; `None` where the
+    /// scene has none.
+    pub(super) fn of_scene(
+        bench: &Bench,
+        shader: &Shader,
+        plan: &RunPlan,
+        every_frame: &[bool],
+        notes: &mut Vec<String>,
+    ) -> Result<Option<ThinObjects>, Error> {
+        let count = every_frame.iter().filter(|t| **t).count();
+        if count == 0 {
+            return Ok(None);
+        }
+        let runner = bench::reference(bench, shader, &plan.reference)?;
+        notes.push(format!(
+            "{count} object(s) drawn at every displayed frame (`every_frame`) and left out of the I-frames, depth-tested into each method's frames through the Z-buffer bridge (Yang et al. 2011 Fig. 4(d)): against the depth the frame was drawn with (image-based: the depth its search chose), or I-frame 0's for the methods that keep none (sample-and-hold, linear blending, half-velocity, the morphs); the bridge and the draw count in every displayed frame's time"
+        ));
+        Ok(Some(ThinObjects::new(bench.gpu, runner).map_err(fail)?))
+    }
+
     /// `runner` draws with the original shader.
     pub fn new(gpu: &Gpu, runner: Runner) -> Result<ThinObjects, String> {
         let device = &gpu.device;
@@ -61,7 +87,7 @@ impl ThinObjects {
                 label: Some("shaders/bridge.wgsl"),
                 source: wgpu::ShaderSource::Wgsl(BRIDGE_WGSL.into()),
             });
-            let texture = super::bframe::texture_entry;
+            let texture = super::gpu::texture_entry;
             let color = texture(0, wgpu::TextureSampleType::Float { filterable: false });
             [
                 (
@@ -128,7 +154,7 @@ impl ThinObjects {
         (color, depth): (&wgpu::Texture, FrameDepth),
         mut profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
     ) -> Result<(), String> {
-        use super::bframe::reborrow;
+        use super::gpu::reborrow;
         // A frame that draws nothing yet, to bridge into and draw more in.
         let empty = FramePart::default();
         self.runner
@@ -159,9 +185,9 @@ impl ThinObjects {
         (color, depth): (&wgpu::Texture, FrameDepth),
         mut profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
     ) -> Result<(), String> {
-        let view = super::bframe::view;
+        let view = super::gpu::view;
         let (index, depth_view, binding) = match depth {
-            FrameDepth::Buffer(texture) => (0, super::bframe::depth_view(texture), 1),
+            FrameDepth::Buffer(texture) => (0, super::gpu::depth_view(texture), 1),
             FrameDepth::Chosen(texture) => (1, view(texture), 2),
         };
         let (pipeline, layout) = &self.bridge[index];
@@ -192,7 +218,7 @@ impl ThinObjects {
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        super::bframe::timed_pass(
+        super::gpu::timed_pass(
             &mut encoder,
             &mut profiler,
             "bridge",

@@ -1,0 +1,52 @@
+//! Sample-and-hold and linear blending: the earlier I-frame shown again,
+//! or the two cross-faded. The baselines every other method must beat,
+//! one fullscreen pass each ([`crate::interpolate::bframe`]).
+
+use crate::diagnostic::Error;
+use crate::interpolate::bframe::{BFrameParams, BFrames};
+use crate::interpolate::frame_method::FrameMethod;
+use crate::interpolate::frames::{Drawn, Frames, IntervalAt};
+use crate::interpolate::thin::FrameDepth;
+use crate::interpolate::Method;
+use crate::measure::clock::{timed_recording, Clock};
+use crate::measure::fail;
+
+/// [`Method::SampleAndHold`] or [`Method::LinearBlend`].
+pub(super) struct HoldOrBlend<'a> {
+    pub method: Method,
+    pub bframes: &'a BFrames,
+}
+
+impl FrameMethod for HoldOrBlend<'_> {
+    fn method(&self) -> Method {
+        self.method
+    }
+
+    fn draw<'s>(
+        &'s mut self,
+        frames: &Frames,
+        clock: &mut Clock,
+        at: &'s IntervalAt,
+        _k: u32,
+        params: &BFrameParams,
+    ) -> Result<Drawn<'s>, Error> {
+        let textures = at.textures;
+        let (time, _, _) = timed_recording(clock, "bframe", |profiler| {
+            self.bframes.render(
+                frames.gpu,
+                self.method,
+                (&textures.0, &textures.1),
+                params,
+                None,
+                profiler,
+            )
+        })
+        .map_err(fail)?;
+        Ok(Drawn {
+            time,
+            color: self.bframes.color(),
+            depth: FrameDepth::Buffer(textures.0.depth),
+            decisions: Some(self.bframes.decisions()),
+        })
+    }
+}
