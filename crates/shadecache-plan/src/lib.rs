@@ -15,6 +15,8 @@
 //! without linking the toolchain (naga, wgpu, the profiler); the
 //! toolchain writes them with the same definitions.
 
+#![deny(missing_docs)]
+
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
@@ -35,29 +37,50 @@ pub const FORMAT_VERSION: u32 = 1;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(into = "&'static str", try_from = "String")]
 pub enum TextureFormat {
+    /// `rgba8unorm`.
     Rgba8Unorm,
+    /// `rgba8unorm-srgb`.
     Rgba8UnormSrgb,
+    /// `bgra8unorm`.
     Bgra8Unorm,
+    /// `bgra8unorm-srgb`.
     Bgra8UnormSrgb,
+    /// `r16float`.
     R16Float,
+    /// `rg16float`.
     Rg16Float,
+    /// `rgba16float`.
     Rgba16Float,
+    /// `r32float`.
     R32Float,
+    /// `rg32float`.
     Rg32Float,
+    /// `rgba32float`.
     Rgba32Float,
+    /// `r32uint`.
     R32Uint,
+    /// `rg32uint`.
     Rg32Uint,
+    /// `rgba32uint`.
     Rgba32Uint,
+    /// `r32sint`.
     R32Sint,
+    /// `rg32sint`.
     Rg32Sint,
+    /// `rgba32sint`.
     Rgba32Sint,
+    /// `depth16unorm`.
     Depth16Unorm,
+    /// `depth24plus`.
     Depth24Plus,
+    /// `depth24plus-stencil8`.
     Depth24PlusStencil8,
+    /// `depth32float`.
     Depth32Float,
 }
 
 impl TextureFormat {
+    /// Every format a plan may name.
     pub const ALL: [TextureFormat; 20] = [
         TextureFormat::Rgba8Unorm,
         TextureFormat::Rgba8UnormSrgb,
@@ -143,24 +166,40 @@ impl TryFrom<String> for TextureFormat {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(into = "&'static str", try_from = "String")]
 pub enum VertexFormat {
+    /// `float16`.
     Float16,
+    /// `float16x2`.
     Float16x2,
+    /// `float16x4`.
     Float16x4,
+    /// `float32`.
     Float32,
+    /// `float32x2`.
     Float32x2,
+    /// `float32x3`.
     Float32x3,
+    /// `float32x4`.
     Float32x4,
+    /// `sint32`.
     Sint32,
+    /// `sint32x2`.
     Sint32x2,
+    /// `sint32x3`.
     Sint32x3,
+    /// `sint32x4`.
     Sint32x4,
+    /// `uint32`.
     Uint32,
+    /// `uint32x2`.
     Uint32x2,
+    /// `uint32x3`.
     Uint32x3,
+    /// `uint32x4`.
     Uint32x4,
 }
 
 impl VertexFormat {
+    /// Every format a plan may name.
     pub const ALL: [VertexFormat; 15] = [
         VertexFormat::Float16,
         VertexFormat::Float16x2,
@@ -261,10 +300,16 @@ impl VertexFormat {
 pub struct Plan {
     /// Version of this format.
     pub format: u32,
+    /// The original shader's file, as the toolchain read it: what the passes
+    /// were made from.
     pub shader: String,
+    /// The original fragment entry point the variant rewrites.
     pub entry: String,
+    /// The cached node: the intermediate value the cache holds.
     pub node: PlanNode,
+    /// Which variant the passes make up; a host checks it is one it runs.
     pub variant: Variant,
+    /// The frame's passes, in the order a host records them.
     pub passes: Vec<Pass>,
     /// A diagnostic pass, drawn after the frame's passes and before the
     /// swap: the cache's decision at each visible pixel as a colour (green
@@ -272,6 +317,8 @@ pub struct Plan {
     /// of rendering a frame.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub classify: Option<Pass>,
+    /// The vertex buffers' attributes every geometry pass reads (buffer slot 0
+    /// per vertex, slot 1 per instance), in packing order.
     pub vertex_layout: Vec<VertexAttribute>,
     /// The lowres variant's upsampling (seed 001): its factor s and the
     /// reconstruction's knobs. Absent for the other variants.
@@ -282,9 +329,16 @@ pub struct Plan {
     /// stage and the passes carry it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub host_vertex: Option<HostVertex>,
+    /// Every resource the passes bind: the original ones, their previous-frame
+    /// twins and the cache's own.
     pub bindings: Bindings,
+    /// The cache's textures: their format, how they are read back, and the
+    /// refresh uniform's layout.
     pub cache: Cache,
+    /// The refresh pattern's settings, as the `CacheParams` uniform carries
+    /// them.
     pub refresh: Refresh,
+    /// The clear values of the frame's targets.
     pub clear: Clear,
     /// What the variant assumes of the frame it runs in; a host refuses a
     /// frame that breaks it.
@@ -403,12 +457,18 @@ pub struct HostVertex {
     pub requirement: String,
 }
 
+/// The cached node, as `shadecache analyze` reports it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PlanNode {
+    /// Its id (`n12`), stable for one shader text: what `--node` takes.
     pub id: String,
+    /// Its source text.
     pub text: String,
+    /// Its WGSL type (`vec3<f32>`), serialised as `type`.
     #[serde(rename = "type")]
     pub ty: String,
+    /// Its scalar components (1 to 4): how many of the payload texture's
+    /// channels hold it.
     pub components: u32,
     /// Absent for a node every pixel computes. `uniform-branch`: under
     /// branches whose conditions depend only on uniforms, overrides and
@@ -422,6 +482,8 @@ pub struct PlanNode {
     /// entry point down to it, which the passes inline (docs/rewrite.md).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub function: Option<String>,
+    /// The calls from the entry point down to the helper that holds it,
+    /// outermost first; empty for a node of the entry point.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub call_path: Vec<PlanCall>,
 }
@@ -451,10 +513,17 @@ pub struct Pass {
     /// pass, vertex stage first. Empty otherwise.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub stage_shaders: Vec<String>,
+    /// The vertex entry point in [`Pass::shader`]; for a fragment-only module,
+    /// the host's own.
     pub vertex_entry: String,
+    /// The fragment entry point in [`Pass::shader`].
     pub fragment_entry: String,
+    /// The colour targets the fragment stage writes, by location.
     pub color_targets: Vec<ColorTarget>,
+    /// The depth test and write, and whether the depth buffer is cleared.
     pub depth: Depth,
+    /// Whether the fragment stage can `discard` (which disables early depth
+    /// tests on some GPUs).
     pub discards: bool,
     /// (group, binding) of every resource this pass's shaders use.
     pub bindings: Vec<[u32; 2]>,
@@ -496,6 +565,8 @@ pub enum DrawKind {
 }
 
 impl DrawKind {
+    /// Whether the pass draws the application's geometry (serde skips the
+    /// default).
     pub fn is_geometry(&self) -> bool {
         *self == DrawKind::Geometry
     }
@@ -506,12 +577,17 @@ impl DrawKind {
 /// `reference_bits`; ordinals run to [`MAX_STENCIL_DRAWS`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Stencil {
+    /// The test against the reference.
     pub compare: CompareFunction,
+    /// The stencil bits the test reads.
     pub read_mask: u32,
+    /// The stencil bits a replace writes.
     pub write_mask: u32,
     /// `true`: replace the masked bits with the reference where the test
     /// passes (and the fragment is not discarded); `false`: keep them.
     pub replace: bool,
+    /// Bits OR-ed into every draw's reference (the top bit marks reused
+    /// pixels).
     pub reference_bits: u32,
 }
 
@@ -519,11 +595,14 @@ pub struct Stencil {
 /// take the stencil's low seven bits, the top bit marks reused pixels.
 pub const MAX_STENCIL_DRAWS: u32 = 127;
 
+/// One colour target of a pass.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ColorTarget {
+    /// The fragment output's `@location`.
     pub location: u32,
     /// What the pass renders into at this location.
     pub target: TargetKind,
+    /// The target's texture format.
     pub format: TextureFormat,
     /// `clear` (first pass to write the target this frame) or `load`.
     pub load: LoadOp,
@@ -570,6 +649,7 @@ pub enum LoadOp {
 }
 
 impl TargetKind {
+    /// Its name in `plan.json`.
     pub fn as_str(self) -> &'static str {
         match self {
             TargetKind::Color => "color",
@@ -585,6 +665,7 @@ impl TargetKind {
 }
 
 impl LoadOp {
+    /// Its name in `plan.json`.
     pub fn as_str(self) -> &'static str {
         match self {
             LoadOp::Clear => "clear",
@@ -594,6 +675,7 @@ impl LoadOp {
 }
 
 impl CompareFunction {
+    /// Its name as WebGPU spells it.
     pub fn as_str(self) -> &'static str {
         match self {
             CompareFunction::Less => "less",
@@ -630,27 +712,42 @@ display_as_str!(
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum CompareFunction {
+    /// Passes where the fragment is nearer with standard depth.
     Less,
+    /// Passes where the fragment is nearer or at the same depth.
     LessEqual,
+    /// Passes where the fragment is nearer with reversed Z.
     Greater,
+    /// Passes where the fragment is nearer or at the same depth, with reversed
+    /// Z.
     GreaterEqual,
+    /// Passes where the fragment is at the depth already written (a pass after
+    /// a depth pre-pass).
     Equal,
+    /// Always passes.
     Always,
 }
 
+/// A pass's depth test and write.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Depth {
+    /// The depth buffer's format ([`DEPTH_FORMAT`]).
     pub format: TextureFormat,
     /// `less` (`greater` with reversed Z) or `equal`; a host's plan may
     /// also say `less-equal`, `greater-equal` or `always`.
     pub compare: CompareFunction,
+    /// Whether the pass writes the depth of the fragments that pass.
     pub write: bool,
+    /// `clear` (the first pass to test against it this frame) or `load`.
     pub load: LoadOp,
 }
 
+/// One vertex attribute of the layout.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct VertexAttribute {
+    /// The vertex stage's `@location`.
     pub location: u32,
+    /// The input's name in the vertex stage (or its struct member's).
     pub name: String,
     /// A WebGPU vertex format, e.g. `float32x3`.
     pub format: VertexFormat,
@@ -669,17 +766,21 @@ pub struct VertexAttribute {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum StepMode {
+    /// Once per vertex: buffer slot 0.
     #[default]
     Vertex,
+    /// Once per instance: buffer slot 1.
     Instance,
 }
 
 impl StepMode {
+    /// Whether it steps per vertex (serde skips the default).
     pub fn is_vertex(&self) -> bool {
         *self == StepMode::Vertex
     }
 }
 
+/// Every resource the passes bind, by who supplies it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Bindings {
     /// The user's resources, as in the original shader.
@@ -711,11 +812,16 @@ pub struct PreviousMembers {
     pub members: Vec<[String; 2]>,
 }
 
+/// One bound resource.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Resource {
+    /// Its `@group`.
     pub group: u32,
+    /// Its `@binding`.
     pub binding: u32,
+    /// Its name in the shader.
     pub name: String,
+    /// What it holds: what the host must create and bind.
     pub kind: ResourceKind,
     /// For the cache's resources, what to bind, e.g. `previous payload`.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -726,26 +832,41 @@ pub struct Resource {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ResourceKind {
+    /// A uniform buffer (`var<uniform>`).
     Uniform,
     /// Read-only storage (`var<storage, read>`).
     Storage,
+    /// Read-write storage (`var<storage, read_write>`).
     StorageReadWrite,
+    /// A storage texture (`texture_storage_2d<…>`).
     StorageTexture,
+    /// A sampled 2D texture (`texture_2d<f32>`).
     Texture,
     /// `texture_2d<u32>`, read with `textureLoad` (a G-buffer).
     UintTexture,
+    /// A sampled 2D texture array (`texture_2d_array<f32>`).
     TextureArray,
+    /// A sampled cube texture (`texture_cube<f32>`).
     CubeTexture,
+    /// A sampled cube texture array (`texture_cube_array<f32>`).
     CubeTextureArray,
+    /// A depth texture (`texture_depth_2d`: a shadow map).
     DepthTexture,
+    /// A depth texture array (`texture_depth_2d_array`).
     DepthTextureArray,
+    /// A depth cube texture (`texture_depth_cube`).
     DepthCubeTexture,
+    /// A depth cube texture array (`texture_depth_cube_array`).
     DepthCubeTextureArray,
+    /// A sampled 1D texture (`texture_1d<f32>`).
     #[serde(rename = "texture-1d")]
     Texture1d,
+    /// A sampled 3D texture (`texture_3d<f32>`).
     #[serde(rename = "texture-3d")]
     Texture3d,
+    /// A filtering sampler (`sampler`).
     Sampler,
+    /// A comparison sampler (`sampler_comparison`).
     ComparisonSampler,
     /// Anything else a module may bind.
     Other,
@@ -756,7 +877,9 @@ pub enum ResourceKind {
 pub struct SampledTexture {
     /// A depth texture (a shadow map).
     pub depth: bool,
+    /// A cube texture (six faces).
     pub cube: bool,
+    /// An array of layers (of 2D textures or of cubes).
     pub arrayed: bool,
 }
 
@@ -784,6 +907,7 @@ impl ResourceKind {
         })
     }
 
+    /// Its name in `plan.json`.
     pub fn as_str(self) -> &'static str {
         use ResourceKind as K;
         match self {
@@ -809,20 +933,30 @@ impl ResourceKind {
     }
 }
 
+/// A previous-frame twin: a resource the rewritten passes read last frame's
+/// values from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Twin {
+    /// Its `@group`.
     pub group: u32,
+    /// Its `@binding`.
     pub binding: u32,
+    /// Its name in the rewritten passes (`previous_` and the original's).
     pub name: String,
+    /// The original resource it holds last frame's contents of.
     pub shadows: Resource,
 }
 
+/// The cache's textures and how the passes read them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Cache {
+    /// The payload texture's format.
     pub format: CacheFormat,
     /// Why the format is not the one asked for, when it is not.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub format_note: Option<String>,
+    /// How a cache variant reads the payload back where a point was last frame;
+    /// for lowres, the upsampling filter.
     #[serde(default = "bilinear")]
     pub reconstruction: Reconstruction,
     /// How many components of the payload texture hold the payload.
@@ -833,26 +967,42 @@ pub struct Cache {
     pub params: Vec<Field>,
 }
 
+/// One field of the refresh uniform (`CacheParams`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Field {
+    /// Its name in `CacheParams`.
     pub name: String,
+    /// Its WGSL type, serialised as `type`.
     #[serde(rename = "type")]
     pub ty: String,
+    /// Its byte offset in the uniform.
     pub offset: u32,
 }
 
+/// The refresh pattern: which pixels recompute the payload each frame (seed 002
+/// §4).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Refresh {
+    /// Δn: the frames between two refreshes of a pixel (1 refreshes every
+    /// frame, 0 turns refresh off); `CacheParams.refresh_period`.
     pub period: u32,
+    /// k: the side, in pixels, of the square blocks that share one refresh
+    /// offset; for lowres, its factor s. `CacheParams.refresh_quad`.
     pub quad: u32,
+    /// ε, relative: a cached depth d agrees with the expected e when
+    /// |d − e| < ε·|e − far depth|. `CacheParams.depth_epsilon`.
     pub depth_epsilon: f32,
     /// Where the per-block offsets come from.
     pub offsets: String,
 }
 
+/// Clear values of the frame's targets, as WebGPU's `Color` and depth.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Clear {
+    /// The colour targets' clear value, RGBA.
     pub color: [f64; 4],
+    /// The payload texture's clear value, RGBA (zeros: with the previous
+    /// depth cleared to the far plane, a first frame misses everywhere).
     pub cache: [f64; 4],
     /// The far plane's depth: 1.0, or 0.0 with reversed Z. Also the
     /// `far_depth` of `CacheParams`.
@@ -867,8 +1017,14 @@ fn bilinear() -> Reconstruction {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Variant {
+    /// One pass: the lookup, the payload on a miss or a refresh, and the
+    /// shading in one fragment stage (seed 002 §3.1).
     OnePass,
+    /// Two passes: reuse where the lookup hits, else discard; then the original
+    /// computation at the pixels left (seed 002 §3.2).
     TwoPass,
+    /// Three passes: the lookup into the cache, the payload where it missed,
+    /// then the shading from the cache (seed 002 §3.3).
     ThreePass,
     /// One geometry pass writes depth and the fragment inputs into a
     /// G-buffer; the lookup, the misses and the shading run in screen
@@ -892,6 +1048,8 @@ impl Variant {
         Variant::Deferred,
     ];
 
+    /// Every variant the toolchain writes, in the profiler's order
+    /// ([`Variant::Reference`] is not one).
     pub const ALL: [Variant; 5] = [
         Variant::OnePass,
         Variant::TwoPass,
@@ -900,6 +1058,7 @@ impl Variant {
         Variant::Lowres,
     ];
 
+    /// Its name on the command line and in `plan.json`.
     pub fn as_str(self) -> &'static str {
         match self {
             Variant::OnePass => "one-pass",
@@ -922,7 +1081,10 @@ impl fmt::Display for Variant {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum CacheFormat {
+    /// Half floats: the default, and enough for colours and normals.
     Rgba16float,
+    /// Full floats: for payloads that half floats round too far (positions,
+    /// large values).
     Rgba32float,
 }
 
@@ -934,6 +1096,7 @@ impl CacheFormat {
             CacheFormat::Rgba32float => TextureFormat::Rgba32Float,
         }
     }
+    /// Its name in `plan.json` and on the command line.
     pub fn as_str(self) -> &'static str {
         match self {
             CacheFormat::Rgba16float => "rgba16float",
@@ -980,6 +1143,7 @@ impl Reconstruction {
         Reconstruction::NearestPacked,
     ];
 
+    /// Every reconstruction, the cache reads first, then lowres's upsamplers.
     pub const ALL: [Reconstruction; 7] = [
         Reconstruction::Bilinear,
         Reconstruction::Nearest,
@@ -990,6 +1154,7 @@ impl Reconstruction {
         Reconstruction::SpatioTemporal,
     ];
 
+    /// Its name in `plan.json` and on the command line.
     pub fn as_str(self) -> &'static str {
         match self {
             Reconstruction::Bilinear => "bilinear",
@@ -1038,6 +1203,7 @@ pub enum DepthConvention {
 }
 
 impl DepthConvention {
+    /// Its name in `plan.json` and on the command line.
     pub fn as_str(self) -> &'static str {
         match self {
             DepthConvention::Standard => "standard",
