@@ -26,7 +26,7 @@
 //!    and k). The cross terms are the pruned rest.
 
 pub use crate::report::{Axes, Design, Pruned, Setting};
-use crate::rewrite::{CacheFormat, Options as RewriteOptions, Reconstruction};
+use crate::rewrite::{CacheFormat, Options as RewriteOptions, Reconstruction, Variant};
 
 /// A (node, Δn) is pruned when even its ideal speed-up is below this.
 pub const MIN_IDEAL_SPEEDUP: f64 = 1.1;
@@ -238,6 +238,117 @@ fn on_a_plane(setting: &Setting, base: &Setting) -> bool {
         && setting.cache_format == base.cache_format
         && setting.depth_epsilon == base.depth_epsilon;
     refresh_as_base || read_back_as_base
+}
+
+/// The settings the grid walks for one variant of a node, in order.
+pub(super) fn variant_settings(
+    settings: &[Setting],
+    variant: Variant,
+    base: &RewriteOptions,
+    lowres: (&[Reconstruction], &[bool]),
+) -> Vec<Setting> {
+    match variant {
+        Variant::Lowres => lowres_settings(settings, base, lowres),
+        _ => adaptive_settings(settings, lowres.1, base),
+    }
+}
+
+/// The nodes a run measures, each with the part of its configurations
+/// (numbered from 0 within the node, in the order the grid walks them:
+/// variants, then settings; `configurations_of` counts them) that is the
+/// run's, and how many the grid has. Unsharded, every node and all of
+/// each. A shard (`--shard K/N`)
+/// takes a contiguous slice of the grid's configurations
+/// ([`crate::report::Shard::slice`]), so it touches about 1/N of the
+/// nodes, and sets up and times the fixed-cost runs of those alone: the
+/// payload and probe runs of every node in every shard are what kept a
+/// sharded sweep over hundreds of nodes from fitting in memory.
+pub(super) fn shard_nodes<T>(
+    nodes: Vec<T>,
+    configurations_of: impl Fn(&T) -> usize,
+    shard: Option<crate::report::Shard>,
+) -> (Vec<T>, Vec<std::ops::Range<usize>>, usize) {
+    let counts: Vec<usize> = nodes.iter().map(configurations_of).collect();
+    let total = counts.iter().sum();
+    let slice = shard.map_or(0..total, |s| s.slice(total));
+    let mut first = 0;
+    let (mut kept, mut takes) = (Vec::new(), Vec::new());
+    for (node, count) in nodes.into_iter().zip(counts) {
+        let (start, end) = (slice.start.max(first), slice.end.min(first + count));
+        // Unsharded, every node stays, as its payload is measured whatever
+        // its configurations.
+        if start < end || shard.is_none() {
+            kept.push(node);
+            takes.push(start - first..end - first);
+        }
+        first += count;
+    }
+    (kept, takes, total)
+}
+
+/// The cache variants' settings with adaptive refresh as `adaptive` asks:
+/// off, or on for every setting; asked both ways (a sweep), every setting
+/// without it and the base setting (`base`'s knobs) with it too: one
+/// more point per node and variant, as the sweep's planes go through the
+/// base.
+pub(super) fn adaptive_settings(
+    settings: &[Setting],
+    adaptive: &[bool],
+    base: &RewriteOptions,
+) -> Vec<Setting> {
+    let with = |setting: &Setting, adaptive| Setting {
+        adaptive,
+        ..*setting
+    };
+    match (adaptive.contains(&false), adaptive.contains(&true)) {
+        (_, false) => settings.to_vec(),
+        (false, true) => settings.iter().map(|s| with(s, true)).collect(),
+        (true, true) => {
+            let base = Setting {
+                refresh_period: base.refresh_period,
+                refresh_quad: base.refresh_quad,
+                reconstruction: base.reconstruction,
+                cache_format: base.cache_format,
+                depth_epsilon: base.depth_epsilon,
+                adaptive: true,
+            };
+            let mut out = settings.to_vec();
+            out.push(base);
+            out
+        }
+    }
+}
+
+/// Lowres's settings: each of its reconstructions at each cache format
+/// the grid measures, its Δn and k those its factor sets (s², s); the
+/// refresh knobs of the cache variants do not apply to it.
+pub(super) fn lowres_settings(
+    settings: &[Setting],
+    base: &RewriteOptions,
+    (reconstructions, reshades): (&[Reconstruction], &[bool]),
+) -> Vec<Setting> {
+    let s = base.upsampling.factor;
+    let mut formats: Vec<CacheFormat> = settings.iter().map(|s| s.cache_format).collect();
+    formats.dedup();
+    let mut out = Vec::new();
+    for &reconstruction in reconstructions {
+        for &cache_format in &formats {
+            for &adaptive in reshades {
+                let setting = Setting {
+                    refresh_period: s * s,
+                    refresh_quad: s,
+                    reconstruction,
+                    cache_format,
+                    depth_epsilon: base.depth_epsilon,
+                    adaptive,
+                };
+                if !out.contains(&setting) {
+                    out.push(setting);
+                }
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -29,9 +29,11 @@
 
 pub(crate) mod bench;
 mod choice;
+mod config;
 pub mod grid;
 pub mod merge;
 pub(crate) mod reference_check;
+mod row;
 pub(crate) mod run;
 pub(crate) mod setup;
 
@@ -42,20 +44,22 @@ use crate::analysis::{self, Candidate};
 use crate::back::{self, Language};
 use crate::diagnostic::{Diagnostic, Error};
 use crate::front::Shader;
-use crate::measure::clock::{read_linear, timed, Clock};
+use crate::measure::clock::{timed, Clock};
 use crate::measure::inputs::SceneInputs;
-use crate::measure::metrics::{self, Decisions, FrameError};
+use crate::measure::metrics;
 use crate::measure::{fail, open_gpu};
 use crate::plan::Plan;
 use crate::report::{
-    Confirmation, Device, FrameStats, GridReport, MissCause, NodeReport, PassTime, Reference,
-    ReferenceCheck, Report, ResultRow,
+    Confirmation, Device, GridReport, MissCause, NodeReport, Reference, ReferenceCheck, Report,
+    ResultRow,
 };
 use crate::rewrite::{self, CacheFormat, Options as RewriteOptions, Reconstruction, Variant};
-use crate::runtime::{self, FrameInputs, Gpu, Runner};
+use crate::runtime::{FrameInputs, Runner};
 use crate::scene::{self, Scene};
-use grid::{Axes, Design, Setting};
-use run::{measured_run, Measured, ReferenceRun, Sample};
+use config::{probed, speedup, Config, Probe, ProbeOf};
+use grid::{shard_nodes, variant_settings, Axes, Design, Setting};
+use row::{miss_causes, result_row, Baseline};
+use run::{measured_run, Measured, ReferenceRun};
 
 pub use crate::measure::{Progress, Quiet, MEASURED_COLOR_FORMAT};
 
@@ -183,158 +187,6 @@ impl Default for Options {
 }
 
 pub use crate::report::{Picture, Pictures};
-
-/// What a [`Probe`] measures the fixed cost of.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum ProbeOf {
-    /// The original shader.
-    Reference,
-    /// A node's payload pass.
-    Payload(usize),
-    /// A node's variant, at the base setting.
-    Variant(usize, Variant),
-}
-
-/// A run made free of the shader's work (payload, shade, or the whole
-/// fragment stage returning zero), timed like the others: what is left is
-/// fixed cost — rasterisation, the vertex stages, lookups, cache writes.
-struct Probe {
-    of: ProbeOf,
-    runner: Runner,
-    times: Vec<f64>,
-    passes: HashMap<String, Vec<f64>>,
-}
-
-/// A probe has no cache to warm: it runs from the last warm-up frame on
-/// (one frame before it is measured), not through the warm-up.
-impl Measured for Probe {
-    fn label(&self) -> &str {
-        "fixed cost"
-    }
-    fn runner(&mut self) -> &mut Runner {
-        &mut self.runner
-    }
-    fn first_frame(&self, warmup: u32) -> u32 {
-        warmup.saturating_sub(1)
-    }
-    fn traced(&self) -> bool {
-        false
-    }
-    fn record(&mut self, sample: Sample) -> Result<(), String> {
-        self.times.push(sample.time);
-        for (name, ms) in sample.passes {
-            self.passes.entry(name).or_default().push(ms);
-        }
-        Ok(())
-    }
-}
-
-impl Probe {
-    fn new(of: ProbeOf, runner: Runner) -> Self {
-        Probe {
-            of,
-            runner,
-            times: Vec::new(),
-            passes: HashMap::new(),
-        }
-    }
-}
-
-/// The median time of the probe of `of`, and its passes'.
-fn probed(probes: &[Probe], of: ProbeOf) -> Option<(f64, Vec<PassTime>)> {
-    let probe = probes.iter().find(|p| p.of == of)?;
-    Some((metrics::median(&probe.times), pass_medians(&probe.passes)))
-}
-
-/// Each pass's median time, by name.
-fn pass_medians(passes: &HashMap<String, Vec<f64>>) -> Vec<PassTime> {
-    let mut out: Vec<PassTime> = passes
-        .iter()
-        .map(|(name, times)| PassTime {
-            name: name.clone(),
-            time_ms: metrics::median(times),
-        })
-        .collect();
-    out.sort_by(|a, b| a.name.cmp(&b.name));
-    out
-}
-
-/// How many times faster `time_ms` is than `reference_ms`; 0 for no time.
-fn speedup(reference_ms: f64, time_ms: f64) -> f64 {
-    if time_ms > 0.0 {
-        reference_ms / time_ms
-    } else {
-        0.0
-    }
-}
-
-struct Config {
-    node: usize,
-    variant: Variant,
-    setting: Setting,
-    runner: Runner,
-    label: String,
-    times: Vec<f64>,
-    passes: HashMap<String, Vec<f64>>,
-    errors: Vec<FrameError>,
-    /// Flicker of each measured frame after the first ([`metrics::flicker`]).
-    flicker: Vec<f64>,
-    decisions: Vec<Decisions>,
-    /// Covered pixels by the age of their value, over the measured frames.
-    ages: Vec<u64>,
-    /// The last measured frame, in linear float, and its classes.
-    last: (metrics::LinearFrame, Vec<u8>),
-    /// The frame's size and the error threshold its frames are compared
-    /// with.
-    size: [u32; 2],
-    error_threshold: f64,
-}
-
-impl Measured for Config {
-    fn label(&self) -> &str {
-        &self.label
-    }
-    fn runner(&mut self) -> &mut Runner {
-        &mut self.runner
-    }
-    /// Its time and passes, its picture against the reference's (error,
-    /// flicker), the cache's decisions and the ages it showed.
-    fn record(&mut self, sample: Sample) -> Result<(), String> {
-        self.times.push(sample.time);
-        for (name, ms) in sample.passes {
-            self.passes.entry(name).or_default().push(ms);
-        }
-        let color = self
-            .runner
-            .color()
-            .ok_or("the configuration draws no colour")?;
-        let color = read_linear(sample.gpu, color)?;
-        let classes = runtime::read_texture(sample.gpu, self.runner.classes(), 4)?;
-        let reference = sample.reference;
-        self.errors.push(metrics::compare(
-            &reference.now,
-            &color,
-            &classes,
-            self.size[0],
-            self.size[1],
-            self.error_threshold,
-        ));
-        if self.errors.len() > 1 {
-            self.flicker.push(metrics::flicker(
-                &reference.before,
-                &reference.now,
-                &self.last.0,
-                &color,
-                &classes,
-            ));
-        }
-        self.decisions.push(metrics::decisions(&classes));
-        let ages = runtime::read_texture(sample.gpu, self.runner.age(), 2)?;
-        metrics::add_ages(&classes, &ages, &mut self.ages);
-        self.last = (color, classes);
-        Ok(())
-    }
-}
 
 /// Profiles `shader` on `scene`. `scene_path` names the scene file (its
 /// folder resolves relative files).
@@ -732,52 +584,6 @@ type NewRunner<'a> = dyn Fn(&Plan, &HashMap<String, String>) -> Result<Runner, S
 /// A node of the grid and the settings it is measured at.
 type GridNode<'a> = (&'a Candidate, &'a [Setting]);
 
-/// The settings the grid walks for one variant of a node, in order.
-fn variant_settings(
-    settings: &[Setting],
-    variant: Variant,
-    base: &RewriteOptions,
-    lowres: (&[Reconstruction], &[bool]),
-) -> Vec<Setting> {
-    match variant {
-        Variant::Lowres => lowres_settings(settings, base, lowres),
-        _ => adaptive_settings(settings, lowres.1, base),
-    }
-}
-
-/// The nodes a run measures, each with the part of its configurations
-/// (numbered from 0 within the node, in the order the grid walks them:
-/// variants, then settings; `configurations_of` counts them) that is the
-/// run's, and how many the grid has. Unsharded, every node and all of
-/// each. A shard (`--shard K/N`)
-/// takes a contiguous slice of the grid's configurations
-/// ([`crate::report::Shard::slice`]), so it touches about 1/N of the
-/// nodes, and sets up and times the fixed-cost runs of those alone: the
-/// payload and probe runs of every node in every shard are what kept a
-/// sharded sweep over hundreds of nodes from fitting in memory.
-fn shard_nodes<T>(
-    nodes: Vec<T>,
-    configurations_of: impl Fn(&T) -> usize,
-    shard: Option<crate::report::Shard>,
-) -> (Vec<T>, Vec<std::ops::Range<usize>>, usize) {
-    let counts: Vec<usize> = nodes.iter().map(configurations_of).collect();
-    let total = counts.iter().sum();
-    let slice = shard.map_or(0..total, |s| s.slice(total));
-    let mut first = 0;
-    let (mut kept, mut takes) = (Vec::new(), Vec::new());
-    for (node, count) in nodes.into_iter().zip(counts) {
-        let (start, end) = (slice.start.max(first), slice.end.min(first + count));
-        // Unsharded, every node stays, as its payload is measured whatever
-        // its configurations.
-        if start < end || shard.is_none() {
-            kept.push(node);
-            takes.push(start - first..end - first);
-        }
-        first += count;
-    }
-    (kept, takes, total)
-}
-
 /// Every node × variant × setting the grid keeps, rewritten and with its
 /// runner from `new_runner`; a refusal, or a setting that runs as another
 /// one (an rgba16float three-pass cache widened to rgba32float), is told
@@ -871,229 +677,6 @@ fn configurations(
     }
 
     Ok(configs)
-}
-
-/// The cache variants' settings with adaptive refresh as `adaptive` asks:
-/// off, or on for every setting; asked both ways (a sweep), every setting
-/// without it and the base setting (`base`'s knobs) with it too: one
-/// more point per node and variant, as the sweep's planes go through the
-/// base.
-fn adaptive_settings(
-    settings: &[Setting],
-    adaptive: &[bool],
-    base: &RewriteOptions,
-) -> Vec<Setting> {
-    let with = |setting: &Setting, adaptive| Setting {
-        adaptive,
-        ..*setting
-    };
-    match (adaptive.contains(&false), adaptive.contains(&true)) {
-        (_, false) => settings.to_vec(),
-        (false, true) => settings.iter().map(|s| with(s, true)).collect(),
-        (true, true) => {
-            let base = Setting {
-                refresh_period: base.refresh_period,
-                refresh_quad: base.refresh_quad,
-                reconstruction: base.reconstruction,
-                cache_format: base.cache_format,
-                depth_epsilon: base.depth_epsilon,
-                adaptive: true,
-            };
-            let mut out = settings.to_vec();
-            out.push(base);
-            out
-        }
-    }
-}
-
-/// Lowres's settings: each of its reconstructions at each cache format
-/// the grid measures, its Δn and k those its factor sets (s², s); the
-/// refresh knobs of the cache variants do not apply to it.
-fn lowres_settings(
-    settings: &[Setting],
-    base: &RewriteOptions,
-    (reconstructions, reshades): (&[Reconstruction], &[bool]),
-) -> Vec<Setting> {
-    let s = base.upsampling.factor;
-    let mut formats: Vec<CacheFormat> = settings.iter().map(|s| s.cache_format).collect();
-    formats.dedup();
-    let mut out = Vec::new();
-    for &reconstruction in reconstructions {
-        for &cache_format in &formats {
-            for &adaptive in reshades {
-                let setting = Setting {
-                    refresh_period: s * s,
-                    refresh_quad: s,
-                    reconstruction,
-                    cache_format,
-                    depth_epsilon: base.depth_epsilon,
-                    adaptive,
-                };
-                if !out.contains(&setting) {
-                    out.push(setting);
-                }
-            }
-        }
-    }
-    out
-}
-
-/// What every configuration's row is measured against: the reference's
-/// frame times and median, the fixed-cost probes, the frame's pixels.
-struct Baseline<'a> {
-    reference_times: &'a [f64],
-    reference_ms: f64,
-    probes: &'a [Probe],
-    pixels: u32,
-}
-
-/// One configuration's row of the report, from its measured frames, and
-/// its last frame's pictures.
-fn result_row(config: Config, node: &NodeReport, baseline: &Baseline) -> (ResultRow, Picture) {
-    let time_ms = metrics::median(&config.times);
-    let column = |f: fn(&Decisions) -> f64| {
-        metrics::mean(&config.decisions.iter().map(f).collect::<Vec<_>>())
-    };
-    let error =
-        |f: fn(&FrameError) -> f64| metrics::mean(&config.errors.iter().map(f).collect::<Vec<_>>());
-    let hit_rate = column(|d| d.hit);
-    let f = node.p_over_t;
-    let ideal = 1.0 / (1.0 - hit_rate * f).max(1e-6);
-    // The most the variant could reach were its payload and shade
-    // free: its passes' fixed costs alone.
-    // (Without GPU timestamps there are no pass times: the frame's.)
-    let (fixed_frame_ms, fixed_passes) = probed(
-        baseline.probes,
-        ProbeOf::Variant(config.node, config.variant),
-    )
-    .unwrap_or_default();
-    let fixed_ms = if fixed_passes.is_empty() {
-        fixed_frame_ms
-    } else {
-        fixed_passes.iter().map(|p| p.time_ms).sum()
-    };
-    let bound = speedup(baseline.reference_ms, fixed_ms);
-    let measured_speedup = speedup(baseline.reference_ms, time_ms);
-    let passes = pass_medians(&config.passes);
-    let row = ResultRow {
-        node: node.id.clone(),
-        node_text: node.text.clone(),
-        variant: config.variant,
-        refresh_period: config.setting.refresh_period,
-        refresh_quad: config.setting.refresh_quad,
-        reconstruction: config.setting.reconstruction,
-        adaptive: config.setting.adaptive,
-        cache_format: config.setting.cache_format,
-        depth_epsilon: config.setting.depth_epsilon,
-        time_ms,
-        passes,
-        speedup: measured_speedup,
-        speedup_ci: metrics::speedup_interval(baseline.reference_times, &config.times),
-        psnr: error(|e| e.psnr),
-        psnr_frame: error(|e| e.psnr_frame),
-        worst_psnr: config
-            .errors
-            .iter()
-            .map(|e| e.psnr)
-            .fold(metrics::PSNR_CAP, f64::min),
-        flicker: metrics::mean(&config.flicker),
-        ssim: error(|e| e.ssim),
-        max_abs_error: config
-            .errors
-            .iter()
-            .map(|e| e.max_abs_error)
-            .fold(0.0, f64::max),
-        above_threshold: error(|e| e.above_threshold),
-        coverage: metrics::mean(
-            &config
-                .decisions
-                .iter()
-                .map(|d| d.covered as f64 / baseline.pixels.max(1) as f64)
-                .collect::<Vec<_>>(),
-        ),
-        hit_rate,
-        miss_rate: column(Decisions::miss),
-        offscreen_rate: column(|d| d.offscreen),
-        disocclusion_rate: column(|d| d.disoccluded),
-        invalid_rate: column(|d| d.invalid),
-        refresh_rate: column(|d| d.refresh),
-        max_age: config.ages.len().saturating_sub(1) as u32,
-        age_histogram: config.ages.clone(),
-        p_over_t: node.p_over_t,
-        ideal_speedup: ideal,
-        fixed_cost_ms: fixed_passes,
-        bound_with_fixed_costs: bound,
-        share_of_ideal: measured_speedup / ideal,
-        pareto_psnr: false,
-        pareto_ssim: false,
-        frame_stats: config
-            .times
-            .iter()
-            .zip(&config.errors)
-            .zip(&config.decisions)
-            .enumerate()
-            .map(|(frame, ((&time_ms, e), d))| FrameStats {
-                time_ms,
-                psnr: e.psnr,
-                psnr_frame: e.psnr_frame,
-                flicker: frame
-                    .checked_sub(1)
-                    .and_then(|i| config.flicker.get(i).copied())
-                    .unwrap_or(0.0),
-                ssim: e.ssim,
-                max_abs_error: e.max_abs_error,
-                hit_rate: d.hit,
-                miss_rate: d.miss(),
-                refresh_rate: d.refresh,
-            })
-            .collect(),
-    };
-    let (color, classes) = config.last;
-    (row, (metrics::rgba8(&color), classes))
-}
-
-/// The misses each declared effect causes alone: a run from `runner` per
-/// moving effect, the scene with only that effect, its decisions averaged
-/// over the measured frames (disocclusion is what the others cause).
-fn miss_causes(
-    gpu: &Gpu,
-    runner: &dyn Fn() -> Result<Runner, String>,
-    scene: &Scene,
-    inputs_of: &dyn Fn(&Scene, u32) -> Result<FrameInputs, Error>,
-    warmup: u32,
-    frames: u32,
-) -> Result<Vec<MissCause>, Error> {
-    let mut causes = Vec::new();
-    let moving = scene
-        .effects
-        .iter()
-        .filter(|e| !matches!(e, scene::Effect::Disocclusion));
-    for &effect in moving {
-        let alone = Scene {
-            effects: vec![effect],
-            ..scene.clone()
-        };
-        let mut runner = runner().map_err(fail)?;
-        let mut decisions = Vec::new();
-        for frame in 0..warmup + frames {
-            runner
-                .frame(gpu, &inputs_of(&alone, frame)?, None)
-                .map_err(fail)?;
-            if frame >= warmup {
-                let classes = runtime::read_texture(gpu, runner.classes(), 4).map_err(fail)?;
-                decisions.push(metrics::decisions(&classes));
-            }
-        }
-        let column =
-            |f: fn(&Decisions) -> f64| metrics::mean(&decisions.iter().map(f).collect::<Vec<_>>());
-        causes.push(MissCause {
-            effect,
-            miss_rate: column(Decisions::miss),
-            offscreen_rate: column(|d| d.offscreen),
-            disocclusion_rate: column(|d| d.disoccluded),
-        });
-    }
-    Ok(causes)
 }
 
 /// The original (`runners[0]`) and the run's winner (`runners[1]`) again,
