@@ -15,6 +15,7 @@ use std::ops::Range;
 
 use bevy::core_pipeline::core_3d::Opaque3d;
 use bevy::ecs::entity::EntityHash;
+use bevy::ecs::system::SystemParam;
 use bevy::mesh::{BaseMeshPipelineKey, MeshVertexBufferLayoutRef};
 use bevy::pbr::{
     DrawMesh, MeshPipeline, RenderMeshInstances, SetMaterialBindGroup, SetMeshBindGroup,
@@ -203,14 +204,20 @@ fn respecialize_handed_back_views(
     dirty.views.extend(taken.handed_back.drain());
 }
 
+/// What queueing a mesh into the phase reads: the phase's draw
+/// functions, and Bevy's prepared meshes and their instances.
+#[derive(SystemParam)]
+pub(crate) struct MeshQueueing<'w> {
+    draw_functions: Res<'w, DrawFunctions<CachedMesh3d>>,
+    render_meshes: Res<'w, RenderAssets<RenderMesh>>,
+    render_mesh_instances: Res<'w, RenderMeshInstances>,
+}
+
 /// Queues the view's visible cached meshes into its phase, every frame
 /// (the phase is small: the meshes of one material), and notes their
 /// vertex layouts.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn queue_cached_meshes(
-    draw_functions: Res<DrawFunctions<CachedMesh3d>>,
-    render_meshes: Res<RenderAssets<RenderMesh>>,
-    render_mesh_instances: Res<RenderMeshInstances>,
+    meshes: MeshQueueing,
     mut phases: ResMut<ViewSortedRenderPhases<CachedMesh3d>>,
     views: Query<(&ExtractedView, &RenderVisibleEntities)>,
     cached: Query<(), With<CachedMaterial>>,
@@ -218,6 +225,11 @@ pub(crate) fn queue_cached_meshes(
     stats: Res<CacheStats>,
     mut refused: Local<HashSet<MainEntity>>,
 ) {
+    let MeshQueueing {
+        draw_functions,
+        render_meshes,
+        render_mesh_instances,
+    } = meshes;
     let draw = draw_functions.read().id::<DrawCachedMesh>();
     layouts.0.clear();
     for (view, visible) in &views {

@@ -6,6 +6,7 @@ use std::sync::{Arc, Mutex};
 
 use bevy::core_pipeline::core_3d::main_opaque_pass_3d;
 use bevy::core_pipeline::{schedule::Core3d, Core3dSystems};
+use bevy::ecs::system::SystemParam;
 use bevy::log::error;
 use bevy::pbr::{
     MeshPipeline, MeshPipelineViewLayoutKey, PreparedMaterial, RenderMaterialInstances,
@@ -150,19 +151,26 @@ fn copyable_view_uniforms(mut uniforms: ResMut<ViewUniforms>) {
     }
 }
 
+/// What a view's cache is made from: the variant, the device, and Bevy's
+/// mesh pipeline, view keys, the cached meshes' vertex layouts and their
+/// materials.
+#[derive(SystemParam)]
+struct CacheSources<'w> {
+    variant: Res<'w, CachedVariant>,
+    device: Res<'w, RenderDevice>,
+    mesh_pipeline: Res<'w, MeshPipeline>,
+    view_keys: Res<'w, ViewKeyCache>,
+    layouts: Res<'w, QueuedLayouts>,
+    material_instances: Res<'w, RenderMaterialInstances>,
+    materials: Res<'w, ErasedRenderAssets<PreparedMaterial>>,
+}
+
 /// Makes, keeps or drops each caching view's cache, before the cached
 /// meshes are taken from Bevy's opaque phase (only views with a cache
 /// draw them).
-#[allow(clippy::too_many_arguments)]
 fn prepare_view_caches(
-    variant: Res<CachedVariant>,
-    device: Res<RenderDevice>,
-    mesh_pipeline: Res<MeshPipeline>,
-    view_keys: Res<ViewKeyCache>,
-    layouts: Res<QueuedLayouts>,
+    sources: CacheSources,
     phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
-    material_instances: Res<RenderMaterialInstances>,
-    materials: Res<ErasedRenderAssets<PreparedMaterial>>,
     views: Query<(&ExtractedView, &ExtractedCamera, &ReprojectionCache)>,
     mut caches: ResMut<ViewCaches>,
     mut caching: ResMut<CachingViews>,
@@ -184,13 +192,7 @@ fn prepare_view_caches(
             }
             continue;
         }
-        let key = match cache_key(
-            &id,
-            &items,
-            settings,
-            (&view_keys, &layouts),
-            (&material_instances, &materials),
-        ) {
+        let key = match cache_key(&id, &items, settings, &sources) {
             Ok(Some(key)) => key,
             // The material or the view is not prepared yet (or again, after
             // a change): a view that cached goes on with the cache it has,
@@ -217,16 +219,10 @@ fn prepare_view_caches(
             .physical_target_size
             .map(|s| (s.x, s.y))
             .unwrap_or((1, 1));
-        let slot = caches.0.entry(id).or_insert_with(|| {
-            Mutex::new(make_cache(
-                &variant,
-                &device,
-                &mesh_pipeline,
-                key.clone(),
-                size,
-                &stats,
-            ))
-        });
+        let slot = caches
+            .0
+            .entry(id)
+            .or_insert_with(|| Mutex::new(make_cache(&sources, key.clone(), size, &stats)));
         let slot = slot
             .get_mut()
             .unwrap_or_else(|poisoned| poisoned.into_inner());
@@ -235,7 +231,7 @@ fn prepare_view_caches(
             Slot::Failed(key) => key,
         };
         if *current != key {
-            *slot = make_cache(&variant, &device, &mesh_pipeline, key, size, &stats);
+            *slot = make_cache(&sources, key, size, &stats);
         }
         if matches!(slot, Slot::Ready(_)) {
             caching.0.insert(id);
@@ -249,12 +245,10 @@ fn cache_key(
     view: &RetainedViewEntity,
     items: &[&CachedMesh3d],
     settings: &ReprojectionCache,
-    (view_keys, layouts): (&ViewKeyCache, &QueuedLayouts),
-    (material_instances, materials): (
-        &RenderMaterialInstances,
-        &ErasedRenderAssets<PreparedMaterial>,
-    ),
+    sources: &CacheSources,
 ) -> Result<Option<CacheKey>, String> {
+    let (view_keys, layouts) = (&sources.view_keys, &sources.layouts);
+    let (material_instances, materials) = (&sources.material_instances, &sources.materials);
     use bevy::render::render_phase::PhaseItem;
     let Some(view_key) = view_keys.get(view).copied() else {
         return Ok(None);
@@ -315,15 +309,15 @@ fn cache_key(
 
 /// Makes a view's cache: the host's pipelines from Bevy's layouts, the
 /// view's copy and its twin. A failure is logged once.
-fn make_cache(
-    variant: &CachedVariant,
-    device: &RenderDevice,
-    mesh_pipeline: &MeshPipeline,
-    key: CacheKey,
-    size: (u32, u32),
-    stats: &CacheStats,
-) -> Slot {
-    match try_make_cache(variant, device, mesh_pipeline, &key, size) {
+fn make_cache(sources: &CacheSources, key: CacheKey, size: (u32, u32), stats: &CacheStats) -> Slot {
+    let made = try_make_cache(
+        &sources.variant,
+        &sources.device,
+        &sources.mesh_pipeline,
+        &key,
+        size,
+    );
+    match made {
         Ok(cache) => Slot::Ready(Box::new(cache)),
         Err(err) => {
             stats.error(format!(
@@ -454,10 +448,20 @@ fn vertex_attributes(plan: &Plan) -> Result<Vec<bevy::mesh::VertexAttributeDescr
         .collect()
 }
 
+/// What the views' passes draw: the phase of cached meshes, each view's
+/// cache, the views that cache this frame, and Bevy's view uniforms (the
+/// twin's source).
+#[derive(SystemParam)]
+struct CachedDraws<'w> {
+    phases: Res<'w, ViewSortedRenderPhases<CachedMesh3d>>,
+    caches: Res<'w, ViewCaches>,
+    caching: Res<'w, CachingViews>,
+    view_uniforms: Res<'w, ViewUniforms>,
+}
+
 /// Records the view's variant after Bevy's opaque pass: the view's
 /// uniform copied for next frame's twin, then each pass drawing the view's
 /// cached meshes with Bevy's render commands.
-#[allow(clippy::too_many_arguments)]
 fn draw_cached_passes(
     world: &World,
     view: ViewQuery<(
@@ -466,15 +470,18 @@ fn draw_cached_passes(
         &ViewUniformOffset,
         &ReprojectionCache,
     )>,
-    phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
-    caches: Res<ViewCaches>,
-    caching: Res<CachingViews>,
-    view_uniforms: Res<ViewUniforms>,
+    drawn: CachedDraws,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
     stats: Res<CacheStats>,
     mut ctx: RenderContext,
 ) {
+    let CachedDraws {
+        phases,
+        caches,
+        caching,
+        view_uniforms,
+    } = drawn;
     let view_entity = view.entity();
     let (extracted, target, offset, settings) = view.into_inner();
     let id = extracted.retained_view_entity;
