@@ -110,56 +110,6 @@ pub fn tracking(speed: f32, [from, to]: [f32; 2]) -> f32 {
     1.0 - t * t * (3.0 - 2.0 * t)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A bright bar one pixel wide at column `column` of a 16×4 frame.
-    fn bar(column: usize) -> Vec<f32> {
-        let mut frame = vec![0.0f32; 16 * 4 * 4];
-        for y in 0..4 {
-            for c in 0..3 {
-                frame[(y * 16 + column) * 4 + c] = 1.0;
-            }
-        }
-        frame
-    }
-
-    #[test]
-    fn still_frames_integrate_to_themselves() {
-        let frame = bar(5);
-        let out = integrate(&[&frame, &frame], &[[0.0; 2]; 64], [16, 4], 2.2, 8);
-        for p in 0..64 {
-            assert!((out[p * 3] - frame[p * 4]).abs() < 1e-5);
-        }
-    }
-
-    /// A bar moving 2 pixels a displayed frame: shown where it is at each
-    /// frame, the eye sees it sharp; held, it smears over the group.
-    #[test]
-    fn a_held_frame_smears_what_the_eye_tracks() {
-        let motion = vec![[4.0, 0.0]; 64];
-        let moving = [bar(4), bar(6)];
-        let held = [bar(4), bar(4)];
-        let reference = integrate(&[&moving[0], &moving[1]], &motion, [16, 4], 2.2, 8);
-        let same = integrate(&[&moving[0], &moving[1]], &motion, [16, 4], 2.2, 8);
-        let hold = integrate(&[&held[0], &held[1]], &motion, [16, 4], 2.2, 8);
-        assert_eq!(error(&reference, &same), 0.0);
-        assert!(
-            error(&reference, &hold) > 0.05,
-            "{}",
-            error(&reference, &hold)
-        );
-    }
-
-    #[test]
-    fn tracking_ramps_from_one_to_zero() {
-        assert_eq!(tracking(10.0, [70.0, 90.0]), 1.0);
-        assert_eq!(tracking(80.0, [70.0, 90.0]), 0.5);
-        assert_eq!(tracking(95.0, [70.0, 90.0]), 0.0);
-    }
-}
-
 /// Each method's pursuit error over the interval just built: the
 /// interval's displayed frames integrated along I-frame 0's exact
 /// motion (damped where the eye cannot track), against the same of
@@ -218,4 +168,54 @@ pub(super) fn interval_errors(
             .push(error);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A bright bar one pixel wide at column `column` of a 16×4 frame.
+    fn bar(column: usize) -> Vec<f32> {
+        let mut frame = vec![0.0f32; 16 * 4 * 4];
+        for y in 0..4 {
+            for c in 0..3 {
+                frame[(y * 16 + column) * 4 + c] = 1.0;
+            }
+        }
+        frame
+    }
+
+    #[test]
+    fn still_frames_integrate_to_themselves() {
+        let frame = bar(5);
+        let out = integrate(&[&frame, &frame], &[[0.0; 2]; 64], [16, 4], 2.2, 8);
+        for p in 0..64 {
+            assert!((out[p * 3] - frame[p * 4]).abs() < 1e-5);
+        }
+    }
+
+    /// A bar moving 2 pixels a displayed frame: shown where it is at each
+    /// frame, the eye sees it sharp; held, it smears over the group.
+    #[test]
+    fn a_held_frame_smears_what_the_eye_tracks() {
+        let motion = vec![[4.0, 0.0]; 64];
+        let moving = [bar(4), bar(6)];
+        let held = [bar(4), bar(4)];
+        let reference = integrate(&[&moving[0], &moving[1]], &motion, [16, 4], 2.2, 8);
+        let same = integrate(&[&moving[0], &moving[1]], &motion, [16, 4], 2.2, 8);
+        let hold = integrate(&[&held[0], &held[1]], &motion, [16, 4], 2.2, 8);
+        assert_eq!(error(&reference, &same), 0.0);
+        assert!(
+            error(&reference, &hold) > 0.05,
+            "{}",
+            error(&reference, &hold)
+        );
+    }
+
+    #[test]
+    fn tracking_ramps_from_one_to_zero() {
+        assert_eq!(tracking(10.0, [70.0, 90.0]), 1.0);
+        assert_eq!(tracking(80.0, [70.0, 90.0]), 0.5);
+        assert_eq!(tracking(95.0, [70.0, 90.0]), 0.0);
+    }
 }

@@ -26,7 +26,9 @@
 //!    and k). The cross terms are the pruned rest.
 
 pub use crate::report::{Axes, Design, Pruned, Setting};
-use crate::rewrite::{CacheFormat, Options as RewriteOptions, Reconstruction, Variant};
+use crate::rewrite::{
+    CacheFormat, CacheRead, Options as RewriteOptions, Reconstruction, Refusal, Upsampler, Variant,
+};
 
 /// A (node, Δn) is pruned when even its ideal speed-up is below this.
 pub const MIN_IDEAL_SPEEDUP: f64 = 1.1;
@@ -41,7 +43,7 @@ impl Axes {
         Axes {
             refresh_periods: vec![4, 8, 16, 32, 64],
             refresh_quads: vec![1, 2, 4, 8],
-            reconstructions: Reconstruction::CACHE.to_vec(),
+            reconstructions: CacheRead::ALL.map(Reconstruction::from).to_vec(),
             cache_formats: vec![CacheFormat::Rgba16float, CacheFormat::Rgba32float],
             depth_epsilons: vec![epsilon / 4.0, epsilon, epsilon * 4.0],
         }
@@ -70,7 +72,7 @@ impl Axes {
         Some(Setting {
             refresh_period: pick(&self.refresh_periods, defaults.refresh_period)?,
             refresh_quad: pick(&self.refresh_quads, defaults.refresh_quad)?,
-            reconstruction: pick(&self.reconstructions, defaults.reconstruction)?,
+            reconstruction: pick(&self.reconstructions, defaults.reconstruction.into())?,
             cache_format: pick(&self.cache_formats, defaults.cache_format)?,
             depth_epsilon: pick(&self.depth_epsilons, defaults.depth_epsilon)?,
             adaptive: false,
@@ -103,30 +105,31 @@ impl Axes {
 }
 
 impl Setting {
-    /// Rewrite options with this setting over `base` for `variant`: for
-    /// lowres the reconstruction is its upsampling's.
+    /// Rewrite options with this setting over `base` for `variant`: its
+    /// reconstruction and adaptive refresh as the variant takes them (a
+    /// cache variant's read-back and refresh, lowres's upsampler and
+    /// reshading); refused where the variant cannot take them.
     pub fn rewrite_options_of(
         &self,
-        variant: crate::rewrite::Variant,
+        variant: Variant,
         base: &RewriteOptions,
-    ) -> RewriteOptions {
+    ) -> Result<RewriteOptions, Refusal> {
         let mut options = self.rewrite_options(base);
-        if variant == crate::rewrite::Variant::Lowres {
-            options.upsampling.reconstruction = self.reconstruction;
-            options.upsampling.reshade = self.adaptive;
-            options.reconstruction = base.reconstruction;
-        } else {
-            options.adaptive_refresh = self.adaptive;
-        }
-        options
+        options.set_reconstruction(variant, self.reconstruction)?;
+        options.set_adaptive(variant, self.adaptive)?;
+        Ok(options)
     }
 
-    /// Rewrite options with this setting over `base`.
+    /// Rewrite options with this setting over `base` as the cache
+    /// variants take it (an upsampler leaves `base`'s read-back).
     pub fn rewrite_options(&self, base: &RewriteOptions) -> RewriteOptions {
         RewriteOptions {
             refresh_period: self.refresh_period,
             refresh_quad: self.refresh_quad,
-            reconstruction: self.reconstruction,
+            reconstruction: self
+                .reconstruction
+                .cache_read()
+                .unwrap_or(base.reconstruction),
             cache_format: self.cache_format,
             depth_epsilon: self.depth_epsilon,
             ..base.clone()
@@ -245,11 +248,12 @@ pub(super) fn variant_settings(
     settings: &[Setting],
     variant: Variant,
     base: &RewriteOptions,
-    lowres: (&[Reconstruction], &[bool]),
+    lowres: (&[Upsampler], &[bool]),
 ) -> Vec<Setting> {
-    match variant {
-        Variant::Lowres => lowres_settings(settings, base, lowres),
-        _ => adaptive_settings(settings, lowres.1, base),
+    if variant.upsamples() {
+        lowres_settings(settings, base, lowres)
+    } else {
+        adaptive_settings(settings, lowres.1, base)
     }
 }
 
@@ -307,7 +311,7 @@ pub(super) fn adaptive_settings(
             let base = Setting {
                 refresh_period: base.refresh_period,
                 refresh_quad: base.refresh_quad,
-                reconstruction: base.reconstruction,
+                reconstruction: base.reconstruction.into(),
                 cache_format: base.cache_format,
                 depth_epsilon: base.depth_epsilon,
                 adaptive: true,
@@ -325,13 +329,14 @@ pub(super) fn adaptive_settings(
 pub(super) fn lowres_settings(
     settings: &[Setting],
     base: &RewriteOptions,
-    (reconstructions, reshades): (&[Reconstruction], &[bool]),
+    (upsamplers, reshades): (&[Upsampler], &[bool]),
 ) -> Vec<Setting> {
     let s = base.upsampling.factor;
     let mut formats: Vec<CacheFormat> = settings.iter().map(|s| s.cache_format).collect();
     formats.dedup();
     let mut out = Vec::new();
-    for &reconstruction in reconstructions {
+    for &upsampler in upsamplers {
+        let reconstruction = upsampler.into();
         for &cache_format in &formats {
             for &adaptive in reshades {
                 let setting = Setting {

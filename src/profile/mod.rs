@@ -53,7 +53,7 @@ use crate::report::{
     Confirmation, Device, GridReport, MissCause, NodeReport, Reference, ReferenceCheck, Report,
     ResultRow,
 };
-use crate::rewrite::{self, CacheFormat, Options as RewriteOptions, Reconstruction, Variant};
+use crate::rewrite::{self, CacheFormat, CacheRead, Options as RewriteOptions, Upsampler, Variant};
 use crate::runtime::{FrameInputs, Runner};
 use crate::scene::{self, Scene};
 use config::{probed, speedup, Config, Probe, ProbeOf};
@@ -78,11 +78,11 @@ pub struct Options {
     pub refresh_periods: Vec<u32>,
     /// The k values (refresh blocks of k×k pixels) to measure.
     pub refresh_quads: Vec<u32>,
-    /// The reconstructions to measure.
-    pub reconstructions: Vec<Reconstruction>,
-    /// The reconstructions lowres is measured with (its Δn and k are its
+    /// The cache variants' reads of their cache to measure.
+    pub reconstructions: Vec<CacheRead>,
+    /// The upsamplers lowres is measured with (its Δn and k are its
     /// factor: s² and s); spatio-temporal by default, all five in a sweep.
-    pub lowres_reconstructions: Vec<Reconstruction>,
+    pub lowres_reconstructions: Vec<Upsampler>,
     /// Lowres's factor and knobs.
     pub upsampling: crate::rewrite::Upsampling,
     /// Adaptive refresh to measure, for every variant: off, on, or both (a
@@ -132,17 +132,11 @@ impl Options {
         Options {
             refresh_periods: axes.refresh_periods,
             refresh_quads: axes.refresh_quads,
-            reconstructions: axes.reconstructions,
+            reconstructions: CacheRead::ALL.to_vec(),
             cache_formats: axes.cache_formats,
             depth_epsilons: axes.depth_epsilons,
             adaptive_refresh: vec![false, true],
-            lowres_reconstructions: vec![
-                Reconstruction::Nearest,
-                Reconstruction::Bilinear,
-                Reconstruction::Spatial,
-                Reconstruction::Temporal,
-                Reconstruction::SpatioTemporal,
-            ],
+            lowres_reconstructions: Upsampler::ALL.to_vec(),
             design: Design::Planes,
             ..self
         }
@@ -152,7 +146,7 @@ impl Options {
         Axes {
             refresh_periods: self.refresh_periods.clone(),
             refresh_quads: self.refresh_quads.clone(),
-            reconstructions: self.reconstructions.clone(),
+            reconstructions: self.reconstructions.iter().map(|&r| r.into()).collect(),
             cache_formats: self.cache_formats.clone(),
             depth_epsilons: self.depth_epsilons.clone(),
         }
@@ -166,8 +160,8 @@ impl Default for Options {
             variants: Variant::ALL.to_vec(),
             refresh_periods: vec![32],
             refresh_quads: vec![4],
-            reconstructions: vec![Reconstruction::Bilinear],
-            lowres_reconstructions: vec![Reconstruction::SpatioTemporal],
+            reconstructions: vec![CacheRead::Bilinear],
+            lowres_reconstructions: vec![Upsampler::SpatioTemporal],
             adaptive_refresh: vec![false],
             upsampling: crate::rewrite::DEFAULT_UPSAMPLING,
             cache_formats: vec![CacheFormat::Rgba16float],
@@ -468,7 +462,8 @@ impl RunContext<'_> {
             upsampling: self
                 .options
                 .variants
-                .contains(&Variant::Lowres)
+                .iter()
+                .any(|v| v.upsamples())
                 .then(|| self.prepared.defaults.upsampling.clone()),
             shard: self.options.shard,
             grid_nodes: findings.grid_nodes,
@@ -593,7 +588,7 @@ type GridNode<'a> = (&'a Candidate, &'a [Setting]);
 fn configurations(
     (shader, analysis): (&Shader, &analysis::Analysis),
     (nodes, takes): (&[GridNode], &[std::ops::Range<usize>]),
-    (variants, lowres): (&[Variant], (&[Reconstruction], &[bool])),
+    (variants, lowres): (&[Variant], (&[Upsampler], &[bool])),
     base: &RewriteOptions,
     new_runner: &NewRunner,
     (size, error_threshold): ([u32; 2], f64),
@@ -623,13 +618,12 @@ fn configurations(
                     setting.depth_epsilon,
                     if setting.adaptive { " adaptive" } else { "" }
                 );
-                let rewritten = match rewrite::rewrite(
-                    shader,
-                    analysis,
-                    candidate,
-                    variant,
-                    &setting.rewrite_options_of(variant, base),
-                ) {
+                let rewritten = setting
+                    .rewrite_options_of(variant, base)
+                    .and_then(|options| {
+                        rewrite::rewrite(shader, analysis, candidate, variant, &options)
+                    });
+                let rewritten = match rewritten {
                     Ok(rewritten) => rewritten,
                     Err(refusal) => {
                         progress.refused(&what, &refusal.reason);
@@ -742,19 +736,15 @@ pub fn rewrite_of(
         depth_epsilon: row.depth_epsilon,
         adaptive: row.adaptive,
     };
-    rewrite::rewrite(
-        shader,
-        analysis,
-        candidate,
-        row.variant,
-        &setting.rewrite_options_of(row.variant, defaults),
-    )
-    .map_err(|refusal| {
-        Error::plain(Diagnostic::error(format!(
-            "node {} {}: {}",
-            row.node, row.variant, refusal.reason
-        )))
-    })
+    setting
+        .rewrite_options_of(row.variant, defaults)
+        .and_then(|options| rewrite::rewrite(shader, analysis, candidate, row.variant, &options))
+        .map_err(|refusal| {
+            Error::plain(Diagnostic::error(format!(
+                "node {} {}: {}",
+                row.node, row.variant, refusal.reason
+            )))
+        })
 }
 
 /// Each shader file of a variant as WGSL text, by the name its plan uses.

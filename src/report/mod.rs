@@ -680,12 +680,19 @@ impl ResultRow {
             self.reconstruction.as_str(),
             self.cache_format.as_str(),
             self.depth_epsilon,
-            match (self.adaptive, self.variant) {
-                (false, _) => "",
-                (true, Variant::Lowres) => ", unreliable pixels re-shaded",
-                (true, _) => ", adaptive refresh",
-            }
+            self.adaptive_words()
         )
+    }
+
+    /// Its adaptive refresh in words, after a comma (nothing when off):
+    /// lowres re-shades its unreliable pixels, a cache variant refreshes
+    /// its changed values early.
+    pub fn adaptive_words(&self) -> &'static str {
+        match (self.adaptive, self.variant.upsamples()) {
+            (false, _) => "",
+            (true, true) => ", unreliable pixels re-shaded",
+            (true, false) => ", adaptive refresh",
+        }
     }
 }
 

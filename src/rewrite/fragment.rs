@@ -18,7 +18,7 @@ use naga::{Binding, Expression, Function, Handle, Module, Statement, TypeInner};
 
 use super::builder::{location, Builder};
 use super::helpers::Pieces;
-use super::stage::{Stage, Writes};
+use super::stage::{CacheStage, Stage, Writes};
 use super::Refusal;
 
 /// Whether the pass of `stage` reprojects: the stages that look the
@@ -26,7 +26,8 @@ use super::Refusal;
 /// too (they compare it with the cached value).
 pub(super) fn reprojects_in(stage: Stage, pieces: &Pieces) -> bool {
     stage.reprojects()
-        || (pieces.adaptive.is_some() && matches!(stage, Stage::Full | Stage::Payload))
+        || (pieces.adaptive.is_some()
+            && matches!(stage, Stage::Cache(CacheStage::Full | CacheStage::Payload)))
 }
 
 /// The `@location`s of a fragment result (a struct's members or the value).
@@ -163,17 +164,10 @@ pub(super) fn read_varyings(b: &mut Builder, at: &VaryingsAt) -> Fragment {
 pub(super) fn entry_point(
     module: &mut Module,
     pieces: &Pieces,
-    stage: Stage,
+    stage: CacheStage,
     inputs: Inputs,
 ) -> Result<Function, Refusal> {
-    if matches!(
-        stage,
-        Stage::GBuffer | Stage::Samples | Stage::Upsample | Stage::Reshade
-    ) {
-        return Err(Refusal::internal(format!(
-            "the {stage:?} pass is built by its own module"
-        )));
-    }
+    let writes = Stage::Cache(stage).writes();
     // Where the inputs come from: the arguments made here, or the G-buffer.
     enum Reader<'g> {
         Arguments(VaryingsAt),
@@ -181,7 +175,8 @@ pub(super) fn entry_point(
     }
     let (arguments, reader) = match inputs {
         Inputs::Varyings => {
-            let (arguments, at) = varying_arguments(module, pieces, reprojects_in(stage, pieces));
+            let reprojects = reprojects_in(Stage::Cache(stage), pieces);
+            let (arguments, at) = varying_arguments(module, pieces, reprojects);
             (arguments, Reader::Arguments(at))
         }
         Inputs::Screen(screen) => (
@@ -189,13 +184,13 @@ pub(super) fn entry_point(
             Reader::Screen(screen),
         ),
     };
-    let (result_ty, cache_member) = output_type(module, pieces, stage.writes());
+    let (result_ty, cache_member) = output_type(module, pieces, writes);
     let mut b = Builder::new(Function {
         name: Some(pieces.name.clone()),
         arguments,
         result: Some(naga::FunctionResult {
             ty: result_ty,
-            binding: match stage.writes() {
+            binding: match writes {
                 Writes::Classes => Some(location(0)),
                 Writes::Color => pieces.result.binding.clone(),
                 // A struct: its members carry the bindings.
@@ -221,7 +216,7 @@ pub(super) fn entry_point(
     let previous = previous
         .ok_or_else(|| Refusal::internal(format!("{stage:?} reads no previous clip position")));
 
-    if stage == Stage::Classify {
+    if stage == CacheStage::Classify {
         classify_return(&mut b, pieces, (previous?, frag_coord), &originals);
         return Ok(b.finish());
     }
@@ -243,7 +238,7 @@ pub(super) fn entry_point(
         &mut b,
         module,
         pieces,
-        stage,
+        Stage::Cache(stage),
         &at,
         (payload.value, age),
         output,
@@ -300,7 +295,7 @@ fn payload_of(
     b: &mut Builder,
     module: &Module,
     pieces: &Pieces,
-    stage: Stage,
+    stage: CacheStage,
     at: &Fragment,
 ) -> Result<PassPayload, Refusal> {
     let previous = || {
@@ -313,7 +308,7 @@ fn payload_of(
         deferred_kill: None,
     };
     Ok(match stage {
-        Stage::OnePass => {
+        CacheStage::OnePass => {
             let (lookup, reuse) = reuse_condition(b, pieces, previous()?, at.frag_coord);
             let reused_age = b.call(pieces.age_written, vec![lookup, reuse]);
             let value = one_pass_payload(b, pieces, (lookup, reuse), &at.originals);
@@ -336,14 +331,14 @@ fn payload_of(
                 deferred_kill: None,
             }
         }
-        Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard => {
+        CacheStage::ReuseOrDiscard | CacheStage::ReprojectOrDiscard => {
             let (lookup, reuse) = reuse_condition(b, pieces, previous()?, at.frag_coord);
             let age = b.call(pieces.age_written, vec![lookup, reuse]);
             // naga writes `discard` as OpKill, which ends the invocation:
             // a derivative after it is undefined in every quad a missed
             // lane leaves. When the shade takes derivatives, every lane
             // shades first and the misses are discarded at the end.
-            let shade_derives = stage.writes() != Writes::Cache
+            let shade_derives = Stage::Cache(stage).writes() != Writes::Cache
                 && super::uniformity::needs_derivatives(module, pieces.shade);
             if !shade_derives {
                 kill_unless(b, reuse);
@@ -355,7 +350,7 @@ fn payload_of(
                 deferred_kill: shade_derives.then_some(reuse),
             }
         }
-        Stage::Full | Stage::Payload => {
+        CacheStage::Full | CacheStage::Payload => {
             let value = b.call(pieces.payload, at.originals.clone());
             match pieces.adaptive {
                 Some(adaptive) => {
@@ -371,13 +366,12 @@ fn payload_of(
                 None => plain(value),
             }
         }
-        Stage::ShadeFromCache => {
+        CacheStage::ShadeFromCache => {
             let cached = b.call(pieces.current, vec![at.frag_coord]);
             plain(from_vec4(b, cached, pieces.components))
         }
-        Stage::Classify | Stage::GBuffer | Stage::Samples | Stage::Upsample | Stage::Reshade => {
-            return Err(Refusal::internal(format!("{stage:?} has no payload")))
-        }
+        // Its entry point returns the classes before any payload.
+        CacheStage::Classify => return Err(Refusal::internal("the classify pass has no payload")),
     })
 }
 

@@ -7,7 +7,7 @@ use naga::{Function, Handle, Module};
 use super::split::Split;
 use super::{cache_helpers, CacheSlot, Options, Refusal};
 use crate::analysis::Candidate;
-use crate::plan::{CacheFormat, Reconstruction};
+use crate::plan::{CacheFormat, CacheRead, Upsampler};
 
 /// The pieces every fragment entry point is built from.
 #[derive(Debug)]
@@ -65,6 +65,14 @@ pub(crate) struct LowresHelpers {
     pub exact_history: Handle<Function>,
 }
 
+/// How a variant's passes read what last frame left: a cache variant's
+/// cache, or lowres's history behind its upsampler.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Readback {
+    Cache(CacheRead),
+    History(Upsampler),
+}
+
 /// The imported helpers a variant's passes call.
 pub(super) struct CacheHelpers {
     lookup: Handle<Function>,
@@ -88,7 +96,8 @@ impl CacheHelpers {
     pub fn import(
         module: &mut Module,
         slot: CacheSlot,
-        (options, lowres): (&Options, bool),
+        options: &Options,
+        readback: Readback,
         candidate: &Candidate,
     ) -> Result<CacheHelpers, Refusal> {
         let imported =
@@ -102,44 +111,44 @@ impl CacheHelpers {
         // rgba16float is filterable: one bilinear sample; rgba32float is
         // not: four loads. Nearest reads one texel of each. Packed
         // reconstructions read the depth from the payload texture instead.
-        let lookup = match (options.reconstruction, options.cache_format) {
+        let lookup = match (readback, options.cache_format) {
             // Lowres reads its history bilinearly (with nearest and
             // bilinear upsampling it reads none).
-            (Reconstruction::Nearest, _) => "cache_lookup_nearest",
+            (Readback::Cache(CacheRead::Nearest) | Readback::History(Upsampler::Nearest), _) => {
+                "cache_lookup_nearest"
+            }
             (
-                Reconstruction::Bilinear
-                | Reconstruction::Spatial
-                | Reconstruction::Temporal
-                | Reconstruction::SpatioTemporal,
+                Readback::Cache(CacheRead::Bilinear) | Readback::History(_),
                 CacheFormat::Rgba16float,
             ) => "cache_lookup",
             (
-                Reconstruction::Bilinear
-                | Reconstruction::Spatial
-                | Reconstruction::Temporal
-                | Reconstruction::SpatioTemporal,
+                Readback::Cache(CacheRead::Bilinear) | Readback::History(_),
                 CacheFormat::Rgba32float,
             ) => "cache_lookup_loads",
-            (Reconstruction::NearestPacked, _) => "cache_lookup_nearest_packed",
-            (Reconstruction::BilinearPacked, CacheFormat::Rgba16float) => "cache_lookup_packed",
-            (Reconstruction::BilinearPacked, CacheFormat::Rgba32float) => {
+            (Readback::Cache(CacheRead::NearestPacked), _) => "cache_lookup_nearest_packed",
+            (Readback::Cache(CacheRead::BilinearPacked), CacheFormat::Rgba16float) => {
+                "cache_lookup_packed"
+            }
+            (Readback::Cache(CacheRead::BilinearPacked), CacheFormat::Rgba32float) => {
                 "cache_lookup_loads_packed"
             }
         };
-        let pack = if options.reconstruction.packs_depth() {
-            if candidate.components > 3 {
-                return Err(Refusal::new(format!(
-                    "{} keeps the depth in the cache's fourth channel, and this payload has four components; use {} or {}",
-                    options.reconstruction.as_str(),
-                    Reconstruction::Bilinear.as_str(),
-                    Reconstruction::Nearest.as_str()
-                )));
+        let pack = match readback {
+            Readback::Cache(read) if read.packs_depth() => {
+                if candidate.components > 3 {
+                    return Err(Refusal::new(format!(
+                        "{} keeps the depth in the cache's fourth channel, and this payload has four components; use {} or {}",
+                        read.as_str(),
+                        CacheRead::Bilinear.as_str(),
+                        CacheRead::Nearest.as_str()
+                    )));
+                }
+                Some(helper("cache_pack")?)
             }
-            Some(helper("cache_pack")?)
-        } else {
-            None
+            _ => None,
         };
         let vec4 = super::builder::vec4_type(module);
+        let lowres = matches!(readback, Readback::History(_));
         let adaptive = if options.adaptive_refresh && !lowres {
             Some(helper("cache_adaptive_age")?)
         } else {

@@ -27,17 +27,37 @@ use super::builder::{location, Builder};
 use super::copy::FunctionCopy;
 use super::fragment;
 use super::helpers::{LowresHelpers, Pieces};
+use super::stage::{LowresStage, Stage};
 use super::Refusal;
 use crate::analysis::graph::ExprSet;
-use crate::plan::Reconstruction;
+use crate::plan::{Upsampler, Upsampling};
 
-/// Whether a reconstruction reads the history (and so the samples pass
-/// takes their temporal gradient): temporal and spatio-temporal.
-fn reads_history(reconstruction: Reconstruction) -> bool {
-    matches!(
-        reconstruction,
-        Reconstruction::Temporal | Reconstruction::SpatioTemporal
-    )
+/// Lowres's passes: the samples, the upsampling, and with adaptive
+/// refresh the reshading of the pixels it cannot vouch for.
+pub(crate) fn stages(upsampling: &Upsampling) -> Vec<Stage> {
+    let mut stages = vec![LowresStage::Samples, LowresStage::Upsample];
+    if upsampling.reshade {
+        stages.push(LowresStage::Reshade);
+    }
+    stages.into_iter().map(Stage::Lowres).collect()
+}
+
+/// Why lowres cannot be built on a module without its vertex stage.
+pub(crate) const NEEDS_VERTEX_STAGE: &str = "lowres shades its samples with the projection jittered in the vertex stage, and this module has no vertex stage (it is composed with the host's): give the module with the vertex stage (`--vertex FILE`, `Build::vertex_shader`) so the rewrite can jitter it";
+
+/// The fragment entry point of lowres's pass `stage`.
+pub(crate) fn entry(
+    module: &mut Module,
+    pieces: &Pieces,
+    stage: LowresStage,
+    upsampling: &Upsampling,
+) -> Result<Function, Refusal> {
+    let helpers = &pieces.lowres;
+    match stage {
+        LowresStage::Samples => samples_entry(module, pieces, helpers, upsampling),
+        LowresStage::Upsample => upsample_entry(module, pieces, helpers, upsampling),
+        LowresStage::Reshade => reshade_entry(module, pieces, helpers),
+    }
 }
 
 /// The history where the fragment was (`before`, `hit`): looked up where
@@ -46,9 +66,9 @@ fn history(
     b: &mut Builder,
     pieces: &Pieces,
     previous: Handle<Expression>,
-    reconstruction: Reconstruction,
+    upsampler: Upsampler,
 ) -> (Handle<Expression>, Handle<Expression>) {
-    if reads_history(reconstruction) {
+    if upsampler.reads_history() {
         let lookup = b.call(pieces.lowres.history, vec![previous]);
         (b.member(lookup, 0), b.member(lookup, 1))
     } else {
@@ -58,20 +78,15 @@ fn history(
     }
 }
 
-/// `cache_upsample`'s mode for a reconstruction.
-pub(crate) fn mode(reconstruction: Reconstruction) -> Result<u32, Refusal> {
-    Ok(match reconstruction {
-        Reconstruction::Nearest => 0,
-        Reconstruction::Bilinear => 1,
-        Reconstruction::Spatial => 2,
-        Reconstruction::Temporal => 3,
-        Reconstruction::SpatioTemporal => 4,
-        other => {
-            return Err(Refusal::new(format!(
-                "lowres rebuilds the payload from its samples: its reconstruction is nearest, bilinear, spatial, temporal or spatio-temporal, not {other}"
-            )))
-        }
-    })
+/// `cache_upsample`'s mode for an upsampler.
+fn mode(upsampler: Upsampler) -> u32 {
+    match upsampler {
+        Upsampler::Nearest => 0,
+        Upsampler::Bilinear => 1,
+        Upsampler::Spatial => 2,
+        Upsampler::Temporal => 3,
+        Upsampler::SpatioTemporal => 4,
+    }
 }
 
 /// Where the fragment's normal comes from: an input the shader
@@ -176,13 +191,13 @@ fn literal_u32(b: &mut Builder, value: u32) -> Handle<Expression> {
 /// Pass 1's fragment entry point: the payload with its level of detail
 /// biased by −log2 s, written to the samples (location 0), and the
 /// sample's geometry texel (location 1).
-pub(crate) fn samples_entry(
+fn samples_entry(
     module: &mut Module,
     pieces: &Pieces,
     helpers: &LowresHelpers,
-    (factor, reconstruction): (u32, Reconstruction),
+    upsampling: &Upsampling,
 ) -> Result<Function, Refusal> {
-    let payload = biased_payload(module, pieces.payload, factor)?;
+    let payload = biased_payload(module, pieces.payload, upsampling.factor)?;
     let output = two_member_output(module, "LowresSamples", pieces.vec4, pieces.vec4);
     let (mut b, frag) = entry_builder(module, pieces, true, output);
     let previous = frag
@@ -199,7 +214,7 @@ pub(crate) fn samples_entry(
     let value = b.call(payload, frag.originals.clone());
     let value = fragment::to_vec4(&mut b, value, pieces.components, pieces.vec4);
     b.name(value, "sample");
-    let (before, hit) = history(&mut b, pieces, previous, reconstruction);
+    let (before, hit) = history(&mut b, pieces, previous, upsampling.reconstruction);
     let components = literal_u32(&mut b, pieces.components);
     let geometry = b.call(
         helpers.sample_texel,
@@ -220,13 +235,14 @@ pub(crate) fn samples_entry(
 /// `cache_upsample`, the shading from it, and the result and history
 /// written after the original outputs (the cache at the first free
 /// location, the history at the next).
-pub(crate) fn upsample_entry(
+fn upsample_entry(
     module: &mut Module,
     pieces: &Pieces,
     helpers: &LowresHelpers,
-    (reconstruction, reshade): (Reconstruction, bool),
+    upsampling: &Upsampling,
 ) -> Result<Function, Refusal> {
-    let mode = mode(reconstruction)?;
+    let (reconstruction, reshade) = (upsampling.reconstruction, upsampling.reshade);
+    let mode = mode(reconstruction);
     let output = fragment::color_and_cache_output(module, pieces, pieces.vec4);
     let (mut b, frag) = entry_builder(module, pieces, true, output.0);
     let previous = frag
@@ -279,7 +295,7 @@ pub(crate) fn upsample_entry(
 /// Pass 3 with adaptive refresh: the original payload at full resolution
 /// where pass 2 discarded (the depth test passes only there), the shading
 /// from it, the payload and an exact history (weight 1, gradient 0).
-pub(crate) fn reshade_entry(
+fn reshade_entry(
     module: &mut Module,
     pieces: &Pieces,
     helpers: &LowresHelpers,

@@ -35,6 +35,7 @@ pub mod reprojection;
 mod split;
 pub(crate) mod stage;
 pub mod uniformity;
+mod variants;
 pub mod vertex;
 
 use std::fmt;
@@ -46,45 +47,26 @@ use crate::analysis::{Analysis, Candidate};
 use crate::front::Shader;
 use crate::plan::Plan;
 use helpers::Pieces;
-use stage::Stage;
+use stage::{CacheStage, Stage};
+use variants::Recipe;
 
 /// The toolchain's cache helpers, imported into every rewritten module.
 pub const CACHE_WGSL: &str = include_str!("../../shaders/cache.wgsl");
 
 pub use crate::plan::{
-    CacheFormat, DepthConvention, Reconstruction, Upsampling, Variant, DEFAULT_DEPTH_EPSILON,
-    DEFAULT_UPSAMPLING, MAX_REFRESH_PERIOD,
+    CacheFormat, CacheRead, DepthConvention, Reconstruction, Upsampler, Upsampling, Variant,
+    DEFAULT_DEPTH_EPSILON, DEFAULT_UPSAMPLING, MAX_REFRESH_PERIOD,
 };
 
 /// The index of the pass of `variant` that computes the payload alone
 /// (three-pass's pass 2), which the profiler draws over every pixel for
 /// P/T; `None` for a variant without one.
 pub fn payload_pass(variant: Variant) -> Option<usize> {
-    stages(variant).iter().position(|&s| s == Stage::Payload)
-}
-
-/// The passes of each variant, as the stages of the fragment entry point
-/// they run (seed 002, §3).
-fn stages(variant: Variant) -> &'static [Stage] {
-    match variant {
-        Variant::OnePass => &[Stage::OnePass],
-        Variant::TwoPass => &[Stage::ReuseOrDiscard, Stage::Full],
-        Variant::ThreePass => &[
-            Stage::ReprojectOrDiscard,
-            Stage::Payload,
-            Stage::ShadeFromCache,
-        ],
-        // Three-pass's passes in screen space, after the one geometry pass.
-        Variant::Deferred => &[
-            Stage::GBuffer,
-            Stage::ReprojectOrDiscard,
-            Stage::Payload,
-            Stage::ShadeFromCache,
-        ],
-        // The samples at 1/s × 1/s, then the upsampling and shading.
-        Variant::Lowres => &[Stage::Samples, Stage::Upsample],
-        Variant::Reference => &[],
-    }
+    let recipe = Recipe::of(variant, &Options::default()).ok()?;
+    recipe
+        .stages()
+        .iter()
+        .position(|&s| s == Stage::Cache(CacheStage::Payload))
 }
 
 /// How to build the variants.
@@ -105,8 +87,9 @@ pub struct Options {
     pub depth_epsilon: f32,
     /// Which way the host's depth buffer runs.
     pub depth: DepthConvention,
-    /// How the payload and depth are read back where a point was.
-    pub reconstruction: Reconstruction,
+    /// How a cache variant reads the payload and depth back where a
+    /// point was; lowres's is its [`Options::upsampling`]'s.
+    pub reconstruction: CacheRead,
     /// Format of the colour targets, written into the plan.
     pub color_format: crate::plan::TextureFormat,
     /// The vertex entry point that draws with the fragment one; `None`
@@ -153,7 +136,7 @@ impl Default for Options {
             cache_format: CacheFormat::Rgba16float,
             depth_epsilon: DEFAULT_DEPTH_EPSILON,
             depth: DepthConvention::Standard,
-            reconstruction: Reconstruction::Bilinear,
+            reconstruction: CacheRead::Bilinear,
             color_format: crate::plan::TextureFormat::Rgba8Unorm,
             vertex_entry: None,
             free_payload: false,
@@ -398,20 +381,10 @@ fn rewrite_at(
     variant: Variant,
     options: &Options,
 ) -> Result<Rewritten, Refusal> {
-    refuse_settings(variant, options)?;
-    // Lowres reads its history bilinearly and rebuilds the payload as its
-    // upsampling says: that is the plan's reconstruction.
-    let lowres_options;
-    let options = if variant == Variant::Lowres {
-        lowres_options = Options {
-            reconstruction: options.upsampling.reconstruction,
-            ..options.clone()
-        };
-        &lowres_options
-    } else {
-        options
-    };
-    let (options, format_note) = cache_format(variant, options, candidate);
+    let recipe = Recipe::of(variant, options)?;
+    refuse_settings(options)?;
+    let stages = recipe.stages();
+    let (options, format_note) = cache_format(&stages, options, candidate);
     let options = &options;
     let original = &shader.module;
     let entry = &original.entry_points[analysis.entry_index];
@@ -429,41 +402,17 @@ fn rewrite_at(
         crate::cost::Weights::default().default_loop_trips,
     );
     let graph = ExprGraph::new(function, &layout);
-    let slice = split::PayloadSlice::of(original, function, &layout, &graph, node, variant)?;
+    let slice = split::PayloadSlice::of(original, function, &layout, &graph, node, &stages)?;
     // Where the cache's resources go: the first bind group the user's
     // shader leaves free; when it uses all four WebGPU allows, after its
     // last binding in the last one.
     let slot = CacheSlot::for_module(original, options.max_bind_groups);
     let mut module = original.clone();
-    let helpers = helpers::CacheHelpers::import(
-        &mut module,
-        slot,
-        (options, variant == Variant::Lowres),
-        candidate,
-    )?;
-    // A fragment-only module (its vertex stage composed elsewhere) gets
-    // fragment passes that take the previous clip position as an input;
-    // the plan says what the host's vertex stage must output.
-    let vertex = if vertex::is_fragment_only(&module) && options.vertex_entry.is_none() {
-        vertex::fragment_only(&module, analysis.entry_index)
-    } else {
-        let vertex_index = vertex::vertex_entry(
-            &module,
-            analysis.entry_index,
-            options.vertex_entry.as_deref(),
-        )?;
-        let twins = slot.first_binding + first_twin_binding().map_err(Refusal::internal)?;
-        vertex::instrument(
-            &mut module,
-            vertex_index,
-            (slot.group, twins),
-            &options.deforming_inputs,
-        )?
-    };
-    if variant == Variant::Lowres && vertex.entry_index.is_none() {
-        return Err(Refusal::new(
-            "lowres shades its samples with the projection jittered in the vertex stage, and this module has no vertex stage (it is composed with the host's): give the module with the vertex stage (`--vertex FILE`, `Build::vertex_shader`) so the rewrite can jitter it",
-        ));
+    let helpers =
+        helpers::CacheHelpers::import(&mut module, slot, options, recipe.readback(), candidate)?;
+    let vertex = instrumented_vertex(&mut module, analysis, options, slot)?;
+    if let (None, Some(reason)) = (vertex.entry_index, recipe.needs_vertex_stage()) {
+        return Err(Refusal::new(reason));
     }
     mark_positions_invariant(&mut module);
     let functions = split::split(
@@ -482,52 +431,39 @@ fn rewrite_at(
         vertex.previous_location,
     );
     // The deferred variant's G-buffer textures are bound after the twins.
-    let gbuffer = match variant {
-        Variant::Deferred => {
+    let gbuffer = match recipe.screen_space() {
+        Some(read) => {
             let first = slot.first_binding
                 + first_twin_binding().map_err(Refusal::internal)?
                 + vertex.twins.len() as u32;
-            let packs_depth = options.reconstruction.packs_depth();
             Some(gbuffer::GBuffer::new(
                 &mut module,
                 &pieces,
-                packs_depth,
+                read.packs_depth(),
                 (slot.group, first),
             )?)
         }
-        _ => None,
+        None => None,
     };
-    let stage_pass = |stage: Stage, name: String| {
-        pass_module(
-            &module,
-            &pieces,
-            &vertex,
-            entry,
-            (stage, name),
-            gbuffer.as_ref(),
-            (
-                options.upsampling.factor,
-                options.reconstruction,
-                options.upsampling.reshade,
-            ),
-        )
+    let passes_of = PassContext {
+        module: &module,
+        pieces: &pieces,
+        vertex: &vertex,
+        entry,
+        gbuffer: gbuffer.as_ref(),
+        recipe: &recipe,
     };
-    let mut stages = stages(variant).to_vec();
-    // Adaptive refresh: the unreliable pixels shaded in a third pass.
-    if variant == Variant::Lowres && options.upsampling.reshade {
-        stages.push(Stage::Reshade);
-    }
     let mut passes = Vec::new();
     for (index, &stage) in stages.iter().enumerate() {
-        passes.push((stage, stage_pass(stage, format!("pass{}", index + 1))?));
+        passes.push((stage, passes_of.pass(stage, format!("pass{}", index + 1))?));
     }
-    let classify = stage_pass(Stage::Classify, "classify".into())?;
+    let classify = passes_of.pass(Stage::Cache(CacheStage::Classify), "classify".into())?;
 
     let mut plan = plan::build(plan::Inputs {
         shader,
         analysis,
         candidate,
-        variant,
+        recipe: &recipe,
         options,
         slot,
         vertex: &vertex,
@@ -549,22 +485,36 @@ fn rewrite_at(
     })
 }
 
+/// The vertex stage the passes draw with, instrumented: the previous clip
+/// position computed beside the position, its twins bound after the
+/// cache's resources. A fragment-only module (its vertex stage composed
+/// elsewhere) gets fragment passes that take the previous clip position
+/// as an input; the plan says what the host's vertex stage must output.
+fn instrumented_vertex(
+    module: &mut naga::Module,
+    analysis: &Analysis,
+    options: &Options,
+    slot: CacheSlot,
+) -> Result<vertex::VertexStage, Refusal> {
+    if vertex::is_fragment_only(module) && options.vertex_entry.is_none() {
+        return Ok(vertex::fragment_only(module, analysis.entry_index));
+    }
+    let vertex_index = vertex::vertex_entry(
+        module,
+        analysis.entry_index,
+        options.vertex_entry.as_deref(),
+    )?;
+    let twins = slot.first_binding + first_twin_binding().map_err(Refusal::internal)?;
+    vertex::instrument(
+        module,
+        vertex_index,
+        (slot.group, twins),
+        &options.deforming_inputs,
+    )
+}
+
 /// Settings no variant can be built with.
-fn refuse_settings(variant: Variant, options: &Options) -> Result<(), Refusal> {
-    if variant == Variant::Reference {
-        return Err(Refusal::new(
-            "the reference is the original shader; there is nothing to rewrite",
-        ));
-    }
-    if variant == Variant::Lowres {
-        options.upsampling.check().map_err(Refusal::new)?;
-        lowres::mode(options.upsampling.reconstruction)?;
-    } else if options.reconstruction.upsamples() {
-        return Err(Refusal::new(format!(
-            "{} reconstruction upsamples lowres's samples; {variant} reads its cache with bilinear, nearest, bilinear-packed or nearest-packed",
-            options.reconstruction
-        )));
-    }
+fn refuse_settings(options: &Options) -> Result<(), Refusal> {
     if options.refresh_period > MAX_REFRESH_PERIOD {
         return Err(Refusal::new(format!(
             "a refresh period of {} frames is beyond the largest the refresh indicator takes, {MAX_REFRESH_PERIOD}",
@@ -574,18 +524,19 @@ fn refuse_settings(variant: Variant, options: &Options) -> Result<(), Refusal> {
     Ok(())
 }
 
-/// The options with the cache format the variant can use, and why it
-/// differs from the one asked for. Three-pass shades from the cached value
-/// itself, so a payload an rgba16float cache cannot hold would be wrong on
-/// screen (one- and two-pass recompute it instead: the lookup misses, see
-/// `cache_encode`). Where the analysis cannot bound the node's value below
-/// 65504, three-pass keeps its cache in rgba32float.
+/// The options with the cache format the passes (`stages`) can use, and
+/// why it differs from the one asked for. Three-pass shades from the
+/// cached value itself, so a payload an rgba16float cache cannot hold
+/// would be wrong on screen (one- and two-pass recompute it instead: the
+/// lookup misses, see `cache_encode`). Where the analysis cannot bound
+/// the node's value below 65504, three-pass keeps its cache in
+/// rgba32float.
 fn cache_format(
-    variant: Variant,
+    stages: &[Stage],
     options: &Options,
     candidate: &Candidate,
 ) -> (Options, Option<String>) {
-    let shows_cached_value = stages(variant).iter().any(|s| s.shows_cached_value());
+    let shows_cached_value = stages.iter().any(|s| s.shows_cached_value());
     if shows_cached_value && options.cache_format == CacheFormat::Rgba16float && !candidate.fits_f16
     {
         let widened = Options {
@@ -602,92 +553,109 @@ fn cache_format(
     }
 }
 
-/// One pass's module: the rewritten module with the vertex entry point
-/// and the pass's fragment entry point for `stage`, compacted, validated,
-/// and checked for derivatives in non-uniform control flow and after a
-/// kill. With a `gbuffer` (the deferred variant), every pass but the
-/// G-buffer pass itself runs in screen space and reads it.
-fn pass_module(
-    module: &naga::Module,
-    pieces: &Pieces,
-    vertex: &vertex::VertexStage,
-    entry: &naga::EntryPoint,
-    (stage, name): (Stage, String),
-    gbuffer: Option<&gbuffer::GBuffer>,
-    (lowres_factor, reconstruction, reshade): (u32, Reconstruction, bool),
-) -> Result<PassModule, Refusal> {
-    let mut pass = module.clone();
-    let (fragment, screen_vertex) = match (gbuffer, stage) {
-        (_, Stage::Samples) => (
-            lowres::samples_entry(
-                &mut pass,
-                pieces,
-                &pieces.lowres,
-                (lowres_factor, reconstruction),
-            )?,
-            None,
-        ),
-        (_, Stage::Upsample) => (
-            lowres::upsample_entry(&mut pass, pieces, &pieces.lowres, (reconstruction, reshade))?,
-            None,
-        ),
-        (_, Stage::Reshade) => (
-            lowres::reshade_entry(&mut pass, pieces, &pieces.lowres)?,
-            None,
-        ),
-        (Some(gbuffer), Stage::GBuffer) => (gbuffer.write_entry(&mut pass, pieces)?, None),
-        (Some(gbuffer), _) => (
-            fragment::entry_point(&mut pass, pieces, stage, fragment::Inputs::Screen(gbuffer))?,
-            Some(gbuffer.fullscreen.clone()),
-        ),
-        (None, _) => (
-            fragment::entry_point(&mut pass, pieces, stage, fragment::Inputs::Varyings)?,
-            None,
-        ),
-    };
-    let mut vertex_entry = match screen_vertex {
-        Some(fullscreen) => Some(fullscreen),
-        None => vertex.entry_index.map(|i| pass.entry_points[i].clone()),
-    };
-    // A pass that does not reproject draws with the vertex stage as the
-    // original has it: no twins read, no previous position interpolated.
-    if let (Some(entry), Some(plain), false, None) = (
-        &mut vertex_entry,
-        &vertex.plain,
-        fragment::reprojects_in(stage, pieces),
-        gbuffer,
-    ) {
-        entry.function = plain.clone();
+/// What every pass of a variant is built from: the rewritten module, the
+/// fragment stage's pieces, the instrumented vertex stage, the original
+/// entry point, the deferred variant's G-buffer and the recipe.
+struct PassContext<'a> {
+    module: &'a naga::Module,
+    pieces: &'a Pieces,
+    vertex: &'a vertex::VertexStage,
+    entry: &'a naga::EntryPoint,
+    gbuffer: Option<&'a gbuffer::GBuffer>,
+    recipe: &'a Recipe,
+}
+
+impl PassContext<'_> {
+    /// One pass's module: the rewritten module with the vertex entry
+    /// point and the pass's fragment entry point for `stage`, compacted,
+    /// validated, and checked for derivatives in non-uniform control flow
+    /// and after a kill. With a G-buffer (the deferred variant), every
+    /// pass but the G-buffer pass itself runs in screen space and reads
+    /// it.
+    fn pass(&self, stage: Stage, name: String) -> Result<PassModule, Refusal> {
+        let (pieces, vertex) = (self.pieces, self.vertex);
+        let mut pass = self.module.clone();
+        let (fragment, screen_vertex) = self.fragment(&mut pass, stage)?;
+        let mut vertex_entry = match screen_vertex {
+            Some(fullscreen) => Some(fullscreen),
+            None => vertex.entry_index.map(|i| pass.entry_points[i].clone()),
+        };
+        // A pass that does not reproject draws with the vertex stage as
+        // the original has it: no twins read, no previous position
+        // interpolated.
+        if let (Some(entry), Some(plain), false, None) = (
+            &mut vertex_entry,
+            &vertex.plain,
+            fragment::reprojects_in(stage, pieces),
+            self.gbuffer,
+        ) {
+            entry.function = plain.clone();
+        }
+        // The samples are shaded on the jittered lattice.
+        if let (Some(entry), Stage::Lowres(stage::LowresStage::Samples)) =
+            (&mut vertex_entry, stage)
+        {
+            lowres::jitter_vertex(&mut pass, entry, pieces.lowres.jitter)?;
+        }
+        pass.entry_points = vertex_entry
+            .into_iter()
+            .chain([naga::EntryPoint {
+                function: fragment,
+                ..self.entry.clone()
+            }])
+            .collect();
+        naga::compact::compact(&mut pass, naga::compact::KeepUnused::No);
+        let info = crate::front::validate(&pass).map_err(|err| {
+            let diagnostic = crate::diagnostic::Diagnostic::from_spanned_error(&err);
+            Refusal::internal(format!(
+                "{name} does not validate: {} ({})",
+                diagnostic.message,
+                diagnostic.notes.join("; ")
+            ))
+        })?;
+        uniformity::check(&pass, &info)
+            .map_err(|err| Refusal::internal(format!("the rewrite left {err}")))?;
+        uniformity::check_kills(&pass)
+            .map_err(|err| Refusal::internal(format!("the rewrite left {err}")))?;
+        Ok(PassModule {
+            name,
+            module: pass,
+            info,
+        })
     }
-    // The samples are shaded on the jittered lattice.
-    if let (Some(entry), Stage::Samples) = (&mut vertex_entry, stage) {
-        lowres::jitter_vertex(&mut pass, entry, pieces.lowres.jitter)?;
+
+    /// The fragment entry point of `stage`, built by the module that
+    /// builds that kind of pass, and the vertex entry point a screen-space
+    /// pass draws with.
+    fn fragment(
+        &self,
+        pass: &mut naga::Module,
+        stage: Stage,
+    ) -> Result<(naga::Function, Option<naga::EntryPoint>), Refusal> {
+        let pieces = self.pieces;
+        Ok(match (stage, self.gbuffer, self.recipe.upsampling()) {
+            (Stage::Lowres(stage), _, Some(upsampling)) => {
+                (lowres::entry(pass, pieces, stage, upsampling)?, None)
+            }
+            (Stage::Lowres(stage), _, None) => {
+                return Err(Refusal::internal(format!(
+                    "the {stage:?} pass of a variant without upsampling"
+                )))
+            }
+            (Stage::GBuffer, Some(gbuffer), _) => (gbuffer.write_entry(pass, pieces)?, None),
+            (Stage::GBuffer, None, _) => {
+                return Err(Refusal::internal("a G-buffer pass without a G-buffer"))
+            }
+            (Stage::Cache(stage), Some(gbuffer), _) => (
+                fragment::entry_point(pass, pieces, stage, fragment::Inputs::Screen(gbuffer))?,
+                Some(gbuffer.fullscreen.clone()),
+            ),
+            (Stage::Cache(stage), None, _) => (
+                fragment::entry_point(pass, pieces, stage, fragment::Inputs::Varyings)?,
+                None,
+            ),
+        })
     }
-    pass.entry_points = vertex_entry
-        .into_iter()
-        .chain([naga::EntryPoint {
-            function: fragment,
-            ..entry.clone()
-        }])
-        .collect();
-    naga::compact::compact(&mut pass, naga::compact::KeepUnused::No);
-    let info = crate::front::validate(&pass).map_err(|err| {
-        let diagnostic = crate::diagnostic::Diagnostic::from_spanned_error(&err);
-        Refusal::internal(format!(
-            "{name} does not validate: {} ({})",
-            diagnostic.message,
-            diagnostic.notes.join("; ")
-        ))
-    })?;
-    uniformity::check(&pass, &info)
-        .map_err(|err| Refusal::internal(format!("the rewrite left {err}")))?;
-    uniformity::check_kills(&pass)
-        .map_err(|err| Refusal::internal(format!("the rewrite left {err}")))?;
-    Ok(PassModule {
-        name,
-        module: pass,
-        info,
-    })
 }
 
 /// Makes `function` return zero (of its result type) at once: a payload,

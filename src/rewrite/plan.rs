@@ -6,9 +6,10 @@
 use naga::{Binding, Module, TypeInner};
 
 use super::fragment;
-use super::stage::{Stage, Writes};
+use super::stage::{CacheStage, LowresStage, Stage, Writes};
+use super::variants::Recipe;
 use super::vertex::VertexStage;
-use super::{Options, PassModule, Variant};
+use super::{Options, PassModule};
 use crate::analysis::{Analysis, Candidate};
 use crate::front::Shader;
 use crate::plan::*;
@@ -20,7 +21,7 @@ pub(crate) struct Inputs<'a> {
     pub shader: &'a Shader,
     pub analysis: &'a Analysis,
     pub candidate: &'a Candidate,
-    pub variant: Variant,
+    pub recipe: &'a Recipe,
     pub options: &'a Options,
     pub slot: rewrite::CacheSlot,
     pub vertex: &'a VertexStage,
@@ -38,7 +39,7 @@ pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
         shader,
         analysis,
         candidate,
-        variant,
+        recipe,
         options,
         slot,
         vertex,
@@ -73,7 +74,7 @@ pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
     {
         full.depth.load = LoadOp::Clear;
     }
-    let lowres = variant == Variant::Lowres;
+    let upsampling = recipe.upsampling();
 
     let entries: Vec<usize> = std::iter::once(analysis.entry_index)
         .chain(vertex.entry_index)
@@ -103,7 +104,7 @@ pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
         shader: shader.file.path.clone(),
         entry: entry.name.clone(),
         node: plan_node(candidate),
-        variant,
+        variant: recipe.variant(),
         passes: plan_passes,
         classify: Some(classify_pass(
             module, result, options, classify, &names, gbuffer,
@@ -131,17 +132,17 @@ pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
         cache: Cache {
             format: options.cache_format,
             format_note: None,
-            reconstruction: options.reconstruction,
+            reconstruction: recipe.reconstruction(),
             components: candidate.components,
-            swap: if lowres {
+            swap: if upsampling.is_some() {
                 "two payload textures, two history textures and two depth buffers alternate: at the end of a frame, this frame's payload, history and depth become last frame's (cache_previous_payload, cache_previous_history, cache_previous_depth); the samples, their geometry and their depth buffer (1/s × 1/s) are made again every frame; on the first frame, after a resize or a camera cut, the previous depth is cleared to the far-plane depth so every pixel's history misses".into()
             } else {
                 "two payload textures, two age textures and two depth buffers alternate: at the end of a frame, this frame's payload texture, age texture and depth buffer become last frame's (bound as cache_previous_payload, cache_previous_age and cache_previous_depth) and last frame's are rendered into next; on the first frame, after a resize or a camera cut, the previous depth is cleared to the far-plane depth (clear.depth) so every pixel misses".into()
             },
             params,
         },
-        refresh: refresh(options, lowres),
-        upsampling: lowres.then(|| options.upsampling.clone()),
+        refresh: refresh(options, upsampling),
+        upsampling: upsampling.cloned(),
         clear: Clear {
             color: [0.0, 0.0, 0.0, 1.0],
             cache: [0.0, 0.0, 0.0, 0.0],
@@ -151,11 +152,11 @@ pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
     })
 }
 
-/// The refresh the passes follow: lowres's lattice, or the cache's
-/// refresh pattern (with adaptive refresh, said).
-fn refresh(options: &Options, lowres: bool) -> Refresh {
-    if lowres {
-        let s = options.upsampling.factor;
+/// The refresh the passes follow: with `upsampling`, lowres's lattice;
+/// else the cache's refresh pattern (with adaptive refresh, said).
+fn refresh(options: &Options, upsampling: Option<&Upsampling>) -> Refresh {
+    if let Some(upsampling) = upsampling {
+        let s = upsampling.factor;
         return Refresh {
             period: s * s,
             quad: s,
@@ -247,7 +248,9 @@ fn plan_pass(
     let screen = gbuffer.is_some() && stage != Stage::GBuffer;
     let (compare, write) = match stage {
         _ if screen => (CompareFunction::Always, false),
-        Stage::ShadeFromCache | Stage::Classify => (CompareFunction::Equal, false),
+        Stage::Cache(CacheStage::ShadeFromCache) | Stage::Cache(CacheStage::Classify) => {
+            (CompareFunction::Equal, false)
+        }
         _ => (options.depth.nearer(), true),
     };
     Pass {
@@ -276,7 +279,7 @@ fn plan_pass(
         },
         stencil: gbuffer.map(|_| deferred_stencil(stage)),
         resolution_divisor: match stage {
-            Stage::Samples => options.upsampling.factor,
+            Stage::Lowres(LowresStage::Samples) => options.upsampling.factor,
             _ => 1,
         },
     }
@@ -311,13 +314,13 @@ fn deferred_stencil(stage: Stage) -> Stencil {
             replace: true,
             reference_bits: 0,
         },
-        Stage::ReprojectOrDiscard => Stencil {
+        Stage::Cache(CacheStage::ReprojectOrDiscard) => Stencil {
             write_mask: REUSED_BIT,
             replace: true,
             reference_bits: REUSED_BIT,
             ..test(ORDINAL_BITS)
         },
-        Stage::Payload => test(0xff),
+        Stage::Cache(CacheStage::Payload) => test(0xff),
         _ => test(ORDINAL_BITS),
     }
 }
@@ -359,7 +362,7 @@ fn classify_pass(
         module,
         result,
         options,
-        (Stage::Classify, classify),
+        (Stage::Cache(CacheStage::Classify), classify),
         names,
         gbuffer,
     );
@@ -423,25 +426,25 @@ pub(crate) fn output_format(
 fn role(stage: Stage, screen: bool) -> &'static str {
     if screen {
         return match stage {
-            Stage::ReprojectOrDiscard => "screen space, per draw over its pixels (stencil): reproject; hit: write the cached payload to this frame's cache and mark the pixel; miss or refresh: discard",
-            Stage::Payload => "screen space, per draw over its unmarked pixels (stencil): compute the payload from the G-buffer into the cache",
-            Stage::ShadeFromCache => "screen space, per draw over its pixels (stencil): shade from the G-buffer and this frame's cache at the pixel",
-            Stage::Classify => "diagnostic, after the frame, in screen space: the cache's decision at each visible pixel",
+            Stage::Cache(CacheStage::ReprojectOrDiscard) => "screen space, per draw over its pixels (stencil): reproject; hit: write the cached payload to this frame's cache and mark the pixel; miss or refresh: discard",
+            Stage::Cache(CacheStage::Payload) => "screen space, per draw over its unmarked pixels (stencil): compute the payload from the G-buffer into the cache",
+            Stage::Cache(CacheStage::ShadeFromCache) => "screen space, per draw over its pixels (stencil): shade from the G-buffer and this frame's cache at the pixel",
+            Stage::Cache(CacheStage::Classify) => "diagnostic, after the frame, in screen space: the cache's decision at each visible pixel",
             _ => "screen space",
         };
     }
     match stage {
         Stage::GBuffer => "the only geometry pass: depth, each draw's ordinal in the stencil, and the fragment's inputs and previous clip position into the G-buffer",
-        Stage::OnePass => "reproject; hit: shade from the cached payload; miss or refresh: compute the payload; write colour and cache",
-        Stage::ReuseOrDiscard => "reproject; hit: shade from the cached payload, write colour and cache; miss or refresh: discard",
-        Stage::Full => "the pixels pass 1 left empty (depth test): compute payload and colour, write colour and cache",
-        Stage::ReprojectOrDiscard => "reproject; hit: write the cached payload to this frame's cache; miss or refresh: discard",
-        Stage::Payload => "the pixels pass 1 left empty (depth test): compute the payload into the cache",
-        Stage::ShadeFromCache => "every pixel (depth equal): shade from this frame's cache at the pixel",
-        Stage::Classify => "diagnostic, after the frame (depth equal): the cache's decision at each visible pixel",
-        Stage::Samples => "at 1/s × 1/s of the pixels, its own depth buffer, the projection jittered onto this frame's lattice: the payload (level of detail biased by −log2 s) into the samples, and their normal, depth, draw id and temporal gradient",
-        Stage::Upsample => "every pixel (depth test): rebuild the payload from the four nearest samples and the reprojected history, shade from it, write colour, the payload and its history (with adaptive refresh: discard the pixels it cannot vouch for)",
-        Stage::Reshade => "the pixels pass 2 left empty (depth test): compute the payload at full resolution and shade, write colour, the payload and an exact history",
+        Stage::Cache(CacheStage::OnePass) => "reproject; hit: shade from the cached payload; miss or refresh: compute the payload; write colour and cache",
+        Stage::Cache(CacheStage::ReuseOrDiscard) => "reproject; hit: shade from the cached payload, write colour and cache; miss or refresh: discard",
+        Stage::Cache(CacheStage::Full) => "the pixels pass 1 left empty (depth test): compute payload and colour, write colour and cache",
+        Stage::Cache(CacheStage::ReprojectOrDiscard) => "reproject; hit: write the cached payload to this frame's cache; miss or refresh: discard",
+        Stage::Cache(CacheStage::Payload) => "the pixels pass 1 left empty (depth test): compute the payload into the cache",
+        Stage::Cache(CacheStage::ShadeFromCache) => "every pixel (depth equal): shade from this frame's cache at the pixel",
+        Stage::Cache(CacheStage::Classify) => "diagnostic, after the frame (depth equal): the cache's decision at each visible pixel",
+        Stage::Lowres(LowresStage::Samples) => "at 1/s × 1/s of the pixels, its own depth buffer, the projection jittered onto this frame's lattice: the payload (level of detail biased by −log2 s) into the samples, and their normal, depth, draw id and temporal gradient",
+        Stage::Lowres(LowresStage::Upsample) => "every pixel (depth test): rebuild the payload from the four nearest samples and the reprojected history, shade from it, write colour, the payload and its history (with adaptive refresh: discard the pixels it cannot vouch for)",
+        Stage::Lowres(LowresStage::Reshade) => "the pixels pass 2 left empty (depth test): compute the payload at full resolution and shade, write colour, the payload and an exact history",
     }
 }
 
@@ -784,7 +787,7 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
         cache: Cache {
             format: options.cache_format,
             format_note: None,
-            reconstruction: options.reconstruction,
+            reconstruction: options.reconstruction.into(),
             components: 0,
             swap: String::new(),
             params: Vec::new(),

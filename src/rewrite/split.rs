@@ -7,8 +7,9 @@
 use naga::{Expression, Function, Handle, Module};
 
 use super::path::{self, Path};
-use super::{copy, free_function, gradients, stages, type_handle, uniformity, without_bindings};
-use super::{Options, Refusal, Variant};
+use super::stage::Stage;
+use super::{copy, free_function, gradients, type_handle, uniformity, without_bindings};
+use super::{Options, Refusal};
 use crate::analysis::graph::{ExprGraph, ExprSet};
 use crate::analysis::{Analysis, Candidate};
 use crate::front::Shader;
@@ -26,7 +27,8 @@ pub(super) struct PayloadSlice {
 }
 
 impl PayloadSlice {
-    /// The node's slice in `function`, refusing what `variant` cannot
+    /// The node's slice in `function`, refusing what a variant's passes
+    /// (`passes`, the stages they run) cannot
     /// compute: a payload before a discard its passes would confuse with
     /// their own, derivatives one-pass cannot take before its miss branch.
     pub fn of(
@@ -35,7 +37,7 @@ impl PayloadSlice {
         layout: &FunctionLayout,
         graph: &ExprGraph,
         node: Handle<Expression>,
-        variant: Variant,
+        passes: &[Stage],
     ) -> Result<PayloadSlice, Refusal> {
         let at = layout
             .placement(node)
@@ -45,8 +47,7 @@ impl PayloadSlice {
         // A pass that discards misses cannot tell them from the pixels the
         // shader itself would cut out after the node, unless a G-buffer
         // pass has decided coverage before it (the stencil holds it).
-        let passes = stages(variant);
-        let coverage_decided = passes.contains(&super::stage::Stage::GBuffer);
+        let coverage_decided = passes.contains(&Stage::GBuffer);
         if discards_after && !coverage_decided && passes.iter().any(|s| s.discards()) {
             return Err(Refusal::new(
                 "the shader may discard after the node is computed, so the payload pass cannot know which pixels are cut out",
@@ -69,7 +70,7 @@ impl PayloadSlice {
                 live.union_with(&graph.slice(condition));
             }
         }
-        let hoist_derivatives = stages(variant).iter().any(|s| s.computes_payload_on_miss())
+        let hoist_derivatives = passes.iter().any(|s| s.computes_payload_on_miss())
             && derivatives_before_the_miss(original, function, layout, &live)?;
         Ok(PayloadSlice {
             live,

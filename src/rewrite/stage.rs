@@ -22,12 +22,26 @@ pub enum Writes {
     ColorAndHistory,
 }
 
-/// The fragment entry point of one pass.
+/// The fragment entry point of one pass: one of the stages that read the
+/// cache, the deferred variant's G-buffer pass, or one of lowres's. Each
+/// kind is built by its own module ([`super::fragment`],
+/// [`super::gbuffer`], [`super::lowres`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stage {
+    /// A pass that looks the fragment up in the cache, or fills it.
+    Cache(CacheStage),
     /// The deferred variant's geometry pass: depth, and the fragment's
     /// inputs and previous clip position into the G-buffer.
     GBuffer,
+    /// A pass of lowres's.
+    Lowres(LowresStage),
+}
+
+/// The stages built from the cache's lookup and the payload/shade split
+/// ([`super::fragment::entry_point`]), drawing the geometry or, deferred,
+/// in screen space.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CacheStage {
     /// One-pass: hit → shade from the cache; miss or refresh → payload.
     OnePass,
     /// Two-pass, pass 1: hit → colour + cache; miss or refresh → discard.
@@ -43,33 +57,44 @@ pub enum Stage {
     /// A diagnostic pass, drawn after a frame: the cache's decision at each
     /// visible pixel as a colour (reuse, refresh, off-screen, disoccluded).
     Classify,
-    /// Lowres, pass 1: the payload at 1/s × 1/s of the pixels, jittered,
-    /// and the samples' geometry ([`super::lowres`]).
+}
+
+/// Lowres's passes ([`super::lowres`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LowresStage {
+    /// Pass 1: the payload at 1/s × 1/s of the pixels, jittered, and the
+    /// samples' geometry.
     Samples,
-    /// Lowres, pass 2: the payload rebuilt at every pixel from the samples
-    /// and the history, and the shading from it.
+    /// Pass 2: the payload rebuilt at every pixel from the samples and the
+    /// history, and the shading from it.
     Upsample,
-    /// Lowres with adaptive refresh, pass 3: the original computation at
-    /// the pixels the upsampling left (its unreliable ones), writing
-    /// colour, the payload and an exact history.
+    /// With adaptive refresh, pass 3: the original computation at the
+    /// pixels the upsampling left (its unreliable ones), writing colour,
+    /// the payload and an exact history.
     Reshade,
 }
 
 impl Stage {
+    /// What its fragment stage writes.
     pub fn writes(self) -> Writes {
+        use CacheStage as C;
         match self {
-            Stage::OnePass | Stage::ReuseOrDiscard | Stage::Full => Writes::ColorAndCache,
-            Stage::ReprojectOrDiscard | Stage::Payload => Writes::Cache,
-            Stage::ShadeFromCache => Writes::Color,
-            Stage::Classify => Writes::Classes,
+            Stage::Cache(C::OnePass | C::ReuseOrDiscard | C::Full) => Writes::ColorAndCache,
+            Stage::Cache(C::ReprojectOrDiscard | C::Payload) => Writes::Cache,
+            Stage::Cache(C::ShadeFromCache) => Writes::Color,
+            Stage::Cache(C::Classify) => Writes::Classes,
             Stage::GBuffer => Writes::GBuffer,
-            Stage::Samples => Writes::Samples,
-            Stage::Upsample | Stage::Reshade => Writes::ColorAndHistory,
+            Stage::Lowres(LowresStage::Samples) => Writes::Samples,
+            Stage::Lowres(LowresStage::Upsample | LowresStage::Reshade) => Writes::ColorAndHistory,
         }
     }
 
+    /// Whether its fragment stage may discard.
     pub fn discards(self) -> bool {
-        matches!(self, Stage::ReuseOrDiscard | Stage::ReprojectOrDiscard)
+        matches!(
+            self,
+            Stage::Cache(CacheStage::ReuseOrDiscard | CacheStage::ReprojectOrDiscard)
+        )
     }
 
     /// Whether the pass looks the fragment up in last frame's cache, and
@@ -77,27 +102,24 @@ impl Stage {
     /// vertex stage as the original has it (no previous-frame twin, no
     /// extra varying).
     pub fn reprojects(self) -> bool {
+        use CacheStage as C;
         matches!(
             self,
-            Stage::OnePass
-                | Stage::ReuseOrDiscard
-                | Stage::ReprojectOrDiscard
-                | Stage::Classify
+            Stage::Cache(C::OnePass | C::ReuseOrDiscard | C::ReprojectOrDiscard | C::Classify)
                 | Stage::GBuffer
-                | Stage::Samples
-                | Stage::Upsample
+                | Stage::Lowres(LowresStage::Samples | LowresStage::Upsample)
         )
     }
 
     /// Whether the screen shows the cached value itself (not recomputed
     /// where it cannot be held): what a cache format must hold exactly.
     pub fn shows_cached_value(self) -> bool {
-        matches!(self, Stage::ShadeFromCache)
+        self == Stage::Cache(CacheStage::ShadeFromCache)
     }
 
     /// Whether the payload is computed in the miss branch, in non-uniform
     /// control flow: its derivatives must be taken before it.
     pub fn computes_payload_on_miss(self) -> bool {
-        matches!(self, Stage::OnePass)
+        self == Stage::Cache(CacheStage::OnePass)
     }
 }

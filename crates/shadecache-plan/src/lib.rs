@@ -353,7 +353,7 @@ pub struct Upsampling {
     /// How the payload is rebuilt from the samples: nearest, bilinear,
     /// spatial, temporal or spatio-temporal (the paper's method).
     #[serde(default = "spatio_temporal")]
-    pub reconstruction: Reconstruction,
+    pub reconstruction: Upsampler,
     /// s: one pixel of each s×s window is shaded per frame (2 or 4), the
     /// window's offset stepping through a Bayer order of the s² positions
     /// (`refresh_phase` = frame mod s²).
@@ -380,7 +380,7 @@ pub struct Upsampling {
 /// 3% (§3.1, there of the depth range; here of the depth itself), a = 1
 /// (§3.5.1), s = 4 (§3.2).
 pub const DEFAULT_UPSAMPLING: Upsampling = Upsampling {
-    reconstruction: Reconstruction::SpatioTemporal,
+    reconstruction: Upsampler::SpatioTemporal,
     factor: 4,
     sigma_normal: 0.2,
     sigma_depth: 0.03,
@@ -388,8 +388,8 @@ pub const DEFAULT_UPSAMPLING: Upsampling = Upsampling {
     reshade: false,
 };
 
-fn spatio_temporal() -> Reconstruction {
-    Reconstruction::SpatioTemporal
+fn spatio_temporal() -> Upsampler {
+    Upsampler::SpatioTemporal
 }
 
 impl Upsampling {
@@ -704,6 +704,8 @@ display_as_str!(
     CompareFunction,
     CacheFormat,
     Reconstruction,
+    CacheRead,
+    Upsampler,
     DepthConvention,
     ResourceKind
 );
@@ -1058,6 +1060,13 @@ impl Variant {
         Variant::Lowres,
     ];
 
+    /// Whether it reuses work by shading a share of the pixels each frame
+    /// and upsampling them (lowres), rather than by reprojecting a cached
+    /// payload: what its classes and its refresh knobs mean.
+    pub fn upsamples(self) -> bool {
+        matches!(self, Variant::Lowres)
+    }
+
     /// Its name on the command line and in `plan.json`.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -1105,7 +1114,118 @@ impl CacheFormat {
     }
 }
 
-/// How the payload and depth are read back where a point was last frame.
+/// How a cache variant reads its cache back where a point was last frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CacheRead {
+    /// Bilinear over the 2×2 texels around the point; all four (those with
+    /// weight) must pass the depth test against last frame's depth buffer.
+    Bilinear,
+    /// The texel the point falls in, tested on its own depth.
+    Nearest,
+    /// Payload and depth filtered together from one texture, the depth in
+    /// its fourth channel (seed 002 §3: "a single four-channel buffer"):
+    /// one read instead of a sample and a gather. For payloads of up to
+    /// three components.
+    BilinearPacked,
+    /// The texel the point falls in, its depth in its fourth channel: one
+    /// load instead of two. For payloads of up to three components.
+    NearestPacked,
+}
+
+impl CacheRead {
+    /// Every read, the default first.
+    pub const ALL: [CacheRead; 4] = [
+        CacheRead::Bilinear,
+        CacheRead::Nearest,
+        CacheRead::BilinearPacked,
+        CacheRead::NearestPacked,
+    ];
+
+    /// Its name in `plan.json` and on the command line.
+    pub fn as_str(self) -> &'static str {
+        Reconstruction::from(self).as_str()
+    }
+
+    /// Whether the cache keeps the depth in the payload texture's fourth
+    /// channel rather than reading last frame's depth buffer.
+    pub fn packs_depth(self) -> bool {
+        matches!(self, CacheRead::BilinearPacked | CacheRead::NearestPacked)
+    }
+}
+
+/// How the lowres variant rebuilds the payload at every pixel from the
+/// samples it shaded (seed 001).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Upsampler {
+    /// The nearest sample.
+    Nearest,
+    /// The four nearest samples, bilinearly.
+    Bilinear,
+    /// The joint-bilateral upsampling of this frame's samples, with
+    /// normal, depth and draw weights and a linear hat in image space
+    /// (seed 001, eqs. 1–3); no history.
+    Spatial,
+    /// Each pixel shaded this frame takes its sample, the others the
+    /// reprojected history (eq. 4); where the history misses, the spatial
+    /// upsampling.
+    Temporal,
+    /// The spatial upsampling blended with the exponential history,
+    /// weighted by the temporal gradient's confidence (eqs. 6–8): the
+    /// paper's method.
+    SpatioTemporal,
+}
+
+impl Upsampler {
+    /// Every upsampler, the simplest first.
+    pub const ALL: [Upsampler; 5] = [
+        Upsampler::Nearest,
+        Upsampler::Bilinear,
+        Upsampler::Spatial,
+        Upsampler::Temporal,
+        Upsampler::SpatioTemporal,
+    ];
+
+    /// Its name in `plan.json` and on the command line.
+    pub fn as_str(self) -> &'static str {
+        Reconstruction::from(self).as_str()
+    }
+
+    /// Whether it reads the history (and so the samples pass takes their
+    /// temporal gradient): temporal and spatio-temporal.
+    pub fn reads_history(self) -> bool {
+        matches!(self, Upsampler::Temporal | Upsampler::SpatioTemporal)
+    }
+}
+
+impl From<CacheRead> for Reconstruction {
+    fn from(read: CacheRead) -> Reconstruction {
+        match read {
+            CacheRead::Bilinear => Reconstruction::Bilinear,
+            CacheRead::Nearest => Reconstruction::Nearest,
+            CacheRead::BilinearPacked => Reconstruction::BilinearPacked,
+            CacheRead::NearestPacked => Reconstruction::NearestPacked,
+        }
+    }
+}
+
+impl From<Upsampler> for Reconstruction {
+    fn from(upsampler: Upsampler) -> Reconstruction {
+        match upsampler {
+            Upsampler::Nearest => Reconstruction::Nearest,
+            Upsampler::Bilinear => Reconstruction::Bilinear,
+            Upsampler::Spatial => Reconstruction::Spatial,
+            Upsampler::Temporal => Reconstruction::Temporal,
+            Upsampler::SpatioTemporal => Reconstruction::SpatioTemporal,
+        }
+    }
+}
+
+/// How a plan's cache is read back, as `plan.json` and reports name it:
+/// a cache variant's [`CacheRead`], or lowres's [`Upsampler`]. The
+/// toolchain's options take the two types apart, so a mix cannot be
+/// asked for; this is their one name in files.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Reconstruction {
@@ -1115,7 +1235,7 @@ pub enum Reconstruction {
     /// The texel the point falls in, tested on its own depth.
     Nearest,
     /// Payload and depth filtered together from one texture, the depth in
-    /// its fourth channel (seed 002 §2.1): one read instead of a sample and
+    /// its fourth channel (seed 002 §3): one read instead of a sample and
     /// a gather. For payloads of up to three components.
     BilinearPacked,
     /// The texel the point falls in, its depth in its fourth channel: one
@@ -1135,6 +1255,21 @@ pub enum Reconstruction {
 }
 
 impl Reconstruction {
+    /// As a cache variant's read; `None` for an upsampler of lowres's
+    /// alone.
+    pub fn cache_read(self) -> Option<CacheRead> {
+        CacheRead::ALL
+            .into_iter()
+            .find(|read| Reconstruction::from(*read) == self)
+    }
+
+    /// As lowres's upsampler; `None` for a packed cache read.
+    pub fn upsampler(self) -> Option<Upsampler> {
+        Upsampler::ALL
+            .into_iter()
+            .find(|upsampler| Reconstruction::from(*upsampler) == self)
+    }
+
     /// The cache variants' reconstructions (reads of the cache).
     pub const CACHE: [Reconstruction; 4] = [
         Reconstruction::Bilinear,

@@ -8,7 +8,7 @@ use shadecache::diagnostic::{Color, Diagnostic, Error};
 use shadecache::profile::{self, Budget, Nodes, Options, Progress};
 use shadecache::report;
 
-use super::rewrite::{CacheFormatArg, ReconstructionArg, VariantArg};
+use super::rewrite::{CacheFormatArg, CacheReadArg, UpsamplerArg, VariantArg};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -56,13 +56,13 @@ pub struct Args {
     /// the payload's fourth channel) [default: bilinear; with --sweep all
     /// four].
     #[arg(long, value_name = "R,...", value_enum, value_delimiter = ',')]
-    pub reconstruction: Option<Vec<ReconstructionArg>>,
+    pub reconstruction: Option<Vec<CacheReadArg>>,
 
     /// How lowres rebuilds the payload from its samples, separated by
     /// commas: nearest, bilinear, spatial, temporal, spatio-temporal
     /// [default: spatio-temporal; with --sweep all five].
     #[arg(long, value_name = "R,...", value_enum, value_delimiter = ',')]
-    pub lowres_reconstruction: Option<Vec<ReconstructionArg>>,
+    pub lowres_reconstruction: Option<Vec<UpsamplerArg>>,
 
     #[command(flatten)]
     pub upsampling: super::rewrite::UpsamplingArgs,
@@ -372,7 +372,7 @@ fn lowres_line(report: &report::Report, row: &report::ResultRow) -> String {
         row.speedup_ci[0],
         row.speedup_ci[1],
         row.reconstruction.as_str(),
-        if row.adaptive { ", unreliable pixels re-shaded" } else { "" },
+        row.adaptive_words(),
         row.bound_with_fixed_costs,
         row.p_over_t,
         row.refresh_rate * 100.0,
@@ -441,7 +441,7 @@ fn summary(report: &report::Report) -> String {
         summary.push_str(&format!("  warning: {warning}\n"));
     }
     for row in report.best_per_variant() {
-        if row.variant == shadecache::rewrite::Variant::Lowres {
+        if row.variant.upsamples() {
             summary.push_str(&lowres_line(report, row));
             continue;
         }

@@ -2,10 +2,13 @@
 
 use std::path::PathBuf;
 
+use clap::ValueEnum;
 use shadecache::analysis::{self, Options as AnalysisOptions};
 use shadecache::back::{self, Language};
 use shadecache::diagnostic::{self, Color, Diagnostic, Error, Severity};
-use shadecache::rewrite::{self, CacheFormat, DepthConvention, Options, Reconstruction, Variant};
+use shadecache::rewrite::{
+    self, CacheFormat, CacheRead, DepthConvention, Options, Reconstruction, Upsampler, Variant,
+};
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -157,15 +160,18 @@ impl VariantArg {
     pub fn variants(list: &[VariantArg]) -> Vec<Variant> {
         let mut out: Vec<Variant> = Vec::new();
         for arg in list {
-            let named: &[Variant] = match arg {
-                VariantArg::OnePass => &[Variant::OnePass],
-                VariantArg::TwoPass => &[Variant::TwoPass],
-                VariantArg::ThreePass => &[Variant::ThreePass],
-                VariantArg::Deferred => &[Variant::Deferred],
-                VariantArg::Lowres => &[Variant::Lowres],
-                VariantArg::All => &Variant::ALL,
+            // Each variant's argument is spelled as its name.
+            let named: Vec<Variant> = match arg {
+                VariantArg::All => Variant::ALL.to_vec(),
+                one => Variant::ALL
+                    .into_iter()
+                    .filter(|variant| {
+                        one.to_possible_value()
+                            .is_some_and(|v| v.get_name() == variant.as_str())
+                    })
+                    .collect(),
             };
-            for &variant in named {
+            for variant in named {
                 if !out.contains(&variant) {
                     out.push(variant);
                 }
@@ -219,6 +225,48 @@ impl From<ReconstructionArg> for Reconstruction {
             ReconstructionArg::Spatial => Reconstruction::Spatial,
             ReconstructionArg::Temporal => Reconstruction::Temporal,
             ReconstructionArg::SpatioTemporal => Reconstruction::SpatioTemporal,
+        }
+    }
+}
+
+/// The profiler's cache reads (`profile --reconstruction`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum CacheReadArg {
+    Bilinear,
+    Nearest,
+    BilinearPacked,
+    NearestPacked,
+}
+
+impl From<CacheReadArg> for CacheRead {
+    fn from(arg: CacheReadArg) -> CacheRead {
+        match arg {
+            CacheReadArg::Bilinear => CacheRead::Bilinear,
+            CacheReadArg::Nearest => CacheRead::Nearest,
+            CacheReadArg::BilinearPacked => CacheRead::BilinearPacked,
+            CacheReadArg::NearestPacked => CacheRead::NearestPacked,
+        }
+    }
+}
+
+/// Lowres's upsamplers (`profile --lowres-reconstruction`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum UpsamplerArg {
+    Nearest,
+    Bilinear,
+    Spatial,
+    Temporal,
+    SpatioTemporal,
+}
+
+impl From<UpsamplerArg> for Upsampler {
+    fn from(arg: UpsamplerArg) -> Upsampler {
+        match arg {
+            UpsamplerArg::Nearest => Upsampler::Nearest,
+            UpsamplerArg::Bilinear => Upsampler::Bilinear,
+            UpsamplerArg::Spatial => Upsampler::Spatial,
+            UpsamplerArg::Temporal => Upsampler::Temporal,
+            UpsamplerArg::SpatioTemporal => Upsampler::SpatioTemporal,
         }
     }
 }
@@ -352,12 +400,9 @@ fn rewrite_entry(
     let options_for = |variant: Variant| {
         let mut options = options.clone();
         if let Some(reconstruction) = args.reconstruction.map(Reconstruction::from) {
-            match variant {
-                Variant::Lowres => options.upsampling.reconstruction = reconstruction,
-                _ => options.reconstruction = reconstruction,
-            }
+            options.set_reconstruction(variant, reconstruction)?;
         }
-        options
+        Ok(options)
     };
     let language = match args.emit {
         EmitArg::Wgsl => Language::Wgsl,
@@ -382,7 +427,10 @@ fn rewrite_entry(
                 (false, 1) => out.to_path_buf(),
                 (false, _) => out.join(variant.as_str()),
             };
-            match rewrite::rewrite(shader, analysis, candidate, variant, &options_for(variant)) {
+            let rewritten = options_for(variant).and_then(|options| {
+                rewrite::rewrite(shader, analysis, candidate, variant, &options)
+            });
+            match rewritten {
                 Ok(rewritten) => {
                     back::write_variant(&dir, &rewritten, language)?;
                     totals.written += 1;

@@ -2,7 +2,7 @@
 //! the misses and the shading in screen space, per draw (docs/rewrite.md).
 
 use shadecache::profile::{Nodes, Options};
-use shadecache::rewrite::{self, CacheFormat, Reconstruction, Variant};
+use shadecache::rewrite::{self, CacheFormat, CacheRead, Variant};
 
 use crate::profile::{options, run_shader};
 use crate::util::{analyzed, interior, root, silhouette};
@@ -68,7 +68,7 @@ fn deferred_refresh_period_one_equals_the_reference() {
     let mut opts = options(&[1], &[1]);
     opts.variants = vec![Variant::Deferred];
     opts.cache_formats = vec![CacheFormat::Rgba32float];
-    opts.reconstructions = Reconstruction::CACHE.to_vec();
+    opts.reconstructions = CacheRead::ALL.to_vec();
     let scene = sphere_over_floor(
         "\"object-motion\", \"camera-motion\"",
         "orbit_degrees_per_frame = 1.0",
@@ -101,7 +101,7 @@ fn deferred_refresh_period_one_equals_the_reference() {
 fn deferred_static_scene_reuses_every_pixel() {
     let mut opts = options(&[0], &[4]);
     opts.variants = vec![Variant::Deferred];
-    opts.reconstructions = Reconstruction::CACHE.to_vec();
+    opts.reconstructions = CacheRead::ALL.to_vec();
     let Some((_, report, _)) = run_tinted(&sphere_over_floor("", "", ""), opts) else {
         return;
     };
@@ -165,7 +165,7 @@ light_color = [1.0, 0.97, 0.92]
         refresh_periods: vec![1],
         refresh_quads: vec![1],
         cache_formats: vec![CacheFormat::Rgba32float],
-        reconstructions: vec![Reconstruction::Bilinear],
+        reconstructions: vec![CacheRead::Bilinear],
         ..Options::default()
     };
     let Some((pictures, report, scene)) = run_shader(&source, scene, opts) else {
@@ -316,7 +316,7 @@ size = 256
         refresh_periods: vec![1],
         refresh_quads: vec![1],
         cache_formats: vec![CacheFormat::Rgba32float],
-        reconstructions: vec![Reconstruction::Bilinear],
+        reconstructions: vec![CacheRead::Bilinear],
         ..Options::default()
     };
     let Some((_, report, _)) = run_shader(&source, scene, opts) else {

@@ -593,7 +593,7 @@ light_color = [1.0, 1.0, 1.0]
 "#;
     let mut opts = options(&[0], &[4]);
     opts.variants = vec![Variant::OnePass];
-    opts.reconstructions = shadecache::rewrite::Reconstruction::CACHE.to_vec();
+    opts.reconstructions = shadecache::rewrite::CacheRead::ALL.to_vec();
     let Some((pictures, report, _)) = run(scene_text, opts) else {
         return;
     };
@@ -685,8 +685,8 @@ light_color = [1.0, 1.0, 1.0]
         let mut opts = options(&[period], &[4]);
         opts.variants = Variant::CACHE.to_vec();
         opts.reconstructions = vec![
-            shadecache::rewrite::Reconstruction::Bilinear,
-            shadecache::rewrite::Reconstruction::Nearest,
+            shadecache::rewrite::CacheRead::Bilinear,
+            shadecache::rewrite::CacheRead::Nearest,
         ];
         let Some((_, report, _)) = run(&scene(speed), opts) else {
             return;

@@ -2,14 +2,14 @@
 //! a jittered lattice and rebuilt at full resolution (seed 001).
 
 use shadecache::profile::Options;
-use shadecache::rewrite::{CacheFormat, Reconstruction, Variant};
+use shadecache::rewrite::{CacheFormat, Upsampler, Variant};
 
 use crate::profile::{marble_scene, options, run};
 use crate::util::{root, shadecache, stderr};
 
 /// Lowres alone, with `reconstructions`, rgba32float, after `warmup`
 /// frames.
-fn lowres(reconstructions: &[Reconstruction], warmup: u32, frames: u32) -> Options {
+fn lowres(reconstructions: &[Upsampler], warmup: u32, frames: u32) -> Options {
     let mut opts = options(&[32], &[4]);
     opts.variants = vec![Variant::Lowres];
     opts.lowres_reconstructions = reconstructions.to_vec();
@@ -35,7 +35,7 @@ fn lowres(reconstructions: &[Reconstruction], warmup: u32, frames: u32) -> Optio
 #[test]
 fn static_scene_lowres_converges_to_full_resolution() {
     let scene = marble_scene("", "").replace("turbulence_amount = 6.0", "turbulence_amount = 1.0");
-    let Some((_, report, _)) = run(&scene, lowres(&[Reconstruction::SpatioTemporal], 17, 3)) else {
+    let Some((_, report, _)) = run(&scene, lowres(&[Upsampler::SpatioTemporal], 17, 3)) else {
         return;
     };
     assert_eq!(report.results.len(), 1);
@@ -55,10 +55,8 @@ fn static_scene_lowres_converges_to_full_resolution() {
 /// history's doing, not an artefact of a full-resolution shading).
 #[test]
 fn lowres_first_frame_is_upsampled_not_shaded() {
-    let Some((_, report, _)) = run(
-        &marble_scene("", ""),
-        lowres(&[Reconstruction::Spatial], 0, 1),
-    ) else {
+    let Some((_, report, _)) = run(&marble_scene("", ""), lowres(&[Upsampler::Spatial], 0, 1))
+    else {
         return;
     };
     let row = &report.results[0];
@@ -194,7 +192,7 @@ position = [1.5, 0.0, 0.0]
     )
 }
 
-fn lowres_top(reconstructions: &[Reconstruction], warmup: u32, frames: u32) -> Options {
+fn lowres_top(reconstructions: &[Upsampler], warmup: u32, frames: u32) -> Options {
     Options {
         nodes: shadecache::profile::Nodes::Top(1),
         ..lowres(reconstructions, warmup, frames)
@@ -211,27 +209,27 @@ fn material_edge_does_not_bleed() {
     let Some((_, report, _)) = crate::profile::run_shader(
         FLAT,
         &two_planes("frames = 1\nwarmup = 0", ""),
-        lowres_top(&[Reconstruction::Spatial, Reconstruction::Bilinear], 0, 1),
+        lowres_top(&[Upsampler::Spatial, Upsampler::Bilinear], 0, 1),
     ) else {
         return;
     };
-    let error = |r: Reconstruction| {
+    let error = |r: Upsampler| {
         report
             .results
             .iter()
-            .find(|row| row.reconstruction == r)
+            .find(|row| row.reconstruction == r.into())
             .unwrap()
             .max_abs_error
     };
     assert!(
-        error(Reconstruction::Spatial) < 0.01,
+        error(Upsampler::Spatial) < 0.01,
         "spatial: {}",
-        error(Reconstruction::Spatial)
+        error(Upsampler::Spatial)
     );
     assert!(
-        error(Reconstruction::Bilinear) > 0.1,
+        error(Upsampler::Bilinear) > 0.1,
         "bilinear: {}",
-        error(Reconstruction::Bilinear)
+        error(Upsampler::Bilinear)
     );
 }
 
@@ -254,24 +252,20 @@ fn history_rejected_on_shading_change() {
     let Some((_, report, _)) = crate::profile::run_shader(
         FLAT,
         &scene,
-        lowres_top(
-            &[Reconstruction::SpatioTemporal, Reconstruction::Temporal],
-            20,
-            10,
-        ),
+        lowres_top(&[Upsampler::SpatioTemporal, Upsampler::Temporal], 20, 10),
     ) else {
         return;
     };
-    let row = |r: Reconstruction| {
+    let row = |r: Upsampler| {
         report
             .results
             .iter()
-            .find(|row| row.reconstruction == r)
+            .find(|row| row.reconstruction == r.into())
             .unwrap()
     };
     // Frame 25 (time 0.5) is measured frame 5.
     let switched = 5;
-    let adaptive = row(Reconstruction::SpatioTemporal);
+    let adaptive = row(Upsampler::SpatioTemporal);
     for (frame, stats) in adaptive.frame_stats.iter().enumerate() {
         assert!(
             stats.max_abs_error < 0.02,
@@ -279,7 +273,7 @@ fn history_rejected_on_shading_change() {
             stats.max_abs_error
         );
     }
-    let temporal = row(Reconstruction::Temporal);
+    let temporal = row(Upsampler::Temporal);
     assert!(
         temporal.frame_stats[switched + 2].max_abs_error > 0.1,
         "temporal: {}",
@@ -320,7 +314,7 @@ fn disocclusion_falls_back_to_spatial() {
     let Some((pictures, report, scene)) = run(
         &sliding_sphere("size = [128, 128]\nframes = 2\nwarmup = 16"),
         lowres(
-            &[Reconstruction::Spatial, Reconstruction::SpatioTemporal],
+            &[Upsampler::Spatial, Upsampler::SpatioTemporal],
             warmup,
             frames,
         ),
@@ -338,18 +332,15 @@ fn disocclusion_falls_back_to_spatial() {
         .filter_map(|(i, &m)| m.then_some(i))
         .collect();
     assert!(revealed.len() > 20, "{} revealed pixels", revealed.len());
-    let error = |r: Reconstruction| {
+    let error = |r: Upsampler| {
         let index = report
             .results
             .iter()
-            .position(|row| row.reconstruction == r)
+            .position(|row| row.reconstruction == r.into())
             .unwrap();
         mean_error(&pictures.results[index].0, &pictures.reference, &revealed)
     };
-    let (spatial, adaptive) = (
-        error(Reconstruction::Spatial),
-        error(Reconstruction::SpatioTemporal),
-    );
+    let (spatial, adaptive) = (error(Upsampler::Spatial), error(Upsampler::SpatioTemporal));
     assert!(
         adaptive <= spatial * 1.2,
         "revealed floor: spatio-temporal {adaptive}, spatial {spatial}"
@@ -385,7 +376,7 @@ translation_per_frame = [0.12, 0.0, 0.0]
     let Some((pictures, report, scene)) = crate::profile::run_shader(
         FLAT,
         scene,
-        lowres_top(&[Reconstruction::SpatioTemporal], warmup, frames),
+        lowres_top(&[Upsampler::SpatioTemporal], warmup, frames),
     ) else {
         return;
     };
@@ -420,25 +411,21 @@ translation_per_frame = [0.12, 0.0, 0.0]
 fn thin_feature_flicker_bounded() {
     let Some((_, report, _)) = run(
         &marble_scene("", ""),
-        lowres(
-            &[Reconstruction::Spatial, Reconstruction::SpatioTemporal],
-            17,
-            6,
-        ),
+        lowres(&[Upsampler::Spatial, Upsampler::SpatioTemporal], 17, 6),
     ) else {
         return;
     };
-    let flicker = |r: Reconstruction| {
+    let flicker = |r: Upsampler| {
         report
             .results
             .iter()
-            .find(|row| row.reconstruction == r)
+            .find(|row| row.reconstruction == r.into())
             .unwrap()
             .flicker
     };
     let (spatial, adaptive) = (
-        flicker(Reconstruction::Spatial),
-        flicker(Reconstruction::SpatioTemporal),
+        flicker(Upsampler::Spatial),
+        flicker(Upsampler::SpatioTemporal),
     );
     assert!(spatial > 0.0, "spatial flicker {spatial}");
     assert!(
@@ -458,7 +445,7 @@ fn thin_feature_flicker_bounded() {
 #[test]
 fn lowres_reshades_unreliable_pixels() {
     let (warmup, frames) = (16, 2);
-    let mut options = lowres(&[Reconstruction::SpatioTemporal], warmup, frames);
+    let mut options = lowres(&[Upsampler::SpatioTemporal], warmup, frames);
     options.adaptive_refresh = vec![false, true];
     let Some((pictures, report, scene)) = run(
         &sliding_sphere("size = [128, 128]\nframes = 2\nwarmup = 16"),
@@ -561,7 +548,7 @@ mesh = {{ kind = "obj", file = "{}" }}
         obj.display()
     );
     let error = |sigma_depth: f32| {
-        let mut options = lowres_top(&[Reconstruction::Spatial], 0, 1);
+        let mut options = lowres_top(&[Upsampler::Spatial], 0, 1);
         options.upsampling.sigma_depth = sigma_depth;
         let (_, report, _) = crate::profile::run_shader(BY_DEPTH, &scene, options)?;
         Some(report.results[0].max_abs_error)

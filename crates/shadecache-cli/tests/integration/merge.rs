@@ -6,7 +6,7 @@ use std::collections::BTreeSet;
 use shadecache::profile::merge::{self, ShardReport};
 use shadecache::profile::{Nodes, Options};
 use shadecache::report::{Report, Shard};
-use shadecache::rewrite::{CacheFormat, Reconstruction, Variant};
+use shadecache::rewrite::{CacheFormat, CacheRead, Variant};
 
 use crate::profile::{marble_scene, run};
 use crate::util::{shadecache, stderr, temp_file};
@@ -19,7 +19,7 @@ fn sweep(shard: Option<Shard>) -> Option<Report> {
         variants: vec![Variant::TwoPass, Variant::ThreePass],
         refresh_periods: vec![8, 32],
         refresh_quads: vec![1, 4],
-        reconstructions: vec![Reconstruction::Bilinear, Reconstruction::Nearest],
+        reconstructions: vec![CacheRead::Bilinear, CacheRead::Nearest],
         cache_formats: vec![CacheFormat::Rgba16float],
         depth_epsilons: vec![shadecache::rewrite::DEFAULT_DEPTH_EPSILON],
         adaptive_refresh: vec![false],

@@ -1,7 +1,7 @@
 //! The profiler on lavapipe: small frames, few of them.
 
 use shadecache::profile::{self, Nodes, Options, Quiet};
-use shadecache::rewrite::{CacheFormat, Reconstruction, Variant};
+use shadecache::rewrite::{CacheFormat, CacheRead, Reconstruction, Variant};
 use shadecache::scene::Scene;
 
 use crate::util::{root, shadecache, stderr, stdout, temp_file};
@@ -72,7 +72,7 @@ pub(crate) fn assert_refresh_one_equals_reference(
         refresh_periods: vec![1],
         refresh_quads: vec![1],
         cache_formats: vec![shadecache::rewrite::CacheFormat::Rgba32float],
-        reconstructions: vec![Reconstruction::Bilinear],
+        reconstructions: vec![CacheRead::Bilinear],
         frames: Some(2),
         warmup: Some(1),
         size: Some([size, size]),
@@ -120,7 +120,7 @@ pub(crate) fn options(periods: &[u32], quads: &[u32]) -> Options {
 #[test]
 fn static_scene_without_refresh_reuses_every_pixel() {
     let mut opts = options(&[0], &[4]);
-    opts.reconstructions = Reconstruction::CACHE.to_vec();
+    opts.reconstructions = CacheRead::ALL.to_vec();
     let Some((_, report, _)) = run(&marble_scene("", ""), opts) else {
         return;
     };
@@ -154,7 +154,7 @@ fn static_scene_without_refresh_reuses_every_pixel() {
 fn refresh_period_one_equals_the_reference() {
     let mut opts = options(&[1], &[1]);
     opts.cache_formats = vec![CacheFormat::Rgba32float];
-    opts.reconstructions = Reconstruction::CACHE.to_vec();
+    opts.reconstructions = CacheRead::ALL.to_vec();
     let Some((_, report, _)) = run(
         &marble_scene("\"object-motion\", \"camera-motion\"", ""),
         opts,
@@ -236,7 +236,7 @@ light_color = [1.0, 1.0, 1.0]
     opts.variants = vec![Variant::ThreePass];
     // Every reconstruction: the packed ones test the depth filtered from
     // the payload's fourth channel instead of last frame's depth buffer.
-    opts.reconstructions = Reconstruction::CACHE.to_vec();
+    opts.reconstructions = CacheRead::ALL.to_vec();
     let Some((pictures, report, scene)) = run(scene_text, opts) else {
         return;
     };
@@ -474,7 +474,7 @@ fn non_finite_options(node_text: &str, shader: &str, format: CacheFormat) -> Opt
 /// depth together, and must keep non-finite payloads from spreading too.
 fn non_finite_options_all(node_text: &str, shader: &str, format: CacheFormat) -> Options {
     Options {
-        reconstructions: Reconstruction::CACHE.to_vec(),
+        reconstructions: CacheRead::ALL.to_vec(),
         ..non_finite_options(node_text, shader, format)
     }
 }

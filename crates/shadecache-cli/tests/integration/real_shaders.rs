@@ -5,7 +5,7 @@
 use shadecache::analysis::{Analysis, Candidate};
 use shadecache::front::Shader;
 use shadecache::profile::{Nodes, Options as ProfileOptions};
-use shadecache::rewrite::{self, CacheFormat, Options, Reconstruction, Variant};
+use shadecache::rewrite::{self, CacheFormat, CacheRead, Options, Variant};
 
 use crate::gpu::wgsl_sources;
 use crate::profile::run_shader;
@@ -252,7 +252,7 @@ fn engine_style_shaders_at_refresh_period_one_equal_the_reference() {
             refresh_periods: vec![1],
             refresh_quads: vec![1],
             cache_formats: vec![CacheFormat::Rgba32float],
-            reconstructions: vec![Reconstruction::Bilinear, Reconstruction::NearestPacked],
+            reconstructions: vec![CacheRead::Bilinear, CacheRead::NearestPacked],
             frames: Some(3),
             warmup: Some(1),
             variants: Variant::CACHE.to_vec(),
@@ -292,7 +292,7 @@ fn absent_pixels_are_not_counted_as_misses() {
         nodes: Nodes::Ids(vec![grass.node.id.clone()]),
         variants: vec![Variant::TwoPass],
         refresh_periods: vec![0],
-        reconstructions: vec![Reconstruction::Nearest],
+        reconstructions: vec![CacheRead::Nearest],
         frames: Some(2),
         warmup: Some(2),
         ..ProfileOptions::default()
@@ -376,7 +376,7 @@ size = 64
     let still = ProfileOptions {
         nodes: Nodes::Ids(vec![coverage.node.id.clone()]),
         refresh_periods: vec![0],
-        reconstructions: vec![Reconstruction::Nearest],
+        reconstructions: vec![CacheRead::Nearest],
         frames: Some(2),
         warmup: Some(2),
         variants: Variant::CACHE.to_vec(),
@@ -549,7 +549,7 @@ fn a_shadow_and_forward_module_profiles_each_fragment_stage_without_a_scene() {
             refresh_periods: vec![1],
             refresh_quads: vec![1],
             cache_formats: vec![CacheFormat::Rgba32float],
-            reconstructions: vec![Reconstruction::Bilinear],
+            reconstructions: vec![CacheRead::Bilinear],
             frames: Some(2),
             warmup: Some(1),
             size: Some([48, 48]),

@@ -573,7 +573,6 @@ fn every_reconstruction_validates_and_builds() {
     for reconstruction in rewrite::Reconstruction::ALL {
         for cache_format in [CacheFormat::Rgba16float, CacheFormat::Rgba32float] {
             let options = Options {
-                reconstruction,
                 cache_format,
                 ..Options::default()
             };
@@ -583,51 +582,43 @@ fn every_reconstruction_validates_and_builds() {
                     // bilinear or its own three. Adaptive refresh at
                     // rgba32float (lowres's third pass, the cache variants'
                     // lookup in the passes that compute the payload).
-                    let options = match variant {
-                        Variant::Lowres => Options {
-                            upsampling: rewrite::Upsampling {
-                                reconstruction,
-                                reshade: cache_format == CacheFormat::Rgba32float,
-                                ..rewrite::DEFAULT_UPSAMPLING
-                            },
-                            ..options.clone()
-                        },
-                        _ => Options {
-                            adaptive_refresh: cache_format == CacheFormat::Rgba32float,
-                            ..options.clone()
-                        },
+                    let mut options = options.clone();
+                    let rgba32 = cache_format == CacheFormat::Rgba32float;
+                    options.set_adaptive(variant, rgba32).unwrap();
+                    let rewritten = options
+                        .set_reconstruction(variant, reconstruction)
+                        .and_then(|()| {
+                            rewrite::rewrite(&shader, &analysis, candidate, variant, &options)
+                        });
+                    let rewritten = match rewritten {
+                        Ok(rewritten) => rewritten,
+                        // Lowres refuses the packed read-backs; the
+                        // cache variants refuse the upsamplings.
+                        Err(refusal)
+                            if (variant == Variant::Lowres && reconstruction.packs_depth())
+                                || (variant != Variant::Lowres && reconstruction.upsamples()) =>
+                        {
+                            assert!(
+                                refusal.reason.contains("upsamples lowres's samples")
+                                    || refusal.reason.contains("rebuilds the payload"),
+                                "{}",
+                                refusal.reason
+                            );
+                            continue;
+                        }
+                        Err(refusal) => {
+                            assert!(
+                                reconstruction.packs_depth() && candidate.components == 4,
+                                "{} {variant} {}: {}",
+                                candidate.node.id,
+                                reconstruction.as_str(),
+                                refusal.reason
+                            );
+                            assert!(refusal.reason.contains("fourth channel"));
+                            refused += 1;
+                            continue;
+                        }
                     };
-                    let rewritten =
-                        match rewrite::rewrite(&shader, &analysis, candidate, variant, &options) {
-                            Ok(rewritten) => rewritten,
-                            // Lowres refuses the packed read-backs; the
-                            // cache variants refuse the upsamplings.
-                            Err(refusal)
-                                if (variant == Variant::Lowres && reconstruction.packs_depth())
-                                    || (variant != Variant::Lowres
-                                        && reconstruction.upsamples()) =>
-                            {
-                                assert!(
-                                    refusal.reason.contains("upsamples lowres's samples")
-                                        || refusal.reason.contains("rebuilds the payload"),
-                                    "{}",
-                                    refusal.reason
-                                );
-                                continue;
-                            }
-                            Err(refusal) => {
-                                assert!(
-                                    reconstruction.packs_depth() && candidate.components == 4,
-                                    "{} {variant} {}: {}",
-                                    candidate.node.id,
-                                    reconstruction.as_str(),
-                                    refusal.reason
-                                );
-                                assert!(refusal.reason.contains("fourth channel"));
-                                refused += 1;
-                                continue;
-                            }
-                        };
                     assert_eq!(rewritten.plan.cache.reconstruction, reconstruction);
                     if variant == Variant::Lowres {
                         let out = dir
