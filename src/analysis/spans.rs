@@ -26,60 +26,12 @@ pub fn local_loads<'f>(
     source: &str,
     copy_of: &dyn Fn(Handle<Expression>) -> (usize, Option<&'f str>),
 ) -> HashMap<Handle<Expression>, Range<usize>> {
-    let span_of = |h: Handle<Expression>| function.expressions.get_span(h).to_range();
-    // Loads without a span, and the variable each reads.
-    let mut name_of = HashMap::new();
-    for (handle, expr) in function.expressions.iter() {
-        let Expression::Load { pointer } = *expr else {
-            continue;
-        };
-        if span_of(handle).is_some() {
-            continue;
-        }
-        if let Some(range) = span_of(pointer) {
-            // `v.member` and `v[i]` are spanned through their pointer.
-            name_of.insert(handle, Err(range));
-            continue;
-        }
-        if let Some(PointerRoot::Local(local)) = proc::pointer_root(function, pointer) {
-            if let Some(name) = &function.local_variables[local].name {
-                name_of.insert(handle, Ok(name.as_str()));
-            }
-        }
-    }
+    let name_of = unspanned_loads(function);
     if name_of.is_empty() {
         return HashMap::new();
     }
 
-    // The first reader of each load with a span: an expression, else a
-    // statement.
-    let mut reader: HashMap<Handle<Expression>, Range<usize>> = HashMap::new();
-    for (handle, expr) in function.expressions.iter() {
-        let Some(range) = span_of(handle) else {
-            continue;
-        };
-        for operand in proc::operands(expr) {
-            if name_of.contains_key(&operand) {
-                reader.entry(operand).or_insert_with(|| range.clone());
-            }
-        }
-    }
-    proc::each_spanned_statement(&function.body, &mut |statement, span| {
-        let read: Vec<Handle<Expression>> = match *statement {
-            Statement::Return { value } => value.into_iter().collect(),
-            Statement::Store { value, .. } => vec![value],
-            Statement::Call { ref arguments, .. } => arguments.clone(),
-            Statement::If { condition, .. } => vec![condition],
-            Statement::Switch { selector, .. } => vec![selector],
-            _ => Vec::new(),
-        };
-        let Some(range) = span.to_range() else {
-            return;
-        };
-        for expr in read.into_iter().filter(|e| name_of.contains_key(e)) {
-            reader.entry(expr).or_insert_with(|| range.clone());
-        }
-    });
+    let reader = first_readers(function, &name_of);
 
     // Several loads of one variable read by one reader (`c * c`) take its
     // occurrences in turn, in arena order.
@@ -124,6 +76,73 @@ pub fn local_loads<'f>(
         }
     }
     out
+}
+
+/// The loads of `function` without a span, and what each reads: the name
+/// of its local variable, or (`Err`) its pointer's span where the pointer
+/// has one (`v.member`, `v[i]`).
+fn unspanned_loads(
+    function: &naga::Function,
+) -> HashMap<Handle<Expression>, Result<&str, Range<usize>>> {
+    let span_of = |h: Handle<Expression>| function.expressions.get_span(h).to_range();
+    let mut name_of = HashMap::new();
+    for (handle, expr) in function.expressions.iter() {
+        let Expression::Load { pointer } = *expr else {
+            continue;
+        };
+        if span_of(handle).is_some() {
+            continue;
+        }
+        if let Some(range) = span_of(pointer) {
+            // `v.member` and `v[i]` are spanned through their pointer.
+            name_of.insert(handle, Err(range));
+            continue;
+        }
+        if let Some(PointerRoot::Local(local)) = proc::pointer_root(function, pointer) {
+            if let Some(name) = &function.local_variables[local].name {
+                name_of.insert(handle, Ok(name.as_str()));
+            }
+        }
+    }
+    name_of
+}
+
+/// The first reader with a span of each load in `loads`: an expression,
+/// else a statement.
+fn first_readers<T>(
+    function: &naga::Function,
+    loads: &HashMap<Handle<Expression>, T>,
+) -> HashMap<Handle<Expression>, Range<usize>> {
+    let span_of = |h: Handle<Expression>| function.expressions.get_span(h).to_range();
+    let mut reader: HashMap<Handle<Expression>, Range<usize>> = HashMap::new();
+    for (handle, expr) in function.expressions.iter() {
+        let Some(range) = span_of(handle) else {
+            continue;
+        };
+        for operand in proc::operands(expr) {
+            if loads.contains_key(&operand) {
+                reader.entry(operand).or_insert_with(|| range.clone());
+            }
+        }
+    }
+    proc::each_spanned_statement(&function.body, &mut |statement, span| {
+        let read: Vec<Handle<Expression>> = match *statement {
+            Statement::Return { value } => value.into_iter().collect(),
+            Statement::Store { value, .. } => vec![value],
+            Statement::Call { ref arguments, .. } => arguments.clone(),
+            Statement::If { condition, .. } => vec![condition],
+            Statement::Switch { selector, .. } => vec![selector],
+            _ => Vec::new(),
+        };
+        let Some(range) = span.to_range() else {
+            return;
+        };
+        for expr in read.into_iter().filter(|e| loads.contains_key(e)) {
+            reader.entry(expr).or_insert_with(|| range.clone());
+        }
+    });
+
+    reader
 }
 
 /// The initializer of the first `let binding` in `source` from `start`

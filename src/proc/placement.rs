@@ -476,13 +476,7 @@ fn loop_trips(
     continuing: &Block,
 ) -> Option<u64> {
     let int = |expr| const_int(module, function, expr);
-    let load_of = |expr: Handle<Expression>| match function.expressions[expr] {
-        Expression::Load { pointer } => match function.expressions[pointer] {
-            Expression::LocalVariable(local) => Some(local),
-            _ => None,
-        },
-        _ => None,
-    };
+    let load_of = |expr| local_load(function, expr);
 
     // The exit test: the first statement after the leading emits.
     let condition = body.iter().find_map(|statement| match *statement {
@@ -519,33 +513,7 @@ fn loop_trips(
         _ => return None,
     };
 
-    // The step: the only store to the counter in the continuing block.
-    let mut step = None;
-    for statement in continuing.iter() {
-        if let Statement::Store { pointer, value } = *statement {
-            if function.expressions[pointer] != Expression::LocalVariable(counter) {
-                continue;
-            }
-            if step.is_some() {
-                return None;
-            }
-            let Expression::Binary { op, left, right } = function.expressions[value] else {
-                return None;
-            };
-            step = match (
-                op,
-                load_of(left) == Some(counter),
-                load_of(right) == Some(counter),
-            ) {
-                (B::Add, true, _) => int(right),
-                (B::Add, _, true) => int(left),
-                (B::Subtract, true, _) => int(right).map(|s| -s),
-                _ => None,
-            };
-            step?;
-        }
-    }
-    let step = step?;
+    let step = counter_step(module, function, continuing, counter)?;
     // The counter must not be written in the body itself.
     if writes_local(body, function, counter) {
         return None;
@@ -571,6 +539,59 @@ fn loop_trips(
         _ => return None,
     };
     u64::try_from(trips.max(0)).ok()
+}
+
+/// The load of a local variable that `expr` is, if it is one.
+fn local_load(
+    function: &naga::Function,
+    expr: Handle<Expression>,
+) -> Option<Handle<naga::LocalVariable>> {
+    match function.expressions[expr] {
+        Expression::Load { pointer } => match function.expressions[pointer] {
+            Expression::LocalVariable(local) => Some(local),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// The step of a loop's `counter`: the only store to it in `continuing`,
+/// the counter plus or minus a constant.
+fn counter_step(
+    module: &naga::Module,
+    function: &naga::Function,
+    continuing: &Block,
+    counter: Handle<naga::LocalVariable>,
+) -> Option<i64> {
+    use naga::BinaryOperator as B;
+    let int = |expr| const_int(module, function, expr);
+    let load_of = |expr| local_load(function, expr);
+    let mut step = None;
+    for statement in continuing.iter() {
+        if let Statement::Store { pointer, value } = *statement {
+            if function.expressions[pointer] != Expression::LocalVariable(counter) {
+                continue;
+            }
+            if step.is_some() {
+                return None;
+            }
+            let Expression::Binary { op, left, right } = function.expressions[value] else {
+                return None;
+            };
+            step = match (
+                op,
+                load_of(left) == Some(counter),
+                load_of(right) == Some(counter),
+            ) {
+                (B::Add, true, _) => int(right),
+                (B::Add, _, true) => int(left),
+                (B::Subtract, true, _) => int(right).map(|s| -s),
+                _ => None,
+            };
+            step?;
+        }
+    }
+    step
 }
 
 fn writes_local(

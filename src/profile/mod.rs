@@ -59,7 +59,7 @@ use crate::scene::{self, Scene};
 use config::{probed, speedup, Config, Probe, ProbeOf};
 use grid::{shard_nodes, variant_settings, Axes, Design, Setting};
 use row::{miss_causes, result_row, Baseline};
-use run::{measured_run, Measured, ReferenceRun};
+use run::{measured_run, Measured, PayloadRun, ReferenceRun};
 
 pub use crate::measure::{Progress, Quiet, MEASURED_COLOR_FORMAT};
 
@@ -194,27 +194,15 @@ pub fn profile(
     refuse_fragment_only(shader)?;
     let prepared = setup::prepare(shader, scene, options)?;
     rewrite::check_entry_point(shader, &prepared.analysis)?;
-    let all_nodes = prepared.nodes();
     let lowres = (
         options.lowres_reconstructions.as_slice(),
         options.adaptive_refresh.as_slice(),
     );
-    let grid_nodes: Vec<String> = match options.shard {
-        Some(_) => all_nodes.iter().map(|(c, _)| c.node.id.clone()).collect(),
-        None => Vec::new(),
-    };
-    let configurations_of = |(_, settings): &GridNode| {
-        let of_variant = |&v: &Variant| variant_settings(settings, v, &prepared.base, lowres).len();
-        options.variants.iter().map(of_variant).sum()
-    };
-    let (nodes, takes, total) = shard_nodes(all_nodes, configurations_of, options.shard);
-    if let (Some(shard), true) = (options.shard, nodes.is_empty()) {
-        return Err(Error::plain(Diagnostic::error(format!(
-            "shard {shard} has nothing to measure: the grid has {total} configuration{}, fewer than the {} shards; use at most {total}",
-            if total == 1 { "" } else { "s" },
-            shard.count
-        ))));
-    }
+    let Share {
+        nodes,
+        takes,
+        grid_nodes,
+    } = sharded(&prepared, options)?;
     let (size, warmup, frames) = (prepared.size, prepared.warmup, prepared.frames);
     let reference_plan =
         rewrite::plan::reference(shader, &prepared.analysis, &prepared.base).map_err(fail)?;
@@ -270,16 +258,7 @@ pub fn profile(
     progress.finish();
 
     let reference_ms = metrics::median(&reference_run.times);
-    let node_reports: Vec<NodeReport> = nodes
-        .iter()
-        .zip(&payloads)
-        .enumerate()
-        .map(|(node, ((candidate, _), payload))| {
-            let payload_ms = metrics::median(&payload.times);
-            let fixed_ms = probed(&probes, ProbeOf::Payload(node)).map_or(0.0, |(ms, _)| ms);
-            node_report(shader, candidate, payload_ms, fixed_ms, reference_ms)
-        })
-        .collect();
+    let node_reports = node_reports(shader, &nodes, (&payloads, &probes), reference_ms);
     let baseline = Baseline {
         reference_times: &reference_run.times,
         reference_ms,
@@ -291,12 +270,7 @@ pub fn profile(
     // What causes the misses: the best configuration again, with one
     // declared effect at a time.
     let miss_causes = match results.first() {
-        Some(best) => {
-            let rewritten = rewrite_of(shader, &prepared.analysis, best, &prepared.defaults)?;
-            let sources = sources_of(&rewritten)?;
-            let runner = || bench.runner(&rewritten.plan, &sources, true);
-            miss_causes(&gpu, &runner, scene, &inputs_of, warmup, frames)?
-        }
+        Some(best) => best_miss_causes(&bench, &prepared, (shader, scene), best)?,
         None => Vec::new(),
     };
     let run = RunContext {
@@ -340,6 +314,89 @@ pub fn profile(
             chosen,
         },
     ))
+}
+
+/// What this run of the grid measures.
+struct Share<'p> {
+    /// The grid's nodes this run measures (a shard's, or all).
+    nodes: Vec<GridNode<'p>>,
+    /// Which of each node's configurations ([`shard_nodes`]).
+    takes: Vec<std::ops::Range<usize>>,
+    /// With a shard, every node of the grid (the report's `grid_nodes`,
+    /// for the merge).
+    grid_nodes: Vec<String>,
+}
+
+/// The share of the grid this run measures: a shard's, or all of it.
+fn sharded<'p>(prepared: &'p setup::Prepared, options: &Options) -> Result<Share<'p>, Error> {
+    let all_nodes = prepared.nodes();
+    let lowres = (
+        options.lowres_reconstructions.as_slice(),
+        options.adaptive_refresh.as_slice(),
+    );
+    let grid_nodes: Vec<String> = match options.shard {
+        Some(_) => all_nodes.iter().map(|(c, _)| c.node.id.clone()).collect(),
+        None => Vec::new(),
+    };
+    let configurations_of = |(_, settings): &GridNode| {
+        let of_variant = |&v: &Variant| variant_settings(settings, v, &prepared.base, lowres).len();
+        options.variants.iter().map(of_variant).sum()
+    };
+    let (nodes, takes, total) = shard_nodes(all_nodes, configurations_of, options.shard);
+    if let (Some(shard), true) = (options.shard, nodes.is_empty()) {
+        return Err(Error::plain(Diagnostic::error(format!(
+            "shard {shard} has nothing to measure: the grid has {total} configuration{}, fewer than the {} shards; use at most {total}",
+            if total == 1 { "" } else { "s" },
+            shard.count
+        ))));
+    }
+    Ok(Share {
+        nodes,
+        takes,
+        grid_nodes,
+    })
+}
+
+/// Each measured node as the report says it: its payload's time and
+/// fixed cost against the reference's `reference_ms`.
+fn node_reports(
+    shader: &Shader,
+    nodes: &[GridNode],
+    (payloads, probes): (&[PayloadRun], &[Probe]),
+    reference_ms: f64,
+) -> Vec<NodeReport> {
+    nodes
+        .iter()
+        .zip(payloads)
+        .enumerate()
+        .map(|(node, ((candidate, _), payload))| {
+            let payload_ms = metrics::median(&payload.times);
+            let fixed_ms = probed(probes, ProbeOf::Payload(node)).map_or(0.0, |(ms, _)| ms);
+            node_report(shader, candidate, payload_ms, fixed_ms, reference_ms)
+        })
+        .collect()
+}
+
+/// The misses each declared effect causes alone, with the `best`
+/// configuration drawn again.
+fn best_miss_causes(
+    bench: &crate::measure::bench::Bench,
+    prepared: &setup::Prepared,
+    (shader, scene): (&Shader, &Scene),
+    best: &ResultRow,
+) -> Result<Vec<MissCause>, Error> {
+    let rewritten = rewrite_of(shader, &prepared.analysis, best, &prepared.defaults)?;
+    let sources = sources_of(&rewritten)?;
+    let runner = || bench.runner(&rewritten.plan, &sources, true);
+    let inputs_of = |scene: &Scene, frame: u32| bench.inputs.frame(scene, frame);
+    miss_causes(
+        bench.gpu,
+        &runner,
+        scene,
+        &inputs_of,
+        prepared.warmup,
+        prepared.frames,
+    )
 }
 
 /// A fragment-only module cannot be drawn by itself.

@@ -102,30 +102,36 @@ pub(super) fn result_row(
         share_of_ideal: measured_speedup / ideal,
         pareto_psnr: false,
         pareto_ssim: false,
-        frame_stats: config
-            .times
-            .iter()
-            .zip(&config.errors)
-            .zip(&config.decisions)
-            .enumerate()
-            .map(|(frame, ((&time_ms, e), d))| FrameStats {
-                time_ms,
-                psnr: e.psnr,
-                psnr_frame: e.psnr_frame,
-                flicker: frame
-                    .checked_sub(1)
-                    .and_then(|i| config.flicker.get(i).copied())
-                    .unwrap_or(0.0),
-                ssim: e.ssim,
-                max_abs_error: e.max_abs_error,
-                hit_rate: d.hit,
-                miss_rate: d.miss(),
-                refresh_rate: d.refresh,
-            })
-            .collect(),
+        frame_stats: frame_stats(&config),
     };
     let (color, classes) = config.last;
     (row, (metrics::rgba8(&color), classes))
+}
+
+/// Each measured frame of `config`: its time, error, flicker (against
+/// the frame before) and decisions.
+fn frame_stats(config: &Config) -> Vec<FrameStats> {
+    config
+        .times
+        .iter()
+        .zip(&config.errors)
+        .zip(&config.decisions)
+        .enumerate()
+        .map(|(frame, ((&time_ms, e), d))| FrameStats {
+            time_ms,
+            psnr: e.psnr,
+            psnr_frame: e.psnr_frame,
+            flicker: frame
+                .checked_sub(1)
+                .and_then(|i| config.flicker.get(i).copied())
+                .unwrap_or(0.0),
+            ssim: e.ssim,
+            max_abs_error: e.max_abs_error,
+            hit_rate: d.hit,
+            miss_rate: d.miss(),
+            refresh_rate: d.refresh,
+        })
+        .collect()
 }
 
 /// The misses each declared effect causes alone: a run from `runner` per

@@ -237,38 +237,7 @@ impl GBuffer {
                 _ => TextureFormat::Rgba32Uint,
             })
             .collect();
-        let texture_ty = module.types.insert(
-            naga::Type {
-                name: None,
-                inner: TypeInner::Image {
-                    dim: naga::ImageDimension::D2,
-                    arrayed: false,
-                    class: naga::ImageClass::Sampled {
-                        kind: ScalarKind::Uint,
-                        multi: false,
-                    },
-                },
-            },
-            naga::Span::UNDEFINED,
-        );
-        let textures = (0..formats.len() as u32)
-            .map(|t| {
-                module.global_variables.append(
-                    naga::GlobalVariable {
-                        name: Some(texture_name(t as usize)),
-                        space: naga::AddressSpace::Handle,
-                        binding: Some(naga::ResourceBinding {
-                            group,
-                            binding: first_binding + t,
-                        }),
-                        ty: texture_ty,
-                        init: None,
-                        memory_decorations: Default::default(),
-                    },
-                    naga::Span::UNDEFINED,
-                )
-            })
-            .collect();
+        let textures = texture_globals(module, formats.len() as u32, (group, first_binding));
         Ok(GBuffer {
             leaves,
             holds,
@@ -405,7 +374,7 @@ impl GBuffer {
                 loaded
             })
             .collect();
-        let word = |b: &mut Builder, w: u32| b.member(texels[(w / 4) as usize], w % 4);
+        let word = |b: &mut Builder, w: u32| load_word(b, &texels, w);
         // Last frame's clip position as the NDC over w = 1: the lookup's
         // division by w then gives the stored NDC back exactly.
         let ndc_bits = leading(b, texels[0], VectorSize::Tri);
@@ -432,6 +401,44 @@ impl GBuffer {
             components: vec![x, y, z, w],
         });
         b.name(frag_coord, "frag_coord");
+        let values = self.leaf_values(b, module, &texels, frag_coord);
+        let originals = pieces
+            .arguments
+            .iter()
+            .enumerate()
+            .map(|(index, argument)| {
+                let index = index as u32;
+                match module.types[argument.ty].inner {
+                    TypeInner::Struct { ref members, .. } => {
+                        let components = (0..members.len() as u32)
+                            .map(|m| values[&(index, Some(m))])
+                            .collect();
+                        b.expr(Expression::Compose {
+                            ty: argument.ty,
+                            components,
+                        })
+                    }
+                    _ => values[&(index, None)],
+                }
+            })
+            .collect();
+        Fragment {
+            originals,
+            previous: Some(previous),
+            frag_coord,
+        }
+    }
+
+    /// Each original input (argument, struct member) as this pixel's
+    /// G-buffer words rebuild it; the position is `frag_coord`.
+    fn leaf_values(
+        &self,
+        b: &mut Builder,
+        module: &mut Module,
+        texels: &[Handle<Expression>],
+        frag_coord: Handle<Expression>,
+    ) -> BTreeMap<(u32, Option<u32>), Handle<Expression>> {
+        let word = |b: &mut Builder, w: u32| load_word(b, texels, w);
         let mut values: BTreeMap<(u32, Option<u32>), Handle<Expression>> = BTreeMap::new();
         for leaf in &self.leaves {
             let value = match leaf.stored {
@@ -468,31 +475,7 @@ impl GBuffer {
             };
             values.insert((leaf.argument, leaf.member), value);
         }
-        let originals = pieces
-            .arguments
-            .iter()
-            .enumerate()
-            .map(|(index, argument)| {
-                let index = index as u32;
-                match module.types[argument.ty].inner {
-                    TypeInner::Struct { ref members, .. } => {
-                        let components = (0..members.len() as u32)
-                            .map(|m| values[&(index, Some(m))])
-                            .collect();
-                        b.expr(Expression::Compose {
-                            ty: argument.ty,
-                            components,
-                        })
-                    }
-                    _ => values[&(index, None)],
-                }
-            })
-            .collect();
-        Fragment {
-            originals,
-            previous: Some(previous),
-            frag_coord,
-        }
+        values
     }
 
     /// The geometry pass's result: a member per target, at its location.
@@ -847,4 +830,50 @@ impl fragment::ScreenInputs for GBuffer {
     fn read(&self, b: &mut Builder, module: &mut Module, pieces: &Pieces) -> Fragment {
         self.read_inputs(b, module, pieces)
     }
+}
+
+/// The G-buffer's `count` textures (`texture_2d<u32>`), bound in `group`
+/// from `first_binding` on.
+fn texture_globals(
+    module: &mut Module,
+    count: u32,
+    (group, first_binding): (u32, u32),
+) -> Vec<Handle<naga::GlobalVariable>> {
+    let texture_ty = module.types.insert(
+        naga::Type {
+            name: None,
+            inner: TypeInner::Image {
+                dim: naga::ImageDimension::D2,
+                arrayed: false,
+                class: naga::ImageClass::Sampled {
+                    kind: ScalarKind::Uint,
+                    multi: false,
+                },
+            },
+        },
+        naga::Span::UNDEFINED,
+    );
+    (0..count)
+        .map(|t| {
+            module.global_variables.append(
+                naga::GlobalVariable {
+                    name: Some(texture_name(t as usize)),
+                    space: naga::AddressSpace::Handle,
+                    binding: Some(naga::ResourceBinding {
+                        group,
+                        binding: first_binding + t,
+                    }),
+                    ty: texture_ty,
+                    init: None,
+                    memory_decorations: Default::default(),
+                },
+                naga::Span::UNDEFINED,
+            )
+        })
+        .collect()
+}
+
+/// Word `w` of a pixel's G-buffer, from its loaded `texels`.
+fn load_word(b: &mut Builder, texels: &[Handle<Expression>], w: u32) -> Handle<Expression> {
+    b.member(texels[(w / 4) as usize], w % 4)
 }

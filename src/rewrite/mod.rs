@@ -430,21 +430,7 @@ fn rewrite_at(
         candidate,
         vertex.previous_location,
     );
-    // The deferred variant's G-buffer textures are bound after the twins.
-    let gbuffer = match recipe.screen_space() {
-        Some(read) => {
-            let first = slot.first_binding
-                + first_twin_binding().map_err(Refusal::internal)?
-                + vertex.twins.len() as u32;
-            Some(gbuffer::GBuffer::new(
-                &mut module,
-                &pieces,
-                read.packs_depth(),
-                (slot.group, first),
-            )?)
-        }
-        None => None,
-    };
+    let gbuffer = g_buffer(&recipe, &mut module, &pieces, slot, &vertex)?;
     let passes_of = PassContext {
         module: &module,
         pieces: &pieces,
@@ -483,6 +469,24 @@ fn rewrite_at(
         classify,
         plan,
     })
+}
+
+/// The deferred variant's G-buffer, its textures bound after the twins;
+/// `None` for a variant whose passes draw the geometry.
+fn g_buffer(
+    recipe: &Recipe,
+    module: &mut naga::Module,
+    pieces: &Pieces,
+    slot: CacheSlot,
+    vertex: &vertex::VertexStage,
+) -> Result<Option<gbuffer::GBuffer>, Refusal> {
+    let Some(read) = recipe.screen_space() else {
+        return Ok(None);
+    };
+    let first = slot.first_binding
+        + first_twin_binding().map_err(Refusal::internal)?
+        + vertex.twins.len() as u32;
+    gbuffer::GBuffer::new(module, pieces, read.packs_depth(), (slot.group, first)).map(Some)
 }
 
 /// The vertex stage the passes draw with, instrumented: the previous clip

@@ -334,16 +334,13 @@ impl Runner {
         })
     }
 
-    /// Draws a part of a frame: only `part`'s shares of the objects' draws
-    /// (in its order), as a frame of its own or, with `part.more`, into
-    /// the last frame drawn ([`CachedShader::record_more_timed`]: its
-    /// colour and depth loaded). `None` draws every object whole.
-    pub fn frame_part(
+    /// Checks that `part` and `inputs` name objects and meshes there are,
+    /// and writes the frame's buffers and depth maps.
+    fn upload(
         &mut self,
         gpu: &Gpu,
         inputs: &FrameInputs,
         part: Option<&FramePart>,
-        profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
     ) -> Result<(), String> {
         if let Some(share) = part
             .into_iter()
@@ -365,6 +362,21 @@ impl Runner {
                 super::textures::write_depth(gpu, texture, texels)?;
             }
         }
+        Ok(())
+    }
+
+    /// Draws a part of a frame: only `part`'s shares of the objects' draws
+    /// (in its order), as a frame of its own or, with `part.more`, into
+    /// the last frame drawn ([`CachedShader::record_more_timed`]: its
+    /// colour and depth loaded). `None` draws every object whole.
+    pub fn frame_part(
+        &mut self,
+        gpu: &Gpu,
+        inputs: &FrameInputs,
+        part: Option<&FramePart>,
+        profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+    ) -> Result<(), String> {
+        self.upload(gpu, inputs, part)?;
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
@@ -485,9 +497,13 @@ impl Runner {
         Ok(())
     }
 
-    /// An object's buffers (sized for this frame's contents), its bind
-    /// groups and its twins.
-    fn make_object(&mut self, gpu: &Gpu, draw: &ObjectInputs) -> Result<Object, String> {
+    /// An object's uniform and storage buffers, sized for this frame's
+    /// contents, by (group, binding); the group the caller binds has none.
+    fn object_buffers(
+        &self,
+        gpu: &Gpu,
+        draw: &ObjectInputs,
+    ) -> Result<HashMap<[u32; 2], wgpu::Buffer>, String> {
         let plan = self.cached.plan();
         let mut buffers = HashMap::new();
         let external_group = self.external.as_ref().map(|(group, _)| *group);
@@ -517,6 +533,15 @@ impl Runner {
             });
             buffers.insert(key, buffer);
         }
+        Ok(buffers)
+    }
+
+    /// An object's buffers (sized for this frame's contents), its bind
+    /// groups and its twins.
+    fn make_object(&mut self, gpu: &Gpu, draw: &ObjectInputs) -> Result<Object, String> {
+        let plan = self.cached.plan();
+        let external_group = self.external.as_ref().map(|(group, _)| *group);
+        let buffers = self.object_buffers(gpu, draw)?;
         let instances = (!draw.instance_inputs.is_empty()).then(|| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("per-instance vertex inputs"),

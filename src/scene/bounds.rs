@@ -115,6 +115,15 @@ pub(super) fn check(scene: &Scene, file: &Arc<SourceFile>) -> Result<(), Error> 
         );
     }
     camera(scene, &fail)?;
+    objects(scene, &fail)
+}
+
+/// Each object's bounds: a positive scale, a mesh within bounds, a skin
+/// that checks.
+fn objects(
+    scene: &Scene,
+    fail: &impl Fn(String, &[&str]) -> Result<(), Error>,
+) -> Result<(), Error> {
     for (index, object) in scene.objects.iter().enumerate() {
         let at = index.to_string();
         if scene.objects[index].scale <= 0.0 {

@@ -243,37 +243,8 @@ fn lower_returns(
     };
     let name = function.name.clone().unwrap_or_else(|| "helper".into());
 
-    // Locals start where the call is: initialisers become stores, and a
-    // local without one is zeroed (a call in a loop starts afresh).
-    let mut start = Block::new();
-    let locals: Vec<(Handle<LocalVariable>, LocalVariable, Span)> = function
-        .local_variables
-        .iter()
-        .map(|(h, l)| (h, l.clone(), function.local_variables.get_span(h)))
-        .collect();
-    for (local, variable, span) in locals {
-        let pointer = made(
-            &mut function,
-            Expression::LocalVariable(local),
-            Span::UNDEFINED,
-        );
-        let value = match variable.init {
-            Some(init) => {
-                let (value, emitted) = fresh_copy(&mut function, init, &mut made);
-                if let Some(range) = emitted {
-                    start.push(Statement::Emit(range), span);
-                }
-                value
-            }
-            None => made(
-                &mut function,
-                Expression::ZeroValue(variable.ty),
-                Span::UNDEFINED,
-            ),
-        };
-        start.push(Statement::Store { pointer, value }, span);
-        function.local_variables.get_mut(local).init = None;
-    }
+    // Locals start where the call is (a call in a loop starts afresh).
+    let mut start = locals_started(&mut function, &mut made);
 
     let result = function.result.as_ref().map(|r| r.ty).map(|ty| {
         let local = function.local_variables.append(
@@ -332,6 +303,42 @@ fn lower_returns(
         origins,
         result,
     }
+}
+
+/// The stores that start `function`'s locals where its call is: each
+/// initialiser becomes a store, and a local without one is zeroed.
+/// `made` appends an expression the lowering makes.
+fn locals_started(
+    function: &mut Function,
+    made: &mut impl FnMut(&mut Function, Expression, Span) -> Handle<Expression>,
+) -> Block {
+    let mut start = Block::new();
+    let locals: Vec<(Handle<LocalVariable>, LocalVariable, Span)> = function
+        .local_variables
+        .iter()
+        .map(|(h, l)| (h, l.clone(), function.local_variables.get_span(h)))
+        .collect();
+    for (local, variable, span) in locals {
+        let pointer = made(function, Expression::LocalVariable(local), Span::UNDEFINED);
+        let value = match variable.init {
+            Some(init) => {
+                let (value, emitted) = fresh_copy(function, init, made);
+                if let Some(range) = emitted {
+                    start.push(Statement::Emit(range), span);
+                }
+                value
+            }
+            None => made(
+                function,
+                Expression::ZeroValue(variable.ty),
+                Span::UNDEFINED,
+            ),
+        };
+        start.push(Statement::Store { pointer, value }, span);
+        function.local_variables.get_mut(local).init = None;
+    }
+
+    start
 }
 
 /// Whether a `return` comes anywhere but as the body's last statement.
