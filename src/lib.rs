@@ -12,8 +12,9 @@
 //! * [`front`]: read, parse and validate a shader (naga's WGSL front end),
 //!   compose it from naga_oil modules, give a fragment-only module its
 //!   vertex stage;
-//! * [`proc`]: facts about the IR that several stages share (operands,
-//!   placement, reaching definitions), and copying IR between modules;
+//! * `proc`: facts about the IR that several stages share (operands,
+//!   placement, reaching definitions), and copying IR between modules
+//!   (internal);
 //! * [`cost`]: the static cost model;
 //! * [`analysis`]: the expression graph, the candidates and why the others
 //!   are rejected;
@@ -32,19 +33,21 @@
 //! stages that measure on a GPU through wgpu:
 //!
 //! * `scene`: what a profile renders, the default scene, roles;
-//! * `runtime`: the scene drawn through the host crate
+//! * `runtime` (internal): the scene drawn through the host crate
 //!   (`shadecache-host`), which runs a plan as applications do;
-//! * `measure`: the measured run both GPU stages stand on: the scene's
-//!   inputs, runners on one device, the clock, the read-back and the
-//!   comparison with the reference;
+//! * `measure` (internal): the measured run both GPU stages stand on: the
+//!   scene's inputs, runners on one device, the clock, the read-back and
+//!   the comparison with the reference; its [`watch`] is public, for a
+//!   supervisor that reports what the GPU was doing when a driver fails;
 //! * `profile`: measuring variants against the unmodified shader;
 //! * `report`: the report's JSON, HTML and pictures;
 //!
 //! and the feature `interpolate` whole-frame reuse:
 //!
-//! * `interpolate`: I-frames rendered with their flows and the B-frames
-//!   between them built by bidirectional reprojection (seeds 000 and 003),
-//!   measured against rendering every frame.
+//! * `interpolate`: I-frames rendered with their flows and the frames
+//!   between them built from them (bidirectional reprojection,
+//!   half-velocity up-conversion, morph-and-blur extrapolation, payload
+//!   interpolation), measured against rendering every frame.
 //!
 //! The `shadecache` command (the `shadecache-cli` crate) turns both on.
 
@@ -66,22 +69,20 @@ pub mod diagnostic;
 pub mod front;
 #[cfg(feature = "interpolate")]
 pub mod interpolate;
-// The toolchain's own internals, public for its end-to-end tests (in
-// the command's crate) and hidden from the documentation: no stability
-// promise.
 #[cfg(feature = "profile")]
-#[doc(hidden)]
-pub mod measure;
+pub(crate) mod measure;
 pub mod plan;
-#[doc(hidden)]
-pub mod proc;
+pub(crate) mod proc;
 #[cfg(feature = "profile")]
 pub mod profile;
 #[cfg(feature = "profile")]
 pub mod report;
 pub mod rewrite;
 #[cfg(feature = "profile")]
-#[doc(hidden)]
-pub mod runtime;
+pub(crate) mod runtime;
 #[cfg(feature = "profile")]
 pub mod scene;
+#[cfg(all(test, feature = "interpolate"))]
+mod tests;
+#[cfg(feature = "profile")]
+pub use measure::watch;

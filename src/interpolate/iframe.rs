@@ -101,8 +101,9 @@ impl SceneMode {
 /// the host fills with which time's contents.
 #[derive(Debug)]
 pub struct IFrameShader {
+    /// The module, for the tests that check it on IR.
+    #[cfg(test)]
     pub module: Module,
-    pub info: naga::valid::ModuleInfo,
     pub text: String,
     /// One geometry pass: the user's colour targets, then `flow_previous`
     /// and `flow_next`.
@@ -281,7 +282,7 @@ pub fn instrument(
         plan,
         flow_locations,
         text,
-        info,
+        #[cfg(test)]
         module,
     })
 }

@@ -53,19 +53,16 @@
 
 #![warn(missing_docs)]
 
-#[doc(hidden)]
-pub mod bframe;
+pub(crate) mod bframe;
 mod blur;
 pub mod correspondence;
 mod frame_method;
 mod frames;
 mod gpu;
-#[doc(hidden)]
-pub mod iframe;
+pub(crate) mod iframe;
 mod measured;
 mod methods;
-#[doc(hidden)]
-pub mod morph;
+pub(crate) mod morph;
 pub mod partition;
 pub mod payload;
 pub mod pursuit;
@@ -75,8 +72,7 @@ pub(crate) mod run;
 mod search;
 mod setup;
 mod summary;
-#[doc(hidden)]
-pub mod thin;
+pub(crate) mod thin;
 
 pub use bframe::Decision;
 
@@ -166,7 +162,7 @@ impl Method {
 
     /// Its scene-assisted pass's mode, for the methods that rasterise the
     /// geometry at each B-frame.
-    pub fn scene_mode(self) -> Option<iframe::SceneMode> {
+    pub(crate) fn scene_mode(self) -> Option<iframe::SceneMode> {
         match self {
             Method::SceneAssisted => Some(iframe::SceneMode::ClosestOnMiss),
             Method::SceneAssistedShadeOnMiss => Some(iframe::SceneMode::ShadeOnMiss),

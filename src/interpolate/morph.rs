@@ -542,6 +542,7 @@ fn grid_pipeline(
 /// The argmax per grid vertex the GPU finds for the motion `motion`
 /// (row-major, pixels, over `setup.size`): the snapping pyramid alone, on
 /// a flow made from it. What [`argmax_on_cpu`] is checked against.
+#[cfg(test)]
 pub fn argmax_on_gpu(
     gpu: &Gpu,
     setup: MorphSetup,
@@ -611,6 +612,7 @@ pub fn argmax_on_gpu(
 /// `fs_argmax_reduce` compute it, on the CPU: for each grid vertex, the
 /// largest packed (gradient, y, x) over its neighbourhood of the motion
 /// `motion` (row-major, pixels). A mirror for the tests.
+#[cfg(test)]
 pub fn argmax_on_cpu(
     motion: &[[f32; 2]],
     size: [u32; 2],

@@ -248,7 +248,6 @@ impl Decisions {
 /// The colour of each class in a classification image (RGBA8).
 pub const HIT: [u8; 3] = [0, 255, 0];
 pub const REFRESH: [u8; 3] = [0, 0, 255];
-pub const OFFSCREEN: [u8; 3] = [255, 128, 0];
 pub const DISOCCLUDED: [u8; 3] = [255, 0, 0];
 pub const INVALID: [u8; 3] = [255, 0, 255];
 
@@ -260,7 +259,8 @@ fn class_of(texel: &[u8]) -> Option<Class> {
         REFRESH => Class::Refresh,
         DISOCCLUDED => Class::Disoccluded,
         INVALID => Class::Invalid,
-        // rgba8unorm stores 0.5 as 127 or 128.
+        // Off-screen is [255, 128, 0]: rgba8unorm stores its 0.5 as 127
+        // or 128.
         [255, 127 | 128, 0] => Class::Offscreen,
         _ => return None,
     })

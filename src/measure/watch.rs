@@ -18,6 +18,8 @@
 
 use std::sync::{Arc, OnceLock, RwLock};
 
+pub use crate::runtime::describe_adapter;
+
 /// One step of a measured run, told before the GPU is given it.
 #[derive(Debug)]
 pub enum Step<'a> {

@@ -32,12 +32,10 @@ pub use names::{name_words, pascal};
 pub use operands::{operands, pointer_root, PointerRoot};
 pub use placement::{
     collect_callees, each_spanned_statement, each_statement, has_effects, layout, CallSite,
-    ExitSite, FunctionLayout, LoopBound, Placement, Store,
+    FunctionLayout, Placement, Store,
 };
 pub use reaching::{reaching_definitions, Definition};
-pub use stages::{
-    inputs, instance_locations, located, location_of, output_values, vertex_entry, Input,
-};
+pub use stages::{inputs, instance_locations, located, location_of, output_values, vertex_entry};
 
 /// Whether a value with `binding` and type `ty` — an entry point's argument
 /// or result — carries a binding that `wanted` accepts, on itself or on one
@@ -139,6 +137,7 @@ pub fn globals_used_by(
 /// The name and (group, binding) of every resource the entry points at
 /// `entries` use (two resources may share a slot when no entry point uses
 /// both, so the slot alone does not say which).
+#[cfg(feature = "profile")]
 pub fn resources_used_by(
     module: &naga::Module,
     entries: &[usize],

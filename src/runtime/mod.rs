@@ -17,7 +17,9 @@ mod gpu;
 mod runner;
 mod textures;
 
-pub use frame::{build_passes, PipelineOptions, PlanFrame, RunOptions};
+#[cfg(test)]
+pub use frame::build_passes;
+pub use frame::{PipelineOptions, RunOptions};
 pub use gpu::{describe_adapter, driver_line, validated, Gpu};
 pub use runner::{DrawShare, FrameInputs, FramePart, Mesh, ObjectInputs, Runner};
 pub use textures::{read_depth, read_texture, DepthTexels, Texels, DEPTH_MAP_SIZE};

@@ -269,11 +269,13 @@ impl Runner {
     }
 
     /// Sets the frame counter c (see [`CachedShader::set_frame_counter`]).
+    #[cfg(test)]
     pub fn set_frame_counter(&mut self, frame: u64) {
         self.cached.set_frame_counter(frame);
     }
 
     /// The frame counter c: frames run, plus where it was set to.
+    #[cfg(test)]
     pub fn frame_counter(&self) -> u64 {
         self.cached.frame_counter()
     }

@@ -16,7 +16,7 @@
 //!
 //! So `shadecache profile` and `shadecache interpolate` start themselves
 //! again as a child, with [`WATCH_FILE`] naming a small file. The child
-//! installs a watch on the measured run ([`shadecache::measure::watch`])
+//! installs a watch on the measured run ([`shadecache::watch`])
 //! that writes, before each step is given to the GPU, what is being drawn
 //! or built, the adapter and its driver, and what the scene defaulted. The
 //! parent waits: the child's exit code is the command's; a child ended by
@@ -32,7 +32,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use serde::{Deserialize, Serialize};
 use shadecache::diagnostic::{self, Color, Diagnostic};
-use shadecache::measure::watch::{self, Step};
+use shadecache::watch::{self, Step};
 
 /// Set in the child: the file its watch writes.
 pub const WATCH_FILE: &str = "SHADECACHE_WATCH_FILE";
@@ -114,7 +114,7 @@ pub fn install_watch() {
         };
         match step {
             Step::Opened(adapter) => {
-                crumb.adapter = Some(shadecache::runtime::describe_adapter(adapter));
+                crumb.adapter = Some(watch::describe_adapter(adapter));
                 return;
             }
             Step::Defaulted(list) => {

@@ -107,11 +107,11 @@ pub use shadecache_plan::Plan;
 pub use timing::{NoTimer, PassTime, PassTimer, Timestamps};
 pub use twins::{TwinSources, Twins};
 
-/// What the shadecache toolchain shares with the host to draw its scenes:
-/// the plan's formats and layouts in wgpu's terms, the host's render
-/// targets. Not part of the host's API (no stability promise; hidden from
-/// its documentation): an application has its own.
-#[doc(hidden)]
+/// What the shadecache toolchain shares with the host to draw its scenes
+/// (feature `toolchain`, which the toolchain turns on): the plan's formats
+/// and layouts in wgpu's terms, the host's render targets. An application
+/// has its own and does not need it.
+#[cfg(feature = "toolchain")]
 pub mod toolchain {
     pub use crate::cached::{clear_depth, render_target};
     pub use crate::formats::{cache_format, texture_format, vertex_format};

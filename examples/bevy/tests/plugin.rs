@@ -15,18 +15,15 @@ mod lava_build;
 
 static ONE_APP_AT_A_TIME: Mutex<()> = Mutex::new(());
 
-/// Whether the test `name` is skipped: no GPU adapter, and
+/// Whether the test is skipped: no GPU adapter, and
 /// `SHADECACHE_SKIP_GPU_TESTS=1` (without it, no adapter is a failure
 /// that says so, as in the other crates' tests).
-fn skipped(name: &str) -> bool {
-    if shadecache::runtime::Gpu::new().is_ok_and(|gpu| gpu.is_some()) {
+fn skipped() -> bool {
+    if shadecache_test_support::adapter().is_some() {
         return false;
     }
-    if std::env::var_os("SHADECACHE_SKIP_GPU_TESTS").is_some_and(|v| v == "1") {
-        eprintln!("{name}: SKIPPED (no GPU adapter, SHADECACHE_SKIP_GPU_TESTS=1)");
-        return true;
-    }
-    panic!("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers), or set SHADECACHE_SKIP_GPU_TESTS=1");
+    shadecache_test_support::no_adapter();
+    true
 }
 
 /// The frames compared; the run must have drawn every one through the
@@ -84,7 +81,7 @@ fn settings() -> Headless {
 /// computes, so equal to the bit.
 #[test]
 fn bevy_plugin_at_refresh_period_one_equals_the_uncached_frame() {
-    if skipped("bevy_plugin_at_refresh_period_one_equals_the_uncached_frame") {
+    if skipped() {
         return;
     }
     let compared = run(Headless {
@@ -113,7 +110,7 @@ const MEASURED: u32 = 32;
 /// HDR), mean over the same frames of the path.
 #[test]
 fn bevy_plugin_reuses_under_camera_motion() {
-    if skipped("bevy_plugin_reuses_under_camera_motion") {
+    if skipped() {
         return;
     }
     // A cut once both images show lava: the plugin's cache starts cold at
@@ -208,7 +205,7 @@ fn profile_from(start_frame: u32) -> Vec<f64> {
 /// image at the new size can still be the old view's, scaled.)
 #[test]
 fn bevy_plugin_resets_on_resize() {
-    if skipped("bevy_plugin_resets_on_resize") {
+    if skipped() {
         return;
     }
     let compared = run(Headless {
@@ -240,7 +237,7 @@ fn bevy_plugin_resets_on_resize() {
 /// without the cut the cache would reuse), and reuse resumes after it.
 #[test]
 fn bevy_plugin_resets_on_camera_cut() {
-    if skipped("bevy_plugin_resets_on_camera_cut") {
+    if skipped() {
         return;
     }
     let (compared, cut) = run_with_cut(Headless {
@@ -277,7 +274,7 @@ fn bevy_plugin_resets_on_camera_cut() {
 /// without the plugin.
 #[test]
 fn bevy_plugin_refuses_msaa_and_leaves_the_material_to_bevy() {
-    if skipped("bevy_plugin_refuses_msaa_and_leaves_the_material_to_bevy") {
+    if skipped() {
         return;
     }
     let run = in_turn(Headless {
@@ -303,7 +300,7 @@ fn bevy_plugin_refuses_msaa_and_leaves_the_material_to_bevy() {
 /// every mesh as without the plugin.
 #[test]
 fn bevy_plugin_refuses_meshes_of_another_material() {
-    if skipped("bevy_plugin_refuses_meshes_of_another_material") {
+    if skipped() {
         return;
     }
     let run = in_turn(Headless {
@@ -327,7 +324,7 @@ fn bevy_plugin_refuses_meshes_of_another_material() {
 /// left out of the opaque phase would be missing from the image).
 #[test]
 fn bevy_plugin_hands_the_meshes_back_when_switched_off() {
-    if skipped("bevy_plugin_hands_the_meshes_back_when_switched_off") {
+    if skipped() {
         return;
     }
     let run = in_turn(Headless {

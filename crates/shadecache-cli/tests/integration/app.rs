@@ -53,7 +53,7 @@ fn steady_state(stdout: &str) -> [f64; 3] {
 /// an 8-bit display).
 #[test]
 fn example_app_at_refresh_period_one_equals_its_original_frames() {
-    if crate::gpu::gpu().is_none() {
+    if crate::util::no_gpu() {
         return;
     }
     let out = tempfile::tempdir().unwrap();
@@ -79,7 +79,7 @@ fn example_app_at_refresh_period_one_equals_its_original_frames() {
 /// through the same host crate.
 #[test]
 fn example_app_error_stays_within_what_profile_measured() {
-    if crate::gpu::gpu().is_none() {
+    if crate::util::no_gpu() {
         return;
     }
     let out = tempfile::tempdir().unwrap();
@@ -229,7 +229,7 @@ fn host_crate_depends_on_wgpu_serde_and_the_plan_only() {
 /// north twists against its south, so the history is reprojected).
 #[test]
 fn lowres_runs_in_the_host_crate() {
-    if crate::gpu::gpu().is_none() {
+    if crate::util::no_gpu() {
         return;
     }
     let out = tempfile::tempdir().unwrap();

@@ -5,190 +5,13 @@
 
 use std::ffi::OsStr;
 
-use shadecache::analysis::{self, Analysis};
-use shadecache::front::compose::{Composition, ShaderDef};
-use shadecache::front::{self, Shader};
-use shadecache::rewrite::{self, Options, Variant};
+use shadecache::analysis::{self};
+use shadecache::front::{self};
 
-use crate::gpu::write_wgsl;
 use crate::util::{root, shadecache, stderr, temp_file, tint_validate};
 
 const FRAGMENT: &str = "corpus/split/toon_material.wgsl";
 const VERTEX: &str = "corpus/split/mesh.wgsl";
-
-fn analysed(shader: &Shader) -> Analysis {
-    analysis::analyze(shader, &analysis::Options::default())
-        .unwrap_or_else(|e| panic!("{}", e.render()))
-}
-
-/// Without its vertex module, every variant of every node is still
-/// emitted: fragment passes that take the previous clip position at the
-/// first location the fragment stage leaves free, and a plan that says
-/// what the host's vertex stage must output. Every pass validates under
-/// naga (in the rewrite) and Tint.
-#[test]
-fn a_fragment_only_module_emits_fragment_passes_and_says_what_the_vertex_stage_must_output() {
-    let shader = front::load(&root().join(FRAGMENT)).unwrap();
-    let analysis = analysed(&shader);
-    let dir = tempfile::tempdir().unwrap();
-    let mut files = Vec::new();
-    let mut emitted = 0;
-    for candidate in analysis.candidates.iter().take(4) {
-        // Lowres jitters the vertex stage, which a fragment-only module
-        // does not have: refused, saying what to give.
-        let refusal = rewrite::rewrite(
-            &shader,
-            &analysis,
-            candidate,
-            Variant::Lowres,
-            &Options::default(),
-        )
-        .expect_err("lowres needs the vertex stage");
-        assert!(
-            refusal.reason.contains("--vertex FILE"),
-            "{}",
-            refusal.reason
-        );
-        for variant in Variant::CACHE {
-            let rewritten =
-                rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
-                    .unwrap_or_else(|r| panic!("{} {variant}: {r}", candidate.node.id));
-            let host = rewritten.plan.host_vertex.as_ref().expect("host_vertex");
-            // The fragment stage reads locations 0, 1 and 2.
-            assert_eq!(host.previous_clip_position_location, 3);
-            assert!(
-                host.requirement
-                    .contains("@location(3) previous_clip_position"),
-                "{}",
-                host.requirement
-            );
-            // The deferred variant's screen-space passes bring their own
-            // vertex stage, a triangle over the screen.
-            let plan_passes = rewritten.plan.passes.iter().chain(&rewritten.plan.classify);
-            for (pass, planned) in rewritten
-                .passes
-                .iter()
-                .chain([&rewritten.classify])
-                .zip(plan_passes)
-            {
-                let geometry = planned.draw == shadecache::plan::DrawKind::Geometry;
-                assert!(
-                    !geometry
-                        || pass
-                            .module
-                            .entry_points
-                            .iter()
-                            .all(|ep| ep.stage == naga::ShaderStage::Fragment)
-                );
-            }
-            assert!(rewritten
-                .plan
-                .passes
-                .iter()
-                .filter(|p| p.draw == shadecache::plan::DrawKind::Geometry)
-                .all(|p| p.vertex_entry.is_empty()));
-            files.extend(write_wgsl(
-                dir.path(),
-                &format!("{}-{variant}", candidate.node.id),
-                &rewritten,
-            ));
-            emitted += 1;
-        }
-    }
-    assert_eq!(emitted, 4 * Variant::CACHE.len());
-    for result in tint_validate(&files) {
-        assert!(result.ok, "{}: {:?}", result.file, result.messages);
-    }
-}
-
-/// `--vertex FILE` merges the vertex module on IR: one `view` uniform for
-/// the binding both declare, the vertex stage instrumented as if it were
-/// the module's own, and every pass builds a wgpu pipeline.
-#[test]
-fn a_separate_vertex_module_is_merged_on_ir() {
-    let shader = front::load_with(
-        &root().join(FRAGMENT),
-        &Composition::default(),
-        Some(&root().join(VERTEX)),
-        None,
-    )
-    .unwrap();
-    let module = &shader.module;
-    let stages: Vec<_> = module
-        .entry_points
-        .iter()
-        .map(|ep| (ep.name.as_str(), ep.stage))
-        .collect();
-    assert_eq!(
-        stages,
-        [
-            ("fragment", naga::ShaderStage::Fragment),
-            ("vertex", naga::ShaderStage::Vertex)
-        ]
-    );
-    let views = module
-        .global_variables
-        .iter()
-        .filter(|(_, g)| {
-            g.binding
-                == Some(naga::ResourceBinding {
-                    group: 0,
-                    binding: 0,
-                })
-        })
-        .count();
-    assert_eq!(views, 1);
-    let analysis = analysed(&shader);
-    let candidate = &analysis.candidates[0];
-    for variant in Variant::CACHE {
-        let rewritten =
-            rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
-                .unwrap_or_else(|r| panic!("{variant}: {r}"));
-        assert!(rewritten.plan.host_vertex.is_none());
-        assert!(rewritten
-            .plan
-            .passes
-            .iter()
-            .filter(|p| p.draw == shadecache::plan::DrawKind::Geometry)
-            .all(|p| p.vertex_entry == "vertex"));
-        // The previous position comes from twins of the vertex module's
-        // uniforms.
-        assert!(
-            rewritten
-                .plan
-                .bindings
-                .previous
-                .iter()
-                .any(|t| t.shadows.name == "mesh"),
-            "{:?}",
-            rewritten.plan.bindings.previous
-        );
-        crate::gpu::build_pipelines(&rewritten, &variant.to_string());
-    }
-}
-
-/// Δn = 1 recomputes every pixel: the composed module's variants give the
-/// reference's image (differential test, on the default scene).
-#[test]
-fn a_composed_module_at_refresh_period_one_equals_the_reference() {
-    let shader = front::load_with(
-        &root().join(FRAGMENT),
-        &Composition::default(),
-        Some(&root().join(VERTEX)),
-        None,
-    )
-    .unwrap();
-    let analysis = analysed(&shader);
-    let ids = analysis
-        .candidates
-        .iter()
-        .take(2)
-        .map(|c| c.node.id.clone())
-        .collect();
-    if let Some(report) = crate::profile::assert_refresh_one_equals_reference(&shader, ids, 64) {
-        assert_eq!(report.results.len(), 2 * Variant::CACHE.len());
-    }
-}
 
 #[test]
 fn vertex_naming_a_module_without_a_vertex_entry_point_is_an_error() {
@@ -241,7 +64,7 @@ fn a_binding_the_two_modules_declare_differently_is_an_error() {
 /// inputs; it used to be refused. `--vertex` still gives the real one.
 #[test]
 fn fragment_only_module_gets_a_generated_vertex_stage() {
-    if crate::gpu::gpu().is_none() {
+    if crate::util::no_gpu() {
         return;
     }
     let out = tempfile::tempdir().unwrap();
@@ -309,64 +132,6 @@ fn fragment_only_module_gets_a_generated_vertex_stage() {
 
 const COMPOSED: &str = "corpus/composed/ripple_material.wgsl";
 const MODULES: &str = "corpus/composed/modules";
-
-fn composition(defs: &[(&str, ShaderDef)]) -> Composition {
-    Composition {
-        import_paths: vec![root().join(MODULES)],
-        defs: defs.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
-        ..Composition::default()
-    }
-}
-
-/// `#import`s resolve under the import path and `#ifdef`s follow the
-/// defs: the lighting helper of another module is part of the costly
-/// node, the fog exists only with `FOG`, and every variant of the top
-/// nodes is emitted and valid under Tint.
-#[test]
-fn a_module_with_imports_is_composed_through_naga_oil() {
-    let plain = front::load_with(&root().join(COMPOSED), &composition(&[]), None, None)
-        .unwrap_or_else(|e| panic!("{}", e.render()));
-    let fog = front::load_with(
-        &root().join(COMPOSED),
-        &composition(&[("FOG", ShaderDef::Bool(true))]),
-        None,
-        None,
-    )
-    .unwrap_or_else(|e| panic!("{}", e.render()));
-    let plain_analysis = analysed(&plain);
-    let fog_analysis = analysed(&fog);
-    // Imported names read as module__item (naga writes them back with one
-    // underscore).
-    assert!(
-        plain.file.text.contains("fn lighting_point_light("),
-        "{}",
-        plain.file.text
-    );
-    assert!(plain_analysis
-        .candidates
-        .iter()
-        .any(|c| c.node.text.starts_with("lighting_point_light(")));
-    let has_fog = |a: &Analysis| a.candidates.iter().any(|c| c.node.text.starts_with("mix("));
-    assert!(!has_fog(&plain_analysis) && has_fog(&fog_analysis));
-
-    let dir = tempfile::tempdir().unwrap();
-    let mut files = Vec::new();
-    for candidate in fog_analysis.candidates.iter().take(3) {
-        for variant in Variant::CACHE {
-            let rewritten =
-                rewrite::rewrite(&fog, &fog_analysis, candidate, variant, &Options::default())
-                    .unwrap_or_else(|r| panic!("{} {variant}: {r}", candidate.node.id));
-            files.extend(write_wgsl(
-                dir.path(),
-                &format!("{}-{variant}", candidate.node.id),
-                &rewritten,
-            ));
-        }
-    }
-    for result in tint_validate(&files) {
-        assert!(result.ok, "{}: {:?}", result.file, result.messages);
-    }
-}
 
 #[test]
 fn an_import_that_does_not_resolve_is_an_error_at_the_import() {

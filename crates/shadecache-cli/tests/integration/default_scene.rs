@@ -70,7 +70,7 @@ fn profile_small(
 /// value it had to invent is listed.
 #[test]
 fn profile_without_a_scene_infers_roles_and_lists_defaults() {
-    if crate::gpu::gpu().is_none() {
+    if crate::util::no_gpu() {
         return;
     }
     let out = tempfile::tempdir().unwrap();
@@ -118,7 +118,7 @@ fn a_scene_init_file_profiles_as_no_scene() {
     );
     assert!(text.contains("# inferred: applied last"), "{text}");
     assert!(text.contains("# defaulted:"), "{text}");
-    if crate::gpu::gpu().is_none() {
+    if crate::util::no_gpu() {
         return;
     }
     let (_dir, path) = temp_file("scene.toml", text.as_bytes());
@@ -280,7 +280,7 @@ fn a_vertex_input_the_mesh_cannot_feed_takes_the_scenes_constant() {
     let err = profile_error(shader, sphere);
     assert!(err.contains("`layer`"), "{err}");
     assert!(err.contains("[vertex_inputs]"), "{err}");
-    if crate::gpu::gpu().is_none() {
+    if crate::util::no_gpu() {
         return;
     }
     let scene = format!("{sphere}\n[vertex_inputs]\nlayer = 0.25\n");
@@ -361,7 +361,7 @@ fn a_long_uniform_array_is_zero_and_listed_as_defaulted() {
     );
     assert!(err.contains("`point_lights.data`"), "{err}");
     assert!(err.contains("leave it out"), "{err}");
-    if crate::gpu::gpu().is_none() {
+    if crate::util::no_gpu() {
         return;
     }
     let out = tempfile::tempdir().unwrap();
@@ -381,7 +381,7 @@ fn a_long_uniform_array_is_zero_and_listed_as_defaulted() {
 /// though variants within the budget were measured.
 #[test]
 fn degenerate_reference_is_reported_and_never_recommended() {
-    if crate::gpu::gpu().is_none() {
+    if crate::util::no_gpu() {
         return;
     }
     let source = "struct Frame { clip_from_world: mat4x4<f32>, world_from_local: mat4x4<f32> }
@@ -454,7 +454,7 @@ fn fs_main(in: VertexOut) -> @location(0) vec4<f32> {
 /// supported".
 #[test]
 fn uint_texture_binding_profiles() {
-    if crate::gpu::gpu().is_none() {
+    if crate::util::no_gpu() {
         return;
     }
     let source = "struct VertexOutput { @location(0) tex_coord: vec2<f32>, @builtin(position) position: vec4<f32> };

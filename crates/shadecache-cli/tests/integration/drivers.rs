@@ -8,7 +8,6 @@ use std::process::{Command, Output};
 
 use serde_json::Value;
 
-use crate::gpu::gpu;
 use crate::util::{root, stderr, stdout};
 
 /// `shadecache ARGS...` from the root with `env` set, colour off.
@@ -59,7 +58,9 @@ fn args(list: &[String]) -> Vec<&str> {
 /// driver, and exits with 3, not with the signal.
 #[test]
 fn a_driver_crash_is_a_diagnostic_not_a_signal() {
-    let Some(gpu) = gpu() else { return };
+    let Some(gpu) = crate::util::adapter() else {
+        return;
+    };
     let out = tempfile::tempdir().unwrap();
     let output = shadecache_with(
         &[("SHADECACHE_TEST_ABORT_WHILE_DRAWING", "reference")],
@@ -71,8 +72,8 @@ fn a_driver_crash_is_a_diagnostic_not_a_signal() {
         "the measured run was ended by signal 6 (SIGABRT",
         "while drawing a frame of reference (its passes",
         "shader: corpus/noise_marble.wgsl",
-        &format!("adapter and driver: {}", gpu.adapter.name),
-        gpu.adapter.driver_info.as_str(),
+        &format!("adapter and driver: {}", gpu.name),
+        gpu.driver_info.as_str(),
         // The default scene's neutral values, which a crash may owe to.
         "the scene gave a neutral value to: uniform `frame.",
     ] {
@@ -85,7 +86,9 @@ fn a_driver_crash_is_a_diagnostic_not_a_signal() {
 /// ended and said to have run past it, with exit code 3.
 #[test]
 fn a_runaway_frame_is_a_diagnostic() {
-    let Some(gpu) = gpu() else { return };
+    let Some(gpu) = crate::util::adapter() else {
+        return;
+    };
     let dir = tempfile::tempdir().unwrap();
     let shader = dir.path().join("runaway.wgsl");
     std::fs::write(
@@ -119,7 +122,7 @@ fn fs(in: V) -> @location(0) vec4<f32> {
     for part in [
         "one GPU step ran past 5 s, so the measured run was ended: drawing a frame of reference",
         "runaway.wgsl",
-        &format!("adapter and driver: {}", gpu.adapter.name),
+        &format!("adapter and driver: {}", gpu.name),
         "SHADECACHE_GPU_TIMEOUT=SECONDS",
     ] {
         assert!(err.contains(part), "`{part}` not in:\n{err}");
@@ -137,7 +140,9 @@ fn fs(in: V) -> @location(0) vec4<f32> {
 /// newer).
 #[test]
 fn lavapipe_22_reproducer_profiles() {
-    let Some(_gpu) = gpu() else { return };
+    let Some(_gpu) = crate::util::adapter() else {
+        return;
+    };
     let out = tempfile::tempdir().unwrap();
     let output = shadecache_with(
         &[],
@@ -187,7 +192,9 @@ fn package_dir(name: &str) -> PathBuf {
 /// died by SIGSEGV on Mesa 22.3.6.
 #[test]
 fn bevy_pbr_profiles() {
-    let Some(_gpu) = gpu() else { return };
+    let Some(_gpu) = crate::util::adapter() else {
+        return;
+    };
     let example = package_dir("naga_oil").join("examples/bevy_pbr_wgsl");
     let out = tempfile::tempdir().unwrap();
     let import_path = example.display().to_string();
@@ -248,8 +255,10 @@ fn names_the_driver(output: &Output, out: &std::path::Path, pointer: &str, versi
 /// its version.
 #[test]
 fn reports_name_the_driver_version() {
-    let Some(gpu) = gpu() else { return };
-    let version = gpu.adapter.driver_info.clone();
+    let Some(gpu) = crate::util::adapter() else {
+        return;
+    };
+    let version = gpu.driver_info.clone();
     assert!(!version.is_empty(), "the adapter names no driver version");
 
     let out = tempfile::tempdir().unwrap();

@@ -86,7 +86,7 @@ document.body.setAttribute('data-check', JSON.stringify({
 /// label is cut off, and no legend repeats a colour.
 #[test]
 fn report_fits_a_laptop_screen_and_its_charts_fit_their_data() {
-    if crate::gpu::gpu().is_none() {
+    if crate::util::no_gpu() {
         return;
     }
     let Some(browser) = chromium() else {

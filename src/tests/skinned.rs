@@ -3,11 +3,11 @@
 //! Last frame's position of a vertex needs last frame's joint matrices,
 //! which the array's previous-frame twin holds.
 
-use shadecache::profile::{Nodes, Options};
-use shadecache::rewrite::{CacheFormat, Variant};
+use crate::profile::{Nodes, Options};
+use crate::rewrite::{CacheFormat, Variant};
 
-use crate::profile::run_shader;
-use crate::util::root;
+use super::profile::run_shader;
+use super::util::root;
 
 fn shader() -> String {
     std::fs::read_to_string(root().join("corpus/skinned_arm.wgsl")).unwrap()
@@ -73,8 +73,8 @@ fn skinned_mesh_previous_position_is_exact() {
     let Some((pictures, report, scene)) = run_shader(&shader(), &arm(14.0, 1, 1), options) else {
         return;
     };
-    let (band, uncovered) = crate::util::moved_bands(&scene, 1, 128, 128);
-    let hit = |i: usize| crate::util::is_hit(&pictures.results[0].1, i);
+    let (band, uncovered) = super::util::moved_bands(&scene, 1, 128, 128);
+    let hit = |i: usize| super::util::is_hit(&pictures.results[0].1, i);
     assert!(band.len() > 30, "the leading band is {} pixels", band.len());
     let missed = band.iter().filter(|&&i| !hit(i)).count();
     assert_eq!(missed, 0, "of {} leading-band pixels", band.len());
@@ -120,14 +120,14 @@ fn skinned_mesh_cache_has_no_tail() {
 /// the two I-frames, which ghosts the forearm.
 #[test]
 fn skinned_mesh_interpolates_with_each_i_frames_joints() {
-    use shadecache::interpolate::{Method, Options};
+    use crate::interpolate::{Method, Options};
     let options = Options {
         methods: vec![Method::SceneAssisted, Method::LinearBlend],
         frames: Some(8),
         ..Options::default()
     };
     let Some((report, _, _)) =
-        crate::interpolate::run_interpolation(&shader(), &arm(4.0, 8, 0), options)
+        super::interpolate::run_interpolation(&shader(), &arm(4.0, 8, 0), options)
     else {
         return;
     };

@@ -3,14 +3,15 @@
 //! `previous_world_from_local`), the previous position reads the siblings
 //! and the resource gets no twin.
 
-use shadecache::analysis;
-use shadecache::front::{self, Shader};
-use shadecache::profile::{Nodes, Options};
-use shadecache::rewrite::{self, Variant};
+use crate::analysis;
+use crate::front::{self, Shader};
+use crate::profile::{Nodes, Options};
+use crate::rewrite::{self, Variant};
 
-use crate::gpu::{build_pipelines, write_wgsl};
-use crate::profile::{marble_scene, run_shader};
-use crate::util::{root, tint_validate};
+use super::gpu::{build_pipelines, write_wgsl};
+use super::profile::run_shader;
+use super::util::marble_scene;
+use super::util::{root, tint_validate};
 
 /// The marble, its frame uniform keeping last frame's view-projection and
 /// model beside this frame's.
@@ -29,7 +30,7 @@ fn marble_with_previous_members() -> String {
 }
 
 fn parsed(text: &str) -> Shader {
-    front::parse(shadecache::diagnostic::SourceFile::new("test.wgsl", text))
+    front::parse(crate::diagnostic::SourceFile::new("test.wgsl", text))
         .unwrap_or_else(|e| panic!("{}", e.render()))
 }
 
@@ -75,7 +76,7 @@ fn an_engines_previous_members_replace_the_twin() {
             ]
         );
         let first = &rewritten.passes[0];
-        let pass = shadecache::back::wgsl_text(&first.module, &first.info).unwrap();
+        let pass = crate::back::wgsl_text(&first.module, &first.info).unwrap();
         let helper = pass
             .split("fn vs_main_previous(")
             .nth(1)
@@ -146,7 +147,7 @@ fn previous_members_reproject_as_a_twin_does() {
         return;
     };
     let (_, members, _) = run_shader(&marble_with_previous_members(), &scene, options()).unwrap();
-    let psnr = |report: &shadecache::report::Report| {
+    let psnr = |report: &crate::report::Report| {
         assert_eq!(report.results.len(), 1, "{:?}", report.results);
         report.results[0].psnr
     };

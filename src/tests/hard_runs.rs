@@ -3,12 +3,13 @@
 //! checks is taken out (said in its comment); docs/rewrite.md explains the
 //! handling.
 
-use shadecache::report::FrameStats;
-use shadecache::rewrite::Variant;
-use shadecache::scene::Scene;
+use crate::report::FrameStats;
+use crate::rewrite::Variant;
+use crate::scene::Scene;
 
-use crate::profile::{marble_scene, options, run};
-use crate::util::{interior, near, silhouette};
+use super::profile::{options, run};
+use super::util::marble_scene;
+use super::util::{interior, near, silhouette};
 
 /// A class of the classification image (RGBA8) at pixel `i`.
 fn class(classes: &[u8], i: usize) -> [u8; 3] {
@@ -137,10 +138,7 @@ fn reversed_z() {
     let Some((pictures, report, scene)) = run(&reversed_scene, options(&[0], &[4])) else {
         return;
     };
-    assert_eq!(
-        scene.camera.depth,
-        shadecache::scene::DepthConvention::Reversed
-    );
+    assert_eq!(scene.camera.depth, crate::scene::DepthConvention::Reversed);
     let pixels = 128 * 128;
     let covered = (0..pixels)
         .filter(|&i| pictures.reference[i * 4..i * 4 + 3] != [0, 0, 0])
@@ -397,8 +395,8 @@ fn fast_motion() {
 /// a missed one (recomputed) within one step.
 fn check_fast_errors(
     what: &str,
-    pictures: &shadecache::profile::Pictures,
-    report: &shadecache::report::Report,
+    pictures: &crate::profile::Pictures,
+    report: &crate::report::Report,
 ) {
     let (w, h) = (128, 128);
     for (row, (color, classes)) in report.results.iter().zip(&pictures.results) {
@@ -429,7 +427,7 @@ fn check_fast_errors(
 }
 
 /// Fast motion's first half: the object moves. `None` without a GPU.
-fn fast_sliding_object(opts: shadecache::profile::Options) -> Option<()> {
+fn fast_sliding_object(opts: crate::profile::Options) -> Option<()> {
     let (w, h) = (128, 128);
     // 1: the object moves.
     let sliding = fast_scene(
@@ -475,7 +473,7 @@ fn fast_sliding_object(opts: shadecache::profile::Options) -> Option<()> {
 }
 
 /// Fast motion's second half: the camera moves.
-fn fast_panning_camera(opts: shadecache::profile::Options) {
+fn fast_panning_camera(opts: crate::profile::Options) {
     let (w, h) = (128, 128);
     // 2: the camera moves.
     // 36 px a frame at the plane, 40 units away: a whole number of pixels,
@@ -593,7 +591,7 @@ light_color = [1.0, 1.0, 1.0]
 "#;
     let mut opts = options(&[0], &[4]);
     opts.variants = vec![Variant::OnePass];
-    opts.reconstructions = shadecache::rewrite::CacheRead::ALL.to_vec();
+    opts.reconstructions = crate::rewrite::CacheRead::ALL.to_vec();
     let Some((pictures, report, _)) = run(scene_text, opts) else {
         return;
     };
@@ -685,8 +683,8 @@ light_color = [1.0, 1.0, 1.0]
         let mut opts = options(&[period], &[4]);
         opts.variants = Variant::CACHE.to_vec();
         opts.reconstructions = vec![
-            shadecache::rewrite::CacheRead::Bilinear,
-            shadecache::rewrite::CacheRead::Nearest,
+            crate::rewrite::CacheRead::Bilinear,
+            crate::rewrite::CacheRead::Nearest,
         ];
         let Some((_, report, _)) = run(&scene(speed), opts) else {
             return;

@@ -2,10 +2,10 @@
 //! payload interpolated between I-frames and shaded at each B-frame's
 //! time.
 
-use shadecache::interpolate::{Method, Options};
+use crate::interpolate::{Method, Options};
 
-use crate::interpolate::{marble, method, run_interpolation};
-use crate::util::root;
+use super::interpolate::{marble, method, run_interpolation};
+use super::util::root;
 
 /// Seed 000 §6's limitation: where only the light moves, every warping
 /// method carries the I-frames' shading along the (zero) flow, so the

@@ -3,9 +3,9 @@
 
 use std::collections::HashMap;
 
-use shadecache::back::{self, Language};
-use shadecache::rewrite::{self, Options, Variant};
-use shadecache::runtime::{self, Gpu};
+use crate::back::{self, Language};
+use crate::rewrite::{self, Options, Variant};
+use crate::runtime::{self, Gpu};
 
 /// The environment variable that lets the tests needing a GPU adapter
 /// skip where there is none.
@@ -46,7 +46,7 @@ pub(crate) fn wgsl_sources(rewritten: &rewrite::Rewritten) -> HashMap<String, St
 }
 
 /// Writes each pass's WGSL into `dir` as `<label>-<file name>`; their
-/// paths, for [`crate::util::tint_validate`].
+/// paths, for [`super::util::tint_validate`].
 pub(crate) fn write_wgsl(
     dir: &std::path::Path,
     label: &str,
@@ -77,14 +77,14 @@ pub fn build_pipelines(rewritten: &rewrite::Rewritten, what: &str) -> Option<usi
     Some(pipelines)
 }
 
-/// Every pass of every corpus variant ([`crate::corpus_rewrites`])
+/// Every pass of every corpus variant ([`super::corpus_rewrites`])
 /// builds a wgpu render pipeline, as its plan describes it.
 #[test]
 fn every_pass_of_every_variant_builds_a_wgpu_pipeline() {
     let Some(mut gpu) = gpu() else { return };
     eprintln!("adapter: {} ({:?})", gpu.adapter.name, gpu.adapter.backend);
     let mut built = 0;
-    for (index, rewrite) in crate::corpus_rewrites::corpus_rewrites().iter().enumerate() {
+    for (index, rewrite) in super::corpus_rewrites::corpus_rewrites().iter().enumerate() {
         let Ok(emitted) = &rewrite.outcome else {
             continue;
         };
@@ -92,7 +92,7 @@ fn every_pass_of_every_variant_builds_a_wgpu_pipeline() {
         // for a device until the device goes (measured: 24 GB over the
         // corpus's 4,000 pipelines on one device).
         if index % 200 == 199 {
-            gpu = crate::gpu::gpu().expect("the adapter found before");
+            gpu = super::gpu::gpu().expect("the adapter found before");
         }
         emitted
             .plan
@@ -180,10 +180,10 @@ fn sphere(rings: u32, segments: u32) -> runtime::Mesh {
 #[test]
 fn three_pass_shades_every_covered_pixel_exactly_once() {
     let Some(gpu) = gpu() else { return };
-    let (shader, analysis) = crate::util::analyzed("counting.wgsl", COUNTING_SHADER);
-    let candidate = crate::util::candidate(&analysis, "sin(in.normal * 10.0)");
+    let (shader, analysis) = super::util::analyzed("counting.wgsl", COUNTING_SHADER);
+    let candidate = super::util::candidate(&analysis, "sin(in.normal * 10.0)");
     let options = Options {
-        color_format: shadecache::plan::TextureFormat::Rgba16Float,
+        color_format: crate::plan::TextureFormat::Rgba16Float,
         refresh_period: 4,
         refresh_quad: 2,
         ..Options::default()
@@ -243,7 +243,7 @@ fn three_pass_shades_every_covered_pixel_exactly_once() {
         // positions must agree.
         if frame > 0 {
             let classes = runtime::read_texture(&gpu, runner.classes(), 4).unwrap();
-            let decisions = shadecache::measure::metrics::decisions(&classes);
+            let decisions = crate::measure::metrics::decisions(&classes);
             assert!(decisions.hit > 0.5, "frame {frame}: {decisions:?}");
         }
         let (mut covered, mut holes, mut doubled) = (0, 0, 0);

@@ -1,11 +1,11 @@
 //! The deferred variant: one geometry pass into a G-buffer, the lookup,
 //! the misses and the shading in screen space, per draw (docs/rewrite.md).
 
-use shadecache::profile::{Nodes, Options};
-use shadecache::rewrite::{self, CacheFormat, CacheRead, Variant};
+use crate::profile::{Nodes, Options};
+use crate::rewrite::{self, CacheFormat, CacheRead, Variant};
 
-use crate::profile::{options, run_shader};
-use crate::util::{analyzed, interior, root, silhouette};
+use super::profile::{options, run_shader};
+use super::util::{analyzed, interior, root, silhouette};
 
 /// The marble shader with its colour tinted by the object's height, read
 /// in the fragment stage from the per-object uniform (its model matrix),
@@ -28,14 +28,14 @@ fn run_tinted(
     scene: &str,
     mut options: Options,
 ) -> Option<(
-    shadecache::profile::Pictures,
-    shadecache::report::Report,
-    shadecache::scene::Scene,
+    crate::profile::Pictures,
+    crate::report::Report,
+    crate::scene::Scene,
 )> {
     let source = tinted_marble();
     let (_, analysis) = analyzed("tinted_marble.wgsl", &source);
     let turbulence =
-        crate::util::candidate(&analysis, "s4 + (0.0625 * abs(gradient_noise(p * 16.0)))");
+        super::util::candidate(&analysis, "s4 + (0.0625 * abs(gradient_noise(p * 16.0)))");
     options.nodes = Nodes::Ids(vec![turbulence.node.id.clone()]);
     run_shader(&source, scene, options)
 }
@@ -46,7 +46,7 @@ fn run_tinted(
 /// groups would show; `effects`, `camera` and `sphere` (TOML lines) set
 /// the motion.
 fn sphere_over_floor(effects: &str, camera: &str, sphere: &str) -> String {
-    crate::util::sphere_over_floor(
+    super::util::sphere_over_floor(
         "size = [128, 128]\nframes = 3\nwarmup = 1",
         effects,
         camera,

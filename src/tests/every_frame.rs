@@ -2,10 +2,10 @@
 //! seed 000 Fig. 4(d)): left out of the I-frames, depth-tested into every
 //! method's frames.
 
-use shadecache::interpolate::{Method, Options};
+use crate::interpolate::{Method, Options};
 
-use crate::interpolate::{marble, method, run_interpolation};
-use crate::util::root;
+use super::interpolate::{marble, method, run_interpolation};
+use super::util::root;
 
 /// The windmill (blades two pixels wide turning 12° a frame before a
 /// still wall), small, its blades drawn every frame or not.

@@ -1,8 +1,8 @@
 //! The cost model on shaders made to have a known answer.
 
-use shadecache::analysis::{analyze, Analysis, Options};
-use shadecache::diagnostic::SourceFile;
-use shadecache::front;
+use crate::analysis::{analyze, Analysis, Options};
+use crate::diagnostic::SourceFile;
+use crate::front;
 
 fn analysis_of(source: &str) -> Analysis {
     let shader = front::parse(SourceFile::new("test.wgsl", source))
@@ -63,7 +63,7 @@ fn loop_trip_counts_are_inferred_from_constant_bounds() {
         );
         let shader = front::parse(SourceFile::new("loop.wgsl", source)).unwrap();
         let function = &shader.module.entry_points[0].function;
-        let layout = shadecache::proc::layout(&shader.module, function, 8.0);
+        let layout = crate::proc::layout(&shader.module, function, 8.0);
         assert_eq!(layout.loops.len(), 1);
         layout.loops[0].trips
     };
@@ -86,7 +86,7 @@ fn loop_trip_counts_are_inferred_from_constant_bounds() {
 fn a_loop_with_unknown_bound_uses_the_default_trip_count() {
     let source = "@fragment\nfn fs(@location(0) x: f32, @location(1) @interpolate(flat) n: i32) -> @location(0) vec4<f32> {\n    var acc = 0.0;\n    for (var i = 0; i < n; i++) {\n        acc += sin(x * f32(i));\n    }\n    let total = acc * 0.5;\n    return vec4<f32>(total);\n}\n";
     let unknown = cost_of(&analysis_of(source), "acc * 0.5");
-    let default_trips = shadecache::cost::Weights::default().default_loop_trips as u32;
+    let default_trips = crate::cost::Weights::default().default_loop_trips as u32;
     let known = cost_of(
         &analysis_of(&loop_shader(&default_trips.to_string())),
         "acc * 0.5",

@@ -1,13 +1,13 @@
 //! Whole-frame reuse (`shadecache interpolate`): the I-frame pass, the
 //! B-frame methods, the run and its report, on small scenes.
 
-use shadecache::interpolate::bframe::Decision;
-use shadecache::interpolate::report::{KeptFrame, Pictures, Report};
-use shadecache::interpolate::{self, Method, Options};
-use shadecache::profile::Quiet;
-use shadecache::scene::Scene;
+use crate::interpolate::bframe::Decision;
+use crate::interpolate::report::{KeptFrame, Pictures, Report};
+use crate::interpolate::{self, Method, Options};
+use crate::profile::Quiet;
+use crate::scene::Scene;
 
-use crate::util::{root, temp_file};
+use super::util::{root, temp_file};
 
 /// Runs `shader_text` on `scene_text` with `options`; `None` (said on
 /// stderr) without a GPU adapter outside CI.
@@ -16,14 +16,11 @@ pub(crate) fn run_interpolation(
     scene_text: &str,
     options: Options,
 ) -> Option<(Report, Pictures, Scene)> {
-    crate::gpu::gpu()?;
+    super::gpu::gpu()?;
     let (_dir, scene_path) = temp_file("scene.toml", scene_text.as_bytes());
     let scene = Scene::load(&scene_path).unwrap_or_else(|e| panic!("{}", e.render()));
-    let shader = shadecache::front::parse(shadecache::diagnostic::SourceFile::new(
-        "test.wgsl",
-        shader_text,
-    ))
-    .unwrap_or_else(|e| panic!("{}", e.render()));
+    let shader = crate::front::parse(crate::diagnostic::SourceFile::new("test.wgsl", shader_text))
+        .unwrap_or_else(|e| panic!("{}", e.render()));
     let (report, pictures) =
         interpolate::interpolate(&shader, &scene, &scene_path, &options, &mut Quiet)
             .unwrap_or_else(|e| panic!("{}", e.render()));
@@ -37,7 +34,7 @@ pub(crate) fn marble() -> String {
 /// A marble sphere over a marble floor; `effects`, `camera` and `sphere`
 /// (TOML lines) set the motion.
 pub(crate) fn sphere_over_floor(effects: &str, camera: &str, sphere: &str) -> String {
-    crate::util::sphere_over_floor("size = [96, 96]\nframes = 8", effects, camera, sphere)
+    super::util::sphere_over_floor("size = [96, 96]\nframes = 8", effects, camera, sphere)
 }
 
 pub(crate) fn method(report: &Report, method: Method) -> &interpolate::report::MethodReport {
@@ -609,7 +606,7 @@ fn reversed_z_interpolation() {
 /// wgpu pipeline per pass of every plan.
 #[test]
 fn every_interpolation_pass_is_valid_and_builds() {
-    let Some(gpu) = crate::gpu::gpu() else { return };
+    let Some(gpu) = super::gpu::gpu() else { return };
     let dir = tempfile::tempdir().unwrap();
     let mut files = vec![
         root().join("shaders/bframe.wgsl"),
@@ -618,7 +615,7 @@ fn every_interpolation_pass_is_valid_and_builds() {
     ];
     let mut built = 0;
     // A refusal is the shader's limit, never the toolchain's failure.
-    let refused = |path: &std::path::Path, what: &str, refusal: &shadecache::rewrite::Refusal| {
+    let refused = |path: &std::path::Path, what: &str, refusal: &crate::rewrite::Refusal| {
         assert!(
             !refusal.is_internal(),
             "{}: {}",
@@ -629,25 +626,25 @@ fn every_interpolation_pass_is_valid_and_builds() {
     };
     // Each plan checked and each of its passes built as a wgpu pipeline.
     let build = |path: &std::path::Path,
-                 plan: &shadecache::plan::Plan,
+                 plan: &crate::plan::Plan,
                  source: &dyn Fn(&str) -> Option<String>| {
         plan.check()
             .unwrap_or_else(|err| panic!("{}: {err}", path.display()));
-        shadecache::runtime::build_passes(
+        crate::runtime::build_passes(
             &gpu,
             plan,
             source,
-            shadecache::runtime::PipelineOptions::default(),
+            crate::runtime::PipelineOptions::default(),
         )
         .unwrap_or_else(|err| panic!("{}: {err}", path.display()))
     };
-    for path in crate::util::corpus() {
+    for path in super::util::corpus() {
         let text = std::fs::read_to_string(root().join(&path)).unwrap();
-        let (shader, analysis) = crate::util::analyzed(&path.display().to_string(), &text);
+        let (shader, analysis) = super::util::analyzed(&path.display().to_string(), &text);
         let instrumented = match interpolate::iframe::instrument(
             &shader,
             &analysis,
-            &shadecache::rewrite::Options::default(),
+            &crate::rewrite::Options::default(),
             gpu.device.limits().max_vertex_attributes,
         ) {
             Ok(instrumented) => instrumented,
@@ -656,7 +653,7 @@ fn every_interpolation_pass_is_valid_and_builds() {
                 continue;
             }
         };
-        shadecache::rewrite::uniformity::check_kills(&instrumented.module)
+        crate::rewrite::uniformity::check_kills(&instrumented.module)
             .unwrap_or_else(|err| panic!("{}: {err:?}", path.display()));
         let stem = path.file_stem().unwrap().to_string_lossy().to_string();
         let file = dir.path().join(format!("{stem}.wgsl"));
@@ -685,8 +682,8 @@ fn every_interpolation_pass_is_valid_and_builds() {
         let Ok(candidate) = interpolate::payload::choose(&analysis) else {
             continue;
         };
-        let options = shadecache::rewrite::Options::default();
-        let reference = shadecache::rewrite::plan::reference(&shader, &analysis, &options).unwrap();
+        let options = crate::rewrite::Options::default();
+        let reference = crate::rewrite::plan::reference(&shader, &analysis, &options).unwrap();
         let passes =
             match interpolate::payload::passes(&shader, &analysis, candidate, &options, &reference)
             {
@@ -705,7 +702,7 @@ fn every_interpolation_pass_is_valid_and_builds() {
             built += build(&path, plan, &|name| passes.sources.get(name).cloned());
         }
     }
-    for result in crate::util::tint_validate(&files) {
+    for result in super::util::tint_validate(&files) {
         assert!(result.ok, "{}: {:?}", result.file, result.messages);
     }
     for latest in [None, Some(1), Some(4)] {
@@ -724,80 +721,6 @@ fn every_interpolation_pass_is_valid_and_builds() {
         interpolate::morph::Morph::new(&gpu, setup).unwrap_or_else(|err| panic!("{err}"));
     }
     assert!(built >= 30, "{built} pipelines");
-}
-
-/// Bad knobs and methods get a clear error and exit 1, before anything is
-/// written.
-#[test]
-fn interpolate_bad_input_is_an_error() {
-    let out = tempfile::tempdir().unwrap();
-    let out_dir = out.path().join("report");
-    let marble = "corpus/noise_marble.wgsl";
-    let scene = "corpus/scenes/marble_sphere.toml";
-    let out_arg = out_dir.display().to_string();
-    for (args, says) in [
-        (vec!["--frames-per-interval", "1"], "frames-per-interval"),
-        (vec!["--iterations", "0"], "iterations"),
-        (vec!["--method", "optical-flow"], "optical-flow"),
-        (vec!["--screen-epsilon=-1"], "screen-epsilon"),
-        (vec!["--inpaint-passes", "0"], "inpaint-passes"),
-        (vec!["--latest-radius", "0"], "latest-radius"),
-        (vec!["--method", "morph", "--grid", "12"], "power of two"),
-        (
-            vec!["--method", "payload", "--node", "n00000000"],
-            "unknown node id `n00000000`",
-        ),
-        (
-            vec!["--method", "morph", "--size", "100x100"],
-            "does not divide the 100×100 frame",
-        ),
-        (vec!["--method", "morph", "--gamma", "0"], "gamma"),
-        (vec!["--method", "morph", "--tracking", "90,70"], "tracking"),
-        (vec!["--method", "morph", "--blur-level", "0"], "blur-level"),
-        (
-            vec!["--method", "morph", "--frames-per-interval", "1"],
-            "frames-per-interval",
-        ),
-    ] {
-        let mut full = vec!["interpolate", marble, "--scene", scene, "--out", &out_arg];
-        full.extend(args.iter().copied());
-        let output = crate::util::shadecache(&full);
-        assert_eq!(output.status.code(), Some(1), "{args:?}");
-        let err = crate::util::stderr(&output);
-        assert!(err.contains(says), "{args:?}: {err}");
-        assert!(!out_dir.exists(), "{args:?} wrote a report");
-    }
-    // A shader whose flows cannot be made (the fragment stage moves its
-    // own depth): refused with the reason, before anything is written.
-    let (_dir, shader) = temp_file(
-        "depth.wgsl",
-        br#"
-struct Frame { clip_from_world: mat4x4<f32> }
-@group(0) @binding(0) var<uniform> frame: Frame;
-@vertex
-fn vs_main(@location(0) position: vec3<f32>) -> @builtin(position) vec4<f32> {
-    return frame.clip_from_world * vec4<f32>(position, 1.0);
-}
-struct Out { @location(0) color: vec4<f32>, @builtin(frag_depth) depth: f32 }
-@fragment
-fn fs_main(@builtin(position) p: vec4<f32>) -> Out {
-    return Out(vec4<f32>(1.0), p.z * 0.5);
-}
-"#,
-    );
-    let shader = shader.display().to_string();
-    let output = crate::util::shadecache([
-        "interpolate",
-        &shader,
-        "--method",
-        "morph",
-        "--out",
-        &out_arg,
-    ]);
-    assert_eq!(output.status.code(), Some(1));
-    let err = crate::util::stderr(&output);
-    assert!(err.contains("frag_depth"), "{err}");
-    assert!(!out_dir.exists());
 }
 
 /// Seed 000's globe (Fig. 3): turning and moving at once, its silhouette
@@ -882,14 +805,14 @@ fn flows_match_cpu_projection() {
         let mut checked = 0;
         for iframe in &pictures.iframes {
             let now = scene.frame(iframe.frame, aspect);
-            let sphere = crate::util::silhouette(&scene, 1, iframe.frame, w, h);
-            let floor = crate::util::silhouette(&scene, 0, iframe.frame, w, h);
-            let sphere_inside = crate::util::interior(&sphere, w);
-            let floor_inside = crate::util::interior(&floor, w);
+            let sphere = super::util::silhouette(&scene, 1, iframe.frame, w, h);
+            let floor = super::util::silhouette(&scene, 0, iframe.frame, w, h);
+            let sphere_inside = super::util::interior(&sphere, w);
+            let floor_inside = super::util::interior(&floor, w);
             for p in 0..w * h {
                 let object = if sphere_inside[p] {
                     1
-                } else if floor_inside[p] && !crate::util::near(&sphere, w, p) {
+                } else if floor_inside[p] && !super::util::near(&sphere, w, p) {
                     0
                 } else {
                     continue;
@@ -1067,13 +990,13 @@ fn half_velocity_constant_motion_is_exact() {
         let outline: Vec<bool> = {
             let masks: Vec<Vec<bool>> = [frame.frame - 1, frame.frame, frame.frame + 1]
                 .iter()
-                .map(|&f| crate::util::silhouette(&scene, 1, f, 96, 96))
+                .map(|&f| super::util::silhouette(&scene, 1, f, 96, 96))
                 .collect();
             (0..96 * 96)
                 .map(|p| {
                     masks
                         .iter()
-                        .any(|m| crate::util::near(m, 96, p) && !crate::util::interior(m, 96)[p])
+                        .any(|m| super::util::near(m, 96, p) && !super::util::interior(m, 96)[p])
                 })
                 .collect()
         };
@@ -1103,11 +1026,11 @@ fn velocity_merge_prefers_nearer_surface() {
             .iter()
             .map(|frame| {
                 // Where the square was a frame ago and no longer is.
-                let now = crate::util::silhouette(&scene, 1, frame.frame, 96, 96);
-                let before = crate::util::silhouette(&scene, 1, frame.frame - 1, 96, 96);
-                let inside_before = crate::util::interior(&before, 96);
+                let now = super::util::silhouette(&scene, 1, frame.frame, 96, 96);
+                let before = super::util::silhouette(&scene, 1, frame.frame - 1, 96, 96);
+                let inside_before = super::util::interior(&before, 96);
                 (0..96 * 96)
-                    .filter(|&p| inside_before[p] && !crate::util::near(&now, 96, p))
+                    .filter(|&p| inside_before[p] && !super::util::near(&now, 96, p))
                     .filter(|&p| frame.result[p * 4] > SQUARE && frame.reference[p * 4] < SQUARE)
                     .count()
             })
@@ -1182,14 +1105,14 @@ fn thin_fast_geometry() {
     let on_blades = |method: Method| -> (f64, f64) {
         let (mut blades, mut rest, mut nb, mut nr) = (0.0f64, 0.0f64, 0, 0);
         for frame in kept(&pictures, method) {
-            let blade = crate::util::silhouette(&scene, 1, frame.frame, 128, 128);
+            let blade = super::util::silhouette(&scene, 1, frame.frame, 128, 128);
             for p in 0..blade.len() {
                 let error = error_at(frame, p);
                 assert!(error.is_finite(), "{}: not finite at {p}", method.name());
                 if blade[p] {
                     blades += f64::from(error);
                     nb += 1;
-                } else if !crate::util::near(&blade, 128, p) {
+                } else if !super::util::near(&blade, 128, p) {
                     rest += f64::from(error);
                     nr += 1;
                 }
@@ -1361,9 +1284,9 @@ fn rim_far_off(paper: bool) -> Option<(usize, usize)> {
     let (_, pictures, scene) = run_interpolation(&marble(), &scene_text, options)?;
     let (mut outline, mut far_off) = (0, 0);
     for frame in kept(&pictures, Method::ImageBased) {
-        let sphere = crate::util::silhouette(&scene, 1, frame.frame, 128, 128);
+        let sphere = super::util::silhouette(&scene, 1, frame.frame, 128, 128);
         let outside: Vec<bool> = sphere.iter().map(|s| !s).collect();
-        for p in (0..sphere.len()).filter(|&p| sphere[p] && crate::util::near(&outside, 128, p)) {
+        for p in (0..sphere.len()).filter(|&p| sphere[p] && super::util::near(&outside, 128, p)) {
             outline += 1;
             far_off += usize::from(error_at(frame, p) > 0.1);
         }
@@ -1416,12 +1339,12 @@ fn moving_objects_leave_no_tail() {
             let times = [frame.frame - 1, frame.frame, frame.frame + 1];
             let masks: Vec<Vec<bool>> = [1, 2]
                 .iter()
-                .flat_map(|&o| times.map(|f| crate::util::silhouette(&scene, o, f, 96, 96)))
+                .flat_map(|&o| times.map(|f| super::util::silhouette(&scene, o, f, 96, 96)))
                 .collect();
             let outline = |p: usize| {
                 masks
                     .iter()
-                    .any(|m| crate::util::near(m, 96, p) && !crate::util::interior(m, 96)[p])
+                    .any(|m| super::util::near(m, 96, p) && !super::util::interior(m, 96)[p])
             };
             for p in (0..96 * 96).filter(|&p| !outline(p)) {
                 if frame.result[p * 4] > SQUARE && frame.reference[p * 4] < SQUARE {
@@ -1449,9 +1372,9 @@ fn moving_objects_leave_no_tail() {
 /// `delta` further in, so the fill grows from the mask's edge.
 #[test]
 fn character_removal_fills_from_unmasked_neighbours() {
-    use shadecache::interpolate::bframe::{BFrameParams, BFrames};
+    use crate::interpolate::bframe::{BFrameParams, BFrames};
     use wgpu::util::DeviceExt;
-    let Some(gpu) = crate::gpu::gpu() else {
+    let Some(gpu) = super::gpu::gpu() else {
         return;
     };
     // 32 × 32: colour x/32 in red, y/32 in green; a moving object (flow w
@@ -1514,8 +1437,8 @@ fn character_removal_fills_from_unmasked_neighbours() {
     // 4–11 masked. One pass fills 4 and 11 from 3 and 12.
     let removal = |passes: u32| -> Vec<f32> {
         bframes.remove_moving_objects(&gpu, (&color, &flow), &params, passes, None);
-        let bytes = shadecache::runtime::read_texture(&gpu, bframes.removed(), 8).unwrap();
-        shadecache::measure::metrics::linear_from_f16(&bytes)
+        let bytes = crate::runtime::read_texture(&gpu, bframes.removed(), 8).unwrap();
+        crate::measure::metrics::linear_from_f16(&bytes)
     };
     let at = |pixels: &[f32], x: usize, y: usize| -> [f32; 4] {
         let i = (y * 16 + x) * 4;
@@ -1592,9 +1515,9 @@ fn latest_frame_init_helps_at_discontinuities() {
         kept(pictures, Method::ImageBased)
             .iter()
             .map(|frame| {
-                let square = crate::util::silhouette(&scene, 1, frame.frame, 96, 96);
+                let square = super::util::silhouette(&scene, 1, frame.frame, 96, 96);
                 (0..96 * 96)
-                    .filter(|&p| crate::util::near(&square, 96, p) && error_at(frame, p) > 0.1)
+                    .filter(|&p| super::util::near(&square, 96, p) && error_at(frame, p) > 0.1)
                     .count()
             })
             .sum()
@@ -1702,55 +1625,5 @@ spin_degrees_per_frame = [0.0, 6.0, 0.0]
     assert!(
         image > blend + 0.05,
         "image-based {image}, linear blend {blend}"
-    );
-}
-
-/// With no scene, `interpolate` renders the motion a game has (the camera
-/// orbiting at 1° a frame, a small sphere crossing in front), said in the
-/// report: holding the I-frame then loses visibly to the scene-assisted
-/// pass. On the profile's default scene, which barely moves, every
-/// method tied with sample-and-hold (SSIM 0.9987 at 64², here 0.986).
-#[test]
-fn default_interpolation_scene_moves() {
-    if crate::gpu::gpu().is_none() {
-        return;
-    }
-    let out = tempfile::tempdir().unwrap();
-    let output = crate::util::shadecache([
-        "interpolate",
-        "corpus/noise_marble.wgsl",
-        "--method",
-        "sample-and-hold,scene-assisted",
-        "--size",
-        "64x64",
-        "--frames",
-        "8",
-        "--quiet",
-        "--out",
-        out.path().to_str().unwrap(),
-    ]);
-    assert!(output.status.success(), "{}", crate::util::stderr(&output));
-    assert!(crate::util::stdout(&output).contains("scene: default scene with a game's motion"));
-    let report: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.path().join("report.json")).unwrap()).unwrap();
-    assert!(report["scene_description"]
-        .as_str()
-        .unwrap()
-        .contains("orbits at 1° a frame"));
-    let ssim = |name: &str| {
-        report["methods"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|m| m["method"] == name)
-            .unwrap_or_else(|| panic!("{name} in {report}"))["ssim_mean"]
-            .as_f64()
-            .unwrap()
-    };
-    let (hold, assisted) = (ssim("sample-and-hold"), ssim("scene-assisted"));
-    assert!(hold < 0.995, "sample-and-hold {hold}");
-    assert!(
-        assisted > hold + 0.005,
-        "scene-assisted {assisted}, hold {hold}"
     );
 }

@@ -7,17 +7,17 @@
 //! buffer and payload through `cache_lookup`, `cache_lookup_loads` and
 //! `cache_lookup_nearest` for a list of previous clip positions, and
 //! writes each lookup's status and payload to a storage buffer. Every case
-//! also runs through the CPU mirror (`shadecache::reprojection`), which
+//! also runs through the CPU mirror (`crate::reprojection`), which
 //! must take the same decisions. The frame counter test runs the real
 //! `Runner`.
 
 use std::borrow::Cow;
 use std::collections::HashMap;
 
+use crate::rewrite::reprojection::{self, PreviousDepth, Status};
+use crate::rewrite::{self, Options, Variant};
+use crate::runtime::{self, Gpu};
 use glam::{DMat4, DVec2, DVec3, DVec4, IVec2, UVec2, Vec2, Vec4};
-use shadecache::rewrite::reprojection::{self, PreviousDepth, Status};
-use shadecache::rewrite::{self, Options, Variant};
-use shadecache::runtime::{self, Gpu};
 use wgpu::util::DeviceExt;
 
 /// The harness around the cache helpers. Case `i` is evaluated in the
@@ -602,7 +602,7 @@ fn previous_payload(gpu: &Gpu, cache: &Cache, size: wgpu::Extent3d, packed: bool
 /// The lookups' pipeline: the cache helpers and the harness, the packed
 /// lookups in place of the others when `packed`.
 fn lookup_pipeline(device: &wgpu::Device, packed: bool) -> wgpu::RenderPipeline {
-    let helpers = std::fs::read_to_string(crate::util::root().join("shaders/cache.wgsl")).unwrap();
+    let helpers = std::fs::read_to_string(super::util::root().join("shaders/cache.wgsl")).unwrap();
     let harness = if packed {
         HARNESS
             .replace("cache_lookup(clip)", "cache_lookup_packed(clip)")
@@ -791,7 +791,7 @@ fn flat_cache() -> Cache {
 fn behind_previous_camera() {
     // Dividing by a negative w lands the point on a texel whose depth
     // agrees: without the `w > 0` test that is a false hit.
-    let Some(gpu) = crate::gpu::gpu() else { return };
+    let Some(gpu) = super::gpu::gpu() else { return };
     let cache = flat_cache();
     let behind = |x: f32, y: f32, w: f32| Case {
         clip: cache.clip_at(Vec2::new(x, y), 0.5, w),
@@ -888,7 +888,7 @@ fn sloped_depth(texel: Vec2) -> f32 {
 /// returning its fallback), the steepest of these miss as disoccluded.
 #[test]
 fn sloped_surface_under_zoom_and_roll() {
-    let Some(gpu) = crate::gpu::gpu() else { return };
+    let Some(gpu) = super::gpu::gpu() else { return };
     let mut cache = sloped_cache();
     // A steeper plane, so that a wrongly turned slope shows.
     cache.depth = (0..256)
@@ -951,7 +951,7 @@ fn offscreen_reprojection() {
     // hits); a point exactly on an edge texel's centre, or within 0.0005
     // texel of it, hits: its outside taps weigh < 0.001 and are ignored,
     // and it reads the edge texel itself.
-    let Some(gpu) = crate::gpu::gpu() else { return };
+    let Some(gpu) = super::gpu::gpu() else { return };
     let last = 15.0;
     let expect = |x: f32, y: f32, footprint: u32, nearest: u32| Expected {
         texel: Vec2::new(x, y),
@@ -1098,7 +1098,7 @@ fn depth_discontinuity() {
     // At a contact, two surfaces meeting with no depth step, the depth
     // test cannot tell them apart: see
     // `depth_discontinuity_at_contact_points` for the measured bound.
-    let Some(gpu) = crate::gpu::gpu() else { return };
+    let Some(gpu) = super::gpu::gpu() else { return };
     let cache = silhouette_cache();
     // (texel, the point's material: 0 foreground, 1 background,
     // footprint status, nearest status)
@@ -1155,7 +1155,7 @@ fn depth_discontinuity() {
 /// weight, is tighter next to a surface near the far plane.
 #[test]
 fn packed_lookups_behind_offscreen_and_at_silhouettes() {
-    let Some(gpu) = crate::gpu::gpu() else { return };
+    let Some(gpu) = super::gpu::gpu() else { return };
     let statuses = |o: &Outcome| [o.bilinear.status, o.loads.status, o.nearest.status];
 
     // Behind the previous camera or NaN: off-screen; the mirrored points
@@ -1451,7 +1451,7 @@ fn depth_discontinuity_at_contact_points() {
     // and there are some (the depth test alone cannot see contacts:
     // material ids would, as in the seed). Pixels seen in both frames hit
     // (≥ 95%).
-    let Some(gpu) = crate::gpu::gpu() else { return };
+    let Some(gpu) = super::gpu::gpu() else { return };
     let scene = ContactScene::new();
     let (cache, previous_points) = scene.previous_frame();
     let size = scene.size as usize;
@@ -1583,8 +1583,8 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
 /// after checking that every pixel of the first frame misses and every
 /// later one hits or refreshes.
 fn refresh_maps(gpu: &Gpu, period: u32, quad: u32, start: u64, frames: usize) -> Vec<Vec<bool>> {
-    let (shader, analysis) = crate::util::analyzed("quad.wgsl", QUAD_SHADER);
-    let candidate = crate::util::candidate(&analysis, "sin(in.local * 10.0)");
+    let (shader, analysis) = super::util::analyzed("quad.wgsl", QUAD_SHADER);
+    let candidate = super::util::candidate(&analysis, "sin(in.local * 10.0)");
     let options = Options {
         refresh_period: period,
         refresh_quad: quad,
@@ -1593,7 +1593,7 @@ fn refresh_maps(gpu: &Gpu, period: u32, quad: u32, start: u64, frames: usize) ->
     let rewritten =
         rewrite::rewrite(&shader, &analysis, candidate, Variant::OnePass, &options).unwrap();
     let sources: HashMap<String, String> =
-        shadecache::back::render_variant(&rewritten, shadecache::back::Language::Wgsl)
+        crate::back::render_variant(&rewritten, crate::back::Language::Wgsl)
             .unwrap()
             .into_iter()
             .map(|(name, bytes)| (name, String::from_utf8(bytes).unwrap()))
@@ -1643,7 +1643,7 @@ fn refresh_maps(gpu: &Gpu, period: u32, quad: u32, start: u64, frames: usize) ->
     for frame in 0..frames {
         runner.frame(gpu, &inputs, None).unwrap();
         let classes = runtime::read_texture(gpu, runner.classes(), 4).unwrap();
-        let decisions = shadecache::measure::metrics::decisions(&classes);
+        let decisions = crate::measure::metrics::decisions(&classes);
         assert_eq!(decisions.covered, (size * size) as usize);
         if frame == 0 {
             assert_eq!(
@@ -1660,7 +1660,7 @@ fn refresh_maps(gpu: &Gpu, period: u32, quad: u32, start: u64, frames: usize) ->
         maps.push(
             classes
                 .chunks_exact(4)
-                .map(|c| [c[0], c[1], c[2]] == shadecache::measure::metrics::REFRESH)
+                .map(|c| [c[0], c[1], c[2]] == crate::measure::metrics::REFRESH)
                 .collect(),
         );
     }
@@ -1675,7 +1675,7 @@ fn frame_counter_wrap() {
     // Periods that do not divide 2^32 (7, 12) and one that does (8). Each
     // frame's refreshes are also eq. 1's with the unwrapped counter:
     // b = (h(block) + c) mod Δn = 0.
-    let Some(gpu) = crate::gpu::gpu() else { return };
+    let Some(gpu) = super::gpu::gpu() else { return };
     let near_u32 = u64::from(u32::MAX) - 20;
     for (period, quad, start) in [
         (7, 2, near_u32),
@@ -1740,7 +1740,7 @@ fn frame_counter_wrap() {
 fn no_derivative_after_kill_in_any_emitted_pass() {
     let mut passes = 0;
     let mut deferred = 0;
-    for rewrite in crate::corpus_rewrites::corpus_rewrites() {
+    for rewrite in super::corpus_rewrites::corpus_rewrites() {
         let Ok(emitted) = &rewrite.outcome else {
             continue;
         };

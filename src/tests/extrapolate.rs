@@ -2,12 +2,12 @@
 //! `morph-warp` of `shadecache interpolate`): the frames after an I-frame,
 //! built from it alone, on small scenes.
 
-use shadecache::interpolate::morph::{argmax_on_cpu, argmax_on_gpu, MorphSetup};
-use shadecache::interpolate::report::{KeptFrame, Pictures, Report};
-use shadecache::interpolate::{Method, Options};
-use shadecache::scene::Scene;
+use crate::interpolate::morph::{argmax_on_cpu, argmax_on_gpu, MorphSetup};
+use crate::interpolate::report::{KeptFrame, Pictures, Report};
+use crate::interpolate::{Method, Options};
+use crate::scene::Scene;
 
-use crate::interpolate::{
+use super::interpolate::{
     error_at, kept, marble, method, run_interpolation, sphere_over_floor, square_speed,
     squares_before_wall, SLIDING_SHADED, SQUARE,
 };
@@ -56,13 +56,13 @@ fn extrapolated(pictures: &Pictures, method: Method) -> Vec<&KeptFrame> {
 fn near_outline(scene: &Scene, frames: &[u32], radius: i64) -> Vec<bool> {
     let masks: Vec<Vec<bool>> = frames
         .iter()
-        .map(|&f| crate::util::silhouette(scene, 1, f, SIZE, SIZE))
+        .map(|&f| super::util::silhouette(scene, 1, f, SIZE, SIZE))
         .collect();
     let edge: Vec<bool> = (0..SIZE * SIZE)
         .map(|p| {
             masks
                 .iter()
-                .any(|m| crate::util::near(m, SIZE, p) && !crate::util::interior(m, SIZE)[p])
+                .any(|m| super::util::near(m, SIZE, p) && !super::util::interior(m, SIZE)[p])
         })
         .collect();
     (0..SIZE * SIZE)
@@ -177,7 +177,7 @@ translation_per_frame = [{}, 0.0, 0.0]
 "#,
             square_speed(12.0)
         );
-        let scene = crate::interpolate::before_wall(depth, 0.0, &object);
+        let scene = super::interpolate::before_wall(depth, 0.0, &object);
         let options = Options {
             methods: vec![Method::MorphWarp],
             frames_per_interval: 2,
@@ -189,12 +189,12 @@ translation_per_frame = [{}, 0.0, 0.0]
             return;
         };
         for frame in extrapolated(&pictures, Method::MorphWarp) {
-            let before = crate::util::silhouette(&scene, 1, iframe_of(frame, 2), SIZE, SIZE);
-            let now = crate::util::silhouette(&scene, 1, frame.frame, SIZE, SIZE);
-            let inside = crate::util::interior(&now, SIZE);
+            let before = super::util::silhouette(&scene, 1, iframe_of(frame, 2), SIZE, SIZE);
+            let now = super::util::silhouette(&scene, 1, frame.frame, SIZE, SIZE);
+            let inside = super::util::interior(&now, SIZE);
             // Newly covered by the square: the wall before, the square now.
             let covered: Vec<usize> = (0..SIZE * SIZE)
-                .filter(|&p| inside[p] && !crate::util::near(&before, SIZE, p))
+                .filter(|&p| inside[p] && !super::util::near(&before, SIZE, p))
                 .collect();
             assert!(covered.len() >= 40, "{depth}: {} pixels", covered.len());
             let lost: Vec<usize> = covered
@@ -225,7 +225,7 @@ translation_per_frame = [{}, 0.0, 0.0]
 /// regular grid.
 #[test]
 fn grid_snaps_to_motion_edge() {
-    let Some(gpu) = crate::gpu::gpu() else { return };
+    let Some(gpu) = super::gpu::gpu() else { return };
     let (size, grid) = ([64u32, 48u32], 8u32);
     let motion: Vec<[f32; 2]> = (0..size[0] * size[1])
         .map(|p| {
@@ -431,11 +431,11 @@ fn disocclusion_hole_filled() {
                 method.name(),
                 frame.frame
             );
-            let before = crate::util::silhouette(&scene, 1, iframe_of(frame, n), SIZE, SIZE);
-            let now = crate::util::silhouette(&scene, 1, frame.frame, SIZE, SIZE);
-            let before_inside = crate::util::interior(&before, SIZE);
+            let before = super::util::silhouette(&scene, 1, iframe_of(frame, n), SIZE, SIZE);
+            let now = super::util::silhouette(&scene, 1, frame.frame, SIZE, SIZE);
+            let before_inside = super::util::interior(&before, SIZE);
             for p in
-                (0..SIZE * SIZE).filter(|&p| before_inside[p] && !crate::util::near(&now, SIZE, p))
+                (0..SIZE * SIZE).filter(|&p| before_inside[p] && !super::util::near(&now, SIZE, p))
             {
                 sum += f64::from(error_at(frame, p));
                 count += 1;
@@ -464,7 +464,7 @@ fn disocclusion_hole_filled() {
 /// exact motion's. The report gives both.
 #[test]
 fn acceleration_error_is_bounded() {
-    let scene = crate::util::sphere_over_floor(
+    let scene = super::util::sphere_over_floor(
         "size = [96, 96]\nframes = 9",
         "\"camera-motion\", \"object-motion\"",
         "orbit_degrees_per_frame = 4.0",
@@ -484,7 +484,7 @@ fn acceleration_error_is_bounded() {
         method(&report, Method::Morph),
         method(&report, Method::MorphPast),
     );
-    let pursuit = |m: &shadecache::interpolate::report::MethodReport| m.pursuit_error.unwrap();
+    let pursuit = |m: &crate::interpolate::report::MethodReport| m.pursuit_error.unwrap();
     assert!(
         pursuit(past) < pursuit(hold) && past.psnr_mean > hold.psnr_mean,
         "morph-past: pursuit {:.4}, PSNR {:.1}; frame repetition: {:.4}, {:.1}",
@@ -565,7 +565,7 @@ fn untrackable_motion_is_held() {
 /// floor's end, it cannot).
 #[test]
 fn pan_leaves_no_border_unwritten() {
-    let scene = crate::util::sphere_over_floor(
+    let scene = super::util::sphere_over_floor(
         "size = [96, 96]\nframes = 6",
         "\"camera-motion\"",
         "pan_per_frame = [0.08, 0.0, 0.0]",

@@ -8,9 +8,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use shadecache::back::{self, Language};
-use shadecache::plan::Plan;
-use shadecache::rewrite::{self, Options, Variant};
+use crate::back::{self, Language};
+use crate::plan::Plan;
+use crate::rewrite::{self, Options, Variant};
 
 /// One corpus shader's candidate in one variant.
 pub struct CorpusRewrite {
@@ -52,7 +52,7 @@ impl CorpusRewrite {
 pub fn corpus_rewrites() -> &'static [CorpusRewrite] {
     static ALL: OnceLock<Vec<CorpusRewrite>> = OnceLock::new();
     ALL.get_or_init(|| {
-        crate::util::corpus()
+        super::util::corpus()
             .iter()
             .flat_map(|path| rewrite_shader(path))
             .collect()
@@ -62,14 +62,13 @@ pub fn corpus_rewrites() -> &'static [CorpusRewrite] {
 fn rewrite_shader(path: &Path) -> Vec<CorpusRewrite> {
     // Under its path relative to the root, so nothing depends on where
     // the checkout is.
-    let text = std::fs::read_to_string(crate::util::root().join(path)).unwrap();
-    let shader = shadecache::front::parse(shadecache::diagnostic::SourceFile::new(
+    let text = std::fs::read_to_string(super::util::root().join(path)).unwrap();
+    let shader = crate::front::parse(crate::diagnostic::SourceFile::new(
         path.display().to_string(),
         text,
     ))
     .unwrap_or_else(|e| panic!("{}", e.render()));
-    let analysis =
-        shadecache::analysis::analyze(&shader, &shadecache::analysis::Options::default()).unwrap();
+    let analysis = crate::analysis::analyze(&shader, &crate::analysis::Options::default()).unwrap();
     let mut out = Vec::new();
     for candidate in &analysis.candidates {
         for variant in Variant::ALL {
@@ -99,8 +98,8 @@ fn emitted(rewritten: &rewrite::Rewritten) -> Emitted {
     let mut kills = Vec::new();
     let mut deferred_kills = 0;
     for pass in rewritten.passes.iter().chain([&rewritten.classify]) {
-        let found = shadecache::rewrite::uniformity::check_kills(&pass.module)
-            .map_err(|err| err.to_string());
+        let found =
+            crate::rewrite::uniformity::check_kills(&pass.module).map_err(|err| err.to_string());
         kills.push((pass.name.clone(), found));
         // The kill moved to the end: the entry point's last statement
         // before its return is the `if`.

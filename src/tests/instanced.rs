@@ -1,11 +1,11 @@
 //! Instanced objects whose per-instance data a storage buffer holds
 //! (`corpus/instanced_storage.wgsl`), profiled on lavapipe.
 
-use shadecache::profile::{Nodes, Options};
-use shadecache::rewrite::{CacheFormat, Variant};
+use crate::profile::{Nodes, Options};
+use crate::rewrite::{CacheFormat, Variant};
 
-use crate::profile::run_shader;
-use crate::util::root;
+use super::profile::run_shader;
+use super::util::root;
 
 fn instanced_shader() -> String {
     std::fs::read_to_string(root().join("corpus/instanced_storage.wgsl")).unwrap()
@@ -125,13 +125,13 @@ fn instance_inputs_at_refresh_period_one_equal_the_reference() {
         .unwrap()
         .replace("size = [256, 256]", "size = [64, 64]");
     let shader = tutorial_shader();
-    let analysis = crate::util::analyzed("tutorial_instances.wgsl", &shader).1;
+    let analysis = super::util::analyzed("tutorial_instances.wgsl", &shader).1;
     let ids = [
         "wood_grain(in.object_position)",
         "vec4<f32>(result, object_color.a)",
     ]
     .iter()
-    .map(|text| crate::util::candidate(&analysis, text).node.id.clone())
+    .map(|text| super::util::candidate(&analysis, text).node.id.clone())
     .collect();
     let mut opts = options(&[1]);
     opts.nodes = Nodes::Ids(ids);
@@ -168,14 +168,14 @@ fn instance_inputs_at_refresh_period_one_equal_the_reference() {
 #[test]
 fn only_instance_inputs_the_position_reads_get_twins() {
     let shader = tutorial_shader();
-    let (shader, analysis) = crate::util::analyzed("tutorial_instances.wgsl", &shader);
-    let node = crate::util::candidate(&analysis, "wood_grain(in.object_position)");
-    let rewritten = shadecache::rewrite::rewrite(
+    let (shader, analysis) = super::util::analyzed("tutorial_instances.wgsl", &shader);
+    let node = super::util::candidate(&analysis, "wood_grain(in.object_position)");
+    let rewritten = crate::rewrite::rewrite(
         &shader,
         &analysis,
         node,
         Variant::TwoPass,
-        &shadecache::rewrite::Options::default(),
+        &crate::rewrite::Options::default(),
     )
     .unwrap();
     let layout = &rewritten.plan.vertex_layout;
@@ -192,7 +192,7 @@ fn only_instance_inputs_the_position_reads_get_twins() {
             (8, "previous_model_matrix_3")
         ]
     );
-    use shadecache::plan::StepMode;
+    use crate::plan::StepMode;
     let per_instance = layout
         .iter()
         .filter(|a| a.step == StepMode::Instance)
@@ -226,8 +226,8 @@ fn static_instances_hit_everywhere_after_the_first_frame() {
     }
     // The covered pixels are the CPU's silhouettes of both instances.
     let (w, h) = (128usize, 128usize);
-    let cubes = crate::util::silhouette(&scene, 0, 0, w, h);
-    let inside = crate::util::interior(&cubes, w);
+    let cubes = super::util::silhouette(&scene, 0, 0, w, h);
+    let inside = super::util::interior(&cubes, w);
     assert!(inside.iter().filter(|&&i| i).count() > 500);
     for (result, (_, classes)) in report.results.iter().zip(&pictures.results) {
         let covered = |i: usize| classes[i * 4..i * 4 + 3] != [0, 0, 0];
@@ -238,7 +238,7 @@ fn static_instances_hit_everywhere_after_the_first_frame() {
                 result.variant
             );
             assert!(
-                !covered(i) || crate::util::near(&cubes, w, i),
+                !covered(i) || super::util::near(&cubes, w, i),
                 "{}: pixel {i} is drawn outside the silhouettes",
                 result.variant
             );
@@ -274,8 +274,8 @@ fn assert_moving_cubes_reproject(shader: &str, tail: &str) {
     let Some((pictures, _, scene)) = run_shader(shader, &scene, opts) else {
         return;
     };
-    let (band, uncovered) = crate::util::moved_bands(&scene, 1, 128, 128);
-    let hit = |i: usize| crate::util::is_hit(&pictures.results[0].1, i);
+    let (band, uncovered) = super::util::moved_bands(&scene, 1, 128, 128);
+    let hit = |i: usize| super::util::is_hit(&pictures.results[0].1, i);
     assert!(band.len() > 50, "the leading band is {} pixels", band.len());
     let missed = band.iter().filter(|&&i| !hit(i)).count();
     assert_eq!(missed, 0, "of {} leading-band pixels", band.len());
@@ -286,7 +286,7 @@ fn assert_moving_cubes_reproject(shader: &str, tail: &str) {
 }
 
 fn profile_error(scene: &str) -> String {
-    crate::util::profile_error("corpus/instanced_storage.wgsl", scene)
+    super::util::profile_error("corpus/instanced_storage.wgsl", scene)
 }
 
 /// A storage member the scene does not set is an error naming it, not
@@ -311,10 +311,10 @@ fn a_list_that_disagrees_with_the_instance_count_is_an_error() {
     assert!(err.contains(&format!("scene.toml:{line}:")), "{err}");
 
     // Many instances of a shader that cannot tell them apart.
-    let marble = crate::profile::marble_scene("", "").replace(
+    let marble = super::util::marble_scene("", "").replace(
         "rotation_degrees_per_frame",
         "instances = 4\nrotation_degrees_per_frame",
     );
-    let err = crate::util::profile_error("corpus/noise_marble.wgsl", &marble);
+    let err = super::util::profile_error("corpus/noise_marble.wgsl", &marble);
     assert!(err.contains("instance_index"), "{err}");
 }

@@ -1,0 +1,497 @@
+//! The lowres variant: the payload shaded at 1/s × 1/s of the pixels on
+//! a jittered lattice and rebuilt at full resolution (seed 001).
+
+use crate::profile::Options;
+use crate::rewrite::{CacheFormat, Upsampler, Variant};
+
+use super::profile::{options, run};
+use super::util::marble_scene;
+
+/// Lowres alone, with `reconstructions`, rgba32float, after `warmup`
+/// frames.
+fn lowres(reconstructions: &[Upsampler], warmup: u32, frames: u32) -> Options {
+    let mut opts = options(&[32], &[4]);
+    opts.variants = vec![Variant::Lowres];
+    opts.lowres_reconstructions = reconstructions.to_vec();
+    opts.cache_formats = vec![CacheFormat::Rgba32float];
+    opts.warmup = Some(warmup);
+    opts.frames = Some(frames);
+    opts
+}
+
+/// A static scene: after s² = 16 frames every pixel has been shaded on
+/// its own once, and the spatio-temporal reconstruction shows its own
+/// samples: within 0.02 of the reference everywhere, silhouettes included
+/// (64 dB). Not to the bit: a sample is shaded where the jittered
+/// low-resolution raster interpolates the varyings, which on lavapipe
+/// differs from the full-resolution raster by about 1e-5, and the marble's
+/// turbulence turns that into up to 0.01 (with its turbulence ×6, 0.06 at
+/// 0.04% of the pixels). This runs the whole variant through the host
+/// crate, as an application does: the samples at 32×32 with the
+/// projection jittered onto each frame's lattice, the upsampling, the
+/// history. Checked: without the exact-sample rule of `cache_upsample`
+/// (the paper's blend alone, which averages the other phases' interpolated
+/// values in for ever) it is 58.6 dB.
+#[test]
+fn static_scene_lowres_converges_to_full_resolution() {
+    let scene = marble_scene("", "").replace("turbulence_amount = 6.0", "turbulence_amount = 1.0");
+    let Some((_, report, _)) = run(&scene, lowres(&[Upsampler::SpatioTemporal], 17, 3)) else {
+        return;
+    };
+    assert_eq!(report.results.len(), 1);
+    let row = &report.results[0];
+    assert_eq!(row.refresh_period, 16);
+    assert!(
+        row.max_abs_error < 0.02 && row.psnr > 61.0,
+        "largest difference {} after 16 frames (PSNR {} dB)",
+        row.max_abs_error,
+        row.psnr
+    );
+}
+
+/// Before the lattice has covered the window, only a sixteenth of the
+/// pixels are shaded: the spatial upsampling interpolates the rest, so
+/// the frame is not yet the reference (the convergence above is the
+/// history's doing, not an artefact of a full-resolution shading).
+#[test]
+fn lowres_first_frame_is_upsampled_not_shaded() {
+    let Some((_, report, _)) = run(&marble_scene("", ""), lowres(&[Upsampler::Spatial], 0, 1))
+    else {
+        return;
+    };
+    let row = &report.results[0];
+    assert!(row.max_abs_error > 4.0 / 255.0, "{}", row.max_abs_error);
+    assert!(row.psnr > 20.0, "{}", row.psnr);
+}
+
+/// A flat colour per object (which side of x = 0 it stands on), dimmed
+/// until a light switches on at `time` 0.5, lit by the up-facing normal,
+/// through a loop that makes it worth caching: the same value at every
+/// pixel of an object, so that any error of an upsampling is a neighbour's
+/// colour bleeding in, or a stale one.
+const FLAT: &str = r#"
+struct Frame {
+    clip_from_world: mat4x4<f32>,
+    world_from_local: mat4x4<f32>,
+    camera_position: vec3<f32>,
+    time: f32,
+}
+@group(0) @binding(0) var<uniform> frame: Frame;
+struct VertexInput {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+}
+struct VertexOutput {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) world_normal: vec3<f32>,
+}
+@vertex
+fn vs_main(in: VertexInput) -> VertexOutput {
+    var out: VertexOutput;
+    out.clip_position = frame.clip_from_world * frame.world_from_local * vec4<f32>(in.position, 1.0);
+    out.world_normal = (frame.world_from_local * vec4<f32>(in.normal, 0.0)).xyz;
+    return out;
+}
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
+    let albedo = select(vec3<f32>(0.8, 0.2, 0.1), vec3<f32>(0.1, 0.3, 0.9), frame.world_from_local[3].x > 0.0);
+    let lit = albedo * select(0.2, 1.0, frame.time >= 0.5) * max(normalize(in.world_normal).y, 0.0);
+    var c = lit;
+    for (var i = 0; i < 32; i++) {
+        c = sqrt((c * c) + vec3<f32>(1e-6));
+    }
+    return vec4<f32>(c, 1.0);
+}
+"#;
+
+/// Two coplanar planes side by side, each its own draw and colour, seen
+/// from above at an angle: their edge has one depth and one normal, only
+/// the draw tells the sides apart. `effects` and `settings` (TOML lines)
+/// add motion and the frame counts.
+fn two_planes(settings: &str, effects: &str) -> String {
+    format!(
+        r#"
+size = [128, 128]
+{settings}
+effects = [{effects}]
+[camera]
+eye = [0.0, 3.0, 3.0]
+target = [0.0, 0.0, 0.0]
+[[objects]]
+mesh = {{ kind = "plane", size = 3.0, subdivisions = 2 }}
+position = [-1.5, 0.0, 0.0]
+[[objects]]
+mesh = {{ kind = "plane", size = 3.0, subdivisions = 2 }}
+position = [1.5, 0.0, 0.0]
+"#
+    )
+}
+
+fn lowres_top(reconstructions: &[Upsampler], warmup: u32, frames: u32) -> Options {
+    Options {
+        nodes: crate::profile::Nodes::Top(1),
+        ..lowres(reconstructions, warmup, frames)
+    }
+}
+
+/// A material edge on one plane (two draws, coplanar): the spatial
+/// upsampling weighs each sample by its draw (ours: eq. 2 has normal and
+/// depth terms only, which cannot tell these sides apart), so no pixel
+/// takes the other side's colour; bilinear upsampling, without weights,
+/// bleeds across, which shows the scene tests what it should.
+#[test]
+fn material_edge_does_not_bleed() {
+    let Some((_, report, _)) = super::profile::run_shader(
+        FLAT,
+        &two_planes("frames = 1\nwarmup = 0", ""),
+        lowres_top(&[Upsampler::Spatial, Upsampler::Bilinear], 0, 1),
+    ) else {
+        return;
+    };
+    let error = |r: Upsampler| {
+        report
+            .results
+            .iter()
+            .find(|row| row.reconstruction == r.into())
+            .unwrap()
+            .max_abs_error
+    };
+    assert!(
+        error(Upsampler::Spatial) < 0.01,
+        "spatial: {}",
+        error(Upsampler::Spatial)
+    );
+    assert!(
+        error(Upsampler::Bilinear) > 0.1,
+        "bilinear: {}",
+        error(Upsampler::Bilinear)
+    );
+}
+
+/// The light switches on: the samples' temporal gradient is 0.8 where
+/// they meet the dim history, the history is dropped, and from the frame
+/// of the switch on no stale (dim) value is shown: every frame is within
+/// 0.02 of the reference. The temporal reconstruction, which trusts its
+/// history, still shows dim pixels frames later. Checked: with eq. 8's
+/// filtered confidence alone (no drop on a change of half or more) the
+/// error is 0.69, 0.63, 0.12, 0.08, 0.05 over the five frames from the
+/// switch.
+#[test]
+fn history_rejected_on_shading_change() {
+    // `time` advances 0.02 a frame: after 20 warm-up frames the history
+    // is settled, and the light comes on at frame 25, measured frame 5.
+    let scene = two_planes(
+        "frames = 10\nwarmup = 20\nseconds_per_frame = 0.02",
+        "\"time\"",
+    );
+    let Some((_, report, _)) = super::profile::run_shader(
+        FLAT,
+        &scene,
+        lowres_top(&[Upsampler::SpatioTemporal, Upsampler::Temporal], 20, 10),
+    ) else {
+        return;
+    };
+    let row = |r: Upsampler| {
+        report
+            .results
+            .iter()
+            .find(|row| row.reconstruction == r.into())
+            .unwrap()
+    };
+    // Frame 25 (time 0.5) is measured frame 5.
+    let switched = 5;
+    let adaptive = row(Upsampler::SpatioTemporal);
+    for (frame, stats) in adaptive.frame_stats.iter().enumerate() {
+        assert!(
+            stats.max_abs_error < 0.02,
+            "frame {frame}: {}",
+            stats.max_abs_error
+        );
+    }
+    let temporal = row(Upsampler::Temporal);
+    assert!(
+        temporal.frame_stats[switched + 2].max_abs_error > 0.1,
+        "temporal: {}",
+        temporal.frame_stats[switched + 2].max_abs_error
+    );
+}
+
+/// The mean absolute difference (over RGB, in [0, 1]) of two RGBA8
+/// pictures at `pixels`.
+fn mean_error(a: &[u8], b: &[u8], pixels: &[usize]) -> f64 {
+    let sum: f64 = pixels
+        .iter()
+        .flat_map(|&i| (0..3).map(move |c| i * 4 + c))
+        .map(|k| f64::from(a[k].abs_diff(b[k])) / 255.0)
+        .sum();
+    sum / (3 * pixels.len().max(1)) as f64
+}
+
+/// The marble sphere sliding over the marble floor, with `settings`.
+fn sliding_sphere(settings: &str) -> String {
+    super::util::sphere_over_floor(
+        settings,
+        "\"object-motion\"",
+        "",
+        "position = [-1.2, 0.0, 0.0]\ntranslation_per_frame = [0.12, 0.0, 0.0]",
+    )
+}
+
+/// Where the sphere slid off the floor last frame, the floor is
+/// disoccluded: its history is the sphere's, so it gets no temporal
+/// weight (eq. 7 with hw = 0) and the spatio-temporal frame there is the
+/// spatial upsampling's (1.02× its error), not a ghost of the sphere.
+/// Checked: with the history weighed on a miss (and its gradient not set
+/// to 1 there), the revealed band's error is 1.56× the spatial one.
+#[test]
+fn disocclusion_falls_back_to_spatial() {
+    let (warmup, frames) = (16, 2);
+    let Some((pictures, report, scene)) = run(
+        &sliding_sphere("size = [128, 128]\nframes = 2\nwarmup = 16"),
+        lowres(
+            &[Upsampler::Spatial, Upsampler::SpatioTemporal],
+            warmup,
+            frames,
+        ),
+    ) else {
+        return;
+    };
+    let last = warmup + frames - 1;
+    let (w, h) = (128, 128);
+    let before = super::util::silhouette(&scene, 1, last - 1, w, h);
+    let now = super::util::silhouette(&scene, 1, last, w, h);
+    let revealed: Vec<bool> = (0..w * h).map(|i| before[i] && !now[i]).collect();
+    let revealed: Vec<usize> = super::util::interior(&revealed, w)
+        .iter()
+        .enumerate()
+        .filter_map(|(i, &m)| m.then_some(i))
+        .collect();
+    assert!(revealed.len() > 20, "{} revealed pixels", revealed.len());
+    let error = |r: Upsampler| {
+        let index = report
+            .results
+            .iter()
+            .position(|row| row.reconstruction == r.into())
+            .unwrap();
+        mean_error(&pictures.results[index].0, &pictures.reference, &revealed)
+    };
+    let (spatial, adaptive) = (error(Upsampler::Spatial), error(Upsampler::SpatioTemporal));
+    assert!(
+        adaptive <= spatial * 1.2,
+        "revealed floor: spatio-temporal {adaptive}, spatial {spatial}"
+    );
+}
+
+/// A blue ball crossing a red floor fast (5 pixels a frame, [`FLAT`]
+/// colours): the floor it uncovers over the last three frames has the
+/// ball's colour in its history, and spatio-temporal shows the floor
+/// there (within 0.02 on average), no blue trail. Checked: with the
+/// history weighed whatever its gradient and its depth test, the trail
+/// is 0.04 off on average (0 with them).
+#[test]
+fn fast_motion_no_ghosting() {
+    let scene = r#"
+size = [128, 128]
+frames = 3
+warmup = 16
+effects = ["object-motion"]
+[camera]
+eye = [0.0, 1.2, 3.4]
+target = [0.0, -0.3, 0.0]
+[[objects]]
+mesh = { kind = "plane", size = 8.0, subdivisions = 4 }
+position = [-2.5, -1.0, 0.0]
+[[objects]]
+mesh = { kind = "sphere", rings = 24, segments = 32 }
+scale = 0.6
+position = [-1.6, -0.4, 0.0]
+translation_per_frame = [0.12, 0.0, 0.0]
+"#;
+    let (warmup, frames) = (16, 3);
+    let Some((pictures, report, scene)) = super::profile::run_shader(
+        FLAT,
+        scene,
+        lowres_top(&[Upsampler::SpatioTemporal], warmup, frames),
+    ) else {
+        return;
+    };
+    let last = warmup + frames - 1;
+    let (w, h) = (128, 128);
+    let now = super::util::silhouette(&scene, 1, last, w, h);
+    let mut trail = vec![false; w * h];
+    for back in 1..=3 {
+        let before = super::util::silhouette(&scene, 1, last - back, w, h);
+        for i in 0..w * h {
+            trail[i] |= before[i] && !now[i];
+        }
+    }
+    let trail: Vec<usize> = super::util::interior(&trail, w)
+        .iter()
+        .enumerate()
+        .filter_map(|(i, &m)| m.then_some(i))
+        .collect();
+    assert!(trail.len() > 100, "{} trail pixels", trail.len());
+    assert_eq!(report.results.len(), 1);
+    let error = mean_error(&pictures.results[0].0, &pictures.reference, &trail);
+    assert!(error < 0.02, "the trail is {error} off on average");
+}
+
+/// The marble's veins are finer than the 4×4 lattice: spatial upsampling
+/// of a still picture changes from frame to frame as the lattice steps
+/// through its offsets (flicker), and spatio-temporal settles on the
+/// shaded samples: its flicker is below a tenth of the spatial one's.
+/// Checked: without its history (wf = 0, no exact samples kept) it
+/// flickers more than the spatial upsampling.
+#[test]
+fn thin_feature_flicker_bounded() {
+    let Some((_, report, _)) = run(
+        &marble_scene("", ""),
+        lowres(&[Upsampler::Spatial, Upsampler::SpatioTemporal], 17, 6),
+    ) else {
+        return;
+    };
+    let flicker = |r: Upsampler| {
+        report
+            .results
+            .iter()
+            .find(|row| row.reconstruction == r.into())
+            .unwrap()
+            .flicker
+    };
+    let (spatial, adaptive) = (
+        flicker(Upsampler::Spatial),
+        flicker(Upsampler::SpatioTemporal),
+    );
+    assert!(spatial > 0.0, "spatial flicker {spatial}");
+    assert!(
+        adaptive < 0.1 * spatial,
+        "flicker: spatio-temporal {adaptive}, spatial {spatial}"
+    );
+}
+
+/// Adaptive refresh (`--reshade-unreliable`): the pixels the upsampling
+/// cannot vouch for (the floor the sliding sphere reveals: no history,
+/// no own sample, few samples of its surface near the edge) are shaded
+/// at full resolution in a third pass, so the revealed band is closer to
+/// the reference than the spatial guess leaves it, for a third pass that
+/// costs what those few pixels cost. Checked: with the third pass's
+/// pixels not discarded from the second (nothing re-shaded), the two
+/// errors are equal.
+#[test]
+fn lowres_reshades_unreliable_pixels() {
+    let (warmup, frames) = (16, 2);
+    let mut options = lowres(&[Upsampler::SpatioTemporal], warmup, frames);
+    options.adaptive_refresh = vec![false, true];
+    let Some((pictures, report, scene)) = run(
+        &sliding_sphere("size = [128, 128]\nframes = 2\nwarmup = 16"),
+        options,
+    ) else {
+        return;
+    };
+    assert_eq!(report.results.len(), 2);
+    let last = warmup + frames - 1;
+    let (w, h) = (128, 128);
+    let before = super::util::silhouette(&scene, 1, last - 1, w, h);
+    let now = super::util::silhouette(&scene, 1, last, w, h);
+    let revealed: Vec<usize> = (0..w * h).filter(|&i| before[i] && !now[i]).collect();
+    let error = |reshade: bool| {
+        let index = report
+            .results
+            .iter()
+            .position(|row| row.adaptive == reshade)
+            .unwrap();
+        assert_eq!(
+            report.results[index].passes.len(),
+            if reshade { 3 } else { 2 }
+        );
+        mean_error(&pictures.results[index].0, &pictures.reference, &revealed)
+    };
+    let (guessed, reshaded) = (error(false), error(true));
+    assert!(
+        reshaded < 0.8 * guessed,
+        "revealed band: re-shaded {reshaded}, upsampled {guessed}"
+    );
+}
+
+/// [`FLAT`] coloured by depth instead of by object: red in front of
+/// z = 0, blue behind it.
+const BY_DEPTH: &str = r#"
+struct Frame {
+    clip_from_world: mat4x4<f32>,
+    world_from_local: mat4x4<f32>,
+}
+@group(0) @binding(0) var<uniform> frame: Frame;
+struct VertexInput {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+}
+struct VertexOutput {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) world_normal: vec3<f32>,
+    @location(1) world_position: vec3<f32>,
+}
+@vertex
+fn vs_main(in: VertexInput) -> VertexOutput {
+    var out: VertexOutput;
+    let world = frame.world_from_local * vec4<f32>(in.position, 1.0);
+    out.clip_position = frame.clip_from_world * world;
+    out.world_normal = (frame.world_from_local * vec4<f32>(in.normal, 0.0)).xyz;
+    out.world_position = world.xyz;
+    return out;
+}
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
+    let albedo = select(vec3<f32>(0.1, 0.3, 0.9), vec3<f32>(0.8, 0.2, 0.1), in.world_position.z > 0.0);
+    var c = albedo * max(normalize(in.world_normal).z, 0.0);
+    for (var i = 0; i < 32; i++) {
+        c = sqrt((c * c) + vec3<f32>(1e-6));
+    }
+    return vec4<f32>(c, 1.0);
+}
+"#;
+
+/// One mesh, one draw: a small square a unit in front of a large one,
+/// both facing the camera. Around the small square's outline the samples
+/// of both squares have one normal and one draw id, and only eq. 2's
+/// depth weight (σz, 3% of the depth) tells them apart: the spatial
+/// upsampling does not bleed the back square's colour onto the front one
+/// or the reverse. With the depth weight made flat (σz = 100) it does,
+/// which shows the scene tests what it should.
+#[test]
+fn depth_edge_does_not_bleed() {
+    let meshes = tempfile::tempdir().unwrap();
+    let obj = meshes.path().join("squares.obj");
+    std::fs::write(
+        &obj,
+        "v -1.5 -1.5 -0.5\nv 1.5 -1.5 -0.5\nv 1.5 1.5 -0.5\nv -1.5 1.5 -0.5\n\
+         v -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv 0.5 0.5 0.5\nv -0.5 0.5 0.5\nvn 0 0 1\n\
+         f 1//1 2//1 3//1\nf 1//1 3//1 4//1\nf 5//1 6//1 7//1\nf 5//1 7//1 8//1\n",
+    )
+    .unwrap();
+    let scene = format!(
+        r#"
+size = [128, 128]
+frames = 1
+warmup = 0
+effects = []
+[camera]
+eye = [0.0, 0.0, 3.0]
+target = [0.0, 0.0, 0.0]
+[[objects]]
+mesh = {{ kind = "obj", file = "{}" }}
+"#,
+        obj.display()
+    );
+    let error = |sigma_depth: f32| {
+        let mut options = lowres_top(&[Upsampler::Spatial], 0, 1);
+        options.upsampling.sigma_depth = sigma_depth;
+        let (_, report, _) = super::profile::run_shader(BY_DEPTH, &scene, options)?;
+        Some(report.results[0].max_abs_error)
+    };
+    let Some(weighted) = error(0.03) else {
+        return;
+    };
+    assert!(weighted < 0.01, "with σz = 0.03: {weighted}");
+    let flat = error(100.0).unwrap();
+    assert!(flat > 0.1, "with σz = 100: {flat}");
+}
