@@ -31,17 +31,7 @@ impl FrameMethod for HoldOrBlend<'_> {
         params: &BFrameParams,
     ) -> Result<Drawn<'s>, Error> {
         let textures = at.textures;
-        let (time, _, _) = timed_recording(clock, "bframe", |profiler| {
-            self.bframes.render(
-                frames.gpu,
-                self.method,
-                (&textures.0, &textures.1),
-                params,
-                None,
-                profiler,
-            )
-        })
-        .map_err(fail)?;
+        let time = render_timed(self.bframes, self.method, frames, clock, at, params)?;
         Ok(Drawn {
             time,
             color: self.bframes.color(),
@@ -49,4 +39,29 @@ impl FrameMethod for HoldOrBlend<'_> {
             decisions: Some(self.bframes.decisions()),
         })
     }
+}
+
+/// Draws `method`'s fullscreen B-frame pass between the interval's two
+/// I-frames at `params`, timed (ms).
+pub(super) fn render_timed(
+    bframes: &BFrames,
+    method: Method,
+    frames: &Frames,
+    clock: &mut Clock,
+    at: &IntervalAt,
+    params: &BFrameParams,
+) -> Result<f64, Error> {
+    let textures = at.textures;
+    let (time, _, _) = timed_recording(clock, "bframe", |profiler| {
+        bframes.render(
+            frames.gpu,
+            method,
+            (&textures.0, &textures.1),
+            params,
+            None,
+            profiler,
+        )
+    })
+    .map_err(fail)?;
+    Ok(time)
 }

@@ -16,11 +16,12 @@ use crate::interpolate::iframe::SceneMode;
 use crate::interpolate::measured::Measured;
 use crate::interpolate::thin::FrameDepth;
 use crate::interpolate::Method;
-use crate::measure::clock::{read_linear, timed_recording, Clock};
+use crate::measure::clock::{read_linear, Clock};
 use crate::measure::fail;
 use crate::measure::metrics::LinearFrame;
 use crate::runtime::FrameInputs;
 
+use super::hold_and_blend::render_timed;
 use super::scene_assisted::SceneRun;
 
 /// [`Method::ImageBased`].
@@ -77,18 +78,8 @@ impl FrameMethod for ImageBased<'_> {
         _k: u32,
         params: &BFrameParams,
     ) -> Result<Drawn<'s>, Error> {
-        let textures = at.textures;
-        let (time, _, _) = timed_recording(clock, "bframe", |profiler| {
-            self.bframes.render(
-                frames.gpu,
-                Method::ImageBased,
-                (&textures.0, &textures.1),
-                params,
-                None,
-                profiler,
-            )
-        })
-        .map_err(fail)?;
+        let method = Method::ImageBased;
+        let time = render_timed(self.bframes, method, frames, clock, at, params)?;
         Ok(Drawn {
             time,
             color: self.bframes.color(),
