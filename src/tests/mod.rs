@@ -13,7 +13,10 @@
 
 #![allow(clippy::panic, clippy::print_stdout, clippy::print_stderr)]
 
+mod analyze;
+mod build_api;
 mod composed;
+mod corpus;
 mod corpus_rewrites;
 mod cost;
 mod deferred;

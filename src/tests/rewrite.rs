@@ -6,6 +6,7 @@ use super::util::{root, tint_validate};
 use crate::analysis::{self, Analysis};
 use crate::back::{self, Language};
 use crate::front::{self, Shader};
+use crate::plan::{CompareFunction, TargetKind};
 use crate::rewrite::{self, CacheFormat, Options, Rewritten, Variant};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -318,5 +319,345 @@ fn every_reconstruction_validates_and_builds() {
             "Tint rejects {}: {:#?}",
             result.file, result.messages
         );
+    }
+}
+
+/// A snapshot case, one file in `tests/snapshot-cases/`: a shader, its
+/// nodes, the variants (all when absent) and the back ends (WGSL when
+/// absent) whose output is kept, so a change in what is emitted shows in
+/// review. A new case is a new file.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SnapshotCase {
+    shader: String,
+    nodes: Vec<String>,
+    #[serde(default)]
+    variants: Vec<Variant>,
+    #[serde(default)]
+    languages: Vec<String>,
+}
+
+/// Every pass (the classification pass included) and the plan of every
+/// case's nodes × variants × back ends. The modules are compacted before
+/// writing, so handle numbering does not churn. Snapshot names are
+/// `shader__node__variant__pass` for WGSL and end in the back end's file
+/// suffix for the others.
+#[test]
+fn snapshots_of_emitted_passes() {
+    let dir = root().join("tests/snapshot-cases");
+    let mut cases: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    cases.sort();
+    assert!(!cases.is_empty());
+    for case_path in cases {
+        let case: SnapshotCase = toml::from_str(&std::fs::read_to_string(&case_path).unwrap())
+            .unwrap_or_else(|e| panic!("{}: {e}", case_path.display()));
+        let variants = if case.variants.is_empty() {
+            Variant::ALL.to_vec()
+        } else {
+            case.variants.clone()
+        };
+        let languages: Vec<Language> = if case.languages.is_empty() {
+            vec![Language::Wgsl]
+        } else {
+            case.languages
+                .iter()
+                .map(|l| match l.as_str() {
+                    "wgsl" => Language::Wgsl,
+                    "msl" => Language::Msl,
+                    "hlsl" => Language::Hlsl,
+                    "glsl" => Language::Glsl,
+                    other => panic!("{}: no text back end `{other}`", case_path.display()),
+                })
+                .collect()
+        };
+        let (shader, analysis) = load(Path::new(&case.shader));
+        let stem = Path::new(&case.shader)
+            .file_stem()
+            .unwrap()
+            .to_str()
+            .unwrap();
+        for node in &case.nodes {
+            let candidate = analysis
+                .candidate(node)
+                .unwrap_or_else(|| panic!("{}: `{node}` is no candidate", case_path.display()));
+            for &variant in &variants {
+                let rewritten =
+                    rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
+                        .unwrap_or_else(|r| panic!("{stem} {node} {variant}: {r}"));
+                for &language in &languages {
+                    for (file, bytes) in back::render_variant(&rewritten, language).unwrap() {
+                        let text = String::from_utf8(bytes).unwrap();
+                        let name = match language {
+                            Language::Wgsl => file.trim_end_matches(".wgsl").to_string(),
+                            _ => file,
+                        };
+                        insta::assert_snapshot!(format!("{stem}__{node}__{variant}__{name}"), text);
+                    }
+                }
+                if languages.contains(&Language::Wgsl) {
+                    let plan = serde_json::to_string_pretty(&rewritten.plan).unwrap();
+                    insta::assert_snapshot!(format!("{stem}__{node}__{variant}__plan"), plan);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn plans_describe_the_passes() {
+    let (shader, analysis) = load(Path::new("corpus/noise_marble.wgsl"));
+    let candidate = analysis.candidate("nb0c12cc4").unwrap();
+    let plan = |variant| {
+        rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default())
+            .unwrap()
+            .plan
+    };
+    let three = plan(Variant::ThreePass);
+    let depth: Vec<(CompareFunction, bool)> = three
+        .passes
+        .iter()
+        .map(|p| (p.depth.compare, p.depth.write))
+        .collect();
+    assert_eq!(
+        depth,
+        [
+            (CompareFunction::Less, true),
+            (CompareFunction::Less, true),
+            (CompareFunction::Equal, false)
+        ]
+    );
+    assert_eq!(
+        three.passes.iter().map(|p| p.discards).collect::<Vec<_>>(),
+        [true, false, false]
+    );
+    assert_eq!(three.passes[0].color_targets[0].target, TargetKind::Cache);
+    assert_eq!(three.passes[2].color_targets[0].target, TargetKind::Color);
+    // The uniform the vertex stage reads has a previous-frame twin.
+    assert_eq!(three.bindings.previous.len(), 1);
+    assert_eq!(three.bindings.previous[0].shadows.name, "frame");
+    assert_eq!(three.bindings.previous[0].group, 1);
+    let one = plan(Variant::OnePass);
+    let targets: Vec<TargetKind> = one.passes[0]
+        .color_targets
+        .iter()
+        .map(|t| t.target)
+        .collect();
+    assert_eq!(
+        targets,
+        [TargetKind::Color, TargetKind::Cache, TargetKind::Age]
+    );
+    assert_eq!(one.passes[0].color_targets[2].format.as_str(), "r16float");
+    assert_eq!(one.vertex_layout.len(), 2);
+    assert_eq!(one.vertex_layout[0].format.as_str(), "float32x3");
+    assert_eq!(three.clear.depth, 1.0);
+
+    // Reversed Z: nearer is `greater`, the far plane (and the clear) is 0,
+    // which the host passes as CacheParams' far_depth.
+    let reversed = rewrite::rewrite(
+        &shader,
+        &analysis,
+        candidate,
+        Variant::ThreePass,
+        &Options {
+            depth: rewrite::DepthConvention::Reversed,
+            ..Options::default()
+        },
+    )
+    .unwrap()
+    .plan;
+    let depth: Vec<CompareFunction> = reversed.passes.iter().map(|p| p.depth.compare).collect();
+    assert_eq!(
+        depth,
+        [
+            CompareFunction::Greater,
+            CompareFunction::Greater,
+            CompareFunction::Equal
+        ]
+    );
+    assert_eq!(reversed.clear.depth, 0.0);
+    let reference = crate::rewrite::plan::reference(
+        &shader,
+        &analysis,
+        &Options {
+            depth: rewrite::DepthConvention::Reversed,
+            ..Options::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(reference.passes[0].depth.compare, CompareFunction::Greater);
+    assert_eq!(reference.clear.depth, 0.0);
+    let far = three
+        .cache
+        .params
+        .iter()
+        .find(|f| f.name == "far_depth")
+        .unwrap();
+    assert_eq!(far.offset, 32);
+}
+
+#[test]
+fn every_emitted_vertex_position_is_invariant() {
+    let (shader, analysis) = load(Path::new("corpus/position_direct.wgsl"));
+    let candidate = &analysis.candidates[0];
+    for variant in Variant::ALL {
+        let rewritten =
+            rewrite::rewrite(&shader, &analysis, candidate, variant, &Options::default()).unwrap();
+        for (pass, text) in wgsl(&rewritten) {
+            // Every position, vertex output and fragment input alike.
+            let positions = text.matches("@builtin(position)").count();
+            let invariant = text.matches("@builtin(position) @invariant").count();
+            assert!(positions >= 2, "{variant} {pass}:\n{text}");
+            assert_eq!(positions, invariant, "{variant} {pass}:\n{text}");
+        }
+    }
+}
+
+#[test]
+fn one_pass_hoists_derivatives_out_of_the_miss_branch() {
+    // `textureSample` is in this node's slice: one-pass computes its
+    // gradients before the branch and samples with textureSampleGrad.
+    let (shader, analysis) = load(Path::new("corpus/implicit_derivative.wgsl"));
+    let candidate = analysis.candidate("n9be52d42").unwrap();
+    assert!(candidate.derivatives);
+    let rewritten = rewrite::rewrite(
+        &shader,
+        &analysis,
+        candidate,
+        Variant::OnePass,
+        &Options::default(),
+    )
+    .unwrap();
+    let (_, text) = &wgsl(&rewritten)[0];
+    assert!(text.contains("fn fs_main_gradients("), "{text}");
+    assert!(text.contains("dpdx("), "{text}");
+    assert!(text.contains("textureSampleGrad(albedo_texture"), "{text}");
+    assert!(!text.contains("textureSample(albedo_texture"), "{text}");
+    // The gradients are taken before the branch, the payload inside it.
+    let gradients = text.find("= fs_main_gradients(").unwrap();
+    let branch = text.find("if reuse").unwrap();
+    let payload = text.find("= fs_main_payload(").unwrap();
+    assert!(gradients < branch && branch < payload, "{text}");
+}
+
+#[test]
+fn uniformity_check_catches_derivatives_in_a_branch() {
+    let source = "@group(0) @binding(0) var t: texture_2d<f32>;\n@group(0) @binding(1) var s: sampler;\n@fragment\nfn fs(@location(0) uv: vec2<f32>) -> @location(0) vec4<f32> {\n    var c = vec4<f32>(0.0);\n    if (uv.x > 0.5) {\n        c = textureSample(t, s, uv);\n    }\n    return c;\n}\n";
+    let shader = front::parse(crate::diagnostic::SourceFile::new("branch.wgsl", source)).unwrap();
+    let violation = rewrite::uniformity::check(&shader.module, &shader.info).unwrap_err();
+    assert!(violation.what.contains("textureSample"), "{violation}");
+    // The same sample before the branch is fine.
+    let fine = source.replace(
+        "    var c = vec4<f32>(0.0);\n    if (uv.x > 0.5) {\n        c = textureSample(t, s, uv);\n    }",
+        "    var c = textureSample(t, s, uv);\n    if (uv.x > 0.5) {\n        c = c * 2.0;\n    }",
+    );
+    let shader = front::parse(crate::diagnostic::SourceFile::new("fine.wgsl", fine)).unwrap();
+    rewrite::uniformity::check(&shader.module, &shader.info).unwrap();
+}
+
+/// The previous position is recomputed wherever the position comes from:
+/// through helper functions (twinned too) and from an instance storage
+/// buffer (twinned like a uniform).
+#[test]
+fn previous_position_follows_helpers_and_storage_buffers() {
+    let (shader, analysis) = load(Path::new("corpus/helpers_nested.wgsl"));
+    let rewritten = rewrite::rewrite(
+        &shader,
+        &analysis,
+        &analysis.candidates[0],
+        Variant::OnePass,
+        &Options::default(),
+    )
+    .unwrap();
+    let (_, text) = &wgsl(&rewritten)[0];
+    assert!(text.contains("fn to_clip_previous("), "{text}");
+    assert!(text.contains("fn to_world_previous("), "{text}");
+    assert!(text.contains("previous_frame.clip_from_world"), "{text}");
+
+    let (shader, analysis) = load(Path::new("corpus/instanced_storage.wgsl"));
+    let rewritten = rewrite::rewrite(
+        &shader,
+        &analysis,
+        &analysis.candidates[0],
+        Variant::ThreePass,
+        &Options::default(),
+    )
+    .unwrap();
+    let shadowed: Vec<&str> = rewritten
+        .plan
+        .bindings
+        .previous
+        .iter()
+        .map(|twin| twin.shadows.name.as_str())
+        .collect();
+    assert_eq!(shadowed, ["frame", "instances"]);
+    let (_, text) = &wgsl(&rewritten)[0];
+    assert!(text.contains("var<storage> previous_instances"), "{text}");
+}
+
+/// f16 overflow, detected statically: the analysis bounds each candidate
+/// with interval arithmetic, and a three-pass rewrite of a node it cannot
+/// bound below 65504 keeps its cache in rgba32float, saying why in the
+/// plan. One- and two-pass keep rgba16float (they recompute an overflowing
+/// payload: `f16_overflow_is_recomputed_not_reused`).
+#[test]
+fn f16_overflow_flagged_nodes_widen_the_three_pass_cache() {
+    let source = "
+struct VertexOutput {
+    @builtin(position) position: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+}
+
+@vertex
+fn vs(@location(0) p: vec3<f32>) -> VertexOutput {
+    return VertexOutput(vec4<f32>(p, 1.0), p.xy);
+}
+
+@fragment
+fn fs(in: VertexOutput) -> @location(0) vec4<f32> {
+    let wave = sin(in.uv.x * 30.0) * 0.5 + 0.5;
+    let growth = exp(in.uv.y * 40.0);
+    return vec4<f32>(wave, fract(growth), 0.0, 1.0);
+}
+";
+    let (shader, analysis) = super::util::analyzed("f16.wgsl", source);
+    let wave = super::util::candidate(&analysis, "sin(in.uv.x * 30.0) * 0.5 + 0.5");
+    let growth = super::util::candidate(&analysis, "exp(in.uv.y * 40.0)");
+    assert!(wave.fits_f16);
+    assert_eq!(wave.range, [Some(0.0), Some(1.0)]);
+    assert!(!growth.fits_f16);
+
+    let options = crate::rewrite::Options::default();
+    assert_eq!(options.cache_format.as_str(), "rgba16float");
+    let plan = |candidate, variant| {
+        crate::rewrite::rewrite(&shader, &analysis, candidate, variant, &options)
+            .unwrap()
+            .plan
+    };
+    let widened = plan(growth, Variant::ThreePass);
+    assert_eq!(widened.cache.format, CacheFormat::Rgba32float);
+    assert!(widened
+        .cache
+        .format_note
+        .as_deref()
+        .unwrap()
+        .contains("65504"));
+    assert!(widened
+        .passes
+        .iter()
+        .flat_map(|p| &p.color_targets)
+        .filter(|t| t.target == TargetKind::Cache)
+        .all(|t| t.format.as_str() == "rgba32float"));
+    for (candidate, variant) in [
+        (wave, Variant::ThreePass),
+        (growth, Variant::TwoPass),
+        (growth, Variant::OnePass),
+    ] {
+        let kept = plan(candidate, variant);
+        assert_eq!(kept.cache.format, CacheFormat::Rgba16float, "{variant}");
+        assert_eq!(kept.cache.format_note, None);
     }
 }

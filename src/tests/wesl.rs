@@ -6,7 +6,7 @@ use crate::analysis::{self, Analysis};
 use crate::front::compose::{Composition, ShaderDef};
 use crate::front::{self, Shader};
 use crate::rewrite::{self, Options, Variant};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 const MATERIAL: &str = "corpus/wesl/lava_material.wesl";
 const PACKAGES: &str = "corpus/wesl/packages";
@@ -110,4 +110,86 @@ fn load(defs: &[(&str, ShaderDef)]) -> Shader {
 fn analysed(shader: &Shader) -> Analysis {
     analysis::analyze(shader, &analysis::Options::default())
         .unwrap_or_else(|e| panic!("{}", e.render()))
+}
+
+/// A copy of `corpus/wesl` in a temporary folder, with `edit` applied to
+/// the file at `file` (relative to `corpus/wesl`).
+fn edited(file: &str, edit: impl Fn(&str) -> String) -> (tempfile::TempDir, PathBuf) {
+    fn copy(from: &Path, to: &Path) {
+        std::fs::create_dir_all(to).unwrap();
+        for entry in std::fs::read_dir(from).unwrap() {
+            let path = entry.unwrap().path();
+            let target = to.join(path.file_name().unwrap());
+            if path.is_dir() {
+                copy(&path, &target);
+            } else {
+                std::fs::copy(&path, &target).unwrap();
+            }
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let wesl = dir.path().join("wesl");
+    copy(&root().join("corpus/wesl"), &wesl);
+    let path = wesl.join(file);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let changed = edit(&text);
+    assert_ne!(changed, text, "the edit changes {file}");
+    std::fs::write(&path, changed).unwrap();
+    (dir, wesl)
+}
+
+/// A build script names a package by its crate (`.crate_package`): found
+/// among the dependencies of the package being built (here this test's
+/// own, whose graph has `shadecache_plan`) as that crate's `src/` (a
+/// material importing from it is looked for there), and a crate not among
+/// them fails the build with the way out, before the shader is composed.
+#[test]
+fn a_build_script_finds_a_wesl_package_by_its_crate() {
+    use crate::build::Build;
+    let dir = tempfile::tempdir().unwrap();
+    let job = |material: &Path, packages: &Path, package: &str| {
+        Build::new()
+            .shader(material)
+            .import_path(packages)
+            .crate_package(package)
+            .def(GROUP.0, GROUP.1)
+            .vertex_shader(root().join(MESH))
+            .variant(Variant::TwoPass)
+            .out_dir(dir.path())
+            .quiet()
+            .run()
+    };
+    let (material, packages) = (root().join(MATERIAL), root().join(PACKAGES));
+    let outputs =
+        job(&material, &packages, "shadecache_plan").unwrap_or_else(|e| panic!("{:?}", e.errors));
+    assert!(!outputs.files.is_empty(), "{outputs:?}");
+
+    // Importing from the crate's package reads its `src/`.
+    let (_copy, wesl) = edited("lava_material.wesl", |text| {
+        text.replacen("import ", "import shadecache_plan::probe::x;\nimport ", 1)
+            .replacen(
+                "fbm(in.world_position * 3.0, 6)",
+                "fbm(in.world_position * 3.0, 6) + x",
+                1,
+            )
+    });
+    let err = job(
+        &wesl.join("lava_material.wesl"),
+        &wesl.join("packages"),
+        "shadecache_plan",
+    )
+    .unwrap_err();
+    let said = err.errors[0].render();
+    assert!(
+        said.contains("crates/shadecache-plan/src/probe.wesl`"),
+        "{said}"
+    );
+
+    let err = job(&material, &packages, "engine_sky").unwrap_err();
+    assert_eq!(err.errors.len(), 1, "{:?}", err.errors);
+    let said = err.errors[0].render();
+    assert!(
+        said.contains("no crate `engine_sky`") && said.contains("engine_sky=DIR"),
+        "{said}"
+    );
 }

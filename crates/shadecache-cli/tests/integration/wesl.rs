@@ -6,21 +6,7 @@
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
-use shadecache::front::compose::ShaderDef;
-use shadecache::rewrite::Variant;
-
 use crate::util::{root, shadecache, stderr};
-
-const MATERIAL: &str = "corpus/wesl/lava_material.wesl";
-const PACKAGES: &str = "corpus/wesl/packages";
-/// The engine's vertex stage: the module `engine_pbr::render::mesh`,
-/// whose `package::render::…` imports resolve only when its package is
-/// known to be the folder above `render/` (as Bevy's crates lay out
-/// theirs).
-const MESH: &str = "corpus/wesl/packages/engine_pbr/render/mesh.wesl";
-
-/// The material's bind group, which it reads as `constants::`.
-const GROUP: (&str, ShaderDef) = ("MATERIAL_BIND_GROUP", ShaderDef::Int(2));
 
 /// A copy of `corpus/wesl` in a temporary folder, with `edit` applied to
 /// the file at `file` (relative to `corpus/wesl`).
@@ -244,60 +230,4 @@ fn a_wesl_package_is_found_by_its_crates_name() {
     assert_eq!(missing.status.code(), Some(1), "{err}");
     assert!(err.contains("no crate `engine_sky`"), "{err}");
     assert!(err.contains("engine_sky=DIR"), "{err}");
-}
-
-/// A build script names a package by its crate (`.crate_package`): found
-/// among the dependencies of the package being built (here this test's
-/// own, whose graph has `shadecache_plan`) as that crate's `src/` (a
-/// material importing from it is looked for there), and a crate not among
-/// them fails the build with the way out, before the shader is composed.
-#[test]
-fn a_build_script_finds_a_wesl_package_by_its_crate() {
-    use shadecache::build::Build;
-    let dir = tempfile::tempdir().unwrap();
-    let job = |material: &Path, packages: &Path, package: &str| {
-        Build::new()
-            .shader(material)
-            .import_path(packages)
-            .crate_package(package)
-            .def(GROUP.0, GROUP.1)
-            .vertex_shader(root().join(MESH))
-            .variant(Variant::TwoPass)
-            .out_dir(dir.path())
-            .quiet()
-            .run()
-    };
-    let (material, packages) = (root().join(MATERIAL), root().join(PACKAGES));
-    let outputs =
-        job(&material, &packages, "shadecache_plan").unwrap_or_else(|e| panic!("{:?}", e.errors));
-    assert!(!outputs.files.is_empty(), "{outputs:?}");
-
-    // Importing from the crate's package reads its `src/`.
-    let (_copy, wesl) = edited("lava_material.wesl", |text| {
-        text.replacen("import ", "import shadecache_plan::probe::x;\nimport ", 1)
-            .replacen(
-                "fbm(in.world_position * 3.0, 6)",
-                "fbm(in.world_position * 3.0, 6) + x",
-                1,
-            )
-    });
-    let err = job(
-        &wesl.join("lava_material.wesl"),
-        &wesl.join("packages"),
-        "shadecache_plan",
-    )
-    .unwrap_err();
-    let said = err.errors[0].render();
-    assert!(
-        said.contains("crates/shadecache-plan/src/probe.wesl`"),
-        "{said}"
-    );
-
-    let err = job(&material, &packages, "engine_sky").unwrap_err();
-    assert_eq!(err.errors.len(), 1, "{:?}", err.errors);
-    let said = err.errors[0].render();
-    assert!(
-        said.contains("no crate `engine_sky`") && said.contains("engine_sky=DIR"),
-        "{said}"
-    );
 }
