@@ -113,6 +113,7 @@ pub fn compare(
 /// [`compare`] with every pixel counted as covered: whole frames (the
 /// interpolation stage's), where the background is part of what is
 /// reconstructed.
+#[cfg(feature = "interpolate")]
 pub fn compare_frames(
     reference: &[f32],
     frame: &[f32],

@@ -186,7 +186,7 @@ pub(super) fn cached_shader(
 /// Makes every pass of `plan` on the GPU as the runner would, the
 /// classification included, with the frame the plan implies: returns how
 /// many pipelines were made.
-#[cfg(test)]
+#[cfg(all(test, feature = "interpolate"))]
 pub fn build_passes(
     gpu: &Gpu,
     plan: &Plan,

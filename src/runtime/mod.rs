@@ -17,9 +17,13 @@ mod gpu;
 mod runner;
 mod textures;
 
-#[cfg(test)]
+#[cfg(all(test, feature = "interpolate"))]
 pub use frame::build_passes;
 pub use frame::{PipelineOptions, RunOptions};
-pub use gpu::{describe_adapter, driver_line, validated, Gpu};
-pub use runner::{DrawShare, FrameInputs, FramePart, Mesh, ObjectInputs, Runner};
+#[cfg(feature = "interpolate")]
+pub use gpu::validated;
+pub use gpu::{describe_adapter, driver_line, Gpu};
+#[cfg(feature = "interpolate")]
+pub use runner::{DrawShare, FramePart};
+pub use runner::{FrameInputs, Mesh, ObjectInputs, Runner};
 pub use textures::{read_depth, read_texture, DepthTexels, Texels, DEPTH_MAP_SIZE};

@@ -244,6 +244,7 @@ impl Runner {
     /// Binds `entries` at the caller's group (`RunOptions::external_group`)
     /// in every pass from the next frame on, as a bind group of the layout
     /// the plan implies for it; `label` names it in errors.
+    #[cfg(feature = "interpolate")]
     pub fn bind_external(
         &mut self,
         gpu: &Gpu,
@@ -269,13 +270,13 @@ impl Runner {
     }
 
     /// Sets the frame counter c (see [`CachedShader::set_frame_counter`]).
-    #[cfg(test)]
+    #[cfg(all(test, feature = "interpolate"))]
     pub fn set_frame_counter(&mut self, frame: u64) {
         self.cached.set_frame_counter(frame);
     }
 
     /// The frame counter c: frames run, plus where it was set to.
-    #[cfg(test)]
+    #[cfg(all(test, feature = "interpolate"))]
     pub fn frame_counter(&self) -> u64 {
         self.cached.frame_counter()
     }
@@ -291,6 +292,7 @@ impl Runner {
     }
 
     /// The frame's colour target at output `location`, if it has one.
+    #[cfg(feature = "interpolate")]
     pub fn color_at(&self, location: u32) -> Option<&wgpu::Texture> {
         self.colors.get(location as usize)?.as_ref()
     }
@@ -306,6 +308,7 @@ impl Runner {
     }
 
     /// The last frame's payload texture.
+    #[cfg(feature = "interpolate")]
     pub fn payload(&self) -> &wgpu::Texture {
         self.cached.payload()
     }

@@ -89,6 +89,7 @@ pub fn entry_for(resource: &Resource) -> Option<wgpu::BindGroupLayoutEntry> {
 /// The layout entries of the application's `group` as the plan implies
 /// them, for an application without layouts of its own (and for the
 /// profiler). Errors for a resource whose type the plan cannot state.
+#[cfg(feature = "toolchain")]
 pub fn plan_layout_entries(
     plan: &Plan,
     group: u32,
@@ -109,6 +110,7 @@ pub fn plan_layout_entries(
 }
 
 /// The groups the application binds, by the plan.
+#[cfg(feature = "toolchain")]
 pub fn plan_groups(plan: &Plan) -> Vec<u32> {
     let mut groups: Vec<u32> = plan.bindings.original.iter().map(|r| r.group).collect();
     groups.sort_unstable();
