@@ -30,6 +30,20 @@ pub(super) trait FrameMethod {
     /// The method it runs, as the report names it.
     fn method(&self) -> Method;
 
+    /// Whether its I-frames are the instrumented pass that writes the
+    /// flows (else the original shader's frame, what the methods that read
+    /// no flows show): which I-frame time it pays.
+    fn reads_flows(&self) -> bool {
+        false
+    }
+
+    /// Whether its frames read the later I-frame's colour, which must then
+    /// be rendered before they are shown: n − 1 displayed frames of added
+    /// latency.
+    fn reads_later_frame(&self) -> bool {
+        false
+    }
+
     /// Whether it shows each rendered I-frame as it is; the extrapolators
     /// show their own ([`FrameMethod::prepare`] adds it to the
     /// composites).

@@ -11,6 +11,12 @@ use crate::measure::metrics::{FrameError, LinearFrame};
 /// One method's measured B-frames.
 #[derive(Default)]
 pub(super) struct MethodRun {
+    /// Whether its I-frames are the instrumented pass (else the
+    /// original's frame): [`super::frame_method::FrameMethod::reads_flows`].
+    pub reads_flows: bool,
+    /// Whether it waits for the later I-frame:
+    /// [`super::frame_method::FrameMethod::reads_later_frame`].
+    pub reads_later_frame: bool,
     pub times: Vec<f64>,
     /// (displayed frame, α, error).
     pub frames: Vec<(u32, f64, FrameError)>,

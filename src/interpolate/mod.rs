@@ -186,42 +186,10 @@ impl Method {
         }
     }
 
-    /// Whether its B-frames read the I-frames' flows (its I-frames are
-    /// the instrumented pass; else the original shader).
-    pub fn reads_flows(self) -> bool {
-        matches!(
-            self,
-            Method::ImageBased | Method::HalfVelocity | Method::Payload
-        ) || self.extrapolates()
-    }
-
-    /// Whether each I-frame of it adds passes of its own to the
-    /// instrumented one (the morph's preparation, the payload's pass),
-    /// which count in its I-frame time.
-    pub fn adds_iframe_passes(self) -> bool {
-        self.extrapolates() || self == Method::Payload
-    }
-
     /// Whether it extrapolates from the earlier I-frame alone by the grid
     /// morph (seed 004), its I-frame followed by the morph's preparation.
     pub fn extrapolates(self) -> bool {
         matches!(self, Method::Morph | Method::MorphPast | Method::MorphWarp)
-    }
-
-    /// Whether its B-frames read the later I-frame's colour, which must
-    /// then be rendered before they are shown: n − 1 displayed frames of
-    /// added latency. Half-velocity reads only the later frame's depth and
-    /// velocity, which an engine renders first (003's one-frame mode: the
-    /// middle frame is shown while the rest of the frame renders).
-    pub fn reads_later_frame(self) -> bool {
-        matches!(
-            self,
-            Method::LinearBlend
-                | Method::ImageBased
-                | Method::SceneAssisted
-                | Method::SceneAssistedShadeOnMiss
-                | Method::Payload
-        )
     }
 }
 

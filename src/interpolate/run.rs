@@ -340,6 +340,9 @@ impl Schedule<'_> {
         let first = frames.twinned_inputs(inputs_of, [0, 0, n])?;
         timed(m.clock, &mut runs.slots[0], &first, "iframe").map_err(fail)?;
         for method in runs.methods.iter_mut() {
+            let run = m.measured.methods.entry(method.method()).or_default();
+            run.reads_flows = method.reads_flows();
+            run.reads_later_frame = method.reads_later_frame();
             method.open(frames, m.clock, inputs_of)?;
         }
         // The Z-buffer bridge's first frames, from either kind of depth,

@@ -35,7 +35,7 @@ impl Summary<'_> {
         let bframes = run.map_or(&[][..], |r| &r.times[..]);
         let mut times = Vec::new();
         for (i, chunk) in bframes.chunks(n - 1).enumerate() {
-            let (iframe, parts) = if method.reads_flows() {
+            let (iframe, parts) = if run.is_some_and(|r| r.reads_flows) {
                 (measured.iframe_times.get(i), measured.iframe_parts.get(i))
             } else {
                 (
@@ -48,7 +48,6 @@ impl Summary<'_> {
                 iframe: iframe.copied().unwrap_or(0.0),
                 parts: parts.map(|p| &p[..]),
                 added: run
-                    .filter(|_| method.adds_iframe_passes())
                     .and_then(|r| r.prepare_times.get(i))
                     .copied()
                     .unwrap_or(0.0),
@@ -72,9 +71,13 @@ impl Summary<'_> {
             _ => b.of(method),
         });
         let b_ms = run.map_or(0.0, |r| metrics::median(&r.times));
-        let i_ms = if method.adds_iframe_passes() {
+        // The methods whose I-frames add passes of their own (the morph's
+        // preparation, the payload's pass) timed them beside the I-frame.
+        let adds_passes = run.is_some_and(|r| !r.prepare_times.is_empty());
+        let reads_flows = run.is_some_and(|r| r.reads_flows);
+        let i_ms = if adds_passes {
             iframe_ms + run.map_or(0.0, |r| metrics::median(&r.prepare_times))
-        } else if method.reads_flows() {
+        } else if reads_flows {
             iframe_ms
         } else {
             reference_ms
@@ -116,7 +119,7 @@ impl Summary<'_> {
             correspondence_error_px: (method == Method::ImageBased)
                 .then(|| correspondence_error(measured))
                 .flatten(),
-            added_latency_frames: if method.reads_later_frame() || self.partitioned {
+            added_latency_frames: if run.is_some_and(|r| r.reads_later_frame) || self.partitioned {
                 f64::from(n - 1)
             } else {
                 0.0

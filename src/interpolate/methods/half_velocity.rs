@@ -69,6 +69,12 @@ impl FrameMethod for HalfVelocity<'_> {
         Method::HalfVelocity
     }
 
+    /// It reads the later I-frame's depth and velocity alone, which an
+    /// engine renders first (Andreev 2010's one-frame mode): no latency.
+    fn reads_flows(&self) -> bool {
+        true
+    }
+
     fn prepare(
         &mut self,
         _frames: &Frames,

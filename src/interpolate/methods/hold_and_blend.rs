@@ -22,6 +22,11 @@ impl FrameMethod for HoldOrBlend<'_> {
         self.method
     }
 
+    /// A blend waits for the later I-frame; holding does not.
+    fn reads_later_frame(&self) -> bool {
+        self.method == Method::LinearBlend
+    }
+
     fn draw<'s>(
         &'s mut self,
         frames: &Frames,

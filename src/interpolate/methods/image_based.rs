@@ -70,6 +70,14 @@ impl FrameMethod for ImageBased<'_> {
         Method::ImageBased
     }
 
+    fn reads_flows(&self) -> bool {
+        true
+    }
+
+    fn reads_later_frame(&self) -> bool {
+        true
+    }
+
     fn draw<'s>(
         &'s mut self,
         frames: &Frames,

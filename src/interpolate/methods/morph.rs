@@ -121,6 +121,10 @@ impl FrameMethod for Extrapolator<'_> {
         self.method
     }
 
+    fn reads_flows(&self) -> bool {
+        true
+    }
+
     fn shows_rendered_iframe(&self) -> bool {
         false
     }

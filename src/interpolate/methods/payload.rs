@@ -116,6 +116,14 @@ impl FrameMethod for Payload {
         Method::Payload
     }
 
+    fn reads_flows(&self) -> bool {
+        true
+    }
+
+    fn reads_later_frame(&self) -> bool {
+        true
+    }
+
     /// The first I-frame's payload, into slot 0.
     fn open(
         &mut self,

@@ -136,6 +136,15 @@ impl FrameMethod for SceneAssisted {
         self.run.method
     }
 
+    /// Scene-assisted blends both I-frames; reverse reprojection reads
+    /// the earlier one alone.
+    fn reads_later_frame(&self) -> bool {
+        matches!(
+            self.run.mode,
+            SceneMode::ClosestOnMiss | SceneMode::ShadeOnMiss
+        )
+    }
+
     fn draw<'s>(
         &'s mut self,
         frames: &Frames,
