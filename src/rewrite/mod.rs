@@ -462,6 +462,8 @@ fn rewrite_at(
     .map_err(Refusal::new)?;
     plan.cache.format_note = format_note;
     plan.node.path = slice.path.as_ref().map(|p| p.describe().to_string());
+    // What a host will check of the plan holds of every plan written.
+    plan.check().map_err(Refusal::internal)?;
     Ok(Rewritten {
         variant,
         node: candidate.node.id.clone(),
@@ -519,6 +521,17 @@ fn instrumented_vertex(
 
 /// Settings no variant can be built with.
 fn refuse_settings(options: &Options) -> Result<(), Refusal> {
+    if options.refresh_quad == 0 {
+        return Err(Refusal::new(
+            "a refresh block of 0 pixels: k (--refresh-quad) is at least 1",
+        ));
+    }
+    if !(0.0..1.0).contains(&options.depth_epsilon) {
+        return Err(Refusal::new(format!(
+            "a depth tolerance ε of {}: it lies in [0, 1)",
+            options.depth_epsilon
+        )));
+    }
     if options.refresh_period > MAX_REFRESH_PERIOD {
         return Err(Refusal::new(format!(
             "a refresh period of {} frames is beyond the largest the refresh indicator takes, {MAX_REFRESH_PERIOD}",

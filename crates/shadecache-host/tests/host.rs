@@ -951,3 +951,110 @@ fn a_uniform_with_a_dynamic_offset_and_a_least_size_matches_its_binding() {
         assert!(made.is_ok(), "{name}: {:?}", made.err());
     }
 }
+
+/// A hand-edited plan is an error where it is read, naming what is wrong,
+/// never a panic or an allocation of gigabytes: the table of corrupted
+/// plans of the adversarial review (a G-buffer target at location
+/// 2³² − 1, a uniform field at byte 2³² − 16, resolution divisors of 0
+/// and 2³² − 1, lowres without or with out-of-range upsampling knobs, a
+/// refresh period past the indicator's, a block of 0 pixels, a depth
+/// tolerance and a far-plane depth out of range, no pass). `Plan::check`
+/// refuses each, and `CachedShader::new` checks the plan before it makes
+/// anything.
+#[test]
+fn a_corrupted_plan_is_an_error_not_an_allocation() {
+    let original: serde_json::Value =
+        serde_json::from_str(include_str!("fixtures/square/three-pass/plan.json")).unwrap();
+    type Edit = fn(&mut serde_json::Value);
+    let cases: [(&str, Edit, &str); 11] = [
+        (
+            "a target at location 2^32 - 1",
+            |p| p["passes"][0]["color_targets"][0]["location"] = 4294967295u32.into(),
+            "location 4294967295",
+        ),
+        (
+            "a uniform field at byte 2^32 - 16",
+            |p| p["cache"]["params"][0]["offset"] = 4294967280u32.into(),
+            "4-aligned",
+        ),
+        (
+            "a resolution divisor of 2^32 - 1",
+            |p| p["passes"][0]["resolution_divisor"] = 4294967295u32.into(),
+            "1/4294967295",
+        ),
+        (
+            "a resolution divisor of 0",
+            |p| p["passes"][0]["resolution_divisor"] = 0.into(),
+            "1/0",
+        ),
+        (
+            "lowres without its upsampling",
+            |p| p["variant"] = "lowres".into(),
+            "upsampling",
+        ),
+        (
+            "upsampling knobs out of range",
+            |p| {
+                p["upsampling"] = serde_json::json!({
+                    "reconstruction": "spatial", "factor": 3,
+                    "sigma_normal": -1.0, "sigma_depth": 0.03, "sensitivity": 1.0
+                })
+            },
+            "factor of 3",
+        ),
+        (
+            "a refresh period past 65535",
+            |p| p["refresh"]["period"] = 70000.into(),
+            "70000",
+        ),
+        (
+            "a refresh block of 0 pixels",
+            |p| p["refresh"]["quad"] = 0.into(),
+            "quad is 0",
+        ),
+        (
+            "a negative depth tolerance",
+            |p| p["refresh"]["depth_epsilon"] = (-3.0).into(),
+            "depth_epsilon = -3",
+        ),
+        (
+            "a far plane at depth 2",
+            |p| p["clear"]["depth"] = 2.0.into(),
+            "clear.depth = 2",
+        ),
+        (
+            "no pass",
+            |p| p["passes"] = serde_json::json!([]),
+            "no pass",
+        ),
+    ];
+    for (what, edit, says) in cases {
+        let mut json = original.clone();
+        edit(&mut json);
+        let plan: Plan = serde_json::from_value(json).expect(what);
+        let err = plan.check().expect_err(what);
+        assert!(err.contains(says), "{what}: {err}");
+    }
+    // The fixture itself is a plan a host takes.
+    let plan: Plan = serde_json::from_value(original.clone()).unwrap();
+    plan.check().unwrap();
+    // And the host reads no further than the check.
+    let Some(gpu) = gpu() else { return };
+    let mut json = original;
+    json["passes"][0]["color_targets"][0]["location"] = 4294967295u32.into();
+    let corrupted: Plan = serde_json::from_value(json).unwrap();
+    let made = with_frame(
+        |_| {},
+        |frame| {
+            CachedShader::new(
+                &gpu.device,
+                &corrupted,
+                |_| Some(""),
+                frame,
+                (SIZE, SIZE),
+                Options::default(),
+            )
+        },
+    );
+    assert!(matches!(made, Err(Error::Plan(_))), "{:?}", made.err());
+}

@@ -1369,14 +1369,30 @@ impl DepthConvention {
 /// `cache_refresh`). 65535 frames is 18 minutes at 60 Hz.
 pub const MAX_REFRESH_PERIOD: u32 = 65535;
 
+/// The most colour targets a pass writes: WebGPU's limit on colour
+/// attachments (`maxColorAttachments`, 8).
+pub const MAX_COLOR_TARGETS: u32 = 8;
+
+/// The largest the refresh uniform (`CacheParams`) may be, in bytes: its
+/// fields lie below it.
+pub const MAX_PARAMS_BYTES: u32 = 256;
+
 /// The default ε of the cache's depth test, relative: a cached depth d
 /// agrees with the expected depth e when |d − e| < ε·|e − far depth|.
 pub const DEFAULT_DEPTH_EPSILON: f32 = 0.02;
 
 impl Plan {
-    /// Checks what deserializing cannot: the format version, and that
-    /// every pass's bindings are among the plan's resources. Read a plan
-    /// with any serde format (`plan.json` is JSON), then check it once.
+    /// Checks what deserializing cannot, everything a host trusts: the
+    /// format version; that every pass's bindings are among the plan's
+    /// resources; at least one pass; colour targets at locations below
+    /// [`MAX_COLOR_TARGETS`]; a resolution divisor of 1, or lowres's s
+    /// for its samples; the refresh pattern's and the depth test's knobs
+    /// within their ranges; lowres's upsampling knobs
+    /// ([`Upsampling::check`]); the far plane's depth 0 or 1; the refresh
+    /// uniform's fields 4-aligned within [`MAX_PARAMS_BYTES`]. Read a plan
+    /// with any serde format (`plan.json` is JSON), then check it once: a
+    /// hand-edited plan is an error here, never a gigabyte's allocation in
+    /// a host.
     pub fn check(&self) -> Result<(), String> {
         if self.format != FORMAT_VERSION {
             return Err(format!(
@@ -1384,6 +1400,8 @@ impl Plan {
                 self.format
             ));
         }
+        self.check_passes()?;
+        self.check_knobs()?;
         let declared = |[group, binding]: [u32; 2]| {
             let at = |g: u32, b: u32| g == group && b == binding;
             self.bindings
@@ -1404,6 +1422,86 @@ impl Plan {
                     pass.name
                 ));
             }
+        }
+        Ok(())
+    }
+
+    /// The passes: at least one, their colour targets at locations a
+    /// device has, their resolution 1, or for lowres's samples its s.
+    fn check_passes(&self) -> Result<(), String> {
+        if self.passes.is_empty() {
+            return Err("the plan has no pass".into());
+        }
+        let factor = self.upsampling.as_ref().map(|u| u.factor);
+        for pass in self.passes.iter().chain(&self.classify) {
+            if let Some(target) = pass
+                .color_targets
+                .iter()
+                .find(|t| t.location >= MAX_COLOR_TARGETS)
+            {
+                return Err(format!(
+                    "pass `{}` writes a colour target at location {}, beyond the {MAX_COLOR_TARGETS} a device has",
+                    pass.name, target.location
+                ));
+            }
+            let divisor = pass.resolution_divisor;
+            if divisor != 1 && Some(divisor) != factor {
+                return Err(format!(
+                    "pass `{}` renders at 1/{divisor} of the frame: a pass renders at the frame's size, or lowres's samples at 1/s with s its upsampling factor ({})",
+                    pass.name,
+                    factor.map_or("none".to_string(), |s| s.to_string())
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The knobs the passes' uniform carries: the refresh pattern's, the
+    /// depth test's, lowres's, the far plane's depth and the uniform's
+    /// layout.
+    fn check_knobs(&self) -> Result<(), String> {
+        let refresh = &self.refresh;
+        if refresh.period > MAX_REFRESH_PERIOD {
+            return Err(format!(
+                "a refresh period of {} frames is beyond the largest the refresh indicator takes, {MAX_REFRESH_PERIOD}",
+                refresh.period
+            ));
+        }
+        if refresh.quad == 0 {
+            return Err("refresh.quad is 0: refresh blocks are at least 1 pixel".into());
+        }
+        if !(0.0..1.0).contains(&refresh.depth_epsilon) {
+            return Err(format!(
+                "refresh.depth_epsilon = {}: the depth test's tolerance lies in [0, 1)",
+                refresh.depth_epsilon
+            ));
+        }
+        if self.clear.depth != 0.0 && self.clear.depth != 1.0 {
+            return Err(format!(
+                "clear.depth = {}: the far plane's depth is 1, or 0 with reversed Z",
+                self.clear.depth
+            ));
+        }
+        match (&self.upsampling, self.variant.upsamples()) {
+            (Some(upsampling), _) => upsampling.check()?,
+            (None, true) => {
+                return Err(format!(
+                    "a {} plan without its upsampling knobs (`upsampling`)",
+                    self.variant
+                ))
+            }
+            (None, false) => {}
+        }
+        if let Some(field) = self
+            .cache
+            .params
+            .iter()
+            .find(|f| f.offset % 4 != 0 || f.offset >= MAX_PARAMS_BYTES)
+        {
+            return Err(format!(
+                "cache.params: `{}` at byte {} is not 4-aligned within the uniform's {MAX_PARAMS_BYTES} bytes",
+                field.name, field.offset
+            ));
         }
         Ok(())
     }
