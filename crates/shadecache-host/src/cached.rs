@@ -235,12 +235,18 @@ impl CachedShader {
             (Some(pass), true) => Some(build(plan.passes.len(), pass).await?),
             _ => None,
         };
+        // In an error scope, as the pipelines: a plan's uniform the device
+        // refuses is the plan's error, not wgpu's panic.
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("shadecache CacheParams"),
             size: params::size(&plan.cache.params)? as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        if let Some(err) = scope.pop().await {
+            return Err(Error::Wgpu(format!("the CacheParams buffer: {err}")));
+        }
         // rgba32float cannot be filtered: its variants load texels, and
         // the layout asks for a non-filtering sampler.
         let filter = if formats.cache == wgpu::TextureFormat::Rgba16Float {
