@@ -6,7 +6,7 @@ use crate::analysis::{self, Analysis};
 use crate::front::compose::{Composition, ShaderDef};
 use crate::front::{self, Shader};
 use crate::rewrite::{self, Options, Variant};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 const MATERIAL: &str = "corpus/wesl/lava_material.wesl";
 const PACKAGES: &str = "corpus/wesl/packages";
@@ -112,32 +112,6 @@ fn analysed(shader: &Shader) -> Analysis {
         .unwrap_or_else(|e| panic!("{}", e.render()))
 }
 
-/// A copy of `corpus/wesl` in a temporary folder, with `edit` applied to
-/// the file at `file` (relative to `corpus/wesl`).
-fn edited(file: &str, edit: impl Fn(&str) -> String) -> (tempfile::TempDir, PathBuf) {
-    fn copy(from: &Path, to: &Path) {
-        std::fs::create_dir_all(to).unwrap();
-        for entry in std::fs::read_dir(from).unwrap() {
-            let path = entry.unwrap().path();
-            let target = to.join(path.file_name().unwrap());
-            if path.is_dir() {
-                copy(&path, &target);
-            } else {
-                std::fs::copy(&path, &target).unwrap();
-            }
-        }
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let wesl = dir.path().join("wesl");
-    copy(&root().join("corpus/wesl"), &wesl);
-    let path = wesl.join(file);
-    let text = std::fs::read_to_string(&path).unwrap();
-    let changed = edit(&text);
-    assert_ne!(changed, text, "the edit changes {file}");
-    std::fs::write(&path, changed).unwrap();
-    (dir, wesl)
-}
-
 /// A build script names a package by its crate (`.crate_package`): found
 /// among the dependencies of the package being built (here this test's
 /// own, whose graph has `shadecache_plan`) as that crate's `src/` (a
@@ -165,7 +139,7 @@ fn a_build_script_finds_a_wesl_package_by_its_crate() {
     assert!(!outputs.files.is_empty(), "{outputs:?}");
 
     // Importing from the crate's package reads its `src/`.
-    let (_copy, wesl) = edited("lava_material.wesl", |text| {
+    let (_copy, wesl) = shadecache_test_support::edited_wesl("lava_material.wesl", |text| {
         text.replacen("import ", "import shadecache_plan::probe::x;\nimport ", 1)
             .replacen(
                 "fbm(in.world_position * 3.0, 6)",

@@ -232,3 +232,30 @@ light_color = [1.0, 1.0, 1.0]
 "#
     )
 }
+
+/// A copy of `corpus/wesl` in a temporary folder, with `edit` applied to
+/// the file at `file` (relative to `corpus/wesl`); the guard and the
+/// copy's path.
+pub fn edited_wesl(file: &str, edit: impl Fn(&str) -> String) -> (tempfile::TempDir, PathBuf) {
+    fn copy(from: &Path, to: &Path) {
+        std::fs::create_dir_all(to).unwrap();
+        for entry in std::fs::read_dir(from).unwrap() {
+            let path = entry.unwrap().path();
+            let target = to.join(path.file_name().unwrap());
+            if path.is_dir() {
+                copy(&path, &target);
+            } else {
+                std::fs::copy(&path, &target).unwrap();
+            }
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let wesl = dir.path().join("wesl");
+    copy(&root().join("corpus/wesl"), &wesl);
+    let path = wesl.join(file);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let changed = edit(&text);
+    assert_ne!(changed, text, "the edit changes {file}");
+    std::fs::write(&path, changed).unwrap();
+    (dir, wesl)
+}

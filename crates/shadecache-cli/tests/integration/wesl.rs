@@ -4,35 +4,9 @@
 //! package's noise, and the engine's vertex module.
 
 use std::ffi::OsStr;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::util::{root, shadecache, stderr};
-
-/// A copy of `corpus/wesl` in a temporary folder, with `edit` applied to
-/// the file at `file` (relative to `corpus/wesl`).
-fn edited(file: &str, edit: impl Fn(&str) -> String) -> (tempfile::TempDir, PathBuf) {
-    fn copy(from: &Path, to: &Path) {
-        std::fs::create_dir_all(to).unwrap();
-        for entry in std::fs::read_dir(from).unwrap() {
-            let path = entry.unwrap().path();
-            let target = to.join(path.file_name().unwrap());
-            if path.is_dir() {
-                copy(&path, &target);
-            } else {
-                std::fs::copy(&path, &target).unwrap();
-            }
-        }
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let wesl = dir.path().join("wesl");
-    copy(&root().join("corpus/wesl"), &wesl);
-    let path = wesl.join(file);
-    let text = std::fs::read_to_string(&path).unwrap();
-    let changed = edit(&text);
-    assert_ne!(changed, text, "the edit changes {file}");
-    std::fs::write(&path, changed).unwrap();
-    (dir, wesl)
-}
 
 /// `shadecache analyze` on the copy's material; its stderr, after
 /// checking the exit status is 1.
@@ -61,7 +35,7 @@ enum At<'a> {
 /// `analyze` on the copy's material, and checks the error says `says` and
 /// points into `file` at `at`, as codespan prints it (`file:line:col`).
 fn assert_error_at(file: &str, edit: impl Fn(&str) -> String, says: &str, at: At) {
-    let (_dir, wesl) = edited(file, edit);
+    let (_dir, wesl) = shadecache_test_support::edited_wesl(file, edit);
     let err = analyze_error(&wesl);
     assert!(err.contains(says), "`{says}` in {err}");
     let (needle, with_column) = match at {
