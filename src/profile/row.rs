@@ -59,6 +59,8 @@ pub(super) fn result_row(
         refresh_quad: config.setting.refresh_quad,
         reconstruction: config.setting.reconstruction,
         adaptive: config.setting.adaptive,
+        // Set with the run's knobs when the report is made.
+        upsampling: None,
         cache_format: config.setting.cache_format,
         depth_epsilon: config.setting.depth_epsilon,
         time_ms,

@@ -596,15 +596,22 @@ fn configuration_cells(row: &ResultRow) -> String {
 }
 
 /// A configuration's knobs in one cell: Δn, k, reconstruction, cache
-/// format, ε.
+/// format, ε, adaptive refresh, and lowres's s, σn, σz and a.
 fn knobs(row: &ResultRow) -> String {
+    let lowres = row.upsampling.as_ref().map_or(String::new(), |u| {
+        format!(
+            " · s {} · σn {} · σz {} · a {}",
+            u.factor, u.sigma_normal, u.sigma_depth, u.sensitivity
+        )
+    });
     format!(
-        "Δn {} · k {} · {} · {} · ε {}",
+        "Δn {} · k {} · {} · {} · ε {}{}{lowres}",
         row.refresh_period,
         row.refresh_quad,
         row.reconstruction.as_str(),
         row.cache_format.as_str(),
-        row.depth_epsilon
+        row.depth_epsilon,
+        row.adaptive_words().replace(", ", " · ")
     )
 }
 

@@ -20,11 +20,14 @@ pub use html::html;
 pub use images::write_images;
 pub use index::{entry_index, entry_index_html, EntryIndex, EntrySection};
 
+/// The version of [`Report`]'s format this build writes and reads.
+pub const FORMAT: u32 = 1;
+
 /// Everything a profile measured.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[non_exhaustive]
 pub struct Report {
-    /// Version of this format.
+    /// Version of this format ([`FORMAT`]).
     pub format: u32,
     /// The shader's path.
     pub shader: String,
@@ -417,6 +420,10 @@ pub struct ResultRow {
     /// refreshed after Δn/4 frames.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub adaptive: bool,
+    /// Lowres's factor and knobs (s, σn, σz, a), on lowres's rows: a row
+    /// merged from another run keeps its own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub upsampling: Option<crate::rewrite::Upsampling>,
     /// Median frame time, ms: from the first pass's start timestamp to the
     /// last one's end, what runs between the passes included.
     pub time_ms: f64,
@@ -728,6 +735,7 @@ pub(crate) mod fixtures {
             cache_format: CacheFormat::Rgba16float,
             depth_epsilon: 1e-3,
             adaptive: false,
+            upsampling: None,
             time_ms,
             passes: Vec::new(),
             speedup: 10.0 / time_ms,

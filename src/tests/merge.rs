@@ -82,7 +82,7 @@ fn merged_shards_equal_the_unsharded_sweep() {
             .enumerate()
             .map(|(i, r)| shard_report(&format!("shard{i}"), r.clone()))
             .collect(),
-        false,
+        merge::Options::default(),
     )
     .unwrap();
     assert_eq!(merged.len(), 1);
@@ -108,7 +108,7 @@ fn merged_shards_equal_the_unsharded_sweep() {
         });
         shard_report(&format!("half{keep}"), part)
     };
-    let rejoined = merge::merge(vec![split(0), split(1)], false).unwrap();
+    let rejoined = merge::merge(vec![split(0), split(1)], merge::Options::default()).unwrap();
     let fronts = |report: &Report| -> BTreeSet<(String, bool, bool)> {
         report
             .results
@@ -132,7 +132,7 @@ fn merged_shards_equal_the_unsharded_sweep() {
             shard_report("a", shards[0].clone()),
             shard_report("b", other.clone()),
         ],
-        false,
+        merge::Options::default(),
     )
     .unwrap_err();
     assert!(refused.contains("their shader differs"), "{refused}");
@@ -141,8 +141,184 @@ fn merged_shards_equal_the_unsharded_sweep() {
             shard_report("a", shards[0].clone()),
             shard_report("b", other),
         ],
-        true,
+        merge::Options {
+            keep_apart: true,
+            allow_partial: true,
+        },
     )
     .unwrap();
     assert_eq!(apart.len(), 2);
+}
+
+/// A report of shard `index`/`count` holding one two-pass row per period
+/// in `periods`.
+fn shard_of(index: u32, count: u32, periods: &[u32]) -> Report {
+    use crate::report::fixtures::{report, row};
+    let mut report = report(
+        periods
+            .iter()
+            .map(|&p| {
+                let mut row = row(10.0 / f64::from(p), 40.0, 0.99);
+                row.node = "n1".into();
+                row.variant = Variant::TwoPass;
+                row.refresh_period = p;
+                row
+            })
+            .collect(),
+    );
+    report.shard = Some(Shard { index, count });
+    report
+}
+
+/// A sweep in three shards merges whole; one missing, one given twice,
+/// or one of another N is an error naming it (a CI matrix with a failed
+/// or retried job), and `--allow-partial` merges what there is, saying so
+/// in the warnings and the answer. A report of another format, or a shard
+/// K/N with K > N, is refused where it is read.
+#[test]
+fn merge_refuses_an_incomplete_or_duplicated_sweep() {
+    let whole = || {
+        vec![
+            shard_report("s1", shard_of(1, 3, &[4])),
+            shard_report("s2", shard_of(2, 3, &[8])),
+            shard_report("s3", shard_of(3, 3, &[16])),
+        ]
+    };
+    let merged = merge::merge(whole(), merge::Options::default()).unwrap();
+    assert_eq!(merged[0].results.len(), 3);
+    assert!(!merged[0].warnings.iter().any(|w| w.contains("partial")));
+
+    let mut missing = whole();
+    missing.remove(1);
+    let err = merge::merge(missing.clone(), merge::Options::default()).unwrap_err();
+    assert!(err.contains("missing shard 2/3"), "{err}");
+    assert!(err.contains("--allow-partial"), "{err}");
+
+    let mut twice = whole();
+    twice.push(shard_report("s3-retried", shard_of(3, 3, &[16])));
+    let err = merge::merge(twice, merge::Options::default()).unwrap_err();
+    assert!(
+        err.contains("shard 3/3 given 2 times (s3, s3-retried)"),
+        "{err}"
+    );
+
+    let mut other_n = whole();
+    other_n.push(shard_report("t2", shard_of(2, 2, &[32])));
+    let err = merge::merge(other_n, merge::Options::default()).unwrap_err();
+    assert!(
+        err.contains("t2 is shard 2/2, of another N than the others' 3"),
+        "{err}"
+    );
+
+    let partial = merge::merge(
+        missing,
+        merge::Options {
+            allow_partial: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(partial[0].results.len(), 2);
+    assert!(
+        partial[0]
+            .warnings
+            .iter()
+            .any(|w| w.contains("a partial sweep") && w.contains("2/3")),
+        "{:?}",
+        partial[0].warnings
+    );
+    let reason = &partial[0].choice.as_ref().unwrap().reason;
+    assert!(
+        reason.contains("from a partial sweep, missing shard 2/3"),
+        "{reason}"
+    );
+
+    // An unsharded run of the grid is whole by itself.
+    let mut with_whole_run = whole();
+    with_whole_run.truncate(1);
+    let mut unsharded = shard_of(1, 1, &[4, 8, 16]);
+    unsharded.shard = None;
+    with_whole_run.push(shard_report("all", unsharded));
+    assert!(merge::merge(with_whole_run, merge::Options::default()).is_ok());
+
+    // Read from files: a report of another format, a shard 5/2, a huge
+    // file.
+    let temp = tempfile::tempdir().unwrap();
+    let dir = temp.path();
+    let write = |name: &str, report: &Report| {
+        let path = dir.join(name);
+        std::fs::write(&path, serde_json::to_string(report).unwrap()).unwrap();
+        path
+    };
+    let mut future = shard_of(1, 2, &[4]);
+    future.format = 999;
+    let err = merge::read(&write("future.json", &future)).unwrap_err();
+    assert!(err.contains("a report of format 999"), "{err}");
+    let beyond = shard_of(5, 2, &[4]);
+    let err = merge::read(&write("beyond.json", &beyond)).unwrap_err();
+    assert!(err.contains("says it is shard 5/2"), "{err}");
+    let huge = dir.join("huge.json");
+    let file = std::fs::File::create(&huge).unwrap();
+    file.set_len(merge::MAX_REPORT_BYTES + 10).unwrap();
+    let err = merge::read(&huge).unwrap_err();
+    assert!(err.contains("larger than the 512 MiB"), "{err}");
+    assert!(merge::read(&write("fine.json", &shard_of(1, 2, &[4]))).is_ok());
+}
+
+/// Two lowres runs that differ only in σn are two configurations, each
+/// row keeping its own knobs (the header shows none of them then);
+/// kept apart, they are two reports.
+#[test]
+fn merge_keeps_rows_that_differ_in_upsampling_knobs() {
+    let lowres = |sigma_normal: f32, factor: u32| {
+        let mut report = shard_of(1, 1, &[16]);
+        report.shard = None;
+        let knobs = crate::rewrite::Upsampling {
+            sigma_normal,
+            factor,
+            ..crate::rewrite::DEFAULT_UPSAMPLING
+        };
+        report.upsampling = Some(knobs.clone());
+        for row in &mut report.results {
+            row.variant = Variant::Lowres;
+            row.upsampling = Some(knobs.clone());
+        }
+        report
+    };
+    let merged = merge::merge(
+        vec![
+            shard_report("a", lowres(0.2, 4)),
+            shard_report("b", lowres(1e-3, 4)),
+            shard_report("c", lowres(0.2, 2)),
+        ],
+        merge::Options::default(),
+    )
+    .unwrap();
+    assert_eq!(merged.len(), 1);
+    let rows = &merged[0].results;
+    assert_eq!(rows.len(), 3, "one row per set of knobs");
+    let knobs: BTreeSet<String> = rows
+        .iter()
+        .map(|r| {
+            let u = r.upsampling.as_ref().unwrap();
+            format!("{} {}", u.factor, u.sigma_normal)
+        })
+        .collect();
+    assert_eq!(knobs.len(), 3, "{knobs:?}");
+    assert!(merged[0].upsampling.is_none());
+
+    let apart = merge::merge(
+        vec![
+            shard_report("a", lowres(0.2, 4)),
+            shard_report("b", lowres(1e-3, 4)),
+        ],
+        merge::Options {
+            keep_apart: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(apart.len(), 2);
+    assert_eq!(apart[0].upsampling.as_ref().unwrap().sigma_normal, 0.2);
+    assert_eq!(apart[1].upsampling.as_ref().unwrap().sigma_normal, 1e-3);
 }

@@ -23,6 +23,12 @@ pub struct Args {
     /// error.
     #[arg(long)]
     pub keep_apart: bool,
+
+    /// Merge a sweep with shards missing or given twice (a failed or
+    /// retried CI job) from what there is; the report and its answer say
+    /// which part it is. Without it, that is an error naming the shards.
+    #[arg(long)]
+    pub allow_partial: bool,
 }
 
 pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
@@ -34,7 +40,14 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         .collect::<Result<Vec<_>, _>>()
         .map_err(plain)?;
     let count = shards.len();
-    let merged = merge::merge(shards, args.keep_apart).map_err(plain)?;
+    let merged = merge::merge(
+        shards,
+        merge::Options {
+            keep_apart: args.keep_apart,
+            allow_partial: args.allow_partial,
+        },
+    )
+    .map_err(plain)?;
     let single = merged.len() == 1;
     for (i, report) in merged.iter().enumerate() {
         let out = if single {

@@ -13,33 +13,37 @@ fn shard_and_merge_bad_input_is_an_error() {
         assert_eq!(out.status.code(), Some(1), "{bad}");
         assert!(stderr(&out).contains("K/N"), "{bad}: {}", stderr(&out));
     }
-    // More shards than configurations: a shard with none is told so,
-    // before anything runs or is written.
+    // More shards than configurations: an error for every shard of such
+    // a sweep (3/3's slice is not empty, 1/3's is), before anything runs
+    // or is written.
     let dir = tempfile::tempdir().unwrap();
-    let out_dir = dir.path().join("shard");
-    let out = shadecache([
-        "profile",
-        "corpus/noise_marble.wgsl",
-        "--nodes",
-        "top:1",
-        "--variant",
-        "two-pass",
-        "--refresh-period",
-        "8",
-        "--refresh-quad",
-        "2",
-        "--shard",
-        "1/3",
-        "--out",
-        out_dir.to_str().unwrap(),
-    ]);
-    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
-    let said = stderr(&out);
-    assert!(
-        said.contains("shard 1/3 has nothing to measure") && said.contains("use at most 1"),
-        "{said}"
-    );
-    assert!(!out_dir.exists());
+    for shard in ["1/3", "3/3"] {
+        let out_dir = dir.path().join("shard");
+        let out = shadecache([
+            "profile",
+            "corpus/noise_marble.wgsl",
+            "--nodes",
+            "top:1",
+            "--variant",
+            "two-pass",
+            "--refresh-period",
+            "8",
+            "--refresh-quad",
+            "2",
+            "--shard",
+            shard,
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+        let said = stderr(&out);
+        assert!(
+            said.contains(&format!("shard {shard}: the grid has 1 configuration"))
+                && said.contains("use at most 1"),
+            "{said}"
+        );
+        assert!(!out_dir.exists());
+    }
     let (_dir, path) = temp_file("report.json", b"{\"format\": 1}");
     let out = shadecache(["merge", path.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));
