@@ -172,7 +172,8 @@ pub fn render_variant(
 
 /// Writes a variant into `dir`: one file per pass (per entry point for
 /// GLSL) and `plan.json`. Each file is written beside its final name and
-/// renamed into place, so a reader never sees half a file.
+/// renamed into place, so a reader never sees half a file; if any cannot
+/// be written, none is left.
 pub fn write_variant(
     dir: &std::path::Path,
     rewritten: &crate::rewrite::Rewritten,
@@ -209,14 +210,36 @@ pub fn write_variant(
     plan.push('\n');
     files.push(("plan.json".into(), plan.into_bytes()));
 
+    // All or nothing: every file is written beside its name first, then
+    // each renamed into place. A failure removes what this call wrote
+    // (the `.partial` files, the files renamed, the folder if it made
+    // it), so that no variant folder is left without its plan.
+    let made = !dir.exists();
     std::fs::create_dir_all(dir).map_err(|err| io_error(dir, err))?;
-    let mut written = Vec::new();
-    for (name, bytes) in files {
-        let path = dir.join(&name);
-        let partial = dir.join(format!(".{name}.partial"));
-        std::fs::write(&partial, bytes).map_err(|err| io_error(&partial, err))?;
-        std::fs::rename(&partial, &path).map_err(|err| io_error(&path, err))?;
-        written.push(path);
+    let staged: Vec<(std::path::PathBuf, std::path::PathBuf)> = files
+        .iter()
+        .map(|(name, _)| (dir.join(format!(".{name}.partial")), dir.join(name)))
+        .collect();
+    let undo = |upto: usize, renamed: usize| {
+        for (i, (partial, path)) in staged.iter().enumerate().take(upto) {
+            let _ = std::fs::remove_file(if i < renamed { path } else { partial });
+        }
+        if made {
+            let _ = std::fs::remove_dir(dir);
+        }
+    };
+    for (i, ((partial, _), (_, bytes))) in staged.iter().zip(&files).enumerate() {
+        if let Err(err) = std::fs::write(partial, bytes) {
+            undo(i + 1, 0);
+            return Err(io_error(partial, err));
+        }
     }
+    for (i, (partial, path)) in staged.iter().enumerate() {
+        if let Err(err) = std::fs::rename(partial, path) {
+            undo(staged.len(), i);
+            return Err(io_error(path, err));
+        }
+    }
+    let written: Vec<std::path::PathBuf> = staged.into_iter().map(|(_, path)| path).collect();
     Ok(written)
 }

@@ -12,6 +12,7 @@ use std::process::ExitCode;
 use clap::Parser;
 
 mod commands;
+mod out_folder;
 mod supervise;
 
 use commands::Command;

@@ -226,6 +226,12 @@ pub struct Args {
     #[arg(long, value_name = "DIR", default_value = "shadecache-interpolation")]
     pub out: PathBuf,
 
+    /// Write into an --out folder that holds files a previous run did not
+    /// list as its own (they stay; files of the same names are replaced).
+    /// Without it, such a folder is refused before anything runs.
+    #[arg(long)]
+    pub overwrite: bool,
+
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -234,7 +240,17 @@ pub struct Args {
     pub stages: super::StageArgs,
 }
 
-pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
+pub fn exec(args: Args, color: Color) -> Result<(), Error> {
+    let out = crate::out_folder::OutFolder::check(&args.out, args.overwrite)?;
+    out.run(|out| interpolate_into(&args, color, out))
+}
+
+/// The run, and its report written into `out`.
+fn interpolate_into(
+    args: &Args,
+    _color: Color,
+    out: &crate::out_folder::OutFolder,
+) -> Result<(), Error> {
     if !(args.screen_epsilon > 0.0 && args.screen_epsilon.is_finite()) {
         return Err(Error::plain(Diagnostic::error(format!(
             "--screen-epsilon must be a positive number of pixels, not {}",
@@ -287,6 +303,7 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
     let (report, pictures) =
         interpolate::interpolate(&shader, &scene, &scene_path, &options, &mut bar)?;
 
+    out.clear()?;
     super::write_report(
         &args.out,
         &report,

@@ -18,6 +18,12 @@ pub struct Args {
     #[arg(long, value_name = "DIR", default_value = "shadecache-merged")]
     pub out: PathBuf,
 
+    /// Write into an --out folder that holds files a previous run did not
+    /// list as its own (they stay; files of the same names are replaced).
+    /// Without it, such a folder is refused before anything runs.
+    #[arg(long)]
+    pub overwrite: bool,
+
     /// Shards of different shaders, scenes, grids or adapters: a merged
     /// report per group of alike shards (in DIR/1, DIR/2...) instead of an
     /// error.
@@ -39,6 +45,21 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         .map(|path| merge::read(path))
         .collect::<Result<Vec<_>, _>>()
         .map_err(plain)?;
+    // The merged report may not replace what it is made of.
+    let inside = |path: &std::path::Path| {
+        let canonical = |p: &std::path::Path| std::fs::canonicalize(p).ok();
+        let out = canonical(&args.out)?;
+        let folder = canonical(path.parent()?)?;
+        folder.starts_with(&out).then_some(())
+    };
+    if let Some(shard) = shards.iter().find(|s| inside(&s.path).is_some()) {
+        return Err(plain(format!(
+            "--out `{}` holds the input {}: the merged report would replace a shard it is made of; name another folder",
+            args.out.display(),
+            shard.path.display()
+        )));
+    }
+    let folder = crate::out_folder::OutFolder::check(&args.out, args.overwrite)?;
     let count = shards.len();
     let merged = merge::merge(
         shards,
@@ -48,6 +69,18 @@ pub fn exec(args: Args, _color: Color) -> Result<(), Error> {
         },
     )
     .map_err(plain)?;
+    folder.run(|folder| write(&args, &merged, count, folder))
+}
+
+/// Writes the merged reports into `folder` (one, or one per group in
+/// `DIR/1`, `DIR/2`...) and says what they answer.
+fn write(
+    args: &Args,
+    merged: &[report::Report],
+    count: usize,
+    folder: &crate::out_folder::OutFolder,
+) -> Result<(), Error> {
+    folder.clear()?;
     let single = merged.len() == 1;
     for (i, report) in merged.iter().enumerate() {
         let out = if single {

@@ -110,6 +110,12 @@ pub struct Args {
     #[arg(long, value_name = "DIR", default_value = "shadecache-report")]
     pub out: PathBuf,
 
+    /// Write into an --out folder that holds files a previous run did not
+    /// list as its own (they stay; files of the same names are replaced).
+    /// Without it, such a folder is refused before anything runs.
+    #[arg(long)]
+    pub overwrite: bool,
+
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -218,6 +224,22 @@ impl Progress for Bar {
 }
 
 pub fn exec(args: Args, color: Color) -> Result<(), Error> {
+    let out = crate::out_folder::OutFolder::check(&args.out, args.overwrite)?;
+    // Entry points that could not be profiled, beside those that were: an
+    // error once the reports of the others are kept.
+    let mut failed = None;
+    out.run(|out| profile_into(&args, color, out, &mut failed))?;
+    failed.map_or(Ok(()), Err)
+}
+
+/// The profile of each fragment entry point, written into `out`;
+/// `failed` is set when some could not be profiled.
+fn profile_into(
+    args: &Args,
+    color: Color,
+    out: &crate::out_folder::OutFolder,
+    failed_entries: &mut Option<Error>,
+) -> Result<(), Error> {
     let shader = args.stages.load(&args.shader)?;
     // Every fragment entry point in turn, unless `--entry` names one:
     // each into `OUT/<entry>/`, with an index in OUT.
@@ -229,7 +251,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         },
     )?;
     if analyses.len() == 1 {
-        let (_, summary) = profile_entry(&args, &shader, &args.stages, &args.out)?;
+        let (_, summary) = profile_entry(args, &shader, &args.stages, out, &args.out)?;
         return super::write_stdout(&summary);
     }
     let mut sections = Vec::new();
@@ -240,7 +262,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
             entry: Some(entry.clone()),
             ..args.stages.clone()
         };
-        let out = args.out.join(entry);
+        let entry_out = args.out.join(entry);
         super::write_stdout(&format!("entry point `{entry}`:\n"))?;
         // An entry point with nothing to cache (a flat-colour wireframe
         // pass) is an answer, not a failure.
@@ -253,7 +275,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
             });
             continue;
         }
-        match profile_entry(&args, &shader, &stages, &out) {
+        match profile_entry(args, &shader, &stages, out, &entry_out) {
             Ok((report, summary)) => {
                 super::write_stdout(&summary)?;
                 sections.push(report::EntrySection {
@@ -271,6 +293,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
             }
         }
     }
+    out.clear()?;
     super::write_report(
         &args.out,
         &report::entry_index(&shader.file.path, &sections),
@@ -281,16 +304,15 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         "report: {} (one section per entry point)\n",
         args.out.join("report.html").display()
     ))?;
-    if failed.is_empty() {
-        Ok(())
-    } else {
-        Err(Error::plain(Diagnostic::error(format!(
+    if !failed.is_empty() {
+        *failed_entries = Some(Error::plain(Diagnostic::error(format!(
             "{} of {} fragment entry points could not be profiled: {} (see above)",
             failed.len(),
             analyses.len(),
             failed.join(", ")
-        ))))
+        ))));
     }
+    Ok(())
 }
 
 /// The profile's options from the command line (a sweep's grid under
@@ -537,6 +559,7 @@ fn profile_entry(
     args: &Args,
     shader: &shadecache::front::Shader,
     stages: &super::StageArgs,
+    folder: &crate::out_folder::OutFolder,
     out: &std::path::Path,
 ) -> Result<(Box<report::Report>, String), Error> {
     let drawn = shader.clone_parts();
@@ -549,6 +572,7 @@ fn profile_entry(
     };
     let (report, pictures) = profile::profile(shader, &scene, &scene_path, &options, &mut bar)?;
 
+    folder.clear()?;
     super::write_report(
         out,
         &report,

@@ -97,6 +97,12 @@ pub struct Args {
     /// Where to write the shaders and plan.json.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+
+    /// Write into an --out folder that holds files a previous run did not
+    /// list as its own (they stay; files of the same names are replaced).
+    /// Without it, such a folder is refused before anything runs.
+    #[arg(long)]
+    pub overwrite: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -290,6 +296,16 @@ pub enum EmitArg {
 }
 
 pub fn exec(args: Args, color: Color) -> Result<(), Error> {
+    let out = crate::out_folder::OutFolder::check(&args.out, args.overwrite)?;
+    out.run(|out| rewrite_into(&args, color, out))
+}
+
+/// The rewrite, written into `out` once every entry point checks.
+fn rewrite_into(
+    args: &Args,
+    color: Color,
+    out: &crate::out_folder::OutFolder,
+) -> Result<(), Error> {
     let shader = args.stages.load(&args.shader)?;
     // Every fragment entry point in turn (into `OUT/<entry>`), unless
     // `--entry` names one; with `--node`, the one that has the node.
@@ -317,6 +333,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         rewrite::check_entry_point(&shader, analysis)?;
     }
     let mut totals = Totals::default();
+    out.clear()?;
     for analysis in &analyses {
         if several && analysis.candidates.is_empty() {
             diagnostic::emit_to_stderr(
@@ -334,7 +351,7 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         } else {
             args.out.clone()
         };
-        rewrite_entry(&args, &shader, analysis, &out, color, &mut totals)?;
+        rewrite_entry(args, &shader, analysis, &out, color, &mut totals)?;
     }
     let Totals {
         written,

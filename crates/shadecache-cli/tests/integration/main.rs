@@ -15,6 +15,7 @@ mod errors;
 mod interpolate_command;
 mod lowres;
 mod merge;
+mod out_folders;
 mod profile_command;
 mod real_shaders;
 mod report_page;

@@ -101,14 +101,18 @@ pub fn candidate<'a>(
 /// Runs `shadecache profile SHADER --scene <scene_text> --quiet`, which
 /// must fail with exit status 1; returns its stderr.
 pub fn profile_error(shader: &str, scene_text: &str) -> String {
-    let (_dir, path) = temp_file("scene.toml", scene_text.as_bytes());
+    let (dir, path) = temp_file("scene.toml", scene_text.as_bytes());
+    let out = dir.path().join("report");
     let output = shadecache([
         "profile".as_ref(),
         shader.as_ref(),
         "--scene".as_ref(),
         path.as_os_str(),
         "--quiet".as_ref(),
-    ] as [&std::ffi::OsStr; 5]);
+        "--out".as_ref(),
+        out.as_os_str(),
+    ] as [&std::ffi::OsStr; 7]);
+    assert!(!out.exists(), "a failed profile left {}", out.display());
     let err = stderr(&output);
     assert_eq!(output.status.code(), Some(1), "{err}");
     err
