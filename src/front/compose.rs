@@ -96,10 +96,21 @@ pub enum ShaderDef {
 impl ShaderDef {
     /// Parses `NAME` or `NAME=VALUE` as `--def` takes it.
     pub fn parse(text: &str) -> Result<(String, ShaderDef), String> {
-        let (name, value) = match text.split_once('=') {
-            None => return Ok((text.to_string(), ShaderDef::Bool(true))),
-            Some(pair) => pair,
-        };
+        let (name, value) = text.split_once('=').unwrap_or((text, "true"));
+        // A name `#ifdef NAME` can test: a WGSL identifier.
+        let identifier = name
+            .chars()
+            .next()
+            .is_some_and(|c| c.is_alphabetic() || c == '_')
+            && name.chars().all(|c| c.is_alphanumeric() || c == '_');
+        if name.is_empty() {
+            return Err(format!("`{text}`: the def has no name"));
+        }
+        if !identifier {
+            return Err(format!(
+                "`{text}`: a def's name is an identifier (letters, digits and `_`, not first a digit), as `#ifdef NAME` names it"
+            ));
+        }
         let value = match value {
             "true" => ShaderDef::Bool(true),
             "false" => ShaderDef::Bool(false),
@@ -111,9 +122,6 @@ impl ShaderDef {
                 format!("`{text}`: a def's value is true, false, an i32 or a u32 with a `u` suffix (`3u`)")
             })?,
         };
-        if name.is_empty() {
-            return Err(format!("`{text}`: the def has no name"));
-        }
         Ok((name.to_string(), value))
     }
 
@@ -179,10 +187,11 @@ struct Found {
 /// Composes the shader read into `top` with `composition`.
 pub fn compose(top: SourceFile, composition: &Composition) -> Result<Shader, Error> {
     let top = Arc::new(top);
-    let mut found: BTreeMap<String, Found> = BTreeMap::new();
+    let mut modules = Modules::default();
     for dir in &composition.import_paths {
-        collect(dir, &mut found)?;
+        modules.collect(dir, dir, 0)?;
     }
+    let found = &modules.found;
     let defs = composition.shader_defs();
     let mut composer = Composer::default();
     // Callees first: naga_oil needs a module's imports added before it.
@@ -191,13 +200,15 @@ pub fn compose(top: SourceFile, composition: &Composition) -> Result<Shader, Err
     for import in &top_imports {
         add(
             &mut composer,
-            &found,
+            found,
             &import.import,
             &defs,
             &mut added,
             &mut Vec::new(),
         )
-        .map_err(|err| err.unwrap_or_else(|| not_found(&top, &import.import, composition)))?;
+        .map_err(|err| {
+            err.unwrap_or_else(|| not_found(&top, &import.import, composition, &modules.skipped))
+        })?;
     }
     let mut module = composer
         .make_naga_module(NagaModuleDescriptor {
@@ -238,34 +249,135 @@ pub(super) fn finish(top: &Arc<SourceFile>, module: naga::Module) -> Result<Shad
     parse(SourceFile::new(format!("{} (composed)", top.path), text))
 }
 
-/// Every `.wgsl` under `dir` that defines an import path.
-fn collect(dir: &Path, found: &mut BTreeMap<String, Found>) -> Result<(), Error> {
-    let entries = std::fs::read_dir(dir).map_err(|err| {
-        Error::plain(Diagnostic::error(format!(
-            "cannot read import path `{}`: {err}",
-            dir.display()
-        )))
-    })?;
-    let mut paths: Vec<PathBuf> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
-    paths.sort();
-    for path in paths {
-        if path.is_dir() {
-            collect(&path, found)?;
-        } else if path.extension().is_some_and(|e| e == "wgsl") {
-            let file = Arc::new(read_source(&path)?);
-            let (name, imports, _) = naga_oil::compose::get_preprocessor_data(&file.text);
-            if let Some(name) = name {
-                found.insert(
-                    name,
-                    Found {
-                        imports: imports.into_iter().map(|i| i.import).collect(),
-                        file,
-                    },
-                );
+/// The defs given as `false` that `#ifdef`/`#ifndef` test in the shader
+/// `top` or a module under the import paths, each with the file that
+/// tests it. naga_oil's `#ifdef NAME` asks only whether NAME is defined,
+/// so there `--def NAME=false` takes the branch it was meant to skip.
+pub fn false_defs_tested_for_presence(
+    top: &SourceFile,
+    composition: &Composition,
+) -> Result<Vec<(String, String)>, Error> {
+    let false_defs: Vec<&str> = composition
+        .defs
+        .iter()
+        .filter(|(_, value)| *value == ShaderDef::Bool(false))
+        .map(|(name, _)| name.as_str())
+        .collect();
+    if false_defs.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut modules = Modules::default();
+    for dir in &composition.import_paths {
+        modules.collect(dir, dir, 0)?;
+    }
+    let files = std::iter::once(top).chain(modules.found.values().map(|m| &*m.file));
+    let mut tested = Vec::new();
+    for file in files {
+        for name in &false_defs {
+            let tests = file.text.lines().any(|line| {
+                let mut words = line.split_whitespace();
+                matches!(words.next(), Some("#ifdef" | "#ifndef")) && words.next() == Some(name)
+            });
+            if tests && !tested.iter().any(|(n, _): &(String, String)| n == name) {
+                tested.push((name.to_string(), file.path.clone()));
             }
         }
     }
-    Ok(())
+    Ok(tested)
+}
+
+/// The most folders an import-path walk descends through, one inside
+/// another: deeper is a link back up, not a project's layout.
+pub const MAX_IMPORT_DEPTH: usize = 32;
+
+/// The most entries (files and folders) an import-path walk looks at: a
+/// project's shader folders hold hundreds; `--import-path /` millions.
+pub const MAX_IMPORT_ENTRIES: usize = 100_000;
+
+/// The modules found under the import paths, by the name each defines.
+#[derive(Default)]
+struct Modules {
+    found: BTreeMap<String, Found>,
+    /// `.wgsl` files that are not UTF-8: skipped, as nothing can import
+    /// them, and named if an import does not resolve.
+    skipped: Vec<PathBuf>,
+    /// Folders walked, by their canonical path: a link back to one is
+    /// not walked again.
+    visited: std::collections::HashSet<PathBuf>,
+    entries: usize,
+}
+
+impl Modules {
+    /// Every `.wgsl` under `dir` that defines an import path, `depth`
+    /// folders below the import path `root`. Bounded: each folder once
+    /// (links to `.` or `..` included), at most [`MAX_IMPORT_DEPTH`]
+    /// deep and [`MAX_IMPORT_ENTRIES`] in all. Two files that define the
+    /// same module are an error naming both.
+    fn collect(&mut self, root: &Path, dir: &Path, depth: usize) -> Result<(), Error> {
+        let cannot = |err: std::io::Error| {
+            Error::plain(Diagnostic::error(format!(
+                "cannot read import path `{}`: {err}",
+                dir.display()
+            )))
+        };
+        let canonical = std::fs::canonicalize(dir).map_err(cannot)?;
+        if !self.visited.insert(canonical) {
+            return Ok(());
+        }
+        let too_big = |what: String| {
+            Error::plain(
+                Diagnostic::error(format!(
+                    "the import path `{}` is too large to search: {what}",
+                    root.display()
+                ))
+                .with_note("--import-path names the folder of the shader modules, not a project's or the disk's root"),
+            )
+        };
+        if depth > MAX_IMPORT_DEPTH {
+            return Err(too_big(format!(
+                "`{}` is more than {MAX_IMPORT_DEPTH} folders down",
+                dir.display()
+            )));
+        }
+        let entries = std::fs::read_dir(dir).map_err(cannot)?;
+        let mut paths: Vec<PathBuf> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
+        self.entries += paths.len();
+        if self.entries > MAX_IMPORT_ENTRIES {
+            return Err(too_big(format!(
+                "it holds more than {MAX_IMPORT_ENTRIES} files and folders"
+            )));
+        }
+        paths.sort();
+        for path in paths {
+            if path.is_dir() {
+                self.collect(root, &path, depth + 1)?;
+            } else if path.extension().is_some_and(|e| e == "wgsl") {
+                let bytes = std::fs::read(&path).unwrap_or_default();
+                if std::str::from_utf8(&bytes).is_err() {
+                    self.skipped.push(path);
+                    continue;
+                }
+                let file = Arc::new(read_source(&path)?);
+                let (name, imports, _) = naga_oil::compose::get_preprocessor_data(&file.text);
+                let Some(name) = name else { continue };
+                if let Some(first) = self.found.get(&name) {
+                    let at = file.text.find(&name).unwrap_or(0);
+                    return Err(Error::in_file(
+                        file.clone(),
+                        Diagnostic::error(format!(
+                            "two modules define `{name}`: `{}` and `{}`",
+                            first.file.path, file.path
+                        ))
+                        .with_label(at..at + name.len(), "defined again here")
+                        .with_note("an import must name one module: remove or rename the copy (a backup, a vendored and a local copy)"),
+                    ));
+                }
+                let imports = imports.into_iter().map(|i| i.import).collect();
+                self.found.insert(name, Found { imports, file });
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Adds module `name` and, first, what it imports. `Err(None)`: `name`
@@ -340,7 +452,12 @@ fn add(
 
 /// An `#import` of the entry shader that nothing under the import paths
 /// defines.
-fn not_found(top: &Arc<SourceFile>, import: &str, composition: &Composition) -> Error {
+fn not_found(
+    top: &Arc<SourceFile>,
+    import: &str,
+    composition: &Composition,
+    skipped: &[PathBuf],
+) -> Error {
     let at = top.text.find(import).unwrap_or(0);
     let searched = if composition.import_paths.is_empty() {
         "no --import-path was given".to_string()
@@ -355,14 +472,20 @@ fn not_found(top: &Arc<SourceFile>, import: &str, composition: &Composition) -> 
                 .join(", ")
         )
     };
-    Error::in_file(
-        top.clone(),
-        Diagnostic::error(format!(
-            "`#import {import}` does not resolve: no module defines it ({searched})"
-        ))
-        .with_label(at..at + import.len(), "imported here")
-        .with_note("a module is a .wgsl file under an --import-path folder with `#define_import_path NAME`"),
-    )
+    let mut diagnostic = Diagnostic::error(format!(
+        "`#import {import}` does not resolve: no module defines it ({searched})"
+    ))
+    .with_label(at..at + import.len(), "imported here")
+    .with_note(
+        "a module is a .wgsl file under an --import-path folder with `#define_import_path NAME`",
+    );
+    for path in skipped.iter().take(4) {
+        diagnostic = diagnostic.with_note(format!(
+            "`{}` was skipped: it is not UTF-8 text",
+            path.display()
+        ));
+    }
+    Error::in_file(top.clone(), diagnostic)
 }
 
 /// A composer error as a diagnostic in the file it is in.
@@ -498,6 +621,125 @@ mod tests {
         );
         assert!(ShaderDef::parse("X=1.5").is_err());
         assert!(ShaderDef::parse("=1").is_err());
+        assert_eq!(
+            ShaderDef::parse(""),
+            Err("``: the def has no name".to_string())
+        );
+        assert!(ShaderDef::parse("A B=1")
+            .unwrap_err()
+            .contains("identifier"));
+        assert!(ShaderDef::parse("1A").is_err());
+        assert!(ShaderDef::parse("é_2=1").is_ok());
+    }
+
+    /// A folder of modules with a module and a non-UTF-8 file nothing
+    /// imports, and a shader importing the module.
+    fn modules_folder() -> (tempfile::TempDir, SourceFile) {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("m.wgsl"),
+            "#define_import_path walk::m\nfn half(x: f32) -> f32 { return x * 0.5; }\n",
+        )
+        .unwrap();
+        std::fs::write(dir.path().join("junk.wgsl"), b"\xff\xfe\x00binary").unwrap();
+        let top = SourceFile::new(
+            "top.wgsl",
+            "#import walk::m::half\n@fragment fn fs() -> @location(0) vec4<f32> { return vec4<f32>(half(1.0)); }\n",
+        );
+        (dir, top)
+    }
+
+    fn composed(top: &SourceFile, dir: &Path) -> Result<Shader, Error> {
+        compose(
+            top.clone(),
+            &Composition {
+                import_paths: vec![dir.to_path_buf()],
+                ..Composition::default()
+            },
+        )
+    }
+
+    /// Links back to the folder (two, so that an unvisited walk doubles
+    /// at each level) are each walked once; a folder deeper than the
+    /// bound is an error naming it, not minutes of walking; a file that
+    /// is not UTF-8 and that nothing imports is skipped.
+    #[cfg(unix)]
+    #[test]
+    fn import_path_walk_is_bounded() {
+        let (dir, top) = modules_folder();
+        std::os::unix::fs::symlink(".", dir.path().join("a")).unwrap();
+        std::os::unix::fs::symlink(".", dir.path().join("b")).unwrap();
+        // Without the visited set, the walk doubles at each level until
+        // the bound on entries stops it with an error.
+        let shader = composed(&top, dir.path()).unwrap_or_else(|e| panic!("{}", e.render()));
+        assert!(!shader.module.functions.is_empty());
+
+        let mut deep = dir.path().to_path_buf();
+        for i in 0..=MAX_IMPORT_DEPTH {
+            deep = deep.join(format!("d{i}"));
+        }
+        std::fs::create_dir_all(&deep).unwrap();
+        let err = composed(&top, dir.path()).err().unwrap().render();
+        assert!(err.contains("is too large to search"), "{err}");
+        assert!(
+            err.contains(&format!("more than {MAX_IMPORT_DEPTH} folders down")),
+            "{err}"
+        );
+
+        // The skipped file is named where an import does not resolve.
+        std::fs::remove_dir_all(dir.path().join("d0")).unwrap();
+        let missing = SourceFile::new(
+            "top.wgsl",
+            "#import walk::gone::f\n@fragment fn fs() -> @location(0) vec4<f32> { return vec4<f32>(f(1.0)); }\n",
+        );
+        let err = composed(&missing, dir.path()).err().unwrap().render();
+        assert!(
+            err.contains("junk.wgsl` was skipped: it is not UTF-8"),
+            "{err}"
+        );
+    }
+
+    /// Two files defining one module: an error naming both, not the later
+    /// one silently (a backup or a vendored copy beside the real one).
+    #[test]
+    fn duplicate_import_path_is_an_error() {
+        let (dir, top) = modules_folder();
+        std::fs::write(
+            dir.path().join("m.old.wgsl"),
+            "#define_import_path walk::m\nfn half(x: f32) -> f32 { return x * 2.0; }\n",
+        )
+        .unwrap();
+        let err = composed(&top, dir.path()).err().unwrap().render();
+        assert!(err.contains("two modules define `walk::m`"), "{err}");
+        assert!(
+            err.contains("m.old.wgsl") && err.contains("m.wgsl`"),
+            "{err}"
+        );
+    }
+
+    /// `--def FOG=false` where a module tests `#ifdef FOG` is found, with
+    /// the file; `#if FOG == false` reads the value and is not.
+    #[test]
+    fn a_false_def_tested_for_presence_is_found() {
+        let (dir, _) = modules_folder();
+        std::fs::write(
+            dir.path().join("fog.wgsl"),
+            "#define_import_path walk::fog\n#ifdef FOG\nfn fog() {}\n#endif\n",
+        )
+        .unwrap();
+        let composition = Composition {
+            import_paths: vec![dir.path().to_path_buf()],
+            defs: vec![
+                ("FOG".into(), ShaderDef::Bool(false)),
+                ("RAIN".into(), ShaderDef::Bool(false)),
+            ],
+            ..Composition::default()
+        };
+        let top = SourceFile::new("top.wgsl", "#if RAIN == false\n#endif\n");
+        let found = false_defs_tested_for_presence(&top, &composition).unwrap();
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert_eq!(found[0].0, "FOG");
+        assert!(found[0].1.ends_with("fog.wgsl"));
     }
 
     #[test]

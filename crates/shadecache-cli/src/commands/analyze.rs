@@ -47,7 +47,9 @@ pub fn exec(args: Args, color: Color) -> Result<(), Error> {
         Some(path) => read_weights(path)?,
         None => Weights::default(),
     };
-    let shader = front::load_with(&args.shader, &args.compose.composition()?, None, None)?;
+    let composition = args.compose.composition()?;
+    let shader = front::load_with(&args.shader, &composition, None, None)?;
+    super::warn_false_defs(&args.shader, &composition);
     // Every fragment entry point in turn, unless `--entry` names one.
     let analyses = analysis::analyze_entries(
         &shader,

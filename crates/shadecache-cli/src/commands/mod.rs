@@ -94,17 +94,21 @@ pub fn write_report(
     images: impl FnOnce() -> Result<Vec<PathBuf>, String>,
     html: impl FnOnce() -> String,
 ) -> Result<(), Error> {
-    let io = |what: &str, err: String| {
+    let io = |path: &Path, err: String| {
         Error::plain(shadecache::diagnostic::Diagnostic::error(format!(
-            "cannot write {what}: {err}"
+            "cannot write `{}`: {err}",
+            path.display()
         )))
     };
-    std::fs::create_dir_all(out).map_err(|e| io("the report folder", e.to_string()))?;
-    images().map_err(|e| io("the pictures", e))?;
-    let json = serde_json::to_string_pretty(json).map_err(|e| io("report.json", e.to_string()))?;
+    std::fs::create_dir_all(out).map_err(|e| io(out, e.to_string()))?;
+    // The pictures' errors name their files.
+    images().map_err(|e| Error::plain(shadecache::diagnostic::Diagnostic::error(e)))?;
+    let json = serde_json::to_string_pretty(json)
+        .map_err(|e| io(&out.join("report.json"), e.to_string()))?;
     std::fs::write(out.join("report.json"), json + "\n")
-        .map_err(|e| io("report.json", e.to_string()))?;
-    std::fs::write(out.join("report.html"), html()).map_err(|e| io("report.html", e.to_string()))
+        .map_err(|e| io(&out.join("report.json"), e.to_string()))?;
+    std::fs::write(out.join("report.html"), html())
+        .map_err(|e| io(&out.join("report.html"), e.to_string()))
 }
 
 /// How to put a shader together from modules: naga_oil's `#import`s and
@@ -129,7 +133,9 @@ pub struct ComposeArgs {
 
     /// A shader def for `#ifdef` (naga_oil) or a feature for `@if` (WESL):
     /// NAME, or NAME=VALUE (true, false, an i32, or a u32 as `3u`; a WESL
-    /// number is `constants::NAME`); repeatable.
+    /// number is `constants::NAME`); repeatable. naga_oil's `#ifdef NAME`
+    /// tests only whether NAME is defined, so NAME=false takes its branch
+    /// (a warning says so): leave the def out to skip it.
     #[arg(long = "def", value_name = "NAME[=VALUE]", value_parser = ShaderDef::parse)]
     pub defs: Vec<(String, ShaderDef)>,
 
@@ -285,11 +291,30 @@ impl StageArgs {
     }
 
     pub fn load(&self, shader: &Path) -> Result<Shader, Error> {
-        front::load_with(
+        let composition = self.compose.composition()?;
+        let loaded = front::load_with(
             shader,
-            &self.compose.composition()?,
+            &composition,
             self.vertex.as_deref(),
             self.vertex_entry.as_deref(),
-        )
+        )?;
+        warn_false_defs(shader, &composition);
+        Ok(loaded)
+    }
+}
+
+/// Warns of each `--def NAME=false` that `#ifdef NAME` tests: naga_oil
+/// asks there only whether NAME is defined, so the def turns the branch
+/// on.
+pub fn warn_false_defs(shader: &Path, composition: &Composition) {
+    let Ok(top) = front::read_source(shader) else {
+        return;
+    };
+    let tested = shadecache::front::compose::false_defs_tested_for_presence(&top, composition)
+        .unwrap_or_default();
+    for (name, file) in tested {
+        eprintln!(
+            "warning: --def {name}=false defines {name}, and `#ifdef {name}` in `{file}` asks only whether it is defined: its branch is taken. Leave the def out to skip it (`#if {name} == true` reads the value)"
+        );
     }
 }
