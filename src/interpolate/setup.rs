@@ -45,6 +45,12 @@ pub(super) fn check(options: &Options) -> Result<(), Error> {
     if options.methods.iter().any(|m| m.extrapolates()) {
         check_morph(options)?;
     }
+    if !(1..=MAX_PURSUIT_SUBSTEPS).contains(&options.pursuit_substeps) {
+        return Err(fail(format!(
+            "--pursuit-substeps must be from 1 to {MAX_PURSUIT_SUBSTEPS}, not {}: each sub-step samples every pixel of every displayed frame on the CPU",
+            options.pursuit_substeps
+        )));
+    }
     if options.inpaint_passes == 0 || options.inpaint_delta == 0 {
         return Err(fail(format!(
             "--inpaint-passes and --inpaint-delta must be at least 1, not {} and {}",
@@ -53,6 +59,18 @@ pub(super) fn check(options: &Options) -> Result<(), Error> {
     }
     Ok(())
 }
+
+/// The display gammas `--gamma` takes: CRTs were about 2.2–2.5, sRGB is
+/// 2.2, and a panel's transfer lies between 1.8 and 2.6. The bounds are
+/// wider, but they keep a typo (1e30) from reading as a result.
+pub const MIN_GAMMA: f32 = 1.0;
+/// See [`MIN_GAMMA`].
+pub const MAX_GAMMA: f32 = 3.0;
+
+/// The most sub-steps of the pursuit's integration of one displayed
+/// frame. The time is linear in it (×W×H×frames, on the CPU): 10 000 at
+/// 32² and 4 frames took 4 s; 10⁶ ran for minutes.
+pub const MAX_PURSUIT_SUBSTEPS: u32 = 1024;
 
 /// The morph's knobs (the grid against the frame's size is checked by
 /// [`check_grid`] once the size is known).
@@ -69,7 +87,12 @@ fn check_morph(options: &Options) -> Result<(), Error> {
                 options.blur_level
             )
         }),
-        positive("gamma", options.gamma),
+        (!(MIN_GAMMA..=MAX_GAMMA).contains(&options.gamma)).then(|| {
+            format!(
+                "--gamma is a display's, from {MIN_GAMMA} to {MAX_GAMMA} (sRGB is about 2.2), not {}",
+                options.gamma
+            )
+        }),
         positive("display-hz", options.display_hz),
         positive("pixels-per-degree", options.pixels_per_degree),
         (!ramp(options.tracking)).then(|| {
@@ -94,8 +117,6 @@ fn check_morph(options: &Options) -> Result<(), Error> {
                 options.snap_threshold
             )
         }),
-        (options.pursuit_substeps == 0)
-            .then(|| "--pursuit-substeps must be at least 1".to_string()),
     ];
     match problems.into_iter().flatten().next() {
         Some(problem) => Err(fail(problem)),
@@ -133,6 +154,15 @@ pub(super) fn check_grid(grid: u32, [width, height]: [u32; 2]) -> Result<(), Err
             "--grid {grid} does not divide the {width}×{height} frame: the morph's tiles must cover it exactly"
         )));
     }
+    // The argmax pyramid pads the frame by one tile on each axis
+    // (`morph::argmax_sizes`): its first level must fit a texture.
+    let largest = crate::scene::bounds::MAX_SIZE - grid;
+    if width > largest || height > largest {
+        return Err(fail(format!(
+            "the morph at --grid {grid} takes frames up to {largest} pixels a side, not {width}×{height}: its search pyramid pads the frame by one tile, and a texture is at most {} pixels a side",
+            crate::scene::bounds::MAX_SIZE
+        )));
+    }
     Ok(())
 }
 
@@ -155,6 +185,9 @@ impl RunPlan {
         let size = options.size.unwrap_or(scene.size);
         let frames = options.frames.unwrap_or(scene.frames);
         crate::measure::setup::check_counts(size, frames, 0)?;
+        if options.methods.iter().any(|m| m.extrapolates()) {
+            check_grid(options.grid, size)?;
+        }
         let intervals = frames.div_ceil(n);
         let last_frame = (WARMUP_INTERVALS + intervals + 1) * n;
         let bindings = crate::measure::setup::scene_bindings(

@@ -13,7 +13,6 @@ use crate::interpolate::frames::{Drawn, Frames, IntervalAt, THRESHOLD};
 use crate::interpolate::measured::Measured;
 use crate::interpolate::morph::{Morph, MorphParams, MorphSetup, Source};
 use crate::interpolate::report::KeptFrame;
-use crate::interpolate::setup::check_grid;
 use crate::interpolate::thin::FrameDepth;
 use crate::interpolate::Method;
 use crate::interpolate::Options;
@@ -191,7 +190,8 @@ pub(in crate::interpolate) fn passes(
     if !options.methods.iter().any(|m| m.extrapolates()) {
         return Ok(None);
     }
-    check_grid(options.grid, size)?;
+    // The grid against the size was checked with the run's plan
+    // (`RunPlan::new`), before the GPU.
     let setup = MorphSetup {
         size,
         grid: options.grid,

@@ -181,8 +181,8 @@ pub struct Args {
     pub pixels_per_degree: f32,
 
     /// The eye-tracking damping's ramp, deg/s: full tracking below the
-    /// first, none above the second.
-    #[arg(long, value_name = "FROM,TO", value_delimiter = ',', num_args = 2, default_values_t = [70.0, 90.0])]
+    /// first, none above the second (`--tracking 70,90`).
+    #[arg(long, value_name = "FROM,TO", value_delimiter = ',', num_args = 1, default_values_t = [70.0, 90.0])]
     pub tracking: Vec<f32>,
 
     /// Selective blur: the morph blurs and compensates only where the
@@ -192,8 +192,8 @@ pub struct Args {
     pub selective_blur: Option<f32>,
 
     /// The grid distortion mapped to full blur: a smooth step between the
-    /// two.
-    #[arg(long, value_name = "FROM,TO", value_delimiter = ',', num_args = 2, default_values_t = [0.25, 1.0])]
+    /// two (`--distortion-blur 0.25,1`).
+    #[arg(long, value_name = "FROM,TO", value_delimiter = ',', num_args = 1, default_values_t = [0.25, 1.0])]
     pub distortion_blur: Vec<f32>,
 
     /// Sub-steps per displayed frame of the pursuit integral.
@@ -395,9 +395,13 @@ fn interpolate_into(
 
 /// Two values clap has already counted (NaN, which the run refuses, for
 /// a missing one).
+/// Two values given as FROM,TO; anything but two is [NaN, NaN], which
+/// the run's checks refuse, naming the flag.
 fn pair(values: &[f32]) -> [f32; 2] {
-    let at = |i: usize| values.get(i).copied().unwrap_or(f32::NAN);
-    [at(0), at(1)]
+    match values {
+        &[from, to] => [from, to],
+        _ => [f32::NAN; 2],
+    }
 }
 
 /// A cosine: a number from −1 to 1.

@@ -29,6 +29,15 @@ fn interpolate_bad_input_is_an_error() {
             "does not divide the 100×100 frame",
         ),
         (vec!["--method", "morph", "--gamma", "0"], "gamma"),
+        (vec!["--method", "morph", "--gamma", "1e30"], "--gamma is a display's"),
+        (
+            vec!["--pursuit-substeps", "1000000"],
+            "--pursuit-substeps must be from 1 to 1024",
+        ),
+        (
+            vec!["--method", "morph", "--tracking", "70,90", "--tracking", "1,2"],
+            "tracking",
+        ),
         (vec!["--method", "morph", "--tracking", "90,70"], "tracking"),
         (vec!["--method", "morph", "--blur-level", "0"], "blur-level"),
         (
@@ -125,4 +134,42 @@ fn default_interpolation_scene_moves() {
         assisted > hold + 0.005,
         "scene-assisted {assisted}, hold {hold}"
     );
+}
+
+/// The morph at the largest frame side: its search pyramid pads the frame
+/// by a tile, past the largest texture, so the size is an error naming
+/// the largest it takes, before the GPU is touched (it was a panic in
+/// wgpu's texture validation). The comma form of the ramps parses.
+#[test]
+fn morph_at_the_largest_size_is_an_error_or_runs() {
+    let out = tempfile::tempdir().unwrap();
+    let out_dir = out.path().join("report");
+    for method in ["morph", "morph-past", "morph-warp", "all"] {
+        let output = crate::util::shadecache([
+            "interpolate",
+            "corpus/noise_marble.wgsl",
+            "--scene",
+            "corpus/scenes/walking_floor.toml",
+            "--size",
+            "8192x8",
+            "--frames",
+            "4",
+            "--method",
+            method,
+            "--tracking",
+            "70,90",
+            "--distortion-blur",
+            "0.25,1",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        let err = crate::util::stderr(&output);
+        assert_eq!(output.status.code(), Some(1), "{method}: {err}");
+        assert!(
+            err.contains("the morph at --grid 8 takes frames up to 8184 pixels a side, not 8192×8"),
+            "{method}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{method}: {err}");
+        assert!(!out_dir.exists());
+    }
 }
