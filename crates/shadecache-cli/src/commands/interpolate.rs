@@ -296,6 +296,12 @@ fn interpolate_into(
         partition: args.partition,
         ..Options::default()
     };
+    if !options.methods.contains(&interpolate::Method::Payload) && args.node.is_some() {
+        super::rewrite::note_unused(
+            &["--node"],
+            "it names the node `payload` interpolates, and --method does not ask for payload",
+        );
+    }
     let mut bar = Bar {
         bar: None,
         quiet: args.quiet,

@@ -55,7 +55,7 @@ pub struct Args {
     /// bilinear-packed, nearest-packed (the packed ones keep the depth in
     /// the payload's fourth channel) [default: bilinear; with --sweep all
     /// four].
-    #[arg(long, value_name = "R,...", value_enum, value_delimiter = ',')]
+    #[arg(long, value_name = "R,...", value_delimiter = ',', value_parser = CacheReadArg::parse)]
     pub reconstruction: Option<Vec<CacheReadArg>>,
 
     /// How lowres rebuilds the payload from its samples, separated by
@@ -318,6 +318,7 @@ fn profile_into(
 /// The profile's options from the command line (a sweep's grid under
 /// what was given).
 fn options(args: &Args, stages: &super::StageArgs) -> Result<Options, Error> {
+    note_unused_flags(args);
     let defaults = if args.sweep {
         Options::default().sweep()
     } else {
@@ -371,6 +372,38 @@ fn options(args: &Args, stages: &super::StageArgs) -> Result<Options, Error> {
         command: std::env::args().collect::<Vec<_>>().join(" "),
         ..defaults
     })
+}
+
+/// A note for the knobs given that no variant asked for reads: lowres's
+/// without lowres, the cache variants' with lowres alone (its Δn is s²,
+/// its k is s, it reads no cache back and tests no depth with ε).
+fn note_unused_flags(args: &Args) {
+    let variants = VariantArg::variants(&args.variant);
+    if !variants.iter().any(|v| v.upsamples()) {
+        let mut given = args.upsampling.given();
+        if args.lowres_reconstruction.is_some() {
+            given.push("--lowres-reconstruction");
+        }
+        super::rewrite::note_unused(
+            &given,
+            "lowres's knobs, and --variant does not ask for lowres",
+        );
+    }
+    if variants.iter().all(|v| v.upsamples()) {
+        let given: Vec<&str> = [
+            ("--refresh-period", args.refresh_period.is_some()),
+            ("--refresh-quad", args.refresh_quad.is_some()),
+            ("--reconstruction", args.reconstruction.is_some()),
+            ("--depth-epsilon", args.depth_epsilon.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(flag, given)| given.then_some(flag))
+        .collect();
+        super::rewrite::note_unused(
+            &given,
+            "the cache variants' knobs, and lowres alone is asked for (its Δn is s², its k is s)",
+        );
+    }
 }
 
 /// What the terminal says of a profile: the reference, its check, the

@@ -123,19 +123,21 @@ pub enum VariantArg {
 /// The lowres variant's knobs (Herzog et al. 2010); the paper's values by default.
 #[derive(Clone, Debug, clap::Args)]
 pub struct UpsamplingArgs {
-    /// s: lowres shades one pixel of each S×S window per frame (2 or 4).
-    #[arg(long, value_name = "S", default_value_t = rewrite::DEFAULT_UPSAMPLING.factor)]
-    pub upsample_factor: u32,
-    /// σn of lowres's normal weight (eq. 2 of Herzog et al. 2010).
-    #[arg(long, value_name = "SIGMA", default_value_t = rewrite::DEFAULT_UPSAMPLING.sigma_normal)]
-    pub sigma_normal: f32,
-    /// σz of lowres's depth weight, relative to the depth.
-    #[arg(long, value_name = "SIGMA", default_value_t = rewrite::DEFAULT_UPSAMPLING.sigma_depth)]
-    pub sigma_depth: f32,
+    /// s: lowres shades one pixel of each S×S window per frame (2 or 4)
+    /// [default: 4].
+    #[arg(long, value_name = "S")]
+    pub upsample_factor: Option<u32>,
+    /// σn of lowres's normal weight (eq. 2 of Herzog et al. 2010)
+    /// [default: 0.2].
+    #[arg(long, value_name = "SIGMA")]
+    pub sigma_normal: Option<f32>,
+    /// σz of lowres's depth weight, relative to the depth [default: 0.03].
+    #[arg(long, value_name = "SIGMA")]
+    pub sigma_depth: Option<f32>,
     /// a: how much lowres's history weighs where the scene is unchanged
-    /// (eq. 8), in (0, 1].
-    #[arg(long, value_name = "A", default_value_t = rewrite::DEFAULT_UPSAMPLING.sensitivity)]
-    pub sensitivity: f32,
+    /// (eq. 8), in (0, 1] [default: 1].
+    #[arg(long, value_name = "A")]
+    pub sensitivity: Option<f32>,
     /// Adaptive refresh for lowres: shade at full resolution, in a third
     /// pass, the pixels its upsampling cannot vouch for (disoccluded or
     /// changed, undersampled, not sampled this frame).
@@ -146,18 +148,46 @@ pub struct UpsamplingArgs {
 impl UpsamplingArgs {
     /// The knobs, checked: a clear error for a value lowres does not take.
     pub fn upsampling(&self) -> Result<rewrite::Upsampling, Error> {
+        let default = rewrite::DEFAULT_UPSAMPLING;
         let upsampling = rewrite::Upsampling {
-            factor: self.upsample_factor,
-            sigma_normal: self.sigma_normal,
-            sigma_depth: self.sigma_depth,
-            sensitivity: self.sensitivity,
+            factor: self.upsample_factor.unwrap_or(default.factor),
+            sigma_normal: self.sigma_normal.unwrap_or(default.sigma_normal),
+            sigma_depth: self.sigma_depth.unwrap_or(default.sigma_depth),
+            sensitivity: self.sensitivity.unwrap_or(default.sensitivity),
             reshade: self.reshade_unreliable,
-            ..rewrite::DEFAULT_UPSAMPLING
+            ..default
         };
         upsampling
             .check()
             .map_err(|err| Error::plain(Diagnostic::error(err)))?;
         Ok(upsampling)
+    }
+
+    /// The lowres flags given on the command line.
+    pub fn given(&self) -> Vec<&'static str> {
+        [
+            ("--upsample-factor", self.upsample_factor.is_some()),
+            ("--sigma-normal", self.sigma_normal.is_some()),
+            ("--sigma-depth", self.sigma_depth.is_some()),
+            ("--sensitivity", self.sensitivity.is_some()),
+            ("--reshade-unreliable", self.reshade_unreliable),
+        ]
+        .into_iter()
+        .filter_map(|(flag, given)| given.then_some(flag))
+        .collect()
+    }
+}
+
+/// The variants `--variant` names.
+fn variants_asked(args: &Args) -> Vec<Variant> {
+    VariantArg::variants(&args.variant)
+}
+
+/// One note for the flags given that do nothing for what was asked
+/// (`why`), so that a knob is never silently ignored.
+pub fn note_unused(flags: &[&str], why: &str) {
+    if !flags.is_empty() {
+        eprintln!("note: ignored {}: {why}", flags.join(", "));
     }
 }
 
@@ -252,6 +282,24 @@ impl From<CacheReadArg> for CacheRead {
             CacheReadArg::BilinearPacked => CacheRead::BilinearPacked,
             CacheReadArg::NearestPacked => CacheRead::NearestPacked,
         }
+    }
+}
+
+impl CacheReadArg {
+    /// Parses one of `profile --reconstruction`'s values; one of lowres's
+    /// upsamplers is an error pointing at `--lowres-reconstruction`.
+    pub fn parse(text: &str) -> Result<CacheReadArg, String> {
+        use clap::ValueEnum;
+        CacheReadArg::from_str(text, false).map_err(|_| {
+            match UpsamplerArg::from_str(text, false) {
+                Ok(_) => format!(
+                    "`{text}` is how lowres rebuilds its samples: --lowres-reconstruction {text}; --reconstruction is the cache variants' read-back (bilinear, nearest, bilinear-packed, nearest-packed)"
+                ),
+                Err(_) => format!(
+                    "`{text}` is not a read-back: bilinear, nearest, bilinear-packed or nearest-packed"
+                ),
+            }
+        })
     }
 }
 
@@ -421,6 +469,12 @@ fn rewrite_entry(
         }
         Ok(options)
     };
+    if !variants_asked(args).iter().any(|v| v.upsamples()) {
+        note_unused(
+            &args.upsampling.given(),
+            "lowres's knobs, and --variant does not ask for lowres",
+        );
+    }
     let language = match args.emit {
         EmitArg::Wgsl => Language::Wgsl,
         EmitArg::Spv => Language::Spv,

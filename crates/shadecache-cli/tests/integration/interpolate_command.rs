@@ -29,13 +29,23 @@ fn interpolate_bad_input_is_an_error() {
             "does not divide the 100×100 frame",
         ),
         (vec!["--method", "morph", "--gamma", "0"], "gamma"),
-        (vec!["--method", "morph", "--gamma", "1e30"], "--gamma is a display's"),
+        (
+            vec!["--method", "morph", "--gamma", "1e30"],
+            "--gamma is a display's",
+        ),
         (
             vec!["--pursuit-substeps", "1000000"],
             "--pursuit-substeps must be from 1 to 1024",
         ),
         (
-            vec!["--method", "morph", "--tracking", "70,90", "--tracking", "1,2"],
+            vec![
+                "--method",
+                "morph",
+                "--tracking",
+                "70,90",
+                "--tracking",
+                "1,2",
+            ],
             "tracking",
         ),
         (vec!["--method", "morph", "--tracking", "90,70"], "tracking"),

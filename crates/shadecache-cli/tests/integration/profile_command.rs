@@ -355,3 +355,62 @@ fn fs_waves(in: VertexOut) -> @location(0) vec4<f32> {
     assert!(output.status.success(), "{}", stderr(&output));
     assert!(variants.join("fs_lit").is_dir() && variants.join("fs_waves").is_dir());
 }
+
+/// A knob is never silently ignored: lowres's given without lowres get a
+/// note, and a read-back value that is lowres's names the flag that takes
+/// it; a value the flag never takes is a usage error, not a run that
+/// refuses its only configuration.
+#[test]
+fn flags_that_do_nothing_are_noted() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("v");
+    let output = shadecache([
+        "rewrite",
+        "corpus/noise_marble.wgsl",
+        "--node",
+        "n5c3eb6af",
+        "--variant",
+        "two-pass",
+        "--sigma-normal",
+        "0.5",
+        "--reshade-unreliable",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains(
+            "note: ignored --sigma-normal, --reshade-unreliable: lowres's knobs, and --variant does not ask for lowres"
+        ),
+        "{}",
+        stderr(&output)
+    );
+    let output = shadecache([
+        "profile",
+        "corpus/noise_marble.wgsl",
+        "--variant",
+        "lowres",
+        "--reconstruction",
+        "spatial",
+    ]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(
+        stderr(&output).contains("--lowres-reconstruction spatial"),
+        "{}",
+        stderr(&output)
+    );
+    let output = shadecache([
+        "profile",
+        "corpus/noise_marble.wgsl",
+        "--variant",
+        "lowres",
+        "--lowres-reconstruction",
+        "bilinear-packed",
+    ]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(
+        stderr(&output).contains("invalid value 'bilinear-packed'"),
+        "{}",
+        stderr(&output)
+    );
+}
