@@ -22,8 +22,6 @@
 use super::frames::{Frames, IntervalAt};
 use super::measured::Measured;
 use crate::diagnostic::Error;
-use crate::measure::clock::read_linear;
-use crate::measure::fail;
 
 /// The pursuit image of `frames` (RGBA linear frames of `size`, the
 /// group's displayed frames in order) along `motion` (per pixel, over the
@@ -124,7 +122,6 @@ pub(super) fn interval_errors(
     let Some(first) = measured.previous_end.as_ref() else {
         return Ok(());
     };
-    let rendered = read_linear(frames.gpu, at.textures.0.color).map_err(fail)?;
     let motion = tracked_motion(
         at.flow_next_0(frames.gpu)?,
         frames.speed_scale(),
@@ -146,12 +143,17 @@ pub(super) fn interval_errors(
     let seen = seen_of(&reference);
     let mut errors = Vec::new();
     for (method, group) in &groups {
+        // A method that shows the rendered I-frame shows, at k = 0, the
+        // frame of that time: the reference's. Not the I-frame's colour
+        // target, which lacks the objects drawn at every displayed frame
+        // (`every_frame`): with it, a method whose frames all equal the
+        // reference scored the blades' contribution as its error.
         let shown: Option<Vec<&[f32]>> = group
             .iter()
             .enumerate()
             .map(|(k, frame)| match (k, frame) {
                 (_, Some(frame)) => Some(frame.as_slice()),
-                (0, None) => Some(rendered.as_slice()),
+                (0, None) => Some(first.as_slice()),
                 _ => None,
             })
             .collect();
