@@ -56,6 +56,36 @@ pub fn rgba8(frame: &[f32]) -> Vec<u8> {
         .collect()
 }
 
+/// A linear value encoded with sRGB's transfer function (IEC 61966-2-1):
+/// what an `*-srgb` target stores and a display decodes back to light.
+pub fn srgb_encode(linear: f32) -> f32 {
+    if linear <= 0.003_130_8 {
+        linear * 12.92
+    } else {
+        1.055 * linear.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// A linear frame as a display shows it, 8 bits a channel: clamped to
+/// [0, 1], encoded with sRGB's transfer function, quantised. SSIM is
+/// taken of this picture: it assumes a perceptually encoded signal, and a
+/// linear frame quantised to 8 bits crushes the darks, where the eye
+/// tells most apart, into a few codes (0.004 and 0.012 are codes 1 and 3
+/// in linear, 13 and 29 in sRGB).
+pub fn srgb8(frame: &[f32]) -> Vec<u8> {
+    frame
+        .chunks(4)
+        .flat_map(|texel| {
+            texel.iter().enumerate().map(|(c, &v)| {
+                let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+                // Alpha has no transfer function.
+                let v = if c == 3 { v } else { srgb_encode(v) };
+                (v * 255.0).round() as u8
+            })
+        })
+        .collect()
+}
+
 /// The difference of two channel values, as a number: a NaN on either
 /// side is the largest difference there is (a cache must never show one
 /// the reference does not).
@@ -156,7 +186,7 @@ fn compare_where(
     FrameError {
         psnr: psnr_of(squared_covered, count * 3),
         psnr_frame: psnr_of(squared, pixels * 3),
-        ssim: ssim(&rgba8(reference), &rgba8(frame), width, height),
+        ssim: ssim(&srgb8(reference), &srgb8(frame), width, height),
         max_abs_error: max,
         above_threshold: if count == 0 {
             0.0
@@ -431,6 +461,33 @@ mod tests {
     /// `n` RGBA pixels of one value.
     fn uniform(n: usize, value: f32) -> Vec<f32> {
         vec![value; n * 4]
+    }
+
+    /// SSIM is of the frame a display shows, sRGB-encoded. A dark
+    /// gradient 5% too bright is a smooth, barely visible change, and
+    /// scores near 1; of the linear frame quantised to 8 bits, where the
+    /// gradient spans codes 1 to 7, the rounding turns the same change
+    /// into structure, and it scored as a visible loss.
+    #[test]
+    fn ssim_is_of_the_srgb_encoded_frame() {
+        let (width, height) = (32u32, 32u32);
+        let gradient = |scale: f32| -> Vec<f32> {
+            (0..height)
+                .flat_map(|y| (0..width).map(move |x| (x, y)))
+                .flat_map(|(x, y)| {
+                    let v = (0.002 + 0.0005 * x as f32 + 0.0003 * y as f32) * scale;
+                    [v, v, v, 1.0]
+                })
+                .collect()
+        };
+        let (reference, brighter) = (gradient(1.0), gradient(1.05));
+        let error = compare_frames(&reference, &brighter, width, height, 0.01);
+        let encoded = ssim(&srgb8(&reference), &srgb8(&brighter), width, height);
+        let linear = ssim(&rgba8(&reference), &rgba8(&brighter), width, height);
+        assert_eq!(error.ssim, encoded);
+        assert!(encoded > 0.97, "sRGB SSIM {encoded}");
+        assert!(linear < 0.92, "linear 8-bit SSIM {linear}");
+        assert_eq!(srgb8(&[0.004, 0.012, 1.0, 0.5]), vec![13, 29, 255, 128]);
     }
 
     #[test]
