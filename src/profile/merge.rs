@@ -361,6 +361,31 @@ pub fn read(path: &Path) -> Result<ShardReport, String> {
             report.format
         ));
     }
+    // The rows' figures are what the merged answer ranks: a hand-edited
+    // or corrupted one must not win it.
+    for (i, row) in report.results.iter().enumerate() {
+        let sane = |v: f64| v.is_finite() && v > 0.0 && v < 1e6;
+        if !(sane(row.speedup) && sane(row.time_ms) && row.psnr.is_finite()) {
+            return Err(format!(
+                "{}: row {} ({} {}) has speed-up {}, time {} ms and PSNR {}, which no run measures",
+                file.display(),
+                i + 1,
+                row.node,
+                row.variant,
+                row.speedup,
+                row.time_ms,
+                row.psnr
+            ));
+        }
+        if !report.nodes.iter().any(|n| n.id == row.node) {
+            return Err(format!(
+                "{}: row {} names node {}, which the report does not list",
+                file.display(),
+                i + 1,
+                row.node
+            ));
+        }
+    }
     if let Some(shard) = report.shard {
         if shard.index == 0 || shard.index > shard.count {
             return Err(format!(

@@ -92,7 +92,12 @@ fn pursuit_error_is_zero_for_the_reference_with_every_frame_objects() {
     };
     for &m in &methods {
         let measured = method(&report, m);
-        assert!(measured.psnr_mean > 60.0, "{}: {} dB", m.name(), measured.psnr_mean);
+        assert!(
+            measured.psnr_mean > 60.0,
+            "{}: {} dB",
+            m.name(),
+            measured.psnr_mean
+        );
         let pursuit = measured.pursuit_error.expect("a pursuit error");
         assert!(pursuit < 1e-4, "{}: pursuit error {pursuit}", m.name());
     }

@@ -153,7 +153,7 @@ fn merged_shards_equal_the_unsharded_sweep() {
 /// A report of shard `index`/`count` holding one two-pass row per period
 /// in `periods`.
 fn shard_of(index: u32, count: u32, periods: &[u32]) -> Report {
-    use crate::report::fixtures::{report, row};
+    use crate::report::fixtures::{node, report, row};
     let mut report = report(
         periods
             .iter()
@@ -166,6 +166,7 @@ fn shard_of(index: u32, count: u32, periods: &[u32]) -> Report {
             })
             .collect(),
     );
+    report.nodes.push(node("n1", 0.5));
     report.shard = Some(Shard { index, count });
     report
 }
@@ -263,6 +264,15 @@ fn merge_refuses_an_incomplete_or_duplicated_sweep() {
     let err = merge::read(&huge).unwrap_err();
     assert!(err.contains("larger than the 512 MiB"), "{err}");
     assert!(merge::read(&write("fine.json", &shard_of(1, 2, &[4]))).is_ok());
+    // A row no run measures would win the merged answer.
+    let mut absurd = shard_of(1, 2, &[4]);
+    absurd.results[0].speedup = 1e300;
+    let err = merge::read(&write("absurd.json", &absurd)).unwrap_err();
+    assert!(err.contains("which no run measures"), "{err}");
+    let mut stranger = shard_of(1, 2, &[4]);
+    stranger.results[0].node = "nzzzz".into();
+    let err = merge::read(&write("stranger.json", &stranger)).unwrap_err();
+    assert!(err.contains("names node nzzzz"), "{err}");
 }
 
 /// Two lowres runs that differ only in σn are two configurations, each

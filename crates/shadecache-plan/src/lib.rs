@@ -392,9 +392,16 @@ fn spatio_temporal() -> Upsampler {
     Upsampler::SpatioTemporal
 }
 
+/// The narrowest width of lowres's weights (σn, σz) and the least
+/// sensitivity a: the shader divides by σ², and below this σ² is a
+/// subnormal or 0 in f32.
+pub const MIN_SIGMA: f32 = 1e-6;
+/// The widest weights: σ² stays within f32.
+pub const MAX_SIGMA: f32 = 1e6;
+
 impl Upsampling {
-    /// Checks the knobs: s is 2 or 4, σn and σz are positive and finite,
-    /// a lies in (0, 1].
+    /// Checks the knobs: s is 2 or 4, σn and σz lie in
+    /// [[`MIN_SIGMA`], [`MAX_SIGMA`]], a in [[`MIN_SIGMA`], 1].
     pub fn check(&self) -> Result<(), String> {
         if self.factor != 2 && self.factor != 4 {
             return Err(format!(
@@ -408,10 +415,15 @@ impl Upsampling {
                     "{name} = {value}: the weights' widths must be positive and finite"
                 ));
             }
+            if !(MIN_SIGMA..=MAX_SIGMA).contains(&value) {
+                return Err(format!(
+                    "{name} = {value:e}: the weights' widths lie from {MIN_SIGMA:e} to {MAX_SIGMA:e} (the shader divides by σ², which leaves f32's range outside them)"
+                ));
+            }
         }
-        if !(self.sensitivity > 0.0 && self.sensitivity <= 1.0) {
+        if !(self.sensitivity >= MIN_SIGMA && self.sensitivity <= 1.0) {
             return Err(format!(
-                "a = {}: the sensitivity must lie in (0, 1]",
+                "a = {}: the sensitivity must lie in [{MIN_SIGMA:e}, 1]",
                 self.sensitivity
             ));
         }

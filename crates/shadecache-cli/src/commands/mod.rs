@@ -208,6 +208,14 @@ impl ComposeArgs {
                 )
             })
             .collect();
+        // One value a def: the second would silently win.
+        for (i, (name, _)) in self.defs.iter().enumerate() {
+            if self.defs[..i].iter().any(|(n, _)| n == name) {
+                return Err(Error::plain(Diagnostic::error(format!(
+                    "--def {name} is given twice: give each def once"
+                ))));
+            }
+        }
         Ok(Composition {
             import_paths: self.import_paths.clone(),
             packages,
