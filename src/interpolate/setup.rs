@@ -75,10 +75,12 @@ pub const MAX_PURSUIT_SUBSTEPS: u32 = 1024;
 /// The morph's knobs (the grid against the frame's size is checked by
 /// [`check_grid`] once the size is known).
 fn check_morph(options: &Options) -> Result<(), Error> {
-    let ramp = |[a, b]: [f32; 2]| a.is_finite() && b.is_finite() && a < b;
-    let positive = |flag: &str, value: f32| {
-        (!(value > 0.0 && value.is_finite()))
-            .then(|| format!("--{flag} must be positive, not {value}"))
+    let ramp = |[a, b]: [f32; 2]| a.is_finite() && b.is_finite() && 0.0 <= a && a < b;
+    // A display's: from a 1 Hz slide show to 1000 Hz; from a projector
+    // across a hall (a pixel a degree) to a phone at arm's length (~100).
+    let within = |flag: &str, value: f32, (low, high): (f32, f32)| {
+        (!(low..=high).contains(&value))
+            .then(|| format!("--{flag} must lie from {low} to {high}, not {value}"))
     };
     let problems = [
         (options.blur_level == 0 || options.blur_level > 6).then(|| {
@@ -93,17 +95,17 @@ fn check_morph(options: &Options) -> Result<(), Error> {
                 options.gamma
             )
         }),
-        positive("display-hz", options.display_hz),
-        positive("pixels-per-degree", options.pixels_per_degree),
+        within("display-hz", options.display_hz, (1.0, 1000.0)),
+        within("pixels-per-degree", options.pixels_per_degree, (1.0, 1000.0)),
         (!ramp(options.tracking)).then(|| {
             format!(
-                "--tracking takes two speeds, the lower first, not {:?}",
+                "--tracking takes two speeds of 0 deg/s or more, the lower first, not {:?}",
                 options.tracking
             )
         }),
         (!ramp(options.distortion_blur)).then(|| {
             format!(
-                "--distortion-blur takes two distortions, the lower first, not {:?}",
+                "--distortion-blur takes two distortions of 0 or more, the lower first, not {:?}",
                 options.distortion_blur
             )
         }),

@@ -71,6 +71,11 @@ impl ThinObjects {
         notes.push(format!(
             "{count} object(s) drawn at every displayed frame (`every_frame`) and left out of the I-frames, depth-tested into each method's frames through the Z-buffer bridge (Yang et al. 2011 Fig. 4(d)): against the depth the frame was drawn with (image-based: the depth its search chose), or I-frame 0's for the methods that keep none (sample-and-hold, linear blending, half-velocity, the morphs); the bridge and the draw count in every displayed frame's time"
         ));
+        if count == every_frame.len() {
+            notes.push(
+                "every object is drawn at every displayed frame: the I-frames hold only the background, so there is nothing to interpolate and every method shows the reference's frames; mark the objects the methods should interpolate without `every_frame`".into(),
+            );
+        }
         Ok(Some(ThinObjects::new(bench.gpu, runner).map_err(fail)?))
     }
 

@@ -389,6 +389,16 @@ fn note_unused_flags(args: &Args) {
             "lowres's knobs, and --variant does not ask for lowres",
         );
     }
+    let refresh_off = args
+        .refresh_period
+        .as_ref()
+        .is_some_and(|periods| periods.iter().all(|&p| p == 0));
+    if args.adaptive_refresh && refresh_off && !variants.iter().any(|v| v.upsamples()) {
+        super::rewrite::note_unused(
+            &["--adaptive-refresh"],
+            "it refreshes changed values early, and --refresh-period 0 turns refresh off",
+        );
+    }
     if variants.iter().all(|v| v.upsamples()) {
         let given: Vec<&str> = [
             ("--refresh-period", args.refresh_period.is_some()),
