@@ -34,7 +34,8 @@ fn lowres_and_cache_reconstructions_do_not_mix() {
     }
 }
 
-/// s must be 2 or 4, σ positive: a clear error, nothing written.
+/// s must be 2 or 4, σ within what f32 squares, a in [1e-6, 1]: a clear
+/// error, nothing written.
 #[test]
 fn lowres_bad_knobs_are_errors() {
     let shader = root().join("corpus/noise_marble.wgsl");
@@ -42,7 +43,8 @@ fn lowres_bad_knobs_are_errors() {
         ("--upsample-factor", "3", "s is 2 or 4"),
         ("--sigma-normal", "0", "positive"),
         ("--sigma-depth=-1", "", "positive"),
-        ("--sensitivity", "1.5", "(0, 1]"),
+        ("--sensitivity", "1.5", "the sensitivity must lie in [1e-6, 1]"),
+        ("--sigma-normal", "1e-45", "the weights' widths lie from 1e-6 to 1e6"),
     ] {
         let out = tempfile::tempdir().unwrap();
         let mut args: Vec<&std::ffi::OsStr> = vec![
