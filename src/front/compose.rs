@@ -673,7 +673,10 @@ mod tests {
         // the bound on entries stops it with an error.
         let shader = composed(&top, dir.path());
         let render = shader.as_ref().err().map(Error::render);
-        assert!(shader.is_ok_and(|s| !s.module.functions.is_empty()), "{render:?}");
+        assert!(
+            shader.is_ok_and(|s| !s.module.functions.is_empty()),
+            "{render:?}"
+        );
 
         let mut deep = dir.path().to_path_buf();
         for i in 0..=MAX_IMPORT_DEPTH {

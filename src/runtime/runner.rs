@@ -396,6 +396,7 @@ impl Runner {
                 b: clear[2],
                 a: clear[3],
             }),
+            depth: None,
         };
         if let Some((group, None)) = &self.external {
             return Err(format!(

@@ -529,6 +529,7 @@ fn draw_cached_passes(
     let targets = Targets {
         color: &color,
         clear: None,
+        depth: None,
     };
     let result = cache.shader.record_engine_timed(
         &queue,

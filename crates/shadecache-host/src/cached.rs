@@ -666,7 +666,11 @@ impl CachedShader {
                 .begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some(&built.pass.name),
                     color_attachments: &attachments,
-                    depth_stencil_attachment: Some(self.depth_attachment(&built.pass, part)),
+                    depth_stencil_attachment: Some(self.depth_attachment(
+                        &built.pass,
+                        part,
+                        targets,
+                    )),
                     timestamp_writes: timer.timestamp_writes(&query),
                     ..wgpu::RenderPassDescriptor::default()
                 })
@@ -677,10 +681,53 @@ impl CachedShader {
             record(built, &binder, render)?;
             timer.end(encoder, query);
         }
+        // What the passes left in the application's depth is the depth
+        // the next frame reprojects against.
+        if let (Some(view), Part::Whole) = (targets.depth, part) {
+            encoder.copy_texture_to_texture(
+                view.texture().as_image_copy(),
+                self.targets.depth[self.current].as_image_copy(),
+                view.texture().size(),
+            );
+        }
         Ok(binder.used.into_inner())
     }
 
     fn check_targets(&self, targets: &Targets<'_>) -> Result<(), Error> {
+        if let Some(view) = targets.depth {
+            let texture = view.texture();
+            let size = (texture.width(), texture.height());
+            if texture.format() != self.depth_format {
+                return Err(Error::Mismatch(format!(
+                    "the application's depth is {:?}, and the cache's is {:?} (the frame's depth format{})",
+                    texture.format(),
+                    self.depth_format,
+                    if self.depth_format.has_stencil_aspect() { ", with the stencil the deferred variant needs" } else { "" }
+                )));
+            }
+            // Depth24Plus's bits are the driver's: WebGPU does not copy it.
+            use wgpu::TextureFormat as F;
+            if matches!(
+                self.depth_format,
+                F::Depth24Plus | F::Depth24PlusStencil8 | F::Stencil8
+            ) {
+                return Err(Error::Refused(format!(
+                    "the application's depth is {:?}, which cannot be copied into the cache for the next frame: share a depth32float, depth32float-stencil8 or depth16unorm depth",
+                    self.depth_format
+                )));
+            }
+            if size != self.size || texture.depth_or_array_layers() != 1 {
+                return Err(Error::Mismatch(format!(
+                    "the application's depth is {}×{}, the cache {}×{}",
+                    size.0, size.1, self.size.0, self.size.1
+                )));
+            }
+            if !texture.usage().contains(wgpu::TextureUsages::COPY_SRC) {
+                return Err(Error::Mismatch(
+                    "the application's depth lacks TextureUsages::COPY_SRC: the host copies it into the cache for the next frame's reprojection".into(),
+                ));
+            }
+        }
         for pass in &self.plan.passes {
             for target in pass
                 .color_targets
@@ -773,11 +820,35 @@ impl CachedShader {
 
     /// The depth attachment of `pass`: this frame's depth buffer, or for
     /// [`Part::More`] the last recorded frame's, loaded.
-    fn depth_attachment(
-        &self,
+    fn depth_attachment<'t>(
+        &'t self,
         pass: &Pass,
         part: Part,
-    ) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+        targets: &Targets<'t>,
+    ) -> wgpu::RenderPassDepthStencilAttachment<'t> {
+        // The application's depth, where it shares its frame: loaded,
+        // tested and written, never cleared (`Targets::depth`).
+        if let (Some(view), true) = (targets.depth, pass.resolution_divisor <= 1) {
+            return wgpu::RenderPassDepthStencilAttachment {
+                view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                // The stencil is the deferred variant's own (its draw
+                // ordinals and reuse marks): cleared where its plan clears.
+                stencil_ops: self
+                    .depth_format
+                    .has_stencil_aspect()
+                    .then_some(wgpu::Operations {
+                        load: match (part, pass.depth.load) {
+                            (Part::Whole, LoadOp::Clear) => wgpu::LoadOp::Clear(0),
+                            _ => wgpu::LoadOp::Load,
+                        },
+                        store: wgpu::StoreOp::Store,
+                    }),
+            };
+        }
         let (load, slot) = match (part, pass.depth.load) {
             (Part::More, _) => (wgpu::LoadOp::Load, 1 - self.current),
             (Part::Whole, LoadOp::Clear) => (
@@ -1062,7 +1133,8 @@ pub fn render_target(
         format,
         usage: wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     })
 }

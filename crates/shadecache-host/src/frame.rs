@@ -74,6 +74,19 @@ pub struct Targets<'a> {
     /// The clear colour of the original pass; `None` keeps what the
     /// targets hold (the original pass loads).
     pub clear: Option<wgpu::Color>,
+    /// The application's depth target, for cached draws that share a
+    /// frame with the application's other draws: the variant's passes at
+    /// full resolution load it (never clear it), test against it with the
+    /// plan's comparisons and write into it, so that what the application
+    /// drew before hides the cached draws and what it draws after is
+    /// hidden by them. What the passes leave in it is copied into the
+    /// cache's own depth, which the next frame reprojects against (so a
+    /// point that another draw hid last frame misses, as it should). Its
+    /// format is the frame's depth format, its size the cache's, and its
+    /// texture has `COPY_SRC`; a stencil in it is the deferred variant's,
+    /// cleared by its first pass. `None`: the cache's own depth, cleared
+    /// each frame, which only the cached draws see.
+    pub depth: Option<&'a wgpu::TextureView>,
 }
 
 /// Refuses what a cache cannot do correctly, and checks that the frame

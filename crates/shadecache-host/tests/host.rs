@@ -362,6 +362,7 @@ impl App {
         let targets = Targets {
             color: &color,
             clear: Some(wgpu::Color::BLACK),
+            depth: None,
         };
         let (groups, vertices, indices) = (&self.groups, &self.vertices, &self.indices);
         self.cached.record_engine_timed(
@@ -385,6 +386,18 @@ impl App {
 
     /// [`App::frame`], drawing as `drawn` says; the error `record` gives.
     fn record(&mut self, gpu: &Gpu, x: f32, drawn: Drawn) -> Result<(), Error> {
+        self.record_with(gpu, x, drawn, None)
+    }
+
+    /// [`App::record`] into a frame that shares the application's depth
+    /// `depth` (and keeps what the colour target holds) when given.
+    fn record_with(
+        &mut self,
+        gpu: &Gpu,
+        x: f32,
+        drawn: Drawn,
+        depth: Option<&wgpu::TextureView>,
+    ) -> Result<(), Error> {
         gpu.queue.write_buffer(&self.object, 0, &bytes(&matrix(x)));
         let views: Vec<wgpu::TextureView> = self
             .targets
@@ -397,7 +410,8 @@ impl App {
         let color: Vec<Option<&wgpu::TextureView>> = views.iter().map(Some).collect();
         let targets = Targets {
             color: &color,
-            clear: Some(wgpu::Color::BLACK),
+            clear: depth.is_none().then_some(wgpu::Color::BLACK),
+            depth,
         };
         let (groups, twins) = (&self.groups, &self.twins);
         let (vertices, indices) = (&self.vertices, &self.indices);
@@ -613,6 +627,7 @@ fn more_draws_into_a_cache_frame_are_refused() {
     let targets = shadecache_host::Targets {
         color: &color,
         clear: None,
+        depth: None,
     };
     let mut encoder = gpu
         .device
@@ -624,6 +639,152 @@ fn more_draws_into_a_cache_frame_are_refused() {
         |_| {},
     ) {
         Err(Error::Refused(text)) => assert!(text.contains("without a cache"), "{text}"),
+        other => panic!("{other:?}"),
+    }
+}
+
+/// The application's depth target, `depth32float` as the frame's, that
+/// the test clears to `depth` and the colour target to red, as the
+/// application's own draws before the cached ones would leave them.
+fn shared_depth(gpu: &Gpu, app: &App, depth: f32) -> wgpu::Texture {
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("application depth"),
+        size: wgpu::Extent3d {
+            width: SIZE,
+            height: SIZE,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Depth32Float,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+    let color = app.targets[0].create_view(&wgpu::TextureViewDescriptor::default());
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("the application's earlier draws"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: &color,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::RED),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &view,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(depth),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        ..wgpu::RenderPassDescriptor::default()
+    });
+    gpu.queue.submit([encoder.finish()]);
+    texture
+}
+
+/// Cached draws in a frame with the application's other draws share its
+/// depth (`Targets::depth`): where the application drew nearer, the
+/// cached square is hidden and the colour is the application's; where it
+/// drew nothing, the square is drawn, its depth written for what the
+/// application draws after, and the next frames reuse it as with the
+/// cache's own depth (the depth left in the shared target is copied into
+/// the cache for the next frame's reprojection: without the copy, every
+/// pixel would miss). A depth of another format or size is an error.
+#[test]
+fn cached_draws_share_the_applications_depth() {
+    let Some(gpu) = gpu() else { return };
+    let mut shared = App::new(&gpu, "three-pass");
+    let mut own = App::new(&gpu, "three-pass");
+    // Something nearer than the square covers the frame: the square is
+    // hidden, the frame stays the application's red.
+    let near = shared_depth(&gpu, &shared, 0.0);
+    let near_view = near.create_view(&wgpu::TextureViewDescriptor::default());
+    shared
+        .record_with(&gpu, 0.0, Drawn::ThroughHost, Some(&near_view))
+        .expect("the frame records");
+    let red = read(&gpu, &shared.targets[0], 4);
+    assert!(
+        red.chunks(4).all(|p| p == [255, 0, 0, 255]),
+        "the square drawn over a nearer surface"
+    );
+
+    // Nothing nearer: the frames are those of the cache's own depth, and
+    // so is the reuse.
+    shared.cached.reset();
+    for frame in 0..3 {
+        let far = shared_depth(&gpu, &shared, 1.0);
+        let far_view = far.create_view(&wgpu::TextureViewDescriptor::default());
+        shared
+            .record_with(&gpu, 0.0, Drawn::ThroughHost, Some(&far_view))
+            .expect("the frame records");
+        own.frame(&gpu, 0.0);
+        // Inside the square, the frame of the cache's own depth; outside,
+        // what the application drew (the own-depth frame cleared it).
+        let (ours, theirs) = (
+            read(&gpu, &shared.targets[0], 4),
+            read(&gpu, &own.targets[0], 4),
+        );
+        let square: Vec<usize> = inside(0.0, SIZE).collect();
+        let differ = square
+            .iter()
+            .filter(|&&i| ours[i * 4..i * 4 + 4] != theirs[i * 4..i * 4 + 4])
+            .count();
+        assert_eq!(
+            differ, 0,
+            "frame {frame}: {differ} pixels of the square differ"
+        );
+        assert_eq!(
+            &ours[..4],
+            [255, 0, 0, 255],
+            "frame {frame}: the corner is not the application's"
+        );
+        assert!(
+            shared.ages(&gpu) == own.ages(&gpu),
+            "frame {frame}: the ages differ from the cache's own depth's"
+        );
+        // The square's depth is left for the application's later draws.
+        let depth_of = |texture: &wgpu::Texture| -> Vec<f32> {
+            read(&gpu, texture, 4)
+                .chunks_exact(4)
+                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect()
+        };
+        let (left, drawn) = (depth_of(&far), depth_of(own.cached.depth()));
+        assert!(
+            square.iter().all(|&i| left[i] == drawn[i] && left[i] < 1.0),
+            "frame {frame}: the square's depth is not in the application's"
+        );
+        assert_eq!(left[0], 1.0, "frame {frame}");
+    }
+    assert!(share_at(&shared.ages(&gpu), inside(0.0, SIZE), 2.0) > REUSED);
+
+    // A depth the cache cannot take.
+    let small = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: None,
+        size: wgpu::Extent3d {
+            width: SIZE / 2,
+            height: SIZE / 2,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Depth32Float,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let small_view = small.create_view(&wgpu::TextureViewDescriptor::default());
+    match shared.record_with(&gpu, 0.0, Drawn::ThroughHost, Some(&small_view)) {
+        Err(Error::Mismatch(message)) => assert!(message.contains("32×32"), "{message}"),
         other => panic!("{other:?}"),
     }
 }

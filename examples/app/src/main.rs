@@ -369,6 +369,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         let frame_targets = Targets {
             color: &color,
             clear: Some(wgpu::Color::TRANSPARENT),
+            depth: None,
         };
         let draw = |draw: &mut shadecache_host::Draw<'_, '_>| {
             planet.draw_cached(draw, &twins);

@@ -227,6 +227,7 @@ impl State {
             let targets = Targets {
                 color: &color,
                 clear: Some(clear),
+                depth: None,
             };
             let (planet, twins) = (&self.planet, &self.twins);
             let draw = |draw: &mut shadecache_host::Draw<'_, '_>| {

@@ -43,8 +43,16 @@ fn lowres_bad_knobs_are_errors() {
         ("--upsample-factor", "3", "s is 2 or 4"),
         ("--sigma-normal", "0", "positive"),
         ("--sigma-depth=-1", "", "positive"),
-        ("--sensitivity", "1.5", "the sensitivity must lie in [1e-6, 1]"),
-        ("--sigma-normal", "1e-45", "the weights' widths lie from 1e-6 to 1e6"),
+        (
+            "--sensitivity",
+            "1.5",
+            "the sensitivity must lie in [1e-6, 1]",
+        ),
+        (
+            "--sigma-normal",
+            "1e-45",
+            "the weights' widths lie from 1e-6 to 1e6",
+        ),
     ] {
         let out = tempfile::tempdir().unwrap();
         let mut args: Vec<&std::ffi::OsStr> = vec![
