@@ -75,7 +75,9 @@
 //!
 //! // Each frame: write `globals` as before, then
 //! let mut encoder = device.create_command_encoder(&Default::default());
-//! let targets = Targets { color: &[Some(view)], clear: Some(wgpu::Color::BLACK) };
+//! // `depth: Some(&depth_view)` shares the application's depth with the
+//! // cached draws, when the frame has other draws (see `Targets::depth`).
+//! let targets = Targets { color: &[Some(view)], clear: Some(wgpu::Color::BLACK), depth: None };
 //! cached.record(queue, &mut encoder, &targets, |draw| {
 //!     draw.set_bind_group(0, globals_group, &[]);
 //!     draw.set_vertex_buffer(0, vertices.slice(..));
