@@ -40,12 +40,20 @@
 //!   view then leaves the meshes to Bevy's own material, and says why
 //!   once. Skinned and morphed meshes are left to Bevy the same way.
 //!
+//! - **One depth with Bevy.** The variant's passes run between Bevy's
+//!   opaque and transparent passes in the view's own depth: they test
+//!   against what the opaque pass left and write into it, so Bevy's opaque
+//!   meshes hide and are hidden by the cached ones, and the transparent
+//!   pass blends over them in depth order. The host copies that depth into
+//!   the cache for the next frame's reprojection (a point another mesh hid
+//!   last frame misses), so a caching camera's depth texture is made a copy
+//!   source.
+//!
 //! What it does not do (yet): more than one cached variant per app; meshes
 //! of several vertex layouts in one view; skinned, morphed or lightmapped
 //! meshes (their mesh bind group has another layout; lightmaps are not
-//! checked); occlusion by meshes Bevy draws itself: the variant's passes
-//! have their own depth buffer, so the cached meshes are drawn over the
-//! opaque pass's meshes.
+//! checked); a depth prepass that already holds the cached meshes' depth
+//! (their depth test would then need `equal`).
 
 mod phase;
 mod view_cache;
@@ -180,7 +188,7 @@ impl Plugin for ShadecachePlugin {
             ExtractComponentPlugin::<ReprojectionCache>::default(),
             phase::CachedPhasePlugin,
         ))
-        .add_systems(First, clear_cuts);
+        .add_systems(First, (clear_cuts, copyable_depth));
         let stats = CacheStats::default();
         app.insert_resource(stats.clone());
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
@@ -188,6 +196,20 @@ impl Plugin for ShadecachePlugin {
         };
         render_app.insert_resource(self.variant.clone());
         view_cache::build(render_app, stats);
+    }
+}
+
+/// The cached draws share the view's depth (so Bevy's other meshes hide
+/// and are hidden by them), and the host copies what they leave in it into
+/// the cache for the next frame's reprojection: the depth texture of a
+/// caching camera is a copy source.
+fn copyable_depth(mut cameras: Query<&mut Camera3d, With<ReprojectionCache>>) {
+    use bevy::render::render_resource::TextureUsages;
+    for mut camera in &mut cameras {
+        let usages = TextureUsages::from(camera.depth_texture_usages);
+        if !usages.contains(TextureUsages::COPY_SRC) {
+            camera.depth_texture_usages = (usages | TextureUsages::COPY_SRC).into();
+        }
     }
 }
 

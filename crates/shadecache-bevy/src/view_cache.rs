@@ -4,7 +4,7 @@
 
 use std::sync::{Arc, Mutex};
 
-use bevy::core_pipeline::core_3d::main_opaque_pass_3d;
+use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d};
 use bevy::core_pipeline::{schedule::Core3d, Core3dSystems};
 use bevy::ecs::system::SystemParam;
 use bevy::log::error;
@@ -21,7 +21,8 @@ use bevy::render::render_phase::{TrackedRenderPass, ViewSortedRenderPhases};
 use bevy::render::render_resource::{BufferUsages, ShaderType};
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
 use bevy::render::view::{
-    ExtractedView, RetainedViewEntity, ViewTarget, ViewUniform, ViewUniformOffset, ViewUniforms,
+    ExtractedView, RetainedViewEntity, ViewDepthStencilTexture, ViewTarget, ViewUniform,
+    ViewUniformOffset, ViewUniforms,
 };
 use bevy::render::{Render, RenderSystems};
 use shadecache_host::plan::ResourceKind;
@@ -130,8 +131,12 @@ pub(crate) fn build(render_app: &mut SubApp, stats: CacheStats) {
         )
         .add_systems(
             Core3d,
+            // Between Bevy's opaque and transparent passes, in the view's
+            // depth: the cached meshes hide and are hidden by the opaque
+            // ones, and the transparent ones blend over them.
             draw_cached_passes
                 .after(main_opaque_pass_3d)
+                .before(main_transparent_pass_3d)
                 .in_set(Core3dSystems::MainPass),
         );
 }
@@ -467,6 +472,7 @@ fn draw_cached_passes(
     view: ViewQuery<(
         &ExtractedView,
         &ViewTarget,
+        &ViewDepthStencilTexture,
         &ViewUniformOffset,
         &ReprojectionCache,
     )>,
@@ -483,7 +489,7 @@ fn draw_cached_passes(
         view_uniforms,
     } = drawn;
     let view_entity = view.entity();
-    let (extracted, target, offset, settings) = view.into_inner();
+    let (extracted, target, depth, offset, settings) = view.into_inner();
     let id = extracted.retained_view_entity;
     if !caching.0.contains(&id) {
         return;
@@ -529,7 +535,9 @@ fn draw_cached_passes(
     let targets = Targets {
         color: &color,
         clear: None,
-        depth: None,
+        // The view's depth, which the opaque pass filled and the
+        // transparent pass tests against.
+        depth: Some(&depth.attachment.texture.default_view),
     };
     let result = cache.shader.record_engine_timed(
         &queue,

@@ -69,6 +69,7 @@ fn compare(args: Args) {
         cut_after: None,
         msaa: false,
         foreign_material: false,
+        other_meshes: false,
         switch_off_after: None,
         linear: args.linear,
     });

@@ -70,6 +70,7 @@ fn settings() -> Headless {
         cut_after: None,
         msaa: false,
         foreign_material: false,
+        other_meshes: false,
         switch_off_after: None,
         linear: false,
     }
@@ -90,6 +91,32 @@ fn bevy_plugin_at_refresh_period_one_equals_the_uncached_frame() {
     });
     assert!(compared.len() >= 24, "{} frames compared", compared.len());
     all_bevys_own(&compared);
+}
+
+/// The cached meshes share the view's depth with the meshes Bevy draws
+/// itself: at Δn = 1 a frame with an opaque floor the lava sphere sinks
+/// into, an opaque box before the torus and a translucent pane before the
+/// sphere is Bevy's own to the bit. With the variant's own depth the lava
+/// was drawn over the floor and the box, and under the pane's blend.
+#[test]
+fn bevy_plugin_shares_the_depth_of_bevys_own_meshes() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        refresh_period: Some(1),
+        other_meshes: true,
+        frames: 12,
+        ..settings()
+    });
+    assert!(run.frames_drawn > 0, "{:?}", run.errors);
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    assert!(
+        run.compared.len() >= 12,
+        "{} frames compared",
+        run.compared.len()
+    );
+    all_bevys_own(&run.compared);
 }
 
 /// Frames the cache runs after its cold start before its error is
