@@ -34,10 +34,8 @@ pub struct Headless {
     /// A box with Bevy's `StandardMaterial` marked for the cache too,
     /// which the variant was not made from.
     pub foreign_material: bool,
-    /// Meshes Bevy draws itself beside the cached ones, in both views: an
-    /// opaque floor the lava sphere sinks into, an opaque box before the
-    /// torus, and a translucent pane before the sphere.
-    pub other_meshes: bool,
+    /// Meshes Bevy draws itself beside the cached ones, in both views.
+    pub other_meshes: OtherMeshes,
     /// After this many compared frames, the caching camera switches its
     /// cache off (Bevy draws the meshes again), and `frames` more are
     /// compared.
@@ -48,6 +46,24 @@ pub struct Headless {
     /// peak 1, the whole frame (its `psnr_frame`). Otherwise the images are
     /// `rgba8unorm-srgb`, as a game displays them, compared as stored.
     pub linear: bool,
+}
+
+/// Meshes Bevy draws with its own `StandardMaterial` (unlit) beside the
+/// cached lava, for the tests of the depth they share.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum OtherMeshes {
+    /// The lava alone.
+    #[default]
+    None,
+    /// An opaque box between the camera and the lava sphere.
+    OpaqueInFront,
+    /// A translucent pane behind the lava sphere: the transparent pass,
+    /// after the cached one, must find the sphere's depth.
+    TranslucentBehind,
+    /// A translucent pane before the lava sphere, blended over it.
+    TranslucentInFront,
+    /// All three, and a floor the sphere sinks into.
+    All,
 }
 
 /// One compared frame: the cached image against Bevy's.
@@ -160,31 +176,12 @@ fn setup(
             CachedMaterial,
         ));
     }
-    if settings.other_meshes {
-        let unlit = |color: Color| StandardMaterial {
-            base_color: color,
-            unlit: true,
-            ..StandardMaterial::from(color)
-        };
-        commands.spawn((
-            Mesh3d(meshes.add(Plane3d::default().mesh().size(8.0, 8.0))),
-            MeshMaterial3d(standard.add(unlit(Color::srgb(0.3, 0.6, 0.3)))),
-            Transform::from_xyz(0.0, -0.4, 0.0),
-        ));
-        commands.spawn((
-            Mesh3d(meshes.add(Cuboid::new(0.5, 0.5, 0.5))),
-            MeshMaterial3d(standard.add(unlit(Color::srgb(0.2, 0.3, 0.9)))),
-            Transform::from_xyz(1.4, 0.2, 1.4),
-        ));
-        commands.spawn((
-            Mesh3d(meshes.add(Cuboid::new(1.4, 1.2, 0.05))),
-            MeshMaterial3d(standard.add(StandardMaterial {
-                alpha_mode: AlphaMode::Blend,
-                ..unlit(Color::srgba(0.9, 0.9, 1.0, 0.4))
-            })),
-            Transform::from_xyz(-1.2, 0.2, 1.3),
-        ));
-    }
+    spawn_other_meshes(
+        settings.other_meshes,
+        &mut commands,
+        &mut meshes,
+        &mut standard,
+    );
     for role in [Role::Cached, Role::Reference] {
         let target = target_image(&mut images, settings.size, settings.linear);
         let mut camera =
@@ -202,6 +199,54 @@ fn setup(
             });
         }
         spawn_readback(&mut commands, target, role);
+    }
+}
+
+/// Spawns the meshes `which` asks for, seen from the start of the
+/// camera's path (before the lava sphere at x = −1.2).
+fn spawn_other_meshes(
+    which: OtherMeshes,
+    commands: &mut Commands,
+    meshes: &mut Assets<Mesh>,
+    standard: &mut Assets<StandardMaterial>,
+) {
+    let unlit = |color: Color, alpha_mode: AlphaMode| StandardMaterial {
+        base_color: color,
+        unlit: true,
+        alpha_mode,
+        ..default()
+    };
+    let all = which == OtherMeshes::All;
+    let mut spawn = |mesh: Mesh, material: StandardMaterial, at: Vec3| {
+        commands.spawn((
+            Mesh3d(meshes.add(mesh)),
+            MeshMaterial3d(standard.add(material)),
+            Transform::from_translation(at),
+        ));
+    };
+    if all || which == OtherMeshes::OpaqueInFront {
+        spawn(
+            Cuboid::new(0.6, 0.6, 0.6).into(),
+            unlit(Color::srgb(0.2, 0.3, 0.9), AlphaMode::Opaque),
+            Vec3::new(-0.9, 0.3, 1.6),
+        );
+    }
+    let pane = |z: f32| (Cuboid::new(1.6, 1.4, 0.05).into(), Vec3::new(-1.2, 0.1, z));
+    let glass = unlit(Color::srgba(0.6, 0.8, 1.0, 0.4), AlphaMode::Blend);
+    if all || which == OtherMeshes::TranslucentBehind {
+        let (mesh, at) = pane(-1.0);
+        spawn(mesh, glass.clone(), at);
+    }
+    if all || which == OtherMeshes::TranslucentInFront {
+        let (mesh, at) = pane(1.1);
+        spawn(mesh, glass, at);
+    }
+    if all {
+        spawn(
+            Plane3d::default().mesh().size(8.0, 8.0).into(),
+            unlit(Color::srgb(0.3, 0.6, 0.3), AlphaMode::Opaque),
+            Vec3::new(0.0, -0.4, 0.0),
+        );
     }
 }
 

@@ -69,7 +69,7 @@ fn compare(args: Args) {
         cut_after: None,
         msaa: false,
         foreign_material: false,
-        other_meshes: false,
+        other_meshes: shadecache_bevy_example::OtherMeshes::None,
         switch_off_after: None,
         linear: args.linear,
     });

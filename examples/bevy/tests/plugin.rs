@@ -8,7 +8,7 @@
 use std::path::Path;
 use std::sync::Mutex;
 
-use shadecache_bevy_example::{run_headless, Compared, Headless, HeadlessRun};
+use shadecache_bevy_example::{run_headless, Compared, Headless, HeadlessRun, OtherMeshes};
 
 #[path = "../lava_build.rs"]
 mod lava_build;
@@ -70,7 +70,7 @@ fn settings() -> Headless {
         cut_after: None,
         msaa: false,
         foreign_material: false,
-        other_meshes: false,
+        other_meshes: OtherMeshes::None,
         switch_off_after: None,
         linear: false,
     }
@@ -93,30 +93,65 @@ fn bevy_plugin_at_refresh_period_one_equals_the_uncached_frame() {
     all_bevys_own(&compared);
 }
 
-/// The cached meshes share the view's depth with the meshes Bevy draws
-/// itself: at Δn = 1 a frame with an opaque floor the lava sphere sinks
-/// into, an opaque box before the torus and a translucent pane before the
-/// sphere is Bevy's own to the bit. With the variant's own depth the lava
-/// was drawn over the floor and the box, and under the pane's blend.
-#[test]
-fn bevy_plugin_shares_the_depth_of_bevys_own_meshes() {
-    if skipped() {
-        return;
-    }
+/// At Δn = 1, with `others` beside the lava, every frame is Bevy's own
+/// to the bit, drawn through the cache.
+fn bevys_own_frames_with(others: OtherMeshes) {
     let run = in_turn(Headless {
         refresh_period: Some(1),
-        other_meshes: true,
-        frames: 12,
+        other_meshes: others,
+        frames: 10,
         ..settings()
     });
     assert!(run.frames_drawn > 0, "{:?}", run.errors);
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     assert!(
-        run.compared.len() >= 12,
+        run.compared.len() >= 10,
         "{} frames compared",
         run.compared.len()
     );
     all_bevys_own(&run.compared);
+}
+
+/// An opaque box of Bevy's before the lava sphere hides it: the cached
+/// passes test against the depth Bevy's opaque pass left (with the
+/// variant's own depth the lava was drawn over the box).
+#[test]
+fn cached_mesh_is_occluded_by_bevys_meshes() {
+    if skipped() {
+        return;
+    }
+    bevys_own_frames_with(OtherMeshes::OpaqueInFront);
+}
+
+/// A translucent pane of Bevy's behind the lava sphere is hidden by it:
+/// the cached passes write the view's depth, which Bevy's transparent
+/// pass tests against (without, the pane blended over the sphere).
+#[test]
+fn cached_mesh_occludes_bevys_meshes() {
+    if skipped() {
+        return;
+    }
+    bevys_own_frames_with(OtherMeshes::TranslucentBehind);
+}
+
+/// A translucent pane before the lava sphere blends over it: the cached
+/// passes run before Bevy's transparent pass (after it, the lava was
+/// drawn over the pane).
+#[test]
+fn transparent_mesh_over_cached_mesh_blends_in_order() {
+    if skipped() {
+        return;
+    }
+    bevys_own_frames_with(OtherMeshes::TranslucentInFront);
+}
+
+/// All of them at once, with a floor the sphere sinks into.
+#[test]
+fn bevy_plugin_shares_the_depth_of_bevys_own_meshes() {
+    if skipped() {
+        return;
+    }
+    bevys_own_frames_with(OtherMeshes::All);
 }
 
 /// Frames the cache runs after its cold start before its error is
