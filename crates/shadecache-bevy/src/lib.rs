@@ -38,7 +38,11 @@
 //!   vertex attributes than the plan reads or of another material, what
 //!   the host refuses (MSAA: the cache holds one value per pixel). The
 //!   view then leaves the meshes to Bevy's own material, and says why
-//!   once. Skinned and morphed meshes are left to Bevy the same way.
+//!   once. A mesh the variant's passes cannot draw as Bevy does is left
+//!   to Bevy on its own, with its reason logged once, while the view
+//!   caches the others: skinned and morphed meshes, lightmapped ones,
+//!   meshes whose material blends or masks (`AlphaMode` other than
+//!   `Opaque`: Bevy draws them in its own phase) or is drawn deferred.
 //!
 //! - **One depth with Bevy.** The variant's passes run between Bevy's
 //!   opaque and transparent passes in the view's own depth: they test
@@ -50,9 +54,9 @@
 //!   source.
 //!
 //! What it does not do (yet): more than one cached variant per app; meshes
-//! of several vertex layouts in one view; skinned, morphed or lightmapped
-//! meshes (their mesh bind group has another layout; lightmaps are not
-//! checked); a depth prepass that already holds the cached meshes' depth
+//! of several vertex layouts in one view; skinned, morphed, lightmapped,
+//! blended or deferred meshes (left to Bevy, above); a material's own
+//! `specialize` (its pipeline changes are not seen); a depth prepass that already holds the cached meshes' depth
 //! (their depth test would then need `equal`).
 
 mod phase;

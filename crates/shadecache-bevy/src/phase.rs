@@ -18,13 +18,15 @@ use bevy::ecs::entity::EntityHash;
 use bevy::ecs::system::SystemParam;
 use bevy::mesh::{BaseMeshPipelineKey, MeshVertexBufferLayoutRef};
 use bevy::pbr::{
-    DrawMesh, MeshPipeline, RenderMeshInstances, SetMaterialBindGroup, SetMeshBindGroup,
-    SetMeshViewBindGroup, SetMeshViewBindingArrayBindGroup, MATERIAL_BIND_GROUP_INDEX,
+    DrawMesh, MeshPipeline, PreparedMaterial, RenderMaterialInstances, RenderMeshInstances,
+    SetMaterialBindGroup, SetMeshBindGroup, SetMeshViewBindGroup, SetMeshViewBindingArrayBindGroup,
+    MATERIAL_BIND_GROUP_INDEX,
 };
 use bevy::platform::collections::{HashMap, HashSet};
 use bevy::prelude::*;
 use bevy::render::batching::gpu_preprocessing::batch_and_prepare_sorted_render_phase;
 use bevy::render::camera::DirtySpecializations;
+use bevy::render::erased_render_asset::ErasedRenderAssets;
 use bevy::render::mesh::RenderMesh;
 use bevy::render::render_asset::RenderAssets;
 use bevy::render::render_phase::{
@@ -211,13 +213,43 @@ pub(crate) struct MeshQueueing<'w> {
     draw_functions: Res<'w, DrawFunctions<CachedMesh3d>>,
     render_meshes: Res<'w, RenderAssets<RenderMesh>>,
     render_mesh_instances: Res<'w, RenderMeshInstances>,
+    material_instances: Res<'w, RenderMaterialInstances>,
+    materials: Res<'w, ErasedRenderAssets<PreparedMaterial>>,
+}
+
+impl MeshQueueing<'_> {
+    /// Why the mesh of `entity` is left to Bevy, for what the variant's
+    /// passes cannot draw as Bevy would: a mesh whose material blends or
+    /// masks (Bevy draws it in its own phase, in depth order), is drawn
+    /// deferred, or is lightmapped (its mesh bind group has the
+    /// lightmap's layout).
+    fn left_to_bevy(&self, entity: MainEntity, lightmapped: bool) -> Option<String> {
+        if lightmapped {
+            return Some("lightmapped: its mesh bind group holds the lightmap, which the variant's pipelines were not made for".into());
+        }
+        let instance = self.material_instances.instances.get(&entity)?;
+        let material = self.materials.get(instance.asset_id)?;
+        let properties = &material.properties;
+        if properties.alpha_mode != AlphaMode::Opaque {
+            return Some(format!(
+                "drawn with alpha mode {:?}: the cache keeps one opaque value per pixel, and Bevy draws such a mesh in its own phase",
+                properties.alpha_mode
+            ));
+        }
+        if properties.render_method == bevy::material::OpaqueRendererMethod::Deferred {
+            return Some(
+                "drawn deferred: its material writes Bevy's G-buffer, which the variant's passes do not".into(),
+            );
+        }
+        None
+    }
 }
 
 /// Queues the view's visible cached meshes into its phase, every frame
 /// (the phase is small: the meshes of one material), and notes their
 /// vertex layouts.
 pub(crate) fn queue_cached_meshes(
-    meshes: MeshQueueing,
+    queueing: MeshQueueing,
     mut phases: ResMut<ViewSortedRenderPhases<CachedMesh3d>>,
     views: Query<(&ExtractedView, &RenderVisibleEntities)>,
     cached: Query<(), With<CachedMaterial>>,
@@ -225,12 +257,9 @@ pub(crate) fn queue_cached_meshes(
     stats: Res<CacheStats>,
     mut refused: Local<HashSet<MainEntity>>,
 ) {
-    let MeshQueueing {
-        draw_functions,
-        render_meshes,
-        render_mesh_instances,
-    } = meshes;
-    let draw = draw_functions.read().id::<DrawCachedMesh>();
+    let draw = queueing.draw_functions.read().id::<DrawCachedMesh>();
+    let (render_meshes, render_mesh_instances) =
+        (&queueing.render_meshes, &queueing.render_mesh_instances);
     layouts.0.clear();
     for (view, visible) in &views {
         // Extraction emptied it of last frame's (transient) items.
@@ -266,6 +295,15 @@ pub(crate) fn queue_cached_meshes(
                     stats.error(format!(
                         "mesh entity {main_entity:?} is {}, which the plugin does not draw through the cache yet: Bevy draws it with its material",
                         if skinned { "skinned" } else { "morphed" }
+                    ));
+                }
+                continue;
+            }
+            let lightmapped = instance.lightmap_slab_index().is_some();
+            if let Some(reason) = queueing.left_to_bevy(*main_entity, lightmapped) {
+                if refused.insert(*main_entity) {
+                    stats.error(format!(
+                        "mesh entity {main_entity:?} is {reason}: Bevy draws it with its material"
                     ));
                 }
                 continue;

@@ -36,6 +36,9 @@ pub struct Headless {
     pub foreign_material: bool,
     /// Meshes Bevy draws itself beside the cached ones, in both views.
     pub other_meshes: OtherMeshes,
+    /// One more lava mesh marked for the cache that the variant's passes
+    /// cannot draw as Bevy does, which the plugin leaves to Bevy.
+    pub left_to_bevy: Option<LeftToBevy>,
     /// After this many compared frames, the caching camera switches its
     /// cache off (Bevy draws the meshes again), and `frames` more are
     /// compared.
@@ -64,6 +67,15 @@ pub enum OtherMeshes {
     TranslucentInFront,
     /// All three, and a floor the sphere sinks into.
     All,
+}
+
+/// What makes a lava mesh one the plugin leaves to Bevy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LeftToBevy {
+    /// Its material blends (`AlphaMode::Blend`).
+    AlphaBlend,
+    /// It has a lightmap.
+    Lightmapped,
 }
 
 /// One compared frame: the cached image against Bevy's.
@@ -133,7 +145,7 @@ struct Run(Headless, Arc<Mutex<Outcome>>);
 pub fn run_headless(settings: Headless) -> HeadlessRun {
     // The runner takes the app: the comparisons come back through this.
     let results = Arc::new(Mutex::new(Outcome::default()));
-    let mut app = headless_app(false, settings.step_degrees);
+    let mut app = headless_app(false, settings.step_degrees, true);
     app.insert_resource(Run(settings.clone(), results.clone()))
         .init_resource::<Capture>()
         .add_systems(Startup, setup)
@@ -175,6 +187,35 @@ fn setup(
             Transform::from_xyz(0.0, 1.0, 0.6),
             CachedMaterial,
         ));
+    }
+    if let Some(which) = settings.left_to_bevy {
+        let alpha_mode = match which {
+            LeftToBevy::AlphaBlend => AlphaMode::Blend,
+            LeftToBevy::Lightmapped => AlphaMode::Opaque,
+        };
+        let mut mesh = commands.spawn((
+            Mesh3d(meshes.add(Sphere::new(0.4).mesh().uv(24, 16))),
+            MeshMaterial3d(materials.add(scene::LavaMaterial::new(alpha_mode))),
+            Transform::from_xyz(0.2, 0.9, 0.8),
+            CachedMaterial,
+        ));
+        if which == LeftToBevy::Lightmapped {
+            let image = Image::new_fill(
+                bevy::render::render_resource::Extent3d {
+                    width: 4,
+                    height: 4,
+                    depth_or_array_layers: 1,
+                },
+                bevy::render::render_resource::TextureDimension::D2,
+                &[128, 128, 128, 255],
+                bevy::render::render_resource::TextureFormat::Rgba8UnormSrgb,
+                bevy::asset::RenderAssetUsages::RENDER_WORLD,
+            );
+            mesh.insert(bevy::pbr::Lightmap {
+                image: images.add(image),
+                ..default()
+            });
+        }
     }
     spawn_other_meshes(
         settings.other_meshes,

@@ -24,7 +24,7 @@ use bevy::prelude::*;
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
 use shadecache_bevy::CacheStats;
 
-pub use compare::{run_headless, Compared, Headless, HeadlessRun, OtherMeshes};
+pub use compare::{run_headless, Compared, Headless, HeadlessRun, LeftToBevy, OtherMeshes};
 pub use measure::{measure, Measure, Measured};
 
 /// Bevy with the game's assets, its material and the cache, run headless
@@ -32,12 +32,21 @@ pub use measure::{measure, Measure, Measured};
 /// runs move them with [`scene::move_cameras`]); with `diagnostics`, Bevy's
 /// render diagnostics (GPU time per pass), which must be added with Bevy's
 /// plugins.
-fn headless_app(diagnostics: bool, step_degrees: f32) -> App {
+/// With `compare`, Bevy compiles its pipelines before the frame that
+/// needs them, so that both cameras' images hold every mesh from the first
+/// frame compared (asynchronously, a material's pipeline can be ready for
+/// one view's frame and not yet the other's).
+fn headless_app(diagnostics: bool, step_degrees: f32, compare: bool) -> App {
     let mut app = App::new();
-    let plugins = DefaultPlugins.set(AssetPlugin {
-        file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/assets").into(),
-        ..default()
-    });
+    let plugins = DefaultPlugins
+        .set(AssetPlugin {
+            file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/assets").into(),
+            ..default()
+        })
+        .set(bevy::render::RenderPlugin {
+            synchronous_pipeline_compilation: compare,
+            ..default()
+        });
     // Built with the window, the headless runs still open none.
     #[cfg(feature = "window")]
     let plugins = plugins

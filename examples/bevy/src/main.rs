@@ -70,6 +70,7 @@ fn compare(args: Args) {
         msaa: false,
         foreign_material: false,
         other_meshes: shadecache_bevy_example::OtherMeshes::None,
+        left_to_bevy: None,
         switch_off_after: None,
         linear: args.linear,
     });

@@ -36,6 +36,9 @@ pub struct LavaMaterial {
     /// Its uniform, `material` in the shader.
     #[uniform(0)]
     pub params: LavaParams,
+    /// Opaque in the game; the tests blend one mesh to see it left to
+    /// Bevy.
+    pub alpha_mode: AlphaMode,
 }
 
 /// `LavaMaterial` in the shader.
@@ -53,6 +56,24 @@ impl Material for LavaMaterial {
     fn fragment_shader() -> ShaderRef {
         "lava.wesl".into()
     }
+
+    fn alpha_mode(&self) -> AlphaMode {
+        self.alpha_mode
+    }
+}
+
+impl LavaMaterial {
+    /// The game's lava, drawn with `alpha_mode`.
+    pub fn new(alpha_mode: AlphaMode) -> Self {
+        LavaMaterial {
+            params: LavaParams {
+                cool_color: Vec4::new(0.25, 0.12, 0.08, 1.0),
+                hot_color: Vec4::new(1.0, 0.35, 0.05, 1.0),
+                flow: Vec4::new(0.6, 0.3, 0.0, 0.0),
+            },
+            alpha_mode,
+        }
+    }
 }
 
 /// Places the lava meshes: a sphere, a torus and a box, each marked for
@@ -62,13 +83,7 @@ pub fn spawn_meshes(
     meshes: &mut Assets<Mesh>,
     materials: &mut Assets<LavaMaterial>,
 ) {
-    let lava = materials.add(LavaMaterial {
-        params: LavaParams {
-            cool_color: Vec4::new(0.25, 0.12, 0.08, 1.0),
-            hot_color: Vec4::new(1.0, 0.35, 0.05, 1.0),
-            flow: Vec4::new(0.6, 0.3, 0.0, 0.0),
-        },
-    });
+    let lava = materials.add(LavaMaterial::new(AlphaMode::Opaque));
     let shapes = [
         (
             meshes.add(Sphere::new(0.8).mesh().uv(48, 32)),

@@ -8,7 +8,9 @@
 use std::path::Path;
 use std::sync::Mutex;
 
-use shadecache_bevy_example::{run_headless, Compared, Headless, HeadlessRun, OtherMeshes};
+use shadecache_bevy_example::{
+    run_headless, Compared, Headless, HeadlessRun, LeftToBevy, OtherMeshes,
+};
 
 #[path = "../lava_build.rs"]
 mod lava_build;
@@ -71,6 +73,7 @@ fn settings() -> Headless {
         msaa: false,
         foreign_material: false,
         other_meshes: OtherMeshes::None,
+        left_to_bevy: None,
         switch_off_after: None,
         linear: false,
     }
@@ -152,6 +155,45 @@ fn bevy_plugin_shares_the_depth_of_bevys_own_meshes() {
         return;
     }
     bevys_own_frames_with(OtherMeshes::All);
+}
+
+/// A lava mesh marked for the cache that the variant cannot draw as Bevy
+/// does is left to Bevy with a reason, once, while the others are cached:
+/// every frame is Bevy's own at Δn = 1 (drawn by both, a blended mesh
+/// was drawn twice).
+fn left_to_bevy_with_a_reason(which: LeftToBevy, reason: &str) {
+    let run = in_turn(Headless {
+        refresh_period: Some(1),
+        left_to_bevy: Some(which),
+        frames: 10,
+        ..settings()
+    });
+    assert!(run.frames_drawn > 0, "{:?}", run.errors);
+    let said: Vec<&String> = run.errors.iter().filter(|e| e.contains(reason)).collect();
+    assert_eq!(said.len(), 1, "{:?}", run.errors);
+    assert_eq!(run.errors.len(), 1, "{:?}", run.errors);
+    assert!(
+        run.compared.len() >= 10,
+        "{} frames compared",
+        run.compared.len()
+    );
+    all_bevys_own(&run.compared);
+}
+
+#[test]
+fn alpha_blend_mesh_is_left_to_bevy_with_a_reason() {
+    if skipped() {
+        return;
+    }
+    left_to_bevy_with_a_reason(LeftToBevy::AlphaBlend, "drawn with alpha mode Blend");
+}
+
+#[test]
+fn lightmapped_mesh_is_left_to_bevy_with_a_reason() {
+    if skipped() {
+        return;
+    }
+    left_to_bevy_with_a_reason(LeftToBevy::Lightmapped, "lightmapped");
 }
 
 /// Frames the cache runs after its cold start before its error is
