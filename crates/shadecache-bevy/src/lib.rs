@@ -36,7 +36,8 @@
 //!   never a panic in the game:
 //!   a plan that does not match the view's layouts, meshes with other
 //!   vertex attributes than the plan reads or of another material, what
-//!   the host refuses (MSAA: the cache holds one value per pixel). The
+//!   the host refuses (MSAA: the cache holds one value per pixel), a
+//!   camera viewport smaller than its target (split screen). The
 //!   view then leaves the meshes to Bevy's own material, and says why
 //!   once. A mesh the variant's passes cannot draw as Bevy does is left
 //!   to Bevy on its own, with its reason logged once, while the view

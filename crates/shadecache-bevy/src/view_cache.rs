@@ -197,7 +197,9 @@ fn prepare_view_caches(
             }
             continue;
         }
-        let key = match cache_key(&id, &items, settings, &sources) {
+        let key = match partial_viewport(camera)
+            .map_or_else(|| cache_key(&id, &items, settings, &sources), Err)
+        {
             Ok(Some(key)) => key,
             // The material or the view is not prepared yet (or again, after
             // a change): a view that cached goes on with the cache it has,
@@ -242,6 +244,26 @@ fn prepare_view_caches(
             caching.0.insert(id);
         }
     }
+}
+
+/// Why a camera's viewport keeps its view from caching: a viewport
+/// smaller than the target (split screen). The cache's pixel addresses,
+/// its refresh pattern and its targets are the whole target's, and the
+/// variant's passes would draw across it.
+fn partial_viewport(camera: &ExtractedCamera) -> Option<String> {
+    let viewport = camera.viewport.as_ref()?;
+    let whole = camera.physical_target_size?;
+    (viewport.physical_position != UVec2::ZERO || viewport.physical_size != whole).then(|| {
+        format!(
+            "its camera draws into a viewport of {}×{} at {}, {} of its {}×{} target (split screen), which the cache does not take yet: its pixels are the whole target's",
+            viewport.physical_size.x,
+            viewport.physical_size.y,
+            viewport.physical_position.x,
+            viewport.physical_position.y,
+            whole.x,
+            whole.y
+        )
+    })
 }
 
 /// What the view's cache is made for, from Bevy's prepared view, mesh and

@@ -36,6 +36,9 @@ pub struct Headless {
     pub foreign_material: bool,
     /// Meshes Bevy draws itself beside the cached ones, in both views.
     pub other_meshes: OtherMeshes,
+    /// Both cameras draw into the left half of their image (a split
+    /// screen's viewport).
+    pub half_viewport: bool,
     /// One more lava mesh marked for the cache that the variant's passes
     /// cannot draw as Bevy does, which the plugin leaves to Bevy.
     pub left_to_bevy: Option<LeftToBevy>,
@@ -229,6 +232,17 @@ fn setup(
             commands.spawn((scene::camera(target.clone(), settings.step_degrees), role));
         if settings.msaa {
             camera.insert(Msaa::Sample4);
+        }
+        if settings.half_viewport {
+            camera.insert(Camera {
+                clear_color: ClearColorConfig::Custom(Color::BLACK),
+                viewport: Some(bevy::camera::Viewport {
+                    physical_position: UVec2::ZERO,
+                    physical_size: UVec2::new(settings.size / 2, settings.size),
+                    ..default()
+                }),
+                ..default()
+            });
         }
         if settings.linear {
             camera.insert(bevy::camera::Hdr);

@@ -71,6 +71,7 @@ fn compare(args: Args) {
         foreign_material: false,
         other_meshes: shadecache_bevy_example::OtherMeshes::None,
         left_to_bevy: None,
+        half_viewport: false,
         switch_off_after: None,
         linear: args.linear,
     });
