@@ -176,6 +176,7 @@ pub(super) fn cached_shader(
                 shadecache_host::Options {
                     classify: options.classify,
                     count_shading: options.pipelines.count_shading,
+                    ..shadecache_host::Options::default()
                 },
             )
         })

@@ -52,13 +52,13 @@
 //!   pass blends over them in depth order. The host copies that depth into
 //!   the cache for the next frame's reprojection (a point another mesh hid
 //!   last frame misses), so a caching camera's depth texture is made a copy
-//!   source.
+//!   source. The variant's `less`/`greater` tests pass on equal depth, as
+//!   a depth prepass (TAA's, SSAO's) already holds the cached meshes' own.
 //!
 //! What it does not do (yet): more than one cached variant per app; meshes
 //! of several vertex layouts in one view; skinned, morphed, lightmapped,
 //! blended or deferred meshes (left to Bevy, above); a material's own
-//! `specialize` (its pipeline changes are not seen); a depth prepass that already holds the cached meshes' depth
-//! (their depth test would then need `equal`).
+//! `specialize` (its pipeline changes are not seen).
 
 mod phase;
 mod view_cache;

@@ -403,7 +403,13 @@ fn try_make_cache(
         |name| variant.shader(name),
         &frame,
         size,
-        Options::default(),
+        // The view's depth is shared, and a depth prepass (which TAA,
+        // SSAO and motion blur need) already holds the cached meshes'
+        // depth: their own tests must pass on it.
+        Options {
+            depth_test_or_equal: true,
+            ..Options::default()
+        },
     )
     .map_err(|err| err.to_string())?;
     let view_size = ViewUniform::min_size().get().next_multiple_of(16);

@@ -24,6 +24,11 @@ pub struct Options {
     /// A debugging view: the frame's colour outputs blend additively, so
     /// with a shader writing a constant a pixel counts its shadings.
     pub count_shading: bool,
+    /// The variant's `less` and `greater` depth tests pass on equal depth
+    /// too. For a shared depth ([`Targets::depth`]) that already holds the
+    /// cached draws' own depth, as an engine's depth prepass does: with
+    /// the plan's strict tests, they would hide themselves.
+    pub depth_test_or_equal: bool,
 }
 
 struct Built {

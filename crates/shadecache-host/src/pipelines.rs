@@ -99,7 +99,14 @@ pub(crate) async fn pipeline(
         depth_stencil: Some(wgpu::DepthStencilState {
             format: inputs.depth_format,
             depth_write_enabled: Some(pass.depth.write),
-            depth_compare: Some(compare_function(pass.depth.compare)),
+            depth_compare: Some({
+                let compare = compare_function(pass.depth.compare);
+                match (inputs.options.depth_test_or_equal, compare) {
+                    (true, wgpu::CompareFunction::Less) => wgpu::CompareFunction::LessEqual,
+                    (true, wgpu::CompareFunction::Greater) => wgpu::CompareFunction::GreaterEqual,
+                    _ => compare,
+                }
+            }),
             stencil: pass.stencil.map(stencil_state).unwrap_or_default(),
             bias: wgpu::DepthBiasState::default(),
         }),

@@ -39,6 +39,10 @@ pub struct Headless {
     /// Both cameras draw into the left half of their image (a split
     /// screen's viewport).
     pub half_viewport: bool,
+    /// Both cameras with Bevy's depth prepass (`DepthPrepass`, which TAA
+    /// and SSAO need): the view's depth holds the cached meshes' own
+    /// before their passes run.
+    pub depth_prepass: bool,
     /// One more lava mesh marked for the cache that the variant's passes
     /// cannot draw as Bevy does, which the plugin leaves to Bevy.
     pub left_to_bevy: Option<LeftToBevy>,
@@ -232,6 +236,9 @@ fn setup(
             commands.spawn((scene::camera(target.clone(), settings.step_degrees), role));
         if settings.msaa {
             camera.insert(Msaa::Sample4);
+        }
+        if settings.depth_prepass {
+            camera.insert(bevy::core_pipeline::prepass::DepthPrepass);
         }
         if settings.half_viewport {
             camera.insert(Camera {

@@ -72,6 +72,7 @@ fn compare(args: Args) {
         other_meshes: shadecache_bevy_example::OtherMeshes::None,
         left_to_bevy: None,
         half_viewport: false,
+        depth_prepass: false,
         switch_off_after: None,
         linear: args.linear,
     });

@@ -75,6 +75,7 @@ fn settings() -> Headless {
         other_meshes: OtherMeshes::None,
         left_to_bevy: None,
         half_viewport: false,
+        depth_prepass: false,
         switch_off_after: None,
         linear: false,
     }
@@ -147,6 +148,32 @@ fn transparent_mesh_over_cached_mesh_blends_in_order() {
         return;
     }
     bevys_own_frames_with(OtherMeshes::TranslucentInFront);
+}
+
+/// With Bevy's depth prepass on the cameras (TAA's and SSAO's), the
+/// view's depth holds the cached meshes' own depth before their passes
+/// run; their tests pass on equal depth, so the frame is still Bevy's own
+/// (with the plan's strict `less`/`greater`, the lava hid itself).
+#[test]
+fn cached_mesh_is_drawn_over_its_own_depth_prepass() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        refresh_period: Some(1),
+        depth_prepass: true,
+        other_meshes: OtherMeshes::All,
+        frames: 10,
+        ..settings()
+    });
+    assert!(run.frames_drawn > 0, "{:?}", run.errors);
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    assert!(
+        run.compared.len() >= 10,
+        "{} frames compared",
+        run.compared.len()
+    );
+    all_bevys_own(&run.compared);
 }
 
 /// All of them at once, with a floor the sphere sinks into.
