@@ -95,7 +95,28 @@ pub struct Outputs {
     pub files: Vec<PathBuf>,
     /// (shader, node, variant, reason) of every variant refused.
     pub refused: Vec<(PathBuf, String, Variant, String)>,
+    /// Every variant written, in order: per shader, its nodes (the top
+    /// ranked first, or those named in their order), each node's variants.
+    pub variants: Vec<WrittenVariant>,
 }
+
+/// One variant a build wrote.
+#[derive(Clone, Debug)]
+pub struct WrittenVariant {
+    /// The shader's folder name: its `.name()`, else its file stem.
+    pub shader: String,
+    /// The node it caches.
+    pub node: String,
+    /// The variant.
+    pub variant: Variant,
+    /// Its files: the pass shaders and `plan.json`.
+    pub files: Vec<PathBuf>,
+}
+
+/// The file, in the build's output folder, that names every variant the
+/// build wrote as Rust: `shadecache_host::include_variants!()` brings it
+/// into the game.
+pub const VARIANTS_MODULE: &str = "variants.rs";
 
 /// The short error a failed build returns; the diagnostics themselves have
 /// been printed on stderr.
@@ -344,11 +365,20 @@ impl Build {
             }
             self.job(job, sources, &out_dir, &mut outputs)
         });
-        if errors.is_empty() {
-            Ok(outputs)
-        } else {
-            Err(self.fail(errors))
+        if !errors.is_empty() {
+            return Err(self.fail(errors));
         }
+        let module = out_dir.join(VARIANTS_MODULE);
+        std::fs::create_dir_all(&out_dir)
+            .and_then(|()| std::fs::write(&module, variants_module(&outputs.variants)))
+            .map_err(|err| {
+                self.fail(vec![Error::plain(Diagnostic::error(format!(
+                    "cannot write `{}`: {err}",
+                    module.display()
+                )))])
+            })?;
+        outputs.files.push(module);
+        Ok(outputs)
     }
 
     /// Each shader as [`Build::run`] composes it (its WESL or naga_oil
@@ -551,11 +581,14 @@ impl Build {
                             .join(stem)
                             .join(&candidate.node.id)
                             .join(variant.as_str());
-                        outputs.files.extend(back::write_variant(
-                            &dir,
-                            &rewritten,
-                            Language::Wgsl,
-                        )?);
+                        let files = back::write_variant(&dir, &rewritten, Language::Wgsl)?;
+                        outputs.files.extend(files.iter().cloned());
+                        outputs.variants.push(WrittenVariant {
+                            shader: stem.to_string(),
+                            node: candidate.node.id.clone(),
+                            variant,
+                            files,
+                        });
                     }
                     Err(refusal) if explicit => {
                         return Err(Error::in_file(
@@ -612,6 +645,95 @@ fn job_name(job: &ShaderJob) -> &str {
             .and_then(|s| s.to_str())
             .unwrap_or("shader")
     })
+}
+
+/// A Rust identifier from a folder or variant name: `-` and other
+/// characters as `_`, a leading digit after `_`.
+fn identifier(name: &str) -> String {
+    let mut ident: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if ident.is_empty() || ident.starts_with(|c: char| c.is_ascii_digit()) {
+        ident.insert(0, '_');
+    }
+    ident
+}
+
+/// The Rust module naming every variant written ([`VARIANTS_MODULE`]):
+/// per shader a module of its name holding `NODE` (its first node: the
+/// top-ranked candidate, or the first named) and, per node, a module per
+/// variant with its `PLAN` and `SHADERS`; the first node's modules are
+/// also the shader's own (`lava::one_pass::PLAN`), so a game names no
+/// node id.
+fn variants_module(variants: &[WrittenVariant]) -> String {
+    use std::fmt::Write;
+    let mut out = String::from(
+        "// Written by shadecache's build-script support: every variant the build wrote.\n",
+    );
+    let mut shaders: Vec<&str> = Vec::new();
+    for v in variants {
+        if !shaders.contains(&v.shader.as_str()) {
+            shaders.push(&v.shader);
+        }
+    }
+    for shader in shaders {
+        let of_shader: Vec<&WrittenVariant> =
+            variants.iter().filter(|v| v.shader == shader).collect();
+        let first = &of_shader[0].node;
+        let _ = writeln!(
+            out,
+            "\n/// `{shader}`'s variants.\n#[allow(dead_code)]\npub mod {} {{",
+            identifier(shader)
+        );
+        let _ = writeln!(out, "    /// The node its first variants cache: the top-ranked candidate, or the first the build named.\n    pub const NODE: &str = {first:?};\n    pub use self::{}::*;", identifier(first));
+        let mut nodes: Vec<&str> = Vec::new();
+        for v in &of_shader {
+            if !nodes.contains(&v.node.as_str()) {
+                nodes.push(&v.node);
+            }
+        }
+        for node in nodes {
+            let _ = writeln!(
+                out,
+                "    /// Node `{node}`'s variants.\n    pub mod {} {{",
+                identifier(node)
+            );
+            for v in of_shader.iter().filter(|v| v.node == node) {
+                let path = |file: &PathBuf| format!("{:?}", file.display().to_string());
+                let plan = v.files.iter().find(|f| f.ends_with("plan.json"));
+                let shaders: Vec<String> = v
+                    .files
+                    .iter()
+                    .filter(|f| !f.ends_with("plan.json"))
+                    .map(|f| {
+                        let name = f
+                            .file_name()
+                            .map(|n| n.to_string_lossy())
+                            .unwrap_or_default();
+                        format!("({name:?}, include_str!({}))", path(f))
+                    })
+                    .collect();
+                let _ = writeln!(
+                    out,
+                    "        /// The {} variant.\n        pub mod {} {{\n            /// Its `plan.json`.\n            pub const PLAN: &str = include_str!({});\n            /// Its pass shaders, by the file names the plan uses.\n            pub const SHADERS: &[(&str, &str)] = &[{}];\n        }}",
+                    v.variant,
+                    identifier(v.variant.as_str()),
+                    plan.map(path).unwrap_or_else(|| "\"\"".into()),
+                    shaders.join(", ")
+                );
+            }
+            out.push_str("    }\n");
+        }
+        out.push_str("}\n");
+    }
+    out
 }
 
 /// Includes a file the build script wrote: `include_variant!("marble",

@@ -28,8 +28,55 @@ fn build_writes_the_chosen_variants() {
         .unwrap()
         .count();
     assert_eq!(shadow_variants, 2);
-    // two-pass: 2 passes, classify, plan; three-pass: 3 passes, classify, plan.
-    assert_eq!(outputs.files.len(), 4 + 2 * 5);
+    // two-pass: 2 passes, classify, plan; three-pass: 3 passes, classify,
+    // plan; and the module naming them.
+    assert_eq!(outputs.files.len(), 4 + 2 * 5 + 1);
+    assert_eq!(outputs.variants.len(), 3);
+
+    // The module naming them: each shader's first node's variants under
+    // the shader's own name, every file included by its path.
+    let module = std::fs::read_to_string(dir.path().join("variants.rs")).unwrap();
+    assert!(module.contains("pub mod noise_marble {"), "{module}");
+    assert!(
+        module.contains("pub const NODE: &str = \"nb0c12cc4\";"),
+        "{module}"
+    );
+    assert!(module.contains("pub use self::nb0c12cc4::*;"), "{module}");
+    assert!(module.contains("pub mod two_pass {"), "{module}");
+    assert_eq!(
+        module.matches("pub mod three_pass {").count(),
+        2,
+        "{module}"
+    );
+    assert_eq!(module.matches("include_str!(").count(), 14, "{module}");
+    for included in module.split("include_str!(\"").skip(1) {
+        let path = &included[..included.find('"').unwrap()];
+        assert!(std::path::Path::new(path).is_file(), "{path}");
+    }
+    assert!(syn_like_balanced(&module), "{module}");
+}
+
+/// Whether braces, brackets and parentheses balance outside strings: the
+/// module is Rust a game includes, checked for its shape here; the Bevy
+/// example compiles one.
+fn syn_like_balanced(text: &str) -> bool {
+    let (mut depth, mut in_string, mut escaped) = (0i64, false, false);
+    for c in text.chars() {
+        match (in_string, escaped, c) {
+            (true, true, _) => escaped = false,
+            (true, false, '\\') => escaped = true,
+            (true, false, '"') => in_string = false,
+            (true, false, _) => {}
+            (false, _, '"') => in_string = true,
+            (false, _, '{' | '[' | '(') => depth += 1,
+            (false, _, '}' | ']' | ')') => depth -= 1,
+            _ => {}
+        }
+        if depth < 0 {
+            return false;
+        }
+    }
+    depth == 0 && !in_string
 }
 
 /// `composed` gives each shader as `run` reads it, in order, without

@@ -71,6 +71,7 @@ use bevy::render::RenderApp;
 use shadecache_host::Plan;
 
 pub use shadecache_host;
+pub use shadecache_host::include_variants;
 pub use view_cache::CacheStats;
 
 /// A variant's plan and its pass shaders, as the build script wrote them

@@ -104,6 +104,20 @@ mod vertex;
 pub use cached::{CachedShader, Draw, Options};
 pub use error::Error;
 pub use frame::{FrameLayout, Targets, Viewport};
+
+/// Brings in the Rust module a build script's `shadecache::build::Build`
+/// writes (`$OUT_DIR/shadecache/variants.rs`), naming every variant it
+/// wrote: after `include_variants!();` in a module, the one-pass variant
+/// of `lava.wesl` is `lava::one_pass::PLAN` (its `plan.json`) and
+/// `lava::one_pass::SHADERS` (its pass shaders by file name), of the node
+/// the build chose, with no node id or path typed; `lava::NODE` names the
+/// node, and every node's variants are under `lava::<node id>::`.
+#[macro_export]
+macro_rules! include_variants {
+    () => {
+        include!(concat!(env!("OUT_DIR"), "/shadecache/variants.rs"));
+    };
+}
 pub use shadecache_plan as plan;
 pub use shadecache_plan::Plan;
 pub use timing::{NoTimer, PassTime, PassTimer, Timestamps};

@@ -7,27 +7,17 @@ use bevy::render::render_resource::{AsBindGroup, ShaderType};
 use bevy::shader::ShaderRef;
 use shadecache_bevy::{CachedMaterial, CachedVariant};
 
-/// The directory of the variant the build script wrote.
-macro_rules! variant_file {
-    ($name:literal) => {
-        include_str!(concat!(
-            env!("OUT_DIR"),
-            "/shadecache/lava/nfe927310/one-pass/",
-            $name
-        ))
-    };
+/// Every variant the build script wrote, by shader, node and variant.
+mod built {
+    shadecache_bevy::include_variants!();
 }
 
-/// The one-pass variant of `assets/lava.wesl`, as the build script made it.
+/// The one-pass variant of `assets/lava.wesl`, as the build script made
+/// it (of the node the build chose: no id is typed here).
 pub fn lava_variant() -> CachedVariant {
-    CachedVariant::new(
-        variant_file!("plan.json"),
-        [
-            ("pass1.wgsl", variant_file!("pass1.wgsl")),
-            ("classify.wgsl", variant_file!("classify.wgsl")),
-        ],
-    )
-    .unwrap_or_else(|err| panic!("the build script's variant does not load: {err}"))
+    let variant = &built::lava::one_pass::SHADERS;
+    CachedVariant::new(built::lava::one_pass::PLAN, variant.iter().copied())
+        .unwrap_or_else(|err| panic!("the build script's variant does not load: {err}"))
 }
 
 /// The material: Bevy draws it with `assets/lava.wesl`.
