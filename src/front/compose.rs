@@ -352,12 +352,19 @@ impl Modules {
             if path.is_dir() {
                 self.collect(root, &path, depth + 1)?;
             } else if path.extension().is_some_and(|e| e == "wgsl") {
-                let bytes = std::fs::read(&path).unwrap_or_default();
-                if std::str::from_utf8(&bytes).is_err() {
-                    self.skipped.push(path);
-                    continue;
-                }
-                let file = Arc::new(read_source(&path)?);
+                // A file that is not UTF-8 defines nothing an import can
+                // name: skipped (read again only then, to tell that error
+                // from the others).
+                let file = match read_source(&path) {
+                    Ok(file) => Arc::new(file),
+                    Err(_)
+                        if std::fs::read(&path).is_ok_and(|b| std::str::from_utf8(&b).is_err()) =>
+                    {
+                        self.skipped.push(path);
+                        continue;
+                    }
+                    Err(err) => return Err(err),
+                };
                 let (name, imports, _) = naga_oil::compose::get_preprocessor_data(&file.text);
                 let Some(name) = name else { continue };
                 if let Some(first) = self.found.get(&name) {

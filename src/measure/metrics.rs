@@ -47,17 +47,24 @@ pub fn linear_from_f16(bytes: &[u8]) -> LinearFrame {
 /// [0, 1] and quantised, with no transfer function (as an `rgba8unorm`
 /// target would store it).
 pub fn rgba8(frame: &[f32]) -> Vec<u8> {
-    frame
-        .iter()
-        .map(|&v| {
-            let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-            (v * 255.0).round() as u8
-        })
-        .collect()
+    frame.iter().map(|&v| unorm8(v)).collect()
+}
+
+/// A channel value as 8 bits: NaN as 0, clamped to [0, 1], rounded.
+fn unorm8(value: f32) -> u8 {
+    let v = if value.is_nan() {
+        0.0
+    } else {
+        value.clamp(0.0, 1.0)
+    };
+    (v * 255.0).round() as u8
 }
 
 /// A linear value encoded with sRGB's transfer function (IEC 61966-2-1):
 /// what an `*-srgb` target stores and a display decodes back to light.
+/// Written here: none of the crates the project uses exposes the transfer
+/// function on plain floats (`image` converts no colour spaces), and it is
+/// the standard's two branches.
 pub fn srgb_encode(linear: f32) -> f32 {
     if linear <= 0.003_130_8 {
         linear * 12.92
@@ -76,11 +83,14 @@ pub fn srgb8(frame: &[f32]) -> Vec<u8> {
     frame
         .chunks(4)
         .flat_map(|texel| {
-            texel.iter().enumerate().map(|(c, &v)| {
-                let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-                // Alpha has no transfer function.
-                let v = if c == 3 { v } else { srgb_encode(v) };
-                (v * 255.0).round() as u8
+            // Alpha has no transfer function; NaN and the clamp as `unorm8`.
+            texel.iter().enumerate().map(|(c, &v)| match c {
+                3 => unorm8(v),
+                _ => unorm8(srgb_encode(if v.is_nan() {
+                    0.0
+                } else {
+                    v.clamp(0.0, 1.0)
+                })),
             })
         })
         .collect()
