@@ -647,20 +647,7 @@ fn more_draws_into_a_cache_frame_are_refused() {
 /// the test clears to `depth` and the colour target to red, as the
 /// application's own draws before the cached ones would leave them.
 fn shared_depth(gpu: &Gpu, app: &App, depth: f32) -> wgpu::Texture {
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("application depth"),
-        size: wgpu::Extent3d {
-            width: SIZE,
-            height: SIZE,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Depth32Float,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    let texture = target(gpu, SIZE, wgpu::TextureFormat::Depth32Float);
     let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
     let color = app.targets[0].create_view(&wgpu::TextureViewDescriptor::default());
     let mut encoder = gpu
@@ -768,20 +755,7 @@ fn cached_draws_share_the_applications_depth() {
     assert!(share_at(&shared.ages(&gpu), inside(0.0, SIZE), 2.0) > REUSED);
 
     // A depth the cache cannot take.
-    let small = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: None,
-        size: wgpu::Extent3d {
-            width: SIZE / 2,
-            height: SIZE / 2,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Depth32Float,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
+    let small = target(&gpu, SIZE / 2, wgpu::TextureFormat::Depth32Float);
     let small_view = small.create_view(&wgpu::TextureViewDescriptor::default());
     match shared.record_with(&gpu, 0.0, Drawn::ThroughHost, Some(&small_view)) {
         Err(Error::Mismatch(message)) => assert!(message.contains("32×32"), "{message}"),

@@ -56,16 +56,22 @@ fn a_failed_rewrite_leaves_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("variants");
     std::fs::create_dir_all(out.join("three-pass/plan.json")).unwrap();
-    let run = shadecache([
-        "rewrite",
-        "corpus/noise_marble.wgsl",
-        "--node",
-        "n5c3eb6af",
-        "--variant",
-        "two-pass,three-pass",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    // Two variants of the marble's `node` into `out`, with `more` flags.
+    let rewrite = |node: &str, out: &std::path::Path, more: &[&str]| {
+        let mut args = vec![
+            "rewrite",
+            "corpus/noise_marble.wgsl",
+            "--node",
+            node,
+            "--variant",
+            "two-pass,three-pass",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend(more);
+        shadecache(args)
+    };
+    let run = rewrite("n5c3eb6af", &out, &[]);
     // Files no run of ours listed: refused before anything is written.
     assert_eq!(run.status.code(), Some(1));
     assert!(stderr(&run).contains("--overwrite"), "{}", stderr(&run));
@@ -77,17 +83,7 @@ fn a_failed_rewrite_leaves_nothing() {
     };
     assert_eq!(listing(&out), ["three-pass", "three-pass/plan.json"]);
 
-    let run = shadecache([
-        "rewrite",
-        "corpus/noise_marble.wgsl",
-        "--node",
-        "n5c3eb6af",
-        "--variant",
-        "two-pass,three-pass",
-        "--overwrite",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let run = rewrite("n5c3eb6af", &out, &["--overwrite"]);
     let said = stderr(&run);
     assert_eq!(run.status.code(), Some(1), "{said}");
     assert!(
@@ -101,15 +97,13 @@ fn a_failed_rewrite_leaves_nothing() {
 
     // Into a folder of its own making: gone when the rewrite fails.
     let fresh = dir.path().join("fresh/variants");
-    let run = shadecache([
-        "rewrite",
-        "corpus/noise_marble.wgsl",
-        "--node",
-        "nzzzz",
-        "--out",
-        fresh.to_str().unwrap(),
-    ]);
+    let run = rewrite("nzzzz", &fresh, &[]);
     assert_eq!(run.status.code(), Some(1));
+    assert!(
+        stderr(&run).contains("unknown node id `nzzzz`"),
+        "{}",
+        stderr(&run)
+    );
     assert!(!dir.path().join("fresh").exists());
 }
 

@@ -385,32 +385,28 @@ fn flags_that_do_nothing_are_noted() {
         "{}",
         stderr(&output)
     );
-    let output = shadecache([
-        "profile",
-        "corpus/noise_marble.wgsl",
-        "--variant",
-        "lowres",
-        "--reconstruction",
-        "spatial",
-    ]);
-    assert_eq!(output.status.code(), Some(1));
-    assert!(
-        stderr(&output).contains("--lowres-reconstruction spatial"),
-        "{}",
-        stderr(&output)
-    );
-    let output = shadecache([
-        "profile",
-        "corpus/noise_marble.wgsl",
-        "--variant",
-        "lowres",
-        "--lowres-reconstruction",
-        "bilinear-packed",
-    ]);
-    assert_eq!(output.status.code(), Some(1));
-    assert!(
-        stderr(&output).contains("invalid value 'bilinear-packed'"),
-        "{}",
-        stderr(&output)
-    );
+    // Usage errors, before anything runs.
+    for (flag, value, says) in [
+        (
+            "--reconstruction",
+            "spatial",
+            "--lowres-reconstruction spatial",
+        ),
+        (
+            "--lowres-reconstruction",
+            "bilinear-packed",
+            "invalid value 'bilinear-packed'",
+        ),
+    ] {
+        let output = shadecache([
+            "profile",
+            "corpus/noise_marble.wgsl",
+            "--variant",
+            "lowres",
+            flag,
+            value,
+        ]);
+        assert_eq!(output.status.code(), Some(1), "{flag} {value}");
+        assert!(stderr(&output).contains(says), "{}", stderr(&output));
+    }
 }
