@@ -182,6 +182,27 @@ pub fn uses_wesl(text: &str) -> bool {
 struct Found {
     file: Arc<SourceFile>,
     imports: Vec<String>,
+    /// Other files that define the same module: an error if the module is
+    /// imported ([`Found::ambiguous`]), nothing if it is not (a tree's
+    /// test fixtures, a backup no shader imports).
+    also: Vec<Arc<SourceFile>>,
+}
+
+impl Found {
+    /// The error for importing a module two files define, naming both.
+    fn ambiguous(&self, name: &str) -> Option<Error> {
+        let second = self.also.first()?;
+        let at = second.text.find(name).unwrap_or(0);
+        Some(Error::in_file(
+            second.clone(),
+            Diagnostic::error(format!(
+                "two modules define `{name}`: `{}` and `{}`",
+                self.file.path, second.path
+            ))
+            .with_label(at..at + name.len(), "defined again here")
+            .with_note("an import must name one module: remove or rename the copy (a backup, a vendored and a local copy)"),
+        ))
+    }
 }
 
 /// Composes the shader read into `top` with `composition`.
@@ -312,7 +333,7 @@ impl Modules {
     /// folders below the import path `root`. Bounded: each folder once
     /// (links to `.` or `..` included), at most [`MAX_IMPORT_DEPTH`]
     /// deep and [`MAX_IMPORT_ENTRIES`] in all. Two files that define the
-    /// same module are an error naming both.
+    /// same module are kept, an error naming both if it is imported.
     fn collect(&mut self, root: &Path, dir: &Path, depth: usize) -> Result<(), Error> {
         let cannot = |err: std::io::Error| {
             Error::plain(Diagnostic::error(format!(
@@ -367,20 +388,20 @@ impl Modules {
                 };
                 let (name, imports, _) = naga_oil::compose::get_preprocessor_data(&file.text);
                 let Some(name) = name else { continue };
-                if let Some(first) = self.found.get(&name) {
-                    let at = file.text.find(&name).unwrap_or(0);
-                    return Err(Error::in_file(
-                        file.clone(),
-                        Diagnostic::error(format!(
-                            "two modules define `{name}`: `{}` and `{}`",
-                            first.file.path, file.path
-                        ))
-                        .with_label(at..at + name.len(), "defined again here")
-                        .with_note("an import must name one module: remove or rename the copy (a backup, a vendored and a local copy)"),
-                    ));
+                if let Some(first) = self.found.get_mut(&name) {
+                    first.also.push(file);
+                    continue;
                 }
                 let imports = imports.into_iter().map(|i| i.import).collect();
-                self.found.insert(name, Found { imports, file });
+                let also = Vec::new();
+                self.found.insert(
+                    name,
+                    Found {
+                        imports,
+                        file,
+                        also,
+                    },
+                );
             }
         }
         Ok(())
@@ -413,6 +434,9 @@ fn add(
     };
     if added.contains(&module_name) {
         return Ok(());
+    }
+    if let Some(err) = module.ambiguous(&module_name) {
+        return Err(Some(err));
     }
     if stack.contains(&module_name) {
         return Err(Some(Error::in_file(
@@ -710,8 +734,9 @@ mod tests {
         );
     }
 
-    /// Two files defining one module: an error naming both, not the later
-    /// one silently (a backup or a vendored copy beside the real one).
+    /// Two files defining one module that a shader imports: an error
+    /// naming both, not the later one silently (a backup or a vendored
+    /// copy beside the real one); one that nothing imports is no error.
     #[test]
     fn duplicate_import_path_is_an_error() {
         let (dir, top) = modules_folder();
@@ -726,6 +751,15 @@ mod tests {
             err.contains("m.old.wgsl") && err.contains("m.wgsl`"),
             "{err}"
         );
+
+        // A module two files define that nothing imports (a tree's test
+        // fixtures) is no error.
+        std::fs::remove_file(dir.path().join("m.old.wgsl")).unwrap();
+        for copy in ["fixture_a.wgsl", "fixture_b.wgsl"] {
+            std::fs::write(dir.path().join(copy), "#define_import_path walk::fixture\n").unwrap();
+        }
+        let render = composed(&top, dir.path()).err().map(|e| e.render());
+        assert!(render.is_none(), "{render:?}");
     }
 
     /// `--def FOG=false` where a module tests `#ifdef FOG` is found, with
