@@ -387,7 +387,7 @@ pub fn read(path: &Path) -> Result<ShardReport, String> {
         }
     }
     if let Some(shard) = report.shard {
-        if shard.index == 0 || shard.index > shard.count {
+        if !shard.is_valid() {
             return Err(format!(
                 "{} says it is shard {shard}, which is not K/N with 1 ≤ K ≤ N",
                 file.display()

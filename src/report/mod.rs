@@ -132,10 +132,13 @@ impl Shard {
             k.trim().parse().map_err(|_| bad())?,
             n.trim().parse().map_err(|_| bad())?,
         );
-        if index == 0 || index > count {
-            return Err(bad());
-        }
-        Ok(Shard { index, count })
+        let shard = Shard { index, count };
+        shard.is_valid().then_some(shard).ok_or_else(bad)
+    }
+
+    /// Whether it is K/N with 1 ≤ K ≤ N (what [`Shard::slice`] needs).
+    pub fn is_valid(self) -> bool {
+        1 <= self.index && self.index <= self.count
     }
 
     /// The configurations (from 0) of a grid of `total` that are this
