@@ -123,7 +123,7 @@ impl OutFolder {
                 .take(4)
                 .map(|n| format!("`{n}`"))
                 .collect::<Vec<_>>();
-            folder.abandon();
+            // The folder was there (it holds files): nothing to undo.
             return Err(fail(format!(
                 "`{shown}` holds files a previous shadecache run did not list as its own ({}{}): name a new or empty folder, or pass --overwrite to write among them",
                 shown_names.join(", "),

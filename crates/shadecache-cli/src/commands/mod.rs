@@ -315,6 +315,10 @@ impl StageArgs {
 /// asks there only whether NAME is defined, so the def turns the branch
 /// on.
 pub fn warn_false_defs(shader: &Path, composition: &Composition) {
+    let false_def = |(_, value): &(String, ShaderDef)| *value == ShaderDef::Bool(false);
+    if !composition.defs.iter().any(false_def) {
+        return;
+    }
     let Ok(top) = front::read_source(shader) else {
         return;
     };

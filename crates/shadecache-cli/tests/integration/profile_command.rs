@@ -385,6 +385,21 @@ fn flags_that_do_nothing_are_noted() {
         "{}",
         stderr(&output)
     );
+    // `--def NAME=false` where a module tests `#ifdef NAME`: warned.
+    let output = shadecache([
+        "analyze",
+        "corpus/composed/ripple_material.wgsl",
+        "--import-path",
+        "corpus/composed/modules",
+        "--def",
+        "FOG=false",
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("warning: --def FOG=false defines FOG, and `#ifdef FOG`"),
+        "{}",
+        stderr(&output)
+    );
     // Usage errors, before anything runs.
     for (flag, value, says) in [
         (
