@@ -219,11 +219,25 @@ pub(crate) struct MeshQueueing<'w> {
 
 impl MeshQueueing<'_> {
     /// Why the mesh of `entity` is left to Bevy, for what the variant's
-    /// passes cannot draw as Bevy would: a mesh whose material blends or
-    /// masks (Bevy draws it in its own phase, in depth order), is drawn
-    /// deferred, or is lightmapped (its mesh bind group has the
-    /// lightmap's layout).
-    fn left_to_bevy(&self, entity: MainEntity, lightmapped: bool) -> Option<String> {
+    /// passes cannot draw as Bevy would: a skinned or morphed mesh, a
+    /// lightmapped one (its mesh bind group has the lightmap's layout), one
+    /// whose material blends or masks (Bevy draws it in its own phase, in
+    /// depth order) or is drawn deferred.
+    fn left_to_bevy(
+        &self,
+        entity: MainEntity,
+        mesh: &RenderMesh,
+        lightmapped: bool,
+    ) -> Option<String> {
+        // Their mesh bind group has another layout (joints, morph
+        // weights), and their previous positions need last frame's joints
+        // and weights.
+        if mesh.layout.0.contains(Mesh::ATTRIBUTE_JOINT_INDEX) {
+            return Some("skinned, which the plugin does not draw through the cache yet".into());
+        }
+        if mesh.key_bits.contains(BaseMeshPipelineKey::MORPH_TARGETS) {
+            return Some("morphed, which the plugin does not draw through the cache yet".into());
+        }
         if lightmapped {
             return Some("lightmapped: its mesh bind group holds the lightmap, which the variant's pipelines were not made for".into());
         }
@@ -285,22 +299,8 @@ pub(crate) fn queue_cached_meshes(
             let Some(mesh) = render_meshes.get(instance.mesh_asset_id()) else {
                 continue;
             };
-            // Their mesh bind group has another layout (joints, morph
-            // weights), and their previous positions need last frame's
-            // joints and weights: Bevy draws them.
-            let skinned = mesh.layout.0.contains(Mesh::ATTRIBUTE_JOINT_INDEX);
-            let morphed = mesh.key_bits.contains(BaseMeshPipelineKey::MORPH_TARGETS);
-            if skinned || morphed {
-                if refused.insert(*main_entity) {
-                    stats.error(format!(
-                        "mesh entity {main_entity:?} is {}, which the plugin does not draw through the cache yet: Bevy draws it with its material",
-                        if skinned { "skinned" } else { "morphed" }
-                    ));
-                }
-                continue;
-            }
             let lightmapped = instance.lightmap_slab_index().is_some();
-            if let Some(reason) = queueing.left_to_bevy(*main_entity, lightmapped) {
+            if let Some(reason) = queueing.left_to_bevy(*main_entity, mesh, lightmapped) {
                 if refused.insert(*main_entity) {
                     stats.error(format!(
                         "mesh entity {main_entity:?} is {reason}: Bevy draws it with its material"
