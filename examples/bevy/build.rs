@@ -1,10 +1,10 @@
-//! Rewrites the lava material into its one-pass cache variant at build
-//! time ([`lava_build`] says how).
+//! Rewrites the game's materials into their one-pass cache variants at
+//! build time ([`lava_build`] says how).
 
 #[path = "lava_build.rs"]
 mod lava_build;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    lava_build::lava_build().run()?;
+    lava_build::game_build().run()?;
     Ok(())
 }

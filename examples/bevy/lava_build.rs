@@ -1,7 +1,7 @@
-//! How the lava material's variant is built: the build script runs it,
-//! and the plugin's tests profile the shader it composes (the same
-//! packages, defs and vertex stage), so that what `shadecache profile`
-//! measures is of the shader the game draws.
+//! How the game's materials' variants are built: the build script runs
+//! it, and the plugin's tests profile the lava shader it composes (the
+//! same packages, defs and vertex stage), so that what `shadecache
+//! profile` measures is of the shader the game draws.
 
 use shadecache::build::Build;
 use shadecache::front::compose::ShaderDef;
@@ -16,14 +16,11 @@ pub const NODE: &str = "nfe927310";
 /// own mesh vertex shader, as for any material without one of its own;
 /// rewritten into the one-pass variant of [`NODE`].
 pub fn lava_build() -> Build {
-    let mut build = Build::new()
-        .shader("assets/lava.wesl")
-        .crate_package("bevy_pbr")
-        .crate_package("bevy_render")
-        .crate_vertex_shader("bevy_pbr", "render/mesh.wesl")
+    bevy_material(Build::new(), "assets/lava.wesl")
         // The crust: six octaves of object-space noise, the same every
-        // frame (`shadecache analyze` ranks it first of the nodes that
-        // read no per-frame input).
+        // frame. The analysis ranks the lit colour first, which reads the
+        // time (the glow): cached, the glow would stand still between
+        // refreshes, so the build names the crust.
         .node(NODE)
         .variant(Variant::OnePass)
         .options(Options {
@@ -35,10 +32,27 @@ pub fn lava_build() -> Build {
             // Vulkan, Metal and D3D12 device has.
             max_bind_groups: 8,
             ..Options::default()
-        });
-    // What Bevy's mesh pipeline defines for a mesh with positions, normals
-    // and UVs on a view without MSAA or prepasses, on a device with storage
-    // buffers.
+        })
+}
+
+/// Every material of the game: the lava ([`lava_build`]) and the stone,
+/// whose one-pass variant caches the node the analysis ranks first (no id
+/// is named: its colour reads nothing that changes from frame to frame).
+pub fn game_build() -> Build {
+    bevy_material(lava_build(), "assets/stone.wesl").variant(Variant::OnePass)
+}
+
+/// Adds a Bevy material's fragment shader to `build`, composed as Bevy
+/// composes it: with Bevy's WESL packages, Bevy's mesh vertex stage and
+/// what Bevy's mesh pipeline defines for a mesh with positions, normals
+/// and UVs on a view without MSAA or prepasses, on a device with storage
+/// buffers.
+fn bevy_material(build: Build, shader: &str) -> Build {
+    let mut build = build
+        .shader(shader)
+        .crate_package("bevy_pbr")
+        .crate_package("bevy_render")
+        .crate_vertex_shader("bevy_pbr", "render/mesh.wesl");
     for (name, value) in [
         ("MATERIAL_BIND_GROUP", ShaderDef::UInt(3)),
         ("MAX_DIRECTIONAL_LIGHTS", ShaderDef::UInt(10)),

@@ -7,17 +7,20 @@
 //! compute it afresh elsewhere and on a refresh pattern. Each variant comes
 //! with a plan (`plan.json`). This crate runs one in a Bevy app:
 //!
-//! - **What the user writes.** [`ShadecachePlugin`] with the variant
-//!   ([`CachedVariant`], from the files the build script wrote), a
-//!   [`CachedMaterial`] on each mesh entity whose material the variant was
-//!   made from (the entity keeps its `MeshMaterial3d`), and a
+//! - **What the user writes.** A [`ShadecachePlugin::<M>`](ShadecachePlugin)
+//!   for each cached material `M`, with the variant made from `M`'s shader
+//!   ([`CachedVariant`], from the files the build script wrote); a
+//!   [`CachedMaterial`] on each mesh entity to cache (the entity keeps its
+//!   `MeshMaterial3d<M>`, whose type picks the variant); and a
 //!   [`ReprojectionCache`] on each camera that caches.
 //! - **Where it draws.** Each caching view has a render phase of its
 //!   cached meshes (`phase.rs`), queued from Bevy's visibility and batched
 //!   by Bevy's mesh batching, and removed from Bevy's opaque phase so Bevy
-//!   does not draw them too. After the main opaque pass, the host crate
-//!   ([`shadecache_host`]) records the variant's passes into the view's
-//!   target; each pass draws the phase with Bevy's own render commands:
+//!   does not draw them too; each material's meshes are one run of the
+//!   phase. After the main opaque pass, the host crate
+//!   ([`shadecache_host`]) records each material's variant into the view's
+//!   target, one after the other, each with its own cache; each pass draws
+//!   the material's run of the phase with Bevy's own render commands:
 //!   the view bind group, the mesh bind group, the material's bind group,
 //!   `DrawMesh` (so GPU preprocessing, indirect draws and Bevy's mesh
 //!   slabs are Bevy's own).
@@ -43,7 +46,8 @@
 //!   to Bevy on its own, with its reason logged once, while the view
 //!   caches the others: skinned and morphed meshes, lightmapped ones,
 //!   meshes whose material blends or masks (`AlphaMode` other than
-//!   `Opaque`: Bevy draws them in its own phase) or is drawn deferred.
+//!   `Opaque`: Bevy draws them in its own phase) or is drawn deferred,
+//!   and meshes of a material no plugin was added for.
 //!
 //! - **One depth with Bevy.** The variant's passes run between Bevy's
 //!   opaque and transparent passes in the view's own depth: they test
@@ -55,14 +59,17 @@
 //!   source. The variant's `less`/`greater` tests pass on equal depth, as
 //!   a depth prepass (TAA's, SSAO's) already holds the cached meshes' own.
 //!
-//! What it does not do (yet): more than one cached variant per app; meshes
-//! of several vertex layouts in one view; skinned, morphed, lightmapped,
+//! What it does not do (yet): meshes of one material with several vertex
+//! layouts in one view; Bevy's `StandardMaterial` (bindless, its defs per
+//! instance); skinned, morphed, lightmapped,
 //! blended or deferred meshes (left to Bevy, above); a material's own
 //! `specialize` (its pipeline changes are not seen).
 
 mod phase;
 mod view_cache;
 
+use std::any::TypeId;
+use std::marker::PhantomData;
 use std::sync::Arc;
 
 use bevy::prelude::*;
@@ -76,7 +83,7 @@ pub use view_cache::CacheStats;
 
 /// A variant's plan and its pass shaders, as the build script wrote them
 /// (`plan.json` and the WGSL files it names).
-#[derive(Clone, Resource)]
+#[derive(Clone)]
 pub struct CachedVariant(Arc<VariantFiles>);
 
 struct VariantFiles {
@@ -125,9 +132,10 @@ impl CachedVariant {
     }
 }
 
-/// Marks a mesh entity whose material the variant is drawn for. The entity
-/// keeps its `MeshMaterial3d`: the variant's passes bind that material's
-/// bind group, and with the cache off Bevy draws it as before.
+/// Marks a mesh entity to draw through its material's variant (the
+/// [`ShadecachePlugin`] of its `MeshMaterial3d`'s type). The entity keeps
+/// its `MeshMaterial3d`: the variant's passes bind that material's bind
+/// group, and with the cache off Bevy draws it as before.
 #[derive(Component, Clone, Copy, Debug, Default, ExtractComponent)]
 #[extract_app(RenderApp)]
 pub struct CachedMaterial;
@@ -174,20 +182,107 @@ impl ReprojectionCache {
     }
 }
 
-/// Draws [`CachedMaterial`] meshes through a [`CachedVariant`] in the views
-/// of cameras with a [`ReprojectionCache`].
-pub struct ShadecachePlugin {
+/// Draws the [`CachedMaterial`] meshes of the material `M` through a
+/// [`CachedVariant`] made from `M`'s shader, in the views of cameras with a
+/// [`ReprojectionCache`]. Add one per cached material, each with its own
+/// variant (`ShadecachePlugin::<LavaMaterial>::new(lava)` beside
+/// `ShadecachePlugin::<StoneMaterial>::new(stone)`); Bevy's
+/// `MaterialPlugin::<M>` draws `M` as before wherever the cache does not.
+pub struct ShadecachePlugin<M> {
     variant: CachedVariant,
+    material: PhantomData<fn() -> M>,
 }
 
-impl ShadecachePlugin {
-    /// The plugin for one variant.
+impl<M: Asset> ShadecachePlugin<M> {
+    /// The plugin for `M`'s variant.
     pub fn new(variant: CachedVariant) -> Self {
-        ShadecachePlugin { variant }
+        ShadecachePlugin {
+            variant,
+            material: PhantomData,
+        }
     }
 }
 
-impl Plugin for ShadecachePlugin {
+impl<M: Asset> Plugin for ShadecachePlugin<M> {
+    fn build(&self, app: &mut App) {
+        // What every cached material shares (the phase, the cameras'
+        // components, the stats) is added with the first.
+        if !app.is_plugin_added::<SharedPlugin>() {
+            app.add_plugins(SharedPlugin);
+        }
+        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+            return;
+        };
+        render_app
+            .world_mut()
+            .resource_mut::<CachedVariants>()
+            .add::<M>(self.variant.clone());
+    }
+}
+
+/// The variant of each cached material, in the order their plugins were
+/// added: a phase item's `variant` is its index here.
+#[derive(Resource, Default)]
+pub(crate) struct CachedVariants(Vec<MaterialVariant>);
+
+pub(crate) struct MaterialVariant {
+    /// The material asset's type.
+    pub material: TypeId,
+    /// Its name, for messages.
+    pub name: String,
+    pub variant: CachedVariant,
+}
+
+impl CachedVariants {
+    fn add<M: Asset>(&mut self, variant: CachedVariant) {
+        let material = TypeId::of::<M>();
+        let name = bevy::utils::prelude::ShortName::of::<M>().to_string();
+        match self.0.iter_mut().find(|v| v.material == material) {
+            // A second plugin for one material: the later variant is the
+            // one drawn, as the later of two inserted resources would be.
+            Some(entry) => entry.variant = variant,
+            None => self.0.push(MaterialVariant {
+                material,
+                name,
+                variant,
+            }),
+        }
+    }
+
+    /// The index of the variant of the material asset type `material`.
+    pub fn index_of(&self, material: TypeId) -> Option<u32> {
+        self.0
+            .iter()
+            .position(|v| v.material == material)
+            .map(|i| i as u32)
+    }
+
+    pub fn get(&self, index: u32) -> Option<&MaterialVariant> {
+        self.0.get(index as usize)
+    }
+
+    /// How many cached materials there are.
+    pub fn len(&self) -> u32 {
+        self.0.len() as u32
+    }
+
+    /// The name of the material of the variant `index`.
+    pub fn name(&self, index: u32) -> &str {
+        self.get(index)
+            .map_or("a cached material", |v| v.name.as_str())
+    }
+
+    /// The names of the cached materials, for a message.
+    pub fn names(&self) -> String {
+        let names: Vec<&str> = self.0.iter().map(|v| v.name.as_str()).collect();
+        names.join(", ")
+    }
+}
+
+/// What every cached material shares, added once.
+struct SharedPlugin;
+
+impl Plugin for SharedPlugin {
     fn build(&self, app: &mut App) {
         app.add_plugins((
             ExtractComponentPlugin::<CachedMaterial>::default(),
@@ -200,7 +295,7 @@ impl Plugin for ShadecachePlugin {
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
             return;
         };
-        render_app.insert_resource(self.variant.clone());
+        render_app.init_resource::<CachedVariants>();
         view_cache::build(render_app, stats);
     }
 }

@@ -40,7 +40,7 @@ use bevy::render::view::{ExtractedView, RenderVisibleEntities, RetainedViewEntit
 use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderDebugFlags, RenderSystems};
 use indexmap::IndexMap;
 
-use crate::{CacheStats, CachedMaterial, ReprojectionCache};
+use crate::{CacheStats, CachedMaterial, CachedVariants, ReprojectionCache};
 
 /// What each pass draws per cached mesh: Bevy's material draw, without its
 /// pipeline (each pass's pipeline is the host's, set before).
@@ -55,6 +55,9 @@ pub(crate) type DrawCachedMesh = (
 /// One cached mesh in a view.
 pub(crate) struct CachedMesh3d {
     entity: (Entity, MainEntity),
+    /// Its material's variant ([`CachedVariants`]): the phase keeps each
+    /// variant's meshes together, and each variant draws its own.
+    pub variant: u32,
     draw_function: DrawFunctionId,
     batch_range: Range<u32>,
     extra_index: PhaseItemExtraIndex,
@@ -92,13 +95,19 @@ impl PhaseItem for CachedMesh3d {
 }
 
 impl SortedPhaseItem for CachedMesh3d {
-    // The passes depth-test, so the order changes no pixel: the items
-    // stay in the order they were queued.
-    type SortKey = ();
+    // Each variant's meshes in one run of the phase, which its passes
+    // draw; within a run the passes depth-test, so the order changes no
+    // pixel and the items stay in the order they were queued.
+    type SortKey = u32;
 
-    fn sort_key(&self) -> Self::SortKey {}
+    fn sort_key(&self) -> Self::SortKey {
+        self.variant
+    }
 
-    fn sort(_: &mut IndexMap<(Entity, MainEntity), CachedMesh3d, EntityHash>) {}
+    fn sort(items: &mut IndexMap<(Entity, MainEntity), CachedMesh3d, EntityHash>) {
+        // Stable: the queued order within a variant stays.
+        items.sort_by(|_, a, _, b| a.variant.cmp(&b.variant));
+    }
 
     fn recalculate_sort_keys(
         _: &mut IndexMap<(Entity, MainEntity), Self, EntityHash>,
@@ -113,30 +122,37 @@ impl SortedPhaseItem for CachedMesh3d {
 
 impl CachedRenderPipelinePhaseItem for CachedMesh3d {
     /// The pass's pipeline is the host's, not one of Bevy's pipeline cache:
-    /// the draw function sets none.
+    /// the draw function sets none, and nothing looks this id up. Bevy's
+    /// batching keeps items of one id together, and two materials' bind
+    /// groups can share an index (each material type has its own
+    /// allocator): an id per variant keeps a batch within one variant.
     fn cached_pipeline(&self) -> CachedRenderPipelineId {
-        CachedRenderPipelineId::INVALID
+        CachedRenderPipelineId::new(usize::MAX - 1 - self.variant as usize)
     }
 }
 
-/// The vertex layouts of each view's cached meshes, as queued: the host
-/// makes its pipelines for one.
-#[derive(Resource, Default)]
-pub(crate) struct QueuedLayouts(pub HashMap<RetainedViewEntity, Vec<MeshVertexBufferLayoutRef>>);
+/// One material's variant in one view: what a cache is made for.
+pub(crate) type ViewVariant = (RetainedViewEntity, u32);
 
-/// The views whose cached meshes were taken out of Bevy's opaque phase
-/// this frame, and those whose were taken before and no longer are: Bevy
-/// queues the meshes of those again.
+/// The vertex layouts of each view's cached meshes of each variant, as
+/// queued: the host makes its pipelines for one.
+#[derive(Resource, Default)]
+pub(crate) struct QueuedLayouts(pub HashMap<ViewVariant, Vec<MeshVertexBufferLayoutRef>>);
+
+/// The view variants whose meshes were taken out of Bevy's opaque phase
+/// this frame, and the views of those taken before and no longer: Bevy
+/// queues the meshes of those views again.
 #[derive(Resource, Default)]
 pub(crate) struct TakenViews {
-    taken: HashSet<RetainedViewEntity>,
+    taken: HashSet<ViewVariant>,
     handed_back: HashSet<RetainedViewEntity>,
 }
 
-/// Whether a view draws through the cache this frame: it caches, and its
-/// cache was made (a view whose cache failed leaves its meshes to Bevy).
+/// Whether a view draws a variant through the cache this frame: it
+/// caches, and its cache of the variant was made (a view whose cache
+/// failed leaves that material's meshes to Bevy).
 #[derive(Resource, Default)]
-pub(crate) struct CachingViews(pub HashSet<RetainedViewEntity>);
+pub(crate) struct CachingViews(pub HashSet<ViewVariant>);
 
 pub(crate) struct CachedPhasePlugin;
 
@@ -215,9 +231,24 @@ pub(crate) struct MeshQueueing<'w> {
     render_mesh_instances: Res<'w, RenderMeshInstances>,
     material_instances: Res<'w, RenderMaterialInstances>,
     materials: Res<'w, ErasedRenderAssets<PreparedMaterial>>,
+    variants: Res<'w, CachedVariants>,
 }
 
 impl MeshQueueing<'_> {
+    /// The variant that draws the mesh of `entity`: its material's; why it
+    /// is left to Bevy where its material has none. `None` while its
+    /// material is not extracted yet.
+    fn variant(&self, entity: MainEntity) -> Option<Result<u32, String>> {
+        let instance = self.material_instances.instances.get(&entity)?;
+        let material = instance.asset_id.type_id();
+        Some(self.variants.index_of(material).ok_or_else(|| {
+            format!(
+                "of a material no ShadecachePlugin was added for (the cached materials: {}; add `ShadecachePlugin::<M>` with its variant to cache it)",
+                self.variants.names()
+            )
+        }))
+    }
+
     /// Why the mesh of `entity` is left to Bevy, for what the variant's
     /// passes cannot draw as Bevy would: a skinned or morphed mesh, a
     /// lightmapped one (its mesh bind group has the lightmap's layout), one
@@ -260,8 +291,8 @@ impl MeshQueueing<'_> {
 }
 
 /// Queues the view's visible cached meshes into its phase, every frame
-/// (the phase is small: the meshes of one material), and notes their
-/// vertex layouts.
+/// (the phase is small: the meshes of the cached materials), each with
+/// its material's variant, and notes their vertex layouts.
 pub(crate) fn queue_cached_meshes(
     queueing: MeshQueueing,
     mut phases: ResMut<ViewSortedRenderPhases<CachedMesh3d>>,
@@ -283,7 +314,6 @@ pub(crate) fn queue_cached_meshes(
         let Some(meshes) = visible.get::<Mesh3d>() else {
             continue;
         };
-        let view_layouts = layouts.0.entry(view.retained_view_entity).or_default();
         let gpu_culled = meshes
             .entities_gpu_culling
             .iter()
@@ -300,7 +330,14 @@ pub(crate) fn queue_cached_meshes(
                 continue;
             };
             let lightmapped = instance.lightmap_slab_index().is_some();
-            if let Some(reason) = queueing.left_to_bevy(*main_entity, mesh, lightmapped) {
+            let Some(variant) = queueing.variant(*main_entity) else {
+                continue;
+            };
+            let left = match &variant {
+                Ok(_) => queueing.left_to_bevy(*main_entity, mesh, lightmapped),
+                Err(reason) => Some(reason.clone()),
+            };
+            if let Some(reason) = left {
                 if refused.insert(*main_entity) {
                     stats.error(format!(
                         "mesh entity {main_entity:?} is {reason}: Bevy draws it with its material"
@@ -308,11 +345,17 @@ pub(crate) fn queue_cached_meshes(
                 }
                 continue;
             }
+            let Ok(variant) = variant else { continue };
+            let view_layouts = layouts
+                .0
+                .entry((view.retained_view_entity, variant))
+                .or_default();
             if !view_layouts.contains(&mesh.layout) {
                 view_layouts.push(mesh.layout.clone());
             }
             phase.add_transient(CachedMesh3d {
                 entity: (*render_entity, *main_entity),
+                variant,
                 draw_function: draw,
                 batch_range: 0..1,
                 extra_index: PhaseItemExtraIndex::None,
@@ -322,29 +365,32 @@ pub(crate) fn queue_cached_meshes(
     }
 }
 
-/// Takes the cached meshes of a caching view out of Bevy's opaque phase:
-/// the variant draws them. A view that took them before and does not now
-/// hands them back.
+/// Takes the cached meshes of each variant a view caches out of Bevy's
+/// opaque phase: the variant draws them. A view that took a variant's
+/// meshes before and does not now hands them back.
 pub(crate) fn take_from_opaque_phase(
     phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
     caching: Res<CachingViews>,
     mut opaque: ResMut<ViewBinnedRenderPhases<Opaque3d>>,
     mut taken: ResMut<TakenViews>,
 ) {
-    let mut now = HashSet::default();
     for (view, phase) in phases.iter() {
-        if !caching.0.contains(view) {
-            continue;
-        }
         let Some(opaque) = opaque.get_mut(view) else {
             continue;
         };
-        for (_, main_entity) in phase.items.keys() {
-            opaque.remove(*main_entity);
+        for ((_, main_entity), item) in &phase.items {
+            if caching.0.contains(&(*view, item.variant)) {
+                opaque.remove(*main_entity);
+            }
         }
-        now.insert(*view);
     }
+    let now: HashSet<ViewVariant> = caching
+        .0
+        .iter()
+        .filter(|(view, _)| opaque.contains_key(view))
+        .copied()
+        .collect();
     let TakenViews { taken, handed_back } = &mut *taken;
-    handed_back.extend(taken.difference(&now).copied());
+    handed_back.extend(taken.difference(&now).map(|(view, _)| *view));
     *taken = now;
 }

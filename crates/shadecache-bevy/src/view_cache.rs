@@ -2,6 +2,7 @@
 //! for the view, its cached meshes and their material, kept at the view's
 //! size, and recorded after the main opaque pass.
 
+use std::ops::Range;
 use std::sync::{Arc, Mutex};
 
 use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d};
@@ -17,12 +18,12 @@ use bevy::prelude::*;
 use bevy::render::camera::ExtractedCamera;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::erased_render_asset::ErasedRenderAssets;
-use bevy::render::render_phase::{TrackedRenderPass, ViewSortedRenderPhases};
+use bevy::render::render_phase::{SortedRenderPhase, TrackedRenderPass, ViewSortedRenderPhases};
 use bevy::render::render_resource::{BufferUsages, ShaderType};
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
 use bevy::render::view::{
-    ExtractedView, RetainedViewEntity, ViewDepthStencilTexture, ViewTarget, ViewUniform,
-    ViewUniformOffset, ViewUniforms,
+    ExtractedView, ViewDepthStencilTexture, ViewTarget, ViewUniform, ViewUniformOffset,
+    ViewUniforms,
 };
 use bevy::render::{Render, RenderSystems};
 use shadecache_host::plan::ResourceKind;
@@ -30,8 +31,8 @@ use shadecache_host::{
     CachedShader, FrameLayout, NoTimer, Options, Plan, Targets, TwinSources, Twins,
 };
 
-use crate::phase::{CachedMesh3d, CachingViews, QueuedLayouts};
-use crate::{CachedVariant, ReprojectionCache};
+use crate::phase::{CachedMesh3d, CachingViews, QueuedLayouts, ViewVariant};
+use crate::{CachedVariant, CachedVariants, ReprojectionCache};
 
 /// Bevy's view uniform: group 0, binding 0 of the mesh view bind group.
 const VIEW_BINDING: [u32; 2] = [0, 0];
@@ -67,9 +68,9 @@ enum Slot {
     Failed(CacheKey),
 }
 
-/// Every caching view's cache.
+/// Every caching view's cache of each cached material's variant.
 #[derive(Resource, Default)]
-struct ViewCaches(HashMap<RetainedViewEntity, Mutex<Slot>>);
+struct ViewCaches(HashMap<ViewVariant, Mutex<Slot>>);
 
 /// What the plugin did, shared by the main world and the render world
 /// (both hold a clone): frames drawn through the cache, and every error
@@ -81,13 +82,27 @@ pub struct CacheStats(Arc<Mutex<StatsInner>>);
 #[derive(Default, Debug)]
 struct StatsInner {
     frames: u64,
+    /// Frames drawn through each material's variant, by its name.
+    by_material: Vec<(String, u64)>,
     errors: Vec<String>,
 }
 
 impl CacheStats {
-    /// Frames drawn through the cache, over every view.
+    /// Frames drawn through the cache, over every view and material (a
+    /// view drawing two cached materials counts two a frame).
     pub fn frames_drawn(&self) -> u64 {
         self.lock().frames
+    }
+
+    /// Frames drawn through the variant of the material `M`, over every
+    /// view.
+    pub fn frames_drawn_of<M: 'static>(&self) -> u64 {
+        let name = bevy::utils::prelude::ShortName::of::<M>().to_string();
+        self.lock()
+            .by_material
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map_or(0, |(_, frames)| *frames)
     }
 
     /// Every error logged, in order.
@@ -101,8 +116,13 @@ impl CacheStats {
             .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
-    fn drew(&self) {
-        self.lock().frames += 1;
+    fn drew(&self, material: &str) {
+        let mut inner = self.lock();
+        inner.frames += 1;
+        match inner.by_material.iter_mut().find(|(n, _)| n == material) {
+            Some((_, frames)) => *frames += 1,
+            None => inner.by_material.push((material.to_string(), 1)),
+        }
     }
 
     /// Logs `err` and keeps it.
@@ -161,7 +181,7 @@ fn copyable_view_uniforms(mut uniforms: ResMut<ViewUniforms>) {
 /// materials.
 #[derive(SystemParam)]
 struct CacheSources<'w> {
-    variant: Res<'w, CachedVariant>,
+    variants: Res<'w, CachedVariants>,
     device: Res<'w, RenderDevice>,
     mesh_pipeline: Res<'w, MeshPipeline>,
     view_keys: Res<'w, ViewKeyCache>,
@@ -170,9 +190,9 @@ struct CacheSources<'w> {
     materials: Res<'w, ErasedRenderAssets<PreparedMaterial>>,
 }
 
-/// Makes, keeps or drops each caching view's cache, before the cached
-/// meshes are taken from Bevy's opaque phase (only views with a cache
-/// draw them).
+/// Makes, keeps or drops each caching view's cache of each variant its
+/// visible cached meshes have, before the cached meshes are taken from
+/// Bevy's opaque phase (only view variants with a cache draw them).
 fn prepare_view_caches(
     sources: CacheSources,
     phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
@@ -180,70 +200,87 @@ fn prepare_view_caches(
     mut caches: ResMut<ViewCaches>,
     mut caching: ResMut<CachingViews>,
     stats: Res<CacheStats>,
-    mut refusals: Local<HashMap<RetainedViewEntity, String>>,
+    mut refusals: Local<HashMap<ViewVariant, String>>,
 ) {
     let was_caching = std::mem::take(&mut caching.0);
-    caches.0.retain(|view, _| phases.contains_key(view));
+    caches.0.retain(|(view, _), _| phases.contains_key(view));
     for (view, camera, settings) in &views {
-        let id = view.retained_view_entity;
-        let Some(phase) = phases.get(&id) else {
+        let Some(phase) = phases.get(&view.retained_view_entity) else {
             continue;
         };
-        let items: Vec<&CachedMesh3d> = phase.items.values().collect();
-        if items.is_empty() {
-            // Nothing cached is visible: nothing to make yet.
-            if was_caching.contains(&id) {
+        for variant in 0..sources.variants.len() {
+            let id = (view.retained_view_entity, variant);
+            let items: Vec<&CachedMesh3d> = phase
+                .items
+                .values()
+                .filter(|item| item.variant == variant)
+                .collect();
+            let key = match view_cache_key(&id, &items, camera, settings, &sources) {
+                Ok(Some(key)) => key,
+                // Nothing of the variant is visible, or its material or
+                // the view is not prepared yet (or again, after a change):
+                // a view that cached goes on with the cache it has, as its
+                // meshes are out of Bevy's opaque phase.
+                Ok(None) => {
+                    if was_caching.contains(&id) {
+                        caching.0.insert(id);
+                    }
+                    continue;
+                }
+                Err(err) => {
+                    // Said once while it lasts; the meshes go back to Bevy
+                    // (`phase::take_from_opaque_phase`).
+                    if refusals.insert(id, err.clone()).as_ref() != Some(&err) {
+                        stats.error(format!(
+                            "the view does not cache {}, so Bevy draws it: {err}",
+                            sources.variants.name(variant)
+                        ));
+                    }
+                    continue;
+                }
+            };
+            refusals.remove(&id);
+            let size = camera
+                .physical_target_size
+                .map(|s| (s.x, s.y))
+                .unwrap_or((1, 1));
+            let slot = caches.0.entry(id).or_insert_with(|| {
+                Mutex::new(make_cache(&sources, variant, key.clone(), size, &stats))
+            });
+            let slot = slot
+                .get_mut()
+                .unwrap_or_else(|poisoned| poisoned.into_inner());
+            let current = match slot {
+                Slot::Ready(cache) => &cache.key,
+                Slot::Failed(key) => key,
+            };
+            if *current != key {
+                *slot = make_cache(&sources, variant, key, size, &stats);
+            }
+            if matches!(slot, Slot::Ready(_)) {
                 caching.0.insert(id);
             }
-            continue;
-        }
-        let key = match partial_viewport(camera)
-            .map_or_else(|| cache_key(&id, &items, settings, &sources), Err)
-        {
-            Ok(Some(key)) => key,
-            // The material or the view is not prepared yet (or again, after
-            // a change): a view that cached goes on with the cache it has,
-            // as its meshes are out of Bevy's opaque phase.
-            Ok(None) => {
-                if was_caching.contains(&id) {
-                    caching.0.insert(id);
-                }
-                continue;
-            }
-            Err(err) => {
-                // Said once while it lasts; the view's meshes go back to
-                // Bevy (`phase::take_from_opaque_phase`).
-                if refusals.insert(id, err.clone()).as_ref() != Some(&err) {
-                    stats.error(format!(
-                        "the view does not cache, so Bevy draws its material: {err}"
-                    ));
-                }
-                continue;
-            }
-        };
-        refusals.remove(&id);
-        let size = camera
-            .physical_target_size
-            .map(|s| (s.x, s.y))
-            .unwrap_or((1, 1));
-        let slot = caches
-            .0
-            .entry(id)
-            .or_insert_with(|| Mutex::new(make_cache(&sources, key.clone(), size, &stats)));
-        let slot = slot
-            .get_mut()
-            .unwrap_or_else(|poisoned| poisoned.into_inner());
-        let current = match slot {
-            Slot::Ready(cache) => &cache.key,
-            Slot::Failed(key) => key,
-        };
-        if *current != key {
-            *slot = make_cache(&sources, key, size, &stats);
-        }
-        if matches!(slot, Slot::Ready(_)) {
-            caching.0.insert(id);
         }
     }
+}
+
+/// What the view's cache of a variant is made for; `None` while there is
+/// nothing to make it for yet (no mesh of it visible, or the view or
+/// material not prepared); why the view does not cache it.
+fn view_cache_key(
+    id: &ViewVariant,
+    items: &[&CachedMesh3d],
+    camera: &ExtractedCamera,
+    settings: &ReprojectionCache,
+    sources: &CacheSources,
+) -> Result<Option<CacheKey>, String> {
+    if items.is_empty() {
+        return Ok(None);
+    }
+    if let Some(refusal) = partial_viewport(camera) {
+        return Err(refusal);
+    }
+    cache_key(id, items, settings, sources)
 }
 
 /// Why a camera's viewport keeps its view from caching: a viewport
@@ -269,7 +306,7 @@ fn partial_viewport(camera: &ExtractedCamera) -> Option<String> {
 /// What the view's cache is made for, from Bevy's prepared view, mesh and
 /// material; `None` while one of them is not prepared yet.
 fn cache_key(
-    view: &RetainedViewEntity,
+    (view, variant): &ViewVariant,
     items: &[&CachedMesh3d],
     settings: &ReprojectionCache,
     sources: &CacheSources,
@@ -280,7 +317,7 @@ fn cache_key(
     let Some(view_key) = view_keys.get(view).copied() else {
         return Ok(None);
     };
-    let Some(mesh_layouts) = layouts.0.get(view) else {
+    let Some(mesh_layouts) = layouts.0.get(&(*view, *variant)) else {
         return Ok(None);
     };
     let mesh_layout = match mesh_layouts.as_slice() {
@@ -336,9 +373,18 @@ fn cache_key(
 
 /// Makes a view's cache: the host's pipelines from Bevy's layouts, the
 /// view's copy and its twin. A failure is logged once.
-fn make_cache(sources: &CacheSources, key: CacheKey, size: (u32, u32), stats: &CacheStats) -> Slot {
+fn make_cache(
+    sources: &CacheSources,
+    variant: u32,
+    key: CacheKey,
+    size: (u32, u32),
+    stats: &CacheStats,
+) -> Slot {
+    let Some(material) = sources.variants.get(variant) else {
+        return Slot::Failed(key);
+    };
     let made = try_make_cache(
-        &sources.variant,
+        &material.variant,
         &sources.device,
         &sources.mesh_pipeline,
         &key,
@@ -348,7 +394,8 @@ fn make_cache(sources: &CacheSources, key: CacheKey, size: (u32, u32), stats: &C
         Ok(cache) => Slot::Ready(Box::new(cache)),
         Err(err) => {
             stats.error(format!(
-                "the view's cache cannot be made, so Bevy draws its material: {err}"
+                "the view's cache of {} cannot be made, so Bevy draws it: {err}",
+                material.name
             ));
             Slot::Failed(key)
         }
@@ -489,12 +536,14 @@ struct CachedDraws<'w> {
     phases: Res<'w, ViewSortedRenderPhases<CachedMesh3d>>,
     caches: Res<'w, ViewCaches>,
     caching: Res<'w, CachingViews>,
+    variants: Res<'w, CachedVariants>,
     view_uniforms: Res<'w, ViewUniforms>,
 }
 
-/// Records the view's variant after Bevy's opaque pass: the view's
-/// uniform copied for next frame's twin, then each pass drawing the view's
-/// cached meshes with Bevy's render commands.
+/// Records the view's variants after Bevy's opaque pass, one cached
+/// material after another: for each, the view's uniform copied for next
+/// frame's twin, then each pass drawing the material's cached meshes (its
+/// run of the phase) with Bevy's render commands.
 fn draw_cached_passes(
     world: &World,
     view: ViewQuery<(
@@ -514,17 +563,14 @@ fn draw_cached_passes(
         phases,
         caches,
         caching,
+        variants,
         view_uniforms,
     } = drawn;
     let view_entity = view.entity();
     let (extracted, target, depth, offset, settings) = view.into_inner();
     let id = extracted.retained_view_entity;
-    if !caching.0.contains(&id) {
-        return;
-    }
-    let (Some(phase), Some(slot), Some(uniforms)) = (
+    let (Some(phase), Some(uniforms)) = (
         phases.get(&id),
-        caches.0.get(&id),
         view_uniforms
             .uniforms
             .buffer()
@@ -532,33 +578,22 @@ fn draw_cached_passes(
     ) else {
         return;
     };
-    let mut slot = slot.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
-    let Slot::Ready(cache) = &mut *slot else {
+    let runs = variant_runs(phase);
+    let drawing: Vec<(u32, Range<usize>)> = runs
+        .into_iter()
+        .filter(|(variant, _)| caching.0.contains(&(id, *variant)))
+        .collect();
+    if drawing.is_empty() {
         return;
-    };
-    let texture = target.main_texture();
-    let size = (texture.width(), texture.height());
-    if let Err(err) = cache.shader.resize(size) {
-        stats.error(err.to_string());
-        return;
-    }
-    if settings.is_cut() {
-        cache.shader.reset();
     }
     // The passes' GPU time, as Bevy's own passes record theirs
-    // (`render/shadecache/elapsed_gpu` with `RenderDiagnosticsPlugin`).
+    // (`render/shadecache/elapsed_gpu` with `RenderDiagnosticsPlugin`):
+    // every cached material of the view.
     let diagnostics = ctx.diagnostic_recorder();
     let encoder = ctx.command_encoder();
     let span = diagnostics
         .as_ref()
         .map(|diagnostics| diagnostics.time_span(encoder, "shadecache"));
-    encoder.copy_buffer_to_buffer(
-        uniforms,
-        offset.offset as u64,
-        &cache.view_now,
-        0,
-        cache.view_now.size(),
-    );
     let color = [Some(&**target.main_texture_view())];
     let targets = Targets {
         color: &color,
@@ -567,24 +602,61 @@ fn draw_cached_passes(
         // transparent pass tests against.
         depth: Some(&depth.attachment.texture.default_view),
     };
-    let result = cache.shader.record_engine_timed(
-        &queue,
-        encoder,
-        &targets,
-        &mut NoTimer,
-        &cache.twins,
-        |_, pass| {
-            let mut pass = TrackedRenderPass::new(&device, pass);
-            phase
-                .render(&mut pass, world, view_entity)
-                .map_err(|err| format!("{err:?}"))
-        },
-    );
+    for (variant, items) in drawing {
+        let Some(slot) = caches.0.get(&(id, variant)) else {
+            continue;
+        };
+        let mut slot = slot.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        let Slot::Ready(cache) = &mut *slot else {
+            continue;
+        };
+        let texture = target.main_texture();
+        if let Err(err) = cache.shader.resize((texture.width(), texture.height())) {
+            stats.error(err.to_string());
+            continue;
+        }
+        if settings.is_cut() {
+            cache.shader.reset();
+        }
+        encoder.copy_buffer_to_buffer(
+            uniforms,
+            offset.offset as u64,
+            &cache.view_now,
+            0,
+            cache.view_now.size(),
+        );
+        let result = cache.shader.record_engine_timed(
+            &queue,
+            encoder,
+            &targets,
+            &mut NoTimer,
+            &cache.twins,
+            |_, pass| {
+                let mut pass = TrackedRenderPass::new(&device, pass);
+                phase
+                    .render_range(&mut pass, world, view_entity, items.clone())
+                    .map_err(|err| format!("{err:?}"))
+            },
+        );
+        match result {
+            Ok(()) => stats.drew(variants.name(variant)),
+            Err(err) => stats.error(err.to_string()),
+        }
+    }
     if let Some(span) = span {
         span.end(encoder);
     }
-    match result {
-        Ok(()) => stats.drew(),
-        Err(err) => stats.error(err.to_string()),
+}
+
+/// Each variant's run of the phase's items (sorted by variant), with the
+/// variant.
+fn variant_runs(phase: &SortedRenderPhase<CachedMesh3d>) -> Vec<(u32, Range<usize>)> {
+    let mut runs: Vec<(u32, Range<usize>)> = Vec::new();
+    for (index, item) in phase.items.values().enumerate() {
+        match runs.last_mut() {
+            Some((variant, range)) if *variant == item.variant => range.end = index + 1,
+            _ => runs.push((item.variant, index..index + 1)),
+        }
     }
+    runs
 }

@@ -32,8 +32,11 @@ pub struct Headless {
     /// Both cameras with 4× MSAA, which a cache cannot do.
     pub msaa: bool,
     /// A box with Bevy's `StandardMaterial` marked for the cache too,
-    /// which the variant was not made from.
+    /// which no variant was made from.
     pub foreign_material: bool,
+    /// The stone meshes too, a second cached material with its own
+    /// variant.
+    pub stone: bool,
     /// Meshes Bevy draws itself beside the cached ones, in both views.
     pub other_meshes: OtherMeshes,
     /// Both cameras draw into the left half of their image (a split
@@ -107,8 +110,11 @@ pub struct Compared {
 pub struct HeadlessRun {
     /// The frames compared, in order.
     pub compared: Vec<Compared>,
-    /// Frames the plugin drew through the cache.
+    /// Frames the plugin drew through the cache (a view drawing two
+    /// cached materials counts two a frame).
     pub frames_drawn: u64,
+    /// Of those, the frames drawn through the stone's variant.
+    pub stone_frames_drawn: u64,
     /// Errors the plugin logged.
     pub errors: Vec<String>,
     /// The frame the cut was marked in, if one was.
@@ -171,6 +177,7 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
     HeadlessRun {
         compared: outcome.compared,
         frames_drawn: stats.frames_drawn(),
+        stone_frames_drawn: stats.frames_drawn_of::<scene::StoneMaterial>(),
         errors: stats.errors(),
         cut_frame: outcome.cut_frame,
         switch_off_frame: outcome.switch_off_frame,
@@ -184,9 +191,13 @@ fn setup(
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<scene::LavaMaterial>>,
     mut standard: ResMut<Assets<StandardMaterial>>,
+    mut stone: ResMut<Assets<scene::StoneMaterial>>,
 ) {
     scene::spawn_meshes(&mut commands, &mut meshes, &mut materials);
     let settings = &run.0;
+    if settings.stone {
+        scene::spawn_stone(&mut commands, &mut meshes, &mut stone);
+    }
     if settings.foreign_material {
         commands.spawn((
             Mesh3d(meshes.add(Cuboid::new(0.6, 0.6, 0.6))),

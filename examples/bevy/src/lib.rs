@@ -62,8 +62,7 @@ fn headless_app(diagnostics: bool, step_degrees: f32, compare: bool) -> App {
     }
     app.add_plugins((
         bevy::app::ScheduleRunnerPlugin::run_loop(std::time::Duration::ZERO),
-        MaterialPlugin::<scene::LavaMaterial>::default(),
-        shadecache_bevy::ShadecachePlugin::new(scene::lava_variant()),
+        scene::MaterialsPlugin,
     ))
     // Time steps a 60 Hz frame each frame, whatever the frame took, as
     // `shadecache profile` steps its `time` uniform: the glow flows alike

@@ -69,6 +69,7 @@ fn compare(args: Args) {
         cut_after: None,
         msaa: false,
         foreign_material: false,
+        stone: false,
         other_meshes: shadecache_bevy_example::OtherMeshes::None,
         left_to_bevy: None,
         half_viewport: false,

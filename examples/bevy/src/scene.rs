@@ -1,11 +1,12 @@
-//! The scene: the lava material, its meshes, the camera's path.
+//! The scene: the lava and stone materials, their meshes, the camera's
+//! path.
 
 use bevy::camera::RenderTarget;
 use bevy::core_pipeline::tonemapping::{DebandDither, Tonemapping};
 use bevy::prelude::*;
 use bevy::render::render_resource::{AsBindGroup, ShaderType};
 use bevy::shader::ShaderRef;
-use shadecache_bevy::{CachedMaterial, CachedVariant};
+use shadecache_bevy::{CachedMaterial, CachedVariant, ShadecachePlugin};
 
 /// Every variant the build script wrote, by shader, node and variant.
 mod built {
@@ -15,9 +16,36 @@ mod built {
 /// The one-pass variant of `assets/lava.wesl`, as the build script made
 /// it (of the node the build chose: no id is typed here).
 pub fn lava_variant() -> CachedVariant {
-    let variant = &built::lava::one_pass::SHADERS;
-    CachedVariant::new(built::lava::one_pass::PLAN, variant.iter().copied())
+    variant(built::lava::one_pass::PLAN, built::lava::one_pass::SHADERS)
+}
+
+/// The one-pass variant of `assets/stone.wesl`, of the node its analysis
+/// ranks first.
+pub fn stone_variant() -> CachedVariant {
+    variant(
+        built::stone::one_pass::PLAN,
+        built::stone::one_pass::SHADERS,
+    )
+}
+
+fn variant(plan: &str, shaders: &[(&str, &str)]) -> CachedVariant {
+    CachedVariant::new(plan, shaders.iter().copied())
         .unwrap_or_else(|err| panic!("the build script's variant does not load: {err}"))
+}
+
+/// Bevy's materials of the game and a cache for each: the lava and the
+/// stone, each with its variant.
+pub struct MaterialsPlugin;
+
+impl Plugin for MaterialsPlugin {
+    fn build(&self, app: &mut App) {
+        app.add_plugins((
+            MaterialPlugin::<LavaMaterial>::default(),
+            MaterialPlugin::<StoneMaterial>::default(),
+            ShadecachePlugin::<LavaMaterial>::new(lava_variant()),
+            ShadecachePlugin::<StoneMaterial>::new(stone_variant()),
+        ));
+    }
 }
 
 /// The material: Bevy draws it with `assets/lava.wesl`.
@@ -63,6 +91,72 @@ impl LavaMaterial {
             },
             alpha_mode,
         }
+    }
+}
+
+/// The second cached material: veined stone, drawn with
+/// `assets/stone.wesl`.
+#[derive(Asset, TypePath, AsBindGroup, Clone, Debug)]
+pub struct StoneMaterial {
+    /// Its uniform, `material` in the shader.
+    #[uniform(0)]
+    pub params: StoneParams,
+}
+
+/// `StoneMaterial` in the shader.
+#[derive(ShaderType, Clone, Debug)]
+pub struct StoneParams {
+    /// The stone's dark colour.
+    pub dark: Vec4,
+    /// Its veins' colour.
+    pub pale: Vec4,
+    /// x: the veins' frequency; y: how far they are stirred.
+    pub veins: Vec4,
+}
+
+impl Material for StoneMaterial {
+    fn fragment_shader() -> ShaderRef {
+        "stone.wesl".into()
+    }
+}
+
+impl Default for StoneMaterial {
+    fn default() -> Self {
+        StoneMaterial {
+            params: StoneParams {
+                dark: Vec4::new(0.18, 0.2, 0.22, 1.0),
+                pale: Vec4::new(0.85, 0.84, 0.8, 1.0),
+                veins: Vec4::new(1.5, 2.5, 0.0, 0.0),
+            },
+        }
+    }
+}
+
+/// Places the stone meshes, marked for the cache: a plinth under the
+/// lava sphere and a column behind the torus.
+pub fn spawn_stone(
+    commands: &mut Commands,
+    meshes: &mut Assets<Mesh>,
+    materials: &mut Assets<StoneMaterial>,
+) {
+    let stone = materials.add(StoneMaterial::default());
+    let shapes = [
+        (
+            meshes.add(Cuboid::new(1.4, 0.5, 1.4)),
+            Vec3::new(-1.2, -1.0, 0.0),
+        ),
+        (
+            meshes.add(Cylinder::new(0.3, 2.2)),
+            Vec3::new(1.6, 0.2, -1.2),
+        ),
+    ];
+    for (mesh, at) in shapes {
+        commands.spawn((
+            Mesh3d(mesh),
+            MeshMaterial3d(stone.clone()),
+            Transform::from_translation(at),
+            CachedMaterial,
+        ));
     }
 }
 

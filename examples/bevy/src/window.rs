@@ -1,13 +1,14 @@
-//! The game in a window: the lava meshes under an orbiting camera, space
-//! toggles the cache, and a readout shows the GPU time of the material's
-//! passes (Bevy's opaque pass plus the plugin's), cached or not.
+//! The game in a window: the lava and stone meshes under an orbiting
+//! camera, space toggles the cache, and a readout shows the GPU time of
+//! the materials' passes (Bevy's opaque pass plus the plugin's), cached
+//! or not.
 
 use bevy::diagnostic::{DiagnosticPath, DiagnosticsStore};
 use bevy::prelude::*;
 use bevy::render::diagnostic::RenderDiagnosticsPlugin;
-use shadecache_bevy::{CacheStats, ReprojectionCache, ShadecachePlugin};
+use shadecache_bevy::{CacheStats, ReprojectionCache};
 
-use crate::scene::{self, LavaMaterial};
+use crate::scene::{self, LavaMaterial, StoneMaterial};
 
 const OPAQUE: &str = "render/main_opaque_pass_3d/elapsed_gpu";
 const CACHE: &str = "render/shadecache/elapsed_gpu";
@@ -31,11 +32,7 @@ pub fn run() {
             file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/assets").into(),
             ..default()
         }))
-        .add_plugins((
-            RenderDiagnosticsPlugin,
-            MaterialPlugin::<LavaMaterial>::default(),
-            ShadecachePlugin::new(scene::lava_variant()),
-        ))
+        .add_plugins((RenderDiagnosticsPlugin, scene::MaterialsPlugin))
         .add_systems(Startup, setup)
         .add_systems(Update, (orbit, toggle, readout))
         .run();
@@ -45,8 +42,10 @@ fn setup(
     mut commands: Commands,
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<LavaMaterial>>,
+    mut stone: ResMut<Assets<StoneMaterial>>,
 ) {
     scene::spawn_meshes(&mut commands, &mut meshes, &mut materials);
+    scene::spawn_stone(&mut commands, &mut meshes, &mut stone);
     commands.spawn((
         Camera3d::default(),
         // The cache holds one value per pixel.
