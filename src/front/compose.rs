@@ -143,6 +143,40 @@ impl Composition {
             && self.composer.is_none()
     }
 
+    /// The file of a module of one of the named packages, by its WESL
+    /// path: `bevy_pbr::render::mesh` is `render/mesh.wesl` (or `.wgsl`)
+    /// in the package `bevy_pbr`'s folder. `None` when `module` is not such
+    /// a path; an error naming what is missing when it is one and no
+    /// package or file answers it.
+    pub fn module_file(&self, module: &str) -> Option<Result<PathBuf, String>> {
+        let (package, rest) = module.split_once("::")?;
+        let parts: Vec<&str> = rest.split("::").collect();
+        let ident =
+            |part: &str| !part.is_empty() && part.chars().all(|c| c.is_alphanumeric() || c == '_');
+        if !ident(package) || !parts.iter().all(|part| ident(part)) {
+            return None;
+        }
+        let Some((_, dir)) = self.packages.iter().find(|(name, _)| name == package) else {
+            let given: Vec<&str> = self.packages.iter().map(|(n, _)| n.as_str()).collect();
+            return Some(Err(format!(
+                "`{module}` is a module of the package `{package}`, which is not given (packages given: {}): add --package {package}",
+                if given.is_empty() { "none".to_string() } else { given.join(", ") }
+            )));
+        };
+        let stem: PathBuf = parts.iter().collect();
+        let found = ["wesl", "wgsl"]
+            .iter()
+            .map(|ext| dir.join(stem.with_extension(ext)))
+            .find(|file| file.is_file());
+        Some(found.ok_or_else(|| {
+            format!(
+                "`{module}`: neither `{}` nor `{}` exists",
+                dir.join(stem.with_extension("wesl")).display(),
+                dir.join(stem.with_extension("wgsl")).display()
+            )
+        }))
+    }
+
     fn shader_defs(&self) -> HashMap<String, ShaderDefValue> {
         self.defs
             .iter()

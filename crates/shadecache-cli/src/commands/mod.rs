@@ -241,8 +241,10 @@ pub struct StageArgs {
 
     /// The module with the vertex stage, for a fragment-only shader
     /// (engines keep the stages in separate files); resources both bind at
-    /// one (group, binding) are one.
-    #[arg(long, value_name = "FILE.wgsl")]
+    /// one (group, binding) are one. A file, or a module of a --package by
+    /// its WESL path: Bevy's mesh vertex stage is `bevy_pbr::render::mesh`
+    /// with `--package bevy_pbr`.
+    #[arg(long, value_name = "FILE.wgsl|PACKAGE::MODULE")]
     pub vertex: Option<PathBuf>,
 
     #[command(flatten)]
@@ -300,14 +302,31 @@ impl StageArgs {
 
     pub fn load(&self, shader: &Path) -> Result<Shader, Error> {
         let composition = self.compose.composition()?;
+        let vertex = self
+            .vertex
+            .as_deref()
+            .map(|vertex| vertex_file(vertex, &composition))
+            .transpose()?;
         let loaded = front::load_with(
             shader,
             &composition,
-            self.vertex.as_deref(),
+            vertex.as_deref(),
             self.vertex_entry.as_deref(),
         )?;
         warn_false_defs(shader, &composition);
         Ok(loaded)
+    }
+}
+
+/// The file of `--vertex`: the path given, or where it names no file and
+/// reads as a package's module (`bevy_pbr::render::mesh`), that module's.
+fn vertex_file(vertex: &Path, composition: &Composition) -> Result<PathBuf, Error> {
+    let module = vertex.to_str().filter(|_| !vertex.exists());
+    match module.and_then(|module| composition.module_file(module)) {
+        None => Ok(vertex.to_path_buf()),
+        Some(found) => {
+            found.map_err(|message| Error::plain(Diagnostic::error(format!("--vertex {message}"))))
+        }
     }
 }
 

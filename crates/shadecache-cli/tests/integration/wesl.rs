@@ -205,3 +205,95 @@ fn a_wesl_package_is_found_by_its_crates_name() {
     assert!(err.contains("no crate `engine_sky`"), "{err}");
     assert!(err.contains("engine_sky=DIR"), "{err}");
 }
+
+/// `--vertex` names the engine's vertex module by its WESL path in a
+/// package given with `--package`, as a material imports it
+/// (`bevy_pbr::render::mesh`): the variant rewritten is the one its file's
+/// path gives, with no registry path spelled. A package not given, and a
+/// module the package lacks, are errors that say so.
+#[test]
+fn vertex_module_is_named_by_its_wesl_path() {
+    let wesl = root().join("corpus/wesl");
+    let package = format!("engine_pbr={}", wesl.join("packages/engine_pbr").display());
+    let dir = tempfile::tempdir().unwrap();
+    let rewrite = |vertex: &OsStr, package: Option<&str>, out: &str| {
+        let out = dir.path().join(out);
+        let mut args: Vec<&OsStr> = vec![
+            "rewrite".as_ref(),
+            "corpus/wesl/lava_material.wesl".as_ref(),
+            "--def".as_ref(),
+            "MATERIAL_BIND_GROUP=2".as_ref(),
+            "--all-nodes".as_ref(),
+            "--variant".as_ref(),
+            "one-pass".as_ref(),
+            "--vertex".as_ref(),
+            vertex,
+            "--out".as_ref(),
+            out.as_os_str(),
+        ];
+        if let Some(package) = package {
+            args.extend::<[&OsStr; 2]>(["--package".as_ref(), package.as_ref()]);
+        }
+        (shadecache_in(&root(), &args), out)
+    };
+    let (by_path, path_out) = rewrite(
+        wesl.join("packages/engine_pbr/render/mesh.wesl")
+            .as_os_str(),
+        Some(&package),
+        "by-path",
+    );
+    assert!(by_path.status.success(), "{}", stderr(&by_path));
+    let (by_module, module_out) = rewrite(
+        "engine_pbr::render::mesh".as_ref(),
+        Some(&package),
+        "by-module",
+    );
+    assert!(by_module.status.success(), "{}", stderr(&by_module));
+    let written = files_under(&path_out);
+    assert!(
+        written.iter().any(|(name, _)| name.ends_with("plan.json")),
+        "{written:?}"
+    );
+    assert_eq!(files_under(&module_out), written);
+
+    let (without, _) = rewrite("engine_pbr::render::mesh".as_ref(), None, "without");
+    let err = stderr(&without);
+    assert_eq!(without.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("the package `engine_pbr`, which is not given")
+            && err.contains("add --package engine_pbr"),
+        "{err}"
+    );
+    let (missing, _) = rewrite(
+        "engine_pbr::render::skinning".as_ref(),
+        Some(&package),
+        "missing",
+    );
+    let err = stderr(&missing);
+    assert_eq!(missing.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("--vertex `engine_pbr::render::skinning`: neither")
+            && err.contains("skinning.wesl"),
+        "{err}"
+    );
+}
+
+/// Every file under `dir` but the output folder's own list, by its path
+/// under `dir`, with its bytes, in order.
+fn files_under(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut files = Vec::new();
+    let mut folders = vec![dir.to_path_buf()];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                folders.push(path);
+            } else if path.file_name() != Some(".shadecache-out".as_ref()) {
+                let name = path.strip_prefix(dir).unwrap().display().to_string();
+                files.push((name, std::fs::read(&path).unwrap()));
+            }
+        }
+    }
+    files.sort();
+    files
+}
