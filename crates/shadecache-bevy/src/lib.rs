@@ -59,9 +59,13 @@
 //!   source. The variant's `less`/`greater` tests pass on equal depth, as
 //!   a depth prepass (TAA's, SSAO's) already holds the cached meshes' own.
 //!
-//! What it does not do (yet): meshes of one material with several vertex
-//! layouts in one view; Bevy's `StandardMaterial` (bindless, its defs per
-//! instance); skinned, morphed, lightmapped,
+//! - **Vertex layouts.** The host makes a variant's pipelines for one
+//!   vertex layout: a view's meshes of one material with several layouts
+//!   (one with vertex colours, another without) have a cache each, drawn
+//!   in turn, each its own run of the phase.
+//!
+//! What it does not do (yet): Bevy's `StandardMaterial` (bindless, its
+//! defs per instance); skinned, morphed, lightmapped,
 //! blended or deferred meshes (left to Bevy, above); a material's own
 //! `specialize` (its pipeline changes are not seen).
 

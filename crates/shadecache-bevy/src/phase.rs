@@ -55,9 +55,12 @@ pub(crate) type DrawCachedMesh = (
 /// One cached mesh in a view.
 pub(crate) struct CachedMesh3d {
     entity: (Entity, MainEntity),
-    /// Its material's variant ([`CachedVariants`]): the phase keeps each
-    /// variant's meshes together, and each variant draws its own.
+    /// Its material's variant ([`CachedVariants`]) and its vertex layout
+    /// (an index into the view variant's [`QueuedLayouts`]): the phase
+    /// keeps the meshes of each pair together, and each pair's cache draws
+    /// its own.
     pub variant: u32,
+    pub layout: u32,
     draw_function: DrawFunctionId,
     batch_range: Range<u32>,
     extra_index: PhaseItemExtraIndex,
@@ -95,18 +98,19 @@ impl PhaseItem for CachedMesh3d {
 }
 
 impl SortedPhaseItem for CachedMesh3d {
-    // Each variant's meshes in one run of the phase, which its passes
-    // draw; within a run the passes depth-test, so the order changes no
-    // pixel and the items stay in the order they were queued.
-    type SortKey = u32;
+    // The meshes of each variant and vertex layout in one run of the
+    // phase, which that cache's passes draw; within a run the passes
+    // depth-test, so the order changes no pixel and the items stay in the
+    // order they were queued.
+    type SortKey = (u32, u32);
 
     fn sort_key(&self) -> Self::SortKey {
-        self.variant
+        (self.variant, self.layout)
     }
 
     fn sort(items: &mut IndexMap<(Entity, MainEntity), CachedMesh3d, EntityHash>) {
-        // Stable: the queued order within a variant stays.
-        items.sort_by(|_, a, _, b| a.variant.cmp(&b.variant));
+        // Stable: the queued order within a run stays.
+        items.sort_by(|_, a, _, b| a.sort_key().cmp(&b.sort_key()));
     }
 
     fn recalculate_sort_keys(
@@ -125,34 +129,51 @@ impl CachedRenderPipelinePhaseItem for CachedMesh3d {
     /// the draw function sets none, and nothing looks this id up. Bevy's
     /// batching keeps items of one id together, and two materials' bind
     /// groups can share an index (each material type has its own
-    /// allocator): an id per variant keeps a batch within one variant.
+    /// allocator): an id per variant and layout keeps a batch within one
+    /// run.
     fn cached_pipeline(&self) -> CachedRenderPipelineId {
-        CachedRenderPipelineId::new(usize::MAX - 1 - self.variant as usize)
+        let run = ((self.variant as usize) << 16) | self.layout as usize;
+        CachedRenderPipelineId::new(usize::MAX - 1 - run)
     }
 }
 
-/// One material's variant in one view: what a cache is made for.
+/// One material's variant in one view.
 pub(crate) type ViewVariant = (RetainedViewEntity, u32);
 
+/// What one cache is made for: a material's variant in a view, for the
+/// meshes of one vertex layout (the host's pipelines take one; meshes of
+/// several layouts have a cache each).
+pub(crate) type CacheId = (RetainedViewEntity, u32, MeshVertexBufferLayoutRef);
+
 /// The vertex layouts of each view's cached meshes of each variant, as
-/// queued: the host makes its pipelines for one.
+/// queued this frame: an item's `layout` is an index into its list.
 #[derive(Resource, Default)]
 pub(crate) struct QueuedLayouts(pub HashMap<ViewVariant, Vec<MeshVertexBufferLayoutRef>>);
 
-/// The view variants whose meshes were taken out of Bevy's opaque phase
-/// this frame, and the views of those taken before and no longer: Bevy
-/// queues the meshes of those views again.
+impl QueuedLayouts {
+    /// The cache that draws `item` in `view`.
+    pub fn cache_of(&self, view: RetainedViewEntity, item: &CachedMesh3d) -> Option<CacheId> {
+        let layout = self
+            .0
+            .get(&(view, item.variant))?
+            .get(item.layout as usize)?;
+        Some((view, item.variant, layout.clone()))
+    }
+}
+
+/// The caches whose meshes were taken out of Bevy's opaque phase this
+/// frame, and the views of those taken before and no longer: Bevy queues
+/// the meshes of those views again.
 #[derive(Resource, Default)]
 pub(crate) struct TakenViews {
-    taken: HashSet<ViewVariant>,
+    taken: HashSet<CacheId>,
     handed_back: HashSet<RetainedViewEntity>,
 }
 
-/// Whether a view draws a variant through the cache this frame: it
-/// caches, and its cache of the variant was made (a view whose cache
-/// failed leaves that material's meshes to Bevy).
+/// The caches that draw this frame: their view caches, and they were made
+/// (a view whose cache failed leaves those meshes to Bevy).
 #[derive(Resource, Default)]
-pub(crate) struct CachingViews(pub HashSet<ViewVariant>);
+pub(crate) struct CachingViews(pub HashSet<CacheId>);
 
 pub(crate) struct CachedPhasePlugin;
 
@@ -350,12 +371,17 @@ pub(crate) fn queue_cached_meshes(
                 .0
                 .entry((view.retained_view_entity, variant))
                 .or_default();
-            if !view_layouts.contains(&mesh.layout) {
-                view_layouts.push(mesh.layout.clone());
-            }
+            let layout = match view_layouts.iter().position(|l| *l == mesh.layout) {
+                Some(index) => index,
+                None => {
+                    view_layouts.push(mesh.layout.clone());
+                    view_layouts.len() - 1
+                }
+            };
             phase.add_transient(CachedMesh3d {
                 entity: (*render_entity, *main_entity),
                 variant,
+                layout: layout as u32,
                 draw_function: draw,
                 batch_range: 0..1,
                 extra_index: PhaseItemExtraIndex::None,
@@ -365,12 +391,13 @@ pub(crate) fn queue_cached_meshes(
     }
 }
 
-/// Takes the cached meshes of each variant a view caches out of Bevy's
-/// opaque phase: the variant draws them. A view that took a variant's
-/// meshes before and does not now hands them back.
+/// Takes the meshes of each cache that draws out of Bevy's opaque phase:
+/// the variant draws them. A view that took a cache's meshes before and
+/// does not now hands them back.
 pub(crate) fn take_from_opaque_phase(
     phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
     caching: Res<CachingViews>,
+    layouts: Res<QueuedLayouts>,
     mut opaque: ResMut<ViewBinnedRenderPhases<Opaque3d>>,
     mut taken: ResMut<TakenViews>,
 ) {
@@ -379,18 +406,19 @@ pub(crate) fn take_from_opaque_phase(
             continue;
         };
         for ((_, main_entity), item) in &phase.items {
-            if caching.0.contains(&(*view, item.variant)) {
+            let cache = layouts.cache_of(*view, item);
+            if cache.is_some_and(|cache| caching.0.contains(&cache)) {
                 opaque.remove(*main_entity);
             }
         }
     }
-    let now: HashSet<ViewVariant> = caching
+    let now: HashSet<CacheId> = caching
         .0
         .iter()
-        .filter(|(view, _)| opaque.contains_key(view))
-        .copied()
+        .filter(|(view, _, _)| opaque.contains_key(view))
+        .cloned()
         .collect();
     let TakenViews { taken, handed_back } = &mut *taken;
-    handed_back.extend(taken.difference(&now).map(|(view, _)| *view));
+    handed_back.extend(taken.difference(&now).map(|(view, _, _)| *view));
     *taken = now;
 }

@@ -13,12 +13,14 @@ use bevy::pbr::{
     MeshPipeline, MeshPipelineViewLayoutKey, PreparedMaterial, RenderMaterialInstances,
     ViewKeyCache,
 };
-use bevy::platform::collections::HashMap;
+use bevy::platform::collections::{HashMap, HashSet};
 use bevy::prelude::*;
 use bevy::render::camera::ExtractedCamera;
 use bevy::render::diagnostic::RecordDiagnostics;
 use bevy::render::erased_render_asset::ErasedRenderAssets;
-use bevy::render::render_phase::{SortedRenderPhase, TrackedRenderPass, ViewSortedRenderPhases};
+use bevy::render::render_phase::{
+    SortedPhaseItem, SortedRenderPhase, TrackedRenderPass, ViewSortedRenderPhases,
+};
 use bevy::render::render_resource::{BufferUsages, ShaderType};
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
 use bevy::render::view::{
@@ -31,7 +33,7 @@ use shadecache_host::{
     CachedShader, FrameLayout, NoTimer, Options, Plan, Targets, TwinSources, Twins,
 };
 
-use crate::phase::{CachedMesh3d, CachingViews, QueuedLayouts, ViewVariant};
+use crate::phase::{CacheId, CachedMesh3d, CachingViews, QueuedLayouts};
 use crate::{CachedVariant, CachedVariants, ReprojectionCache};
 
 /// Bevy's view uniform: group 0, binding 0 of the mesh view bind group.
@@ -70,7 +72,7 @@ enum Slot {
 
 /// Every caching view's cache of each cached material's variant.
 #[derive(Resource, Default)]
-struct ViewCaches(HashMap<ViewVariant, Mutex<Slot>>);
+struct ViewCaches(HashMap<CacheId, Mutex<Slot>>);
 
 /// What the plugin did, shared by the main world and the render world
 /// (both hold a clone): frames drawn through the cache, and every error
@@ -190,9 +192,9 @@ struct CacheSources<'w> {
     materials: Res<'w, ErasedRenderAssets<PreparedMaterial>>,
 }
 
-/// Makes, keeps or drops each caching view's cache of each variant its
-/// visible cached meshes have, before the cached meshes are taken from
-/// Bevy's opaque phase (only view variants with a cache draw them).
+/// Makes, keeps or drops each caching view's caches: one per variant and
+/// vertex layout its visible cached meshes have, before the cached meshes
+/// are taken from Bevy's opaque phase (only meshes with a cache are).
 fn prepare_view_caches(
     sources: CacheSources,
     phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
@@ -200,87 +202,97 @@ fn prepare_view_caches(
     mut caches: ResMut<ViewCaches>,
     mut caching: ResMut<CachingViews>,
     stats: Res<CacheStats>,
-    mut refusals: Local<HashMap<ViewVariant, String>>,
+    mut refusals: Local<HashMap<CacheId, String>>,
 ) {
     let was_caching = std::mem::take(&mut caching.0);
-    caches.0.retain(|(view, _), _| phases.contains_key(view));
+    caches.0.retain(|(view, _, _), _| phases.contains_key(view));
+    let mut seen: HashSet<CacheId> = HashSet::default();
     for (view, camera, settings) in &views {
         let Some(phase) = phases.get(&view.retained_view_entity) else {
             continue;
         };
         for variant in 0..sources.variants.len() {
-            let id = (view.retained_view_entity, variant);
-            let items: Vec<&CachedMesh3d> = phase
-                .items
-                .values()
-                .filter(|item| item.variant == variant)
-                .collect();
-            let key = match view_cache_key(&id, &items, camera, settings, &sources) {
-                Ok(Some(key)) => key,
-                // Nothing of the variant is visible, or its material or
-                // the view is not prepared yet (or again, after a change):
-                // a view that cached goes on with the cache it has, as its
-                // meshes are out of Bevy's opaque phase.
-                Ok(None) => {
-                    if was_caching.contains(&id) {
-                        caching.0.insert(id);
+            let queued = sources.layouts.0.get(&(view.retained_view_entity, variant));
+            for (index, layout) in queued.into_iter().flatten().enumerate() {
+                let id: CacheId = (view.retained_view_entity, variant, layout.clone());
+                seen.insert(id.clone());
+                let items: Vec<&CachedMesh3d> = phase
+                    .items
+                    .values()
+                    .filter(|item| item.variant == variant && item.layout == index as u32)
+                    .collect();
+                let key = match partial_viewport(camera)
+                    .map_or_else(|| cache_key(&id, &items, settings, &sources), Err)
+                {
+                    Ok(Some(key)) => key,
+                    // The material or the view is not prepared yet (or
+                    // again, after a change): a view that cached goes on
+                    // with the cache it has, as its meshes are out of
+                    // Bevy's opaque phase.
+                    Ok(None) => {
+                        if was_caching.contains(&id) {
+                            caching.0.insert(id);
+                        }
+                        continue;
                     }
-                    continue;
-                }
-                Err(err) => {
-                    // Said once while it lasts; the meshes go back to Bevy
-                    // (`phase::take_from_opaque_phase`).
-                    if refusals.insert(id, err.clone()).as_ref() != Some(&err) {
-                        stats.error(format!(
-                            "the view does not cache {}, so Bevy draws it: {err}",
-                            sources.variants.name(variant)
-                        ));
+                    Err(err) => {
+                        // Said once while it lasts; the meshes go back to
+                        // Bevy (`phase::take_from_opaque_phase`).
+                        if refusals.insert(id, err.clone()).as_ref() != Some(&err) {
+                            stats.error(format!(
+                                "the view does not cache {}, so Bevy draws it: {err}",
+                                sources.variants.name(variant)
+                            ));
+                        }
+                        continue;
                     }
-                    continue;
+                };
+                refusals.remove(&id);
+                let size = camera
+                    .physical_target_size
+                    .map(|s| (s.x, s.y))
+                    .unwrap_or((1, 1));
+                if prepare_cache(&mut caches, &id, key, size, &sources, &stats) {
+                    caching.0.insert(id);
                 }
-            };
-            refusals.remove(&id);
-            let size = camera
-                .physical_target_size
-                .map(|s| (s.x, s.y))
-                .unwrap_or((1, 1));
-            let slot = caches.0.entry(id).or_insert_with(|| {
-                Mutex::new(make_cache(&sources, variant, key.clone(), size, &stats))
-            });
-            let slot = slot
-                .get_mut()
-                .unwrap_or_else(|poisoned| poisoned.into_inner());
-            let current = match slot {
-                Slot::Ready(cache) => &cache.key,
-                Slot::Failed(key) => key,
-            };
-            if *current != key {
-                *slot = make_cache(&sources, variant, key, size, &stats);
-            }
-            if matches!(slot, Slot::Ready(_)) {
-                caching.0.insert(id);
             }
         }
     }
+    // A cache with nothing of its own visible this frame goes on with what
+    // it has.
+    caching.0.extend(
+        was_caching
+            .into_iter()
+            .filter(|id| !seen.contains(id) && phases.contains_key(&id.0)),
+    );
 }
 
-/// What the view's cache of a variant is made for; `None` while there is
-/// nothing to make it for yet (no mesh of it visible, or the view or
-/// material not prepared); why the view does not cache it.
-fn view_cache_key(
-    id: &ViewVariant,
-    items: &[&CachedMesh3d],
-    camera: &ExtractedCamera,
-    settings: &ReprojectionCache,
+/// Makes the cache `id` for `key`, or again if it was made for another
+/// key; whether it is ready.
+fn prepare_cache(
+    caches: &mut ViewCaches,
+    id: &CacheId,
+    key: CacheKey,
+    size: (u32, u32),
     sources: &CacheSources,
-) -> Result<Option<CacheKey>, String> {
-    if items.is_empty() {
-        return Ok(None);
+    stats: &CacheStats,
+) -> bool {
+    let variant = id.1;
+    let slot = caches
+        .0
+        .entry(id.clone())
+        .or_insert_with(|| Mutex::new(make_cache(sources, variant, key.clone(), size, stats)));
+    let slot = slot
+        .get_mut()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    let current = match slot {
+        Slot::Ready(cache) => &cache.key,
+        Slot::Failed(key) => key,
+    };
+    if *current != key {
+        *slot = make_cache(sources, variant, key, size, stats);
     }
-    if let Some(refusal) = partial_viewport(camera) {
-        return Err(refusal);
-    }
-    cache_key(id, items, settings, sources)
+    matches!(slot, Slot::Ready(_))
 }
 
 /// Why a camera's viewport keeps its view from caching: a viewport
@@ -306,29 +318,16 @@ fn partial_viewport(camera: &ExtractedCamera) -> Option<String> {
 /// What the view's cache is made for, from Bevy's prepared view, mesh and
 /// material; `None` while one of them is not prepared yet.
 fn cache_key(
-    (view, variant): &ViewVariant,
+    (view, _, mesh_layout): &CacheId,
     items: &[&CachedMesh3d],
     settings: &ReprojectionCache,
     sources: &CacheSources,
 ) -> Result<Option<CacheKey>, String> {
-    let (view_keys, layouts) = (&sources.view_keys, &sources.layouts);
+    let view_keys = &sources.view_keys;
     let (material_instances, materials) = (&sources.material_instances, &sources.materials);
     use bevy::render::render_phase::PhaseItem;
     let Some(view_key) = view_keys.get(view).copied() else {
         return Ok(None);
-    };
-    let Some(mesh_layouts) = layouts.0.get(&(*view, *variant)) else {
-        return Ok(None);
-    };
-    let mesh_layout = match mesh_layouts.as_slice() {
-        [] => return Ok(None),
-        [one] => one.clone(),
-        _ => {
-            return Err(format!(
-                "the view's cached meshes have {} vertex layouts; a view's cached meshes must share one (the same vertex attributes), as the variant's pipelines are made for one",
-                mesh_layouts.len()
-            ))
-        }
     };
     // The material group's layout, which every cached mesh's material
     // must have: each pass binds each mesh's own material.
@@ -365,7 +364,7 @@ fn cache_key(
         view_layout: MeshPipelineViewLayoutKey::from(view_key),
         samples: view_key.msaa_samples(),
         color_format,
-        mesh_layout,
+        mesh_layout: mesh_layout.clone(),
         material_layout,
         refresh_period: settings.refresh_period,
     }))
@@ -536,6 +535,7 @@ struct CachedDraws<'w> {
     phases: Res<'w, ViewSortedRenderPhases<CachedMesh3d>>,
     caches: Res<'w, ViewCaches>,
     caching: Res<'w, CachingViews>,
+    layouts: Res<'w, QueuedLayouts>,
     variants: Res<'w, CachedVariants>,
     view_uniforms: Res<'w, ViewUniforms>,
 }
@@ -563,6 +563,7 @@ fn draw_cached_passes(
         phases,
         caches,
         caching,
+        layouts,
         variants,
         view_uniforms,
     } = drawn;
@@ -578,10 +579,12 @@ fn draw_cached_passes(
     ) else {
         return;
     };
-    let runs = variant_runs(phase);
-    let drawing: Vec<(u32, Range<usize>)> = runs
+    let drawing: Vec<(CacheId, Range<usize>)> = cache_runs(phase)
         .into_iter()
-        .filter(|(variant, _)| caching.0.contains(&(id, *variant)))
+        .filter_map(|(first, items)| {
+            let cache = layouts.cache_of(id, first)?;
+            caching.0.contains(&cache).then_some((cache, items))
+        })
         .collect();
     if drawing.is_empty() {
         return;
@@ -602,8 +605,9 @@ fn draw_cached_passes(
         // transparent pass tests against.
         depth: Some(&depth.attachment.texture.default_view),
     };
-    for (variant, items) in drawing {
-        let Some(slot) = caches.0.get(&(id, variant)) else {
+    for (cache_id, items) in drawing {
+        let variant = cache_id.1;
+        let Some(slot) = caches.0.get(&cache_id) else {
             continue;
         };
         let mut slot = slot.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
@@ -648,14 +652,14 @@ fn draw_cached_passes(
     }
 }
 
-/// Each variant's run of the phase's items (sorted by variant), with the
-/// variant.
-fn variant_runs(phase: &SortedRenderPhase<CachedMesh3d>) -> Vec<(u32, Range<usize>)> {
-    let mut runs: Vec<(u32, Range<usize>)> = Vec::new();
+/// Each cache's run of the phase's items (sorted by variant and layout),
+/// with its first item.
+fn cache_runs(phase: &SortedRenderPhase<CachedMesh3d>) -> Vec<(&CachedMesh3d, Range<usize>)> {
+    let mut runs: Vec<(&CachedMesh3d, Range<usize>)> = Vec::new();
     for (index, item) in phase.items.values().enumerate() {
         match runs.last_mut() {
-            Some((variant, range)) if *variant == item.variant => range.end = index + 1,
-            _ => runs.push((item.variant, index..index + 1)),
+            Some((first, range)) if first.sort_key() == item.sort_key() => range.end = index + 1,
+            _ => runs.push((item, index..index + 1)),
         }
     }
     runs

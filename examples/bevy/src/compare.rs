@@ -37,6 +37,9 @@ pub struct Headless {
     /// The stone meshes too, a second cached material with its own
     /// variant.
     pub stone: bool,
+    /// One more lava mesh, with vertex colours: another vertex layout
+    /// than the others' in the same view.
+    pub coloured_mesh: bool,
     /// Meshes Bevy draws itself beside the cached ones, in both views.
     pub other_meshes: OtherMeshes,
     /// Both cameras draw into the left half of their image (a split
@@ -197,6 +200,20 @@ fn setup(
     let settings = &run.0;
     if settings.stone {
         scene::spawn_stone(&mut commands, &mut meshes, &mut stone);
+    }
+    if settings.coloured_mesh {
+        let mut mesh = Mesh::from(Cuboid::new(0.5, 0.5, 0.5));
+        let vertices = mesh.count_vertices();
+        mesh.insert_attribute(
+            Mesh::ATTRIBUTE_COLOR,
+            vec![[1.0f32, 1.0, 1.0, 1.0]; vertices],
+        );
+        commands.spawn((
+            Mesh3d(meshes.add(mesh)),
+            MeshMaterial3d(materials.add(scene::LavaMaterial::new(AlphaMode::Opaque))),
+            Transform::from_xyz(-0.3, 0.9, 0.8),
+            CachedMaterial,
+        ));
     }
     if settings.foreign_material {
         commands.spawn((

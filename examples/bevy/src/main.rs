@@ -70,6 +70,7 @@ fn compare(args: Args) {
         msaa: false,
         foreign_material: false,
         stone: false,
+        coloured_mesh: false,
         other_meshes: shadecache_bevy_example::OtherMeshes::None,
         left_to_bevy: None,
         half_viewport: false,

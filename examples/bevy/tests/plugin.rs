@@ -74,6 +74,7 @@ fn settings() -> Headless {
         msaa: false,
         foreign_material: false,
         stone: false,
+        coloured_mesh: false,
         other_meshes: OtherMeshes::None,
         left_to_bevy: None,
         half_viewport: false,
@@ -464,6 +465,32 @@ fn mesh_of_a_material_without_a_variant_is_left_to_bevy_with_a_reason() {
     assert_eq!(said.len(), 1, "{:?}", run.errors);
     assert_eq!(run.errors.len(), 1, "{:?}", run.errors);
     assert!(run.compared.len() >= 8, "{:?}", run.compared);
+    all_bevys_own(&run.compared);
+}
+
+/// Lava meshes of two vertex layouts in one view (one has vertex
+/// colours, which the variant does not read): each layout gets a cache of
+/// its own, drawn in turn, and at Δn = 1 every frame is Bevy's own.
+#[test]
+fn meshes_of_several_vertex_layouts_in_one_view() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        refresh_period: Some(1),
+        frames: 8,
+        coloured_mesh: true,
+        ..settings()
+    });
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    assert!(run.compared.len() >= 8, "{:?}", run.compared);
+    // Both layouts' caches drew every frame compared.
+    assert!(
+        run.frames_drawn >= 2 * run.compared.len() as u64,
+        "{} caches drawn over {} frames",
+        run.frames_drawn,
+        run.compared.len()
+    );
     all_bevys_own(&run.compared);
 }
 
