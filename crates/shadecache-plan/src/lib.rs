@@ -13,9 +13,13 @@
 //!
 //! This crate depends on serde alone, so an application reads plans
 //! without linking the toolchain (naga, wgpu, the profiler); the
-//! toolchain writes them with the same definitions.
+//! toolchain writes them with the same definitions. It also holds what
+//! the toolchain and the applications both compute from frame times
+//! ([`speed`]: the speed-up and its interval).
 
 #![deny(missing_docs)]
+
+pub mod speed;
 
 use std::fmt;
 

@@ -48,13 +48,15 @@ impl Measured {
     /// The median and the 2.5th and 97.5th percentiles of the per-frame
     /// times.
     pub fn median_and_interval(&self) -> Option<(f64, f64, f64)> {
-        let mut sorted = self.material_ms.clone();
-        if sorted.is_empty() {
-            return None;
-        }
-        sorted.sort_by(f64::total_cmp);
-        let at = |q: f64| sorted[((sorted.len() - 1) as f64 * q).round() as usize];
-        Some((at(0.5), at(0.025), at(0.975)))
+        use shadecache_bevy::shadecache_host::plan::speed::{median, quantile};
+        let times = &self.material_ms;
+        (!times.is_empty()).then(|| {
+            (
+                median(times),
+                quantile(times, 0.025),
+                quantile(times, 0.975),
+            )
+        })
     }
 }
 
