@@ -94,6 +94,7 @@ mod cached;
 mod error;
 mod formats;
 mod frame;
+mod governor;
 mod layouts;
 mod params;
 mod pipelines;
@@ -104,6 +105,7 @@ mod vertex;
 pub use cached::{CachedShader, Draw, Options};
 pub use error::Error;
 pub use frame::{FrameLayout, Targets, Viewport};
+pub use governor::{Choice, Decision, GovernedFrame, Governor, GovernorSettings, SpeedEstimate};
 
 /// Brings in the Rust module a build script's `shadecache::build::Build`
 /// writes (`$OUT_DIR/shadecache/variants.rs`), naming every variant it

@@ -1,0 +1,501 @@
+//! Whether the cache pays on the GPU the application runs on, decided
+//! from that GPU's own frame times.
+//!
+//! `shadecache profile` answers on the developer's machine; the player's
+//! GPU is another one, and the same variant wins on one and loses on
+//! another by how heavy its payload is there. A [`Governor`] decides per
+//! frame what the application draws, the original or the cached frame,
+//! from the GPU times of the frames it has drawn:
+//!
+//! - **Measuring is interleaving.** While the cache is on, one frame in
+//!   [`GovernorSettings::probe_every`] is the original: those frames are
+//!   the measurement of what the cache saves. While it is off, a burst of
+//!   cached frames runs every [`GovernorSettings::reprobe_every`] frames,
+//!   because scenes change; the burst starts cold (the cache is new), and
+//!   its first [`GovernorSettings::warmup`] frames are not counted, as the
+//!   profiler leaves out its warm-up.
+//! - **Deciding is an interval.** The speed-up is the median original
+//!   frame over the median cached frame, of the last
+//!   [`GovernorSettings::window`] of each, with the profiler's bootstrap
+//!   interval (`shadecache_plan::speed`, the same code). The cache turns
+//!   off when the whole interval lies below 1× and on when it lies above;
+//!   in between, the decision holds (that is the hysteresis), and no
+//!   decision changes within [`GovernorSettings::min_dwell`] frames of the
+//!   last.
+//! - **Times come late.** A GPU time is read when its timestamps are
+//!   ready, frames after it was drawn, without a stall:
+//!   [`Governor::next_frame`] numbers each frame, and
+//!   [`Governor::measured`] takes the number back with the time.
+//! - **A switch on starts a new cache.** The first cached frame after the
+//!   cache was off carries `reset: true`: what the cache holds is from
+//!   before, as after a camera cut.
+//!
+//! The governor itself draws nothing and reads no timestamps: it is the
+//! decision, which an application (or the host's timing) feeds.
+
+use std::collections::VecDeque;
+
+use shadecache_plan::speed::{median, speedup_interval_resampled};
+
+/// How the governor samples and decides.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GovernorSettings {
+    /// Frame times kept of each kind, original and cached; the speed-up is
+    /// of the last this many.
+    pub window: usize,
+    /// Frame times of each kind needed before a decision.
+    pub min_samples: usize,
+    /// While the cache is on, one frame in this many is the original.
+    pub probe_every: u32,
+    /// While the cache is off, a burst of cached frames starts this many
+    /// frames after the last one began.
+    pub reprobe_every: u32,
+    /// Frames in a burst of cached frames while the cache is off.
+    pub reprobe_frames: u32,
+    /// Cached frames after a new start that are not measured: the cache
+    /// fills (its refresh period Δn and one frame: after a cold start most
+    /// values reach age Δn together).
+    pub warmup: u32,
+    /// Frames a decision holds at least.
+    pub min_dwell: u32,
+    /// Measured frames between two decisions (each resamples the windows).
+    pub decide_every: u32,
+    /// Resamples of the bootstrap interval (the profiler takes 2000; a
+    /// decision a game makes while it runs takes fewer, about 0.4 ms of
+    /// CPU for 400 in a release build).
+    pub resamples: usize,
+}
+
+impl Default for GovernorSettings {
+    fn default() -> Self {
+        GovernorSettings {
+            window: 32,
+            min_samples: 12,
+            probe_every: 16,
+            reprobe_every: 600,
+            reprobe_frames: 48,
+            warmup: 33,
+            min_dwell: 120,
+            decide_every: 16,
+            resamples: 400,
+        }
+    }
+}
+
+impl GovernorSettings {
+    /// Why these settings cannot govern: a window smaller than the samples
+    /// a decision needs, a burst that is all warm-up, a zero cadence.
+    pub fn check(&self) -> Result<(), String> {
+        if self.min_samples < 4 || self.window < self.min_samples {
+            return Err(format!(
+                "the governor's window ({}) must hold its minimum samples ({}), at least 4",
+                self.window, self.min_samples
+            ));
+        }
+        if self.probe_every < 2 || self.decide_every == 0 || self.resamples < 100 {
+            return Err("the governor probes one frame in 2 or more, decides every 1 or more measured frames, and resamples 100 times or more".into());
+        }
+        if self.reprobe_frames <= self.warmup || self.reprobe_every <= self.reprobe_frames {
+            return Err(format!(
+                "a burst of {} cached frames every {} frames leaves nothing after a warm-up of {}",
+                self.reprobe_frames, self.reprobe_every, self.warmup
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// What the application draws this frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Choice {
+    /// The original shader.
+    Original,
+    /// The cached variant; with `reset`, the cache starts afresh first
+    /// (`CachedShader::reset`).
+    Cached {
+        /// Whether the cache starts afresh this frame.
+        reset: bool,
+    },
+}
+
+/// One frame the governor asked for: its number, to give back with its
+/// GPU time, and what to draw.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GovernedFrame {
+    /// The frame's number, for [`Governor::measured`].
+    pub frame: u64,
+    /// What to draw.
+    pub choice: Choice,
+}
+
+/// The speed-up the governor holds: the ratio of the medians and its 95%
+/// interval.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpeedEstimate {
+    /// Median original frame time over median cached frame time.
+    pub speedup: f64,
+    /// Its bootstrap interval.
+    pub interval: [f64; 2],
+}
+
+/// A decision: the cache on or off from a frame on, and why.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Decision {
+    /// The frame it applies from.
+    pub frame: u64,
+    /// Whether the cache is on.
+    pub on: bool,
+    /// The estimate it was made on.
+    pub estimate: SpeedEstimate,
+}
+
+/// What a frame was, as far as measuring goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Original,
+    /// A cached frame, counted once the cache is warm.
+    Cached {
+        warm: bool,
+    },
+}
+
+/// Decides per frame whether the application draws the original or the
+/// cached frame, from the GPU times of the frames drawn (module docs).
+#[derive(Clone, Debug)]
+pub struct Governor {
+    settings: GovernorSettings,
+    on: bool,
+    /// The next frame's number.
+    frame: u64,
+    /// The frame the last decision applies from.
+    since: u64,
+    /// Cached frames drawn since the cache last started afresh.
+    warm_frames: u32,
+    /// Where the last burst of cached frames began, while off.
+    burst_start: u64,
+    /// Frames asked for and not yet measured, by number.
+    pending: VecDeque<(u64, Kind)>,
+    originals: VecDeque<f64>,
+    cached: VecDeque<f64>,
+    /// Measured frames since the last decision was weighed.
+    undecided: u32,
+    estimate: Option<SpeedEstimate>,
+    decisions: Vec<Decision>,
+}
+
+/// Frames asked for and never measured that the governor forgets: a time
+/// that never comes (a frame the application dropped) does not grow it.
+const MAX_PENDING: usize = 256;
+
+impl Governor {
+    /// A governor with the cache on (the developer chose it); the first
+    /// original frames measure it.
+    pub fn new(settings: GovernorSettings) -> Result<Governor, String> {
+        settings.check()?;
+        Ok(Governor {
+            settings,
+            on: true,
+            frame: 0,
+            since: 0,
+            warm_frames: 0,
+            burst_start: 0,
+            pending: VecDeque::new(),
+            originals: VecDeque::new(),
+            cached: VecDeque::new(),
+            undecided: 0,
+            estimate: None,
+            decisions: Vec::new(),
+        })
+    }
+
+    /// Whether the cache is on.
+    pub fn is_on(&self) -> bool {
+        self.on
+    }
+
+    /// The speed-up last weighed, if there were enough frames of each kind.
+    pub fn estimate(&self) -> Option<SpeedEstimate> {
+        self.estimate
+    }
+
+    /// Every switch, in order.
+    pub fn decisions(&self) -> &[Decision] {
+        &self.decisions
+    }
+
+    /// What to draw for the next frame, and its number.
+    pub fn next_frame(&mut self) -> GovernedFrame {
+        let frame = self.frame;
+        self.frame += 1;
+        let draw = if self.on {
+            let since = frame - self.since;
+            if since % u64::from(self.settings.probe_every)
+                == u64::from(self.settings.probe_every) - 1
+            {
+                Choice::Original
+            } else {
+                self.cached_frame()
+            }
+        } else {
+            let every = u64::from(self.settings.reprobe_every);
+            let into = (frame - self.since) % every;
+            if frame > self.since && into < u64::from(self.settings.reprobe_frames) {
+                if into == 0 {
+                    // A new burst: the cached frames of the last one are
+                    // of another scene.
+                    self.burst_start = frame;
+                    self.cached.clear();
+                    self.warm_frames = 0;
+                }
+                self.cached_frame()
+            } else {
+                Choice::Original
+            }
+        };
+        let kind = match draw {
+            Choice::Original => Kind::Original,
+            Choice::Cached { .. } => Kind::Cached {
+                warm: self.warm_frames > self.settings.warmup,
+            },
+        };
+        if self.pending.len() == MAX_PENDING {
+            self.pending.pop_front();
+        }
+        self.pending.push_back((frame, kind));
+        GovernedFrame {
+            frame,
+            choice: draw,
+        }
+    }
+
+    /// A cached frame: the first since the cache was off starts afresh.
+    fn cached_frame(&mut self) -> Choice {
+        let reset = self.warm_frames == 0;
+        self.warm_frames = self.warm_frames.saturating_add(1);
+        Choice::Cached { reset }
+    }
+
+    /// The GPU time of frame `frame`, in milliseconds, once read; a frame
+    /// not asked for (or forgotten) is ignored. May switch the cache for
+    /// the frames after.
+    pub fn measured(&mut self, frame: u64, gpu_ms: f64) {
+        let Some(at) = self.pending.iter().position(|(f, _)| *f == frame) else {
+            return;
+        };
+        let (_, kind) = self.pending.remove(at).unwrap_or((frame, Kind::Original));
+        if !gpu_ms.is_finite() || gpu_ms <= 0.0 {
+            return;
+        }
+        let window = match kind {
+            Kind::Original => &mut self.originals,
+            Kind::Cached { warm: true } => &mut self.cached,
+            Kind::Cached { warm: false } => return,
+        };
+        if window.len() == self.settings.window {
+            window.pop_front();
+        }
+        window.push_back(gpu_ms);
+        self.undecided += 1;
+        if self.undecided >= self.settings.decide_every {
+            self.undecided = 0;
+            self.weigh();
+        }
+    }
+
+    /// Weighs the windows, and switches where the interval lies wholly on
+    /// the other side of 1× and the last decision has held long enough.
+    fn weigh(&mut self) {
+        let min = self.settings.min_samples;
+        if self.originals.len() < min || self.cached.len() < min {
+            return;
+        }
+        let originals: Vec<f64> = self.originals.iter().copied().collect();
+        let cached: Vec<f64> = self.cached.iter().copied().collect();
+        let estimate = SpeedEstimate {
+            speedup: median(&originals) / median(&cached),
+            interval: speedup_interval_resampled(&originals, &cached, self.settings.resamples),
+        };
+        self.estimate = Some(estimate);
+        if self.frame - self.since < u64::from(self.settings.min_dwell) {
+            return;
+        }
+        let switch = if self.on {
+            estimate.interval[1] < 1.0
+        } else {
+            estimate.interval[0] > 1.0
+        };
+        if switch {
+            self.on = !self.on;
+            self.since = self.frame;
+            self.warm_frames = 0;
+            // The other kind's frames are what the new state samples
+            // rarely: keep them, but the cached ones are of a cache that
+            // starts afresh.
+            if self.on {
+                self.cached.clear();
+            }
+            self.decisions.push(Decision {
+                frame: self.frame,
+                on: self.on,
+                estimate,
+            });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Frame times with ±`spread` relative noise, seeded.
+    struct Noise(u64);
+
+    impl Noise {
+        fn around(&mut self, ms: f64, spread: f64) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            let unit = (self.0 >> 11) as f64 / (1u64 << 53) as f64;
+            ms * (1.0 + spread * (2.0 * unit - 1.0))
+        }
+    }
+
+    /// Runs `frames` frames, each measured `lag` frames later, the
+    /// original costing `original(frame)` and a warm cached frame
+    /// `cached(frame)` (a cold one costs the original's and more). The
+    /// frame times drawn, in order.
+    fn play(
+        governor: &mut Governor,
+        frames: u64,
+        lag: usize,
+        original: impl Fn(u64) -> f64,
+        cached: impl Fn(u64) -> f64,
+    ) -> Vec<(Choice, f64)> {
+        let mut noise = Noise(0x2545_F491_4F6C_DD1D);
+        let mut drawn = Vec::new();
+        let mut in_flight: VecDeque<(u64, f64)> = VecDeque::new();
+        let mut warm = 0u32;
+        for _ in 0..frames {
+            let next = governor.next_frame();
+            let ms = match next.choice {
+                Choice::Original => noise.around(original(next.frame), 0.05),
+                Choice::Cached { reset } => {
+                    warm = if reset { 0 } else { warm + 1 };
+                    let cold = warm < 8;
+                    let base = if cold {
+                        original(next.frame) * 1.1
+                    } else {
+                        cached(next.frame)
+                    };
+                    noise.around(base, 0.05)
+                }
+            };
+            drawn.push((next.choice, ms));
+            in_flight.push_back((next.frame, ms));
+            if in_flight.len() > lag {
+                let (frame, ms) = in_flight.pop_front().unwrap();
+                governor.measured(frame, ms);
+            }
+        }
+        drawn
+    }
+
+    fn mean_ms(drawn: &[(Choice, f64)]) -> f64 {
+        drawn.iter().map(|(_, ms)| ms).sum::<f64>() / drawn.len() as f64
+    }
+
+    fn governor() -> Governor {
+        Governor::new(GovernorSettings::default()).unwrap()
+    }
+
+    #[test]
+    fn a_losing_cache_is_turned_off_and_costs_little_after() {
+        let mut g = governor();
+        let drawn = play(&mut g, 3000, 3, |_| 1.0, |_| 1.25);
+        assert!(!g.is_on(), "{:?}", g.decisions());
+        assert_eq!(g.decisions().len(), 1, "{:?}", g.decisions());
+        let off_at = g.decisions()[0].frame as usize;
+        assert!(off_at <= 400, "turned off at frame {off_at}");
+        // After, the re-probes' bursts cost a few percent over the original.
+        let after = mean_ms(&drawn[off_at..]);
+        assert!(after < 1.05, "mean {after} ms after switching off");
+    }
+
+    #[test]
+    fn a_winning_cache_is_kept_with_most_of_its_gain() {
+        let mut g = governor();
+        let drawn = play(&mut g, 3000, 3, |_| 1.0, |_| 0.5);
+        assert!(g.is_on());
+        assert!(g.decisions().is_empty(), "{:?}", g.decisions());
+        let estimate = g.estimate().unwrap();
+        assert!(estimate.interval[0] > 1.5, "{estimate:?}");
+        // The fixed cache saves 0.5 ms a frame; the probes keep ≥ 90% of it.
+        let kept = (1.0 - mean_ms(&drawn[100..])) / 0.5;
+        assert!(kept >= 0.9, "kept {kept:.3} of the gain");
+    }
+
+    #[test]
+    fn a_scene_that_changes_weight_is_followed_both_ways() {
+        let mut g = governor();
+        // The cache wins for 1500 frames, then loses, then wins again.
+        let cached = |frame: u64| {
+            if (1500..3500).contains(&frame) {
+                1.4
+            } else {
+                0.5
+            }
+        };
+        play(&mut g, 6000, 3, |_| 1.0, cached);
+        let switches: Vec<(u64, bool)> = g.decisions().iter().map(|d| (d.frame, d.on)).collect();
+        assert_eq!(switches.len(), 2, "{switches:?}");
+        let (off, on) = (switches[0], switches[1]);
+        assert!(!off.1 && (1500..1800).contains(&off.0), "{switches:?}");
+        // Back on at a burst after 3500: within a re-probe period and a burst.
+        assert!(
+            on.1 && (3500..3500 + 600 + 48 + 120).contains(&on.0),
+            "{switches:?}"
+        );
+    }
+
+    #[test]
+    fn a_cache_at_one_to_one_does_not_flap() {
+        let mut g = governor();
+        play(&mut g, 1000, 3, |_| 1.0, |_| 1.0);
+        assert!(g.decisions().len() <= 1, "{:?}", g.decisions());
+    }
+
+    #[test]
+    fn switching_on_starts_the_cache_afresh() {
+        let mut g = governor();
+        let cached = |frame: u64| if frame < 1000 { 1.4 } else { 0.5 };
+        let drawn = play(&mut g, 3000, 2, |_| 1.0, cached);
+        let on = g
+            .decisions()
+            .iter()
+            .find(|d| d.on)
+            .expect("switched back on");
+        let first = drawn[on.frame as usize..]
+            .iter()
+            .find(|(draw, _)| matches!(draw, Choice::Cached { .. }))
+            .unwrap();
+        assert_eq!(first.0, Choice::Cached { reset: true });
+    }
+
+    #[test]
+    fn times_of_frames_not_asked_for_are_ignored() {
+        let mut g = governor();
+        for _ in 0..10 {
+            g.next_frame();
+        }
+        g.measured(12345, 1.0);
+        g.measured(3, f64::NAN);
+        assert_eq!(g.pending.len(), 9);
+        assert!(GovernorSettings {
+            window: 8,
+            min_samples: 12,
+            ..Default::default()
+        }
+        .check()
+        .is_err());
+    }
+}
