@@ -122,7 +122,7 @@ macro_rules! include_variants {
 }
 pub use shadecache_plan as plan;
 pub use shadecache_plan::Plan;
-pub use timing::{NoTimer, PassTime, PassTimer, Timestamps};
+pub use timing::{FrameTimer, NoTimer, PassTime, PassTimer, Timestamps};
 pub use twins::{TwinSources, Twins};
 
 /// What the shadecache toolchain shares with the host to draw its scenes

@@ -181,3 +181,206 @@ impl PassTimer for Timestamps {
 
     fn end(&mut self, _: &mut wgpu::CommandEncoder, _: Option<u32>) {}
 }
+
+/// One frame's queries in a [`FrameTimer`], and where its times are read.
+#[derive(Debug)]
+struct FrameSlot {
+    queries: wgpu::QuerySet,
+    resolved: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    /// The frame recorded into it, and its queries used.
+    frame: Option<u64>,
+    used: u32,
+    /// Set by the map's callback once the times can be read.
+    mapped: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    mapping: bool,
+}
+
+/// Whole frames' GPU times, read when they are ready, never waited for:
+/// what a running application measures itself with (a
+/// [`crate::Governor`] decides from it), where [`Timestamps`] waits for
+/// each frame as a profiler may.
+///
+/// A frame is timed from the start of its first timed pass to the end of
+/// its last, through this timer as a [`PassTimer`] (the host's passes,
+/// and the application's own original pass timed the same way). Per
+/// frame: [`FrameTimer::begin_frame`], record, [`FrameTimer::resolve`]
+/// into the frame's encoder, submit, then [`FrameTimer::ready`], which
+/// starts the reads of what was submitted and returns the frames whose
+/// times have arrived. Up to `in_flight` frames wait for their times; a
+/// frame begun while all are waiting goes untimed (`begin_frame` says so).
+#[derive(Debug)]
+pub struct FrameTimer {
+    slots: Vec<FrameSlot>,
+    /// The slot being recorded.
+    current: Option<usize>,
+    capacity: u32,
+    period_ns: f32,
+}
+
+impl FrameTimer {
+    /// Room for `passes` timed passes a frame and `in_flight` frames
+    /// waiting for their times; `None` when the device was not opened with
+    /// `Features::TIMESTAMP_QUERY`.
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        passes: u32,
+        in_flight: usize,
+    ) -> Option<FrameTimer> {
+        if !device.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
+            return None;
+        }
+        let capacity = passes.max(1);
+        let bytes = u64::from(capacity) * 16;
+        let slots = (0..in_flight.max(1))
+            .map(|_| FrameSlot {
+                queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("shadecache frame timestamps"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: capacity * 2,
+                }),
+                resolved: device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("shadecache resolved frame timestamps"),
+                    size: bytes,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                }),
+                readback: device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("shadecache frame timestamp readback"),
+                    size: bytes,
+                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                    mapped_at_creation: false,
+                }),
+                frame: None,
+                used: 0,
+                mapped: Default::default(),
+                mapping: false,
+            })
+            .collect();
+        Some(FrameTimer {
+            slots,
+            current: None,
+            capacity,
+            period_ns: queue.get_timestamp_period(),
+        })
+    }
+
+    /// Starts timing frame `frame`; false when every slot still waits for
+    /// its times (the frame is not timed).
+    pub fn begin_frame(&mut self, frame: u64) -> bool {
+        // A frame begun and never resolved was not submitted with its
+        // queries: its slot is free.
+        if let Some(index) = self.current.take() {
+            self.slots[index].frame = None;
+        }
+        self.current = self.slots.iter().position(|slot| slot.frame.is_none());
+        if let Some(index) = self.current {
+            let slot = &mut self.slots[index];
+            slot.frame = Some(frame);
+            slot.used = 0;
+        }
+        self.current.is_some()
+    }
+
+    /// Resolves the frame's queries into `encoder`; record after its
+    /// passes, before the encoder is submitted.
+    pub fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        let Some(index) = self.current.take() else {
+            return;
+        };
+        let slot = &mut self.slots[index];
+        if slot.used == 0 {
+            // Nothing timed: the slot is free again.
+            slot.frame = None;
+            return;
+        }
+        let count = slot.used * 2;
+        encoder.resolve_query_set(&slot.queries, 0..count, &slot.resolved, 0);
+        encoder.copy_buffer_to_buffer(&slot.resolved, 0, &slot.readback, 0, u64::from(count) * 8);
+    }
+
+    /// The frames whose times have arrived, as (frame, milliseconds from
+    /// its first pass's start to its last pass's end). Call after
+    /// submitting the frames resolved: it starts their reads and polls the
+    /// device without waiting.
+    pub fn ready(&mut self, device: &wgpu::Device) -> Result<Vec<(u64, f64)>, crate::Error> {
+        for (index, slot) in self.slots.iter_mut().enumerate() {
+            if slot.frame.is_some() && !slot.mapping && Some(index) != self.current {
+                slot.mapping = true;
+                let mapped = slot.mapped.clone();
+                slot.readback.slice(..u64::from(slot.used) * 16).map_async(
+                    wgpu::MapMode::Read,
+                    move |result| {
+                        if result.is_ok() {
+                            mapped.store(true, std::sync::atomic::Ordering::Release);
+                        }
+                    },
+                );
+            }
+        }
+        device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|err| crate::Error::Wgpu(err.to_string()))?;
+        let mut times = Vec::new();
+        for slot in &mut self.slots {
+            if !slot
+                .mapped
+                .swap(false, std::sync::atomic::Ordering::Acquire)
+            {
+                continue;
+            }
+            let ticks: Vec<u64> = {
+                let data = slot
+                    .readback
+                    .slice(..u64::from(slot.used) * 16)
+                    .get_mapped_range()
+                    .map_err(|err| crate::Error::Wgpu(format!("{err:?}")))?;
+                data.chunks_exact(8)
+                    .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+                    .collect()
+            };
+            slot.readback.unmap();
+            slot.mapping = false;
+            let (first, last) = (
+                ticks.iter().step_by(2).min(),
+                ticks.iter().skip(1).step_by(2).max(),
+            );
+            if let (Some(frame), Some(&first), Some(&last)) = (slot.frame.take(), first, last) {
+                let ms = last.saturating_sub(first) as f64 * f64::from(self.period_ns) / 1e6;
+                times.push((frame, ms));
+            }
+        }
+        times.sort_by_key(|(frame, _)| *frame);
+        Ok(times)
+    }
+}
+
+impl PassTimer for FrameTimer {
+    /// The pass's index in the frame's slot; `None` when the frame is not
+    /// timed or past the capacity.
+    type Query = Option<u32>;
+
+    fn begin(&mut self, _: &mut wgpu::CommandEncoder, _: &str) -> Option<u32> {
+        let slot = &mut self.slots[self.current?];
+        (slot.used < self.capacity).then(|| {
+            slot.used += 1;
+            slot.used - 1
+        })
+    }
+
+    fn timestamp_writes<'a>(
+        &'a self,
+        query: &'a Option<u32>,
+    ) -> Option<wgpu::RenderPassTimestampWrites<'a>> {
+        let index = (*query)?;
+        let slot = &self.slots[self.current?];
+        Some(wgpu::RenderPassTimestampWrites {
+            query_set: &slot.queries,
+            beginning_of_pass_write_index: Some(index * 2),
+            end_of_pass_write_index: Some(index * 2 + 1),
+        })
+    }
+
+    fn end(&mut self, _: &mut wgpu::CommandEncoder, _: Option<u32>) {}
+}

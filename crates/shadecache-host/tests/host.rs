@@ -108,6 +108,11 @@ struct Gpu {
 }
 
 fn gpu() -> Option<Gpu> {
+    gpu_with(wgpu::Features::empty())
+}
+
+/// A device with `features`, where the adapter has them.
+fn gpu_with(features: wgpu::Features) -> Option<Gpu> {
     let instance =
         wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     let Ok(adapter) =
@@ -125,9 +130,12 @@ fn gpu() -> Option<Gpu> {
         }
         panic!("no GPU adapter: install a Vulkan driver (mesa-vulkan-drivers), or set SHADECACHE_SKIP_GPU_TESTS=1");
     };
-    let (device, queue) =
-        pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor::default()))
-            .expect("a device");
+    let features = features & adapter.features();
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        required_features: features,
+        ..Default::default()
+    }))
+    .expect("a device");
     Some(Gpu { device, queue })
 }
 
@@ -398,6 +406,27 @@ impl App {
         drawn: Drawn,
         depth: Option<&wgpu::TextureView>,
     ) -> Result<(), Error> {
+        self.record_timed(
+            gpu,
+            x,
+            drawn,
+            depth,
+            &mut shadecache_host::NoTimer,
+            |_, _| {},
+        )
+    }
+
+    /// [`App::record_with`], its passes timed by `timer`, and `before_submit`
+    /// given the timer and the encoder after them (to resolve the queries).
+    fn record_timed<T: shadecache_host::PassTimer>(
+        &mut self,
+        gpu: &Gpu,
+        x: f32,
+        drawn: Drawn,
+        depth: Option<&wgpu::TextureView>,
+        timer: &mut T,
+        before_submit: impl FnOnce(&mut T, &mut wgpu::CommandEncoder),
+    ) -> Result<(), Error> {
         gpu.queue.write_buffer(&self.object, 0, &bytes(&matrix(x)));
         let views: Vec<wgpu::TextureView> = self
             .targets
@@ -421,7 +450,7 @@ impl App {
         };
         let cache_group = self.cached.cache_group();
         self.cached
-            .record(&gpu.queue, &mut encoder, &targets, |draw| {
+            .record_timed(&gpu.queue, &mut encoder, &targets, timer, |draw| {
                 draw.set_bind_group(0, &groups[0], &[]);
                 draw.set_bind_group(1, &groups[1], &[]);
                 if let (Drawn::OnTheCacheGroup, Some(group)) = (drawn, cache_group) {
@@ -435,6 +464,7 @@ impl App {
                     _ => draw.draw_indexed(twins, 0..6, 0, 0..1),
                 }
             })?;
+        before_submit(timer, &mut encoder);
         gpu.queue.submit([encoder.finish()]);
         Ok(())
     }
@@ -1192,4 +1222,69 @@ fn a_corrupted_plan_is_an_error_not_an_allocation() {
         },
     );
     assert!(matches!(made, Err(Error::Plan(_))), "{:?}", made.err());
+}
+
+/// A running application's frame times arrive when the GPU is done with
+/// them, without a wait: each frame is asked for after its submit, and
+/// every frame's time comes back once, under its own number, however
+/// many frames later; a governor fed with them holds an estimate.
+#[test]
+fn frame_times_are_read_when_ready_without_waiting() {
+    let Some(gpu) = gpu_with(wgpu::Features::TIMESTAMP_QUERY) else {
+        return;
+    };
+    let Some(mut timer) = shadecache_host::FrameTimer::new(&gpu.device, &gpu.queue, 4, 3) else {
+        eprintln!("SKIPPED (the adapter has no timestamp queries)");
+        return;
+    };
+    let mut app = App::new(&gpu, "three-pass");
+    let mut governor = shadecache_host::Governor::new(shadecache_host::GovernorSettings {
+        min_samples: 4,
+        window: 8,
+        probe_every: 2,
+        decide_every: 1,
+        warmup: 2,
+        ..Default::default()
+    })
+    .expect("the settings govern");
+    let mut arrived = Vec::new();
+    let mut untimed = Vec::new();
+    for _ in 0..24 {
+        let next = governor.next_frame();
+        if !timer.begin_frame(next.frame) {
+            untimed.push(next.frame);
+        }
+        app.record_timed(
+            &gpu,
+            0.0,
+            Drawn::ThroughHost,
+            None,
+            &mut timer,
+            |timer, encoder| timer.resolve(encoder),
+        )
+        .expect("the frame records");
+        for (frame, ms) in timer.ready(&gpu.device).expect("the times read") {
+            governor.measured(frame, ms);
+            arrived.push((frame, ms));
+        }
+    }
+    // What is still on the way comes in once the GPU is idle.
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .expect("the GPU finishes");
+    for (frame, ms) in timer.ready(&gpu.device).expect("the times read") {
+        governor.measured(frame, ms);
+        arrived.push((frame, ms));
+    }
+    let mut frames: Vec<u64> = arrived.iter().map(|(f, _)| *f).collect();
+    frames.extend(&untimed);
+    frames.sort();
+    assert_eq!(
+        frames,
+        (0..24).collect::<Vec<u64>>(),
+        "{arrived:?} untimed {untimed:?}"
+    );
+    assert!(arrived.len() >= 8, "{arrived:?}");
+    assert!(arrived.iter().all(|(_, ms)| *ms > 0.0), "{arrived:?}");
+    assert!(governor.estimate().is_some());
 }
