@@ -59,15 +59,19 @@
 //!   source. The variant's `less`/`greater` tests pass on equal depth, as
 //!   a depth prepass (TAA's, SSAO's) already holds the cached meshes' own.
 //!
-//! - **Vertex layouts.** The host makes a variant's pipelines for one
-//!   vertex layout: a view's meshes of one material with several layouts
-//!   (one with vertex colours, another without) have a cache each, drawn
-//!   in turn, each its own run of the phase.
+//! - **Drawn as Bevy draws them.** The host makes a variant's pipelines
+//!   for one vertex layout and primitive state, and the primitive state is
+//!   that of the pipeline Bevy specialised for the mesh: the mesh's
+//!   topology, the material's culling, whatever the material's own
+//!   `specialize` set. A view's meshes of one material drawn several ways
+//!   (one with vertex colours, one double-sided) have a cache each, drawn
+//!   in turn, each its own run of the phase; a mesh is cached from the
+//!   frame after Bevy's pipeline for it is made.
 //!
 //! What it does not do (yet): Bevy's `StandardMaterial` (bindless, its
 //! defs per instance); skinned, morphed, lightmapped,
-//! blended or deferred meshes (left to Bevy, above); a material's own
-//! `specialize` (its pipeline changes are not seen).
+//! blended or deferred meshes (left to Bevy, above); shader defs a
+//! material's `specialize` adds (the variant's are the build script's).
 
 mod phase;
 mod view_cache;

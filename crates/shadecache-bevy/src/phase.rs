@@ -20,7 +20,7 @@ use bevy::mesh::{BaseMeshPipelineKey, MeshVertexBufferLayoutRef};
 use bevy::pbr::{
     DrawMesh, MeshPipeline, PreparedMaterial, RenderMaterialInstances, RenderMeshInstances,
     SetMaterialBindGroup, SetMeshBindGroup, SetMeshViewBindGroup, SetMeshViewBindingArrayBindGroup,
-    MATERIAL_BIND_GROUP_INDEX,
+    SpecializedMaterialPipelineCache, MATERIAL_BIND_GROUP_INDEX,
 };
 use bevy::platform::collections::{HashMap, HashSet};
 use bevy::prelude::*;
@@ -34,7 +34,7 @@ use bevy::render::render_phase::{
     DrawFunctions, PhaseItem, PhaseItemExtraIndex, SortedPhaseItem, SortedRenderPhasePlugin,
     ViewBinnedRenderPhases, ViewSortedRenderPhases,
 };
-use bevy::render::render_resource::CachedRenderPipelineId;
+use bevy::render::render_resource::{CachedPipelineState, CachedRenderPipelineId, PipelineCache};
 use bevy::render::sync_world::MainEntity;
 use bevy::render::view::{ExtractedView, RenderVisibleEntities, RetainedViewEntity};
 use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderDebugFlags, RenderSystems};
@@ -55,10 +55,10 @@ pub(crate) type DrawCachedMesh = (
 /// One cached mesh in a view.
 pub(crate) struct CachedMesh3d {
     entity: (Entity, MainEntity),
-    /// Its material's variant ([`CachedVariants`]) and its vertex layout
-    /// (an index into the view variant's [`QueuedLayouts`]): the phase
-    /// keeps the meshes of each pair together, and each pair's cache draws
-    /// its own.
+    /// Its material's variant ([`CachedVariants`]) and how Bevy draws it
+    /// (an index into the view variant's [`QueuedLayouts`]: its vertex
+    /// layout and primitive state): the phase keeps the meshes of each
+    /// pair together, and each pair's cache draws its own.
     pub variant: u32,
     pub layout: u32,
     draw_function: DrawFunctionId,
@@ -140,15 +140,25 @@ impl CachedRenderPipelinePhaseItem for CachedMesh3d {
 /// One material's variant in one view.
 pub(crate) type ViewVariant = (RetainedViewEntity, u32);
 
-/// What one cache is made for: a material's variant in a view, for the
-/// meshes of one vertex layout (the host's pipelines take one; meshes of
-/// several layouts have a cache each).
-pub(crate) type CacheId = (RetainedViewEntity, u32, MeshVertexBufferLayoutRef);
+/// How Bevy draws a mesh, as far as the variant's pipelines go: its
+/// vertex layout, and the primitive state Bevy's specialisation gave its
+/// pipeline (the mesh's topology, the material's culling and whatever
+/// else its `specialize` set).
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub(crate) struct DrawnAs {
+    pub layout: MeshVertexBufferLayoutRef,
+    pub primitive: wgpu::PrimitiveState,
+}
 
-/// The vertex layouts of each view's cached meshes of each variant, as
-/// queued this frame: an item's `layout` is an index into its list.
+/// What one cache is made for: a material's variant in a view, for the
+/// meshes drawn one way (the host's pipelines take one vertex layout and
+/// primitive state; meshes drawn several ways have a cache each).
+pub(crate) type CacheId = (RetainedViewEntity, u32, DrawnAs);
+
+/// How each view's cached meshes of each variant are drawn, as queued
+/// this frame: an item's `layout` is an index into its list.
 #[derive(Resource, Default)]
-pub(crate) struct QueuedLayouts(pub HashMap<ViewVariant, Vec<MeshVertexBufferLayoutRef>>);
+pub(crate) struct QueuedLayouts(pub HashMap<ViewVariant, Vec<DrawnAs>>);
 
 impl QueuedLayouts {
     /// The cache that draws `item` in `view`.
@@ -253,9 +263,32 @@ pub(crate) struct MeshQueueing<'w> {
     material_instances: Res<'w, RenderMaterialInstances>,
     materials: Res<'w, ErasedRenderAssets<PreparedMaterial>>,
     variants: Res<'w, CachedVariants>,
+    specialized: Res<'w, SpecializedMaterialPipelineCache>,
+    pipeline_cache: Res<'w, PipelineCache>,
 }
 
 impl MeshQueueing<'_> {
+    /// The primitive state of the pipeline Bevy specialised for the mesh
+    /// of `entity` in `view` (the material's `specialize` included);
+    /// `None` until that pipeline is made.
+    fn primitive(
+        &self,
+        view: &RetainedViewEntity,
+        entity: MainEntity,
+    ) -> Option<wgpu::PrimitiveState> {
+        let id = *self.specialized.get(view)?.get(&entity)?;
+        // Only a pipeline the cache has processed has its descriptor.
+        matches!(
+            self.pipeline_cache.get_render_pipeline_state(id),
+            CachedPipelineState::Ok(_)
+        )
+        .then(|| {
+            self.pipeline_cache
+                .get_render_pipeline_descriptor(id)
+                .primitive
+        })
+    }
+
     /// The variant that draws the mesh of `entity`: its material's; why it
     /// is left to Bevy where its material has none. `None` while its
     /// material is not extracted yet.
@@ -367,14 +400,23 @@ pub(crate) fn queue_cached_meshes(
                 continue;
             }
             let Ok(variant) = variant else { continue };
+            // Not drawn by Bevy yet either: its pipeline is on the way.
+            let Some(primitive) = queueing.primitive(&view.retained_view_entity, *main_entity)
+            else {
+                continue;
+            };
+            let drawn = DrawnAs {
+                layout: mesh.layout.clone(),
+                primitive,
+            };
             let view_layouts = layouts
                 .0
                 .entry((view.retained_view_entity, variant))
                 .or_default();
-            let layout = match view_layouts.iter().position(|l| *l == mesh.layout) {
+            let layout = match view_layouts.iter().position(|d| *d == drawn) {
                 Some(index) => index,
                 None => {
-                    view_layouts.push(mesh.layout.clone());
+                    view_layouts.push(drawn);
                     view_layouts.len() - 1
                 }
             };

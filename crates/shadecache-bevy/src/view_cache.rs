@@ -48,6 +48,8 @@ struct CacheKey {
     samples: u32,
     color_format: wgpu::TextureFormat,
     mesh_layout: bevy::mesh::MeshVertexBufferLayoutRef,
+    /// The primitive state of Bevy's own pipeline for the meshes.
+    primitive: wgpu::PrimitiveState,
     material_layout: Vec<wgpu::BindGroupLayoutEntry>,
     refresh_period: Option<u32>,
 }
@@ -318,7 +320,7 @@ fn partial_viewport(camera: &ExtractedCamera) -> Option<String> {
 /// What the view's cache is made for, from Bevy's prepared view, mesh and
 /// material; `None` while one of them is not prepared yet.
 fn cache_key(
-    (view, _, mesh_layout): &CacheId,
+    (view, _, drawn): &CacheId,
     items: &[&CachedMesh3d],
     settings: &ReprojectionCache,
     sources: &CacheSources,
@@ -364,7 +366,8 @@ fn cache_key(
         view_layout: MeshPipelineViewLayoutKey::from(view_key),
         samples: view_key.msaa_samples(),
         color_format,
-        mesh_layout: mesh_layout.clone(),
+        mesh_layout: drawn.layout.clone(),
+        primitive: drawn.primitive,
         material_layout,
         refresh_period: settings.refresh_period,
     }))
@@ -438,10 +441,9 @@ fn try_make_cache(
     let colors = [Some(wgpu::ColorTargetState::from(key.color_format))];
     let mut frame = FrameLayout::new(&vertex, &groups, &colors);
     frame.sample_count = key.samples;
-    frame.primitive = wgpu::PrimitiveState {
-        cull_mode: Some(wgpu::Face::Back),
-        ..Default::default()
-    };
+    // As Bevy's own pipeline for these meshes: the mesh's topology, the
+    // material's culling, whatever its `specialize` set.
+    frame.primitive = key.primitive;
     let wgpu_device = device.wgpu_device();
     let mut shader = CachedShader::new(
         wgpu_device,

@@ -40,6 +40,9 @@ pub struct Headless {
     /// One more lava mesh, with vertex colours: another vertex layout
     /// than the others' in the same view.
     pub coloured_mesh: bool,
+    /// One more lava mesh, a quad turned away from the camera, its
+    /// material double-sided through the material's `specialize`.
+    pub double_sided: bool,
     /// Meshes Bevy draws itself beside the cached ones, in both views.
     pub other_meshes: OtherMeshes,
     /// Both cameras draw into the left half of their image (a split
@@ -200,6 +203,21 @@ fn setup(
     let settings = &run.0;
     if settings.stone {
         scene::spawn_stone(&mut commands, &mut meshes, &mut stone);
+    }
+    if settings.double_sided {
+        let lava = scene::LavaMaterial {
+            double_sided: true,
+            ..scene::LavaMaterial::new(AlphaMode::Opaque)
+        };
+        // The quad faces −z, away from the camera's start at +z: only its
+        // back is seen.
+        commands.spawn((
+            Mesh3d(meshes.add(Rectangle::new(1.2, 0.8))),
+            MeshMaterial3d(materials.add(lava)),
+            Transform::from_xyz(0.1, 0.9, 0.9)
+                .with_rotation(Quat::from_rotation_y(std::f32::consts::PI)),
+            CachedMaterial,
+        ));
     }
     if settings.coloured_mesh {
         let mut mesh = Mesh::from(Cuboid::new(0.5, 0.5, 0.5));

@@ -71,6 +71,7 @@ fn compare(args: Args) {
         foreign_material: false,
         stone: false,
         coloured_mesh: false,
+        double_sided: false,
         other_meshes: shadecache_bevy_example::OtherMeshes::None,
         left_to_bevy: None,
         half_viewport: false,

@@ -50,6 +50,7 @@ impl Plugin for MaterialsPlugin {
 
 /// The material: Bevy draws it with `assets/lava.wesl`.
 #[derive(Asset, TypePath, AsBindGroup, Clone, Debug)]
+#[bind_group_data(LavaKey)]
 pub struct LavaMaterial {
     /// Its uniform, `material` in the shader.
     #[uniform(0)]
@@ -57,6 +58,22 @@ pub struct LavaMaterial {
     /// Opaque in the game; the tests blend one mesh to see it left to
     /// Bevy.
     pub alpha_mode: AlphaMode,
+    /// Both faces drawn: the material's `specialize` turns culling off.
+    pub double_sided: bool,
+}
+
+/// What the lava's pipeline is specialised on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct LavaKey {
+    double_sided: bool,
+}
+
+impl From<&LavaMaterial> for LavaKey {
+    fn from(material: &LavaMaterial) -> Self {
+        LavaKey {
+            double_sided: material.double_sided,
+        }
+    }
 }
 
 /// `LavaMaterial` in the shader.
@@ -78,6 +95,18 @@ impl Material for LavaMaterial {
     fn alpha_mode(&self) -> AlphaMode {
         self.alpha_mode
     }
+
+    fn specialize(
+        _pipeline: &bevy::pbr::MaterialPipeline,
+        descriptor: &mut bevy::render::render_resource::RenderPipelineDescriptor,
+        _layout: &bevy::mesh::MeshVertexBufferLayoutRef,
+        key: bevy::pbr::MaterialPipelineKey<Self>,
+    ) -> Result<(), bevy::render::render_resource::SpecializedMeshPipelineError> {
+        if key.bind_group_data.double_sided {
+            descriptor.primitive.cull_mode = None;
+        }
+        Ok(())
+    }
 }
 
 impl LavaMaterial {
@@ -90,6 +119,7 @@ impl LavaMaterial {
                 flow: Vec4::new(0.6, 0.3, 0.0, 0.0),
             },
             alpha_mode,
+            double_sided: false,
         }
     }
 }
