@@ -32,6 +32,7 @@ mod choice;
 mod config;
 pub mod grid;
 pub mod merge;
+pub mod play;
 pub(crate) mod reference_check;
 mod row;
 pub(crate) mod run;

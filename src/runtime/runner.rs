@@ -269,6 +269,12 @@ impl Runner {
         Ok(())
     }
 
+    /// Starts the cache afresh, as after a camera cut: the next frame
+    /// misses everywhere.
+    pub fn reset(&mut self) {
+        self.cached.reset();
+    }
+
     /// Sets the frame counter c (see [`CachedShader::set_frame_counter`]).
     #[cfg(all(test, feature = "interpolate"))]
     pub fn set_frame_counter(&mut self, frame: u64) {

@@ -3,6 +3,7 @@
 pub mod analyze;
 pub mod interpolate;
 pub mod merge;
+pub mod play;
 pub mod profile;
 pub mod rewrite;
 pub mod scene;
@@ -28,6 +29,8 @@ pub enum Command {
     Scene(scene::Args),
     /// Join the reports of a sweep's shards (`profile --shard K/N`) into one report and one Pareto front.
     Merge(merge::Args),
+    /// Play a scene as an application would: the original, a fixed cache and the host crate's governor, each frame timed, to see what the governor does on this GPU.
+    Play(play::Args),
 }
 
 impl Command {
@@ -36,6 +39,7 @@ impl Command {
         match self {
             Command::Profile(args) => Some(&args.shader),
             Command::Interpolate(args) => Some(&args.shader),
+            Command::Play(args) => Some(&args.shader),
             Command::Analyze(_) | Command::Rewrite(_) | Command::Scene(_) | Command::Merge(_) => {
                 None
             }
@@ -51,6 +55,7 @@ pub fn exec(command: Command, color: Color) -> Result<(), Error> {
         Command::Interpolate(args) => interpolate::exec(args, color),
         Command::Scene(args) => scene::exec(args, color),
         Command::Merge(args) => merge::exec(args, color),
+        Command::Play(args) => play::exec(args, color),
     }
 }
 

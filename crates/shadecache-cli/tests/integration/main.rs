@@ -16,6 +16,7 @@ mod interpolate_command;
 mod lowres;
 mod merge;
 mod out_folders;
+mod play_command;
 mod profile_command;
 mod real_shaders;
 mod report_page;

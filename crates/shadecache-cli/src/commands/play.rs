@@ -1,0 +1,160 @@
+//! `shadecache play`: a scene played as an application plays it, the
+//! original, a fixed cache and the host crate's governor side by side, to
+//! see on this GPU what the governor would do (`shadecache::profile::play`).
+
+use std::path::PathBuf;
+
+use shadecache::diagnostic::{Color, Diagnostic, Error};
+use shadecache::profile::{play, Nodes, Options};
+
+use super::profile::{frame_count, parse_size, Bar};
+use super::rewrite::VariantArg;
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The WGSL shader to play.
+    pub shader: PathBuf,
+
+    /// The scene to play (TOML; see docs/scene-toml.md). Without one, the
+    /// default scene `shadecache scene init` writes.
+    #[arg(long, value_name = "SCENE.toml")]
+    pub scene: Option<PathBuf>,
+
+    /// The node the cache keeps (default: the one the analysis ranks
+    /// first).
+    #[arg(long, value_name = "ID")]
+    pub node: Option<String>,
+
+    /// The variant the fixed and the governed ways draw.
+    #[arg(long, value_enum, default_value = "one-pass")]
+    pub variant: VariantArg,
+
+    /// The refresh period Δn (default: the variant's).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=65535))]
+    pub refresh_period: Option<u32>,
+
+    /// Frames played of each way: the governor needs a few hundred to
+    /// decide, and re-probes every 600 while the cache is off.
+    #[arg(long, value_name = "N", default_value_t = 600, value_parser = frame_count)]
+    pub frames: u32,
+
+    /// Frame size (default: the scene's).
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<[u32; 2]>,
+
+    /// Where to write play.json.
+    #[arg(long, value_name = "DIR", default_value = "shadecache-play")]
+    pub out: PathBuf,
+
+    /// Write into an --out folder that holds files a previous run did not
+    /// list as its own (they stay; files of the same names are replaced).
+    /// Without it, such a folder is refused before anything runs.
+    #[arg(long)]
+    pub overwrite: bool,
+
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+
+    #[command(flatten)]
+    pub stages: super::StageArgs,
+}
+
+pub fn exec(args: Args, color: Color) -> Result<(), Error> {
+    if args.variant == VariantArg::All {
+        return Err(Error::plain(Diagnostic::error(
+            "--variant all: play draws one variant; name it (one-pass, two-pass, three-pass, deferred or lowres)",
+        )));
+    }
+    let out = crate::out_folder::OutFolder::check(&args.out, args.overwrite)?;
+    out.run(|out| play_into(&args, color, out))
+}
+
+/// The play, and play.json written into `out`.
+fn play_into(args: &Args, _color: Color, out: &crate::out_folder::OutFolder) -> Result<(), Error> {
+    let shader = args.stages.load(&args.shader)?;
+    let (shader, scene, scene_path) = args.stages.drawn(shader, args.scene.as_deref(), false)?;
+    let defaults = Options::default();
+    let options = Options {
+        nodes: match &args.node {
+            Some(id) => Nodes::Ids(vec![id.clone()]),
+            None => Nodes::Top(1),
+        },
+        variants: VariantArg::variants(&[args.variant]),
+        refresh_periods: args
+            .refresh_period
+            .map_or(defaults.refresh_periods.clone(), |period| vec![period]),
+        size: args.size,
+        entry: args.stages.entry.clone(),
+        vertex_entry: args.stages.vertex_entry.clone(),
+        ..defaults
+    };
+    let mut bar = Bar {
+        bar: None,
+        quiet: args.quiet,
+    };
+    let played = play::play(
+        &shader,
+        &scene,
+        &scene_path,
+        &options,
+        args.frames,
+        &mut bar,
+    )?;
+
+    out.clear()?;
+    let path = args.out.join("play.json");
+    let io = |err: String| {
+        Error::plain(Diagnostic::error(format!(
+            "cannot write `{}`: {err}",
+            path.display()
+        )))
+    };
+    std::fs::create_dir_all(&args.out).map_err(|e| io(e.to_string()))?;
+    let json = serde_json::to_string_pretty(&played).map_err(|e| io(e.to_string()))?;
+    std::fs::write(&path, json + "\n").map_err(|e| io(e.to_string()))?;
+    super::write_stdout(&summary(&played, &path))
+}
+
+/// What a play found, in a few lines.
+fn summary(played: &play::Play, path: &std::path::Path) -> String {
+    let ratio = |ms: f64| {
+        if ms > 0.0 {
+            played.original_ms / ms
+        } else {
+            0.0
+        }
+    };
+    let mut text = format!(
+        "{} on {} ({}×{}, {} frames each, {}): {}\n  original {:.3} ms a frame; fixed cache {:.3} ms ({:.2}×); governor {:.3} ms ({:.2}×, {:.0}% of its frames cached, cache {} at the end)\n",
+        played.shader,
+        played.scene,
+        played.size[0],
+        played.size[1],
+        played.frames,
+        played.device,
+        played.fixed_variant,
+        played.original_ms,
+        played.fixed_ms,
+        ratio(played.fixed_ms),
+        played.auto_ms,
+        ratio(played.auto_ms),
+        played.auto_cached_share * 100.0,
+        if played.auto_on_at_end { "on" } else { "off" },
+    );
+    for decision in &played.decisions {
+        text += &format!(
+            "  frame {}: cache {} (speed-up {:.2}× [{:.2}, {:.2}])\n",
+            decision.frame,
+            if decision.on { "on" } else { "off" },
+            decision.speedup,
+            decision.interval[0],
+            decision.interval[1]
+        );
+    }
+    if played.decisions.is_empty() {
+        text += "  no switch: the governor kept the cache on\n";
+    }
+    text += &format!("play: {}\n", path.display());
+    text
+}

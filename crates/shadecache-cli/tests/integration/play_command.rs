@@ -1,0 +1,143 @@
+//! `shadecache play` as a user runs it: the original, a fixed cache and
+//! the host crate's governor, on lavapipe. The ratios are of one run (each
+//! frame draws all three in turn), and the bounds leave room for a shared
+//! two-core machine.
+
+use std::path::Path;
+
+use serde_json::Value;
+
+use crate::util::*;
+
+/// `shadecache play SHADER --scene SCENE ARGS...` into a new folder; its
+/// play.json.
+fn play(shader: &str, scene: &str, args: &[&str]) -> Value {
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("play");
+    let mut all = vec!["play", shader, "--scene", scene, "--quiet", "--out"];
+    let dir_text = dir.display().to_string();
+    all.push(&dir_text);
+    all.extend(args);
+    let output = shadecache(&all);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = std::fs::read_to_string(dir.join("play.json")).unwrap();
+    assert!(
+        stdout(&output).contains("original") && stdout(&output).contains("governor"),
+        "{}",
+        stdout(&output)
+    );
+    serde_json::from_str(&text).unwrap()
+}
+
+fn number(value: &Value, key: &str) -> f64 {
+    value[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("`{key}` in {value}"))
+}
+
+/// Mean time of the governed frames from `frame` on.
+fn auto_mean_from(played: &Value, frame: u64) -> f64 {
+    let times: Vec<f64> = played["auto_frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| f["frame"].as_u64().unwrap() >= frame)
+        .map(|f| f["ms"].as_f64().unwrap())
+        .collect();
+    times.iter().sum::<f64>() / times.len().max(1) as f64
+}
+
+/// A cache that costs more than it saves (three-pass recomputing every
+/// pixel every frame, Δn = 1) is switched off once the governor has
+/// enough original frames to be sure, and from then on the governed
+/// frames cost what the original's do, within 5%.
+#[test]
+fn governor_turns_a_losing_cache_off() {
+    if no_gpu() {
+        return;
+    }
+    let played = play(
+        "corpus/noise_marble.wgsl",
+        "corpus/scenes/marble_sphere.toml",
+        &[
+            "--size",
+            "128x128",
+            "--frames",
+            "600",
+            "--variant",
+            "three-pass",
+            "--refresh-period",
+            "1",
+        ],
+    );
+    let fixed = number(&played, "original_ms") / number(&played, "fixed_ms");
+    assert!(
+        fixed < 0.9,
+        "the fixed cache at {fixed:.2}×: it should lose"
+    );
+    let decisions = played["decisions"].as_array().unwrap();
+    assert_eq!(decisions.len(), 1, "{decisions:?}");
+    assert_eq!(decisions[0]["on"], false);
+    let off = decisions[0]["frame"].as_u64().unwrap();
+    assert!(off <= 400, "off at frame {off}");
+    let after = auto_mean_from(&played, off);
+    let original = number(&played, "original_ms");
+    assert!(
+        after <= original * 1.05,
+        "governed {after:.3} ms after the switch against {original:.3} ms"
+    );
+    assert_eq!(played["auto_on_at_end"], false);
+}
+
+/// A cache that pays (the environment map's 25 taps, two-pass) is kept,
+/// and the governor's original frames, the measurement, cost little of its
+/// gain: at least 90% of what the fixed cache saves.
+#[test]
+fn governor_keeps_a_winning_cache() {
+    if no_gpu() {
+        return;
+    }
+    let played = play(
+        "corpus/envmap_gauss.wgsl",
+        "corpus/scenes/envmap_sphere.toml",
+        &[
+            "--size",
+            "128x128",
+            "--frames",
+            "400",
+            "--variant",
+            "two-pass",
+        ],
+    );
+    let (original, fixed, auto) = (
+        number(&played, "original_ms"),
+        number(&played, "fixed_ms"),
+        number(&played, "auto_ms"),
+    );
+    assert!(
+        fixed < original * 0.8,
+        "{fixed:.3} ms against {original:.3}"
+    );
+    assert_eq!(played["decisions"].as_array().unwrap().len(), 0, "{played}");
+    let kept = (original - auto) / (original - fixed);
+    assert!(kept >= 0.9, "the governor kept {kept:.3} of the gain");
+}
+
+/// A variant `play` cannot draw is refused before anything runs, with the
+/// reason, and a bad flag is a usage error.
+#[test]
+fn play_refuses_what_it_cannot_play() {
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("play");
+    let output = shadecache([
+        "play".as_ref(),
+        "corpus/noise_marble.wgsl".as_ref(),
+        "--variant".as_ref(),
+        "all".as_ref(),
+        "--out".as_ref(),
+        dir.as_os_str(),
+    ] as [&std::ffi::OsStr; 6]);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(stderr(&output).contains("play draws one variant"));
+    assert!(!Path::new(&dir).join("play.json").exists());
+}
