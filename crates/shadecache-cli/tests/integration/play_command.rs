@@ -50,7 +50,10 @@ fn auto_mean_from(played: &Value, frame: u64) -> f64 {
 /// A cache that costs more than it saves (three-pass recomputing every
 /// pixel every frame, Δn = 1) is switched off once the governor has
 /// enough original frames to be sure, and from then on the governed
-/// frames cost what the original's do, within 5%.
+/// frames cost what the original's do, within 10%: the re-probes' bursts
+/// cost about 2%, and on lavapipe the same original pipeline drawn at
+/// another place in the frame's order differs by up to 6%
+/// (docs/governor.md).
 #[test]
 fn governor_turns_a_losing_cache_off() {
     if no_gpu() {
@@ -83,7 +86,7 @@ fn governor_turns_a_losing_cache_off() {
     let after = auto_mean_from(&played, off);
     let original = number(&played, "original_ms");
     assert!(
-        after <= original * 1.05,
+        after <= original * 1.10,
         "governed {after:.3} ms after the switch against {original:.3} ms"
     );
     assert_eq!(played["auto_on_at_end"], false);
