@@ -30,7 +30,10 @@
 #   4. Sitthi-amorn et al. 2008 fig. 9 at 1024×768: Δn ∈ {8, 16, 32, 64} × k ∈ {1, 2, 4}
 #      for every variant, with the paper's kind of node (two octaves of
 #      noise, object-space: `s2`) and with the lit colour;
-#   5. `interpolate` on every bundled interpolation scene at 256².
+#   5. `interpolate` on every bundled interpolation scene at 256²;
+#   6. docs/governor.md's `play` runs: the governor on a winning cache
+#      (the environment map, two-pass) and a losing one (the marble,
+#      three-pass at Δn = 1), 256².
 # Budget: minutes on a discrete GPU; under an hour on lavapipe (2 cores).
 #
 # With GPU_RUN_REPRODUCTION=1 it runs docs/reproduction.md's experiments
@@ -45,8 +48,10 @@ cd "$(dirname "$0")/.."
 quick=${GPU_RUN_QUICK:-}
 if [ -n "$quick" ]; then
   big=128x96; small=64x64; mid=96x96; frames=(--frames 8 --warmup 8); iframes=(--frames 8)
+  played=(--frames 60)
 else
   big=1024x768; small=256x256; mid=512x512; frames=(--frames 32); iframes=()
+  played=(--frames 1000)
 fi
 
 cargo build --release --locked -p shadecache-cli
@@ -177,6 +182,9 @@ for scene in walking_floor globe windmill windmill_every_frame moving_light; do
 done
 run interpolate-terrain_flyover interpolate corpus/terrain_slope_branch.wgsl \
   --scene corpus/scenes/terrain_flyover.toml --size "$small" "${iframes[@]}"
+run play-envmap-two-pass play "${envmap_sphere[@]}" --size "$small" "${played[@]}" --variant two-pass
+run play-marble-three-pass-every-frame play "${marble[@]}" --size "$small" "${played[@]}" \
+  --variant three-pass --refresh-period 1
 
 mkdir -p docs/runs
 out=$(node scripts/runs-table.mjs "$work" "$manifest" ${quick:+--quick})

@@ -1,7 +1,8 @@
 // Turns the reports of one `scripts/gpu-run.sh` run into one markdown file
 // under docs/runs/: the adapter and driver, then a table per command with
 // every figure and its interval (the profile's bootstrap interval of the
-// speed-up; `interpolate` runs once and gives none, which the table says).
+// speed-up; `interpolate` runs once and gives none, which the table says;
+// `play` gives each way's mean frame time and the governor's switches).
 //
 //   node scripts/runs-table.mjs WORK_DIR MANIFEST [--quick] [--reproduction]
 //
@@ -67,13 +68,36 @@ function interpolateTable(report) {
   return lines;
 }
 
+function playTable(play) {
+  const ratio = (ms) => (ms > 0 ? `${fixed(play.original_ms / ms, 2)}×` : "—");
+  const lines = [
+    `${play.size[0]}×${play.size[1]}, ${play.frames} frames each way, interleaved; ${play.fixed_variant}. Mean GPU time of a displayed frame.`,
+    "",
+    "| way | mean frame ms | speed-up |",
+    "|---|---|---|",
+    `| original | ${fixed(play.original_ms, 3)} | 1× |`,
+    `| fixed cache | ${fixed(play.fixed_ms, 3)} | ${ratio(play.fixed_ms)} |`,
+    `| governor | ${fixed(play.auto_ms, 3)} | ${ratio(play.auto_ms)} (${fixed(play.auto_cached_share * 100, 0)}% of frames cached, cache ${play.auto_on_at_end ? "on" : "off"} at the end) |`,
+    "",
+  ];
+  for (const d of play.decisions) {
+    lines.push(`- frame ${d.frame}: cache ${d.on ? "on" : "off"}, speed-up ${fixed(d.speedup, 2)}× ${interval(d.interval)}`);
+  }
+  if (play.decisions.length === 0) lines.push("- no switch: the cache stayed on");
+  return lines;
+}
+
 const reports = runs.map((run) => {
   const path = join(work, run.name, "report.json");
+  const played = join(work, run.name, "play.json");
+  if (existsSync(played)) return { ...run, play: JSON.parse(readFileSync(played, "utf8")) };
   if (!existsSync(path)) throw new Error(`${run.name}: no report.json`);
   return { ...run, report: JSON.parse(readFileSync(path, "utf8")) };
 });
-const device = reports.find((r) => r.report.device)?.report.device;
-const adapter = device ? `${device.name} (${device.backend})` : reports[0].report.adapter;
+const device = reports.find((r) => r.report?.device)?.report.device;
+const adapter = device
+  ? `${device.name} (${device.backend})`
+  : (reports.find((r) => r.report)?.report.adapter ?? reports[0].play?.device);
 const driver = device ? device.driver : "—";
 const date = new Date().toISOString().slice(0, 16).replace(":", "") + "Z";
 // The file names the adapter and, where the driver says it, its Mesa
@@ -92,7 +116,11 @@ const out = [
 ];
 for (const r of reports) {
   out.push(`## ${r.name}`, "", "```sh", r.command, "```", "", `${r.seconds} s.`, "");
-  const table = r.report.methods ? interpolateTable(r.report) : profileTable(r.report);
+  const table = r.play
+    ? playTable(r.play)
+    : r.report.methods
+      ? interpolateTable(r.report)
+      : profileTable(r.report);
   out.push(...table, "");
 }
 const file = join(
