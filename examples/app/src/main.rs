@@ -13,16 +13,23 @@
 //! can show both, measure the cached frame's error against the original,
 //! and time every pass with timestamp queries.
 //!
-//! Headless: it renders offscreen, writes a few frames as PNG and prints
-//! per-frame errors and per-pass GPU times. With the `window` feature and
-//! a display, `--window` draws into a window instead, the space bar
-//! switching between the original pipeline and the cached variant.
+//! Headless, by default it runs as it would ship: the host crate's
+//! governor chooses each frame between the original pipeline and the
+//! variant from the GPU times it measures on this adapter, and the app
+//! prints what it decided and what the frames cost (`governed.rs`). With
+//! `--compare` it draws every frame both ways, writes a few frames as PNG
+//! and prints per-frame errors and per-pass GPU times. With the `window`
+//! feature and a display, `--window` draws into a window instead, the
+//! space bar switching between the original pipeline and the cached
+//! variant.
 //!
 //! ```text
-//! cargo run --release -- [--frames N] [--warmup N] [--size PIXELS] [--refresh-period N] [--variant three-pass|lowres] [--out DIR]
+//! cargo run --release -- [--frames N] [--size PIXELS] [--refresh-period N] [--variant three-pass|lowres]
+//! cargo run --release -- --compare [--frames N] [--warmup N] [--size PIXELS] [--refresh-period N] [--variant three-pass|lowres] [--out DIR]
 //! cargo run --release --features window -- --window [--refresh-period N]
 //! ```
 
+mod governed;
 mod planet;
 #[cfg(feature = "window")]
 mod window;
@@ -94,8 +101,9 @@ const WARMUP: u32 = 4;
 const PSNR_CAP: f64 = 100.0;
 
 struct Args {
-    /// Frames measured, after the warm-up.
-    frames: u32,
+    /// Frames measured, after the warm-up (with --compare; default 24), or
+    /// played (governed; default 600).
+    frames: Option<u32>,
     warmup: Option<u32>,
     size: u32,
     refresh_period: Option<u32>,
@@ -105,24 +113,28 @@ struct Args {
     /// Draw into a window instead, switching between the original and the
     /// cached variant with the space bar.
     window: bool,
+    /// Draw each frame both ways and compare them, instead of letting the
+    /// governor choose.
+    compare: bool,
 }
 
 fn args() -> Result<Args, String> {
     let mut args = Args {
-        frames: 24,
+        frames: None,
         warmup: None,
         size: 256,
         refresh_period: None,
         lowres: false,
         out: PathBuf::from("frames"),
         window: false,
+        compare: false,
     };
     let mut given = std::env::args().skip(1);
     while let Some(flag) = given.next() {
         let mut value = || given.next().ok_or_else(|| format!("{flag} needs a value"));
         let number = |text: String| text.parse::<u32>().map_err(|err| format!("{flag}: {err}"));
         match flag.as_str() {
-            "--frames" => args.frames = number(value()?)?,
+            "--frames" => args.frames = Some(number(value()?)?),
             "--warmup" => args.warmup = Some(number(value()?)?),
             "--size" => args.size = number(value()?)?.max(16),
             "--refresh-period" => args.refresh_period = Some(number(value()?)?),
@@ -135,6 +147,7 @@ fn args() -> Result<Args, String> {
             }
             "--out" => args.out = PathBuf::from(value()?),
             "--window" => args.window = true,
+            "--compare" => args.compare = true,
             other => return Err(format!("unknown argument `{other}`")),
         }
     }
@@ -221,7 +234,7 @@ fn draw_original(
     (pipeline, planet): (&wgpu::RenderPipeline, &Planet),
     (view, depth): (&wgpu::TextureView, &wgpu::TextureView),
     clear: wgpu::Color,
-    mut timer: Option<&mut Timestamps>,
+    mut timer: Option<&mut impl PassTimer>,
 ) {
     let query = timer.as_mut().map(|t| t.begin(encoder, "original"));
     let writes = timer
@@ -321,16 +334,27 @@ fn main() -> Result<(), Box<dyn Error>> {
     let planet = Planet::new(&gpu.device, &gpu.queue, 1.0);
     let original = original_pipeline(&gpu, &planet, COLOR_FORMAT);
     let size = (args.size, args.size);
-    let mut cached = cached_shader(
-        &gpu,
-        (args.refresh_period, args.lowres),
-        COLOR_FORMAT,
-        size,
-    )?;
+    let mut cached = cached_shader(&gpu, (args.refresh_period, args.lowres), COLOR_FORMAT, size)?;
     let twins = cached.twins(&TwinSources {
         buffers: &[([0, 0], &planet.globals), ([1, 0], &planet.locals)],
         ..TwinSources::default()
     })?;
+    if !args.compare {
+        println!("adapter: {}", gpu.name);
+        let plan = cached.plan();
+        let frames = args.frames.unwrap_or(600);
+        println!(
+            "variant: {} caching `{}`, Δn = {}, {}×{}, {frames} frames, governed",
+            plan.variant, plan.node.text, plan.refresh.period, args.size, args.size
+        );
+        return governed::run(
+            &gpu,
+            (&planet, &original),
+            (&mut cached, &twins),
+            size,
+            frames,
+        );
+    }
     let mut timer = Timestamps::new(&gpu.device, &gpu.queue, 4);
     let targets =
         ["original", "cached"].map(|label| texture(&gpu.device, label, size, COLOR_FORMAT));
@@ -344,10 +368,11 @@ fn main() -> Result<(), Box<dyn Error>> {
     println!("adapter: {}", gpu.name);
     let plan = cached.plan();
     let warmup = args.warmup.unwrap_or(WARMUP.max(plan.refresh.period));
-    let frames = warmup + args.frames;
+    let measured = args.frames.unwrap_or(24);
+    let frames = warmup + measured;
     println!(
-        "variant: {} caching `{}`, Δn = {}, {}×{}, {} frames after {warmup} warm-up",
-        plan.variant, plan.node.text, plan.refresh.period, args.size, args.size, args.frames
+        "variant: {} caching `{}`, Δn = {}, {}×{}, {measured} frames after {warmup} warm-up",
+        plan.variant, plan.node.text, plan.refresh.period, args.size, args.size
     );
     let mut steady = Steady::default();
     for frame in 0..frames {

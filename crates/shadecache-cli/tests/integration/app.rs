@@ -58,7 +58,15 @@ fn example_app_at_refresh_period_one_equals_its_original_frames() {
     }
     let out = tempfile::tempdir().unwrap();
     let stdout = run_app(
-        &["--refresh-period", "1", "--frames", "4", "--size", "96"],
+        &[
+            "--compare",
+            "--refresh-period",
+            "1",
+            "--frames",
+            "4",
+            "--size",
+            "96",
+        ],
         out.path(),
     );
     for line in stdout.lines().filter(|l| l.starts_with("frame")) {
@@ -83,7 +91,7 @@ fn example_app_error_stays_within_what_profile_measured() {
         return;
     }
     let out = tempfile::tempdir().unwrap();
-    let app = run_app(&["--frames", "8", "--size", "96"], out.path());
+    let app = run_app(&["--compare", "--frames", "8", "--size", "96"], out.path());
     let [mean, worst, _] = steady_state(&app);
     let profile = crate::util::shadecache([
         "profile",
@@ -238,11 +246,40 @@ fn lowres_runs_in_the_host_crate() {
     }
     let out = tempfile::tempdir().unwrap();
     let stdout = run_app(
-        &["--variant", "lowres", "--frames", "4", "--size", "96"],
+        &[
+            "--compare",
+            "--variant",
+            "lowres",
+            "--frames",
+            "4",
+            "--size",
+            "96",
+        ],
         out.path(),
     );
     assert!(stdout.contains("variant: lowres"), "{stdout}");
     let [mean, worst, _] = steady_state(&stdout);
     assert!(mean > 30.0 && worst > 28.0, "{stdout}");
     assert!(stdout.contains("GPU ms per frame: original"), "{stdout}");
+}
+
+/// Run as it ships, the app lets the host crate's governor choose each
+/// frame between its original pipeline and the variant, times every frame
+/// without waiting for it, and says what the governor decided.
+#[test]
+fn example_app_runs_the_governor_by_default() {
+    if crate::util::no_gpu() {
+        return;
+    }
+    let out = tempfile::tempdir().unwrap();
+    let stdout = run_app(&["--frames", "300", "--size", "96"], out.path());
+    assert!(stdout.contains("300 frames, governed"), "{stdout}");
+    assert!(stdout.contains("governor: cache"), "{stdout}");
+    let timed: u32 = stdout
+        .split(" over ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no timed frames in {stdout}"));
+    assert!(timed >= 200, "{timed} of 300 frames timed\n{stdout}");
 }
