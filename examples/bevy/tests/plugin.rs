@@ -471,23 +471,18 @@ fn mesh_of_a_material_without_a_variant_is_left_to_bevy_with_a_reason() {
     all_bevys_own(&run.compared);
 }
 
-/// Lava meshes of two vertex layouts in one view (one has vertex
-/// colours, which the variant does not read): each layout gets a cache of
-/// its own, drawn in turn, and at Δn = 1 every frame is Bevy's own.
-#[test]
-fn meshes_of_several_vertex_layouts_in_one_view() {
-    if skipped() {
-        return;
-    }
+/// Runs `with` at Δn = 1, 8 frames, and checks that every frame is
+/// Bevy's own, nothing was refused, and two caches drew every frame
+/// compared: the lava's meshes that `with` draws one way and the others
+/// another.
+fn two_caches_each_frame(with: Headless) {
     let run = in_turn(Headless {
         refresh_period: Some(1),
         frames: 8,
-        coloured_mesh: true,
-        ..settings()
+        ..with
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     assert!(run.compared.len() >= 8, "{:?}", run.compared);
-    // Both layouts' caches drew every frame compared.
     assert!(
         run.frames_drawn >= 2 * run.compared.len() as u64,
         "{} caches drawn over {} frames",
@@ -497,32 +492,34 @@ fn meshes_of_several_vertex_layouts_in_one_view() {
     all_bevys_own(&run.compared);
 }
 
+/// Lava meshes of two vertex layouts in one view (one has vertex
+/// colours, which the variant does not read): each layout gets a cache of
+/// its own, drawn in turn, and at Δn = 1 every frame is Bevy's own.
+#[test]
+fn meshes_of_several_vertex_layouts_in_one_view() {
+    if skipped() {
+        return;
+    }
+    two_caches_each_frame(Headless {
+        coloured_mesh: true,
+        ..settings()
+    });
+}
+
 /// The material's own `specialize` is Bevy's to apply, and the cache
 /// draws as Bevy's specialised pipeline does: a lava quad seen from its
 /// back, whose material turns culling off, is drawn by the cache too (with
-/// the culling the plugin once set itself, it was missing), and at Δn = 1
-/// every frame is Bevy's own.
+/// the culling the plugin once set itself, it was missing), in a cache of
+/// its own, and at Δn = 1 every frame is Bevy's own.
 #[test]
 fn material_specialize_is_honoured() {
     if skipped() {
         return;
     }
-    let run = in_turn(Headless {
-        refresh_period: Some(1),
-        frames: 8,
+    two_caches_each_frame(Headless {
         double_sided: true,
         ..settings()
     });
-    assert!(run.errors.is_empty(), "{:?}", run.errors);
-    assert!(run.compared.len() >= 8, "{:?}", run.compared);
-    // The quad's culling differs from the other meshes': a cache of its own.
-    assert!(
-        run.frames_drawn >= 2 * run.compared.len() as u64,
-        "{} caches drawn over {} frames",
-        run.frames_drawn,
-        run.compared.len()
-    );
-    all_bevys_own(&run.compared);
 }
 
 /// Two cached materials in one app, each through its own variant (the
