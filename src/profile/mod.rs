@@ -207,18 +207,7 @@ pub fn profile(
     let (size, warmup, frames) = (prepared.size, prepared.warmup, prepared.frames);
     let reference_plan =
         rewrite::plan::reference(shader, &prepared.analysis, &prepared.base).map_err(fail)?;
-    // The scene must provide everything else the shader binds.
-    scene::storage::check(&prepared.storage, scene)?;
-    crate::measure::setup::check_instancing(shader, scene, &reference_plan.vertex_layout)?;
-    let scene_inputs = SceneInputs::new(
-        shader,
-        scene,
-        scene_path,
-        &reference_plan,
-        &prepared.used,
-        (&prepared.uniforms, &prepared.storage),
-        prepared.size,
-    )?;
+    let scene_inputs = scene_inputs((shader, scene, scene_path), &prepared, &reference_plan)?;
     let inputs_of = |scene: &Scene, frame: u32| scene_inputs.frame(scene, frame);
 
     let gpu = open_gpu()?;
@@ -315,6 +304,27 @@ pub fn profile(
             chosen,
         },
     ))
+}
+
+/// The scene's inputs for a run of `shader` on `scene` (its textures,
+/// meshes and each frame's buffers, for the reference's layout), once the
+/// scene is checked to provide everything else the shader binds.
+fn scene_inputs<'a>(
+    (shader, scene, scene_path): (&Shader, &Scene, &Path),
+    prepared: &'a setup::Prepared,
+    reference_plan: &'a Plan,
+) -> Result<SceneInputs<'a>, Error> {
+    scene::storage::check(&prepared.storage, scene)?;
+    crate::measure::setup::check_instancing(shader, scene, &reference_plan.vertex_layout)?;
+    SceneInputs::new(
+        shader,
+        scene,
+        scene_path,
+        reference_plan,
+        &prepared.used,
+        (&prepared.uniforms, &prepared.storage),
+        prepared.size,
+    )
 }
 
 /// What this run of the grid measures.

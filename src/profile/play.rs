@@ -31,11 +31,10 @@ use crate::diagnostic::{Diagnostic, Error};
 use crate::front::Shader;
 use crate::measure::bench::{reference, Bench};
 use crate::measure::clock::Clock;
-use crate::measure::inputs::SceneInputs;
 use crate::measure::{fail, open_gpu};
 use crate::rewrite::{self, Variant};
 use crate::runtime::Runner;
-use crate::scene::{self, Scene};
+use crate::scene::Scene;
 
 /// What a play of a scene found (`play.json`).
 #[derive(Clone, Debug, Serialize)]
@@ -206,17 +205,8 @@ pub fn play(
     let sources = sources_of(&rewritten)?;
     let reference_plan =
         rewrite::plan::reference(shader, &prepared.analysis, &prepared.base).map_err(fail)?;
-    scene::storage::check(&prepared.storage, scene)?;
-    crate::measure::setup::check_instancing(shader, scene, &reference_plan.vertex_layout)?;
-    let scene_inputs = SceneInputs::new(
-        shader,
-        scene,
-        scene_path,
-        &reference_plan,
-        &prepared.used,
-        (&prepared.uniforms, &prepared.storage),
-        prepared.size,
-    )?;
+    let scene_inputs =
+        super::scene_inputs((shader, scene, scene_path), &prepared, &reference_plan)?;
     let gpu = open_gpu()?;
     let mut clock = Clock::new(&gpu)?;
     let bench = Bench {
