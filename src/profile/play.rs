@@ -292,3 +292,103 @@ pub fn play(
         auto_frames: governed.frames,
     })
 }
+
+impl Play {
+    /// The play as a page: the three ways' mean frame times, and a chart
+    /// of every governed frame's GPU time (original, cached, cache
+    /// started afresh) over the frames, with the two means as lines and
+    /// each switch marked.
+    pub fn html(&self) -> String {
+        use std::fmt::Write;
+        let escape = |text: &str| {
+            text.replace('&', "&amp;")
+                .replace('<', "&lt;")
+                .replace('>', "&gt;")
+        };
+        let (width, height, margin) = (900.0, 300.0, 40.0);
+        let frames = self.auto_frames.len().max(1) as f64;
+        let top = self
+            .auto_frames
+            .iter()
+            .map(|f| f.ms)
+            .chain([self.original_ms, self.fixed_ms])
+            .fold(0.0f64, f64::max)
+            .max(1e-6)
+            * 1.1;
+        let x = |frame: f64| margin + frame / frames * (width - 2.0 * margin);
+        let y = |ms: f64| height - margin - ms / top * (height - 2.0 * margin);
+        let mut svg = format!(
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width}\" height=\"{height}\" role=\"img\" aria-label=\"governed frame times\">\n"
+        );
+        let _ = writeln!(
+            svg,
+            "<text x=\"4\" y=\"14\" font-size=\"12\">{top:.2} ms</text><text x=\"4\" y=\"{}\" font-size=\"12\">0</text>",
+            height - margin
+        );
+        for (ms, color, label) in [
+            (self.original_ms, "#3366cc", "original, mean"),
+            (self.fixed_ms, "#2e9e44", "fixed cache, mean"),
+        ] {
+            let _ = writeln!(
+                svg,
+                "<line x1=\"{0:.1}\" x2=\"{1:.1}\" y1=\"{2:.1}\" y2=\"{2:.1}\" stroke=\"{color}\" stroke-dasharray=\"6 4\"/><text x=\"{3:.1}\" y=\"{4:.1}\" font-size=\"11\" fill=\"{color}\">{label} {ms:.3} ms</text>",
+                x(0.0),
+                x(frames),
+                y(ms),
+                x(frames) - 170.0,
+                y(ms) - 4.0
+            );
+        }
+        for frame in &self.auto_frames {
+            let color = match frame.drew {
+                "original" => "#3366cc",
+                "reset" => "#cc2222",
+                _ => "#e08a00",
+            };
+            let _ = writeln!(
+                svg,
+                "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"1.6\" fill=\"{color}\"><title>frame {}: {} {:.3} ms</title></circle>",
+                x(frame.frame as f64),
+                y(frame.ms),
+                frame.frame,
+                frame.drew,
+                frame.ms
+            );
+        }
+        for decision in &self.decisions {
+            let state = if decision.on { "cache on" } else { "cache off" };
+            let _ = writeln!(
+                svg,
+                "<line x1=\"{0:.1}\" x2=\"{0:.1}\" y1=\"{1}\" y2=\"{2}\" stroke=\"#555\"/><text x=\"{3:.1}\" y=\"{4}\" font-size=\"11\">{state} at {5} ({6:.2}× [{7:.2}, {8:.2}])</text>",
+                x(decision.frame as f64),
+                margin,
+                height - margin,
+                x(decision.frame as f64) + 4.0,
+                margin + 12.0,
+                decision.frame,
+                decision.speedup,
+                decision.interval[0],
+                decision.interval[1]
+            );
+        }
+        svg.push_str("</svg>\n");
+        let ratio = |ms: f64| if ms > 0.0 { self.original_ms / ms } else { 0.0 };
+        format!(
+            "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>shadecache play: {shader}</title>\n<style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{padding:.2em .8em;text-align:right}}</style></head><body>\n<h1>{shader} on {scene}</h1>\n<p>{w}×{h}, {frames} frames each way, interleaved; {variant}; {device}.</p>\n<table><tr><th>way</th><th>mean frame ms</th><th>speed-up</th></tr>\n<tr><td>original</td><td>{o:.3}</td><td>1×</td></tr>\n<tr><td>fixed cache</td><td>{f:.3}</td><td>{fr:.2}×</td></tr>\n<tr><td>governor</td><td>{a:.3}</td><td>{ar:.2}× ({share:.0}% of its frames cached, cache {end} at the end)</td></tr></table>\n<h2>Each governed frame</h2>\n<p>Blue: the original drawn; orange: cached; red: the cache started afresh. Dashed: the means of the original and of the fixed cache every frame.</p>\n{svg}</body></html>\n",
+            shader = escape(&self.shader),
+            scene = escape(&self.scene),
+            w = self.size[0],
+            h = self.size[1],
+            frames = self.frames,
+            variant = escape(&self.fixed_variant),
+            device = escape(&self.device),
+            o = self.original_ms,
+            f = self.fixed_ms,
+            fr = ratio(self.fixed_ms),
+            a = self.auto_ms,
+            ar = ratio(self.auto_ms),
+            share = self.auto_cached_share * 100.0,
+            end = if self.auto_on_at_end { "on" } else { "off" },
+        )
+    }
+}

@@ -42,7 +42,7 @@ pub struct Args {
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<[u32; 2]>,
 
-    /// Where to write play.json.
+    /// Where to write play.json and play.html.
     #[arg(long, value_name = "DIR", default_value = "shadecache-play")]
     pub out: PathBuf,
 
@@ -113,7 +113,14 @@ fn play_into(args: &Args, _color: Color, out: &crate::out_folder::OutFolder) -> 
     std::fs::create_dir_all(&args.out).map_err(|e| io(e.to_string()))?;
     let json = serde_json::to_string_pretty(&played).map_err(|e| io(e.to_string()))?;
     std::fs::write(&path, json + "\n").map_err(|e| io(e.to_string()))?;
-    super::write_stdout(&summary(&played, &path))
+    let page = args.out.join("play.html");
+    std::fs::write(&page, played.html()).map_err(|e| {
+        Error::plain(Diagnostic::error(format!(
+            "cannot write `{}`: {e}",
+            page.display()
+        )))
+    })?;
+    super::write_stdout(&summary(&played, &page))
 }
 
 /// What a play found, in a few lines.

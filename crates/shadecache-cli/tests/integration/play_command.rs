@@ -21,12 +21,17 @@ fn play(shader: &str, scene: &str, args: &[&str]) -> Value {
     let output = shadecache(&all);
     assert!(output.status.success(), "{}", stderr(&output));
     let text = std::fs::read_to_string(dir.join("play.json")).unwrap();
+    let page = std::fs::read_to_string(dir.join("play.html")).unwrap();
+    assert!(page.contains("<svg") && page.contains("governor"), "{page}");
     assert!(
         stdout(&output).contains("original") && stdout(&output).contains("governor"),
         "{}",
         stdout(&output)
     );
-    serde_json::from_str(&text).unwrap()
+    let mut played: Value = serde_json::from_str(&text).unwrap();
+    // What the page shows, for the tests to check beside the JSON.
+    played["html_marks_the_switch"] = Value::Bool(page.contains("cache off at "));
+    played
 }
 
 fn number(value: &Value, key: &str) -> f64 {
@@ -90,6 +95,10 @@ fn governor_turns_a_losing_cache_off() {
         "governed {after:.3} ms after the switch against {original:.3} ms"
     );
     assert_eq!(played["auto_on_at_end"], false);
+    assert!(
+        played["html_marks_the_switch"].as_bool().unwrap(),
+        "the page marks no switch"
+    );
 }
 
 /// A cache that pays (the environment map's 25 taps, two-pass) is kept,
