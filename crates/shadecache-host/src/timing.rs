@@ -51,9 +51,7 @@ const DEFAULT_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(10);
 /// submit, then [`Timestamps::read`].
 #[derive(Debug)]
 pub struct Timestamps {
-    queries: wgpu::QuerySet,
-    resolved: wgpu::Buffer,
-    readback: wgpu::Buffer,
+    slot: QuerySlot,
     capacity: u32,
     period_ns: f32,
     passes: Vec<String>,
@@ -68,26 +66,8 @@ impl Timestamps {
         if !device.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
             return None;
         }
-        let count = passes.max(1) * 2;
-        let bytes = u64::from(count) * 8;
         Some(Timestamps {
-            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("shadecache pass timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count,
-            }),
-            resolved: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("shadecache resolved timestamps"),
-                size: bytes,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            }),
-            readback: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("shadecache timestamp readback"),
-                size: bytes,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            }),
+            slot: QuerySlot::new(device, passes.max(1)),
             capacity: passes.max(1),
             period_ns: queue.get_timestamp_period(),
             passes: Vec::new(),
@@ -104,12 +84,7 @@ impl Timestamps {
 
     /// Resolves this frame's queries; record after the passes.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
-        let count = self.passes.len() as u32 * 2;
-        if count == 0 {
-            return;
-        }
-        encoder.resolve_query_set(&self.queries, 0..count, &self.resolved, 0);
-        encoder.copy_buffer_to_buffer(&self.resolved, 0, &self.readback, 0, u64::from(count) * 8);
+        self.slot.resolve(encoder, self.passes.len() as u32);
     }
 
     /// The frame's pass times, once its commands were submitted; starts
@@ -120,8 +95,10 @@ impl Timestamps {
         if passes.is_empty() {
             return Ok(Vec::new());
         }
-        let slice = self.readback.slice(..passes.len() as u64 * 16);
-        slice.map_async(wgpu::MapMode::Read, |_| {});
+        let used = passes.len() as u32;
+        self.slot
+            .read_slice(used)
+            .map_async(wgpu::MapMode::Read, |_| {});
         device
             .poll(wgpu::PollType::Wait {
                 submission_index: None,
@@ -134,22 +111,13 @@ impl Timestamps {
                 )),
                 err => crate::Error::Wgpu(err.to_string()),
             })?;
-        let ticks: Vec<u64> = {
-            let data = slice
-                .get_mapped_range()
-                .map_err(|err| crate::Error::Wgpu(format!("{err:?}")))?;
-            data.chunks_exact(8)
-                .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
-                .collect()
-        };
-        self.readback.unmap();
+        let ticks = self.slot.ticks(used)?;
         Ok(passes
             .into_iter()
             .zip(ticks.chunks_exact(2))
             .map(|(pass, pair)| PassTime {
                 pass,
-                milliseconds: pair[1].saturating_sub(pair[0]) as f64 * f64::from(self.period_ns)
-                    / 1e6,
+                milliseconds: milliseconds(pair[0], pair[1], self.period_ns),
             })
             .collect())
     }
@@ -171,23 +139,97 @@ impl PassTimer for Timestamps {
         &'a self,
         query: &'a Option<u32>,
     ) -> Option<wgpu::RenderPassTimestampWrites<'a>> {
-        let index = (*query)?;
-        Some(wgpu::RenderPassTimestampWrites {
-            query_set: &self.queries,
-            beginning_of_pass_write_index: Some(index * 2),
-            end_of_pass_write_index: Some(index * 2 + 1),
-        })
+        Some(self.slot.writes((*query)?))
     }
 
     fn end(&mut self, _: &mut wgpu::CommandEncoder, _: Option<u32>) {}
 }
 
-/// One frame's queries in a [`FrameTimer`], and where its times are read.
+/// One frame's timestamp queries (a begin and an end per pass), and the
+/// buffers they are resolved into and read back from: what [`Timestamps`]
+/// and each of a [`FrameTimer`]'s frames in flight hold.
 #[derive(Debug)]
-struct FrameSlot {
+struct QuerySlot {
     queries: wgpu::QuerySet,
     resolved: wgpu::Buffer,
     readback: wgpu::Buffer,
+}
+
+impl QuerySlot {
+    /// Room for `passes` passes.
+    fn new(device: &wgpu::Device, passes: u32) -> QuerySlot {
+        let bytes = u64::from(passes) * 16;
+        QuerySlot {
+            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("shadecache pass timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: passes * 2,
+            }),
+            resolved: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("shadecache resolved timestamps"),
+                size: bytes,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            readback: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("shadecache timestamp readback"),
+                size: bytes,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            }),
+        }
+    }
+
+    /// The writes of pass `index`'s begin and end.
+    fn writes(&self, index: u32) -> wgpu::RenderPassTimestampWrites<'_> {
+        wgpu::RenderPassTimestampWrites {
+            query_set: &self.queries,
+            beginning_of_pass_write_index: Some(index * 2),
+            end_of_pass_write_index: Some(index * 2 + 1),
+        }
+    }
+
+    /// Resolves the first `used` passes' queries and copies them where
+    /// they are read back; nothing when none was used.
+    fn resolve(&self, encoder: &mut wgpu::CommandEncoder, used: u32) {
+        if used == 0 {
+            return;
+        }
+        encoder.resolve_query_set(&self.queries, 0..used * 2, &self.resolved, 0);
+        encoder.copy_buffer_to_buffer(&self.resolved, 0, &self.readback, 0, u64::from(used) * 16);
+    }
+
+    /// The read-back bytes of the first `used` passes, to map.
+    fn read_slice(&self, used: u32) -> wgpu::BufferSlice<'_> {
+        self.readback.slice(..u64::from(used) * 16)
+    }
+
+    /// The mapped ticks of the first `used` passes (begin, end, begin...),
+    /// and the read-back buffer unmapped.
+    fn ticks(&self, used: u32) -> Result<Vec<u64>, crate::Error> {
+        let ticks = {
+            let data = self
+                .read_slice(used)
+                .get_mapped_range()
+                .map_err(|err| crate::Error::Wgpu(format!("{err:?}")))?;
+            data.chunks_exact(8)
+                .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+                .collect()
+        };
+        self.readback.unmap();
+        Ok(ticks)
+    }
+}
+
+/// Milliseconds from tick `begin` to tick `end`.
+fn milliseconds(begin: u64, end: u64, period_ns: f32) -> f64 {
+    end.saturating_sub(begin) as f64 * f64::from(period_ns) / 1e6
+}
+
+/// One frame's queries in a [`FrameTimer`], and where its times are read.
+#[derive(Debug)]
+struct FrameSlot {
+    slot: QuerySlot,
     /// The frame recorded into it, and its queries used.
     frame: Option<u64>,
     used: u32,
@@ -232,26 +274,9 @@ impl FrameTimer {
             return None;
         }
         let capacity = passes.max(1);
-        let bytes = u64::from(capacity) * 16;
         let slots = (0..in_flight.max(1))
             .map(|_| FrameSlot {
-                queries: device.create_query_set(&wgpu::QuerySetDescriptor {
-                    label: Some("shadecache frame timestamps"),
-                    ty: wgpu::QueryType::Timestamp,
-                    count: capacity * 2,
-                }),
-                resolved: device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("shadecache resolved frame timestamps"),
-                    size: bytes,
-                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                }),
-                readback: device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("shadecache frame timestamp readback"),
-                    size: bytes,
-                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                    mapped_at_creation: false,
-                }),
+                slot: QuerySlot::new(device, capacity),
                 frame: None,
                 used: 0,
                 mapped: Default::default(),
@@ -295,9 +320,7 @@ impl FrameTimer {
             slot.frame = None;
             return;
         }
-        let count = slot.used * 2;
-        encoder.resolve_query_set(&slot.queries, 0..count, &slot.resolved, 0);
-        encoder.copy_buffer_to_buffer(&slot.resolved, 0, &slot.readback, 0, u64::from(count) * 8);
+        slot.slot.resolve(encoder, slot.used);
     }
 
     /// The frames whose times have arrived, as (frame, milliseconds from
@@ -309,14 +332,13 @@ impl FrameTimer {
             if slot.frame.is_some() && !slot.mapping && Some(index) != self.current {
                 slot.mapping = true;
                 let mapped = slot.mapped.clone();
-                slot.readback.slice(..u64::from(slot.used) * 16).map_async(
-                    wgpu::MapMode::Read,
-                    move |result| {
+                slot.slot
+                    .read_slice(slot.used)
+                    .map_async(wgpu::MapMode::Read, move |result| {
                         if result.is_ok() {
                             mapped.store(true, std::sync::atomic::Ordering::Release);
                         }
-                    },
-                );
+                    });
             }
         }
         device
@@ -330,25 +352,14 @@ impl FrameTimer {
             {
                 continue;
             }
-            let ticks: Vec<u64> = {
-                let data = slot
-                    .readback
-                    .slice(..u64::from(slot.used) * 16)
-                    .get_mapped_range()
-                    .map_err(|err| crate::Error::Wgpu(format!("{err:?}")))?;
-                data.chunks_exact(8)
-                    .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
-                    .collect()
-            };
-            slot.readback.unmap();
+            let ticks = slot.slot.ticks(slot.used)?;
             slot.mapping = false;
             let (first, last) = (
                 ticks.iter().step_by(2).min(),
                 ticks.iter().skip(1).step_by(2).max(),
             );
             if let (Some(frame), Some(&first), Some(&last)) = (slot.frame.take(), first, last) {
-                let ms = last.saturating_sub(first) as f64 * f64::from(self.period_ns) / 1e6;
-                times.push((frame, ms));
+                times.push((frame, milliseconds(first, last, self.period_ns)));
             }
         }
         times.sort_by_key(|(frame, _)| *frame);
@@ -373,13 +384,7 @@ impl PassTimer for FrameTimer {
         &'a self,
         query: &'a Option<u32>,
     ) -> Option<wgpu::RenderPassTimestampWrites<'a>> {
-        let index = (*query)?;
-        let slot = &self.slots[self.current?];
-        Some(wgpu::RenderPassTimestampWrites {
-            query_set: &slot.queries,
-            beginning_of_pass_write_index: Some(index * 2),
-            end_of_pass_write_index: Some(index * 2 + 1),
-        })
+        Some(self.slots[self.current?].slot.writes((*query)?))
     }
 
     fn end(&mut self, _: &mut wgpu::CommandEncoder, _: Option<u32>) {}
