@@ -178,8 +178,12 @@ pub struct Governor {
     since: u64,
     /// Cached frames drawn since the cache last started afresh.
     warm_frames: u32,
-    /// Frames asked for and not yet measured, by number.
-    pending: VecDeque<(u64, Kind)>,
+    /// Frames asked for and not yet measured, by number, with the epoch
+    /// of pairs they were drawn in.
+    pending: VecDeque<(u64, Kind, u32)>,
+    /// Counts the times the pairs started afresh: a time that arrives
+    /// after that, of a frame drawn before, is of a cache that is gone.
+    epoch: u32,
     /// The latest time of each kind, and the windows of paired times.
     last_original: Option<f64>,
     last_cached: Option<f64>,
@@ -207,6 +211,7 @@ impl Governor {
             since: 0,
             warm_frames: 0,
             pending: VecDeque::new(),
+            epoch: 0,
             last_original: None,
             last_cached: None,
             originals: VecDeque::new(),
@@ -254,10 +259,7 @@ impl Governor {
                 if into == 0 {
                     // A new burst: the cached frames of the last one are
                     // of another scene.
-                    self.originals.clear();
-                    self.cached.clear();
-                    self.last_cached = None;
-                    self.warm_frames = 0;
+                    self.start_pairs_afresh();
                 }
                 self.cached_frame()
             } else {
@@ -273,11 +275,22 @@ impl Governor {
         if self.pending.len() == MAX_PENDING {
             self.pending.pop_front();
         }
-        self.pending.push_back((frame, kind));
+        self.pending.push_back((frame, kind, self.epoch));
         GovernedFrame {
             frame,
             choice: draw,
         }
+    }
+
+    /// Forgets the pairs and the latest cached time, and starts the cache
+    /// afresh at its next frame: what was measured is of a cache that is
+    /// gone.
+    fn start_pairs_afresh(&mut self) {
+        self.originals.clear();
+        self.cached.clear();
+        self.last_cached = None;
+        self.warm_frames = 0;
+        self.epoch = self.epoch.wrapping_add(1);
     }
 
     /// A cached frame: the first since the cache was off starts afresh.
@@ -291,10 +304,13 @@ impl Governor {
     /// not asked for (or forgotten) is ignored. May switch the cache for
     /// the frames after.
     pub fn measured(&mut self, frame: u64, gpu_ms: f64) {
-        let Some(at) = self.pending.iter().position(|(f, _)| *f == frame) else {
+        let at = self.pending.iter().position(|(f, _, _)| *f == frame);
+        let Some((_, kind, epoch)) = at.and_then(|at| self.pending.remove(at)) else {
             return;
         };
-        let (_, kind) = self.pending.remove(at).unwrap_or((frame, Kind::Original));
+        if epoch != self.epoch {
+            return;
+        }
         if !gpu_ms.is_finite() || gpu_ms <= 0.0 {
             return;
         }
@@ -354,12 +370,9 @@ impl Governor {
         if switch {
             self.on = !self.on;
             self.since = self.frame;
-            self.warm_frames = 0;
             // The new state's pairs are its own: a cache that starts
             // afresh, or bursts of it among original frames.
-            self.originals.clear();
-            self.cached.clear();
-            self.last_cached = None;
+            self.start_pairs_afresh();
             self.decisions.push(Decision {
                 frame: self.frame,
                 on: self.on,
@@ -532,6 +545,38 @@ mod tests {
             .find(|(draw, _)| matches!(draw, Choice::Cached { .. }))
             .unwrap();
         assert_eq!(first.0, Choice::Cached { reset: true });
+    }
+
+    /// A frame drawn before a switch whose time arrives after it is of
+    /// the cache as it was: it does not enter the new state's pairs.
+    #[test]
+    fn a_time_from_before_a_switch_is_not_paired_after_it() {
+        let mut g = governor();
+        let mut held = None;
+        // A losing cache, each time given back at once but one cached
+        // frame's, held until the governor has switched off.
+        while g.is_on() {
+            let next = g.next_frame();
+            let ms = match next.choice {
+                Choice::Original => 1.0,
+                Choice::Cached { .. } => 1.5,
+            };
+            if held.is_none() && next.frame > 100 && ms > 1.0 {
+                held = Some((next.frame, ms));
+                continue;
+            }
+            g.measured(next.frame, ms);
+            assert!(next.frame < 5000, "never switched off");
+        }
+        let (frame, ms) = held.expect("a cached frame was held back");
+        // Off, before its first re-probe: no cached time is paired.
+        for _ in 0..500 {
+            let next = g.next_frame();
+            g.measured(next.frame, 1.0);
+        }
+        assert!(g.last_cached.is_none() && g.cached.is_empty());
+        g.measured(frame, ms);
+        assert!(g.last_cached.is_none() && g.cached.is_empty());
     }
 
     #[test]
