@@ -90,6 +90,19 @@ impl Default for GovernorSettings {
 }
 
 impl GovernorSettings {
+    /// The defaults for a variant of `plan`: its cache warms up over its
+    /// refresh period Δn and a frame, and a re-probe's burst is that warm-up
+    /// and enough pairs for a decision.
+    pub fn for_plan(plan: &shadecache_plan::Plan) -> GovernorSettings {
+        let defaults = GovernorSettings::default();
+        let warmup = plan.refresh.period.max(1) + 1;
+        GovernorSettings {
+            warmup,
+            reprobe_frames: warmup + defaults.min_samples as u32 + 4,
+            ..defaults
+        }
+    }
+
     /// Why these settings cannot govern: a window smaller than the samples
     /// a decision needs, a burst that is all warm-up, a zero cadence.
     pub fn check(&self) -> Result<(), String> {

@@ -48,14 +48,7 @@ pub fn run(
     let mut timer = FrameTimer::new(&gpu.device, &gpu.queue, 4, 3).ok_or(
         "the adapter has no timestamp queries, which the governor decides from: --compare draws both ways instead",
     )?;
-    let period = cached.plan().refresh.period.max(1);
-    let defaults = GovernorSettings::default();
-    let mut governor = Governor::new(GovernorSettings {
-        // The cache fills over a refresh period and a frame.
-        warmup: period + 1,
-        reprobe_frames: period + 1 + defaults.min_samples as u32 + 4,
-        ..defaults
-    })?;
+    let mut governor = Governor::new(GovernorSettings::for_plan(cached.plan()))?;
     let target = texture(&gpu.device, "frame", size, COLOR_FORMAT);
     let depth = texture(&gpu.device, "depth", size, crate::planet::DEPTH_FORMAT);
     let view = target.create_view(&wgpu::TextureViewDescriptor::default());
