@@ -7,7 +7,7 @@
 
 use std::collections::HashMap;
 
-use super::run::PayloadRun;
+use super::run::TimedRun;
 use super::setup::Prepared;
 use super::{sources_of, Probe, ProbeOf};
 use crate::analysis::Candidate;
@@ -28,7 +28,7 @@ pub(super) fn fixed_cost_runs(
     prepared: &Prepared,
     nodes: &[(&Candidate, &[super::grid::Setting])],
     variants: &[Variant],
-) -> Result<(Vec<PayloadRun>, Vec<Probe>), Error> {
+) -> Result<(Vec<TimedRun>, Vec<Probe>), Error> {
     let base = &prepared.base;
     let free = RewriteOptions {
         free_payload: true,
@@ -38,7 +38,8 @@ pub(super) fn fixed_cost_runs(
     let mut probes = Vec::new();
     for (node, (candidate, _)) in nodes.iter().enumerate() {
         let payload = |options| payload_runner(bench, shader, prepared, candidate, options);
-        payloads.push(PayloadRun {
+        payloads.push(TimedRun {
+            label: "payload",
             runner: payload(base)?,
             times: Vec::new(),
         });

@@ -60,7 +60,7 @@ use crate::scene::{self, Scene};
 use config::{probed, speedup, Config, Probe, ProbeOf};
 use grid::{shard_nodes, variant_settings, Axes, Design, Setting};
 use row::{miss_causes, result_row, Baseline};
-use run::{measured_run, Measured, PayloadRun, ReferenceRun};
+use run::{measured_run, Measured, ReferenceRun, TimedRun};
 
 pub use crate::measure::{Progress, Quiet, MEASURED_COLOR_FORMAT};
 
@@ -376,7 +376,7 @@ fn sharded<'p>(prepared: &'p setup::Prepared, options: &Options) -> Result<Share
 fn node_reports(
     shader: &Shader,
     nodes: &[GridNode],
-    (payloads, probes): (&[PayloadRun], &[Probe]),
+    (payloads, probes): (&[TimedRun], &[Probe]),
     reference_ms: f64,
 ) -> Vec<NodeReport> {
     nodes

@@ -58,15 +58,17 @@ pub(super) struct ReferenceRun {
     pub stats: super::reference_check::ReferenceStats,
 }
 
-/// A node's payload over every pixel, for its P/T.
-pub(super) struct PayloadRun {
+/// A runner drawn every frame and timed, nothing else kept: a node's
+/// payload over every pixel (for its P/T), `play`'s fixed cache.
+pub(super) struct TimedRun {
+    pub label: &'static str,
     pub runner: Runner,
     pub times: Vec<f64>,
 }
 
-impl Measured for PayloadRun {
+impl Measured for TimedRun {
     fn label(&self) -> &str {
-        "payload"
+        self.label
     }
     fn runner(&mut self) -> &mut Runner {
         &mut self.runner
