@@ -242,19 +242,14 @@ pub(crate) struct MaterialVariant {
 }
 
 impl CachedVariants {
+    /// `M`'s variant. Once per material: Bevy refuses a second
+    /// `ShadecachePlugin::<M>` as it refuses any plugin added twice.
     fn add<M: Asset>(&mut self, variant: CachedVariant) {
-        let material = TypeId::of::<M>();
-        let name = bevy::utils::prelude::ShortName::of::<M>().to_string();
-        match self.0.iter_mut().find(|v| v.material == material) {
-            // A second plugin for one material: the later variant is the
-            // one drawn, as the later of two inserted resources would be.
-            Some(entry) => entry.variant = variant,
-            None => self.0.push(MaterialVariant {
-                material,
-                name,
-                variant,
-            }),
-        }
+        self.0.push(MaterialVariant {
+            material: TypeId::of::<M>(),
+            name: bevy::utils::prelude::ShortName::of::<M>().to_string(),
+            variant,
+        });
     }
 
     /// The index of the variant of the material asset type `material`.
