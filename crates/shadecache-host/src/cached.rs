@@ -935,6 +935,38 @@ impl CachedShader {
         };
     }
 
+    /// Sets the refresh period Δn from the next frame on: a pixel's value
+    /// is then at most `period` frames old (what a governor lowers when
+    /// the cached frames drift from the original). The cache keeps what it
+    /// holds: a value older than the new period is refreshed within it,
+    /// the pattern reaching every pixel once a period. The phase becomes
+    /// c mod Δn. Refused for 0 (no refresh, which leaves wrong values
+    /// forever) and past the largest period the refresh indicator takes,
+    /// and for a variant whose refresh pattern is its sampling lattice
+    /// (`lowres`: Δn is its s², fixed by its passes).
+    pub fn set_refresh_period(&mut self, period: u32) -> Result<(), Error> {
+        if self.plan.upsampling.is_some() {
+            return Err(Error::Refused(format!(
+                "this variant's refresh period is its lattice's s² = {}, fixed by its passes",
+                self.plan.refresh.period
+            )));
+        }
+        if period == 0 || period > shadecache_plan::MAX_REFRESH_PERIOD {
+            return Err(Error::Refused(format!(
+                "a refresh period of {period} frames: it is from 1 to {}",
+                shadecache_plan::MAX_REFRESH_PERIOD
+            )));
+        }
+        self.plan.refresh.period = period;
+        self.set_frame_counter(self.frame);
+        Ok(())
+    }
+
+    /// The refresh period Δn the next frame runs with.
+    pub fn refresh_period(&self) -> u32 {
+        self.plan.refresh.period
+    }
+
     /// The frame counter c.
     pub fn frame_counter(&self) -> u64 {
         self.frame

@@ -16,6 +16,14 @@ pub trait PassTimer {
         &'a self,
         query: &'a Self::Query,
     ) -> Option<wgpu::RenderPassTimestampWrites<'a>>;
+    /// The timestamp writes a compute pass takes, if any (the error
+    /// watch's comparison is one); none unless the timer says.
+    fn compute_timestamp_writes<'a>(
+        &'a self,
+        _query: &'a Self::Query,
+    ) -> Option<wgpu::ComputePassTimestampWrites<'a>> {
+        None
+    }
     /// Ends timing the pass, after it is recorded.
     fn end(&mut self, encoder: &mut wgpu::CommandEncoder, query: Self::Query);
 }
@@ -142,6 +150,13 @@ impl PassTimer for Timestamps {
         Some(self.slot.writes((*query)?))
     }
 
+    fn compute_timestamp_writes<'a>(
+        &'a self,
+        query: &'a Option<u32>,
+    ) -> Option<wgpu::ComputePassTimestampWrites<'a>> {
+        Some(self.slot.compute_writes((*query)?))
+    }
+
     fn end(&mut self, _: &mut wgpu::CommandEncoder, _: Option<u32>) {}
 }
 
@@ -186,6 +201,16 @@ impl QuerySlot {
             query_set: &self.queries,
             beginning_of_pass_write_index: Some(index * 2),
             end_of_pass_write_index: Some(index * 2 + 1),
+        }
+    }
+
+    /// The same writes for a compute pass.
+    fn compute_writes(&self, index: u32) -> wgpu::ComputePassTimestampWrites<'_> {
+        let writes = self.writes(index);
+        wgpu::ComputePassTimestampWrites {
+            query_set: writes.query_set,
+            beginning_of_pass_write_index: writes.beginning_of_pass_write_index,
+            end_of_pass_write_index: writes.end_of_pass_write_index,
         }
     }
 
@@ -385,6 +410,13 @@ impl PassTimer for FrameTimer {
         query: &'a Option<u32>,
     ) -> Option<wgpu::RenderPassTimestampWrites<'a>> {
         Some(self.slots[self.current?].slot.writes((*query)?))
+    }
+
+    fn compute_timestamp_writes<'a>(
+        &'a self,
+        query: &'a Option<u32>,
+    ) -> Option<wgpu::ComputePassTimestampWrites<'a>> {
+        Some(self.slots[self.current?].slot.compute_writes((*query)?))
     }
 
     fn end(&mut self, _: &mut wgpu::CommandEncoder, _: Option<u32>) {}

@@ -247,7 +247,9 @@ fn target(gpu: &Gpu, size: u32, format: wgpu::TextureFormat) -> wgpu::Texture {
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING,
         view_formats: &[],
     })
 }
@@ -1287,4 +1289,163 @@ fn frame_times_are_read_when_ready_without_waiting() {
     assert!(arrived.len() >= 8, "{arrived:?}");
     assert!(arrived.iter().all(|(_, ms)| *ms > 0.0), "{arrived:?}");
     assert!(governor.estimate().is_some());
+}
+
+/// Clears `view` to `color` (a render pass with nothing drawn).
+fn clear_to(gpu: &Gpu, view: &wgpu::TextureView, color: wgpu::Color) {
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view,
+            resolve_target: None,
+            depth_slice: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(color),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        ..Default::default()
+    });
+    gpu.queue.submit([encoder.finish()]);
+}
+
+/// Records the watch's comparison of `frames` over what `app`'s last
+/// frame covered, submits it, and waits for its answer (`ready` itself
+/// never waits).
+fn watched(
+    gpu: &Gpu,
+    watch: &mut shadecache_host::ErrorWatch,
+    frame: u64,
+    original: Option<&wgpu::Texture>,
+    app: &App,
+) -> shadecache_host::WatchedError {
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    let io = (&gpu.queue, &mut encoder);
+    let timer = &mut shadecache_host::NoTimer;
+    let cached = &app.targets[0];
+    let recorded = match original {
+        None => watch.compare(&gpu.device, io, timer, frame, cached, &app.cached),
+        Some(original) => watch.compare_frames(
+            &gpu.device,
+            io,
+            timer,
+            frame,
+            [original, cached],
+            &app.cached,
+        ),
+    }
+    .expect("the frames compare");
+    assert!(recorded);
+    assert!(!watch.is_free(), "a second comparison waits for the first");
+    gpu.queue.submit([encoder.finish()]);
+    loop {
+        if let Some(error) = watch.ready(&gpu.device).expect("the numbers read") {
+            assert!(watch.is_free());
+            return error;
+        }
+        gpu.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .expect("the GPU finishes");
+    }
+}
+
+/// The error watch's PSNR, over the pixels the cached draws covered,
+/// is what a read-back of the same frames gives on the CPU by the
+/// profiler's rule (linear RGB, peak 1, mean over the covered pixels'
+/// channels); a frame against itself is at the cap. Frames the watch
+/// cannot read are an error naming them.
+#[test]
+fn the_error_watch_gives_the_psnr_of_a_read_back() {
+    let Some(gpu) = gpu() else { return };
+    let mut app = App::new(&gpu, "three-pass");
+    app.frame(&gpu, 0.0);
+    app.frame(&gpu, 0.1);
+    let format = wgpu::TextureFormat::Rgba8Unorm;
+    let mut watch = shadecache_host::ErrorWatch::new(&gpu.device, (SIZE, SIZE), format)
+        .expect("the watch is made");
+    clear_to(
+        &gpu,
+        watch.spare_view(),
+        wgpu::Color {
+            r: 0.5,
+            g: 0.25,
+            b: 0.75,
+            a: 1.0,
+        },
+    );
+    let error = watched(&gpu, &mut watch, 7, None, &app);
+
+    let pixels = read(&gpu, &app.targets[0], 4);
+    let depth: Vec<f32> = read(&gpu, app.cached.depth(), 4)
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    let (mut squared, mut covered) = (0.0f64, 0u64);
+    for (pixel, &d) in depth.iter().enumerate() {
+        if d == 1.0 {
+            continue;
+        }
+        covered += 1;
+        // The spare target holds the clear colour in 8 bits.
+        for (channel, spare) in [0.5f64, 0.25, 0.75].into_iter().enumerate() {
+            let spare = (spare * 255.0).round() / 255.0;
+            let value = f64::from(pixels[pixel * 4 + channel]) / 255.0;
+            squared += (value - spare) * (value - spare);
+        }
+    }
+    let expected = 10.0 * (3.0 * covered as f64 / squared).log10();
+    assert_eq!(error.frame, 7);
+    assert_eq!(error.covered, covered);
+    assert!(
+        covered > 500 && covered < u64::from(SIZE * SIZE) / 2,
+        "{covered}"
+    );
+    assert!(
+        (error.psnr - expected).abs() < 0.01,
+        "watch {:.4} dB, read-back {expected:.4} dB",
+        error.psnr
+    );
+
+    let same = watched(&gpu, &mut watch, 8, Some(&app.targets[0]), &app);
+    assert_eq!(same.psnr, 100.0);
+
+    let unreadable = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("no binding"),
+        size: wgpu::Extent3d {
+            width: SIZE,
+            height: SIZE,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    let refused = watch.compare_frames(
+        &gpu.device,
+        (&gpu.queue, &mut encoder),
+        &mut shadecache_host::NoTimer,
+        9,
+        [&unreadable, &app.targets[0]],
+        &app.cached,
+    );
+    assert!(
+        matches!(&refused, Err(Error::Mismatch(text)) if text.contains("original") && text.contains("TEXTURE_BINDING")),
+        "{refused:?}"
+    );
+    assert!(shadecache_host::ErrorWatch::new(
+        &gpu.device,
+        (SIZE, SIZE),
+        wgpu::TextureFormat::Rgba8Uint
+    )
+    .is_err());
 }
