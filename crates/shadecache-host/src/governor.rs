@@ -34,6 +34,22 @@
 //! - **A switch on starts a new cache.** The first cached frame after the
 //!   cache was off carries `reset: true`: what the cache holds is from
 //!   before, as after a camera cut.
+//! - **Fast is not enough: the error watch.** With an error budget
+//!   ([`GovernorSettings::min_psnr`]), one warm cached frame in
+//!   [`GovernorSettings::watch_every`] is watched
+//!   ([`GovernedFrame::watch`]): the application draws the original as well,
+//!   into a spare target, and an [`crate::ErrorWatch`] compares the two on
+//!   the GPU; its PSNR comes back through [`Governor::watched`]. Below the
+//!   budget, the governor halves the refresh period Δn
+//!   ([`GovernedFrame::period`], which the application sets with
+//!   `CachedShader::set_refresh_period`); at the floor
+//!   ([`GovernorSettings::min_period`]) it turns the cache off. While off,
+//!   each re-probe's burst watches its first warm frame, and the cache
+//!   turns on again only when that frame was within the budget. A watched
+//!   frame costs more (the original drawn too, the comparison): its time
+//!   is kept apart, and the extra, spread over `watch_every` frames, is
+//!   added to every cached frame the speed-up is weighed on, so the
+//!   speed-up the governor reports is of the cache with its watch.
 //!
 //! The governor itself draws nothing and reads no timestamps: it is the
 //! decision, which an application (or the host's timing) feeds.
@@ -71,6 +87,18 @@ pub struct GovernorSettings {
     /// decision a game makes while it runs takes fewer, about 0.4 ms of
     /// CPU for 400 in a release build).
     pub resamples: usize,
+    /// The error budget: the least PSNR (dB, over the cached pixels, as
+    /// the profiler measures it) a watched cached frame may have against
+    /// the original. `None`: no watch, the speed alone decides.
+    pub min_psnr: Option<f64>,
+    /// With a budget, one warm cached frame in this many is watched.
+    pub watch_every: u32,
+    /// The refresh period Δn the cache starts with: the variant's.
+    pub period: u32,
+    /// The least Δn the watch lowers to; below the budget there, the
+    /// cache turns off. Δn = 1 recomputes every pixel every frame and
+    /// saves nothing, so the floor is at least 2.
+    pub min_period: u32,
 }
 
 impl Default for GovernorSettings {
@@ -85,6 +113,10 @@ impl Default for GovernorSettings {
             min_dwell: 120,
             decide_every: 2,
             resamples: 400,
+            min_psnr: None,
+            watch_every: 64,
+            period: 32,
+            min_period: 2,
         }
     }
 }
@@ -92,14 +124,32 @@ impl Default for GovernorSettings {
 impl GovernorSettings {
     /// The defaults for a variant of `plan`: its cache warms up over its
     /// refresh period Δn and a frame, and a re-probe's burst is that warm-up
-    /// and enough pairs for a decision.
+    /// and enough pairs for a decision. Its Δn is where the watch starts;
+    /// a variant whose Δn is fixed by its passes (`lowres`'s lattice) has
+    /// no lower one, and a watch that trips turns it off.
     pub fn for_plan(plan: &shadecache_plan::Plan) -> GovernorSettings {
         let defaults = GovernorSettings::default();
         let warmup = plan.refresh.period.max(1) + 1;
+        let period = plan.refresh.period;
         GovernorSettings {
             warmup,
             reprobe_frames: warmup + defaults.min_samples as u32 + 4,
+            period,
+            min_period: if plan.upsampling.is_some() {
+                period
+            } else {
+                defaults.min_period
+            },
             ..defaults
+        }
+    }
+
+    /// These settings with an error budget: the least PSNR, in dB, a
+    /// watched frame may have.
+    pub fn with_min_psnr(self, min_psnr: f64) -> GovernorSettings {
+        GovernorSettings {
+            min_psnr: Some(min_psnr),
+            ..self
         }
     }
 
@@ -115,6 +165,14 @@ impl GovernorSettings {
         if self.probe_every < 2 || self.decide_every == 0 || self.resamples < 100 {
             return Err("the governor probes one frame in 2 or more, decides every 1 or more measured frames, and resamples 100 times or more".into());
         }
+        if let Some(min_psnr) = self.min_psnr {
+            if !min_psnr.is_finite() || self.watch_every < 2 {
+                return Err(format!(
+                    "an error budget is a finite PSNR ({min_psnr} dB here), watched one frame in 2 or more ({} here)",
+                    self.watch_every
+                ));
+            }
+        }
         if self.reprobe_frames <= self.warmup || self.reprobe_every <= self.reprobe_frames {
             return Err(format!(
                 "a burst of {} cached frames every {} frames leaves nothing after a warm-up of {}",
@@ -122,6 +180,31 @@ impl GovernorSettings {
             ));
         }
         Ok(())
+    }
+}
+
+/// How an application runs its cache: what a game's settings menu or a
+/// build's configuration sets, and what a [`Governor`] made with
+/// [`Governor::for_mode`] follows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CacheMode {
+    /// The cached variant every frame: the developer measured it pays.
+    Always,
+    /// The original every frame.
+    Off,
+    /// The governor decides from this GPU's frame times; with
+    /// `min_psnr`, the error watch keeps the cached frames within that
+    /// PSNR (dB) of the original.
+    Auto {
+        /// The error budget ([`GovernorSettings::min_psnr`]).
+        min_psnr: Option<f64>,
+    },
+}
+
+impl Default for CacheMode {
+    /// `Auto`, with no error budget.
+    fn default() -> Self {
+        CacheMode::Auto { min_psnr: None }
     }
 }
 
@@ -146,6 +229,14 @@ pub struct GovernedFrame {
     pub frame: u64,
     /// What to draw.
     pub choice: Choice,
+    /// The refresh period Δn a cached frame runs with
+    /// (`CachedShader::set_refresh_period` where it changed).
+    pub period: u32,
+    /// Whether this cached frame is watched: the original is drawn as
+    /// well, into the watch's spare target, and the two compared
+    /// ([`crate::ErrorWatch::compare`]); its PSNR goes to
+    /// [`Governor::watched`].
+    pub watch: bool,
 }
 
 /// The speed-up the governor holds: the ratio of the medians and its 95%
@@ -158,15 +249,33 @@ pub struct SpeedEstimate {
     pub interval: [f64; 2],
 }
 
-/// A decision: the cache on or off from a frame on, and why.
+/// A decision: the cache on or off, or its refresh period, from a frame
+/// on, and why.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Decision {
     /// The frame it applies from.
     pub frame: u64,
     /// Whether the cache is on.
     pub on: bool,
-    /// The estimate it was made on.
-    pub estimate: SpeedEstimate,
+    /// The refresh period Δn from then.
+    pub period: u32,
+    /// The speed-up last weighed when it was made (`None` before there
+    /// were enough frames to weigh).
+    pub estimate: Option<SpeedEstimate>,
+    /// Why.
+    pub cause: Cause,
+}
+
+/// Why the governor decided.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Cause {
+    /// The speed-up's interval lay wholly on the other side of 1×.
+    Speed,
+    /// A watched frame was below the error budget, at this PSNR (dB).
+    Error {
+        /// The watched frame's PSNR.
+        psnr: f64,
+    },
 }
 
 /// What a frame was, as far as measuring goes.
@@ -177,6 +286,9 @@ enum Kind {
     Cached {
         warm: bool,
     },
+    /// A cached frame that was watched: it cost the original and the
+    /// comparison too.
+    Watched,
 }
 
 /// Decides per frame whether the application draws the original or the
@@ -191,6 +303,18 @@ pub struct Governor {
     since: u64,
     /// Cached frames drawn since the cache last started afresh.
     warm_frames: u32,
+    /// Whether the next cached frame starts the cache afresh.
+    reset_next: bool,
+    /// The refresh period Δn cached frames run with.
+    period: u32,
+    /// The watched frame whose error is awaited, with its epoch.
+    watching: Option<(u64, u32)>,
+    /// Whether the last watch since the pairs started afresh was within
+    /// the budget (while off: whether the burst's frame was).
+    watch_ok: bool,
+    /// Times of watched frames (the original and the comparison on top
+    /// of a cached frame), the latest few.
+    watch_times: VecDeque<f64>,
     /// Frames asked for and not yet measured, by number, with the epoch
     /// of pairs they were drawn in.
     pending: VecDeque<(u64, Kind, u32)>,
@@ -206,11 +330,17 @@ pub struct Governor {
     undecided: u32,
     estimate: Option<SpeedEstimate>,
     decisions: Vec<Decision>,
+    /// `Some` for [`CacheMode::Always`] (true) and [`CacheMode::Off`]:
+    /// nothing is measured or decided.
+    fixed: Option<bool>,
 }
 
 /// Frames asked for and never measured that the governor forgets: a time
 /// that never comes (a frame the application dropped) does not grow it.
 const MAX_PENDING: usize = 256;
+
+/// Watched frames' times kept for the watch's cost.
+const WATCH_TIMES: usize = 8;
 
 impl Governor {
     /// A governor with the cache on (the developer chose it); the first
@@ -218,11 +348,15 @@ impl Governor {
     pub fn new(settings: GovernorSettings) -> Result<Governor, String> {
         settings.check()?;
         Ok(Governor {
-            settings,
             on: true,
             frame: 0,
             since: 0,
             warm_frames: 0,
+            reset_next: true,
+            period: settings.period,
+            watching: None,
+            watch_ok: false,
+            watch_times: VecDeque::new(),
             pending: VecDeque::new(),
             epoch: 0,
             last_original: None,
@@ -232,12 +366,40 @@ impl Governor {
             undecided: 0,
             estimate: None,
             decisions: Vec::new(),
+            fixed: None,
+            settings,
         })
+    }
+
+    /// A governor for a variant of `plan` in `mode`: `Auto` governs with
+    /// [`GovernorSettings::for_plan`] (and its budget); `Always` and `Off`
+    /// draw the one way every frame (the cache starting afresh on its
+    /// first), and measure and decide nothing, so that an application has
+    /// one render loop for every mode.
+    pub fn for_mode(mode: CacheMode, plan: &shadecache_plan::Plan) -> Result<Governor, String> {
+        let settings = GovernorSettings::for_plan(plan);
+        let (settings, fixed) = match mode {
+            CacheMode::Always => (settings, Some(true)),
+            CacheMode::Off => (settings, Some(false)),
+            CacheMode::Auto { min_psnr: None } => (settings, None),
+            CacheMode::Auto {
+                min_psnr: Some(min_psnr),
+            } => (settings.with_min_psnr(min_psnr), None),
+        };
+        let mut governor = Governor::new(settings)?;
+        governor.fixed = fixed;
+        governor.on = fixed != Some(false);
+        Ok(governor)
     }
 
     /// Whether the cache is on.
     pub fn is_on(&self) -> bool {
         self.on
+    }
+
+    /// The refresh period Δn cached frames run with now.
+    pub fn period(&self) -> u32 {
+        self.period
     }
 
     /// The speed-up last weighed, if there were enough frames of each kind.
@@ -254,6 +416,18 @@ impl Governor {
     pub fn next_frame(&mut self) -> GovernedFrame {
         let frame = self.frame;
         self.frame += 1;
+        if let Some(on) = self.fixed {
+            return GovernedFrame {
+                frame,
+                choice: if on {
+                    self.cached_frame()
+                } else {
+                    Choice::Original
+                },
+                period: self.period,
+                watch: false,
+            };
+        }
         let draw = if self.on {
             let since = frame - self.since;
             if since % u64::from(self.settings.probe_every)
@@ -272,19 +446,23 @@ impl Governor {
                 if into == 0 {
                     // A new burst: the cached frames of the last one are
                     // of another scene.
-                    self.start_pairs_afresh();
+                    self.start_pairs_afresh(true);
                 }
                 self.cached_frame()
             } else {
                 Choice::Original
             }
         };
+        let warm = self.warm_frames > self.settings.warmup;
+        let watch = matches!(draw, Choice::Cached { .. }) && warm && self.watch_due();
         let kind = match draw {
             Choice::Original => Kind::Original,
-            Choice::Cached { .. } => Kind::Cached {
-                warm: self.warm_frames > self.settings.warmup,
-            },
+            Choice::Cached { .. } if watch => Kind::Watched,
+            Choice::Cached { .. } => Kind::Cached { warm },
         };
+        if watch {
+            self.watching = Some((frame, self.epoch));
+        }
         if self.pending.len() == MAX_PENDING {
             self.pending.pop_front();
         }
@@ -292,23 +470,41 @@ impl Governor {
         GovernedFrame {
             frame,
             choice: draw,
+            period: self.period,
+            watch,
         }
     }
 
-    /// Forgets the pairs and the latest cached time, and starts the cache
-    /// afresh at its next frame: what was measured is of a cache that is
-    /// gone.
-    fn start_pairs_afresh(&mut self) {
+    /// Whether this warm cached frame is watched: with a budget, the
+    /// first warm frame since the pairs started afresh (a burst's one
+    /// watch) and every `watch_every` after it, while no other watch is
+    /// awaited.
+    fn watch_due(&self) -> bool {
+        if self.settings.min_psnr.is_none() || self.watching.is_some() {
+            return false;
+        }
+        let into = self.warm_frames - self.settings.warmup - 1;
+        into.is_multiple_of(self.settings.watch_every)
+    }
+
+    /// Forgets the pairs and the latest cached time, and warms the cache
+    /// up again (started afresh at its next frame with `reset`): what was
+    /// measured is of a cache that is gone, or of another Δn.
+    fn start_pairs_afresh(&mut self, reset: bool) {
         self.originals.clear();
         self.cached.clear();
         self.last_cached = None;
         self.warm_frames = 0;
+        self.reset_next |= reset;
+        self.watching = None;
+        self.watch_ok = false;
         self.epoch = self.epoch.wrapping_add(1);
     }
 
-    /// A cached frame: the first since the cache was off starts afresh.
+    /// A cached frame: the first after a switch on or a burst's start
+    /// starts afresh.
     fn cached_frame(&mut self) -> Choice {
-        let reset = self.warm_frames == 0;
+        let reset = std::mem::take(&mut self.reset_next);
         self.warm_frames = self.warm_frames.saturating_add(1);
         Choice::Cached { reset }
     }
@@ -317,6 +513,9 @@ impl Governor {
     /// not asked for (or forgotten) is ignored. May switch the cache for
     /// the frames after.
     pub fn measured(&mut self, frame: u64, gpu_ms: f64) {
+        if self.fixed.is_some() {
+            return;
+        }
         let at = self.pending.iter().position(|(f, _, _)| *f == frame);
         let Some((_, kind, epoch)) = at.and_then(|at| self.pending.remove(at)) else {
             return;
@@ -331,6 +530,13 @@ impl Governor {
             Kind::Original => self.last_original = Some(gpu_ms),
             Kind::Cached { warm: true } => self.last_cached = Some(gpu_ms),
             Kind::Cached { warm: false } => return,
+            Kind::Watched => {
+                if self.watch_times.len() == WATCH_TIMES {
+                    self.watch_times.pop_front();
+                }
+                self.watch_times.push_back(gpu_ms);
+                return;
+            }
         }
         // Each frame of the kind drawn rarely is paired with the latest
         // of the other: both windows span the same frames, so a slow
@@ -366,7 +572,13 @@ impl Governor {
             return;
         }
         let originals: Vec<f64> = self.originals.iter().copied().collect();
-        let cached: Vec<f64> = self.cached.iter().copied().collect();
+        let mut cached: Vec<f64> = self.cached.iter().copied().collect();
+        // The watch's extra, spread over the frames between two watches,
+        // is part of what a cached frame costs.
+        let overhead = self.watch_overhead(&cached);
+        for ms in &mut cached {
+            *ms += overhead;
+        }
         let estimate = SpeedEstimate {
             speedup: median(&originals) / median(&cached),
             interval: speedup_interval_resampled(&originals, &cached, self.settings.resamples),
@@ -378,19 +590,83 @@ impl Governor {
         let switch = if self.on {
             estimate.interval[1] < 1.0
         } else {
-            estimate.interval[0] > 1.0
+            // On again only where the burst's watched frame was within
+            // the budget.
+            estimate.interval[0] > 1.0 && (self.settings.min_psnr.is_none() || self.watch_ok)
         };
         if switch {
-            self.on = !self.on;
-            self.since = self.frame;
-            // The new state's pairs are its own: a cache that starts
-            // afresh, or bursts of it among original frames.
-            self.start_pairs_afresh();
+            self.switch(!self.on, Cause::Speed);
+        }
+    }
+
+    /// The watch's extra cost per frame: a watched frame's median time
+    /// over a cached frame's, spread over `watch_every` frames; 0 without
+    /// a budget or a watched time.
+    fn watch_overhead(&self, cached: &[f64]) -> f64 {
+        if self.settings.min_psnr.is_none() || self.watch_times.is_empty() || cached.is_empty() {
+            return 0.0;
+        }
+        let watched: Vec<f64> = self.watch_times.iter().copied().collect();
+        (median(&watched) - median(cached)).max(0.0) / f64::from(self.settings.watch_every)
+    }
+
+    /// Turns the cache on or off from the next frame, and says why.
+    fn switch(&mut self, on: bool, cause: Cause) {
+        self.on = on;
+        self.since = self.frame;
+        // The new state's pairs are its own: a cache that starts afresh,
+        // or bursts of it among original frames.
+        self.start_pairs_afresh(true);
+        self.decisions.push(Decision {
+            frame: self.frame,
+            on,
+            period: self.period,
+            estimate: self.estimate,
+            cause,
+        });
+    }
+
+    /// The error of watched frame `frame` (PSNR in dB, as the
+    /// [`crate::ErrorWatch`] gives it), once read. Below the budget the
+    /// refresh period halves, down to the floor; below it at the floor,
+    /// the cache turns off. A frame not watched, or watched before the
+    /// pairs last started afresh, is ignored.
+    pub fn watched(&mut self, frame: u64, psnr: f64) {
+        let (Some(min_psnr), Some((watched, epoch))) = (self.settings.min_psnr, self.watching)
+        else {
+            return;
+        };
+        if watched != frame {
+            return;
+        }
+        self.watching = None;
+        if epoch != self.epoch {
+            return;
+        }
+        // A NaN is no measurement of being within the budget.
+        self.watch_ok = psnr >= min_psnr;
+        if self.watch_ok || !self.on {
+            // Off, a burst's frame below the budget keeps the cache off.
+            return;
+        }
+        let cause = Cause::Error { psnr };
+        if self.period > self.settings.min_period {
+            // Δn = 0 refreshes nothing: its first step down is to 32.
+            self.period = match self.period {
+                0 => 32,
+                period => (period / 2).max(self.settings.min_period),
+            };
+            // The cache keeps what it holds; the times are of another Δn.
+            self.start_pairs_afresh(false);
             self.decisions.push(Decision {
                 frame: self.frame,
-                on: self.on,
-                estimate,
+                on: true,
+                period: self.period,
+                estimate: self.estimate,
+                cause,
             });
+        } else {
+            self.switch(false, cause);
         }
     }
 }
@@ -423,13 +699,25 @@ mod tests {
         original: impl Fn(u64) -> f64,
         cached: impl Fn(u64) -> f64,
     ) -> Vec<(Choice, f64)> {
+        play_watched(governor, frames, lag, (original, cached), |_, _| 100.0)
+    }
+
+    /// [`play`], a watched frame costing the cached frame and the
+    /// original, its PSNR `psnr(frame, Δn)` given back with its time.
+    fn play_watched(
+        governor: &mut Governor,
+        frames: u64,
+        lag: usize,
+        (original, cached): (impl Fn(u64) -> f64, impl Fn(u64) -> f64),
+        psnr: impl Fn(u64, u32) -> f64,
+    ) -> Vec<(Choice, f64)> {
         let mut noise = Noise(0x2545_F491_4F6C_DD1D);
         let mut drawn = Vec::new();
-        let mut in_flight: VecDeque<(u64, f64)> = VecDeque::new();
+        let mut in_flight: VecDeque<(GovernedFrame, f64)> = VecDeque::new();
         let mut warm = 0u32;
         for _ in 0..frames {
             let next = governor.next_frame();
-            let ms = match next.choice {
+            let mut ms = match next.choice {
                 Choice::Original => noise.around(original(next.frame), 0.05),
                 Choice::Cached { reset } => {
                     warm = if reset { 0 } else { warm + 1 };
@@ -442,11 +730,17 @@ mod tests {
                     noise.around(base, 0.05)
                 }
             };
+            if next.watch {
+                ms += original(next.frame) * 1.05;
+            }
             drawn.push((next.choice, ms));
-            in_flight.push_back((next.frame, ms));
+            in_flight.push_back((next, ms));
             if in_flight.len() > lag {
                 let (frame, ms) = in_flight.pop_front().unwrap();
-                governor.measured(frame, ms);
+                governor.measured(frame.frame, ms);
+                if frame.watch {
+                    governor.watched(frame.frame, psnr(frame.frame, frame.period));
+                }
             }
         }
         drawn
@@ -592,6 +886,34 @@ mod tests {
         assert!(g.last_cached.is_none() && g.cached.is_empty());
     }
 
+    /// `Always` and `Off` draw one way every frame, whatever the times.
+    #[test]
+    fn fixed_modes_draw_one_way_and_decide_nothing() {
+        let plan: shadecache_plan::Plan = serde_json::from_str(include_str!(
+            "../tests/fixtures/square/three-pass/plan.json"
+        ))
+        .unwrap();
+        for (mode, cached) in [(CacheMode::Always, true), (CacheMode::Off, false)] {
+            let mut g = Governor::for_mode(mode, &plan).unwrap();
+            let drawn = play(&mut g, 2000, 3, |_| 1.0, |_| 2.0);
+            assert!(g.decisions().is_empty());
+            assert_eq!(g.is_on(), cached);
+            assert!(drawn
+                .iter()
+                .all(|(choice, _)| matches!(choice, Choice::Cached { .. }) == cached));
+            assert_eq!(drawn[0].0 == Choice::Cached { reset: true }, cached);
+        }
+        let auto = Governor::for_mode(
+            CacheMode::Auto {
+                min_psnr: Some(30.0),
+            },
+            &plan,
+        )
+        .unwrap();
+        assert_eq!(auto.settings.min_psnr, Some(30.0));
+        assert_eq!(auto.period(), plan.refresh.period);
+    }
+
     #[test]
     fn times_of_frames_not_asked_for_are_ignored() {
         let mut g = governor();
@@ -608,5 +930,85 @@ mod tests {
         }
         .check()
         .is_err());
+    }
+
+    fn watched_governor() -> Governor {
+        Governor::new(GovernorSettings::default().with_min_psnr(30.0)).unwrap()
+    }
+
+    /// The light starts to move at frame 1000: the cached shading lags
+    /// it, the more the longer Δn (3 dB a halving, within the budget of 30
+    /// dB from Δn = 8). The watch halves Δn from 32 to 8 and the cache
+    /// stays on.
+    #[test]
+    fn the_watch_lowers_delta_n_until_the_error_is_within_budget() {
+        let mut g = watched_governor();
+        let psnr = |frame: u64, period: u32| {
+            if frame < 1000 {
+                45.0
+            } else {
+                24.0 + 3.0 * (5.0 - f64::from(period).log2())
+            }
+        };
+        play_watched(&mut g, 3000, 3, (|_| 1.0, |_| 0.5), psnr);
+        assert!(g.is_on(), "{:?}", g.decisions());
+        assert_eq!(g.period(), 8, "{:?}", g.decisions());
+        let steps: Vec<(u64, u32)> = g.decisions().iter().map(|d| (d.frame, d.period)).collect();
+        assert_eq!(steps.len(), 2, "{steps:?}");
+        assert!(steps.iter().all(|&(frame, _)| frame >= 1000), "{steps:?}");
+        assert!(g
+            .decisions()
+            .iter()
+            .all(|d| d.on && matches!(d.cause, Cause::Error { psnr } if psnr < 30.0)));
+        // Each step within a watch period and a warm-up of the change.
+        assert!(steps[1].0 < 1000 + 2 * (64 + 40) + 10, "{steps:?}");
+    }
+
+    /// Below the budget at every Δn, the watch lowers Δn to the floor and
+    /// then turns the cache off, and the re-probes' watches keep it off
+    /// while the error stays: a cache that pays and looks wrong is off.
+    #[test]
+    fn the_watch_turns_the_cache_off_at_the_floor_and_keeps_it_off() {
+        let mut g = watched_governor();
+        let psnr = |frame: u64, _| if frame < 500 { 45.0 } else { 20.0 };
+        let drawn = play_watched(&mut g, 4000, 3, (|_| 1.0, |_| 0.5), psnr);
+        let last = *g.decisions().last().expect("decided");
+        assert!(!last.on && last.period == 2, "{:?}", g.decisions());
+        assert!(!g.is_on());
+        assert_eq!(
+            g.decisions().iter().filter(|d| !d.on).count(),
+            1,
+            "{:?}",
+            g.decisions()
+        );
+        // The re-probes' bursts only, after the switch off.
+        let cached = drawn[last.frame as usize..]
+            .iter()
+            .filter(|(choice, _)| *choice != Choice::Original)
+            .count() as u64;
+        let settings = GovernorSettings::default();
+        let bursts = (4000 - last.frame) / u64::from(settings.reprobe_every);
+        assert!(
+            cached <= bursts * u64::from(settings.reprobe_frames),
+            "{cached} cached frames after the switch off"
+        );
+    }
+
+    /// A cache just worth it without the watch (0.97 of the original's
+    /// time) loses once the watch's cost is counted (the original drawn
+    /// again one frame in 8): the governor turns it off.
+    #[test]
+    fn the_watchs_cost_is_counted_in_the_speedup() {
+        let settings = GovernorSettings {
+            watch_every: 8,
+            ..GovernorSettings::default()
+        };
+        let mut unwatched = Governor::new(settings.clone()).unwrap();
+        play(&mut unwatched, 2000, 3, |_| 1.0, |_| 0.9);
+        assert!(unwatched.is_on(), "{:?}", unwatched.decisions());
+        let mut watched = Governor::new(settings.with_min_psnr(30.0)).unwrap();
+        play_watched(&mut watched, 2000, 3, (|_| 1.0, |_| 0.9), |_, _| 45.0);
+        assert!(!watched.is_on(), "{:?}", watched.decisions());
+        assert_eq!(watched.decisions()[0].cause, Cause::Speed);
     }
 }

@@ -101,11 +101,14 @@ mod pipelines;
 mod timing;
 mod twins;
 mod vertex;
+mod watch;
 
 pub use cached::{CachedShader, Draw, Options};
 pub use error::Error;
 pub use frame::{FrameLayout, Targets, Viewport};
-pub use governor::{Choice, Decision, GovernedFrame, Governor, GovernorSettings, SpeedEstimate};
+pub use governor::{
+    CacheMode, Cause, Choice, Decision, GovernedFrame, Governor, GovernorSettings, SpeedEstimate,
+};
 
 /// Brings in the Rust module a build script's `shadecache::build::Build`
 /// writes (`$OUT_DIR/shadecache/variants.rs`), naming every variant it
@@ -124,6 +127,7 @@ pub use shadecache_plan as plan;
 pub use shadecache_plan::Plan;
 pub use timing::{FrameTimer, NoTimer, PassTime, PassTimer, Timestamps};
 pub use twins::{TwinSources, Twins};
+pub use watch::{ErrorWatch, WatchedError};
 
 /// What the shadecache toolchain shares with the host to draw its scenes
 /// (feature `toolchain`, which the toolchain turns on): the plan's formats
