@@ -80,7 +80,6 @@ pub(crate) fn timed(
 /// Times what `record` submits, as [`timed`] times a runner's frame:
 /// `record` gets the profiler and the label to scope its passes with
 /// (`<label>/<pass>`) when the device has timestamp queries.
-#[cfg(feature = "interpolate")]
 pub(crate) fn timed_recording(
     clock: &mut Clock,
     label: &str,

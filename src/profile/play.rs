@@ -20,10 +20,20 @@
 //! The answer ([`Play`]) is each way's mean frame time (what a player
 //! sees over the run), the governor's decisions and the share of frames
 //! it cached. The governor's settings are its defaults, its warm-up the
-//! variant's refresh period and one frame. Not yet: the error watch.
+//! variant's refresh period and one frame.
+//!
+//! With an error budget (`--min-psnr`), the governed way runs the host
+//! crate's error watch as an application would: on the frames the
+//! governor watches it draws the original as well and records the
+//! watch's comparison, all inside the frame's time, and gives the watch's
+//! PSNR back to the governor, which lowers Δn or turns the cache off.
+//! Each watched frame is also measured the profiler's way, its picture
+//! read back and compared with the reference's after the frame was timed
+//! ([`PlayWatch::profiler_psnr`]): what the watch measured on the GPU
+//! beside what `profile` would report for the same frame.
 
 use serde::Serialize;
-use shadecache_host::{Choice, GovernedFrame, Governor, GovernorSettings};
+use shadecache_host::{Cause, Choice, ErrorWatch, GovernedFrame, Governor, GovernorSettings};
 
 use super::run::{measured_run, Measured, ReferenceRun, Sample, TimedRun};
 use super::{sources_of, Options, Progress};
@@ -31,8 +41,10 @@ use crate::diagnostic::{Diagnostic, Error};
 use crate::front::Shader;
 use crate::measure::bench::{reference, Bench};
 use crate::measure::clock::Clock;
+use crate::measure::clock::{read_linear, timed, timed_recording, Timed};
 use crate::measure::{fail, open_gpu};
 use crate::rewrite::{self, Variant};
+use crate::runtime::FrameInputs;
 use crate::runtime::Runner;
 use crate::scene::Scene;
 
@@ -64,23 +76,57 @@ pub struct Play {
     pub auto_cached_share: f64,
     /// Whether the governor had the cache on at the end.
     pub auto_on_at_end: bool,
-    /// The governor's switches, in order.
+    /// The error budget the governor kept, as the least PSNR in dB
+    /// (`null`: none, no watch).
+    pub min_psnr: Option<f64>,
+    /// The refresh period Δn the governed cache ran with at the end.
+    pub auto_period_at_end: u32,
+    /// Mean time of a watched frame (the cached frame, the original and
+    /// the comparison), in ms; 0 without watches.
+    pub watch_frame_ms: f64,
+    /// The watch's comparison pass alone, mean, in ms.
+    pub watch_compare_ms: f64,
+    /// The governor's switches and changes of Δn, in order.
     pub decisions: Vec<PlayDecision>,
+    /// The watched frames.
+    pub watches: Vec<PlayWatch>,
     /// The governed frames: what each drew and its time.
     pub auto_frames: Vec<AutoFrame>,
 }
 
-/// One switch of the governor.
+/// One watched frame.
+#[derive(Clone, Debug, Serialize)]
+pub struct PlayWatch {
+    /// The frame.
+    pub frame: u64,
+    /// Its refresh period Δn.
+    pub period: u32,
+    /// The watch's PSNR (the GPU's comparison), in dB.
+    pub psnr: f64,
+    /// The same frame's PSNR the profiler's way (read back, compared with
+    /// the reference over the pixels the classification marks); `null`
+    /// where the watch's answer came after the frame was gone.
+    pub profiler_psnr: Option<f64>,
+}
+
+/// One decision of the governor.
 #[derive(Clone, Debug, Serialize)]
 pub struct PlayDecision {
     /// The frame it applies from.
     pub frame: u64,
     /// The cache on or off from then.
     pub on: bool,
-    /// The speed-up it was decided on.
+    /// The refresh period Δn from then.
+    pub period: u32,
+    /// `speed` (the interval lay across 1×) or `error` (a watched frame
+    /// was below the budget).
+    pub cause: &'static str,
+    /// The speed-up last weighed (0 before there was one).
     pub speedup: f64,
     /// That speed-up's bootstrap interval.
     pub interval: [f64; 2],
+    /// With `error`: the watched frame's PSNR.
+    pub psnr: Option<f64>,
 }
 
 /// One governed frame.
@@ -92,20 +138,70 @@ pub struct AutoFrame {
     pub drew: &'static str,
     /// Its GPU time, in ms.
     pub ms: f64,
+    /// Whether it was watched (its time holds the original and the
+    /// comparison too).
+    pub watched: bool,
 }
 
-/// `play.json`'s format.
-pub const PLAY_FORMAT: u32 = 1;
+/// `play.json`'s format: 2 added the error watch (`min_psnr`,
+/// `watches`, the decisions' `period` and `cause`).
+pub const PLAY_FORMAT: u32 = 2;
 
 /// The governed way: each frame the governor's choice of runner, its time
-/// given back to the governor.
+/// given back to the governor; on a watched frame, the original drawn as
+/// well and the two compared by the error watch.
 struct Governed {
     original: Runner,
     cached: Runner,
     governor: Governor,
+    watch: Option<ErrorWatch>,
     /// This frame's choice, made when its runner is asked for.
     now: Option<GovernedFrame>,
     frames: Vec<AutoFrame>,
+    watches: Vec<PlayWatch>,
+    /// The watched frames' times, and their comparisons' alone.
+    watch_times: (Vec<f64>, Vec<f64>),
+    size: [u32; 2],
+    /// The refresh period before the first decision.
+    governor_start_period: u32,
+}
+
+impl Governed {
+    /// Asks the governor for this frame, and sets the cache up for it:
+    /// started afresh where it says, at the refresh period it says.
+    fn choose(&mut self) -> Result<GovernedFrame, String> {
+        let next = self.governor.next_frame();
+        self.now = Some(next);
+        if let Choice::Cached { reset } = next.choice {
+            if reset {
+                self.cached.reset();
+            }
+            if self.cached.refresh_period() != next.period {
+                self.cached.set_refresh_period(next.period)?;
+            }
+        }
+        Ok(next)
+    }
+
+    /// The profiler's PSNR of the cached runner's last frame against the
+    /// reference's of the same frame.
+    fn profiler_psnr(&self, sample: &Sample) -> Result<f64, String> {
+        let color = self
+            .cached
+            .color()
+            .ok_or("the cached variant draws no colour")?;
+        let frame = read_linear(sample.gpu, color)?;
+        let classes = crate::runtime::read_texture(sample.gpu, self.cached.classes(), 4)?;
+        Ok(crate::measure::metrics::compare(
+            &sample.reference.now,
+            &frame,
+            &classes,
+            self.size[0],
+            self.size[1],
+            0.0,
+        )
+        .psnr)
+    }
 }
 
 impl Measured for Governed {
@@ -113,15 +209,35 @@ impl Measured for Governed {
         "auto"
     }
     fn runner(&mut self) -> &mut Runner {
-        let next = self.governor.next_frame();
-        self.now = Some(next);
-        match next.choice {
-            Choice::Original => &mut self.original,
-            Choice::Cached { reset } => {
-                if reset {
-                    self.cached.reset();
-                }
-                &mut self.cached
+        match self.now.map(|now| now.choice) {
+            Some(Choice::Cached { .. }) => &mut self.cached,
+            _ => &mut self.original,
+        }
+    }
+    fn frame(
+        &mut self,
+        clock: &mut Clock,
+        inputs: &FrameInputs,
+        label: &str,
+    ) -> Result<Timed, String> {
+        let next = self.choose()?;
+        let gpu = clock.gpu;
+        let Governed {
+            original,
+            cached,
+            watch,
+            ..
+        } = self;
+        match (next.choice, watch.as_mut().filter(|_| next.watch)) {
+            (Choice::Original, _) => timed(clock, original, inputs, label),
+            (Choice::Cached { .. }, None) => timed(clock, cached, inputs, label),
+            (Choice::Cached { .. }, Some(watch)) => {
+                timed_recording(clock, label, |mut profiler| {
+                    cached.frame(gpu, inputs, again(&mut profiler))?;
+                    original.frame(gpu, inputs, again(&mut profiler))?;
+                    cached.watch(gpu, (watch, next.frame), original, again(&mut profiler))?;
+                    Ok(())
+                })
             }
         }
     }
@@ -131,6 +247,42 @@ impl Measured for Governed {
             .take()
             .ok_or("a governed frame was measured before it was drawn")?;
         self.governor.measured(now.frame, sample.time);
+        let watched = now.watch && self.watch.is_some();
+        if watched {
+            self.watch_times.0.push(sample.time);
+            if let Some((_, ms)) = sample.passes.iter().find(|(pass, _)| pass == "watch") {
+                self.watch_times.1.push(*ms);
+            }
+        }
+        // The GPU is idle after each timed frame: the watch's answer is
+        // read here, without a wait of its own.
+        let answer = match &mut self.watch {
+            Some(watch) => watch
+                .ready(&sample.gpu.device)
+                .map_err(|err| err.to_string())?,
+            None => None,
+        };
+        if let Some(answer) = answer {
+            self.governor.watched(answer.frame, answer.psnr);
+            let same_frame = answer.frame == now.frame;
+            let profiler_psnr = if same_frame {
+                Some(self.profiler_psnr(&sample)?)
+            } else {
+                None
+            };
+            self.watches.push(PlayWatch {
+                frame: answer.frame,
+                period: self
+                    .governor
+                    .decisions()
+                    .iter()
+                    .rev()
+                    .find(|d| d.frame <= answer.frame)
+                    .map_or(self.governor_start_period, |d| d.period),
+                psnr: answer.psnr,
+                profiler_psnr,
+            });
+        }
         self.frames.push(AutoFrame {
             frame: now.frame,
             drew: match now.choice {
@@ -139,9 +291,17 @@ impl Measured for Governed {
                 Choice::Cached { reset: true } => "reset",
             },
             ms: sample.time,
+            watched,
         });
         Ok(())
     }
+}
+
+/// The frame's profiler again, for one more runner in the same frame.
+fn again<'p>(
+    profiler: &'p mut Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+) -> Option<(&'p mut wgpu_profiler::GpuProfiler, &'p str)> {
+    profiler.as_mut().map(|(p, label)| (&mut **p, *label))
 }
 
 /// Plays `scene` `frames` frames each way with the first node and variant
@@ -152,7 +312,7 @@ pub fn play(
     scene: &Scene,
     scene_path: &std::path::Path,
     options: &Options,
-    frames: u32,
+    (frames, min_psnr): (u32, Option<f64>),
     progress: &mut dyn Progress,
 ) -> Result<Play, Error> {
     super::refuse_fragment_only(shader)?;
@@ -195,25 +355,47 @@ pub fn play(
         size: prepared.size,
         cull_back_faces: scene.cull_back_faces,
     };
-    let runner = |what: &str| {
+    let runner = |what: &str, classify: bool| {
         bench
-            .runner(&rewritten.plan, &sources, false)
+            .runner(&rewritten.plan, &sources, classify)
             .map_err(|err| fail(format!("{what}: {err}")))
     };
     let mut original = reference(&bench, shader, &reference_plan)?;
     let mut fixed = TimedRun {
         label: "fixed",
-        runner: runner("the fixed cache")?,
+        runner: runner("the fixed cache", false)?,
         times: Vec::new(),
     };
     let period = rewritten.plan.refresh.period.max(1);
-    let settings = GovernorSettings::for_plan(&rewritten.plan);
+    let mut settings = GovernorSettings::for_plan(&rewritten.plan);
+    if let Some(min_psnr) = min_psnr {
+        settings = settings.with_min_psnr(min_psnr);
+    }
+    // The governed cache classifies its frames for the profiler's PSNR of
+    // the watched ones; the classification is not part of a frame's time.
+    let cached = runner("the governed cache", min_psnr.is_some())?;
+    let watch = match min_psnr {
+        Some(_) => {
+            let format = cached
+                .color()
+                .ok_or_else(|| fail("the variant draws no colour to watch".into()))?
+                .format();
+            let size = (prepared.size[0], prepared.size[1]);
+            Some(ErrorWatch::new(&gpu.device, size, format).map_err(|err| fail(err.to_string()))?)
+        }
+        None => None,
+    };
     let mut governed = Governed {
         original: reference(&bench, shader, &reference_plan)?,
-        cached: runner("the governed cache")?,
+        cached,
+        governor_start_period: settings.period,
         governor: Governor::new(settings).map_err(fail)?,
+        watch,
         now: None,
         frames: Vec::new(),
+        watches: Vec::new(),
+        watch_times: (Vec::new(), Vec::new()),
+        size: prepared.size,
     };
     // The reference's frames are read back each frame, as in a profile,
     // though nothing here is compared with them: the wait for them starts
@@ -256,6 +438,10 @@ pub fn play(
         auto_ms: mean(&auto_times),
         auto_cached_share: cached as f64 / governed.frames.len().max(1) as f64,
         auto_on_at_end: governed.governor.is_on(),
+        min_psnr,
+        auto_period_at_end: governed.governor.period(),
+        watch_frame_ms: mean(&governed.watch_times.0),
+        watch_compare_ms: mean(&governed.watch_times.1),
         decisions: governed
             .governor
             .decisions()
@@ -263,15 +449,47 @@ pub fn play(
             .map(|d| PlayDecision {
                 frame: d.frame,
                 on: d.on,
-                speedup: d.estimate.speedup,
-                interval: d.estimate.interval,
+                period: d.period,
+                cause: match d.cause {
+                    Cause::Speed => "speed",
+                    Cause::Error { .. } => "error",
+                },
+                speedup: d.estimate.map_or(0.0, |e| e.speedup),
+                interval: d.estimate.map_or([0.0; 2], |e| e.interval),
+                psnr: match d.cause {
+                    Cause::Error { psnr } => Some(psnr),
+                    Cause::Speed => None,
+                },
             })
             .collect(),
+        watches: governed.watches,
         auto_frames: governed.frames,
     })
 }
 
 impl Play {
+    /// The watched frames as a table, with the profiler's PSNR of each;
+    /// nothing without an error budget.
+    fn watch_table(&self) -> String {
+        let Some(min_psnr) = self.min_psnr else {
+            return String::new();
+        };
+        let mut rows = String::new();
+        for watch in &self.watches {
+            let profiler = watch
+                .profiler_psnr
+                .map_or("—".to_string(), |db| format!("{db:.2}"));
+            rows += &format!(
+                "<tr><td>{}</td><td>{}</td><td>{:.2}</td><td>{profiler}</td></tr>\n",
+                watch.frame, watch.period, watch.psnr
+            );
+        }
+        format!(
+            "<h2>Error watch</h2>\n<p>Budget {min_psnr} dB. A watched frame took {:.3} ms (its comparison {:.3} ms); Δn = {} at the end.</p>\n<table><tr><th>frame</th><th>Δn</th><th>watch dB</th><th>profiler dB</th></tr>\n{rows}</table>\n",
+            self.watch_frame_ms, self.watch_compare_ms, self.auto_period_at_end
+        )
+    }
+
     /// The play as a page: the three ways' mean frame times, and a chart
     /// of every governed frame's GPU time (original, cached, cache
     /// started afresh) over the frames, with the two means as lines and
@@ -319,6 +537,7 @@ impl Play {
         }
         for frame in &self.auto_frames {
             let color = match frame.drew {
+                _ if frame.watched => "#8e44ad",
                 "original" => "#3366cc",
                 "reset" => "#cc2222",
                 _ => "#e08a00",
@@ -333,26 +552,32 @@ impl Play {
                 frame.ms
             );
         }
-        for decision in &self.decisions {
+        for (index, decision) in self.decisions.iter().enumerate() {
             let state = if decision.on { "cache on" } else { "cache off" };
+            let why = match decision.psnr {
+                Some(psnr) => format!("Δn = {}, watched {psnr:.1} dB", decision.period),
+                None => format!(
+                    "{:.2}× [{:.2}, {:.2}]",
+                    decision.speedup, decision.interval[0], decision.interval[1]
+                ),
+            };
+            // Labels step down so that decisions close together stay
+            // legible.
             let _ = writeln!(
                 svg,
-                "<line x1=\"{0:.1}\" x2=\"{0:.1}\" y1=\"{1}\" y2=\"{2}\" stroke=\"#555\"/><text x=\"{3:.1}\" y=\"{4}\" font-size=\"11\">{state} at {5} ({6:.2}× [{7:.2}, {8:.2}])</text>",
+                "<line x1=\"{0:.1}\" x2=\"{0:.1}\" y1=\"{1}\" y2=\"{2}\" stroke=\"#555\"/><text x=\"{3:.1}\" y=\"{4}\" font-size=\"11\">{state} at {5} ({why})</text>",
                 x(decision.frame as f64),
                 margin,
                 height - margin,
                 x(decision.frame as f64) + 4.0,
-                margin + 12.0,
+                margin + 12.0 + 13.0 * (index % 4) as f64,
                 decision.frame,
-                decision.speedup,
-                decision.interval[0],
-                decision.interval[1]
             );
         }
         svg.push_str("</svg>\n");
         let ratio = |ms: f64| if ms > 0.0 { self.original_ms / ms } else { 0.0 };
         format!(
-            "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>shadecache play: {shader}</title>\n<style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{padding:.2em .8em;text-align:right}}</style></head><body>\n<h1>{shader} on {scene}</h1>\n<p>{w}×{h}, {frames} frames each way, interleaved; {variant}; {device}.</p>\n<table><tr><th>way</th><th>mean frame ms</th><th>speed-up</th></tr>\n<tr><td>original</td><td>{o:.3}</td><td>1×</td></tr>\n<tr><td>fixed cache</td><td>{f:.3}</td><td>{fr:.2}×</td></tr>\n<tr><td>governor</td><td>{a:.3}</td><td>{ar:.2}× ({share:.0}% of its frames cached, cache {end} at the end)</td></tr></table>\n<h2>Each governed frame</h2>\n<p>Blue: the original drawn; orange: cached; red: the cache started afresh. Dashed: the means of the original and of the fixed cache every frame.</p>\n{svg}</body></html>\n",
+            "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>shadecache play: {shader}</title>\n<style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{padding:.2em .8em;text-align:right}}</style></head><body>\n<h1>{shader} on {scene}</h1>\n<p>{w}×{h}, {frames} frames each way, interleaved; {variant}; {device}.</p>\n<table><tr><th>way</th><th>mean frame ms</th><th>speed-up</th></tr>\n<tr><td>original</td><td>{o:.3}</td><td>1×</td></tr>\n<tr><td>fixed cache</td><td>{f:.3}</td><td>{fr:.2}×</td></tr>\n<tr><td>governor</td><td>{a:.3}</td><td>{ar:.2}× ({share:.0}% of its frames cached, cache {end} at the end)</td></tr></table>\n<h2>Each governed frame</h2>\n<p>Blue: the original drawn; orange: cached; red: the cache started afresh; purple: watched (the cached frame, the original and the error watch's comparison). Dashed: the means of the original and of the fixed cache every frame.</p>\n{svg}{watch}</body></html>\n",
             shader = escape(&self.shader),
             scene = escape(&self.scene),
             w = self.size[0],
@@ -367,6 +592,7 @@ impl Play {
             ar = ratio(self.auto_ms),
             share = self.auto_cached_share * 100.0,
             end = if self.auto_on_at_end { "on" } else { "off" },
+            watch = self.watch_table(),
         )
     }
 }

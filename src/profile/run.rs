@@ -11,7 +11,7 @@
 //! reuse) can add its own.
 
 use crate::diagnostic::Error;
-use crate::measure::clock::{read_linear, timed, Clock};
+use crate::measure::clock::{read_linear, timed, Clock, Timed};
 use crate::runtime::{FrameInputs, Gpu, Runner};
 
 use super::{fail, Progress};
@@ -32,7 +32,19 @@ pub(super) struct Sample<'a> {
 pub(super) trait Measured {
     /// The progress label, also the timer scope's.
     fn label(&self) -> &str;
+    /// The runner it draws this frame.
     fn runner(&mut self) -> &mut Runner;
+    /// Draws its frame of `inputs` and times it, as `label`: its
+    /// runner's frame, unless it draws more (the governed way's watched
+    /// frames draw the original and a comparison as well).
+    fn frame(
+        &mut self,
+        clock: &mut Clock,
+        inputs: &FrameInputs,
+        label: &str,
+    ) -> Result<Timed, String> {
+        timed(clock, self.runner(), inputs, label)
+    }
     /// The first frame it is drawn at: 0, or later for what has no cache
     /// to warm.
     fn first_frame(&self, _warmup: u32) -> u32 {
@@ -124,7 +136,7 @@ pub(super) fn measured_run(
                 continue;
             }
             let label = item.label().to_string();
-            let (time, passes, raw) = timed(clock, item.runner(), &inputs, &label).map_err(fail)?;
+            let (time, passes, raw) = item.frame(clock, &inputs, &label).map_err(fail)?;
             if last && item.traced() {
                 trace.extend(raw);
             }

@@ -163,6 +163,13 @@ impl PassTimer for Profiled<'_> {
         query.render_pass_timestamp_writes()
     }
 
+    fn compute_timestamp_writes<'a>(
+        &'a self,
+        query: &'a Self::Query,
+    ) -> Option<wgpu::ComputePassTimestampWrites<'a>> {
+        query.compute_pass_timestamp_writes()
+    }
+
     fn end(&mut self, encoder: &mut wgpu::CommandEncoder, query: Self::Query) {
         self.profiler.end_query(encoder, query);
     }
@@ -323,6 +330,66 @@ impl Runner {
     /// entry was written, how many frames ago its value was computed.
     pub fn age(&self) -> &wgpu::Texture {
         self.cached.age()
+    }
+
+    /// Sets the refresh period Δn from the next frame on
+    /// (`CachedShader::set_refresh_period`).
+    pub fn set_refresh_period(&mut self, period: u32) -> Result<(), String> {
+        self.cached
+            .set_refresh_period(period)
+            .map_err(|err| err.to_string())
+    }
+
+    /// The refresh period Δn the next frame runs with.
+    pub fn refresh_period(&self) -> u32 {
+        self.cached.refresh_period()
+    }
+
+    /// Records and submits the error watch's comparison of this runner's
+    /// last frame with `original`'s last frame (the same inputs drawn by
+    /// the original), over the pixels this frame covered; timed as
+    /// `<label>/watch` when a profiler is given. `false` when the watch
+    /// still waits for its last answer (nothing was recorded).
+    pub fn watch(
+        &self,
+        gpu: &Gpu,
+        (watch, frame): (&mut shadecache_host::ErrorWatch, u64),
+        original: &Runner,
+        profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+    ) -> Result<bool, String> {
+        let (Some(cached), Some(original)) = (self.color(), original.color()) else {
+            return Err("the error watch compares colour frames; one of these draws none".into());
+        };
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        let frames = [original, cached];
+        let recorded = match profiler {
+            Some((profiler, label)) => {
+                let mut timer = Profiled { profiler, label };
+                let recorded = watch.compare_frames(
+                    &gpu.device,
+                    (&gpu.queue, &mut encoder),
+                    &mut timer,
+                    frame,
+                    frames,
+                    &self.cached,
+                );
+                timer.profiler.resolve_queries(&mut encoder);
+                recorded
+            }
+            None => watch.compare_frames(
+                &gpu.device,
+                (&gpu.queue, &mut encoder),
+                &mut NoTimer,
+                frame,
+                frames,
+                &self.cached,
+            ),
+        }
+        .map_err(|err| err.to_string())?;
+        gpu.queue.submit([encoder.finish()]);
+        Ok(recorded)
     }
 
     /// Renders one frame: every pass of the plan in order (each timed when

@@ -320,6 +320,11 @@ pub struct Light {
     /// With `light-motion`: orbit about the vertical axis.
     #[serde(default)]
     pub orbit_degrees_per_frame: f32,
+    /// With `light-motion`: frames the light stands still before it
+    /// starts to orbit (a light switched on to move partway through, as
+    /// a governor's error watch must notice).
+    #[serde(default)]
+    pub still_frames: u32,
 }
 
 impl Default for Light {
@@ -327,6 +332,7 @@ impl Default for Light {
         Light {
             position: default_light(),
             orbit_degrees_per_frame: 0.0,
+            still_frames: 0,
         }
     }
 }
@@ -751,8 +757,10 @@ impl Scene {
 
         let mut light = Vec3::from(self.light.position);
         if self.has(Effect::LightMotion) {
-            light = Mat4::from_rotation_y((self.light.orbit_degrees_per_frame * t).to_radians())
-                .transform_point3(light);
+            let moving = (t - self.light.still_frames as f32).max(0.0);
+            light =
+                Mat4::from_rotation_y((self.light.orbit_degrees_per_frame * moving).to_radians())
+                    .transform_point3(light);
         }
         let light_clip_from_world = Mat4::perspective_rh(50f32.to_radians(), 1.0, 0.5, 30.0)
             * Mat4::look_at_rh(light, Vec3::ZERO, Vec3::Y);

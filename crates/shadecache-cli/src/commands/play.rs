@@ -38,6 +38,14 @@ pub struct Args {
     #[arg(long, value_name = "N", default_value_t = 600, value_parser = frame_count)]
     pub frames: u32,
 
+    /// The error budget of the governed way, as the least PSNR (dB, over
+    /// the cached pixels, as `profile` measures it): the governor watches
+    /// one cached frame in 64 against the original on the GPU, halves Δn
+    /// below the budget and turns the cache off below it at Δn = 2.
+    /// Without it, speed alone decides.
+    #[arg(long, value_name = "DB", value_parser = min_psnr)]
+    pub min_psnr: Option<f64>,
+
     /// Frame size (default: the scene's).
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<[u32; 2]>,
@@ -98,7 +106,7 @@ fn play_into(args: &Args, _color: Color, out: &crate::out_folder::OutFolder) -> 
         &scene,
         &scene_path,
         &options,
-        args.frames,
+        (args.frames, args.min_psnr),
         &mut bar,
     )?;
 
@@ -150,18 +158,43 @@ fn summary(played: &play::Play, path: &std::path::Path) -> String {
         if played.auto_on_at_end { "on" } else { "off" },
     );
     for decision in &played.decisions {
-        text += &format!(
-            "  frame {}: cache {} (speed-up {:.2}× [{:.2}, {:.2}])\n",
-            decision.frame,
-            if decision.on { "on" } else { "off" },
-            decision.speedup,
-            decision.interval[0],
-            decision.interval[1]
-        );
+        let state = if decision.on { "on" } else { "off" };
+        text += &match decision.psnr {
+            Some(psnr) => format!(
+                "  frame {}: cache {state}, Δn = {} (a watched frame at {psnr:.1} dB, below the budget)\n",
+                decision.frame, decision.period
+            ),
+            None => format!(
+                "  frame {}: cache {state} (speed-up {:.2}× [{:.2}, {:.2}])\n",
+                decision.frame, decision.speedup, decision.interval[0], decision.interval[1]
+            ),
+        };
     }
     if played.decisions.is_empty() {
         text += "  no switch: the governor kept the cache on\n";
     }
+    if let Some(min_psnr) = played.min_psnr {
+        let lowest = played
+            .watches
+            .iter()
+            .map(|w| w.psnr)
+            .fold(f64::INFINITY, f64::min);
+        text += &format!(
+            "  error watch, budget {min_psnr} dB: {} frames watched, lowest {lowest:.1} dB; a watched frame {:.3} ms (its comparison {:.3} ms); Δn = {} at the end\n",
+            played.watches.len(),
+            played.watch_frame_ms,
+            played.watch_compare_ms,
+            played.auto_period_at_end
+        );
+    }
     text += &format!("play: {}\n", path.display());
     text
+}
+
+/// An error budget: a finite PSNR in dB, above 0.
+fn min_psnr(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(db) if db.is_finite() && db > 0.0 => Ok(db),
+        _ => Err(format!("`{text}` is not a PSNR in dB above 0 (e.g. 35)")),
+    }
 }

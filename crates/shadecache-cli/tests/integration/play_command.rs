@@ -135,6 +135,93 @@ fn governor_keeps_a_winning_cache() {
     assert!(kept >= 0.9, "the governor kept {kept:.3} of the gain");
 }
 
+/// A light that starts to move (frame 120, then 4° a frame) leaves the
+/// cached lit colour behind it: the error watch sees the watched frames
+/// fall below the budget of 36 dB and the governor halves Δn from 16,
+/// each time for a watched frame below the budget, never before the light
+/// moves, and keeps the cache on.
+#[test]
+fn governor_lowers_delta_n_when_the_error_watch_trips() {
+    if no_gpu() {
+        return;
+    }
+    let played = play(
+        "corpus/noise_marble.wgsl",
+        "corpus/scenes/light_starts_moving.toml",
+        &[
+            "--frames",
+            "400",
+            "--variant",
+            "one-pass",
+            "--refresh-period",
+            "16",
+            "--min-psnr",
+            "36",
+        ],
+    );
+    let decisions = played["decisions"].as_array().unwrap();
+    let lowered: Vec<&Value> = decisions.iter().filter(|d| d["cause"] == "error").collect();
+    assert!(!lowered.is_empty(), "{decisions:?}");
+    let mut period = 16;
+    for decision in &lowered {
+        assert!(decision["frame"].as_u64().unwrap() > 120, "{decision}");
+        assert!(number(decision, "psnr") < 36.0, "{decision}");
+        assert_eq!(decision["on"], true, "{decision}");
+        assert_eq!(
+            decision["period"].as_u64().unwrap(),
+            period / 2,
+            "{decision}"
+        );
+        period /= 2;
+    }
+    assert_eq!(played["auto_period_at_end"].as_u64().unwrap(), period);
+    let watches = played["watches"].as_array().unwrap();
+    assert!(
+        watches
+            .iter()
+            .filter(|w| w["frame"].as_u64().unwrap() < 120)
+            .all(|w| number(w, "psnr") >= 36.0),
+        "{watches:?}"
+    );
+    assert!(number(&played, "watch_frame_ms") > number(&played, "fixed_ms"));
+}
+
+/// On the same frames, the error watch's PSNR (a compute pass on the GPU,
+/// over the pixels the cache's depth covers) is the profiler's (the frame
+/// read back and compared with the reference's over the pixels the
+/// classification marks), within 0.5 dB.
+#[test]
+fn error_watch_equals_the_profilers_error() {
+    if no_gpu() {
+        return;
+    }
+    let played = play(
+        "corpus/noise_marble.wgsl",
+        "corpus/scenes/marble_sphere.toml",
+        &[
+            "--size",
+            "128x128",
+            "--frames",
+            "150",
+            "--variant",
+            "one-pass",
+            "--refresh-period",
+            "32",
+            "--min-psnr",
+            "20",
+        ],
+    );
+    let watches = played["watches"].as_array().unwrap();
+    assert!(watches.len() >= 2, "{played}");
+    for watch in watches {
+        let (gpu, profiler) = (number(watch, "psnr"), number(watch, "profiler_psnr"));
+        assert!(
+            (gpu - profiler).abs() < 0.5 && gpu < 100.0,
+            "watch {gpu:.3} dB, profiler {profiler:.3} dB"
+        );
+    }
+}
+
 /// A variant `play` cannot draw is refused before anything runs, with the
 /// reason, and a bad flag is a usage error.
 #[test]
