@@ -1,13 +1,19 @@
 //! The app as it would ship: each frame the host crate's `Governor` says
 //! whether to draw the original pipeline or the cached variant, and
 //! `FrameTimer` gives it each frame's GPU time when the timestamps are
-//! ready, without a wait. What it decided, and what the frames cost, is
-//! printed at the end.
+//! ready, without a wait. With an error budget (`CacheMode::Auto` with
+//! `min_psnr`, the default), the frames the governor watches draw the
+//! original as well, into the `ErrorWatch`'s spare target, and the watch
+//! compares the two on the GPU; its answer, frames later, goes back to the
+//! governor, which lowers Δn (`CachedShader::set_refresh_period`) or turns
+//! the cache off. `CacheMode::Always` and `Off` run the same loop, one way
+//! every frame. What it decided, and what the frames cost, is printed at
+//! the end.
 
 use std::error::Error;
 
 use shadecache_host::{
-    CachedShader, Choice, FrameTimer, Governor, GovernorSettings, Targets, Twins,
+    CacheMode, CachedShader, Cause, Choice, ErrorWatch, FrameTimer, Governor, Targets, Twins,
 };
 
 use crate::planet::Planet;
@@ -21,6 +27,8 @@ struct Drawn {
     original: Vec<f64>,
     cached: Vec<f64>,
     untimed: u32,
+    /// The watched frames' PSNRs, in dB.
+    watched: Vec<f64>,
 }
 
 impl Drawn {
@@ -35,20 +43,42 @@ impl Drawn {
             }
         }
     }
+
+    /// The watch's answer, if it has come: to the governor, and kept.
+    fn watch(
+        &mut self,
+        watch: Option<&mut ErrorWatch>,
+        gpu: &Gpu,
+        governor: &mut Governor,
+    ) -> Result<(), Box<dyn Error>> {
+        if let Some(answer) = watch.map(|w| w.ready(&gpu.device)).transpose()?.flatten() {
+            governor.watched(answer.frame, answer.psnr);
+            self.watched.push(answer.psnr);
+        }
+        Ok(())
+    }
 }
 
-/// Plays `frames` frames governed, at `size`.
+/// Plays `frames` frames in `mode`, at `size`.
 pub fn run(
     gpu: &Gpu,
     (planet, original): (&Planet, &wgpu::RenderPipeline),
     (cached, twins): (&mut CachedShader, &Twins),
-    size: (u32, u32),
-    frames: u32,
+    (size, frames, mode): ((u32, u32), u32, CacheMode),
 ) -> Result<(), Box<dyn Error>> {
-    let mut timer = FrameTimer::new(&gpu.device, &gpu.queue, 4, 3).ok_or(
+    // The passes a frame times: the variant's, the original a watched
+    // frame draws too, and the watch's comparison.
+    let passes = cached.plan().passes.len() as u32 + 2;
+    let mut timer = FrameTimer::new(&gpu.device, &gpu.queue, passes, 3).ok_or(
         "the adapter has no timestamp queries, which the governor decides from: --compare draws both ways instead",
     )?;
-    let mut governor = Governor::new(GovernorSettings::for_plan(cached.plan()))?;
+    let mut governor = Governor::for_mode(mode, cached.plan())?;
+    let mut watch = match mode {
+        CacheMode::Auto {
+            min_psnr: Some(_), ..
+        } => Some(ErrorWatch::new(&gpu.device, size, COLOR_FORMAT)?),
+        _ => None,
+    };
     let target = texture(&gpu.device, "frame", size, COLOR_FORMAT);
     let depth = texture(&gpu.device, "depth", size, crate::planet::DEPTH_FORMAT);
     let view = target.create_view(&wgpu::TextureViewDescriptor::default());
@@ -77,6 +107,9 @@ pub fn run(
                 if reset {
                     cached.reset();
                 }
+                if cached.refresh_period() != next.period {
+                    cached.set_refresh_period(next.period)?;
+                }
                 let color = [Some(&view)];
                 let targets = Targets {
                     color: &color,
@@ -86,28 +119,70 @@ pub fn run(
                 cached.record_timed(&gpu.queue, &mut encoder, &targets, &mut timer, |draw| {
                     planet.draw_cached(draw, twins)
                 })?;
+                if let Some(watch) = watch.as_mut().filter(|w| next.watch && w.is_free()) {
+                    // The original into the watch's spare target (the
+                    // cache keeps its own depth, so the frame's depth
+                    // target is free), then the comparison.
+                    draw_original(
+                        &mut encoder,
+                        (original, planet),
+                        (watch.spare_view(), &depth_view),
+                        wgpu::Color::TRANSPARENT,
+                        Some(&mut timer),
+                    );
+                    watch.compare(
+                        &gpu.device,
+                        (&gpu.queue, &mut encoder),
+                        &mut timer,
+                        next.frame,
+                        &target,
+                        cached,
+                    )?;
+                }
             }
         }
         timer.resolve(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
         drawn.take(timer.ready(&gpu.device)?, &mut governor);
+        drawn.watch(watch.as_mut(), gpu, &mut governor)?;
     }
     gpu.device.poll(wgpu::PollType::wait_indefinitely())?;
     drawn.take(timer.ready(&gpu.device)?, &mut governor);
+    drawn.watch(watch.as_mut(), gpu, &mut governor)?;
     print(&governor, &drawn, frames);
     Ok(())
 }
 
 fn print(governor: &Governor, drawn: &Drawn, frames: u32) {
-    let mean = |times: &[f64]| times.iter().sum::<f64>() / times.len().max(1) as f64;
+    let mean = |times: &[f64]| {
+        if times.is_empty() {
+            0.0
+        } else {
+            times.iter().sum::<f64>() / times.len() as f64
+        }
+    };
     for decision in governor.decisions() {
+        let state = if decision.on { "on" } else { "off" };
+        match (decision.cause, decision.estimate) {
+            (Cause::Error { psnr }, _) => println!(
+                "governor: from frame {}, cache {state}, Δn = {} (a watched frame at {psnr:.1} dB)",
+                decision.frame, decision.period
+            ),
+            (Cause::Speed, Some(estimate)) => println!(
+                "governor: from frame {}, cache {state} (speed-up {:.2}× [{:.2}, {:.2}])",
+                decision.frame, estimate.speedup, estimate.interval[0], estimate.interval[1]
+            ),
+            (Cause::Speed, None) => {
+                println!("governor: from frame {}, cache {state}", decision.frame)
+            }
+        }
+    }
+    if !drawn.watched.is_empty() {
         println!(
-            "governor: from frame {}, cache {} (speed-up {:.2}× [{:.2}, {:.2}])",
-            decision.frame,
-            if decision.on { "on" } else { "off" },
-            decision.estimate.speedup,
-            decision.estimate.interval[0],
-            decision.estimate.interval[1]
+            "error watch: {} frames watched, lowest {:.1} dB; Δn = {} at the end",
+            drawn.watched.len(),
+            drawn.watched.iter().copied().fold(f64::INFINITY, f64::min),
+            governor.period()
         );
     }
     match governor.estimate() {

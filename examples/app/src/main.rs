@@ -15,8 +15,11 @@
 //!
 //! Headless, by default it runs as it would ship: the host crate's
 //! governor chooses each frame between the original pipeline and the
-//! variant from the GPU times it measures on this adapter, and the app
-//! prints what it decided and what the frames cost (`governed.rs`). With
+//! variant from the GPU times it measures on this adapter, and its error
+//! watch keeps the cached frames within 35 dB of the original
+//! (`--min-psnr`), lowering Δn where they drift; the app prints what it
+//! decided and what the frames cost (`governed.rs`). `--mode always` and
+//! `--mode off` run the same loop one way. With
 //! `--compare` it draws every frame both ways, writes a few frames as PNG
 //! and prints per-frame errors and per-pass GPU times. With the `window`
 //! feature and a display, `--window` draws into a window instead, the
@@ -24,7 +27,7 @@
 //! variant.
 //!
 //! ```text
-//! cargo run --release -- [--frames N] [--size PIXELS] [--refresh-period N] [--variant three-pass|lowres]
+//! cargo run --release -- [--frames N] [--size PIXELS] [--refresh-period N] [--variant three-pass|lowres] [--mode always|off|auto] [--min-psnr DB|none]
 //! cargo run --release -- --compare [--frames N] [--warmup N] [--size PIXELS] [--refresh-period N] [--variant three-pass|lowres] [--out DIR]
 //! cargo run --release --features window -- --window [--refresh-period N]
 //! ```
@@ -39,7 +42,7 @@ use std::path::PathBuf;
 
 use planet::Planet;
 use shadecache_host::{
-    CachedShader, FrameLayout, PassTimer, Plan, Targets, Timestamps, TwinSources,
+    CacheMode, CachedShader, FrameLayout, PassTimer, Plan, Targets, Timestamps, TwinSources,
 };
 
 /// The variant the build script wrote, by the plan's file names.
@@ -116,7 +119,13 @@ struct Args {
     /// Draw each frame both ways and compare them, instead of letting the
     /// governor choose.
     compare: bool,
+    /// How the governed run caches (`--mode`, `--min-psnr`).
+    mode: CacheMode,
 }
+
+/// The error budget the app ships with: the least PSNR, in dB, of a
+/// watched cached frame against the original.
+const MIN_PSNR: f64 = 35.0;
 
 fn args() -> Result<Args, String> {
     let mut args = Args {
@@ -128,6 +137,9 @@ fn args() -> Result<Args, String> {
         out: PathBuf::from("frames"),
         window: false,
         compare: false,
+        mode: CacheMode::Auto {
+            min_psnr: Some(MIN_PSNR),
+        },
     };
     let mut given = std::env::args().skip(1);
     while let Some(flag) = given.next() {
@@ -148,6 +160,31 @@ fn args() -> Result<Args, String> {
             "--out" => args.out = PathBuf::from(value()?),
             "--window" => args.window = true,
             "--compare" => args.compare = true,
+            "--mode" => {
+                args.mode = match value()?.as_str() {
+                    "always" => CacheMode::Always,
+                    "off" => CacheMode::Off,
+                    "auto" => CacheMode::Auto {
+                        min_psnr: Some(MIN_PSNR),
+                    },
+                    other => return Err(format!("--mode: always, off or auto, not `{other}`")),
+                }
+            }
+            "--min-psnr" => {
+                let text = value()?;
+                let budget = match text.as_str() {
+                    "none" => None,
+                    _ => Some(
+                        text.parse::<f64>()
+                            .ok()
+                            .filter(|db| db.is_finite() && *db > 0.0)
+                            .ok_or(format!(
+                                "--min-psnr: a PSNR in dB above 0, or none, not `{text}`"
+                            ))?,
+                    ),
+                };
+                args.mode = CacheMode::Auto { min_psnr: budget };
+            }
             other => return Err(format!("unknown argument `{other}`")),
         }
     }
@@ -344,15 +381,24 @@ fn main() -> Result<(), Box<dyn Error>> {
         let plan = cached.plan();
         let frames = args.frames.unwrap_or(600);
         println!(
-            "variant: {} caching `{}`, Δn = {}, {}×{}, {frames} frames, governed",
-            plan.variant, plan.node.text, plan.refresh.period, args.size, args.size
+            "variant: {} caching `{}`, Δn = {}, {}×{}, {frames} frames, {}",
+            plan.variant,
+            plan.node.text,
+            plan.refresh.period,
+            args.size,
+            args.size,
+            match args.mode {
+                CacheMode::Always => "cached every frame (--mode always)".to_string(),
+                CacheMode::Off => "the original every frame (--mode off)".to_string(),
+                CacheMode::Auto { min_psnr: None } => "governed".to_string(),
+                CacheMode::Auto { min_psnr: Some(db) } => format!("governed, error budget {db} dB"),
+            }
         );
         return governed::run(
             &gpu,
             (&planet, &original),
             (&mut cached, &twins),
-            size,
-            frames,
+            (size, frames, args.mode),
         );
     }
     let mut timer = Timestamps::new(&gpu.device, &gpu.queue, 4);
@@ -597,7 +643,10 @@ fn texture(
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        // Bound as a texture by the error watch, which reads the frame.
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::TEXTURE_BINDING,
         view_formats: &[],
     })
 }

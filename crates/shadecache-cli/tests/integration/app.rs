@@ -265,7 +265,8 @@ fn lowres_runs_in_the_host_crate() {
 
 /// Run as it ships, the app lets the host crate's governor choose each
 /// frame between its original pipeline and the variant, times every frame
-/// without waiting for it, and says what the governor decided.
+/// without waiting for it, watches the cached frames' error against a
+/// budget, and says what the governor decided.
 #[test]
 fn example_app_runs_the_governor_by_default() {
     if crate::util::no_gpu() {
@@ -273,8 +274,14 @@ fn example_app_runs_the_governor_by_default() {
     }
     let out = tempfile::tempdir().unwrap();
     let stdout = run_app(&["--frames", "300", "--size", "96"], out.path());
-    assert!(stdout.contains("300 frames, governed"), "{stdout}");
+    assert!(
+        stdout.contains("300 frames, governed, error budget 35 dB"),
+        "{stdout}"
+    );
     assert!(stdout.contains("governor: cache"), "{stdout}");
+    // The error watch ran: the cache starts on, and its first warm
+    // frame is watched.
+    assert!(stdout.contains("error watch: "), "{stdout}");
     let timed: u32 = stdout
         .split(" over ")
         .nth(1)
