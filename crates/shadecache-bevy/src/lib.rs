@@ -86,8 +86,8 @@ use bevy::render::RenderApp;
 use shadecache_host::Plan;
 
 pub use shadecache_host;
-pub use shadecache_host::include_variants;
-pub use view_cache::CacheStats;
+pub use shadecache_host::{include_variants, CacheMode};
+pub use view_cache::{CacheStats, GovernorReadout};
 
 /// A variant's plan and its pass shaders, as the build script wrote them
 /// (`plan.json` and the WGSL files it names).
@@ -165,6 +165,20 @@ pub struct ReprojectionCache {
     /// that frame misses everywhere. The plugin clears it as the next
     /// frame begins.
     pub cut: bool,
+    /// Whether the view caches every frame (`Always`, the default: the
+    /// developer measured that it pays) or lets the host crate's governor
+    /// decide from this GPU's frame times (`Auto`): one frame in 16 the
+    /// view draws the cached meshes with Bevy's own pipelines instead, in
+    /// the same place of the frame, and the two kinds of frame's GPU times
+    /// decide whether the cache pays here; a cache that loses is turned
+    /// off (Bevy's pipelines draw the meshes) and probed again every 600
+    /// frames. `Off` draws Bevy's way every frame, the meshes still in
+    /// the plugin's pass. `Auto` needs timestamp queries (without them the
+    /// view caches every frame, and says why); an error budget
+    /// (`min_psnr`) is not watched by the plugin yet (it says so, and the
+    /// speed alone decides). The governor's state is in [`CacheStats`]
+    /// and in Bevy's diagnostics (`render/shadecache/<material>/...`).
+    pub mode: CacheMode,
 }
 
 impl Default for ReprojectionCache {
@@ -173,6 +187,7 @@ impl Default for ReprojectionCache {
             enabled: true,
             refresh_period: None,
             cut: false,
+            mode: CacheMode::Always,
         }
     }
 }
@@ -218,6 +233,19 @@ impl<M: Asset> Plugin for ShadecachePlugin<M> {
         if !app.is_plugin_added::<SharedPlugin>() {
             app.add_plugins(SharedPlugin);
         }
+        let name = bevy::utils::prelude::ShortName::of::<M>().to_string();
+        for diagnostic in diagnostics::of(&name) {
+            bevy::diagnostic::RegisterDiagnostic::register_diagnostic(
+                app,
+                bevy::diagnostic::Diagnostic::new(diagnostic),
+            );
+        }
+        app.add_systems(
+            PostUpdate,
+            move |stats: Res<CacheStats>, diagnostics: bevy::diagnostic::Diagnostics| {
+                diagnostics::publish(&name, &stats, diagnostics)
+            },
+        );
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
             return;
         };
@@ -225,6 +253,50 @@ impl<M: Asset> Plugin for ShadecachePlugin<M> {
             .world_mut()
             .resource_mut::<CachedVariants>()
             .add::<M>(self.variant.clone());
+    }
+}
+
+/// The governor's state in Bevy's diagnostics, per cached material:
+/// `render/shadecache/<material>/speedup` and its interval's bounds
+/// (`speedup_low`, `speedup_high`), `cached` (1 while the cache is on, 0
+/// while the governor has it off) and `delta_n` (the refresh period), as
+/// `RenderDiagnosticsPlugin` puts Bevy's passes' times under `render/`.
+mod diagnostics {
+    use bevy::diagnostic::{DiagnosticPath, Diagnostics};
+
+    use crate::CacheStats;
+
+    const MEASURES: [&str; 5] = [
+        "speedup",
+        "speedup_low",
+        "speedup_high",
+        "cached",
+        "delta_n",
+    ];
+
+    /// The paths of `material`'s diagnostics.
+    pub fn of(material: &str) -> Vec<DiagnosticPath> {
+        MEASURES
+            .iter()
+            .map(|measure| DiagnosticPath::new(format!("render/shadecache/{material}/{measure}")))
+            .collect()
+    }
+
+    /// Adds this frame's measurements of `material`'s governor, once it
+    /// has one.
+    pub fn publish(material: &str, stats: &CacheStats, mut diagnostics: Diagnostics) {
+        let Some(readout) = stats.governor(material) else {
+            return;
+        };
+        let paths = of(material);
+        let mut add = |at: usize, value: f64| diagnostics.add_measurement(&paths[at], || value);
+        if let Some(estimate) = readout.estimate {
+            add(0, estimate.speedup);
+            add(1, estimate.interval[0]);
+            add(2, estimate.interval[1]);
+        }
+        add(3, f64::from(u8::from(readout.on)));
+        add(4, f64::from(readout.period));
     }
 }
 

@@ -1,6 +1,13 @@
 //! Each caching view's variant on the host crate: made from Bevy's layouts
 //! for the view, its cached meshes and their material, kept at the view's
 //! size, and recorded after the main opaque pass.
+//!
+//! Each cache runs in its camera's [`CacheMode`]: every frame, never, or
+//! governed by the host crate's `Governor`. A frame the governor gives to
+//! the original draws the cache's meshes with the pipelines Bevy
+//! specialised for them, in one pass at the same place in the frame (so
+//! the frame is Bevy's own), and the `FrameTimer` times either kind; its
+//! times, read a few frames later without a wait, feed the governor.
 
 use std::ops::Range;
 use std::sync::{Arc, Mutex};
@@ -30,7 +37,8 @@ use bevy::render::view::{
 use bevy::render::{Render, RenderSystems};
 use shadecache_host::plan::ResourceKind;
 use shadecache_host::{
-    CachedShader, FrameLayout, NoTimer, Options, Plan, Targets, TwinSources, Twins,
+    CacheMode, CachedShader, Choice, FrameLayout, FrameTimer, Governor, NoTimer, Options,
+    PassTimer, Plan, SpeedEstimate, Targets, TwinSources, Twins,
 };
 
 use crate::phase::{CacheId, CachedMesh3d, CachingViews, QueuedLayouts};
@@ -62,6 +70,38 @@ struct ViewCache {
     /// view's offset; the host keeps last frame's copy of it.
     view_now: wgpu::Buffer,
     twins: Twins,
+    /// How it runs, as its camera says (made again when that changes).
+    governed: Option<Governed>,
+}
+
+/// A cache's mode and what runs it: a governor for every mode (`Always`
+/// and `Off` draw one way and decide nothing), and for `Auto` the timer
+/// that measures it.
+struct Governed {
+    mode: CacheMode,
+    governor: Governor,
+    timer: Option<FrameTimer>,
+    readout: GovernorReadout,
+}
+
+/// What a cached material's governor holds, for a game's readout and
+/// Bevy's diagnostics (of the view that drew it last).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GovernorReadout {
+    /// Whether the cache is on.
+    pub on: bool,
+    /// The speed-up last weighed and its interval, once there were enough
+    /// frames.
+    pub estimate: Option<SpeedEstimate>,
+    /// The refresh period Δn.
+    pub period: u32,
+    /// Frames the view drew the meshes Bevy's way (the governor's probes,
+    /// or all while the cache is off).
+    pub original_frames: u64,
+    /// Frames drawn through the cache.
+    pub cached_frames: u64,
+    /// Frames whose GPU time reached the governor.
+    pub measured_frames: u64,
 }
 
 /// A view's cache, or why it has none.
@@ -89,6 +129,8 @@ struct StatsInner {
     /// Frames drawn through each material's variant, by its name.
     by_material: Vec<(String, u64)>,
     errors: Vec<String>,
+    /// Each governed material's governor, by its name.
+    governors: Vec<(String, GovernorReadout)>,
 }
 
 impl CacheStats {
@@ -112,6 +154,29 @@ impl CacheStats {
     /// Every error logged, in order.
     pub fn errors(&self) -> Vec<String> {
         self.lock().errors.clone()
+    }
+
+    /// The governor of the material `M`'s cache (of the view that drew it
+    /// last), once one has drawn.
+    pub fn governor_of<M: 'static>(&self) -> Option<GovernorReadout> {
+        self.governor(&bevy::utils::prelude::ShortName::of::<M>().to_string())
+    }
+
+    /// [`CacheStats::governor_of`] by the material's name.
+    pub(crate) fn governor(&self, material: &str) -> Option<GovernorReadout> {
+        self.lock()
+            .governors
+            .iter()
+            .find(|(n, _)| n == material)
+            .map(|(_, readout)| *readout)
+    }
+
+    fn governed(&self, material: &str, readout: GovernorReadout) {
+        let mut inner = self.lock();
+        match inner.governors.iter_mut().find(|(n, _)| n == material) {
+            Some((_, kept)) => *kept = readout,
+            None => inner.governors.push((material.to_string(), readout)),
+        }
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, StatsInner> {
@@ -480,7 +545,58 @@ fn try_make_cache(
         shader,
         view_now,
         twins,
+        governed: None,
     })
+}
+
+impl ViewCache {
+    /// The cache's governor for `mode`, made again where the mode changed
+    /// (a new governor: what the old one measured was of another mode).
+    /// `Auto` without timestamp queries caches every frame; an error
+    /// budget is not watched here. Both are said once, as warnings.
+    fn governed(
+        &mut self,
+        mode: CacheMode,
+        device: &RenderDevice,
+        queue: &RenderQueue,
+    ) -> Result<&mut Governed, String> {
+        if self.governed.as_ref().is_none_or(|g| g.mode != mode) {
+            let timer = match mode {
+                CacheMode::Auto { .. } => {
+                    // The variant's passes, or the one pass of Bevy's way.
+                    let passes = self.shader.plan().passes.len() as u32;
+                    let timer = FrameTimer::new(device.wgpu_device(), queue, passes, 4);
+                    if timer.is_none() {
+                        warn!("shadecache: the device has no timestamp queries, which CacheMode::Auto decides from: the view caches every frame");
+                    }
+                    timer
+                }
+                _ => None,
+            };
+            if let CacheMode::Auto { min_psnr: Some(db) } = mode {
+                warn!("shadecache: the plugin does not watch the error yet: the budget of {db} dB is not kept, the speed alone decides");
+            }
+            let run = match (mode, &timer) {
+                (CacheMode::Auto { .. }, Some(_)) => CacheMode::Auto { min_psnr: None },
+                (CacheMode::Auto { .. }, None) => CacheMode::Always,
+                (fixed, _) => fixed,
+            };
+            let governor = Governor::for_mode(run, self.shader.plan())?;
+            self.governed = Some(Governed {
+                mode,
+                readout: GovernorReadout {
+                    on: governor.is_on(),
+                    period: governor.period(),
+                    ..Default::default()
+                },
+                governor,
+                timer,
+            });
+        }
+        self.governed
+            .as_mut()
+            .ok_or_else(|| "no governor".to_string())
+    }
 }
 
 /// The plugin keeps last frame's copy of the view only; the mesh's
@@ -624,33 +740,227 @@ fn draw_cached_passes(
         if settings.is_cut() {
             cache.shader.reset();
         }
-        encoder.copy_buffer_to_buffer(
-            uniforms,
-            offset.offset as u64,
-            &cache.view_now,
-            0,
-            cache.view_now.size(),
-        );
-        let result = cache.shader.record_engine_timed(
-            &queue,
-            encoder,
-            &targets,
-            &mut NoTimer,
-            &cache.twins,
-            |_, pass| {
-                let mut pass = TrackedRenderPass::new(&device, pass);
-                phase
-                    .render_range(&mut pass, world, view_entity, items.clone())
-                    .map_err(|err| format!("{err:?}"))
-            },
-        );
-        match result {
-            Ok(()) => stats.drew(variants.name(variant)),
-            Err(err) => stats.error(err.to_string()),
+        let frame = CacheFrame {
+            world,
+            phase,
+            view: (view_entity, id),
+            items,
+            targets: &targets,
+            device: &device,
+            queue: &queue,
+            uniforms: (uniforms, offset.offset as u64),
+        };
+        let name = variants.name(variant);
+        match frame.draw(cache, settings.mode, encoder) {
+            Ok((cached, readout)) => {
+                if cached {
+                    stats.drew(name);
+                }
+                if let Some(readout) = readout {
+                    stats.governed(name, readout);
+                }
+            }
+            Err(err) => stats.error(err),
         }
     }
     if let Some(span) = span {
         span.end(encoder);
+    }
+}
+
+/// What one cache's frame draws with: the view, its run of the phase, its
+/// targets, and Bevy's view uniforms (the twin's source, at the view's
+/// offset).
+struct CacheFrame<'a> {
+    world: &'a World,
+    phase: &'a SortedRenderPhase<CachedMesh3d>,
+    view: (Entity, bevy::render::view::RetainedViewEntity),
+    items: Range<usize>,
+    targets: &'a Targets<'a>,
+    device: &'a RenderDevice,
+    queue: &'a RenderQueue,
+    uniforms: (&'a wgpu::Buffer, u64),
+}
+
+impl CacheFrame<'_> {
+    /// Draws the frame of `cache` as its mode and governor say: through
+    /// the variant or Bevy's way, timed where it is governed, the times
+    /// that have arrived given to the governor. Whether it drew through
+    /// the cache, and the governor's state where it is governed.
+    fn draw(
+        &self,
+        cache: &mut ViewCache,
+        mode: CacheMode,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(bool, Option<GovernorReadout>), String> {
+        let governed = cache.governed(mode, self.device, self.queue)?;
+        if let Some(timer) = &mut governed.timer {
+            let times = timer
+                .ready(self.device.wgpu_device())
+                .map_err(|err| err.to_string())?;
+            for (frame, ms) in times {
+                governed.governor.measured(frame, ms);
+                governed.readout.measured_frames += 1;
+            }
+        }
+        let next = governed.governor.next_frame();
+        let timed = governed
+            .timer
+            .as_mut()
+            .is_some_and(|timer| timer.begin_frame(next.frame));
+        let cached = matches!(next.choice, Choice::Cached { .. });
+        if let Choice::Cached { reset: true } = next.choice {
+            cache.shader.reset();
+        }
+        if cached && cache.shader.refresh_period() != next.period {
+            cache
+                .shader
+                .set_refresh_period(next.period)
+                .map_err(|err| err.to_string())?;
+        }
+        let ViewCache {
+            shader,
+            view_now,
+            twins,
+            governed,
+            ..
+        } = cache;
+        let governed = governed.as_mut().ok_or("no governor")?;
+        let result = match (governed.timer.as_mut().filter(|_| timed), cached) {
+            (Some(timer), true) => self.cached(encoder, (shader, view_now, twins), timer),
+            (None, true) => self.cached(encoder, (shader, view_now, twins), &mut NoTimer),
+            (Some(timer), false) => self.bevys_way(encoder, timer),
+            (None, false) => self.bevys_way(encoder, &mut NoTimer),
+        };
+        if let Some(timer) = governed.timer.as_mut().filter(|_| timed) {
+            timer.resolve(encoder);
+        }
+        result?;
+        let readout = &mut governed.readout;
+        if cached {
+            readout.cached_frames += 1;
+        } else {
+            readout.original_frames += 1;
+        }
+        readout.on = governed.governor.is_on();
+        readout.estimate = governed.governor.estimate();
+        readout.period = governed.governor.period();
+        let governs = matches!(governed.mode, CacheMode::Auto { .. });
+        Ok((cached, governs.then_some(*readout)))
+    }
+
+    /// The variant's passes over the run: the view's uniform copied for
+    /// next frame's twin, then each pass drawing the run with Bevy's
+    /// render commands.
+    fn cached<T: PassTimer>(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (shader, view_now, twins): (&mut CachedShader, &wgpu::Buffer, &Twins),
+        timer: &mut T,
+    ) -> Result<(), String> {
+        let (uniforms, offset) = self.uniforms;
+        encoder.copy_buffer_to_buffer(uniforms, offset, view_now, 0, view_now.size());
+        shader
+            .record_engine_timed(
+                self.queue,
+                encoder,
+                self.targets,
+                timer,
+                twins,
+                |_, pass| {
+                    let mut pass = TrackedRenderPass::new(self.device, pass);
+                    self.phase
+                        .render_range(&mut pass, self.world, self.view.0, self.items.clone())
+                        .map_err(|err| format!("{err:?}"))
+                },
+            )
+            .map_err(|err| err.to_string())
+    }
+
+    /// The run drawn as Bevy draws it: one pass into the view's colour and
+    /// depth, each mesh with the pipeline Bevy specialised for it and the
+    /// same render commands. The frame is Bevy's own; the cache is not
+    /// recorded (its next frame reuses from the last one that was).
+    fn bevys_way<T: PassTimer>(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut T,
+    ) -> Result<(), String> {
+        use bevy::pbr::SpecializedMaterialPipelineCache;
+        use bevy::render::render_resource::PipelineCache;
+        let specialized = self
+            .world
+            .resource::<SpecializedMaterialPipelineCache>()
+            .get(&self.view.1)
+            .ok_or("the view has no pipelines Bevy specialised")?;
+        let pipelines = self.world.resource::<PipelineCache>();
+        let color = self.targets.color.first().copied().flatten();
+        let (Some(color), Some(depth)) = (color, self.targets.depth) else {
+            return Err("the view's colour or depth target is missing".into());
+        };
+        let query = timer.begin(encoder, "original");
+        let raw = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadecache: the cached meshes as Bevy draws them"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: color,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timer.timestamp_writes(&query),
+            ..Default::default()
+        });
+        let mut pass = TrackedRenderPass::new(self.device, raw);
+        // Batch by batch, as `render_range` draws them (a batch's first
+        // item draws every instance of it, each with its own mesh from
+        // the indirect parameters), each batch with the pipeline Bevy
+        // specialised for its meshes.
+        use bevy::render::render_phase::PhaseItem;
+        let pipeline_of = |index: usize| {
+            let (_, item) = self.phase.items.get_index(index)?;
+            specialized.get(&item.main_entity()).copied()
+        };
+        let mut drawn = Ok(());
+        let mut index = self.items.start;
+        while index < self.items.end && drawn.is_ok() {
+            let Some((_, item)) = self.phase.items.get_index(index) else {
+                break;
+            };
+            let batch = item.batch_range().len().max(1);
+            let end = (index + batch).min(self.items.end);
+            let first = pipeline_of(index);
+            drawn = match (
+                first,
+                first.and_then(|id| pipelines.get_render_pipeline(id)),
+            ) {
+                (Some(id), Some(pipeline)) if (index..end).all(|i| pipeline_of(i) == Some(id)) => {
+                    pass.set_render_pipeline(pipeline);
+                    self.phase
+                        .render_range(&mut pass, self.world, self.view.0, index..end)
+                        .map_err(|err| format!("{err:?}"))
+                }
+                (Some(_), Some(_)) => Err(
+                    "a batch of cached meshes has meshes Bevy draws with different pipelines"
+                        .into(),
+                ),
+                _ => Err("Bevy's pipeline for a cached mesh is not ready".into()),
+            };
+            index = end;
+        }
+        drop(pass);
+        timer.end(encoder, query);
+        drawn
     }
 }
 

@@ -6,7 +6,7 @@ use bevy::app::AppExit;
 use bevy::camera::RenderTarget;
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
-use shadecache_bevy::{CachedMaterial, ReprojectionCache};
+use shadecache_bevy::{CacheMode, CachedMaterial, GovernorReadout, ReprojectionCache};
 
 use crate::scene::{self, FrameCount};
 use crate::{headless_app, run_to_exit, target_image, Deadline};
@@ -65,6 +65,8 @@ pub struct Headless {
     /// peak 1, the whole frame (its `psnr_frame`). Otherwise the images are
     /// `rgba8unorm-srgb`, as a game displays them, compared as stored.
     pub linear: bool,
+    /// The caching camera's `ReprojectionCache::mode`.
+    pub mode: CacheMode,
 }
 
 /// Meshes Bevy draws with its own `StandardMaterial` (unlit) beside the
@@ -127,6 +129,11 @@ pub struct HeadlessRun {
     pub cut_frame: Option<u32>,
     /// The frame the cache was switched off in, if it was.
     pub switch_off_frame: Option<u32>,
+    /// The lava's governor, where the mode is `Auto`.
+    pub governor: Option<GovernorReadout>,
+    /// The plugin's diagnostics (`render/shadecache/...`) with their
+    /// latest values, as the run ended.
+    pub diagnostics: Vec<(String, f64)>,
 }
 
 /// Which image a camera draws.
@@ -152,6 +159,7 @@ struct Outcome {
     compared: Vec<Compared>,
     cut_frame: Option<u32>,
     switch_off_frame: Option<u32>,
+    diagnostics: Vec<(String, f64)>,
 }
 
 #[derive(Resource, Clone)]
@@ -187,6 +195,8 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
         errors: stats.errors(),
         cut_frame: outcome.cut_frame,
         switch_off_frame: outcome.switch_off_frame,
+        governor: stats.governor_of::<scene::LavaMaterial>(),
+        diagnostics: outcome.diagnostics,
     }
 }
 
@@ -303,6 +313,7 @@ fn setup(
         if role == Role::Cached {
             camera.insert(ReprojectionCache {
                 refresh_period: settings.refresh_period,
+                mode: settings.mode,
                 ..default()
             });
         }
@@ -469,6 +480,7 @@ fn finish(
     run: Res<Run>,
     capture: Res<Capture>,
     deadline: Res<Deadline>,
+    store: Option<Res<bevy::diagnostic::DiagnosticsStore>>,
     mut exit: MessageWriter<AppExit>,
 ) {
     let settings = &run.0;
@@ -481,6 +493,12 @@ fn finish(
             compared: capture.compared.clone(),
             cut_frame: capture.cut_frame,
             switch_off_frame: capture.switch_off_frame,
+            diagnostics: store
+                .iter()
+                .flat_map(|store| store.iter())
+                .filter(|d| d.path().as_str().starts_with("render/shadecache/"))
+                .filter_map(|d| Some((d.path().to_string(), d.value()?)))
+                .collect(),
         };
         exit.write(AppExit::Success);
     }

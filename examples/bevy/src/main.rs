@@ -78,6 +78,8 @@ fn compare(args: Args) {
         depth_prepass: false,
         switch_off_after: None,
         linear: args.linear,
+        // Every frame through the cache, to compare each with Bevy's.
+        mode: shadecache_bevy::CacheMode::Always,
     });
     for err in &run.errors {
         eprintln!("error: {err}");

@@ -1,12 +1,14 @@
 //! The game in a window: the lava and stone meshes under an orbiting
 //! camera, space toggles the cache, and a readout shows the GPU time of
 //! the materials' passes (Bevy's opaque pass plus the plugin's), cached
-//! or not.
+//! or not. The cache runs as a game would ship it, `CacheMode::Auto`:
+//! the governor measures on this GPU whether it pays, and the readout
+//! shows its speed-up and state from Bevy's diagnostics.
 
 use bevy::diagnostic::{DiagnosticPath, DiagnosticsStore};
 use bevy::prelude::*;
 use bevy::render::diagnostic::RenderDiagnosticsPlugin;
-use shadecache_bevy::{CacheStats, ReprojectionCache};
+use shadecache_bevy::{CacheMode, CacheStats, ReprojectionCache};
 
 use crate::scene::{self, LavaMaterial, StoneMaterial};
 
@@ -52,7 +54,10 @@ fn setup(
         Msaa::Off,
         // Bevy's default tonemapper needs the `tonemapping_luts` feature.
         bevy::core_pipeline::tonemapping::Tonemapping::None,
-        ReprojectionCache::default(),
+        ReprojectionCache {
+            mode: CacheMode::Auto { min_psnr: None },
+            ..default()
+        },
         scene::orbit_at(0.0),
     ));
     commands.spawn((
@@ -105,6 +110,28 @@ fn readout(
         if enabled { "on" } else { "off" },
         opaque + cache
     );
+    for material in ["LavaMaterial", "StoneMaterial"] {
+        let diagnostic = |measure: &str| {
+            store
+                .get(&DiagnosticPath::new(format!(
+                    "render/shadecache/{material}/{measure}"
+                )))
+                .and_then(|d| d.value())
+        };
+        if let Some(speedup) = diagnostic("speedup") {
+            line.push_str(&format!(
+                "\n{material}: governor {:.2}× [{:.2}, {:.2}], cache {}",
+                speedup,
+                diagnostic("speedup_low").unwrap_or(0.0),
+                diagnostic("speedup_high").unwrap_or(0.0),
+                if diagnostic("cached") == Some(1.0) {
+                    "on"
+                } else {
+                    "off"
+                }
+            ));
+        }
+    }
     if let Some(err) = stats.errors().last() {
         line.push_str(&format!("\nerror: {err}"));
     }

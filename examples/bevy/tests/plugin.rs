@@ -8,6 +8,7 @@
 use std::path::Path;
 use std::sync::Mutex;
 
+use shadecache_bevy::CacheMode;
 use shadecache_bevy_example::{
     run_headless, Compared, Headless, HeadlessRun, LeftToBevy, OtherMeshes,
 };
@@ -82,6 +83,7 @@ fn settings() -> Headless {
         depth_prepass: false,
         switch_off_after: None,
         linear: false,
+        mode: CacheMode::Always,
     }
 }
 
@@ -577,4 +579,69 @@ fn bevy_plugin_hands_the_meshes_back_when_switched_off() {
     let after: Vec<&Compared> = run.compared.iter().filter(|f| f.frame >= off + 4).collect();
     assert!(after.len() >= 6, "{:?}", run.compared);
     all_bevys_own(after);
+}
+
+/// `CacheMode::Auto` in a headless app: the governor gives one frame in
+/// 16 to Bevy's own pipelines (the plugin draws the cached meshes with
+/// them, in its pass), times both kinds of frame with timestamp queries
+/// and reads the times back without a wait. Every frame, cached at Δn = 1
+/// or drawn Bevy's way, is Bevy's own to the bit, and the governor holds
+/// its state (frames of each kind, times measured) for Bevy's
+/// diagnostics.
+#[test]
+fn bevy_plugin_auto_probes_with_bevys_own_pipelines_and_measures_both() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        refresh_period: Some(1),
+        frames: 48,
+        mode: CacheMode::Auto { min_psnr: None },
+        ..settings()
+    });
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    assert!(run.compared.len() >= 48, "{} compared", run.compared.len());
+    all_bevys_own(&run.compared);
+    let governor = run.governor.expect("the lava's governor reported");
+    assert!(governor.on, "{governor:?}");
+    assert!(
+        governor.original_frames >= 2 && governor.cached_frames >= 30,
+        "{governor:?}"
+    );
+    // The cached frames the harness counts are the governor's.
+    assert_eq!(run.frames_drawn, governor.cached_frames, "{governor:?}");
+    assert!(
+        governor.measured_frames + 8 >= governor.original_frames + governor.cached_frames,
+        "{governor:?}"
+    );
+    // Bevy's diagnostics carry its state.
+    let diagnostic = |name: &str| {
+        run.diagnostics
+            .iter()
+            .find(|(path, _)| path == &format!("render/shadecache/LavaMaterial/{name}"))
+            .map(|(_, value)| *value)
+    };
+    assert_eq!(diagnostic("cached"), Some(1.0), "{:?}", run.diagnostics);
+    assert_eq!(diagnostic("delta_n"), Some(1.0), "{:?}", run.diagnostics);
+}
+
+/// `CacheMode::Off`: the plugin's pass draws the cached meshes every
+/// frame with the pipelines Bevy specialised for them, batch by batch as
+/// Bevy draws a phase (a batch of several meshes is one indirect draw of
+/// its first item), and the frames are Bevy's own to the bit; nothing is
+/// drawn through the cache.
+#[test]
+fn cache_mode_off_draws_every_frame_with_bevys_pipelines() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        frames: 12,
+        mode: CacheMode::Off,
+        ..settings()
+    });
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    assert!(run.compared.len() >= 12, "{} compared", run.compared.len());
+    all_bevys_own(&run.compared);
+    assert_eq!(run.frames_drawn, 0);
 }
