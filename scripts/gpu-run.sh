@@ -33,7 +33,8 @@
 #   5. `interpolate` on every bundled interpolation scene at 256²;
 #   6. docs/governor.md's `play` runs: the governor on a winning cache
 #      (the environment map, two-pass) and a losing one (the marble,
-#      three-pass at Δn = 1), 256².
+#      three-pass at Δn = 1), and the error watch (its cost on the
+#      environment map, and Δn lowered where a light starts to move), 256².
 # Budget: minutes on a discrete GPU; under an hour on lavapipe (2 cores).
 #
 # With GPU_RUN_REPRODUCTION=1 it runs docs/reproduction.md's experiments
@@ -185,6 +186,13 @@ run interpolate-terrain_flyover interpolate corpus/terrain_slope_branch.wgsl \
 run play-envmap-two-pass play "${envmap_sphere[@]}" --size "$small" "${played[@]}" --variant two-pass
 run play-marble-three-pass-every-frame play "${marble[@]}" --size "$small" "${played[@]}" \
   --variant three-pass --refresh-period 1
+# The error watch: its cost on a winning cache, and Δn lowered where a
+# light starts to move.
+run play-envmap-two-pass-watched play "${envmap_sphere[@]}" --size "$small" "${played[@]}" \
+  --variant two-pass --min-psnr 35
+run play-light-starts-moving-watched play corpus/noise_marble.wgsl \
+  --scene corpus/scenes/light_starts_moving.toml --size "$small" "${played[@]}" \
+  --variant one-pass --refresh-period 16 --min-psnr 36
 
 mkdir -p docs/runs
 out=$(node scripts/runs-table.mjs "$work" "$manifest" ${quick:+--quick})

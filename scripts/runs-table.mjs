@@ -81,9 +81,20 @@ function playTable(play) {
     "",
   ];
   for (const d of play.decisions) {
-    lines.push(`- frame ${d.frame}: cache ${d.on ? "on" : "off"}, speed-up ${fixed(d.speedup, 2)}× ${interval(d.interval)}`);
+    lines.push(
+      d.cause === "error"
+        ? `- frame ${d.frame}: Δn = ${d.period}, cache ${d.on ? "on" : "off"} (a watched frame at ${fixed(d.psnr, 1)} dB, below the budget)`
+        : `- frame ${d.frame}: cache ${d.on ? "on" : "off"}, speed-up ${fixed(d.speedup, 2)}× ${interval(d.interval)}`,
+    );
   }
   if (play.decisions.length === 0) lines.push("- no switch: the cache stayed on");
+  // play.json format 2 has the error watch.
+  if (play.min_psnr != null) {
+    const lowest = Math.min(...play.watches.map((w) => w.psnr));
+    lines.push(
+      `- error watch, budget ${play.min_psnr} dB: ${play.watches.length} frames watched, lowest ${fixed(lowest, 1)} dB; a watched frame ${fixed(play.watch_frame_ms, 3)} ms, its comparison ${fixed(play.watch_compare_ms, 3)} ms; Δn = ${play.auto_period_at_end} at the end`,
+    );
+  }
   return lines;
 }
 

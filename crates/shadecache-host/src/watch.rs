@@ -6,9 +6,9 @@
 //! in a while (a [`crate::Governor`] says when) the application draws the
 //! original frame as well, into a spare target, and [`ErrorWatch::compare`]
 //! records a small compute pass that compares the two over the pixels the
-//! cached draws cover: each 16×16 workgroup sums the squared RGB
-//! differences of its covered pixels and counts them, and writes the two
-//! numbers to a buffer; the buffer is copied for reading and mapped when
+//! cached draws cover: each invocation sums the squared RGB differences of
+//! the covered pixels of one 16×16 tile and counts them, and writes the
+//! two numbers to a buffer; the buffer is copied for reading and mapped when
 //! the GPU is done. [`ErrorWatch::ready`] polls without waiting and
 //! gives the frame's PSNR once the numbers are there, frames later.
 //!
@@ -36,7 +36,7 @@ use crate::{CachedShader, Error, PassTimer};
 /// be infinite.
 pub const PSNR_CAP: f64 = 100.0;
 
-/// Side of the comparison's square workgroups.
+/// Side of the square tile one invocation of the comparison sums.
 const TILE: u32 = 16;
 
 /// A squared difference larger than this counts as this: a NaN or an
@@ -51,41 +51,40 @@ const COMPARE_WGSL: &str = r#"
 
 struct Params {
     size: vec2<u32>,
-    groups_x: u32,
+    tiles_x: u32,
     far_depth: f32,
 }
 @group(0) @binding(4) var<uniform> params: Params;
 
-var<workgroup> sums: array<vec2<f32>, 256>;
-
-@compute @workgroup_size(16, 16)
-fn compare(
-    @builtin(global_invocation_id) pixel: vec3<u32>,
-    @builtin(local_invocation_index) lane: u32,
-    @builtin(workgroup_id) group: vec3<u32>,
-) {
-    var value = vec2<f32>(0.0, 0.0);
-    if all(pixel.xy < params.size) {
-        let depth = textureLoad(coverage, pixel.xy, 0);
-        if depth != params.far_depth {
-            let difference = textureLoad(original, pixel.xy, 0).rgb
-                - textureLoad(cached, pixel.xy, 0).rgb;
-            let squared = dot(difference, difference);
+// One invocation sums one 16×16 tile: no workgroup memory and no barrier
+// (a CPU rasteriser runs a barrier loop far slower than the loads).
+@compute @workgroup_size(64)
+fn compare(@builtin(global_invocation_id) id: vec3<u32>) {
+    let tiles_y = (params.size.y + 15u) / 16u;
+    if id.x >= params.tiles_x * tiles_y {
+        return;
+    }
+    let origin = vec2<u32>(id.x % params.tiles_x, id.x / params.tiles_x) * 16u;
+    var squared = 0.0;
+    var covered = 0.0;
+    for (var y = 0u; y < 16u; y = y + 1u) {
+        for (var x = 0u; x < 16u; x = x + 1u) {
+            let pixel = origin + vec2<u32>(x, y);
+            if any(pixel >= params.size) {
+                continue;
+            }
+            if textureLoad(coverage, pixel, 0) == params.far_depth {
+                continue;
+            }
+            let difference = textureLoad(original, pixel, 0).rgb
+                - textureLoad(cached, pixel, 0).rgb;
+            let value = dot(difference, difference);
             // A NaN compares false: it counts as the huge error.
-            value = vec2<f32>(select(HUGE, squared, squared < HUGE), 1.0);
+            squared = squared + select(HUGE, value, value < HUGE);
+            covered = covered + 1.0;
         }
     }
-    sums[lane] = value;
-    workgroupBarrier();
-    for (var stride = 128u; stride > 0u; stride = stride >> 1u) {
-        if lane < stride {
-            sums[lane] = sums[lane] + sums[lane + stride];
-        }
-        workgroupBarrier();
-    }
-    if lane == 0u {
-        partials[group.y * params.groups_x + group.x] = sums[0];
-    }
+    partials[id.x] = vec2<f32>(squared, covered);
 }
 "#;
 
@@ -338,9 +337,9 @@ impl ErrorWatch {
                 coverage.size().1
             )));
         }
-        let groups = (self.size.0.div_ceil(TILE), self.size.1.div_ceil(TILE));
+        let tiles = (self.size.0.div_ceil(TILE), self.size.1.div_ceil(TILE));
         let mut params = Vec::with_capacity(16);
-        for value in [self.size.0, self.size.1, groups.0] {
+        for value in [self.size.0, self.size.1, tiles.0] {
             params.extend(value.to_le_bytes());
         }
         params.extend((coverage.plan().clear.depth as f32).to_le_bytes());
@@ -383,7 +382,7 @@ impl ErrorWatch {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(groups.0, groups.1, 1);
+            pass.dispatch_workgroups((tiles.0 * tiles.1).div_ceil(64), 1, 1);
         }
         timer.end(encoder, query);
         encoder.copy_buffer_to_buffer(&self.partials, 0, &self.readback, 0, self.partials.size());

@@ -149,11 +149,11 @@ pub fn run(
     gpu.device.poll(wgpu::PollType::wait_indefinitely())?;
     drawn.take(timer.ready(&gpu.device)?, &mut governor);
     drawn.watch(watch.as_mut(), gpu, &mut governor)?;
-    print(&governor, &drawn, frames);
+    print(&governor, &drawn, (frames, mode));
     Ok(())
 }
 
-fn print(governor: &Governor, drawn: &Drawn, frames: u32) {
+fn print(governor: &Governor, drawn: &Drawn, (frames, mode): (u32, CacheMode)) {
     let mean = |times: &[f64]| {
         if times.is_empty() {
             0.0
@@ -186,6 +186,10 @@ fn print(governor: &Governor, drawn: &Drawn, frames: u32) {
         );
     }
     match governor.estimate() {
+        _ if !matches!(mode, CacheMode::Auto { .. }) => println!(
+            "cache {} every frame ({mode:?}): nothing measured or decided",
+            if governor.is_on() { "on" } else { "off" }
+        ),
         Some(estimate) => println!(
             "governor: cache {} after {frames} frames; speed-up {:.2}× [{:.2}, {:.2}]",
             if governor.is_on() { "on" } else { "off" },
