@@ -94,8 +94,10 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
     // The expensive part: 25 environment samples.
     let reflection = blurred_environment(r, frame.blur_radius);
 
-    // Schlick Fresnel with a metal-like base reflectance.
-    let n_dot_v = max(dot(n, v), 0.0);
+    // Schlick Fresnel with a metal-like base reflectance. The dot of two
+    // unit vectors can round past 1, and pow() of a negative base is NaN:
+    // clamp it to [0, 1] (at 512² a few pixels face the camera exactly).
+    let n_dot_v = clamp(dot(n, v), 0.0, 1.0);
     let fresnel = frame.base_color + ((vec3<f32>(1.0) - frame.base_color) * pow(1.0 - n_dot_v, 5.0));
     let color = reflection * fresnel;
     return vec4<f32>(color, 1.0);

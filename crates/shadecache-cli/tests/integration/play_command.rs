@@ -135,6 +135,44 @@ fn governor_keeps_a_winning_cache() {
     assert!(kept >= 0.9, "the governor kept {kept:.3} of the gain");
 }
 
+/// A cache near 1× (three-pass at Δn = 32 on the marble at 128²: 0.90×
+/// to 1.00× on lavapipe) has a speed-up interval that straddles 1× most of
+/// the time: in 1000 frames the governor switches at most twice, never
+/// twice within its minimum dwell of 120 frames.
+#[test]
+fn governor_does_not_flap_on_noise() {
+    if no_gpu() {
+        return;
+    }
+    let played = play(
+        "corpus/noise_marble.wgsl",
+        "corpus/scenes/marble_sphere.toml",
+        &[
+            "--size",
+            "128x128",
+            "--frames",
+            "1000",
+            "--variant",
+            "three-pass",
+            "--refresh-period",
+            "32",
+        ],
+    );
+    let fixed = number(&played, "original_ms") / number(&played, "fixed_ms");
+    assert!(
+        (0.8..1.2).contains(&fixed),
+        "the fixed cache at {fixed:.2}×: not near 1×"
+    );
+    let frames: Vec<u64> = played["decisions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d["frame"].as_u64().unwrap())
+        .collect();
+    assert!(frames.len() <= 2, "{frames:?}");
+    assert!(frames.windows(2).all(|w| w[1] - w[0] >= 120), "{frames:?}");
+}
+
 /// A light that starts to move (frame 120, then 4° a frame) leaves the
 /// cached lit colour behind it: the error watch sees the watched frames
 /// fall below the budget of 36 dB and the governor halves Δn from 16,
