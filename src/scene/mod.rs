@@ -73,6 +73,16 @@ pub enum Effect {
     Deformation,
 }
 
+/// Uniform values from a frame on (`[[uniform_changes]]`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UniformChange {
+    /// The first run frame (warm-up included) with these values.
+    pub frame: u32,
+    /// Values of uniform members by name, each set in `[uniforms]` too.
+    pub uniforms: BTreeMap<String, toml::Value>,
+}
+
 /// A scene file.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -118,6 +128,12 @@ pub struct Scene {
     /// Values of uniform members by name.
     #[serde(default)]
     pub uniforms: BTreeMap<String, toml::Value>,
+    /// Uniform values that change partway through the run, in frame order:
+    /// from its `frame` on (run frames, warm-up included), each change's
+    /// values replace `[uniforms]`' (a payload whose weight changes, as a
+    /// governor must follow).
+    #[serde(default)]
+    pub uniform_changes: Vec<UniformChange>,
     /// Textures by binding name.
     #[serde(default)]
     pub textures: BTreeMap<String, textures::TextureSource>,
@@ -449,6 +465,8 @@ pub struct FrameState {
     /// an object without a skin): a skinning matrix is the object's
     /// `world_from_local` times its joint's pose.
     pub joints: Vec<Vec<Mat4>>,
+    /// The run frame it is (0-based, warm-up included).
+    pub frame: u32,
     /// The frame before (`None` on the first frame, and within that state
     /// itself): what a `previous_` member holds, as engines keep last
     /// frame's transforms beside this frame's (Bevy's
@@ -606,6 +624,22 @@ impl Scene {
                 return Err(self.error(
                     format!("[uniforms] sets `{name}`, which the shader does not have: {listing}"),
                     self.span(&["uniforms", name]),
+                ));
+            }
+        }
+        for (index, change) in self.uniform_changes.iter().enumerate() {
+            if let Some(name) = change
+                .uniforms
+                .keys()
+                .find(|n| !self.uniforms.contains_key(*n))
+            {
+                let at = index.to_string();
+                return Err(self.error(
+                    format!(
+                        "[[uniform_changes]] at frame {} sets `{name}`, which [uniforms] does not: set its value from the first frame there",
+                        change.frame
+                    ),
+                    self.span(&["uniform_changes", &at, "uniforms", name]),
                 ));
             }
         }
@@ -815,8 +849,21 @@ impl Scene {
             objects,
             instances,
             joints: self.joint_poses(t),
+            frame: n,
             previous: None,
         }
+    }
+
+    /// The value of uniform member `name` in run frame `frame`: the last
+    /// `[[uniform_changes]]` from that frame or before that sets it, else
+    /// `[uniforms]`'.
+    pub fn uniform_at(&self, name: &str, frame: u32) -> Option<&toml::Value> {
+        self.uniform_changes
+            .iter()
+            .rev()
+            .filter(|change| change.frame <= frame)
+            .find_map(|change| change.uniforms.get(name))
+            .or_else(|| self.uniforms.get(name))
     }
 
     /// Each object's joints' poses at frame `t` (bending only with
@@ -898,6 +945,40 @@ mod tests {
         assert_eq!(
             later.deformed(0, &mesh, 2).unwrap().positions,
             from_start.deformed(0, &mesh, 9).unwrap().positions
+        );
+    }
+
+    /// `[[uniform_changes]]` replace `[uniforms]`' values from their
+    /// frame on, the latest change that sets a member winning; a change
+    /// of a member `[uniforms]` does not set is an error at its line.
+    #[test]
+    fn uniform_changes_take_over_from_their_frame() {
+        let text = "[[objects]]\nmesh = { kind = \"cube\" }\n[uniforms]\ntaps = 64\nsaturation = 1.0\n[[uniform_changes]]\nframe = 10\nuniforms = { taps = 8 }\n[[uniform_changes]]\nframe = 20\nuniforms = { taps = 1, saturation = 0.5 }\n";
+        let scene = Scene::parse(Arc::new(SourceFile::new("s.toml", text))).unwrap();
+        let at = |name: &str, frame| {
+            scene
+                .uniform_at(name, frame)
+                .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+        };
+        assert_eq!(at("taps", 0), Some(64.0));
+        assert_eq!(at("taps", 9), Some(64.0));
+        assert_eq!(at("taps", 10), Some(8.0));
+        assert_eq!(at("taps", 25), Some(1.0));
+        assert_eq!(at("saturation", 15), Some(1.0));
+        assert_eq!(at("saturation", 20), Some(0.5));
+        assert_eq!(scene.frame(12, 1.0).frame, 12);
+
+        let module = naga::front::wgsl::parse_str(
+            "struct P { taps: u32, saturation: f32 }\n@group(0) @binding(0) var<uniform> p: P;\n@fragment fn f() -> @location(0) vec4<f32> { return vec4<f32>(f32(p.taps) * p.saturation); }\n",
+        )
+        .unwrap();
+        assert!(scene.check_names(&module).is_ok());
+        let unset = text.replace("taps = 1, saturation", "taps = 1, brightness");
+        let scene = Scene::parse(Arc::new(SourceFile::new("s.toml", unset))).unwrap();
+        let err = scene.check_names(&module).unwrap_err().render();
+        assert!(
+            err.contains("brightness") && err.contains("s.toml:11:"),
+            "{err}"
         );
     }
 

@@ -130,7 +130,7 @@ pub fn fill(
             continue;
         }
         let name = &member.name;
-        let value = scene.uniforms.get(name).ok_or_else(|| {
+        let value = scene.uniform_at(name, state.frame).ok_or_else(|| {
             format!(
                 "the scene does not set uniform member `{}.{name}`",
                 buffer.name
@@ -143,8 +143,9 @@ pub fn fill(
 }
 
 /// Every value the scene writes into `buffers`, for every object, over
-/// frames `0..frames` at `aspect`: the bounds the range analysis needs to
-/// tell whether a payload computed from uniforms fits f16 in this scene.
+/// frames `0..frames` and the first frame of each `[[uniform_changes]]`,
+/// at `aspect`: the bounds the range analysis needs to tell whether a
+/// payload computed from uniforms fits f16 in this scene.
 pub fn bounds(
     buffers: &[UniformBuffer],
     scene: &Scene,
@@ -152,7 +153,10 @@ pub fn bounds(
     frames: u32,
 ) -> Result<UniformBounds, String> {
     let mut bounds = UniformBounds::default();
-    for n in 0..frames {
+    // The frames of the run, and each frame a change of uniform values
+    // starts at, which may lie past them.
+    let changes = scene.uniform_changes.iter().map(|change| change.frame);
+    for n in (0..frames).chain(changes.filter(|&frame| frame >= frames)) {
         let state = scene.frame(n, aspect);
         for object in 0..scene.objects.len() {
             for buffer in buffers {

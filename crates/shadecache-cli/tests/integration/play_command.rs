@@ -173,6 +173,46 @@ fn governor_does_not_flap_on_noise() {
     assert!(frames.windows(2).all(|w| w[1] - w[0] >= 120), "{frames:?}");
 }
 
+/// The payload's weight drops halfway (the blur's 64 taps become 1 at
+/// frame 500): the cache pays before and loses after, and the governor
+/// keeps it on until the change and turns it off within 400 frames of it
+/// (its pairs come one in 16 frames, and the window's median turns after
+/// half of its 24 pairs are new).
+#[test]
+fn governor_follows_a_scene_that_changes_weight() {
+    if no_gpu() {
+        return;
+    }
+    let played = play(
+        "corpus/texture_loop.wgsl",
+        "corpus/scenes/blur_gets_light.toml",
+        &["--frames", "1000", "--variant", "two-pass"],
+    );
+    let decisions = played["decisions"].as_array().unwrap();
+    assert!(!decisions.is_empty(), "{played}");
+    let first = &decisions[0];
+    assert_eq!(first["on"], false, "{decisions:?}");
+    let off = first["frame"].as_u64().unwrap();
+    assert!(
+        (500..900).contains(&off),
+        "off at frame {off}: {decisions:?}"
+    );
+    assert!(number(first, "speedup") < 1.0, "{first}");
+    // Before the change the cache was on and paid.
+    let before: Vec<&Value> = played["auto_frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| (100..500).contains(&f["frame"].as_u64().unwrap()))
+        .collect();
+    let cached = before.iter().filter(|f| f["drew"] != "original").count();
+    assert!(
+        cached * 10 >= before.len() * 9,
+        "{cached} of {} cached",
+        before.len()
+    );
+}
+
 /// A light that starts to move (frame 120, then 4° a frame) leaves the
 /// cached lit colour behind it: the error watch sees the watched frames
 /// fall below the budget of 36 dB and the governor halves Δn from 16,
