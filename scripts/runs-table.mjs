@@ -82,8 +82,8 @@ function playTable(play) {
   ];
   for (const d of play.decisions) {
     lines.push(
-      d.cause === "error"
-        ? `- frame ${d.frame}: Δn = ${d.period}, cache ${d.on ? "on" : "off"} (a watched frame at ${fixed(d.psnr, 1)} dB, below the budget)`
+      d.cause === "error" || d.cause === "margin"
+        ? `- frame ${d.frame}: Δn = ${d.period}, cache ${d.on ? "on" : "off"} (a watched frame at ${fixed(d.psnr, 1)} dB, ${d.cause === "error" ? "below" : "well within"} the budget)`
         : `- frame ${d.frame}: cache ${d.on ? "on" : "off"}, speed-up ${fixed(d.speedup, 2)}× ${interval(d.interval)}`,
     );
   }

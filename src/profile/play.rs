@@ -118,14 +118,16 @@ pub struct PlayDecision {
     pub on: bool,
     /// The refresh period Δn from then.
     pub period: u32,
-    /// `speed` (the interval lay across 1×) or `error` (a watched frame
-    /// was below the budget).
+    /// `speed` (the interval lay across 1×), `error` (a watched frame
+    /// was below the budget: Δn halved, or the cache off at Δn's floor) or
+    /// `margin` (the watched frames stayed well within it: Δn doubled
+    /// again).
     pub cause: &'static str,
     /// The speed-up last weighed (0 before there was one).
     pub speedup: f64,
     /// That speed-up's bootstrap interval.
     pub interval: [f64; 2],
-    /// With `error`: the watched frame's PSNR.
+    /// With `error` and `margin`: the watched frame's PSNR.
     pub psnr: Option<f64>,
 }
 
@@ -453,11 +455,12 @@ pub fn play(
                 cause: match d.cause {
                     Cause::Speed => "speed",
                     Cause::Error { .. } => "error",
+                    Cause::Margin { .. } => "margin",
                 },
                 speedup: d.estimate.map_or(0.0, |e| e.speedup),
                 interval: d.estimate.map_or([0.0; 2], |e| e.interval),
                 psnr: match d.cause {
-                    Cause::Error { psnr } => Some(psnr),
+                    Cause::Error { psnr } | Cause::Margin { psnr } => Some(psnr),
                     Cause::Speed => None,
                 },
             })

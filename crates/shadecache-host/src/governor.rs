@@ -43,7 +43,12 @@
 //!   budget, the governor halves the refresh period Δn
 //!   ([`GovernedFrame::period`], which the application sets with
 //!   `CachedShader::set_refresh_period`); at the floor
-//!   ([`GovernorSettings::min_period`]) it turns the cache off. While off,
+//!   ([`GovernorSettings::min_period`]) it turns the cache off. Once the
+//!   watched frames have stayed well within the budget
+//!   ([`GovernorSettings::raise_after`] in a row,
+//!   [`GovernorSettings::raise_margin`] dB above it), a lowered Δn doubles
+//!   again, up to the variant's: the largest Δn within the budget is the
+//!   cheapest refresh the budget allows. While off,
 //!   each re-probe's burst watches its first warm frame, and the cache
 //!   turns on again only when that frame was within the budget. A watched
 //!   frame costs more (the original drawn too, the comparison): its time
@@ -99,6 +104,16 @@ pub struct GovernorSettings {
     /// cache turns off. Δn = 1 recomputes every pixel every frame and
     /// saves nothing, so the floor is at least 2.
     pub min_period: u32,
+    /// Watched frames in a row at least [`GovernorSettings::raise_margin`]
+    /// dB above the budget before a lowered Δn is doubled again (up to
+    /// [`GovernorSettings::period`]): a light that stopped moving gives
+    /// back the cache's savings. Each raise the next watch finds below the
+    /// budget doubles this, so a scene at the edge of the budget does not
+    /// see-saw.
+    pub raise_after: u32,
+    /// How far above the budget, in dB, a watched frame counts towards a
+    /// raise.
+    pub raise_margin: f64,
 }
 
 impl Default for GovernorSettings {
@@ -117,6 +132,8 @@ impl Default for GovernorSettings {
             watch_every: 64,
             period: 32,
             min_period: 2,
+            raise_after: 4,
+            raise_margin: 3.0,
         }
     }
 }
@@ -166,9 +183,13 @@ impl GovernorSettings {
             return Err("the governor probes one frame in 2 or more, decides every 1 or more measured frames, and resamples 100 times or more".into());
         }
         if let Some(min_psnr) = self.min_psnr {
-            if !min_psnr.is_finite() || self.watch_every < 2 {
+            if !min_psnr.is_finite()
+                || self.watch_every < 2
+                || self.raise_after == 0
+                || !self.raise_margin.is_finite()
+            {
                 return Err(format!(
-                    "an error budget is a finite PSNR ({min_psnr} dB here), watched one frame in 2 or more ({} here)",
+                    "an error budget is a finite PSNR ({min_psnr} dB here), watched one frame in 2 or more ({} here), raised after 1 or more watches within a finite margin",
                     self.watch_every
                 ));
             }
@@ -271,9 +292,16 @@ pub struct Decision {
 pub enum Cause {
     /// The speed-up's interval lay wholly on the other side of 1×.
     Speed,
-    /// A watched frame was below the error budget, at this PSNR (dB).
+    /// A watched frame was below the error budget, at this PSNR (dB): Δn
+    /// halved, or the cache off at the floor.
     Error {
         /// The watched frame's PSNR.
+        psnr: f64,
+    },
+    /// The watched frames stayed well within the budget, the last at
+    /// this PSNR (dB): a lowered Δn doubled again.
+    Margin {
+        /// The last watched frame's PSNR.
         psnr: f64,
     },
 }
@@ -315,6 +343,12 @@ pub struct Governor {
     /// Times of watched frames (the original and the comparison on top
     /// of a cached frame), the latest few.
     watch_times: VecDeque<f64>,
+    /// Watched frames in a row well within the budget, and how many a
+    /// raise of Δn needs now (doubled by a raise that tripped).
+    within: u32,
+    raise_after: u32,
+    /// Whether the last change of Δn was a raise.
+    raised_last: bool,
     /// Frames asked for and not yet measured, by number, with the epoch
     /// of pairs they were drawn in.
     pending: VecDeque<(u64, Kind, u32)>,
@@ -357,6 +391,9 @@ impl Governor {
             watching: None,
             watch_ok: false,
             watch_times: VecDeque::new(),
+            within: 0,
+            raise_after: settings.raise_after,
+            raised_last: false,
             pending: VecDeque::new(),
             epoch: 0,
             last_original: None,
@@ -645,29 +682,72 @@ impl Governor {
         }
         // A NaN is no measurement of being within the budget.
         self.watch_ok = psnr >= min_psnr;
-        if self.watch_ok || !self.on {
+        if !self.on {
             // Off, a burst's frame below the budget keeps the cache off.
             return;
         }
+        if self.watch_ok {
+            self.within_budget(psnr, min_psnr);
+            return;
+        }
+        self.within = 0;
+        if std::mem::take(&mut self.raised_last) {
+            // The raise was one too many: the next needs twice the watches.
+            self.raise_after = self.raise_after.saturating_mul(2);
+        }
         let cause = Cause::Error { psnr };
-        if self.period > self.settings.min_period {
+        if self.period > self.settings.min_period || self.period == 0 {
             // Δn = 0 refreshes nothing: its first step down is to 32.
-            self.period = match self.period {
+            let period = match self.period {
                 0 => 32,
                 period => (period / 2).max(self.settings.min_period),
             };
-            // The cache keeps what it holds; the times are of another Δn.
-            self.start_pairs_afresh(false);
-            self.decisions.push(Decision {
-                frame: self.frame,
-                on: true,
-                period: self.period,
-                estimate: self.estimate,
-                cause,
-            });
+            self.change_period(period, cause);
         } else {
             self.switch(false, cause);
         }
+    }
+
+    /// A watched frame within the budget: after `raise_after` in a row
+    /// well within it, a lowered Δn doubles again, up to the variant's.
+    fn within_budget(&mut self, psnr: f64, min_psnr: f64) {
+        let highest = self.settings.period;
+        let lowered = match highest {
+            // No refresh: lowered to 32 and below, raised back to none.
+            0 => self.period != 0,
+            highest => self.period < highest,
+        };
+        if psnr < min_psnr + self.settings.raise_margin || !lowered {
+            self.within = 0;
+            return;
+        }
+        self.within += 1;
+        if self.within < self.raise_after {
+            return;
+        }
+        self.within = 0;
+        let period = match highest {
+            0 if self.period >= 32 => 0,
+            0 => self.period * 2,
+            highest => self.period.saturating_mul(2).min(highest),
+        };
+        self.change_period(period, Cause::Margin { psnr });
+        self.raised_last = true;
+    }
+
+    /// Runs the cache at Δn = `period` from the next frame, and says why.
+    fn change_period(&mut self, period: u32, cause: Cause) {
+        self.period = period;
+        self.raised_last = false;
+        // The cache keeps what it holds; the times are of another Δn.
+        self.start_pairs_afresh(false);
+        self.decisions.push(Decision {
+            frame: self.frame,
+            on: true,
+            period,
+            estimate: self.estimate,
+            cause,
+        });
     }
 }
 
@@ -1010,5 +1090,61 @@ mod tests {
         play_watched(&mut watched, 2000, 3, (|_| 1.0, |_| 0.9), |_, _| 45.0);
         assert!(!watched.is_on(), "{:?}", watched.decisions());
         assert_eq!(watched.decisions()[0].cause, Cause::Speed);
+    }
+
+    /// The light moves from frame 1000 to 2000 and then stops: the watch
+    /// lowers Δn while it moves and, once the watched frames have stayed
+    /// well within the budget, doubles it back to the variant's 32.
+    #[test]
+    fn the_watch_raises_delta_n_again_once_the_error_stays_within_budget() {
+        let mut g = watched_governor();
+        let psnr = |frame: u64, period: u32| {
+            if (1000..2000).contains(&frame) {
+                24.0 + 3.0 * (5.0 - f64::from(period).log2())
+            } else {
+                45.0
+            }
+        };
+        play_watched(&mut g, 4000, 3, (|_| 1.0, |_| 0.5), psnr);
+        let steps: Vec<(u64, u32)> = g.decisions().iter().map(|d| (d.frame, d.period)).collect();
+        assert_eq!(g.period(), 32, "{steps:?}");
+        assert!(g.is_on());
+        let lowest = steps.iter().map(|&(_, p)| p).min().unwrap();
+        assert_eq!(lowest, 8, "{steps:?}");
+        let raised: Vec<&Decision> = g
+            .decisions()
+            .iter()
+            .filter(|d| matches!(d.cause, Cause::Margin { .. }))
+            .collect();
+        assert_eq!(raised.len(), 2, "{steps:?}");
+        assert!(raised.iter().all(|d| d.frame >= 2000), "{steps:?}");
+    }
+
+    /// At the edge of the budget (well within it at Δn = 8, below it at
+    /// 16), a raise trips at the next watch;
+    /// each such raise doubles the watches the next one needs, so the
+    /// governor does not see-saw between the two.
+    #[test]
+    fn a_raise_that_trips_waits_twice_as_long_for_the_next() {
+        let mut g = watched_governor();
+        let psnr = |_: u64, period: u32| if period <= 8 { 40.0 } else { 28.0 };
+        play_watched(&mut g, 8000, 3, (|_| 1.0, |_| 0.5), psnr);
+        let raises: Vec<u64> = g
+            .decisions()
+            .iter()
+            .filter(|d| matches!(d.cause, Cause::Margin { .. }))
+            .map(|d| d.frame)
+            .collect();
+        assert!(
+            !raises.is_empty() && raises.len() <= 4,
+            "{:?}",
+            g.decisions()
+        );
+        // The gaps between raises grow.
+        assert!(
+            raises.windows(3).all(|w| w[2] - w[1] > w[1] - w[0]),
+            "{raises:?}"
+        );
+        assert!(g.is_on());
     }
 }

@@ -164,7 +164,7 @@ fn print(governor: &Governor, drawn: &Drawn, (frames, mode): (u32, CacheMode)) {
     for decision in governor.decisions() {
         let state = if decision.on { "on" } else { "off" };
         match (decision.cause, decision.estimate) {
-            (Cause::Error { psnr }, _) => println!(
+            (Cause::Error { psnr } | Cause::Margin { psnr }, _) => println!(
                 "governor: from frame {}, cache {state}, Δn = {} (a watched frame at {psnr:.1} dB)",
                 decision.frame, decision.period
             ),

@@ -161,8 +161,14 @@ fn summary(played: &play::Play, path: &std::path::Path) -> String {
         let state = if decision.on { "on" } else { "off" };
         text += &match decision.psnr {
             Some(psnr) => format!(
-                "  frame {}: cache {state}, Δn = {} (a watched frame at {psnr:.1} dB, below the budget)\n",
-                decision.frame, decision.period
+                "  frame {}: cache {state}, Δn = {} (a watched frame at {psnr:.1} dB, {})\n",
+                decision.frame,
+                decision.period,
+                if decision.cause == "margin" {
+                    "well within the budget"
+                } else {
+                    "below the budget"
+                }
             ),
             None => format!(
                 "  frame {}: cache {state} (speed-up {:.2}× [{:.2}, {:.2}])\n",
