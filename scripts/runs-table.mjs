@@ -88,6 +88,10 @@ function playTable(play) {
     );
   }
   if (play.decisions.length === 0) lines.push("- no switch: the cache stayed on");
+  for (const [i, trial] of (play.trials ?? []).entries()) {
+    const turns = trial.map((t) => `${play.auto_variants[t.variant]} ${fixed(t.speedup, 2)}×${t.psnr != null ? ` at ${fixed(t.psnr, 1)} dB` : ""}`);
+    lines.push(`- trial ${i + 1} of the variants: ${turns.join(", ")}`);
+  }
   // play.json format 2 has the error watch.
   if (play.min_psnr != null) {
     const lowest = Math.min(...play.watches.map((w) => w.psnr));

@@ -63,8 +63,14 @@ pub struct Play {
     pub size: [u32; 2],
     /// The frames played of each way.
     pub frames: u32,
-    /// The variant the fixed and the governed ways draw.
+    /// The variant the fixed way draws: the first of `auto_variants`.
     pub fixed_variant: String,
+    /// The variants the governed way chooses among, in the order given
+    /// (with several, it tries each and draws the fastest within the
+    /// budget).
+    pub auto_variants: Vec<String>,
+    /// The governor's trials of the variants, each its turns.
+    pub trials: Vec<Vec<PlayTurn>>,
     /// Mean GPU time of a displayed frame of the original every frame, in
     /// ms.
     pub original_ms: f64,
@@ -109,6 +115,19 @@ pub struct PlayWatch {
     pub profiler_psnr: Option<f64>,
 }
 
+/// One variant's turn in a trial.
+#[derive(Clone, Debug, Serialize)]
+pub struct PlayTurn {
+    /// The variant (its index in `auto_variants`).
+    pub variant: usize,
+    /// Its speed-up against the original over its turn.
+    pub speedup: f64,
+    /// That speed-up's interval.
+    pub interval: [f64; 2],
+    /// Its watched frame's PSNR, with a budget.
+    pub psnr: Option<f64>,
+}
+
 /// One decision of the governor.
 #[derive(Clone, Debug, Serialize)]
 pub struct PlayDecision {
@@ -118,7 +137,10 @@ pub struct PlayDecision {
     pub on: bool,
     /// The refresh period Δn from then.
     pub period: u32,
-    /// `speed` (the interval lay across 1×), `error` (a watched frame
+    /// The variant drawn from then (its index in `auto_variants`).
+    pub variant: usize,
+    /// `trial` (a trial of the variants ended), `speed` (the interval lay
+    /// across 1×), `error` (a watched frame
     /// was below the budget: Δn halved, or the cache off at Δn's floor) or
     /// `margin` (the watched frames stayed well within it: Δn doubled
     /// again).
@@ -143,10 +165,13 @@ pub struct AutoFrame {
     /// Whether it was watched (its time holds the original and the
     /// comparison too).
     pub watched: bool,
+    /// Which of `auto_variants` a cached frame drew.
+    pub variant: usize,
 }
 
 /// `play.json`'s format: 2 added the error watch (`min_psnr`,
-/// `watches`, the decisions' `period` and `cause`).
+/// `watches`, the decisions' `period` and `cause`) and several variants
+/// (`auto_variants`, `trials`, the decisions' and frames' `variant`).
 pub const PLAY_FORMAT: u32 = 2;
 
 /// The governed way: each frame the governor's choice of runner, its time
@@ -154,7 +179,8 @@ pub const PLAY_FORMAT: u32 = 2;
 /// well and the two compared by the error watch.
 struct Governed {
     original: Runner,
-    cached: Runner,
+    /// A runner per variant the governor chooses among.
+    cached: Vec<Runner>,
     governor: Governor,
     watch: Option<ErrorWatch>,
     /// This frame's choice, made when its runner is asked for.
@@ -175,25 +201,31 @@ impl Governed {
         let next = self.governor.next_frame();
         self.now = Some(next);
         if let Choice::Cached { reset } = next.choice {
+            let cached = self.cached_runner(next.variant)?;
             if reset {
-                self.cached.reset();
+                cached.reset();
             }
-            if self.cached.refresh_period() != next.period {
-                self.cached.set_refresh_period(next.period)?;
+            if cached.refresh_period() != next.period {
+                cached.set_refresh_period(next.period)?;
             }
         }
         Ok(next)
     }
 
+    /// The runner of variant `variant`.
+    fn cached_runner(&mut self, variant: usize) -> Result<&mut Runner, String> {
+        self.cached
+            .get_mut(variant)
+            .ok_or_else(|| format!("the governor asked for variant {variant}, which is not played"))
+    }
+
     /// The profiler's PSNR of the cached runner's last frame against the
     /// reference's of the same frame.
-    fn profiler_psnr(&self, sample: &Sample) -> Result<f64, String> {
-        let color = self
-            .cached
-            .color()
-            .ok_or("the cached variant draws no colour")?;
+    fn profiler_psnr(&self, sample: &Sample, variant: usize) -> Result<f64, String> {
+        let cached = self.cached.get(variant).ok_or("no such variant")?;
+        let color = cached.color().ok_or("the cached variant draws no colour")?;
         let frame = read_linear(sample.gpu, color)?;
-        let classes = crate::runtime::read_texture(sample.gpu, self.cached.classes(), 4)?;
+        let classes = crate::runtime::read_texture(sample.gpu, cached.classes(), 4)?;
         Ok(crate::measure::metrics::compare(
             &sample.reference.now,
             &frame,
@@ -211,8 +243,12 @@ impl Measured for Governed {
         "auto"
     }
     fn runner(&mut self) -> &mut Runner {
-        match self.now.map(|now| now.choice) {
-            Some(Choice::Cached { .. }) => &mut self.cached,
+        match self.now {
+            Some(GovernedFrame {
+                choice: Choice::Cached { .. },
+                variant,
+                ..
+            }) if variant < self.cached.len() => &mut self.cached[variant],
             _ => &mut self.original,
         }
     }
@@ -230,6 +266,9 @@ impl Measured for Governed {
             watch,
             ..
         } = self;
+        let cached = cached
+            .get_mut(next.variant)
+            .ok_or("the governor asked for a variant that is not played")?;
         match (next.choice, watch.as_mut().filter(|_| next.watch)) {
             (Choice::Original, _) => timed(clock, original, inputs, label),
             (Choice::Cached { .. }, None) => timed(clock, cached, inputs, label),
@@ -268,7 +307,7 @@ impl Measured for Governed {
             self.governor.watched(answer.frame, answer.psnr);
             let same_frame = answer.frame == now.frame;
             let profiler_psnr = if same_frame {
-                Some(self.profiler_psnr(&sample)?)
+                Some(self.profiler_psnr(&sample, now.variant)?)
             } else {
                 None
             };
@@ -294,6 +333,7 @@ impl Measured for Governed {
             },
             ms: sample.time,
             watched,
+            variant: now.variant,
         });
         Ok(())
     }
@@ -320,31 +360,39 @@ pub fn play(
     super::refuse_fragment_only(shader)?;
     let prepared = super::setup::prepare(shader, scene, options)?;
     rewrite::check_entry_point(shader, &prepared.analysis)?;
-    let variant = *options.variants.first().unwrap_or(&Variant::OnePass);
     let candidate = prepared.selected.first().ok_or_else(|| {
         Error::plain(Diagnostic::error(
             "no node to play: the selection of nodes is empty",
         ))
     })?;
-    let rewritten = prepared
-        .base_setting
-        .rewrite_options_of(variant, &prepared.base)
-        .and_then(|rewrite_options| {
-            rewrite::rewrite(
-                shader,
-                &prepared.analysis,
-                candidate,
-                variant,
-                &rewrite_options,
-            )
-        })
-        .map_err(|refusal| {
-            Error::plain(Diagnostic::error(format!(
-                "node {} {variant}: {}",
-                candidate.node.id, refusal.reason
-            )))
-        })?;
-    let sources = sources_of(&rewritten)?;
+    let mut variants = Vec::new();
+    for &variant in options.variants.iter().chain(
+        // One-pass where none is named.
+        options.variants.is_empty().then_some(&Variant::OnePass),
+    ) {
+        let rewritten = prepared
+            .base_setting
+            .rewrite_options_of(variant, &prepared.base)
+            .and_then(|rewrite_options| {
+                rewrite::rewrite(
+                    shader,
+                    &prepared.analysis,
+                    candidate,
+                    variant,
+                    &rewrite_options,
+                )
+            })
+            .map_err(|refusal| {
+                Error::plain(Diagnostic::error(format!(
+                    "node {} {variant}: {}",
+                    candidate.node.id, refusal.reason
+                )))
+            })?;
+        let sources = sources_of(&rewritten)?;
+        variants.push((variant, rewritten, sources));
+    }
+    let (variant, rewritten, _) = &variants[0];
+    let variant = *variant;
     let reference_plan =
         rewrite::plan::reference(shader, &prepared.analysis, &prepared.base).map_err(fail)?;
     let scene_inputs =
@@ -357,28 +405,34 @@ pub fn play(
         size: prepared.size,
         cull_back_faces: scene.cull_back_faces,
     };
-    let runner = |what: &str, classify: bool| {
+    let runner = |index: usize, what: &str, classify: bool| {
+        let (variant, rewritten, sources) = &variants[index];
         bench
-            .runner(&rewritten.plan, &sources, classify)
-            .map_err(|err| fail(format!("{what}: {err}")))
+            .runner(&rewritten.plan, sources, classify)
+            .map_err(|err| fail(format!("{what} ({variant}): {err}")))
     };
     let mut original = reference(&bench, shader, &reference_plan)?;
     let mut fixed = TimedRun {
         label: "fixed",
-        runner: runner("the fixed cache", false)?,
+        runner: runner(0, "the fixed cache", false)?,
         times: Vec::new(),
     };
     let period = rewritten.plan.refresh.period.max(1);
-    let mut settings = GovernorSettings::for_plan(&rewritten.plan);
+    let mut settings = GovernorSettings {
+        variants: variants.len(),
+        ..GovernorSettings::for_plan(&rewritten.plan)
+    };
     if let Some(min_psnr) = min_psnr {
         settings = settings.with_min_psnr(min_psnr);
     }
-    // The governed cache classifies its frames for the profiler's PSNR of
+    // The governed caches classify their frames for the profiler's PSNR of
     // the watched ones; the classification is not part of a frame's time.
-    let cached = runner("the governed cache", min_psnr.is_some())?;
+    let cached = (0..variants.len())
+        .map(|index| runner(index, "the governed cache", min_psnr.is_some()))
+        .collect::<Result<Vec<Runner>, Error>>()?;
     let watch = match min_psnr {
         Some(_) => {
-            let format = cached
+            let format = cached[0]
                 .color()
                 .ok_or_else(|| fail("the variant draws no colour to watch".into()))?
                 .format();
@@ -435,6 +489,23 @@ pub fn play(
             "{variant} of node {} `{}`, Δn = {period}",
             candidate.node.id, candidate.node.text
         ),
+        auto_variants: variants.iter().map(|(v, _, _)| v.to_string()).collect(),
+        trials: governed
+            .governor
+            .trials()
+            .iter()
+            .map(|turns| {
+                turns
+                    .iter()
+                    .map(|turn| PlayTurn {
+                        variant: turn.variant,
+                        speedup: turn.estimate.speedup,
+                        interval: turn.estimate.interval,
+                        psnr: turn.psnr,
+                    })
+                    .collect()
+            })
+            .collect(),
         original_ms: mean(&reference_run.times),
         fixed_ms: mean(&fixed.times),
         auto_ms: mean(&auto_times),
@@ -452,7 +523,9 @@ pub fn play(
                 frame: d.frame,
                 on: d.on,
                 period: d.period,
+                variant: d.variant,
                 cause: match d.cause {
+                    Cause::Trial => "trial",
                     Cause::Speed => "speed",
                     Cause::Error { .. } => "error",
                     Cause::Margin { .. } => "margin",
@@ -461,7 +534,7 @@ pub fn play(
                 interval: d.estimate.map_or([0.0; 2], |e| e.interval),
                 psnr: match d.cause {
                     Cause::Error { psnr } | Cause::Margin { psnr } => Some(psnr),
-                    Cause::Speed => None,
+                    Cause::Speed | Cause::Trial => None,
                 },
             })
             .collect(),
@@ -471,6 +544,34 @@ pub fn play(
 }
 
 impl Play {
+    /// The governor's trials of the variants as a table; nothing with
+    /// one variant.
+    fn trial_table(&self) -> String {
+        if self.trials.is_empty() {
+            return String::new();
+        }
+        let mut rows = String::new();
+        for (index, trial) in self.trials.iter().enumerate() {
+            for turn in trial {
+                let name = self
+                    .auto_variants
+                    .get(turn.variant)
+                    .map_or("?", String::as_str);
+                let psnr = turn.psnr.map_or("—".to_string(), |db| format!("{db:.2}"));
+                rows += &format!(
+                    "<tr><td>{}</td><td>{name}</td><td>{:.2}× [{:.2}, {:.2}]</td><td>{psnr}</td></tr>\n",
+                    index + 1,
+                    turn.speedup,
+                    turn.interval[0],
+                    turn.interval[1]
+                );
+            }
+        }
+        format!(
+            "<h2>Trials of the variants</h2>\n<p>Each variant in turn, started afresh, warmed up and measured against the original; the governor draws the fastest within the budget.</p>\n<table><tr><th>trial</th><th>variant</th><th>speed-up</th><th>watched dB</th></tr>\n{rows}</table>\n"
+        )
+    }
+
     /// The watched frames as a table, with the profiler's PSNR of each;
     /// nothing without an error budget.
     fn watch_table(&self) -> String {
@@ -595,7 +696,7 @@ impl Play {
             ar = ratio(self.auto_ms),
             share = self.auto_cached_share * 100.0,
             end = if self.auto_on_at_end { "on" } else { "off" },
-            watch = self.watch_table(),
+            watch = self.watch_table() + &self.trial_table(),
         )
     }
 }

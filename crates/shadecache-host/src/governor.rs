@@ -56,6 +56,19 @@
 //!   added to every cached frame the speed-up is weighed on, so the
 //!   speed-up the governor reports is of the cache with its watch.
 //!
+//! - **Several variants: the fastest within the budget.** Where the
+//!   application can draw several variants of the shader (a plan bundle's
+//!   one-, two-, three-pass...; [`GovernorSettings::variants`]), the
+//!   governor runs a trial at the start and every
+//!   [`GovernorSettings::retrial_every`] frames while the cache is on: each
+//!   variant in turn ([`GovernedFrame::variant`]) is started afresh, warmed
+//!   up and measured against the original (one frame in
+//!   [`GovernorSettings::trial_probe_every`], so that a turn is short),
+//!   its first warm frame watched where there is a budget; the variant with
+//!   the highest speed-up among those within the budget is then drawn, and
+//!   the cache is off where even it loses. While the cache is off, each
+//!   re-probe's burst tries the next variant.
+//!
 //! The governor itself draws nothing and reads no timestamps: it is the
 //! decision, which an application (or the host's timing) feeds.
 
@@ -114,6 +127,15 @@ pub struct GovernorSettings {
     /// How far above the budget, in dB, a watched frame counts towards a
     /// raise.
     pub raise_margin: f64,
+    /// The variants the application can draw ([`GovernedFrame::variant`]
+    /// indexes them); with more than one, the governor tries each and
+    /// draws the fastest within the budget.
+    pub variants: usize,
+    /// During a trial, one frame in this many is the original.
+    pub trial_probe_every: u32,
+    /// While the cache is on, a trial of the variants runs again this many
+    /// frames after the last ended.
+    pub retrial_every: u32,
 }
 
 impl Default for GovernorSettings {
@@ -134,6 +156,9 @@ impl Default for GovernorSettings {
             min_period: 2,
             raise_after: 4,
             raise_margin: 3.0,
+            variants: 1,
+            trial_probe_every: 4,
+            retrial_every: 3000,
         }
     }
 }
@@ -179,7 +204,14 @@ impl GovernorSettings {
                 self.window, self.min_samples
             ));
         }
-        if self.probe_every < 2 || self.decide_every == 0 || self.resamples < 100 {
+        if self.variants == 0 {
+            return Err("the governor governs at least one variant".into());
+        }
+        if self.probe_every < 2
+            || self.trial_probe_every < 2
+            || self.decide_every == 0
+            || self.resamples < 100
+        {
             return Err("the governor probes one frame in 2 or more, decides every 1 or more measured frames, and resamples 100 times or more".into());
         }
         if let Some(min_psnr) = self.min_psnr {
@@ -258,6 +290,9 @@ pub struct GovernedFrame {
     /// ([`crate::ErrorWatch::compare`]); its PSNR goes to
     /// [`Governor::watched`].
     pub watch: bool,
+    /// Which of the application's variants a cached frame draws (0 with
+    /// one).
+    pub variant: usize,
 }
 
 /// The speed-up the governor holds: the ratio of the medians and its 95%
@@ -280,6 +315,8 @@ pub struct Decision {
     pub on: bool,
     /// The refresh period Δn from then.
     pub period: u32,
+    /// The variant drawn from then.
+    pub variant: usize,
     /// The speed-up last weighed when it was made (`None` before there
     /// were enough frames to weigh).
     pub estimate: Option<SpeedEstimate>,
@@ -304,6 +341,30 @@ pub enum Cause {
         /// The last watched frame's PSNR.
         psnr: f64,
     },
+    /// A trial of the variants ended: the variant drawn is the fastest of
+    /// those within the budget ([`Governor::trials`] has each one's
+    /// figures).
+    Trial,
+}
+
+/// One variant's turn in a trial.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrialTurn {
+    /// The variant.
+    pub variant: usize,
+    /// Its speed-up against the original over its turn.
+    pub estimate: SpeedEstimate,
+    /// Its watched frame's PSNR (dB), with a budget.
+    pub psnr: Option<f64>,
+}
+
+/// A trial in progress: the variant on turn, and the turns taken.
+#[derive(Clone, Debug)]
+struct Trial {
+    variant: usize,
+    turns: Vec<TrialTurn>,
+    /// The watched PSNR of the variant on turn, once read.
+    psnr: Option<f64>,
 }
 
 /// What a frame was, as far as measuring goes.
@@ -349,6 +410,12 @@ pub struct Governor {
     raise_after: u32,
     /// Whether the last change of Δn was a raise.
     raised_last: bool,
+    /// The variant cached frames draw, the trial in progress, the frame
+    /// the last one ended, and every trial's turns.
+    variant: usize,
+    trial: Option<Trial>,
+    trial_ended: u64,
+    trials: Vec<Vec<TrialTurn>>,
     /// Frames asked for and not yet measured, by number, with the epoch
     /// of pairs they were drawn in.
     pending: VecDeque<(u64, Kind, u32)>,
@@ -394,6 +461,10 @@ impl Governor {
             within: 0,
             raise_after: settings.raise_after,
             raised_last: false,
+            variant: 0,
+            trial: None,
+            trial_ended: 0,
+            trials: Vec::new(),
             pending: VecDeque::new(),
             epoch: 0,
             last_original: None,
@@ -427,6 +498,16 @@ impl Governor {
         governor.fixed = fixed;
         governor.on = fixed != Some(false);
         Ok(governor)
+    }
+
+    /// Every trial of the variants, each the turns it took, in order.
+    pub fn trials(&self) -> &[Vec<TrialTurn>] {
+        &self.trials
+    }
+
+    /// The variant cached frames draw now.
+    pub fn variant(&self) -> usize {
+        self.variant
     }
 
     /// Whether the cache is on.
@@ -463,13 +544,28 @@ impl Governor {
                 },
                 period: self.period,
                 watch: false,
+                variant: self.variant,
             };
+        }
+        if self.settings.variants > 1 && self.trial.is_none() && self.on {
+            let due = frame == 0
+                || frame.saturating_sub(self.trial_ended) >= u64::from(self.settings.retrial_every);
+            if due {
+                self.trial = Some(Trial {
+                    variant: 0,
+                    turns: Vec::new(),
+                    psnr: None,
+                });
+                self.start_pairs_afresh(true);
+            }
         }
         let draw = if self.on {
             let since = frame - self.since;
-            if since % u64::from(self.settings.probe_every)
-                == u64::from(self.settings.probe_every) - 1
-            {
+            let every = u64::from(match self.trial {
+                Some(_) => self.settings.trial_probe_every,
+                None => self.settings.probe_every,
+            });
+            if since % every == every - 1 {
                 Choice::Original
             } else {
                 self.cached_frame()
@@ -482,8 +578,9 @@ impl Governor {
             if elapsed >= every && into < u64::from(self.settings.reprobe_frames) {
                 if into == 0 {
                     // A new burst: the cached frames of the last one are
-                    // of another scene.
+                    // of another scene; it tries the next variant.
                     self.start_pairs_afresh(true);
+                    self.variant = (self.variant + 1) % self.settings.variants;
                 }
                 self.cached_frame()
             } else {
@@ -509,6 +606,7 @@ impl Governor {
             choice: draw,
             period: self.period,
             watch,
+            variant: self.trial.as_ref().map_or(self.variant, |t| t.variant),
         }
     }
 
@@ -594,6 +692,12 @@ impl Governor {
             }
             window.push_back(ms);
         }
+        if self.trial.is_some() {
+            if self.originals.len() >= self.settings.min_samples {
+                self.end_turn();
+            }
+            return;
+        }
         self.undecided += 1;
         if self.undecided >= self.settings.decide_every {
             self.undecided = 0;
@@ -601,24 +705,79 @@ impl Governor {
         }
     }
 
+    /// Ends the turn of the variant on trial with its figures, and starts
+    /// the next variant's, or ends the trial.
+    fn end_turn(&mut self) {
+        let Some(estimate) = self.estimate_now() else {
+            return;
+        };
+        self.estimate = Some(estimate);
+        let Some(trial) = self.trial.as_mut() else {
+            return;
+        };
+        // A budget needs the turn's watched frame: its answer is a few
+        // frames late (a turn that never gets one, after a whole window of
+        // pairs, ends without it and is not within the budget).
+        let awaited = self.settings.min_psnr.is_some() && trial.psnr.is_none();
+        if awaited && self.watching.is_some() && self.originals.len() < self.settings.window {
+            return;
+        }
+        trial.turns.push(TrialTurn {
+            variant: trial.variant,
+            estimate,
+            psnr: trial.psnr.take(),
+        });
+        trial.variant += 1;
+        if trial.variant < self.settings.variants {
+            self.start_pairs_afresh(true);
+            return;
+        }
+        let Some(trial) = self.trial.take() else {
+            return;
+        };
+        self.end_trial(trial.turns);
+    }
+
+    /// Draws the fastest variant of the trial's turns within the budget
+    /// (the fastest of all where none is), and turns the cache off where
+    /// even it loses.
+    fn end_trial(&mut self, turns: Vec<TrialTurn>) {
+        let within = |turn: &&TrialTurn| match (self.settings.min_psnr, turn.psnr) {
+            (Some(min_psnr), Some(psnr)) => psnr >= min_psnr,
+            (Some(_), None) => false,
+            (None, _) => true,
+        };
+        let fastest = |turns: &mut dyn Iterator<Item = &TrialTurn>| {
+            turns
+                .max_by(|a, b| a.estimate.speedup.total_cmp(&b.estimate.speedup))
+                .copied()
+        };
+        let best = fastest(&mut turns.iter().filter(within)).or_else(|| fastest(&mut turns.iter()));
+        self.trials.push(turns);
+        self.trial_ended = self.frame;
+        let Some(best) = best else {
+            return;
+        };
+        self.variant = best.variant;
+        self.estimate = Some(best.estimate);
+        self.on = best.estimate.interval[1] >= 1.0;
+        self.since = self.frame;
+        self.start_pairs_afresh(true);
+        self.decisions.push(Decision {
+            frame: self.frame,
+            on: self.on,
+            period: self.period,
+            variant: self.variant,
+            estimate: self.estimate,
+            cause: Cause::Trial,
+        });
+    }
+
     /// Weighs the windows, and switches where the interval lies wholly on
     /// the other side of 1× and the last decision has held long enough.
     fn weigh(&mut self) {
-        let min = self.settings.min_samples;
-        if self.originals.len() < min || self.cached.len() < min {
+        let Some(estimate) = self.estimate_now() else {
             return;
-        }
-        let originals: Vec<f64> = self.originals.iter().copied().collect();
-        let mut cached: Vec<f64> = self.cached.iter().copied().collect();
-        // The watch's extra, spread over the frames between two watches,
-        // is part of what a cached frame costs.
-        let overhead = self.watch_overhead(&cached);
-        for ms in &mut cached {
-            *ms += overhead;
-        }
-        let estimate = SpeedEstimate {
-            speedup: median(&originals) / median(&cached),
-            interval: speedup_interval_resampled(&originals, &cached, self.settings.resamples),
         };
         self.estimate = Some(estimate);
         if self.frame - self.since < u64::from(self.settings.min_dwell) {
@@ -634,6 +793,27 @@ impl Governor {
         if switch {
             self.switch(!self.on, Cause::Speed);
         }
+    }
+
+    /// The speed-up of the windows, with the watch's cost; `None` with
+    /// fewer pairs than a decision needs.
+    fn estimate_now(&self) -> Option<SpeedEstimate> {
+        let min = self.settings.min_samples;
+        if self.originals.len() < min || self.cached.len() < min {
+            return None;
+        }
+        let originals: Vec<f64> = self.originals.iter().copied().collect();
+        let mut cached: Vec<f64> = self.cached.iter().copied().collect();
+        // The watch's extra, spread over the frames between two watches,
+        // is part of what a cached frame costs.
+        let overhead = self.watch_overhead(&cached);
+        for ms in &mut cached {
+            *ms += overhead;
+        }
+        Some(SpeedEstimate {
+            speedup: median(&originals) / median(&cached),
+            interval: speedup_interval_resampled(&originals, &cached, self.settings.resamples),
+        })
     }
 
     /// The watch's extra cost per frame: a watched frame's median time
@@ -658,6 +838,7 @@ impl Governor {
             frame: self.frame,
             on,
             period: self.period,
+            variant: self.variant,
             estimate: self.estimate,
             cause,
         });
@@ -682,6 +863,11 @@ impl Governor {
         }
         // A NaN is no measurement of being within the budget.
         self.watch_ok = psnr >= min_psnr;
+        if let Some(trial) = self.trial.as_mut() {
+            // The turn's variant's figure; the trial decides.
+            trial.psnr = Some(psnr);
+            return;
+        }
         if !self.on {
             // Off, a burst's frame below the budget keeps the cache off.
             return;
@@ -745,6 +931,7 @@ impl Governor {
             frame: self.frame,
             on: true,
             period,
+            variant: self.variant,
             estimate: self.estimate,
             cause,
         });
@@ -791,6 +978,23 @@ mod tests {
         (original, cached): (impl Fn(u64) -> f64, impl Fn(u64) -> f64),
         psnr: impl Fn(u64, u32) -> f64,
     ) -> Vec<(Choice, f64)> {
+        play_variants(
+            governor,
+            (frames, lag),
+            (original, |frame, _| cached(frame)),
+            |frame, period, _| psnr(frame, period),
+        )
+    }
+
+    /// [`play_watched`] with several variants: a warm cached frame of
+    /// variant v costs `cached(frame, v)`, a watched one's PSNR is
+    /// `psnr(frame, Δn, v)`.
+    fn play_variants(
+        governor: &mut Governor,
+        (frames, lag): (u64, usize),
+        (original, cached): (impl Fn(u64) -> f64, impl Fn(u64, usize) -> f64),
+        psnr: impl Fn(u64, u32, usize) -> f64,
+    ) -> Vec<(Choice, f64)> {
         let mut noise = Noise(0x2545_F491_4F6C_DD1D);
         let mut drawn = Vec::new();
         let mut in_flight: VecDeque<(GovernedFrame, f64)> = VecDeque::new();
@@ -805,7 +1009,7 @@ mod tests {
                     let base = if cold {
                         original(next.frame) * 1.1
                     } else {
-                        cached(next.frame)
+                        cached(next.frame, next.variant)
                     };
                     noise.around(base, 0.05)
                 }
@@ -819,7 +1023,8 @@ mod tests {
                 let (frame, ms) = in_flight.pop_front().unwrap();
                 governor.measured(frame.frame, ms);
                 if frame.watch {
-                    governor.watched(frame.frame, psnr(frame.frame, frame.period));
+                    let db = psnr(frame.frame, frame.period, frame.variant);
+                    governor.watched(frame.frame, db);
                 }
             }
         }
@@ -1146,5 +1351,96 @@ mod tests {
             "{raises:?}"
         );
         assert!(g.is_on());
+    }
+
+    fn governor_of(variants: usize, min_psnr: Option<f64>) -> Governor {
+        Governor::new(GovernorSettings {
+            variants,
+            min_psnr,
+            ..GovernorSettings::default()
+        })
+        .unwrap()
+    }
+
+    /// Three variants: the fastest (0.4 ms) is below the budget, the
+    /// next (0.5 ms) within it: the trial at the start tries each and the
+    /// governor draws the second, on.
+    #[test]
+    fn the_fastest_variant_within_the_budget_is_drawn() {
+        let mut g = governor_of(3, Some(30.0));
+        let costs = [0.8, 0.5, 0.4];
+        let psnrs = [45.0, 40.0, 25.0];
+        let drawn = play_variants(&mut g, (1500, 3), (|_| 1.0, |_, v| costs[v]), |_, _, v| {
+            psnrs[v]
+        });
+        assert_eq!(g.trials().len(), 1, "{:?}", g.decisions());
+        let turns = &g.trials()[0];
+        assert_eq!(
+            turns.iter().map(|t| t.variant).collect::<Vec<_>>(),
+            [0, 1, 2]
+        );
+        assert!(turns.iter().all(|t| t.psnr.is_some()), "{turns:?}");
+        assert!(
+            turns[2].estimate.speedup > turns[1].estimate.speedup,
+            "{turns:?}"
+        );
+        assert_eq!(g.variant(), 1);
+        assert!(g.is_on());
+        assert_eq!(g.decisions()[0].cause, Cause::Trial);
+        // The trial is short: it ends within 400 frames.
+        assert!(g.decisions()[0].frame < 400, "{:?}", g.decisions());
+        assert!(mean_ms(&drawn[500..]) < 0.6, "{}", mean_ms(&drawn[500..]));
+    }
+
+    /// Without a budget the fastest variant is drawn; where every variant
+    /// loses, the trial turns the cache off, and each re-probe's burst
+    /// tries the next variant.
+    #[test]
+    fn a_trial_where_every_variant_loses_turns_the_cache_off() {
+        let mut g = governor_of(2, None);
+        let drawn = play_variants(
+            &mut g,
+            (2000, 3),
+            (|_| 1.0, |_, v| [1.4, 1.6][v]),
+            |_, _, _| 100.0,
+        );
+        assert!(!g.is_on(), "{:?}", g.decisions());
+        assert_eq!(g.decisions()[0].cause, Cause::Trial);
+        assert!(!g.decisions()[0].on);
+        let after = g.decisions()[0].frame as usize;
+        assert!(
+            mean_ms(&drawn[after..]) < 1.05,
+            "{}",
+            mean_ms(&drawn[after..])
+        );
+        let mut fastest = governor_of(2, None);
+        play_variants(
+            &mut fastest,
+            (1000, 3),
+            (|_| 1.0, |_, v| [0.7, 0.5][v]),
+            |_, _, _| 100.0,
+        );
+        assert_eq!(fastest.variant(), 1);
+    }
+
+    /// The variants' costs swap at frame 2000: the trial every 3000 frames
+    /// finds it and draws the other.
+    #[test]
+    fn a_retrial_finds_a_variant_that_became_faster() {
+        let mut g = governor_of(2, None);
+        let cost = |frame: u64, v: usize| match (frame < 2000, v) {
+            (true, 0) | (false, 1) => 0.4,
+            _ => 0.7,
+        };
+        play_variants(&mut g, (4000, 3), (|_| 1.0, cost), |_, _, _| 100.0);
+        assert_eq!(g.trials().len(), 2, "{:?}", g.decisions());
+        assert_eq!(g.variant(), 1, "{:?}", g.decisions());
+        let trials: Vec<usize> = g
+            .decisions()
+            .iter()
+            .filter(|d| d.cause == Cause::Trial)
+            .map(|d| d.variant)
+            .collect();
+        assert_eq!(trials, [0, 1]);
     }
 }

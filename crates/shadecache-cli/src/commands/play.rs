@@ -25,9 +25,12 @@ pub struct Args {
     #[arg(long, value_name = "ID")]
     pub node: Option<String>,
 
-    /// The variant the fixed and the governed ways draw.
-    #[arg(long, value_enum, default_value = "one-pass")]
-    pub variant: VariantArg,
+    /// The variant the fixed and the governed ways draw; several,
+    /// separated by commas, and the governor tries each (at the start and
+    /// every 3000 frames while the cache is on) and draws the fastest
+    /// within the budget, while the fixed way draws the first.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "one-pass")]
+    pub variant: Vec<VariantArg>,
 
     /// The refresh period Δn (default: the variant's).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=65535))]
@@ -69,9 +72,9 @@ pub struct Args {
 }
 
 pub fn exec(args: Args, color: Color) -> Result<(), Error> {
-    if args.variant == VariantArg::All {
+    if args.variant.contains(&VariantArg::All) {
         return Err(Error::plain(Diagnostic::error(
-            "--variant all: play draws one variant; name it (one-pass, two-pass, three-pass, deferred or lowres)",
+            "--variant all: play draws the variants it is given; name them (one-pass, two-pass, three-pass, deferred or lowres, separated by commas)",
         )));
     }
     let out = crate::out_folder::OutFolder::check(&args.out, args.overwrite)?;
@@ -88,7 +91,7 @@ fn play_into(args: &Args, _color: Color, out: &crate::out_folder::OutFolder) -> 
             Some(id) => Nodes::Ids(vec![id.clone()]),
             None => Nodes::Top(1),
         },
-        variants: VariantArg::variants(&[args.variant]),
+        variants: VariantArg::variants(&args.variant),
         refresh_periods: args
             .refresh_period
             .map_or(defaults.refresh_periods.clone(), |period| vec![period]),
@@ -159,6 +162,22 @@ fn summary(played: &play::Play, path: &std::path::Path) -> String {
     );
     for decision in &played.decisions {
         let state = if decision.on { "on" } else { "off" };
+        if decision.cause == "trial" {
+            let name = played
+                .auto_variants
+                .get(decision.variant)
+                .map_or("?", String::as_str);
+            let within = if played.min_psnr.is_some() {
+                " within the budget"
+            } else {
+                ""
+            };
+            text += &format!(
+                "  frame {}: cache {state} with {name}, the fastest of the trial{within} ({:.2}× [{:.2}, {:.2}])\n",
+                decision.frame, decision.speedup, decision.interval[0], decision.interval[1]
+            );
+            continue;
+        }
         text += &match decision.psnr {
             Some(psnr) => format!(
                 "  frame {}: cache {state}, Δn = {} (a watched frame at {psnr:.1} dB, {})\n",
@@ -178,6 +197,22 @@ fn summary(played: &play::Play, path: &std::path::Path) -> String {
     }
     if played.decisions.is_empty() {
         text += "  no switch: the governor kept the cache on\n";
+    }
+    for (index, trial) in played.trials.iter().enumerate() {
+        let turns: Vec<String> = trial
+            .iter()
+            .map(|turn| {
+                let name = played
+                    .auto_variants
+                    .get(turn.variant)
+                    .map_or("?", String::as_str);
+                match turn.psnr {
+                    Some(db) => format!("{name} {:.2}× at {db:.1} dB", turn.speedup),
+                    None => format!("{name} {:.2}×", turn.speedup),
+                }
+            })
+            .collect();
+        text += &format!("  trial {}: {}\n", index + 1, turns.join(", "));
     }
     if let Some(min_psnr) = played.min_psnr {
         let lowest = played

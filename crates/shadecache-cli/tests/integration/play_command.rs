@@ -213,6 +213,64 @@ fn governor_follows_a_scene_that_changes_weight() {
     );
 }
 
+/// Given several variants, the governor tries each at the start (warmed
+/// up, measured against the original, its first warm frame watched) and
+/// draws the fastest of those within the budget; the fixed way draws the
+/// first.
+#[test]
+fn governor_draws_the_fastest_of_several_variants() {
+    if no_gpu() {
+        return;
+    }
+    let played = play(
+        "corpus/noise_marble.wgsl",
+        "corpus/scenes/marble_sphere.toml",
+        &[
+            "--size",
+            "128x128",
+            "--frames",
+            "400",
+            "--variant",
+            "three-pass,one-pass,two-pass",
+            "--min-psnr",
+            "20",
+        ],
+    );
+    assert_eq!(
+        played["auto_variants"],
+        serde_json::json!(["three-pass", "one-pass", "two-pass"])
+    );
+    assert!(played["fixed_variant"]
+        .as_str()
+        .unwrap()
+        .starts_with("three-pass"));
+    let trials = played["trials"].as_array().unwrap();
+    assert_eq!(trials.len(), 1, "{played}");
+    let turns = trials[0].as_array().unwrap();
+    let tried: Vec<u64> = turns
+        .iter()
+        .map(|t| t["variant"].as_u64().unwrap())
+        .collect();
+    assert_eq!(tried, [0, 1, 2]);
+    assert!(turns.iter().all(|t| number(t, "psnr") >= 20.0), "{turns:?}");
+    let fastest = turns
+        .iter()
+        .max_by(|a, b| number(a, "speedup").total_cmp(&number(b, "speedup")))
+        .unwrap()["variant"]
+        .clone();
+    let chosen = &played["decisions"][0];
+    assert_eq!(chosen["cause"], "trial", "{chosen}");
+    assert_eq!(chosen["variant"], fastest, "{chosen}");
+    // The governed frames after the trial draw the chosen variant.
+    let after = chosen["frame"].as_u64().unwrap() + 8;
+    assert!(played["auto_frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|f| f["frame"].as_u64().unwrap() > after && f["drew"] != "original")
+        .all(|f| f["variant"] == fastest));
+}
+
 /// A light that starts to move (frame 120, then 4° a frame) leaves the
 /// cached lit colour behind it: the error watch sees the watched frames
 /// fall below the budget of 36 dB and the governor halves Δn from 16,
@@ -315,6 +373,23 @@ fn play_refuses_what_it_cannot_play() {
         dir.as_os_str(),
     ] as [&std::ffi::OsStr; 6]);
     assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
-    assert!(stderr(&output).contains("play draws one variant"));
+    assert!(stderr(&output).contains("name them"));
+    assert!(!Path::new(&dir).join("play.json").exists());
+    // An error budget that is no PSNR is a usage error, before anything
+    // runs.
+    let output = shadecache([
+        "play".as_ref(),
+        "corpus/noise_marble.wgsl".as_ref(),
+        "--min-psnr".as_ref(),
+        "0".as_ref(),
+        "--out".as_ref(),
+        dir.as_os_str(),
+    ] as [&std::ffi::OsStr; 6]);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("PSNR in dB"),
+        "{}",
+        stderr(&output)
+    );
     assert!(!Path::new(&dir).join("play.json").exists());
 }
