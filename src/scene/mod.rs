@@ -129,9 +129,10 @@ pub struct Scene {
     #[serde(default)]
     pub uniforms: BTreeMap<String, toml::Value>,
     /// Uniform values that change partway through the run, in frame order:
-    /// from its `frame` on (run frames, warm-up included), each change's
-    /// values replace `[uniforms]`' (a payload whose weight changes, as a
-    /// governor must follow).
+    /// from its `frame` on (frames of the motion: run frames, warm-up
+    /// included, after `start_frame`), each change's values replace
+    /// `[uniforms]`' (a payload whose weight changes, as a governor must
+    /// follow).
     #[serde(default)]
     pub uniform_changes: Vec<UniformChange>,
     /// Textures by binding name.
@@ -465,7 +466,9 @@ pub struct FrameState {
     /// an object without a skin): a skinning matrix is the object's
     /// `world_from_local` times its joint's pose.
     pub joints: Vec<Vec<Mat4>>,
-    /// The run frame it is (0-based, warm-up included).
+    /// The frame of the scene's motion it shows: the run frame (0-based,
+    /// warm-up included) plus `start_frame`. `[[uniform_changes]]` are on
+    /// this timeline, as the motion is.
     pub frame: u32,
     /// The frame before (`None` on the first frame, and within that state
     /// itself): what a `previous_` member holds, as engines keep last
@@ -849,12 +852,12 @@ impl Scene {
             objects,
             instances,
             joints: self.joint_poses(t),
-            frame: n,
+            frame: n.saturating_add(self.start_frame),
             previous: None,
         }
     }
 
-    /// The value of uniform member `name` in run frame `frame`: the last
+    /// The value of uniform member `name` in motion frame `frame`: the last
     /// `[[uniform_changes]]` from that frame or before that sets it, else
     /// `[uniforms]`'.
     pub fn uniform_at(&self, name: &str, frame: u32) -> Option<&toml::Value> {
@@ -902,10 +905,20 @@ mod tests {
         Scene::parse(Arc::new(SourceFile::new("scene.toml", text))).unwrap()
     }
 
+    /// A frame's state as the motion has it, whatever frame it is (the
+    /// states of a still scene's frames differ in their number alone).
+    fn posed(mut state: FrameState) -> FrameState {
+        state.frame = 0;
+        state
+    }
+
     #[test]
     fn only_declared_effects_move() {
         let still = scene("");
-        assert_eq!(still.frame_alone(0, 1.0), still.frame_alone(10, 1.0));
+        assert_eq!(
+            posed(still.frame_alone(0, 1.0)),
+            posed(still.frame_alone(10, 1.0))
+        );
         let mesh = still.objects[0].mesh.build(Path::new(".")).unwrap();
         assert!(still.deformed(0, &mesh, 10).is_none());
 
@@ -923,7 +936,10 @@ mod tests {
         let deforming = scene("\"deformation\"");
         let moved = deforming.deformed(0, &mesh, 3).unwrap();
         assert_ne!(moved.positions, mesh.positions);
-        assert_eq!(deforming.frame_alone(0, 1.0), deforming.frame_alone(3, 1.0));
+        assert_eq!(
+            posed(deforming.frame_alone(0, 1.0)),
+            posed(deforming.frame_alone(3, 1.0))
+        );
     }
 
     /// A scene started `start_frame` frames into its motion shows at run
@@ -940,7 +956,10 @@ mod tests {
         assert_eq!(later.frame_alone(0, 1.0), from_start.frame_alone(7, 1.0));
         assert_eq!(later.frame(3, 1.0), from_start.frame(10, 1.0));
         assert!(later.frame(0, 1.0).previous.is_none());
-        assert_ne!(later.frame_alone(0, 1.0), from_start.frame_alone(0, 1.0));
+        assert_ne!(
+            posed(later.frame_alone(0, 1.0)),
+            posed(from_start.frame_alone(0, 1.0))
+        );
         let mesh = later.objects[0].mesh.build(Path::new(".")).unwrap();
         assert_eq!(
             later.deformed(0, &mesh, 2).unwrap().positions,
@@ -1066,7 +1085,10 @@ mod tests {
             format!("effects = [{effects}]\n[[objects]]\nmesh = {{ kind = \"cube\" }}\ninstances = {{ count = 4, layout = \"ring\", orbit_degrees_per_frame = [1, -1, 2, 0], spin_degrees_per_frame = [0, 3, 0] }}\n[[objects]]\nmesh = {{ kind = \"cube\" }}\n")
         };
         let still = Scene::parse(Arc::new(SourceFile::new("s.toml", text("")))).unwrap();
-        assert_eq!(still.frame_alone(0, 1.0), still.frame_alone(5, 1.0));
+        assert_eq!(
+            posed(still.frame_alone(0, 1.0)),
+            posed(still.frame_alone(5, 1.0))
+        );
         let state = still.frame(0, 1.0);
         assert_eq!(state.instances[0].len(), 4);
         assert_eq!(state.instances[1], [Mat4::IDENTITY]);

@@ -445,20 +445,11 @@ fn sized(
     size: (u32, u32),
     format: wgpu::TextureFormat,
 ) -> (wgpu::Texture, wgpu::Buffer, wgpu::Buffer) {
-    let spare = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("shadecache error watch's original"),
-        size: wgpu::Extent3d {
-            width: size.0.max(1),
-            height: size.1.max(1),
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
+    // The host's render target: drawn into, bound by the comparison, and a
+    // copy destination for an application that starts the original from
+    // a copy of its frame.
+    let spare =
+        crate::cached::render_target(device, "shadecache error watch's original", size, format);
     let bytes = u64::from(size.0.max(1).div_ceil(TILE) * size.1.max(1).div_ceil(TILE)) * 8;
     let buffer = |label, usage| {
         device.create_buffer(&wgpu::BufferDescriptor {

@@ -168,11 +168,11 @@ fn print(governor: &Governor, drawn: &Drawn, (frames, mode): (u32, CacheMode)) {
                 "governor: from frame {}, cache {state}, Δn = {} (a watched frame at {psnr:.1} dB)",
                 decision.frame, decision.period
             ),
-            (Cause::Speed, Some(estimate)) => println!(
+            (Cause::Speed | Cause::Trial, Some(estimate)) => println!(
                 "governor: from frame {}, cache {state} (speed-up {:.2}× [{:.2}, {:.2}])",
                 decision.frame, estimate.speedup, estimate.interval[0], estimate.interval[1]
             ),
-            (Cause::Speed, None) => {
+            (Cause::Speed | Cause::Trial, None) => {
                 println!("governor: from frame {}, cache {state}", decision.frame)
             }
         }
