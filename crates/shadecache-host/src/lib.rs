@@ -32,6 +32,14 @@
 //! miss everywhere. [`Timestamps`] times each pass with plain timestamp
 //! queries; [`PassTimer`] lets another timer do it.
 //!
+//! Whether the cache pays is the player's GPU's to say: a [`Governor`]
+//! decides per frame whether to draw the original or the cached frame
+//! from the frames' GPU times, which [`FrameTimer`] reads when they are
+//! ready; an [`ErrorWatch`] compares a cached frame with the original on
+//! the GPU once in a while, so the governor keeps the cache within an
+//! error budget by its refresh period; [`CacheMode`] gives one render loop
+//! for caching always, never, or as the governor says.
+//!
 //! Every misuse is an [`Error`], never a panic in the application: a size
 //! the device cannot hold (in `new` and `resize`), a draw with another
 //! shader's twins, the cache's bind group set by the application; what
@@ -108,6 +116,7 @@ pub use error::Error;
 pub use frame::{FrameLayout, Targets, Viewport};
 pub use governor::{
     CacheMode, Cause, Choice, Decision, GovernedFrame, Governor, GovernorSettings, SpeedEstimate,
+    TrialTurn,
 };
 
 /// Brings in the Rust module a build script's `shadecache::build::Build`
