@@ -373,7 +373,7 @@ impl Runner {
                     &mut timer,
                     frame,
                     frames,
-                    &self.cached,
+                    shadecache_host::Coverage::Cache(&self.cached),
                 );
                 timer.profiler.resolve_queries(&mut encoder);
                 recorded
@@ -384,7 +384,7 @@ impl Runner {
                 &mut NoTimer,
                 frame,
                 frames,
-                &self.cached,
+                shadecache_host::Coverage::Cache(&self.cached),
             ),
         }
         .map_err(|err| err.to_string())?;

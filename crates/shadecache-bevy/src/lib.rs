@@ -174,10 +174,18 @@ pub struct ReprojectionCache {
     /// off (Bevy's pipelines draw the meshes) and probed again every 600
     /// frames. `Off` draws Bevy's way every frame, the meshes still in
     /// the plugin's pass. `Auto` needs timestamp queries (without them the
-    /// view caches every frame, and says why); an error budget
-    /// (`min_psnr`) is not watched by the plugin yet (it says so, and the
-    /// speed alone decides). The governor's state is in [`CacheStats`]
-    /// and in Bevy's diagnostics (`render/shadecache/<material>/...`).
+    /// view caches every frame, and says why). With an error budget
+    /// (`min_psnr`), one cached frame in 64 is watched: the plugin copies
+    /// the view's colour and depth as Bevy's opaque pass left them, draws
+    /// the cached meshes Bevy's way into the copy, and the host crate's
+    /// `ErrorWatch` compares the two frames over the pixels either
+    /// changed; below the budget the governor lowers Δn, and at its floor
+    /// turns the cache off. The watch needs the view's main texture to be
+    /// a copy source bound as a texture (Bevy's default
+    /// `CameraMainTextureUsages`) and a copyable depth (`Depth32Float`);
+    /// otherwise it warns once and the speed alone decides. The
+    /// governor's state is in [`CacheStats`] and in Bevy's diagnostics
+    /// (`render/shadecache/<material>/...`).
     pub mode: CacheMode,
 }
 
@@ -259,19 +267,21 @@ impl<M: Asset> Plugin for ShadecachePlugin<M> {
 /// The governor's state in Bevy's diagnostics, per cached material:
 /// `render/shadecache/<material>/speedup` and its interval's bounds
 /// (`speedup_low`, `speedup_high`), `cached` (1 while the cache is on, 0
-/// while the governor has it off) and `delta_n` (the refresh period), as
+/// while the governor has it off), `delta_n` (the refresh period) and,
+/// with an error budget, `psnr` (the last watched frame's), as
 /// `RenderDiagnosticsPlugin` puts Bevy's passes' times under `render/`.
 mod diagnostics {
     use bevy::diagnostic::{DiagnosticPath, Diagnostics};
 
     use crate::CacheStats;
 
-    const MEASURES: [&str; 5] = [
+    const MEASURES: [&str; 6] = [
         "speedup",
         "speedup_low",
         "speedup_high",
         "cached",
         "delta_n",
+        "psnr",
     ];
 
     /// The paths of `material`'s diagnostics.
@@ -297,6 +307,9 @@ mod diagnostics {
         }
         add(3, f64::from(u8::from(readout.on)));
         add(4, f64::from(readout.period));
+        if let Some(psnr) = readout.psnr {
+            add(5, psnr);
+        }
     }
 }
 

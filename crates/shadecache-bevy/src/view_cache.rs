@@ -37,8 +37,8 @@ use bevy::render::view::{
 use bevy::render::{Render, RenderSystems};
 use shadecache_host::plan::ResourceKind;
 use shadecache_host::{
-    CacheMode, CachedShader, Choice, FrameLayout, FrameTimer, Governor, NoTimer, Options,
-    PassTimer, Plan, SpeedEstimate, Targets, TwinSources, Twins,
+    CacheMode, CachedShader, Choice, Coverage, ErrorWatch, FrameLayout, FrameTimer, Governor,
+    NoTimer, Options, PassTimer, Plan, SpeedEstimate, Targets, TwinSources, Twins,
 };
 
 use crate::phase::{CacheId, CachedMesh3d, CachingViews, QueuedLayouts};
@@ -82,6 +82,97 @@ struct Governed {
     governor: Governor,
     timer: Option<FrameTimer>,
     readout: GovernorReadout,
+    /// With an error budget: the watch, made at the first watched frame
+    /// (`None` before), or why the view cannot be watched.
+    watch: Option<Result<ViewWatch, String>>,
+}
+
+/// A view's error watch: the watch (its spare target is the original's
+/// colour), and the base frame and the depth a watched frame copies the
+/// view's into before the cached passes.
+struct ViewWatch {
+    watch: ErrorWatch,
+    base: wgpu::Texture,
+    depth_view: wgpu::TextureView,
+    depth: wgpu::Texture,
+}
+
+impl ViewWatch {
+    /// A watch of the view whose colour and depth are `color` and
+    /// `depth`; why not where they cannot be copied or read (a copy of the
+    /// colour and the depth starts the original's frame).
+    fn new(
+        device: &wgpu::Device,
+        color: &wgpu::Texture,
+        depth: &wgpu::Texture,
+    ) -> Result<ViewWatch, String> {
+        let usage = wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING;
+        if !color.usage().contains(usage) {
+            return Err("the view's main texture is not a copy source bound as a texture (CameraMainTextureUsages)".into());
+        }
+        if !matches!(
+            depth.format(),
+            wgpu::TextureFormat::Depth32Float | wgpu::TextureFormat::Depth16Unorm
+        ) || !depth.usage().contains(wgpu::TextureUsages::COPY_SRC)
+        {
+            return Err(format!(
+                "the view's depth, {:?}, cannot be copied",
+                depth.format()
+            ));
+        }
+        let size = (color.width(), color.height());
+        let watch = ErrorWatch::new(device, size, color.format()).map_err(|err| err.to_string())?;
+        let texture = |label, format, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: color.size(),
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let base = texture(
+            "shadecache error watch's base",
+            color.format(),
+            wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let depth = texture(
+            "shadecache error watch's depth",
+            depth.format(),
+            wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        Ok(ViewWatch {
+            watch,
+            base,
+            depth_view: depth.create_view(&Default::default()),
+            depth,
+        })
+    }
+
+    /// Copies the view's colour (into the base and the spare) and depth,
+    /// as the opaque pass left them, before the cached passes.
+    fn copy_view(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        color: &wgpu::Texture,
+        depth: &wgpu::Texture,
+    ) {
+        for into in [&self.base, self.watch.spare()] {
+            encoder.copy_texture_to_texture(
+                color.as_image_copy(),
+                into.as_image_copy(),
+                color.size(),
+            );
+        }
+        encoder.copy_texture_to_texture(
+            depth.as_image_copy(),
+            self.depth.as_image_copy(),
+            depth.size(),
+        );
+    }
 }
 
 /// What a cached material's governor holds, for a game's readout and
@@ -102,6 +193,9 @@ pub struct GovernorReadout {
     pub cached_frames: u64,
     /// Frames whose GPU time reached the governor.
     pub measured_frames: u64,
+    /// With an error budget, the last watched frame's PSNR against Bevy's
+    /// own frame (dB, over the pixels the cached meshes drew in either).
+    pub psnr: Option<f64>,
 }
 
 /// A view's cache, or why it has none.
@@ -573,13 +667,9 @@ impl ViewCache {
                 }
                 _ => None,
             };
-            if let CacheMode::Auto { min_psnr: Some(db) } = mode {
-                warn!("shadecache: the plugin does not watch the error yet: the budget of {db} dB is not kept, the speed alone decides");
-            }
             let run = match (mode, &timer) {
-                (CacheMode::Auto { .. }, Some(_)) => CacheMode::Auto { min_psnr: None },
                 (CacheMode::Auto { .. }, None) => CacheMode::Always,
-                (fixed, _) => fixed,
+                (mode, _) => mode,
             };
             let governor = Governor::for_mode(run, self.shader.plan())?;
             self.governed = Some(Governed {
@@ -591,6 +681,7 @@ impl ViewCache {
                 },
                 governor,
                 timer,
+                watch: None,
             });
         }
         self.governed
@@ -746,6 +837,7 @@ fn draw_cached_passes(
             view: (view_entity, id),
             items,
             targets: &targets,
+            textures: (target.main_texture(), &depth.attachment.texture.texture),
             device: &device,
             queue: &queue,
             uniforms: (uniforms, offset.offset as u64),
@@ -777,6 +869,8 @@ struct CacheFrame<'a> {
     view: (Entity, bevy::render::view::RetainedViewEntity),
     items: Range<usize>,
     targets: &'a Targets<'a>,
+    /// The view's colour and depth textures (the error watch copies them).
+    textures: (&'a wgpu::Texture, &'a wgpu::Texture),
     device: &'a RenderDevice,
     queue: &'a RenderQueue,
     uniforms: (&'a wgpu::Buffer, u64),
@@ -794,13 +888,22 @@ impl CacheFrame<'_> {
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<(bool, Option<GovernorReadout>), String> {
         let governed = cache.governed(mode, self.device, self.queue)?;
+        let device = self.device.wgpu_device();
         if let Some(timer) = &mut governed.timer {
-            let times = timer
-                .ready(self.device.wgpu_device())
-                .map_err(|err| err.to_string())?;
+            let times = timer.ready(device).map_err(|err| err.to_string())?;
             for (frame, ms) in times {
                 governed.governor.measured(frame, ms);
                 governed.readout.measured_frames += 1;
+            }
+        }
+        if let Some(Ok(view_watch)) = &mut governed.watch {
+            if let Some(answer) = view_watch
+                .watch
+                .ready(device)
+                .map_err(|err| err.to_string())?
+            {
+                governed.governor.watched(answer.frame, answer.psnr);
+                governed.readout.psnr = Some(answer.psnr);
             }
         }
         let next = governed.governor.next_frame();
@@ -826,11 +929,29 @@ impl CacheFrame<'_> {
             ..
         } = cache;
         let governed = governed.as_mut().ok_or("no governor")?;
-        let result = match (governed.timer.as_mut().filter(|_| timed), cached) {
-            (Some(timer), true) => self.cached(encoder, (shader, view_now, twins), timer),
-            (None, true) => self.cached(encoder, (shader, view_now, twins), &mut NoTimer),
-            (Some(timer), false) => self.bevys_way(encoder, timer),
-            (None, false) => self.bevys_way(encoder, &mut NoTimer),
+        let watch = match (
+            cached && next.watch,
+            self.watch(governed.mode, &mut governed.watch),
+        ) {
+            (true, Some(watch)) if watch.watch.is_free() => Some(watch),
+            _ => None,
+        };
+        let timer = governed.timer.as_mut().filter(|_| timed);
+        let result = match (timer, cached) {
+            (Some(timer), true) => self.cached(
+                encoder,
+                (shader, view_now, twins),
+                (timer, watch),
+                next.frame,
+            ),
+            (None, true) => self.cached(
+                encoder,
+                (shader, view_now, twins),
+                (&mut NoTimer, watch),
+                next.frame,
+            ),
+            (Some(timer), false) => self.bevys_way(encoder, timer, self.view_targets()),
+            (None, false) => self.bevys_way(encoder, &mut NoTimer, self.view_targets()),
         };
         if let Some(timer) = governed.timer.as_mut().filter(|_| timed) {
             timer.resolve(encoder);
@@ -852,12 +973,21 @@ impl CacheFrame<'_> {
     /// The variant's passes over the run: the view's uniform copied for
     /// next frame's twin, then each pass drawing the run with Bevy's
     /// render commands.
+    ///
+    /// On a watched frame, the view's colour and depth are copied first,
+    /// Bevy's way draws the run into the copies after, and the watch
+    /// compares the two frames over the pixels either changed.
     fn cached<T: PassTimer>(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (shader, view_now, twins): (&mut CachedShader, &wgpu::Buffer, &Twins),
-        timer: &mut T,
+        (timer, watch): (&mut T, Option<&mut ViewWatch>),
+        frame: u64,
     ) -> Result<(), String> {
+        let (color, depth) = self.textures;
+        if let Some(watch) = &watch {
+            watch.copy_view(encoder, color, depth);
+        }
         let (uniforms, offset) = self.uniforms;
         encoder.copy_buffer_to_buffer(uniforms, offset, view_now, 0, view_now.size());
         shader
@@ -874,7 +1004,61 @@ impl CacheFrame<'_> {
                         .map_err(|err| format!("{err:?}"))
                 },
             )
+            .map_err(|err| err.to_string())?;
+        let Some(watch) = watch else {
+            return Ok(());
+        };
+        let spare = watch.watch.spare_view().clone();
+        self.bevys_way(encoder, timer, (&spare, &watch.depth_view))?;
+        watch
+            .watch
+            .compare(
+                self.device.wgpu_device(),
+                (self.queue, encoder),
+                timer,
+                frame,
+                color,
+                Coverage::ChangedFrom(&watch.base),
+            )
+            .map(|_| ())
             .map_err(|err| err.to_string())
+    }
+
+    /// The view's colour and depth attachments, which `draw_cached_passes`
+    /// always gives.
+    fn view_targets(&self) -> (&wgpu::TextureView, &wgpu::TextureView) {
+        let color = self.targets.color.first().copied().flatten();
+        match (color, self.targets.depth) {
+            (Some(color), Some(depth)) => (color, depth),
+            _ => unreachable!("the view's targets are made with a colour and a depth"),
+        }
+    }
+
+    /// The view's watch, made at the first watched frame and again when
+    /// the view's size changes; none without a budget, or where the view
+    /// cannot be watched (said once).
+    fn watch<'g>(
+        &self,
+        mode: CacheMode,
+        watch: &'g mut Option<Result<ViewWatch, String>>,
+    ) -> Option<&'g mut ViewWatch> {
+        if !matches!(mode, CacheMode::Auto { min_psnr: Some(_) }) {
+            return None;
+        }
+        let (color, depth) = self.textures;
+        let stale = match &*watch {
+            Some(Ok(watch)) => watch.base.size() != color.size(),
+            Some(Err(_)) => false,
+            None => true,
+        };
+        if stale {
+            let made = ViewWatch::new(self.device.wgpu_device(), color, depth);
+            if let Err(why) = &made {
+                warn!("shadecache: the view's error watch cannot run, so the speed alone decides: {why}");
+            }
+            *watch = Some(made);
+        }
+        watch.as_mut()?.as_mut().ok()
     }
 
     /// The run drawn as Bevy draws it: one pass into the view's colour and
@@ -885,6 +1069,7 @@ impl CacheFrame<'_> {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut T,
+        (color, depth): (&wgpu::TextureView, &wgpu::TextureView),
     ) -> Result<(), String> {
         use bevy::pbr::SpecializedMaterialPipelineCache;
         use bevy::render::render_resource::PipelineCache;
@@ -894,10 +1079,6 @@ impl CacheFrame<'_> {
             .get(&self.view.1)
             .ok_or("the view has no pipelines Bevy specialised")?;
         let pipelines = self.world.resource::<PipelineCache>();
-        let color = self.targets.color.first().copied().flatten();
-        let (Some(color), Some(depth)) = (color, self.targets.depth) else {
-            return Err("the view's colour or depth target is missing".into());
-        };
         let query = timer.begin(encoder, "original");
         let raw = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("shadecache: the cached meshes as Bevy draws them"),

@@ -136,7 +136,7 @@ pub use shadecache_plan as plan;
 pub use shadecache_plan::Plan;
 pub use timing::{FrameTimer, NoTimer, PassTime, PassTimer, Timestamps};
 pub use twins::{TwinSources, Twins};
-pub use watch::{ErrorWatch, WatchedError};
+pub use watch::{Coverage, ErrorWatch, WatchedError};
 
 /// What the shadecache toolchain shares with the host to draw its scenes
 /// (feature `toolchain`, which the toolchain turns on): the plan's formats

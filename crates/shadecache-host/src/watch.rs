@@ -46,7 +46,7 @@ const HUGE: f32 = 1.0e30;
 const COMPARE_WGSL: &str = r#"
 @group(0) @binding(0) var original: texture_2d<f32>;
 @group(0) @binding(1) var cached: texture_2d<f32>;
-@group(0) @binding(2) var coverage: texture_depth_2d;
+COVERAGE_BINDING
 @group(0) @binding(3) var<storage, read_write> partials: array<vec2<f32>>;
 
 struct Params {
@@ -73,11 +73,12 @@ fn compare(@builtin(global_invocation_id) id: vec3<u32>) {
             if any(pixel >= params.size) {
                 continue;
             }
-            if textureLoad(coverage, pixel, 0) == params.far_depth {
+            let original_texel = textureLoad(original, pixel, 0);
+            let cached_texel = textureLoad(cached, pixel, 0);
+            if !(COVERED) {
                 continue;
             }
-            let difference = textureLoad(original, pixel, 0).rgb
-                - textureLoad(cached, pixel, 0).rgb;
+            let difference = original_texel.rgb - cached_texel.rgb;
             let value = dot(difference, difference);
             // A NaN compares false: it counts as the huge error.
             squared = squared + select(HUGE, value, value < HUGE);
@@ -87,6 +88,46 @@ fn compare(@builtin(global_invocation_id) id: vec3<u32>) {
     partials[id.x] = vec2<f32>(squared, covered);
 }
 "#;
+
+/// The comparison's coverage, by [`Coverage`]: its binding 2 and the test
+/// of a pixel.
+fn compare_wgsl(coverage: CoverageKind) -> String {
+    let (binding, covered) = match coverage {
+        CoverageKind::Cache => (
+            "@group(0) @binding(2) var coverage: texture_depth_2d;",
+            "textureLoad(coverage, pixel, 0) != params.far_depth",
+        ),
+        CoverageKind::ChangedFrom => (
+            "@group(0) @binding(2) var base: texture_2d<f32>;",
+            "any(original_texel != textureLoad(base, pixel, 0)) || any(cached_texel != textureLoad(base, pixel, 0))",
+        ),
+    };
+    COMPARE_WGSL
+        .replace("COVERAGE_BINDING", binding)
+        .replace("COVERED", covered)
+        .replace("HUGE", &format!("{HUGE:e}"))
+}
+
+/// Which pixels the watch compares.
+#[derive(Clone, Copy, Debug)]
+pub enum Coverage<'a> {
+    /// Those the cache's last recorded frame drew (its own depth nearer
+    /// than the far plane): for an application whose cached draws have the
+    /// cache's depth to themselves.
+    Cache(&'a CachedShader),
+    /// Those where the original or the cached frame differs from this
+    /// one, the frame as it was before the cached meshes were drawn: for
+    /// an engine whose cached draws share the view's depth with its other
+    /// meshes (the cache's depth then holds those too, and would count
+    /// their pixels, equal in both frames, as compared).
+    ChangedFrom(&'a wgpu::Texture),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum CoverageKind {
+    Cache,
+    ChangedFrom,
+}
 
 /// One watched frame's error.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -107,8 +148,8 @@ pub struct ErrorWatch {
     size: (u32, u32),
     spare: wgpu::Texture,
     spare_view: wgpu::TextureView,
-    pipeline: wgpu::ComputePipeline,
-    layout: wgpu::BindGroupLayout,
+    /// The comparison's pipeline and layout by [`CoverageKind`].
+    pipelines: [(wgpu::ComputePipeline, wgpu::BindGroupLayout); 2],
     params: wgpu::Buffer,
     partials: wgpu::Buffer,
     readback: wgpu::Buffer,
@@ -135,64 +176,8 @@ impl ErrorWatch {
                 "the error watch reads frames as float textures; {format:?} is not one"
             )));
         }
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("shadecache error watch"),
-            source: wgpu::ShaderSource::Wgsl(
-                COMPARE_WGSL.replace("HUGE", &format!("{HUGE:e}")).into(),
-            ),
-        });
-        let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Texture {
-                sample_type,
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
-        let unfiltered = wgpu::TextureSampleType::Float { filterable: false };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("shadecache error watch"),
-            entries: &[
-                texture(0, unfiltered),
-                texture(1, unfiltered),
-                texture(2, wgpu::TextureSampleType::Depth),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: false },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 4,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-            ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("shadecache error watch"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("shadecache error watch"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("compare"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipelines = [CoverageKind::Cache, CoverageKind::ChangedFrom]
+            .map(|coverage| comparison(device, coverage));
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("shadecache error watch parameters"),
             size: 16,
@@ -204,8 +189,7 @@ impl ErrorWatch {
             size,
             spare_view: spare.create_view(&wgpu::TextureViewDescriptor::default()),
             spare,
-            pipeline,
-            layout,
+            pipelines,
             params,
             partials,
             readback,
@@ -282,8 +266,8 @@ impl ErrorWatch {
 
     /// Records the comparison of `cached` (the frame as the cached
     /// variant drew it) with the spare target (where the application drew
-    /// the same frame with the original) over the pixels `coverage`'s
-    /// last recorded frame covers, into `encoder`, after both were drawn;
+    /// the same frame with the original) over the pixels of `coverage`,
+    /// into `encoder`, after both were drawn;
     /// timed through `timer` as pass `watch`. Call [`ErrorWatch::ready`]
     /// after submitting. `false` when [`ErrorWatch::is_free`] is not
     /// (nothing is recorded).
@@ -294,7 +278,7 @@ impl ErrorWatch {
         timer: &mut T,
         frame: u64,
         cached: &wgpu::Texture,
-        coverage: &CachedShader,
+        coverage: Coverage<'_>,
     ) -> Result<bool, Error> {
         let spare = self.spare.clone();
         self.compare_frames(
@@ -316,7 +300,7 @@ impl ErrorWatch {
         timer: &mut T,
         frame: u64,
         [original, cached]: [&wgpu::Texture; 2],
-        coverage: &CachedShader,
+        coverage: Coverage<'_>,
     ) -> Result<bool, Error> {
         if !self.is_free() {
             return Ok(false);
@@ -324,33 +308,47 @@ impl ErrorWatch {
         for (what, texture) in [("original", original), ("cached", cached)] {
             self.check_frame(what, texture)?;
         }
+        let (kind, far_depth, coverage_view) = match coverage {
+            Coverage::Cache(cache) => {
+                if cache.size() != self.size {
+                    return Err(Error::Mismatch(format!(
+                        "the error watch is for {}×{} frames and the cache's are {}×{}",
+                        self.size.0,
+                        self.size.1,
+                        cache.size().0,
+                        cache.size().1
+                    )));
+                }
+                let depth = cache.depth().create_view(&wgpu::TextureViewDescriptor {
+                    aspect: wgpu::TextureAspect::DepthOnly,
+                    ..Default::default()
+                });
+                (CoverageKind::Cache, cache.plan().clear.depth as f32, depth)
+            }
+            Coverage::ChangedFrom(base) => {
+                self.check_frame("base", base)?;
+                (
+                    CoverageKind::ChangedFrom,
+                    0.0,
+                    base.create_view(&Default::default()),
+                )
+            }
+        };
         // An `*-srgb` texture's view decodes to linear light, as the
         // profiler's frames are.
         let view = |texture: &wgpu::Texture| texture.create_view(&Default::default());
         let (original, cached) = (view(original), view(cached));
-        if coverage.size() != self.size {
-            return Err(Error::Mismatch(format!(
-                "the error watch is for {}×{} frames and the cache's are {}×{}",
-                self.size.0,
-                self.size.1,
-                coverage.size().0,
-                coverage.size().1
-            )));
-        }
         let tiles = (self.size.0.div_ceil(TILE), self.size.1.div_ceil(TILE));
         let mut params = Vec::with_capacity(16);
         for value in [self.size.0, self.size.1, tiles.0] {
             params.extend(value.to_le_bytes());
         }
-        params.extend((coverage.plan().clear.depth as f32).to_le_bytes());
+        params.extend(far_depth.to_le_bytes());
         queue.write_buffer(&self.params, 0, &params);
-        let depth = coverage.depth().create_view(&wgpu::TextureViewDescriptor {
-            aspect: wgpu::TextureAspect::DepthOnly,
-            ..Default::default()
-        });
+        let (pipeline, layout) = &self.pipelines[kind as usize];
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("shadecache error watch"),
-            layout: &self.layout,
+            layout,
             entries: &[
                 wgpu::BindGroupEntry {
                     binding: 0,
@@ -362,7 +360,7 @@ impl ErrorWatch {
                 },
                 wgpu::BindGroupEntry {
                     binding: 2,
-                    resource: wgpu::BindingResource::TextureView(&depth),
+                    resource: wgpu::BindingResource::TextureView(&coverage_view),
                 },
                 wgpu::BindGroupEntry {
                     binding: 3,
@@ -380,7 +378,7 @@ impl ErrorWatch {
                 label: Some("shadecache error watch"),
                 timestamp_writes: timer.compute_timestamp_writes(&query),
             });
-            pass.set_pipeline(&self.pipeline);
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &group, &[]);
             pass.dispatch_workgroups((tiles.0 * tiles.1).div_ceil(64), 1, 1);
         }
@@ -437,6 +435,66 @@ impl ErrorWatch {
             covered: covered as u64,
         }))
     }
+}
+
+/// The comparison's pipeline and bind group layout for `coverage`.
+fn comparison(
+    device: &wgpu::Device,
+    coverage: CoverageKind,
+) -> (wgpu::ComputePipeline, wgpu::BindGroupLayout) {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("shadecache error watch"),
+        source: wgpu::ShaderSource::Wgsl(compare_wgsl(coverage).into()),
+    });
+    let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    };
+    let unfiltered = wgpu::TextureSampleType::Float { filterable: false };
+    let coverage_type = match coverage {
+        CoverageKind::Cache => wgpu::TextureSampleType::Depth,
+        CoverageKind::ChangedFrom => unfiltered,
+    };
+    let buffer = |binding, ty| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("shadecache error watch"),
+        entries: &[
+            texture(0, unfiltered),
+            texture(1, unfiltered),
+            texture(2, coverage_type),
+            buffer(3, wgpu::BufferBindingType::Storage { read_only: false }),
+            buffer(4, wgpu::BufferBindingType::Uniform),
+        ],
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("shadecache error watch"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("shadecache error watch"),
+        layout: Some(&pipeline_layout),
+        module: &module,
+        entry_point: Some("compare"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    (pipeline, layout)
 }
 
 /// The spare target and the partial sums' buffers of `size` frames.

@@ -1328,14 +1328,21 @@ fn watched(
     let timer = &mut shadecache_host::NoTimer;
     let cached = &app.targets[0];
     let recorded = match original {
-        None => watch.compare(&gpu.device, io, timer, frame, cached, &app.cached),
+        None => watch.compare(
+            &gpu.device,
+            io,
+            timer,
+            frame,
+            cached,
+            shadecache_host::Coverage::Cache(&app.cached),
+        ),
         Some(original) => watch.compare_frames(
             &gpu.device,
             io,
             timer,
             frame,
             [original, cached],
-            &app.cached,
+            shadecache_host::Coverage::Cache(&app.cached),
         ),
     }
     .expect("the frames compare");
@@ -1436,7 +1443,7 @@ fn the_error_watch_gives_the_psnr_of_a_read_back() {
         &mut shadecache_host::NoTimer,
         9,
         [&unreadable, &app.targets[0]],
-        &app.cached,
+        shadecache_host::Coverage::Cache(&app.cached),
     );
     assert!(
         matches!(&refused, Err(Error::Mismatch(text)) if text.contains("original") && text.contains("TEXTURE_BINDING")),
@@ -1448,4 +1455,70 @@ fn the_error_watch_gives_the_psnr_of_a_read_back() {
         wgpu::TextureFormat::Rgba8Uint
     )
     .is_err());
+}
+
+/// With the coverage of the pixels either frame changed from a base frame
+/// (an engine's cached draws sharing the view's depth with its other
+/// meshes): two squares at different places over a black base, compared
+/// over the union of what they drew, as a read-back gives on the CPU.
+#[test]
+fn the_error_watch_compares_what_either_frame_changed_from_a_base() {
+    let Some(gpu) = gpu() else { return };
+    let (mut left, mut right) = (App::new(&gpu, "three-pass"), App::new(&gpu, "three-pass"));
+    left.frame(&gpu, -0.2);
+    right.frame(&gpu, 0.2);
+    let format = wgpu::TextureFormat::Rgba8Unorm;
+    let base = target(&gpu, SIZE, format);
+    clear_to(
+        &gpu,
+        &base.create_view(&Default::default()),
+        wgpu::Color::BLACK,
+    );
+    let mut watch = shadecache_host::ErrorWatch::new(&gpu.device, (SIZE, SIZE), format)
+        .expect("the watch is made");
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    watch
+        .compare_frames(
+            &gpu.device,
+            (&gpu.queue, &mut encoder),
+            &mut shadecache_host::NoTimer,
+            3,
+            [&left.targets[0], &right.targets[0]],
+            shadecache_host::Coverage::ChangedFrom(&base),
+        )
+        .expect("the frames compare");
+    gpu.queue.submit([encoder.finish()]);
+    let error = loop {
+        if let Some(error) = watch.ready(&gpu.device).expect("the numbers read") {
+            break error;
+        }
+        gpu.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .expect("the GPU finishes");
+    };
+    let (a, b) = (
+        read(&gpu, &left.targets[0], 4),
+        read(&gpu, &right.targets[0], 4),
+    );
+    let (mut squared, mut covered) = (0.0f64, 0u64);
+    for (pa, pb) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
+        if pa == [0, 0, 0, 255] && pb == [0, 0, 0, 255] {
+            continue;
+        }
+        covered += 1;
+        for c in 0..3 {
+            let d = (f64::from(pa[c]) - f64::from(pb[c])) / 255.0;
+            squared += d * d;
+        }
+    }
+    let expected = 10.0 * (3.0 * covered as f64 / squared).log10();
+    assert_eq!(error.covered, covered);
+    assert!(covered > 1000, "{covered}");
+    assert!(
+        (error.psnr - expected).abs() < 0.01,
+        "watch {:.4} dB, read-back {expected:.4} dB",
+        error.psnr
+    );
 }

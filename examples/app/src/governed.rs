@@ -13,7 +13,8 @@
 use std::error::Error;
 
 use shadecache_host::{
-    CacheMode, CachedShader, Cause, Choice, ErrorWatch, FrameTimer, Governor, Targets, Twins,
+    CacheMode, CachedShader, Cause, Choice, Coverage, ErrorWatch, FrameTimer, Governor, Targets,
+    Twins,
 };
 
 use crate::planet::Planet;
@@ -136,7 +137,7 @@ pub fn run(
                         &mut timer,
                         next.frame,
                         &target,
-                        cached,
+                        Coverage::Cache(cached),
                     )?;
                 }
             }

@@ -645,3 +645,53 @@ fn cache_mode_off_draws_every_frame_with_bevys_pipelines() {
     all_bevys_own(&run.compared);
     assert_eq!(run.frames_drawn, 0);
 }
+
+/// `CacheMode::Auto` with an error budget: on a watched frame the plugin
+/// copies the view as Bevy's opaque pass left it, draws the cached meshes
+/// Bevy's way into the copy, and the host crate's watch compares the two
+/// frames over the pixels either changed. At Δn = 1 the cached frame is
+/// Bevy's own (the watch reads it so, and the view's frames stay Bevy's
+/// own to the bit: the watch draws beside them, not in them); at the
+/// plan's Δn under camera motion the watch reads a finite error, and
+/// Bevy's diagnostics carry it.
+#[test]
+fn bevy_plugin_auto_watches_the_error_against_bevys_own_frame() {
+    if skipped() {
+        return;
+    }
+    let budget = CacheMode::Auto {
+        min_psnr: Some(20.0),
+    };
+    let exact = in_turn(Headless {
+        refresh_period: Some(1),
+        frames: 40,
+        mode: budget,
+        ..settings()
+    });
+    assert!(exact.errors.is_empty(), "{:?}", exact.errors);
+    all_bevys_own(&exact.compared);
+    let watched = exact.governor.and_then(|g| g.psnr);
+    assert!(watched.is_some_and(|db| db >= 50.0), "{:?}", exact.governor);
+
+    let reused = in_turn(Headless {
+        frames: 60,
+        step_degrees: 1.0,
+        mode: budget,
+        ..settings()
+    });
+    assert!(reused.errors.is_empty(), "{:?}", reused.errors);
+    let psnr = reused.governor.and_then(|g| g.psnr);
+    assert!(
+        psnr.is_some_and(|db| db > 15.0 && db < 100.0),
+        "{:?}",
+        reused.governor
+    );
+    assert!(
+        reused
+            .diagnostics
+            .iter()
+            .any(|(path, _)| path == "render/shadecache/LavaMaterial/psnr"),
+        "{:?}",
+        reused.diagnostics
+    );
+}
