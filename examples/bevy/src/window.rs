@@ -55,7 +55,10 @@ fn setup(
         // Bevy's default tonemapper needs the `tonemapping_luts` feature.
         bevy::core_pipeline::tonemapping::Tonemapping::None,
         ReprojectionCache {
-            mode: CacheMode::Auto { min_psnr: None },
+            // Governed, and kept within 35 dB of Bevy's own frame.
+            mode: CacheMode::Auto {
+                min_psnr: Some(35.0),
+            },
             ..default()
         },
         scene::orbit_at(0.0),
@@ -120,7 +123,7 @@ fn readout(
         };
         if let Some(speedup) = diagnostic("speedup") {
             line.push_str(&format!(
-                "\n{material}: governor {:.2}× [{:.2}, {:.2}], cache {}",
+                "\n{material}: governor {:.2}× [{:.2}, {:.2}], cache {}, Δn {}, watched {:.1} dB",
                 speedup,
                 diagnostic("speedup_low").unwrap_or(0.0),
                 diagnostic("speedup_high").unwrap_or(0.0),
@@ -128,7 +131,9 @@ fn readout(
                     "on"
                 } else {
                     "off"
-                }
+                },
+                diagnostic("delta_n").unwrap_or(0.0),
+                diagnostic("psnr").unwrap_or(f64::NAN)
             ));
         }
     }
