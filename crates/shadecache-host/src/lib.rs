@@ -106,6 +106,7 @@ mod governor;
 mod layouts;
 mod params;
 mod pipelines;
+mod readback;
 mod timing;
 mod twins;
 mod vertex;

@@ -4,6 +4,8 @@
 
 use serde::Serialize;
 
+use crate::readback::MapWhenReady;
+
 /// Times render passes. The host begins a query before each pass it
 /// records, gives the pass the query's timestamp writes, and ends it after.
 pub trait PassTimer {
@@ -258,9 +260,8 @@ struct FrameSlot {
     /// The frame recorded into it, and its queries used.
     frame: Option<u64>,
     used: u32,
-    /// Set by the map's callback once the times can be read.
-    mapped: std::sync::Arc<std::sync::atomic::AtomicBool>,
-    mapping: bool,
+    /// The read of its times.
+    map: MapWhenReady,
 }
 
 /// Whole frames' GPU times, read when they are ready, never waited for:
@@ -304,8 +305,7 @@ impl FrameTimer {
                 slot: QuerySlot::new(device, capacity),
                 frame: None,
                 used: 0,
-                mapped: Default::default(),
-                mapping: false,
+                map: MapWhenReady::default(),
             })
             .collect();
         Some(FrameTimer {
@@ -354,16 +354,8 @@ impl FrameTimer {
     /// device without waiting.
     pub fn ready(&mut self, device: &wgpu::Device) -> Result<Vec<(u64, f64)>, crate::Error> {
         for (index, slot) in self.slots.iter_mut().enumerate() {
-            if slot.frame.is_some() && !slot.mapping && Some(index) != self.current {
-                slot.mapping = true;
-                let mapped = slot.mapped.clone();
-                slot.slot
-                    .read_slice(slot.used)
-                    .map_async(wgpu::MapMode::Read, move |result| {
-                        if result.is_ok() {
-                            mapped.store(true, std::sync::atomic::Ordering::Release);
-                        }
-                    });
+            if slot.frame.is_some() && Some(index) != self.current {
+                slot.map.start(slot.slot.read_slice(slot.used));
             }
         }
         device
@@ -371,14 +363,10 @@ impl FrameTimer {
             .map_err(|err| crate::Error::Wgpu(err.to_string()))?;
         let mut times = Vec::new();
         for slot in &mut self.slots {
-            if !slot
-                .mapped
-                .swap(false, std::sync::atomic::Ordering::Acquire)
-            {
+            if !slot.map.done() {
                 continue;
             }
             let ticks = slot.slot.ticks(slot.used)?;
-            slot.mapping = false;
             let (first, last) = (
                 ticks.iter().step_by(2).min(),
                 ticks.iter().skip(1).step_by(2).max(),

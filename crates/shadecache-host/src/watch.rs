@@ -27,9 +27,7 @@
 //! frame that watches costs what it costs, the extra original draw and the
 //! comparison included, and a governor counts it.
 
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
-
+use crate::readback::MapWhenReady;
 use crate::{CachedShader, Error, PassTimer};
 
 /// PSNR is capped here, as the profiler caps it: identical frames would
@@ -153,11 +151,9 @@ pub struct ErrorWatch {
     params: wgpu::Buffer,
     partials: wgpu::Buffer,
     readback: wgpu::Buffer,
-    /// The frame whose numbers are on their way, and whether their read
-    /// was started.
-    pending: Option<(u64, bool)>,
-    /// Set by the map's callback once the numbers can be read.
-    mapped: Arc<AtomicBool>,
+    /// The frame whose numbers are on their way, and their read.
+    pending: Option<u64>,
+    map: MapWhenReady,
 }
 
 impl ErrorWatch {
@@ -194,7 +190,7 @@ impl ErrorWatch {
             partials,
             readback,
             pending: None,
-            mapped: Arc::default(),
+            map: MapWhenReady::default(),
         })
     }
 
@@ -211,7 +207,7 @@ impl ErrorWatch {
         self.readback = readback;
         self.size = size;
         self.pending = None;
-        self.mapped = Arc::default();
+        self.map = MapWhenReady::default();
     }
 
     /// The spare target to draw the original into, on a frame that
@@ -384,7 +380,7 @@ impl ErrorWatch {
         }
         timer.end(encoder, query);
         encoder.copy_buffer_to_buffer(&self.partials, 0, &self.readback, 0, self.partials.size());
-        self.pending = Some((frame, false));
+        self.pending = Some(frame);
         Ok(true)
     }
 
@@ -392,24 +388,14 @@ impl ErrorWatch {
     /// arrived: starts their read (call after submitting the comparison)
     /// and polls the device without waiting.
     pub fn ready(&mut self, device: &wgpu::Device) -> Result<Option<WatchedError>, Error> {
-        let Some((frame, reading)) = self.pending else {
+        let Some(frame) = self.pending else {
             return Ok(None);
         };
-        if !reading {
-            let mapped = self.mapped.clone();
-            self.readback
-                .slice(..)
-                .map_async(wgpu::MapMode::Read, move |result| {
-                    if result.is_ok() {
-                        mapped.store(true, Ordering::Release);
-                    }
-                });
-            self.pending = Some((frame, true));
-        }
+        self.map.start(self.readback.slice(..));
         device
             .poll(wgpu::PollType::Poll)
             .map_err(|err| Error::Wgpu(err.to_string()))?;
-        if !self.mapped.swap(false, Ordering::Acquire) {
+        if !self.map.done() {
             return Ok(None);
         }
         let (squared, covered) = {
