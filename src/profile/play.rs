@@ -258,7 +258,15 @@ impl Measured for Governed {
         inputs: &FrameInputs,
         label: &str,
     ) -> Result<Timed, String> {
-        let next = self.choose()?;
+        let mut next = self.choose()?;
+        let free = self.watch.as_ref().is_some_and(ErrorWatch::is_free);
+        if next.watch && !free {
+            // No watch to run, or its last answer still on the way: an
+            // ordinary cached frame.
+            self.governor.unwatched(next.frame);
+            next.watch = false;
+            self.now = Some(next);
+        }
         let gpu = clock.gpu;
         let Governed {
             original,

@@ -81,7 +81,9 @@ struct Governed {
     mode: CacheMode,
     governor: Governor,
     timer: Option<FrameTimer>,
-    readout: GovernorReadout,
+    /// The frames of each kind, measured and watched (the rest of the
+    /// readout is the governor's own state).
+    counts: GovernorReadout,
     /// With an error budget: the watch, made at the first watched frame
     /// (`None` before), or why the view cannot be watched.
     watch: Option<Result<ViewWatch, String>>,
@@ -674,11 +676,7 @@ impl ViewCache {
             let governor = Governor::for_mode(run, self.shader.plan())?;
             self.governed = Some(Governed {
                 mode,
-                readout: GovernorReadout {
-                    on: governor.is_on(),
-                    period: governor.period(),
-                    ..Default::default()
-                },
+                counts: GovernorReadout::default(),
                 governor,
                 timer,
                 watch: None,
@@ -893,7 +891,7 @@ impl CacheFrame<'_> {
             let times = timer.ready(device).map_err(|err| err.to_string())?;
             for (frame, ms) in times {
                 governed.governor.measured(frame, ms);
-                governed.readout.measured_frames += 1;
+                governed.counts.measured_frames += 1;
             }
         }
         if let Some(Ok(view_watch)) = &mut governed.watch {
@@ -903,7 +901,7 @@ impl CacheFrame<'_> {
                 .map_err(|err| err.to_string())?
             {
                 governed.governor.watched(answer.frame, answer.psnr);
-                governed.readout.psnr = Some(answer.psnr);
+                governed.counts.psnr = Some(answer.psnr);
             }
         }
         let next = governed.governor.next_frame();
@@ -929,11 +927,22 @@ impl CacheFrame<'_> {
             ..
         } = cache;
         let governed = governed.as_mut().ok_or("no governor")?;
-        let watch = match (
-            cached && next.watch,
-            self.watch(governed.mode, &mut governed.watch),
-        ) {
-            (true, Some(watch)) if watch.watch.is_free() => Some(watch),
+        self.prepare_watch(governed.mode, &mut governed.watch);
+        if let Some(Err(_)) = governed.watch {
+            // No watch can run here: the speed alone decides.
+            governed.governor.drop_budget();
+        }
+        let free = match &governed.watch {
+            Some(Ok(watch)) => watch.watch.is_free(),
+            _ => false,
+        };
+        if next.watch && !free {
+            // Its last answer is still on the way: an ordinary cached
+            // frame, the next watch the next due.
+            governed.governor.unwatched(next.frame);
+        }
+        let watch = match &mut governed.watch {
+            Some(Ok(watch)) if cached && next.watch && free => Some(watch),
             _ => None,
         };
         let timer = governed.timer.as_mut().filter(|_| timed);
@@ -957,17 +966,23 @@ impl CacheFrame<'_> {
             timer.resolve(encoder);
         }
         result?;
-        let readout = &mut governed.readout;
+        let counts = &mut governed.counts;
         if cached {
-            readout.cached_frames += 1;
+            counts.cached_frames += 1;
         } else {
-            readout.original_frames += 1;
+            counts.original_frames += 1;
         }
-        readout.on = governed.governor.is_on();
-        readout.estimate = governed.governor.estimate();
-        readout.period = governed.governor.period();
+        let governor = &governed.governor;
         let governs = matches!(governed.mode, CacheMode::Auto { .. });
-        Ok((cached, governs.then_some(*readout)))
+        Ok((
+            cached,
+            governs.then_some(GovernorReadout {
+                on: governor.is_on(),
+                estimate: governor.estimate(),
+                period: governor.period(),
+                ..*counts
+            }),
+        ))
     }
 
     /// The variant's passes over the run: the view's uniform copied for
@@ -1034,16 +1049,12 @@ impl CacheFrame<'_> {
         }
     }
 
-    /// The view's watch, made at the first watched frame and again when
-    /// the view's size changes; none without a budget, or where the view
-    /// cannot be watched (said once).
-    fn watch<'g>(
-        &self,
-        mode: CacheMode,
-        watch: &'g mut Option<Result<ViewWatch, String>>,
-    ) -> Option<&'g mut ViewWatch> {
+    /// Makes the view's watch at its first frame with a budget, and again
+    /// when the view's size changes; where the view cannot be watched,
+    /// says why once and keeps the reason.
+    fn prepare_watch(&self, mode: CacheMode, watch: &mut Option<Result<ViewWatch, String>>) {
         if !matches!(mode, CacheMode::Auto { min_psnr: Some(_) }) {
-            return None;
+            return;
         }
         let (color, depth) = self.textures;
         let stale = match &*watch {
@@ -1058,7 +1069,6 @@ impl CacheFrame<'_> {
             }
             *watch = Some(made);
         }
-        watch.as_mut()?.as_mut().ok()
     }
 
     /// The run drawn as Bevy draws it: one pass into the view's colour and

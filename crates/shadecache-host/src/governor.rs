@@ -760,17 +760,7 @@ impl Governor {
         };
         self.variant = best.variant;
         self.estimate = Some(best.estimate);
-        self.on = best.estimate.interval[1] >= 1.0;
-        self.since = self.frame;
-        self.start_pairs_afresh(true);
-        self.decisions.push(Decision {
-            frame: self.frame,
-            on: self.on,
-            period: self.period,
-            variant: self.variant,
-            estimate: self.estimate,
-            cause: Cause::Trial,
-        });
+        self.switch(best.estimate.interval[1] >= 1.0, Cause::Trial);
     }
 
     /// Weighs the windows, and switches where the interval lies wholly on
@@ -827,16 +817,22 @@ impl Governor {
         (median(&watched) - median(cached)).max(0.0) / f64::from(self.settings.watch_every)
     }
 
-    /// Turns the cache on or off from the next frame, and says why.
+    /// Turns the cache on or off (or keeps it, at the end of a trial)
+    /// from the next frame, and says why.
     fn switch(&mut self, on: bool, cause: Cause) {
         self.on = on;
         self.since = self.frame;
         // The new state's pairs are its own: a cache that starts afresh,
         // or bursts of it among original frames.
         self.start_pairs_afresh(true);
+        self.decided(cause);
+    }
+
+    /// Keeps the decision just made, of the state the governor is in now.
+    fn decided(&mut self, cause: Cause) {
         self.decisions.push(Decision {
             frame: self.frame,
-            on,
+            on: self.on,
             period: self.period,
             variant: self.variant,
             estimate: self.estimate,
@@ -894,6 +890,31 @@ impl Governor {
         }
     }
 
+    /// Frame `frame` was to be watched and was not (the application's
+    /// watch still waited for its last answer, or cannot run): it is an
+    /// ordinary cached frame, and the next watch is the next due. Without
+    /// this, the governor would wait for its answer and watch nothing
+    /// more.
+    pub fn unwatched(&mut self, frame: u64) {
+        if self.watching.is_some_and(|(watched, _)| watched == frame) {
+            self.watching = None;
+        }
+        if let Some(pending) = self.pending.iter_mut().find(|(f, _, _)| *f == frame) {
+            if pending.1 == Kind::Watched {
+                pending.1 = Kind::Cached { warm: true };
+            }
+        }
+    }
+
+    /// The application cannot watch at all (its frames cannot be read
+    /// as the watch needs): the speed alone decides from now on, as
+    /// without a budget, instead of waiting for watches that never come
+    /// (a cache the budget turned off could not turn on again).
+    pub fn drop_budget(&mut self) {
+        self.settings.min_psnr = None;
+        self.watching = None;
+    }
+
     /// A watched frame within the budget: after `raise_after` in a row
     /// well within it, a lowered Δn doubles again, up to the variant's.
     fn within_budget(&mut self, psnr: f64, min_psnr: f64) {
@@ -927,14 +948,7 @@ impl Governor {
         self.raised_last = false;
         // The cache keeps what it holds; the times are of another Δn.
         self.start_pairs_afresh(false);
-        self.decisions.push(Decision {
-            frame: self.frame,
-            on: true,
-            period,
-            variant: self.variant,
-            estimate: self.estimate,
-            cause,
-        });
+        self.decided(cause);
     }
 }
 
@@ -1442,5 +1456,38 @@ mod tests {
             .map(|d| d.variant)
             .collect();
         assert_eq!(trials, [0, 1]);
+    }
+
+    /// The application skips a watch (its watch still busy, say): told
+    /// so, the governor watches the next frame due, and a light that
+    /// starts moving later still lowers Δn. Had it waited for the skipped
+    /// frame's answer, it would never watch again.
+    #[test]
+    fn a_watch_the_application_skips_does_not_stop_the_watching() {
+        let mut g = watched_governor();
+        let mut skipped = 0;
+        for _ in 0..3000 {
+            let next = g.next_frame();
+            let ms = match next.choice {
+                Choice::Original => 1.0,
+                Choice::Cached { .. } => 0.5,
+            };
+            g.measured(next.frame, ms);
+            if next.watch {
+                if skipped < 2 {
+                    skipped += 1;
+                    g.unwatched(next.frame);
+                } else {
+                    let psnr = if next.frame < 1500 { 45.0 } else { 25.0 };
+                    g.watched(next.frame, psnr);
+                }
+            }
+        }
+        assert_eq!(skipped, 2);
+        assert!(g.period() < 32, "{:?}", g.decisions());
+        assert!(g
+            .decisions()
+            .iter()
+            .all(|d| d.frame >= 1500 && matches!(d.cause, Cause::Error { .. })));
     }
 }

@@ -120,7 +120,13 @@ pub fn run(
                 cached.record_timed(&gpu.queue, &mut encoder, &targets, &mut timer, |draw| {
                     planet.draw_cached(draw, twins)
                 })?;
-                if let Some(watch) = watch.as_mut().filter(|w| next.watch && w.is_free()) {
+                let free = watch.as_ref().is_some_and(ErrorWatch::is_free);
+                if next.watch && !free {
+                    // Its last answer is still on the way: an ordinary
+                    // cached frame, the next watch the next due.
+                    governor.unwatched(next.frame);
+                }
+                if let Some(watch) = watch.as_mut().filter(|_| next.watch && free) {
                     // The original into the watch's spare target (the
                     // cache keeps its own depth, so the frame's depth
                     // target is free), then the comparison.
