@@ -71,6 +71,9 @@ pub struct Play {
     pub auto_variants: Vec<String>,
     /// The governor's trials of the variants, each its turns.
     pub trials: Vec<Vec<PlayTurn>>,
+    /// The variants asked for that the rewrite refused, each with its
+    /// reason (left out of the play).
+    pub refused: Vec<String>,
     /// Mean GPU time of a displayed frame of the original every frame, in
     /// ms.
     pub original_ms: f64,
@@ -373,7 +376,9 @@ pub fn play(
             "no node to play: the selection of nodes is empty",
         ))
     })?;
-    let mut variants = Vec::new();
+    // A variant the rewrite refuses is left out, with its reason; only
+    // where every one is refused is there nothing to play.
+    let (mut variants, mut refused) = (Vec::new(), Vec::new());
     for &variant in options.variants.iter().chain(
         // One-pass where none is named.
         options.variants.is_empty().then_some(&Variant::OnePass),
@@ -389,17 +394,21 @@ pub fn play(
                     variant,
                     &rewrite_options,
                 )
-            })
-            .map_err(|refusal| {
-                Error::plain(Diagnostic::error(format!(
-                    "node {} {variant}: {}",
-                    candidate.node.id, refusal.reason
-                )))
-            })?;
-        let sources = sources_of(&rewritten)?;
-        variants.push((variant, rewritten, sources));
+            });
+        match rewritten {
+            Ok(rewritten) => {
+                let sources = sources_of(&rewritten)?;
+                variants.push((variant, rewritten, sources));
+            }
+            Err(refusal) => refused.push(format!(
+                "node {} {variant}: {}",
+                candidate.node.id, refusal.reason
+            )),
+        }
     }
-    let (variant, rewritten, _) = &variants[0];
+    let Some((variant, rewritten, _)) = variants.first() else {
+        return Err(Error::plain(Diagnostic::error(refused.join("\n"))));
+    };
     let variant = *variant;
     let reference_plan =
         rewrite::plan::reference(shader, &prepared.analysis, &prepared.base).map_err(fail)?;
@@ -498,6 +507,7 @@ pub fn play(
             candidate.node.id, candidate.node.text
         ),
         auto_variants: variants.iter().map(|(v, _, _)| v.to_string()).collect(),
+        refused,
         trials: governed
             .governor
             .trials()
@@ -552,6 +562,25 @@ pub fn play(
 }
 
 impl Play {
+    /// The variants left out, refused, with their reasons; nothing
+    /// where none was.
+    fn refused_list(&self) -> String {
+        if self.refused.is_empty() {
+            return String::new();
+        }
+        let escape = |text: &str| {
+            text.replace('&', "&amp;")
+                .replace('<', "&lt;")
+                .replace('>', "&gt;")
+        };
+        let items: String = self
+            .refused
+            .iter()
+            .map(|reason| format!("<li>{}</li>\n", escape(reason)))
+            .collect();
+        format!("<h2>Variants left out</h2>\n<ul>\n{items}</ul>\n")
+    }
+
     /// The governor's trials of the variants as a table; nothing with
     /// one variant.
     fn trial_table(&self) -> String {
@@ -704,7 +733,7 @@ impl Play {
             ar = ratio(self.auto_ms),
             share = self.auto_cached_share * 100.0,
             end = if self.auto_on_at_end { "on" } else { "off" },
-            watch = self.watch_table() + &self.trial_table(),
+            watch = self.watch_table() + &self.trial_table() + &self.refused_list(),
         )
     }
 }

@@ -214,6 +214,9 @@ fn summary(played: &play::Play, path: &std::path::Path) -> String {
             .collect();
         text += &format!("  trial {}: {}\n", index + 1, turns.join(", "));
     }
+    for refusal in &played.refused {
+        text += &format!("  left out, refused: {refusal}\n");
+    }
     if let Some(min_psnr) = played.min_psnr {
         let lowest = played
             .watches

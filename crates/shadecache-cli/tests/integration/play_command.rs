@@ -358,6 +358,56 @@ fn error_watch_equals_the_profilers_error() {
     }
 }
 
+/// Of several variants, one the rewrite refuses (one-pass, where the
+/// payload takes implicit derivatives under the miss branch) is left out
+/// with its reason, and the others are played; asked for alone, it is an
+/// error naming the reason, and nothing is written.
+#[test]
+fn play_leaves_out_a_refused_variant_and_plays_the_rest() {
+    if no_gpu() {
+        return;
+    }
+    let played = play(
+        "corpus/pbr_material_flags.wgsl",
+        "corpus/scenes/pbr_flags_sphere.toml",
+        &[
+            "--size",
+            "64x64",
+            "--frames",
+            "20",
+            "--variant",
+            "one-pass,two-pass",
+        ],
+    );
+    assert_eq!(played["auto_variants"], serde_json::json!(["two-pass"]));
+    let refused = played["refused"].as_array().unwrap();
+    assert_eq!(refused.len(), 1, "{refused:?}");
+    assert!(
+        refused[0].as_str().unwrap().contains("one-pass")
+            && refused[0].as_str().unwrap().contains("derivatives"),
+        "{refused:?}"
+    );
+    let out = tempfile::tempdir().unwrap();
+    let dir = out.path().join("play");
+    let output = shadecache([
+        "play".as_ref(),
+        "corpus/pbr_material_flags.wgsl".as_ref(),
+        "--scene".as_ref(),
+        "corpus/scenes/pbr_flags_sphere.toml".as_ref(),
+        "--variant".as_ref(),
+        "one-pass".as_ref(),
+        "--out".as_ref(),
+        dir.as_os_str(),
+    ] as [&std::ffi::OsStr; 8]);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("derivatives"),
+        "{}",
+        stderr(&output)
+    );
+    assert!(!dir.join("play.json").exists());
+}
+
 /// A variant `play` cannot draw is refused before anything runs, with the
 /// reason, and a bad flag is a usage error.
 #[test]
