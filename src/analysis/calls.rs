@@ -128,6 +128,7 @@ pub fn specialise(
             module,
             info,
             vertex_file: shader.vertex_file.clone(),
+            defs: shader.defs.clone(),
         },
         handle,
     ))

@@ -15,7 +15,7 @@
 //! validation error in an imported module) are diagnostics pointing into
 //! the file they are in.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -275,7 +275,67 @@ pub fn compose(top: SourceFile, composition: &Composition) -> Result<Shader, Err
         })
         .map_err(|err| composer_error(&composer, &err))?;
     rename(&mut module, readable);
-    finish(&top, module)
+    let mut tested = BTreeSet::new();
+    for text in std::iter::once(&top.text).chain(added.iter().map(|name| &found[name].file.text)) {
+        tested_by_directives(text, &mut tested);
+    }
+    let mut shader = finish(&top, module)?;
+    shader.defs = composition.values_of(tested);
+    Ok(shader)
+}
+
+impl Composition {
+    /// The defs named in `tested`, each with its value here (unset where
+    /// this composition does not set it).
+    pub(crate) fn values_of(&self, tested: BTreeSet<String>) -> Vec<crate::plan::ShaderDef> {
+        use crate::plan::ShaderDefValue;
+        tested
+            .into_iter()
+            .map(|name| {
+                let value = match self.defs.iter().rev().find(|(n, _)| *n == name) {
+                    None | Some((_, ShaderDef::Bool(false))) => ShaderDefValue::Unset,
+                    Some((_, ShaderDef::Bool(true))) => ShaderDefValue::Set,
+                    Some((_, ShaderDef::Int(v))) => ShaderDefValue::Int(*v),
+                    Some((_, ShaderDef::UInt(v))) => ShaderDefValue::UInt(*v),
+                };
+                crate::plan::ShaderDef { name, value }
+            })
+            .collect()
+    }
+}
+
+/// Adds the defs naga_oil's directives in `text` test to `into`:
+/// `#ifdef`, `#ifndef`, `#if NAME op value`, their `#else` forms, and
+/// `#{NAME}` substitutions. Read from the text because naga_oil keeps the
+/// defs a module tests to itself (its module sets' `effective_defs` are
+/// private), and a variant must say which defs it depends on.
+pub(crate) fn tested_by_directives(text: &str, into: &mut BTreeSet<String>) {
+    for line in text.lines() {
+        let line = line.trim_start();
+        let Some(directive) = line.strip_prefix('#') else {
+            continue;
+        };
+        let mut words = directive.split_whitespace();
+        let mut word = words.next();
+        if word == Some("else") {
+            word = words.next();
+        }
+        if matches!(word, Some("ifdef" | "ifndef" | "if")) {
+            if let Some(name) = words.next() {
+                into.insert(name.to_string());
+            }
+        }
+    }
+    let mut rest = text;
+    while let Some(at) = rest.find("#{") {
+        rest = &rest[at + 2..];
+        if let Some(end) = rest.find('}') {
+            let name = rest[..end].trim();
+            if !name.is_empty() {
+                into.insert(name.to_string());
+            }
+        }
+    }
 }
 
 /// Validates a composed module, writes it as WGSL and parses that: the

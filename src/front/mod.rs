@@ -40,6 +40,10 @@ pub struct Shader {
     /// The separate module the vertex stage came from
     /// ([`with_vertex_module`]); `None` when `file` has the whole module.
     pub vertex_file: Option<Arc<SourceFile>>,
+    /// The defs its composed sources test, with the values they were
+    /// composed with (the plan's `shader_defs`); empty when it was not
+    /// composed.
+    pub defs: Vec<crate::plan::ShaderDef>,
 }
 
 impl Shader {
@@ -50,6 +54,7 @@ impl Shader {
             module: self.module.clone(),
             info: self.info.clone(),
             vertex_file: self.vertex_file.clone(),
+            defs: self.defs.clone(),
         }
     }
 }
@@ -162,6 +167,7 @@ pub fn parse(file: SourceFile) -> Result<Shader, Error> {
             module,
             info,
             vertex_file: None,
+            defs: Vec::new(),
         }),
         Ok(Err(diagnostic)) => Err(Error::in_file(file, diagnostic)),
         Err(_) => Err(Error::in_file(
@@ -325,8 +331,19 @@ pub fn with_vertex_module(
         ));
     }
     let Shader {
-        file, mut module, ..
+        file,
+        mut module,
+        mut defs,
+        ..
     } = shader;
+    // The vertex module's defs with the fragment's: one composition
+    // each, the same defs given to both.
+    for def in &vertex.defs {
+        if !defs.iter().any(|d| d.name == def.name) {
+            defs.push(def.clone());
+        }
+    }
+    defs.sort_by(|a, b| a.name.cmp(&b.name));
     crate::proc::import::import_vertex_stage(&mut module, &vertex.module, index).map_err(
         |reason| {
             Error::in_file(
@@ -356,6 +373,7 @@ pub fn with_vertex_module(
         module,
         info,
         vertex_file: Some(vertex.file.clone()),
+        defs,
     })
 }
 

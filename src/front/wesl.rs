@@ -33,6 +33,7 @@
 
 use std::borrow::Cow;
 use std::cell::RefCell;
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -80,7 +81,61 @@ pub fn compose(top: SourceFile, path: &Path, composition: &Composition) -> Resul
     if let Some(map) = &result.sourcemap {
         super::compose::rename(&mut module, |name| readable(map, &main, name));
     }
-    super::compose::finish(&top, module)
+    let mut tested = BTreeSet::new();
+    tested_by_conditions(&top.text, &mut tested);
+    for read in resolver.reads.borrow().iter() {
+        if let Some(file) = &read.found {
+            tested_by_conditions(&file.text, &mut tested);
+        }
+    }
+    let mut shader = super::compose::finish(&top, module)?;
+    shader.defs = composition.values_of(tested);
+    Ok(shader)
+}
+
+/// Adds the features and constants `text` tests to `into`: the names in
+/// its `@if(…)` and `@elif(…)` conditions, and each `constants::NAME` it
+/// reads. Read from the text because the `wesl` crate does not say which
+/// features a compilation looked at, and a variant must say which defs
+/// it depends on.
+fn tested_by_conditions(text: &str, into: &mut BTreeSet<String>) {
+    let is_name = |c: char| c.is_ascii_alphanumeric() || c == '_';
+    for attribute in ["@if", "@elif"] {
+        let mut rest = text;
+        while let Some(at) = rest.find(attribute) {
+            rest = &rest[at + attribute.len()..];
+            let Some(open) = rest.trim_start().strip_prefix('(') else {
+                continue;
+            };
+            let mut depth = 1;
+            let end = open
+                .char_indices()
+                .find(|&(_, c)| {
+                    depth += match c {
+                        '(' => 1,
+                        ')' => -1,
+                        _ => 0,
+                    };
+                    depth == 0
+                })
+                .map_or(open.len(), |(i, _)| i);
+            for name in open[..end].split(|c: char| !is_name(c)) {
+                let starts_as_name =
+                    name.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_');
+                if starts_as_name && !matches!(name, "true" | "false") {
+                    into.insert(name.to_string());
+                }
+            }
+        }
+    }
+    let mut rest = text;
+    while let Some(at) = rest.find("constants::") {
+        rest = &rest[at + "constants::".len()..];
+        let name: String = rest.chars().take_while(|&c| is_name(c)).collect();
+        if !name.is_empty() {
+            into.insert(name);
+        }
+    }
 }
 
 /// The entry shader's module path: in the package whose folder it is

@@ -114,6 +114,7 @@ fn free_reference(bench: &Bench, shader: &Shader, prepared: &Prepared) -> Result
         module,
         info,
         vertex_file: shader.vertex_file.clone(),
+        defs: shader.defs.clone(),
     };
     let plan = rewrite::plan::reference(&free, &prepared.analysis, &prepared.base).map_err(fail)?;
     let sources = HashMap::from([("reference.wgsl".to_string(), text)]);

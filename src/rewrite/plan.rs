@@ -149,6 +149,7 @@ pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
             depth: options.depth.far_depth().into(),
         },
         assumes: FrameAssumptions::default(),
+        shader_defs: shader.defs.clone(),
     })
 }
 
@@ -804,6 +805,7 @@ pub fn reference(shader: &Shader, analysis: &Analysis, options: &Options) -> Res
             depth: options.depth.far_depth().into(),
         },
         assumes: FrameAssumptions::default(),
+        shader_defs: shader.defs.clone(),
     })
 }
 

@@ -245,3 +245,47 @@ fn composition(defs: &[(&str, ShaderDef)]) -> Composition {
         ..Composition::default()
     }
 }
+
+/// A variant says which defs its composition tests, and with what value,
+/// in its plan: those of the shader (`FOG`) and of the modules it imports
+/// (`SOFT_SPECULAR`), set or not; a def no source tests is not named. An
+/// engine that composes per draw state draws through the passes only
+/// where it composes with the same values.
+#[test]
+fn a_variant_says_which_defs_its_composition_tests() {
+    use crate::plan::{ShaderDef as PlanDef, ShaderDefValue};
+    let fog = front::load_with(
+        &root().join(COMPOSED),
+        &composition(&[
+            ("FOG", ShaderDef::Bool(true)),
+            ("UNTESTED", ShaderDef::UInt(3)),
+        ]),
+        None,
+        None,
+    )
+    .unwrap_or_else(|e| panic!("{}", e.render()));
+    let def = |name: &str, value| PlanDef {
+        name: name.into(),
+        value,
+    };
+    let expected = vec![
+        def("FOG", ShaderDefValue::Set),
+        def("SOFT_SPECULAR", ShaderDefValue::Unset),
+    ];
+    assert_eq!(fog.defs, expected);
+    let analysis = analysed(&fog);
+    let rewritten = rewrite::rewrite(
+        &fog,
+        &analysis,
+        &analysis.candidates[0],
+        Variant::OnePass,
+        &Options::default(),
+    )
+    .unwrap_or_else(|r| panic!("{r}"));
+    assert_eq!(rewritten.plan.shader_defs, expected);
+    let json = serde_json::to_string(&rewritten.plan).unwrap();
+    assert!(
+        json.contains(r#""shader_defs":[{"name":"FOG","value":"set"},{"name":"SOFT_SPECULAR","value":"unset"}]"#),
+        "{json}"
+    );
+}

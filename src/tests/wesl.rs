@@ -167,3 +167,37 @@ fn a_build_script_finds_a_wesl_package_by_its_crate() {
         "{said}"
     );
 }
+
+/// A WESL composition's plan names the features its modules' `@if`s test
+/// and the `constants::` they read, with the values composed with: the
+/// fog's feature in an imported module, off unless given, and the
+/// material's bind group as its number.
+#[test]
+fn a_wesl_variant_says_which_defs_its_composition_tests() {
+    use crate::plan::{ShaderDef as PlanDef, ShaderDefValue};
+    let def = |name: &str, value| PlanDef {
+        name: name.into(),
+        value,
+    };
+    let plain = load(&[]);
+    assert!(
+        plain.defs.contains(&def("FOG", ShaderDefValue::Unset)),
+        "{:?}",
+        plain.defs
+    );
+    assert!(plain
+        .defs
+        .contains(&def("MATERIAL_BIND_GROUP", ShaderDefValue::Int(2))));
+    let fog = load(&[("FOG", ShaderDef::Bool(true))]);
+    assert!(fog.defs.contains(&def("FOG", ShaderDefValue::Set)));
+    let analysis = analysed(&fog);
+    let rewritten = rewrite::rewrite(
+        &fog,
+        &analysis,
+        &analysis.candidates[0],
+        Variant::OnePass,
+        &Options::default(),
+    )
+    .unwrap_or_else(|r| panic!("{r}"));
+    assert_eq!(rewritten.plan.shader_defs, fog.defs);
+}

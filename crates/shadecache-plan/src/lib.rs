@@ -348,6 +348,41 @@ pub struct Plan {
     /// frame that breaks it.
     #[serde(default)]
     pub assumes: FrameAssumptions,
+    /// The shader defs the composed source tests (`@if`, `#ifdef`,
+    /// `constants::`), each with the value the passes were composed with.
+    /// An engine that composes the original once per draw state (Bevy, per
+    /// mesh and view) draws through these passes only where it composes
+    /// the original with the same values; any other def leaves the passes
+    /// as they are. Empty for a shader composed without defs.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shader_defs: Vec<ShaderDef>,
+}
+
+/// A shader def the composed source tests, and its value in the
+/// composition the passes were made from.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ShaderDef {
+    /// The def's name (`VERTEX_UVS`).
+    pub name: String,
+    /// Its value: unset, a boolean, or a number (which also turns the
+    /// feature of its name on, as Bevy and naga_oil do).
+    pub value: ShaderDefValue,
+}
+
+/// A shader def's value; a def set to `false` is unset (a WESL feature
+/// that is off).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ShaderDefValue {
+    /// Not set, or set to `false`.
+    Unset,
+    /// Set, with no value (`true`).
+    Set,
+    /// A signed number.
+    Int(i32),
+    /// An unsigned number.
+    #[serde(rename = "uint")]
+    UInt(u32),
 }
 
 /// How the lowres variant rebuilds the payload at full resolution from
