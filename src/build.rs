@@ -468,6 +468,7 @@ impl Build {
                 packages,
                 defs: job.composition.defs.clone(),
                 composer: job.composition.composer,
+                every_tested_def: job.composition.every_tested_def,
             };
             let sources = Sources {
                 path: &path,

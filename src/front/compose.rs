@@ -43,6 +43,10 @@ pub struct Composition {
     /// Which composer puts the shader together; `None`: told from the
     /// file ([`ComposerKind::detect`]).
     pub composer: Option<ComposerKind>,
+    /// Keep every def the sources test in the loaded shader's `defs`,
+    /// instead of narrowing them to those that change the code (each
+    /// flipped alone and composed again; see `front::load_with`).
+    pub every_tested_def: bool,
 }
 
 /// The two ways engines compose WGSL from modules.

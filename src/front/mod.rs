@@ -407,8 +407,81 @@ pub fn load_with(
         }
     };
     let shader = load_one(path)?;
-    match vertex {
-        None => Ok(shader),
-        Some(vertex) => with_vertex_module(shader, &load_one(vertex)?, vertex_entry),
+    let mut shader = match vertex {
+        None => shader,
+        Some(vertex) => with_vertex_module(shader, &load_one(vertex)?, vertex_entry)?,
+    };
+    if !composition.every_tested_def {
+        shader.defs = defs_that_change_the_code(&shader, |flipped| {
+            let mut composition = composition.clone();
+            // Unset is absent (naga_oil's `#ifdef` reads a `false` def as
+            // defined).
+            composition.defs.retain(|(name, _)| *name != flipped.0);
+            if flipped.1 == compose::ShaderDef::Bool(true) {
+                composition.defs.push(flipped);
+            }
+            load_without_narrowing(path, &composition, vertex, vertex_entry)
+        });
     }
+    Ok(shader)
+}
+
+/// [`load_with`] without narrowing the defs: what each flip composes.
+fn load_without_narrowing(
+    path: &Path,
+    composition: &compose::Composition,
+    vertex: Option<&Path>,
+    vertex_entry: Option<&str>,
+) -> Result<Shader, Error> {
+    let composition = compose::Composition {
+        every_tested_def: true,
+        ..composition.clone()
+    };
+    load_with(path, &composition, vertex, vertex_entry)
+}
+
+/// The defs of `shader` (those its sources test) that change the code its
+/// entry points run: each set or unset def is flipped alone and the
+/// shader composed again (`compose`, given the flipped def); a def whose
+/// flip leaves the compacted module (unused functions, types and globals
+/// dropped) as it was is left out. A number is kept (its value may be read
+/// anywhere), as is a def whose flip does not compose. Flipping one at a
+/// time misses a branch only a pair of defs opens (`@if(A && B)` with
+/// both off); a host that sets both where the variant set neither composes
+/// code the passes lack.
+fn defs_that_change_the_code(
+    shader: &Shader,
+    compose: impl Fn((String, compose::ShaderDef)) -> Result<Shader, Error>,
+) -> Vec<crate::plan::ShaderDef> {
+    use crate::plan::ShaderDefValue;
+    if shader.defs.is_empty() {
+        return Vec::new();
+    }
+    let Some(base) = compacted_text(&shader.module) else {
+        return shader.defs.clone();
+    };
+    shader
+        .defs
+        .iter()
+        .filter(|def| {
+            let flipped = match def.value {
+                ShaderDefValue::Unset => compose::ShaderDef::Bool(true),
+                ShaderDefValue::Set => compose::ShaderDef::Bool(false),
+                ShaderDefValue::Int(_) | ShaderDefValue::UInt(_) => return true,
+            };
+            match compose((def.name.clone(), flipped)) {
+                Ok(other) => compacted_text(&other.module).as_deref() != Some(base.as_str()),
+                Err(_) => true,
+            }
+        })
+        .cloned()
+        .collect()
+}
+
+/// The module with what its entry points do not reach dropped, as WGSL.
+fn compacted_text(module: &naga::Module) -> Option<String> {
+    let mut module = module.clone();
+    naga::compact::compact(&mut module, naga::compact::KeepUnused::No);
+    let info = validate(&module).ok()?;
+    naga::back::wgsl::write_string(&module, &info, naga::back::wgsl::WriterFlags::empty()).ok()
 }

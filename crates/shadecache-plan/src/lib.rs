@@ -348,8 +348,11 @@ pub struct Plan {
     /// frame that breaks it.
     #[serde(default)]
     pub assumes: FrameAssumptions,
-    /// The shader defs the composed source tests (`@if`, `#ifdef`,
-    /// `constants::`), each with the value the passes were composed with.
+    /// The shader defs that change the code the passes were made from
+    /// (of those the composed sources test with `@if`, `#ifdef` or
+    /// `constants::`, each whose flip alone changes what the entry points
+    /// run, and every number), each with the value the passes were
+    /// composed with.
     /// An engine that composes the original once per draw state (Bevy, per
     /// mesh and view) draws through these passes only where it composes
     /// the original with the same values; any other def leaves the passes

@@ -226,6 +226,7 @@ impl ComposeArgs {
             packages,
             defs: self.defs.clone(),
             composer: self.composer,
+            ..Composition::default()
         })
     }
 }
