@@ -79,6 +79,63 @@ struct Sources<'a> {
     composition: &'a front::compose::Composition,
 }
 
+/// The vertex attributes of the meshes a Bevy material is drawn on
+/// ([`Build::bevy_mesh`]): positions always; [`BevyMesh::default`] has
+/// normals and the first UVs, as Bevy's primitive shapes do.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BevyMesh {
+    /// `Mesh::ATTRIBUTE_NORMAL`.
+    pub normals: bool,
+    /// `Mesh::ATTRIBUTE_UV_0`.
+    pub uv_0: bool,
+    /// `Mesh::ATTRIBUTE_UV_1`.
+    pub uv_1: bool,
+    /// `Mesh::ATTRIBUTE_TANGENT`.
+    pub tangents: bool,
+    /// `Mesh::ATTRIBUTE_COLOR`.
+    pub colors: bool,
+}
+
+impl Default for BevyMesh {
+    fn default() -> Self {
+        BevyMesh {
+            normals: true,
+            uv_0: true,
+            uv_1: false,
+            tangents: false,
+            colors: false,
+        }
+    }
+}
+
+impl BevyMesh {
+    /// The defs Bevy 0.20's `MeshPipeline::specialize` sets for these
+    /// attributes (uncompressed).
+    fn defs(self) -> Vec<&'static str> {
+        let mut defs = vec![
+            "MESH_PIPELINE",
+            "VERTEX_OUTPUT_INSTANCE_INDEX",
+            "VERTEX_POSITIONS",
+        ];
+        for (on, names) in [
+            (self.normals, &["VERTEX_NORMALS"][..]),
+            (self.uv_0, &["VERTEX_UVS", "VERTEX_UVS_A"]),
+            (self.uv_1, &["VERTEX_UVS", "VERTEX_UVS_B"]),
+            (self.tangents, &["VERTEX_TANGENTS"]),
+            (self.colors, &["VERTEX_COLORS"]),
+        ] {
+            if on {
+                for name in names {
+                    if !defs.contains(name) {
+                        defs.push(name);
+                    }
+                }
+            }
+        }
+        defs
+    }
+}
+
 /// A set of shaders to rewrite at build time.
 #[derive(Clone, Debug, Default)]
 pub struct Build {
@@ -243,6 +300,34 @@ impl Build {
     /// feature for its `@if`s or a `constants::` value (WESL).
     pub fn def(mut self, name: impl Into<String>, value: front::compose::ShaderDef) -> Self {
         self.last().composition.defs.push((name.into(), value));
+        self
+    }
+
+    /// The defs Bevy 0.20 composes a material's shader with for meshes
+    /// with `mesh`'s vertex attributes, drawn in its forward opaque pass
+    /// (what `MeshPipeline::specialize` and the material pipeline set:
+    /// `MESH_PIPELINE`, `VERTEX_OUTPUT_INSTANCE_INDEX`, one `VERTEX_*` per
+    /// attribute, `MATERIAL_BIND_GROUP` 3, and the light counts Bevy's
+    /// `mesh_view_types` library is loaded with), for the last shader. Bevy's
+    /// own list is in its specialisation code, not a table a build script
+    /// can read; the plugin checks each mesh's pipeline's defs against the
+    /// variant's plan at run time and leaves a mesh composed otherwise to
+    /// Bevy, naming the defs that differ.
+    pub fn bevy_mesh(mut self, mesh: BevyMesh) -> Self {
+        use front::compose::ShaderDef;
+        for name in mesh.defs() {
+            self = self.def(name, ShaderDef::Bool(true));
+        }
+        // The material's group; then the numbers Bevy's view types
+        // library carries as its own defs (native builds' values).
+        for (name, value) in [
+            ("MATERIAL_BIND_GROUP", 3),
+            ("MAX_DIRECTIONAL_LIGHTS", 10),
+            ("MAX_CASCADES_PER_LIGHT", 4),
+            ("MAX_RECT_LIGHTS", 8),
+        ] {
+            self = self.def(name, ShaderDef::UInt(value));
+        }
         self
     }
 

@@ -68,11 +68,19 @@
 //!   in turn, each its own run of the phase; a mesh is cached from the
 //!   frame after Bevy's pipeline for it is made.
 //!
+//! - **Composed as Bevy composes it.** Bevy composes a material's shader
+//!   per mesh layout and view; the variant was composed once, with the
+//!   build script's defs, and its plan names those that change its code.
+//!   A mesh is drawn through the first of its material's builds
+//!   ([`ShadecachePlugin::and`]) whose defs are those of the pipeline Bevy
+//!   specialised for it (`defs.rs`), else left to Bevy with the defs that
+//!   differ in its reason.
+//!
 //! What it does not do (yet): Bevy's `StandardMaterial` (bindless, its
-//! defs per instance); skinned, morphed, lightmapped,
-//! blended or deferred meshes (left to Bevy, above); shader defs a
-//! material's `specialize` adds (the variant's are the build script's).
+//! defs per instance); skinned, morphed, lightmapped, blended or
+//! deferred meshes (left to Bevy, above); split screen.
 
+mod defs;
 mod phase;
 mod view_cache;
 
@@ -220,7 +228,7 @@ impl ReprojectionCache {
 /// `ShadecachePlugin::<StoneMaterial>::new(stone)`); Bevy's
 /// `MaterialPlugin::<M>` draws `M` as before wherever the cache does not.
 pub struct ShadecachePlugin<M> {
-    variant: CachedVariant,
+    builds: Vec<CachedVariant>,
     material: PhantomData<fn() -> M>,
 }
 
@@ -228,9 +236,21 @@ impl<M: Asset> ShadecachePlugin<M> {
     /// The plugin for `M`'s variant.
     pub fn new(variant: CachedVariant) -> Self {
         ShadecachePlugin {
-            variant,
+            builds: vec![variant],
             material: PhantomData,
         }
+    }
+
+    /// Another build of `M`'s variant, composed with other defs (for
+    /// meshes with vertex colours, say: Bevy composes `M`'s shader once
+    /// per mesh layout and view). Each mesh is drawn through the first
+    /// build composed as Bevy composes its pipeline (the plan's
+    /// `shader_defs` against the defs of the pipeline Bevy specialised
+    /// for it); a mesh no build matches is left to Bevy, with the defs
+    /// that differ in its reason.
+    pub fn and(mut self, variant: CachedVariant) -> Self {
+        self.builds.push(variant);
+        self
     }
 }
 
@@ -260,7 +280,7 @@ impl<M: Asset> Plugin for ShadecachePlugin<M> {
         render_app
             .world_mut()
             .resource_mut::<CachedVariants>()
-            .add::<M>(self.variant.clone());
+            .add::<M>(self.builds.clone());
     }
 }
 
@@ -323,17 +343,20 @@ pub(crate) struct MaterialVariant {
     pub material: TypeId,
     /// Its name, for messages.
     pub name: String,
-    pub variant: CachedVariant,
+    /// Its variant's builds, each composed with its own defs
+    /// ([`ShadecachePlugin::and`]); a mesh is drawn through the first
+    /// composed as Bevy composes its pipeline.
+    pub builds: Vec<CachedVariant>,
 }
 
 impl CachedVariants {
     /// `M`'s variant. Once per material: Bevy refuses a second
     /// `ShadecachePlugin::<M>` as it refuses any plugin added twice.
-    fn add<M: Asset>(&mut self, variant: CachedVariant) {
+    fn add<M: Asset>(&mut self, builds: Vec<CachedVariant>) {
         self.0.push(MaterialVariant {
             material: TypeId::of::<M>(),
             name: bevy::utils::prelude::ShortName::of::<M>().to_string(),
-            variant,
+            builds,
         });
     }
 
@@ -383,7 +406,10 @@ impl Plugin for SharedPlugin {
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
             return;
         };
-        render_app.init_resource::<CachedVariants>();
+        render_app
+            .init_resource::<CachedVariants>()
+            .init_resource::<defs::LibraryDefs>()
+            .add_systems(bevy::render::ExtractSchedule, defs::extract_library_defs);
         view_cache::build(render_app, stats);
     }
 }

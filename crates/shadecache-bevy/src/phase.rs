@@ -35,11 +35,13 @@ use bevy::render::render_phase::{
     ViewBinnedRenderPhases, ViewSortedRenderPhases,
 };
 use bevy::render::render_resource::{CachedPipelineState, CachedRenderPipelineId, PipelineCache};
+use bevy::render::renderer::RenderDevice;
 use bevy::render::sync_world::MainEntity;
 use bevy::render::view::{ExtractedView, RenderVisibleEntities, RetainedViewEntity};
 use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderDebugFlags, RenderSystems};
 use indexmap::IndexMap;
 
+use crate::defs::{BevyDefs, LibraryDefs};
 use crate::{CacheStats, CachedMaterial, CachedVariants, ReprojectionCache};
 
 /// What each pass draws per cached mesh: Bevy's material draw, without its
@@ -148,6 +150,9 @@ pub(crate) type ViewVariant = (RetainedViewEntity, u32);
 pub(crate) struct DrawnAs {
     pub layout: MeshVertexBufferLayoutRef,
     pub primitive: wgpu::PrimitiveState,
+    /// The build of the material's variant composed as Bevy composed the
+    /// mesh's pipeline (an index into its `builds`).
+    pub build: u32,
 }
 
 /// What one cache is made for: a material's variant in a view, for the
@@ -265,28 +270,54 @@ pub(crate) struct MeshQueueing<'w> {
     variants: Res<'w, CachedVariants>,
     specialized: Res<'w, SpecializedMaterialPipelineCache>,
     pipeline_cache: Res<'w, PipelineCache>,
+    device: Res<'w, RenderDevice>,
+    library_defs: Res<'w, LibraryDefs>,
 }
 
 impl MeshQueueing<'_> {
     /// The primitive state of the pipeline Bevy specialised for the mesh
-    /// of `entity` in `view` (the material's `specialize` included);
-    /// `None` until that pipeline is made.
-    fn primitive(
+    /// of `entity` in `view` (the material's `specialize` included), and
+    /// the defs Bevy composed it with; `None` until that pipeline is made.
+    fn drawn_by_bevy(
         &self,
         view: &RetainedViewEntity,
         entity: MainEntity,
-    ) -> Option<wgpu::PrimitiveState> {
+    ) -> Option<(wgpu::PrimitiveState, BevyDefs)> {
         let id = *self.specialized.get(view)?.get(&entity)?;
         // Only a pipeline the cache has processed has its descriptor.
-        matches!(
+        if !matches!(
             self.pipeline_cache.get_render_pipeline_state(id),
             CachedPipelineState::Ok(_)
-        )
-        .then(|| {
-            self.pipeline_cache
-                .get_render_pipeline_descriptor(id)
-                .primitive
-        })
+        ) {
+            return None;
+        }
+        let descriptor = self.pipeline_cache.get_render_pipeline_descriptor(id);
+        let stages = descriptor
+            .vertex
+            .shader_defs
+            .iter()
+            .chain(descriptor.fragment.iter().flat_map(|f| &f.shader_defs));
+        let defs = BevyDefs::new(stages, &self.device, &self.library_defs);
+        Some((descriptor.primitive, defs))
+    }
+
+    /// The first build of the material `variant`'s variant composed as
+    /// Bevy composed the mesh's pipeline (`defs`); why the mesh is left to
+    /// Bevy where none is: the first build's defs that differ.
+    fn build(&self, variant: u32, defs: &BevyDefs) -> Result<u32, String> {
+        let builds = self.variants.get(variant).map_or(&[][..], |m| &m.builds);
+        let differences: Vec<Vec<String>> = builds
+            .iter()
+            .map(|build| defs.differences(&build.plan().shader_defs))
+            .collect();
+        match differences.iter().position(Vec::is_empty) {
+            Some(build) => Ok(build as u32),
+            None => Err(format!(
+                "composed by Bevy with other defs than {}'s variant was ({}): build the variant with Bevy's defs for this mesh as well and add it with `ShadecachePlugin::and`",
+                self.variants.name(variant),
+                differences.first().map_or(String::new(), |d| d.join("; "))
+            )),
+        }
     }
 
     /// The variant that draws the mesh of `entity`: its material's; why it
@@ -401,13 +432,26 @@ pub(crate) fn queue_cached_meshes(
             }
             let Ok(variant) = variant else { continue };
             // Not drawn by Bevy yet either: its pipeline is on the way.
-            let Some(primitive) = queueing.primitive(&view.retained_view_entity, *main_entity)
+            let Some((primitive, defs)) =
+                queueing.drawn_by_bevy(&view.retained_view_entity, *main_entity)
             else {
                 continue;
+            };
+            let build = match queueing.build(variant, &defs) {
+                Ok(build) => build,
+                Err(reason) => {
+                    if refused.insert(*main_entity) {
+                        stats.error(format!(
+                            "mesh entity {main_entity:?} is {reason}: Bevy draws it with its material"
+                        ));
+                    }
+                    continue;
+                }
             };
             let drawn = DrawnAs {
                 layout: mesh.layout.clone(),
                 primitive,
+                build,
             };
             let view_layouts = layouts
                 .0

@@ -440,11 +440,10 @@ fn prepare_cache(
     sources: &CacheSources,
     stats: &CacheStats,
 ) -> bool {
-    let variant = id.1;
     let slot = caches
         .0
         .entry(id.clone())
-        .or_insert_with(|| Mutex::new(make_cache(sources, variant, key.clone(), size, stats)));
+        .or_insert_with(|| Mutex::new(make_cache(sources, id, key.clone(), size, stats)));
     let slot = slot
         .get_mut()
         .unwrap_or_else(|poisoned| poisoned.into_inner());
@@ -453,7 +452,7 @@ fn prepare_cache(
         Slot::Failed(key) => key,
     };
     if *current != key {
-        *slot = make_cache(sources, variant, key, size, stats);
+        *slot = make_cache(sources, id, key, size, stats);
     }
     matches!(slot, Slot::Ready(_))
 }
@@ -538,21 +537,18 @@ fn cache_key(
 /// view's copy and its twin. A failure is logged once.
 fn make_cache(
     sources: &CacheSources,
-    variant: u32,
+    (_, variant, drawn): &CacheId,
     key: CacheKey,
     size: (u32, u32),
     stats: &CacheStats,
 ) -> Slot {
-    let Some(material) = sources.variants.get(variant) else {
+    let Some(material) = sources.variants.get(*variant) else {
         return Slot::Failed(key);
     };
-    let made = try_make_cache(
-        &material.variant,
-        &sources.device,
-        &sources.mesh_pipeline,
-        &key,
-        size,
-    );
+    let Some(build) = material.builds.get(drawn.build as usize) else {
+        return Slot::Failed(key);
+    };
+    let made = try_make_cache(build, &sources.device, &sources.mesh_pipeline, &key, size);
     match made {
         Ok(cache) => Slot::Ready(Box::new(cache)),
         Err(err) => {

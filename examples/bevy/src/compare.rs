@@ -94,6 +94,10 @@ pub enum LeftToBevy {
     AlphaBlend,
     /// It has a lightmap.
     Lightmapped,
+    /// It has vertex colours, and the lava's cache lacks its build for
+    /// them: Bevy composes its pipeline with `VERTEX_COLORS`, and the
+    /// variant was composed without.
+    ComposedOtherwise,
 }
 
 /// One compared frame: the cached image against Bevy's.
@@ -172,7 +176,10 @@ struct Run(Headless, Arc<Mutex<Outcome>>);
 pub fn run_headless(settings: Headless) -> HeadlessRun {
     // The runner takes the app: the comparisons come back through this.
     let results = Arc::new(Mutex::new(Outcome::default()));
-    let mut app = headless_app(false, settings.step_degrees, true);
+    let materials = crate::scene::MaterialsPlugin {
+        lava_vertex_colors: settings.left_to_bevy != Some(LeftToBevy::ComposedOtherwise),
+    };
+    let mut app = headless_app(false, settings.step_degrees, true, materials);
     app.insert_resource(Run(settings.clone(), results.clone()))
         .init_resource::<Capture>()
         .add_systems(Startup, setup)
@@ -254,10 +261,18 @@ fn setup(
     if let Some(which) = settings.left_to_bevy {
         let alpha_mode = match which {
             LeftToBevy::AlphaBlend => AlphaMode::Blend,
-            LeftToBevy::Lightmapped => AlphaMode::Opaque,
+            LeftToBevy::Lightmapped | LeftToBevy::ComposedOtherwise => AlphaMode::Opaque,
         };
+        let mut sphere = Sphere::new(0.4).mesh().uv(24, 16);
+        if which == LeftToBevy::ComposedOtherwise {
+            let vertices = sphere.count_vertices();
+            sphere.insert_attribute(
+                Mesh::ATTRIBUTE_COLOR,
+                vec![[1.0f32, 1.0, 1.0, 1.0]; vertices],
+            );
+        }
         let mut mesh = commands.spawn((
-            Mesh3d(meshes.add(Sphere::new(0.4).mesh().uv(24, 16))),
+            Mesh3d(meshes.add(sphere)),
             MeshMaterial3d(materials.add(scene::LavaMaterial::new(alpha_mode))),
             Transform::from_xyz(0.2, 0.9, 0.8),
             CachedMaterial,

@@ -36,7 +36,12 @@ pub use measure::{measure, Measure, Measured};
 /// needs them, so that both cameras' images hold every mesh from the first
 /// frame compared (asynchronously, a material's pipeline can be ready for
 /// one view's frame and not yet the other's).
-fn headless_app(diagnostics: bool, step_degrees: f32, compare: bool) -> App {
+fn headless_app(
+    diagnostics: bool,
+    step_degrees: f32,
+    compare: bool,
+    materials: scene::MaterialsPlugin,
+) -> App {
     let mut app = App::new();
     let plugins = DefaultPlugins
         .set(AssetPlugin {
@@ -62,7 +67,7 @@ fn headless_app(diagnostics: bool, step_degrees: f32, compare: bool) -> App {
     }
     app.add_plugins((
         bevy::app::ScheduleRunnerPlugin::run_loop(std::time::Duration::ZERO),
-        scene::MaterialsPlugin,
+        materials,
     ))
     // Time steps a 60 Hz frame each frame, whatever the frame took, as
     // `shadecache profile` steps its `time` uniform: the glow flows alike

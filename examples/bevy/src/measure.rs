@@ -77,7 +77,12 @@ struct Timing {
 /// material's GPU time per frame.
 pub fn measure(settings: Measure) -> Measured {
     let results = Arc::new(Mutex::new(Vec::new()));
-    let mut app = headless_app(true, settings.step_degrees, false);
+    let mut app = headless_app(
+        true,
+        settings.step_degrees,
+        false,
+        crate::scene::MaterialsPlugin::default(),
+    );
     app.insert_resource(Run(settings.clone(), results.clone()))
         .init_resource::<Timing>()
         .add_systems(Startup, setup)

@@ -19,6 +19,15 @@ pub fn lava_variant() -> CachedVariant {
     variant(built::lava::one_pass::PLAN, built::lava::one_pass::SHADERS)
 }
 
+/// The same variant, built with the defs Bevy composes the lava with for
+/// meshes with vertex colours.
+pub fn lava_vertex_colors_variant() -> CachedVariant {
+    variant(
+        built::lava_vertex_colors::one_pass::PLAN,
+        built::lava_vertex_colors::one_pass::SHADERS,
+    )
+}
+
 /// The one-pass variant of `assets/stone.wesl`, of the node its analysis
 /// ranks first.
 pub fn stone_variant() -> CachedVariant {
@@ -33,16 +42,33 @@ fn variant(plan: &str, shaders: &[(&str, &str)]) -> CachedVariant {
         .unwrap_or_else(|err| panic!("the build script's variant does not load: {err}"))
 }
 
-/// Bevy's materials of the game and a cache for each: the lava and the
-/// stone, each with its variant.
-pub struct MaterialsPlugin;
+/// Bevy's materials of the game and a cache for each: the lava (its
+/// variant built for Bevy's primitive shapes and for meshes with vertex
+/// colours) and the stone, each with its variant.
+pub struct MaterialsPlugin {
+    /// Whether the lava's cache has its build for meshes with vertex
+    /// colours (a test leaves it out to see such a mesh left to Bevy).
+    pub lava_vertex_colors: bool,
+}
+
+impl Default for MaterialsPlugin {
+    fn default() -> Self {
+        MaterialsPlugin {
+            lava_vertex_colors: true,
+        }
+    }
+}
 
 impl Plugin for MaterialsPlugin {
     fn build(&self, app: &mut App) {
+        let mut lava = ShadecachePlugin::<LavaMaterial>::new(lava_variant());
+        if self.lava_vertex_colors {
+            lava = lava.and(lava_vertex_colors_variant());
+        }
         app.add_plugins((
             MaterialPlugin::<LavaMaterial>::default(),
             MaterialPlugin::<StoneMaterial>::default(),
-            ShadecachePlugin::<LavaMaterial>::new(lava_variant()),
+            lava,
             ShadecachePlugin::<StoneMaterial>::new(stone_variant()),
         ));
     }

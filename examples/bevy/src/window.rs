@@ -34,7 +34,7 @@ pub fn run() {
             file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/assets").into(),
             ..default()
         }))
-        .add_plugins((RenderDiagnosticsPlugin, scene::MaterialsPlugin))
+        .add_plugins((RenderDiagnosticsPlugin, scene::MaterialsPlugin::default()))
         .add_systems(Startup, setup)
         .add_systems(Update, (orbit, toggle, readout))
         .run();

@@ -217,6 +217,23 @@ fn lightmapped_mesh_is_left_to_bevy_with_a_reason() {
     left_to_bevy_with_a_reason(LeftToBevy::Lightmapped, "lightmapped");
 }
 
+/// A lava mesh with vertex colours, where the lava's cache has no build
+/// composed with `VERTEX_COLORS`: Bevy composes that mesh's pipeline
+/// otherwise than the variant was, so it is left to Bevy, the def named in
+/// the reason. Without the check of the plan's defs against Bevy's, the
+/// mesh is drawn through the variant (white vertex colours leave the
+/// lava's colour as it is, so only the check can tell).
+#[test]
+fn mesh_bevy_composes_otherwise_is_left_to_bevy_with_a_reason() {
+    if skipped() {
+        return;
+    }
+    left_to_bevy_with_a_reason(
+        LeftToBevy::ComposedOtherwise,
+        "VERTEX_COLORS: Bevy set, the variant unset",
+    );
+}
+
 /// A camera drawing into part of its target (split screen) does not
 /// cache yet: the cache's pixels are the whole target's. Its view says so,
 /// once, and Bevy draws its meshes, so every frame is Bevy's own (drawn
@@ -495,8 +512,10 @@ fn two_caches_each_frame(with: Headless) {
 }
 
 /// Lava meshes of two vertex layouts in one view (one has vertex
-/// colours, which the variant does not read): each layout gets a cache of
-/// its own, drawn in turn, and at Δn = 1 every frame is Bevy's own.
+/// colours): each is drawn through the lava's build composed as Bevy
+/// composes it (the one with `VERTEX_COLORS` for the coloured mesh), in a
+/// cache of its own, drawn in turn, and at Δn = 1 every frame is Bevy's
+/// own.
 #[test]
 fn meshes_of_several_vertex_layouts_in_one_view() {
     if skipped() {
