@@ -93,6 +93,26 @@ impl ExprGraph {
             }
             needed
         };
+        // What a call reads through the pointers it is given: every value
+        // written into the variables they point into (Bevy's
+        // `point_light(id, &lighting_input)` reads the members
+        // `apply_pbr_lighting` stored into its local). Without it, a slice
+        // that needs the call's result or what it writes kept the call and
+        // dropped those stores, and the callee read an unwritten variable.
+        let call_reads = |call: &proc::CallSite| -> Vec<Handle<Expression>> {
+            let mut roots: Vec<PointerRoot> = call
+                .arguments
+                .iter()
+                .filter_map(|&arg| proc::pointer_root(function, arg))
+                .filter(|root| matches!(root, PointerRoot::Local(_) | PointerRoot::Global(_)))
+                .collect();
+            roots.dedup();
+            roots.into_iter().flat_map(writes_to).collect()
+        };
+        let call_needs = |call: &proc::CallSite, needed: &mut Vec<Handle<Expression>>| {
+            call_needs(call, needed);
+            needed.extend(call_reads(call));
+        };
         // What a load of a local needs: only the definitions that reach it.
         let reaching_definitions = proc::reaching_definitions(function);
         let reaching = |load: Handle<Expression>,
@@ -141,6 +161,9 @@ impl ExprGraph {
             if let Some(result) = call.result {
                 for &argument in &call.arguments {
                     graph.add_edge(node(result), node(argument), ());
+                }
+                for read in call_reads(call) {
+                    graph.add_edge(node(result), node(read), ());
                 }
             }
         }

@@ -661,3 +661,104 @@ fn fs(in: VertexOutput) -> @location(0) vec4<f32> {
         assert_eq!(kept.cache.format_note, None);
     }
 }
+
+/// A shader that fills a local struct member by member and hands a
+/// pointer to it to a helper, in a loop (as Bevy's `apply_pbr_lighting`
+/// fills `lighting_input` and calls `point_light(id, &lighting_input)`).
+const LIGHTING_THROUGH_A_POINTER: &str = r#"
+struct Frame {
+    clip_from_world: mat4x4<f32>,
+    world_from_local: mat4x4<f32>,
+    camera_position: vec3<f32>,
+    time: f32,
+}
+@group(0) @binding(0) var<uniform> frame: Frame;
+
+struct VertexOutput {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) world_position: vec3<f32>,
+    @location(1) world_normal: vec3<f32>,
+}
+
+@vertex
+fn vs_main(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) -> VertexOutput {
+    var out: VertexOutput;
+    let world = frame.world_from_local * vec4<f32>(position, 1.0);
+    out.clip_position = frame.clip_from_world * world;
+    out.world_position = world.xyz;
+    out.world_normal = (frame.world_from_local * vec4<f32>(normal, 0.0)).xyz;
+    return out;
+}
+
+struct LightingInput {
+    n: vec3<f32>,
+    v: vec3<f32>,
+    roughness: f32,
+    diffuse: vec3<f32>,
+}
+
+fn light(input: ptr<function, LightingInput>, i: u32) -> vec3<f32> {
+    let angle = f32(i) * 0.7;
+    let l = normalize(vec3<f32>(cos(angle), 0.8, sin(angle)));
+    let h = normalize(l + (*input).v);
+    let shininess = 2.0 + 64.0 * (1.0 - (*input).roughness);
+    let specular = pow(max(dot((*input).n, h), 0.0), shininess);
+    return (*input).diffuse * max(dot((*input).n, l), 0.0) + vec3<f32>(specular);
+}
+
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
+    var input: LightingInput;
+    input.n = normalize(in.world_normal);
+    input.v = normalize(frame.camera_position - in.world_position);
+    input.roughness = 0.35;
+    input.diffuse = vec3<f32>(0.6, 0.4, 0.2);
+    var sum = vec3<f32>(0.0);
+    for (var i = 0u; i < 6u; i++) {
+        sum += light(&input, i);
+    }
+    return vec4<f32>(sum * 0.3, 1.0);
+}
+"#;
+
+/// Hard case: the payload calls a helper that reads a local through a
+/// pointer. The payload slice keeps the stores into that local (its
+/// members), which the helper reads; without them the payload pass drew
+/// the helper reading an unwritten struct, a valid shader that lit
+/// nothing (found on Bevy's `StandardMaterial`, whose point lights went
+/// dark in the cache). At Δn = 1 every variant equals the reference.
+#[test]
+fn payload_keeps_what_a_call_reads_through_a_pointer() {
+    let (shader, analysis) = super::util::analyzed("pointer.wgsl", LIGHTING_THROUGH_A_POINTER);
+    let node = super::util::candidate(&analysis, "sum");
+    let rewritten = rewrite::rewrite(
+        &shader,
+        &analysis,
+        node,
+        Variant::TwoPass,
+        &Options::default(),
+    )
+    .unwrap_or_else(|r| panic!("{r}"));
+    // The payload function, in the pass that computes it.
+    let payloads: Vec<String> = rewritten
+        .passes
+        .iter()
+        .map(|pass| back::wgsl_text(&pass.module, &pass.info).unwrap())
+        .filter_map(|text| {
+            let start = text.find("fn fs_main_payload(")?;
+            let body = &text[start..];
+            let end = body[1..].find("\nfn ").map_or(body.len(), |i| i + 1);
+            Some(body[..end].to_string())
+        })
+        .collect();
+    assert!(!payloads.is_empty());
+    for payload in &payloads {
+        for member in [".n = ", ".v = ", ".roughness = ", ".diffuse = "] {
+            assert!(
+                payload.contains(member),
+                "the payload lost `{member}`:\n{payload}"
+            );
+        }
+    }
+    super::profile::assert_refresh_one_equals_reference(&shader, vec![node.node.id.clone()], 48);
+}
