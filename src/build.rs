@@ -47,6 +47,8 @@ struct ShaderJob {
     /// The vertex stage's module in a crate's WESL package: the crate and
     /// the path under its `src/`, found at `run`.
     crate_vertex: Option<(String, PathBuf)>,
+    /// The shader itself in a crate's `src/` (`path` is then under it).
+    in_crate: Option<String>,
     composition: front::compose::Composition,
     /// WESL packages by their crate's name, found at `run`.
     crate_packages: Vec<String>,
@@ -64,6 +66,7 @@ impl ShaderJob {
             deforming_inputs: Vec::new(),
             vertex: None,
             crate_vertex: None,
+            in_crate: None,
             composition: front::compose::Composition::default(),
             crate_packages: Vec::new(),
             nodes: Nodes::Top(1),
@@ -206,6 +209,18 @@ impl Build {
         self
     }
 
+    /// Adds a shader that ships in a crate's `src/`, as an engine's own
+    /// materials do (Bevy's `StandardMaterial` is bevy_pbr's
+    /// `render/pbr.wesl`): the crate is found in the dependency graph of
+    /// the package being built, as for [`Build::crate_package`]. Its
+    /// files go in a folder named by [`Build::name`], else the file stem.
+    pub fn crate_shader(mut self, name: impl Into<String>, path: impl Into<PathBuf>) -> Self {
+        let mut job = ShaderJob::new(path.into());
+        job.in_crate = Some(name.into());
+        self.jobs.push(job);
+        self
+    }
+
     /// The job settings apply to. Settings made before any `.shader()` go
     /// to a job without a path, which `run` reports as an error.
     fn last(&mut self) -> &mut ShaderJob {
@@ -316,6 +331,16 @@ impl Build {
     pub fn bevy_mesh(mut self, mesh: BevyMesh) -> Self {
         use front::compose::ShaderDef;
         for name in mesh.defs() {
+            self = self.def(name, ShaderDef::Bool(true));
+        }
+        // Bevy's defaults for a view (`ShadowFilteringMethod::Gaussian`)
+        // and what its pipeline cache says of a desktop GPU's storage
+        // buffers (at least 6 per stage).
+        for name in [
+            "SHADOW_FILTER_METHOD_GAUSSIAN",
+            "AVAILABLE_STORAGE_BUFFER_BINDINGS__GE_3",
+            "AVAILABLE_STORAGE_BUFFER_BINDINGS__GE_6",
+        ] {
             self = self.def(name, ShaderDef::Bool(true));
         }
         // The material's group; then the numbers Bevy's view types
@@ -512,7 +537,16 @@ impl Build {
         #[cfg(not(feature = "wesl"))]
         let crate_lookup = ();
         for job in &self.jobs {
-            let path = resolve(&job.path);
+            let path = match &job.in_crate {
+                Some(name) => match crate_package(name, &crate_lookup) {
+                    Ok(dir) => dir.join(&job.path),
+                    Err(err) => {
+                        errors.push(err);
+                        continue;
+                    }
+                },
+                None => resolve(&job.path),
+            };
             let vertex = match &job.crate_vertex {
                 Some((name, under)) => match crate_package(name, &crate_lookup) {
                     Ok(dir) => Some(dir.join(under)),
@@ -775,7 +809,7 @@ fn variants_module(variants: &[WrittenVariant]) -> String {
         let first = &of_shader[0].node;
         let _ = writeln!(
             out,
-            "\n/// `{shader}`'s variants.\n#[allow(dead_code)]\npub mod {} {{",
+            "\n/// `{shader}`'s variants.\n#[allow(dead_code, unused_imports)]\npub mod {} {{",
             identifier(shader)
         );
         let _ = writeln!(out, "    /// The node its first variants cache: the top-ranked candidate, or the first the build named.\n    pub const NODE: &str = {first:?};\n    pub use self::{}::*;", identifier(first));

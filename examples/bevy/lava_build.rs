@@ -57,7 +57,20 @@ pub fn game_build() -> Build {
         .name("lava_vertex_colors")
         .node(NODE)
         .variant(Variant::OnePass);
-    bevy_material(build, "assets/stone.wesl", BevyMesh::default()).variant(Variant::OnePass)
+    let build =
+        bevy_material(build, "assets/stone.wesl", BevyMesh::default()).variant(Variant::OnePass);
+    build
+        .crate_shader("bevy_pbr", "render/pbr.wesl")
+        .name("standard_material")
+        .crate_package("bevy_pbr")
+        .crate_package("bevy_render")
+        .crate_vertex_shader("bevy_pbr", "render/mesh.wesl")
+        .bevy_mesh(BevyMesh::default())
+        .def(
+            "BINDLESS",
+            shadecache::front::compose::ShaderDef::Bool(true),
+        )
+        .variant(Variant::TwoPass)
 }
 
 /// Adds a Bevy material's fragment shader to `build`, composed as Bevy

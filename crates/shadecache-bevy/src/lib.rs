@@ -76,8 +76,20 @@
 //!   specialised for it (`defs.rs`), else left to Bevy with the defs that
 //!   differ in its reason.
 //!
-//! What it does not do (yet): Bevy's `StandardMaterial` (bindless, its
-//! defs per instance); skinned, morphed, lightmapped, blended or
+//! - **Bevy's own materials.** `StandardMaterial` is a material like any
+//!   other: its variant is made from bevy_pbr's `render/pbr.wesl`
+//!   (`Build::crate_shader`) with Bevy's defs for the mesh layout and
+//!   `BINDLESS` (Bevy binds it bindless where the device can), and its
+//!   meshes are drawn through it with Bevy's bindless material bind group.
+//! - **Multi-pass variants and prepasses.** Without a prepass, the view's
+//!   depth holds only Bevy's other meshes and the plan's strict depth
+//!   tests stand, so a later pass (two-pass's second, three-pass's third)
+//!   draws only the pixels the earlier ones left. After a prepass the
+//!   depth already holds the cached meshes' own: the tests pass on equal
+//!   depth, and a variant whose later passes are told apart by depth is
+//!   refused for the view (one-pass is not).
+//!
+//! What it does not do (yet): skinned, morphed, lightmapped, blended or
 //! deferred meshes (left to Bevy, above); split screen.
 
 mod defs;

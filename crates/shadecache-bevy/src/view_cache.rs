@@ -576,6 +576,21 @@ fn try_make_cache(
         plan.refresh.period = period;
     }
     check_twins(&plan)?;
+    let prepass = key.view_layout.intersects(
+        MeshPipelineViewLayoutKey::DEPTH_PREPASS
+            | MeshPipelineViewLayoutKey::NORMAL_PREPASS
+            | MeshPipelineViewLayoutKey::MOTION_VECTOR_PREPASS
+            | MeshPipelineViewLayoutKey::DEFERRED_PREPASS,
+    );
+    if prepass {
+        if let Some(pass) = depth_tells_passes_apart(&plan) {
+            return Err(format!(
+                "the view has a prepass, which writes the cached meshes' depth before the variant's passes, and {}'s `{}` draws only the pixels earlier passes left, told by the depth they wrote: give the view no prepass, or cache the material with the one-pass variant",
+                plan.variant.as_str(),
+                pass.name
+            ));
+        }
+    }
     let view_layout = mesh_pipeline.get_view_layout(key.view_layout);
     let mesh_layout = &mesh_pipeline.mesh_layouts.model_only;
     let groups: [(u32, &[wgpu::BindGroupLayoutEntry]); 4] = [
@@ -608,11 +623,13 @@ fn try_make_cache(
         |name| variant.shader(name),
         &frame,
         size,
-        // The view's depth is shared, and a depth prepass (which TAA,
-        // SSAO and motion blur need) already holds the cached meshes'
-        // depth: their own tests must pass on it.
+        // The view's depth is shared. After a prepass (which TAA, SSAO
+        // and motion blur need) it already holds the cached meshes' depth:
+        // their own tests must pass on it. Without one it holds only
+        // Bevy's other meshes, and the plan's strict tests stand (a later
+        // pass tells the pixels an earlier one left by them).
         Options {
-            depth_test_or_equal: true,
+            depth_test_or_equal: prepass,
             ..Options::default()
         },
     )
@@ -702,6 +719,29 @@ fn check_twins(plan: &Plan) -> Result<(), String> {
         return Err("the variant reads last frame's vertex buffers (a deforming mesh), which the plugin does not keep".into());
     }
     Ok(())
+}
+
+/// A pass that draws the meshes after another did in the same frame and
+/// keeps the depth it wrote, with a strict test: it draws only the pixels
+/// the earlier passes left (two-pass's second pass, three-pass's third),
+/// which a depth already holding the meshes' own cannot tell.
+fn depth_tells_passes_apart(plan: &Plan) -> Option<&shadecache_host::plan::Pass> {
+    use shadecache_host::plan::{CompareFunction, DrawKind, LoadOp};
+    let mut drawn = false;
+    for pass in &plan.passes {
+        if pass.draw != DrawKind::Geometry || pass.resolution_divisor != 1 {
+            continue;
+        }
+        let strict = matches!(
+            pass.depth.compare,
+            CompareFunction::Less | CompareFunction::Greater
+        );
+        if drawn && pass.depth.load == LoadOp::Load && strict {
+            return Some(pass);
+        }
+        drawn = true;
+    }
+    None
 }
 
 /// The mesh attributes at the variant's vertex input locations, by Bevy's

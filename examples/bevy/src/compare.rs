@@ -37,6 +37,12 @@ pub struct Headless {
     /// The stone meshes too, a second cached material with its own
     /// variant.
     pub stone: bool,
+    /// A lit box in Bevy's own `StandardMaterial`, marked for the cache,
+    /// and the plugin for it with Bevy PBR's variant.
+    pub standard_material: bool,
+    /// The lava meshes left unmarked: Bevy draws them (the cache draws
+    /// only the other cached meshes).
+    pub lava_uncached: bool,
     /// One more lava mesh, with vertex colours: another vertex layout
     /// than the others' in the same view.
     pub coloured_mesh: bool,
@@ -127,6 +133,8 @@ pub struct HeadlessRun {
     pub frames_drawn: u64,
     /// Of those, the frames drawn through the stone's variant.
     pub stone_frames_drawn: u64,
+    /// Of those, the frames drawn through Bevy PBR's variant.
+    pub standard_frames_drawn: u64,
     /// Errors the plugin logged.
     pub errors: Vec<String>,
     /// The frame the cut was marked in, if one was.
@@ -178,6 +186,7 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
     let results = Arc::new(Mutex::new(Outcome::default()));
     let materials = crate::scene::MaterialsPlugin {
         lava_vertex_colors: settings.left_to_bevy != Some(LeftToBevy::ComposedOtherwise),
+        standard_material: settings.standard_material,
     };
     let mut app = headless_app(false, settings.step_degrees, true, materials);
     app.insert_resource(Run(settings.clone(), results.clone()))
@@ -199,6 +208,7 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
         compared: outcome.compared,
         frames_drawn: stats.frames_drawn(),
         stone_frames_drawn: stats.frames_drawn_of::<scene::StoneMaterial>(),
+        standard_frames_drawn: stats.frames_drawn_of::<StandardMaterial>(),
         errors: stats.errors(),
         cut_frame: outcome.cut_frame,
         switch_off_frame: outcome.switch_off_frame,
@@ -216,8 +226,13 @@ fn setup(
     mut standard: ResMut<Assets<StandardMaterial>>,
     mut stone: ResMut<Assets<scene::StoneMaterial>>,
 ) {
-    scene::spawn_meshes(&mut commands, &mut meshes, &mut materials);
     let settings = &run.0;
+    scene::spawn_meshes(
+        &mut commands,
+        &mut meshes,
+        &mut materials,
+        !settings.lava_uncached,
+    );
     if settings.stone {
         scene::spawn_stone(&mut commands, &mut meshes, &mut stone);
     }
@@ -248,6 +263,27 @@ fn setup(
             MeshMaterial3d(materials.add(scene::LavaMaterial::new(AlphaMode::Opaque))),
             Transform::from_xyz(-0.3, 0.9, 0.8),
             CachedMaterial,
+        ));
+    }
+    if settings.standard_material {
+        commands.spawn((
+            Mesh3d(meshes.add(Cuboid::new(0.6, 0.6, 0.6))),
+            MeshMaterial3d(standard.add(StandardMaterial {
+                base_color: Color::srgb(0.2, 0.5, 0.9),
+                perceptual_roughness: 0.4,
+                ..default()
+            })),
+            Transform::from_xyz(-0.2, 0.2, 1.0).with_rotation(Quat::from_rotation_y(0.6)),
+            CachedMaterial,
+        ));
+        // A light on it: its specular highlight moves with the camera.
+        commands.spawn((
+            PointLight {
+                intensity: 400_000.0,
+                range: 10.0,
+                ..default()
+            },
+            Transform::from_xyz(0.6, 1.6, 2.2),
         ));
     }
     if settings.foreign_material {

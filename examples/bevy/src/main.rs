@@ -70,6 +70,8 @@ fn compare(args: Args) {
         msaa: false,
         foreign_material: false,
         stone: false,
+        standard_material: false,
+        lava_uncached: false,
         coloured_mesh: false,
         double_sided: false,
         other_meshes: shadecache_bevy_example::OtherMeshes::None,

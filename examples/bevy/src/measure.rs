@@ -102,7 +102,7 @@ fn setup(
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<scene::LavaMaterial>>,
 ) {
-    scene::spawn_meshes(&mut commands, &mut meshes, &mut materials);
+    scene::spawn_meshes(&mut commands, &mut meshes, &mut materials, true);
     let settings = &run.0;
     let target = target_image(&mut images, settings.size, false);
     commands.spawn((

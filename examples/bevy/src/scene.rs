@@ -42,6 +42,15 @@ fn variant(plan: &str, shaders: &[(&str, &str)]) -> CachedVariant {
         .unwrap_or_else(|err| panic!("the build script's variant does not load: {err}"))
 }
 
+/// The two-pass variant of Bevy's own `StandardMaterial` shader
+/// (bevy_pbr's `render/pbr.wesl`), of the node its analysis ranks first.
+pub fn standard_material_variant() -> CachedVariant {
+    variant(
+        built::standard_material::two_pass::PLAN,
+        built::standard_material::two_pass::SHADERS,
+    )
+}
+
 /// Bevy's materials of the game and a cache for each: the lava (its
 /// variant built for Bevy's primitive shapes and for meshes with vertex
 /// colours) and the stone, each with its variant.
@@ -49,12 +58,15 @@ pub struct MaterialsPlugin {
     /// Whether the lava's cache has its build for meshes with vertex
     /// colours (a test leaves it out to see such a mesh left to Bevy).
     pub lava_vertex_colors: bool,
+    /// Whether Bevy's `StandardMaterial` is cached too.
+    pub standard_material: bool,
 }
 
 impl Default for MaterialsPlugin {
     fn default() -> Self {
         MaterialsPlugin {
             lava_vertex_colors: true,
+            standard_material: true,
         }
     }
 }
@@ -71,6 +83,11 @@ impl Plugin for MaterialsPlugin {
             lava,
             ShadecachePlugin::<StoneMaterial>::new(stone_variant()),
         ));
+        if self.standard_material {
+            app.add_plugins(ShadecachePlugin::<StandardMaterial>::new(
+                standard_material_variant(),
+            ));
+        }
     }
 }
 
@@ -217,11 +234,12 @@ pub fn spawn_stone(
 }
 
 /// Places the lava meshes: a sphere, a torus and a box, each marked for
-/// the cache.
+/// the cache where `cached`.
 pub fn spawn_meshes(
     commands: &mut Commands,
     meshes: &mut Assets<Mesh>,
     materials: &mut Assets<LavaMaterial>,
+    cached: bool,
 ) {
     let lava = materials.add(LavaMaterial::new(AlphaMode::Opaque));
     let shapes = [
@@ -236,12 +254,14 @@ pub fn spawn_meshes(
         ),
     ];
     for (mesh, at) in shapes {
-        commands.spawn((
+        let mut entity = commands.spawn((
             Mesh3d(mesh),
             MeshMaterial3d(lava.clone()),
             Transform::from_translation(at),
-            CachedMaterial,
         ));
+        if cached {
+            entity.insert(CachedMaterial);
+        }
     }
 }
 

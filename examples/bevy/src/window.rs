@@ -46,7 +46,7 @@ fn setup(
     mut materials: ResMut<Assets<LavaMaterial>>,
     mut stone: ResMut<Assets<StoneMaterial>>,
 ) {
-    scene::spawn_meshes(&mut commands, &mut meshes, &mut materials);
+    scene::spawn_meshes(&mut commands, &mut meshes, &mut materials, true);
     scene::spawn_stone(&mut commands, &mut meshes, &mut stone);
     commands.spawn((
         Camera3d::default(),
