@@ -630,6 +630,37 @@ fn standard_material_is_cached() {
     );
 }
 
+/// A view with a depth prepass already holds the cached meshes' depth,
+/// and two-pass's second pass draws only the pixels the first left, told
+/// by the depth the first wrote: the view refuses Bevy PBR's two-pass
+/// variant with that reason, once, and Bevy draws the box, so every frame
+/// is Bevy's own (the lava's one-pass still caches). Without the refusal
+/// the second pass, its test passing on equal depth, computed every pixel
+/// the prepass covered again: Bevy's frames, at the cost of both passes.
+#[test]
+fn multi_pass_variant_over_a_prepass_is_left_to_bevy_with_a_reason() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        refresh_period: Some(1),
+        frames: 10,
+        standard_material: true,
+        depth_prepass: true,
+        ..settings()
+    });
+    let said: Vec<&String> = run
+        .errors
+        .iter()
+        .filter(|e| e.contains("the view has a prepass"))
+        .collect();
+    assert_eq!(said.len(), 1, "{:?}", run.errors);
+    assert_eq!(run.errors.len(), 1, "{:?}", run.errors);
+    assert_eq!(run.standard_frames_drawn, 0);
+    assert!(run.frames_drawn >= 10, "{} frames drawn", run.frames_drawn);
+    all_bevys_own(&run.compared);
+}
+
 /// Switching the cache off hands the meshes back to Bevy's opaque pass:
 /// a few frames after, every frame is Bevy's own, lava included (a mesh
 /// left out of the opaque phase would be missing from the image).
