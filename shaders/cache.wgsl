@@ -9,7 +9,9 @@
 // point seen now is the one that was cached (no disocclusion).
 
 struct CacheParams {
-    // Render target size in pixels.
+    // The viewport's size in pixels: the whole render target's, or the
+    // part of it a camera draws into (split screen; its corner is
+    // `viewport_origin`).
     viewport: vec2<f32>,
     // ε, relative: a tap agrees when |cached depth - expected depth| <
     // depth_epsilon * |expected depth - far_depth|, the expected depth
@@ -40,6 +42,13 @@ struct CacheParams {
     upsample_sigma_normal: f32,
     upsample_sigma_depth: f32,
     upsample_sensitivity: f32,
+    // The viewport's top-left corner in the render target, in pixels (0, 0
+    // for the whole target), and the render target's size: the cache's
+    // textures are the target's size, and a fragment's `@builtin(position)`
+    // is in the target's pixels, so last frame's clip position maps into
+    // the viewport's rectangle of them. Lowres takes the whole target only.
+    viewport_origin: vec2<f32>,
+    target_size: vec2<f32>,
 }
 
 @group(1) @binding(0) var<uniform> cache_params: CacheParams;
@@ -129,7 +138,7 @@ fn cache_bilinear_weights(f: vec2<f32>) -> vec4<f32> {
 // The age of a value blended from the 2×2 texels from `base` with
 // fractions `f`: one more than the oldest texel that weighs.
 fn cache_age(base: vec2<f32>, f: vec2<f32>) -> f32 {
-    let ages = textureGather(0, cache_previous_age, cache_sampler, (base + vec2<f32>(1.0)) / cache_params.viewport);
+    let ages = textureGather(0, cache_previous_age, cache_sampler, (base + vec2<f32>(1.0)) / cache_params.target_size);
     let counted = select(vec4<f32>(0.0), ages, cache_bilinear_weights(f) >= vec4<f32>(0.001));
     return min(max(max(counted.x, counted.y), max(counted.z, counted.w)) + 1.0, CACHE_AGE_LIMIT);
 }
@@ -256,12 +265,12 @@ struct CachePoint {
 // texel (a bilinear footprint there has weight only inside).
 fn cache_point(previous_clip: vec4<f32>) -> CachePoint {
     let ndc = previous_clip.xyz / previous_clip.w;
-    let texel = (vec2<f32>((ndc.x * 0.5) + 0.5, 0.5 - (ndc.y * 0.5)) * cache_params.viewport) - vec2<f32>(0.5);
+    let texel = ((vec2<f32>((ndc.x * 0.5) + 0.5, 0.5 - (ndc.y * 0.5)) * cache_params.viewport) + cache_params.viewport_origin) - vec2<f32>(0.5);
     let slack = vec2<f32>(0.001);
     // Comparisons with NaN are false, so a NaN position is off-screen too.
     let inside = (previous_clip.w > 0.0)
-        & all(texel >= -slack)
-        & all(texel <= ((cache_params.viewport - vec2<f32>(1.0)) + slack));
+        & all(texel >= (cache_params.viewport_origin - slack))
+        & all(texel <= ((cache_params.viewport_origin + cache_params.viewport - vec2<f32>(1.0)) + slack));
     return CachePoint(ndc.z, texel, inside);
 }
 
@@ -291,7 +300,7 @@ fn cache_footprint(previous_clip: vec4<f32>) -> CacheFootprint {
     let f = texel - base;
     // textureGather's order: (0, 1), (1, 1), (1, 0), (0, 0) from `base`.
     let weights = cache_bilinear_weights(f);
-    let depths = textureGather(cache_previous_depth, cache_sampler, (base + vec2<f32>(1.0)) / cache_params.viewport);
+    let depths = textureGather(cache_previous_depth, cache_sampler, (base + vec2<f32>(1.0)) / cache_params.target_size);
     let expected = cache_expected_depth(
         point.depth,
         cache_previous_slope(point.depth, texel),
@@ -308,7 +317,7 @@ fn cache_footprint(previous_clip: vec4<f32>) -> CacheFootprint {
 // only on a hit; it is read either way, to keep the code branch-free.
 fn cache_lookup(previous_clip: vec4<f32>) -> CacheLookup {
     let footprint = cache_footprint(previous_clip);
-    let at = (footprint.base + vec2<f32>(0.5) + footprint.weights) / cache_params.viewport;
+    let at = (footprint.base + vec2<f32>(0.5) + footprint.weights) / cache_params.target_size;
     let payload = textureSampleLevel(cache_previous_payload, cache_sampler, at, 0.0);
     return cache_checked(payload, footprint.status, cache_age(footprint.base, footprint.weights));
 }
@@ -317,7 +326,7 @@ fn cache_lookup(previous_clip: vec4<f32>) -> CacheLookup {
 // without the age (lowres keeps none), one gather and one sample.
 fn cache_history(previous_clip: vec4<f32>) -> CacheLookup {
     let footprint = cache_footprint(previous_clip);
-    let at = (footprint.base + vec2<f32>(0.5) + footprint.weights) / cache_params.viewport;
+    let at = (footprint.base + vec2<f32>(0.5) + footprint.weights) / cache_params.target_size;
     let payload = textureSampleLevel(cache_previous_payload, cache_sampler, at, 0.0);
     return cache_checked(payload, footprint.status, 0.0);
 }
@@ -341,9 +350,10 @@ fn cache_lookup_loads(previous_clip: vec4<f32>) -> CacheLookup {
 // four loads. Taps just outside the viewport (weight below 0.001) read the
 // edge; a NaN position is clamped to some texel and is a miss anyway.
 fn cache_bilinear_loads(base: vec2<f32>, f: vec2<f32>) -> vec4<f32> {
-    let last = vec2<i32>(cache_params.viewport) - vec2<i32>(1);
-    let t0 = clamp(vec2<i32>(base), vec2<i32>(0), last);
-    let t1 = clamp(vec2<i32>(base) + vec2<i32>(1), vec2<i32>(0), last);
+    let first = vec2<i32>(cache_params.viewport_origin);
+    let last = vec2<i32>(cache_params.viewport_origin + cache_params.viewport) - vec2<i32>(1);
+    let t0 = clamp(vec2<i32>(base), first, last);
+    let t1 = clamp(vec2<i32>(base) + vec2<i32>(1), first, last);
     let top = mix(
         textureLoad(cache_previous_payload, t0, 0),
         textureLoad(cache_previous_payload, vec2<i32>(t1.x, t0.y), 0),
@@ -378,10 +388,11 @@ struct CacheNearest {
 
 fn cache_nearest(previous_clip: vec4<f32>) -> CacheNearest {
     let ndc = previous_clip.xyz / previous_clip.w;
-    let position = vec2<f32>((ndc.x * 0.5) + 0.5, 0.5 - (ndc.y * 0.5)) * cache_params.viewport;
+    let origin = cache_params.viewport_origin;
+    let position = (vec2<f32>((ndc.x * 0.5) + 0.5, 0.5 - (ndc.y * 0.5)) * cache_params.viewport) + origin;
     // Comparisons with NaN are false, so a NaN position is off-screen.
-    let inside = (previous_clip.w > 0.0) & all(position >= vec2<f32>(0.0)) & all(position < cache_params.viewport);
-    let t = clamp(vec2<i32>(floor(position)), vec2<i32>(0), vec2<i32>(cache_params.viewport) - vec2<i32>(1));
+    let inside = (previous_clip.w > 0.0) & all(position >= origin) & all(position < (origin + cache_params.viewport));
+    let t = clamp(vec2<i32>(floor(position)), vec2<i32>(origin), vec2<i32>(origin + cache_params.viewport) - vec2<i32>(1));
     let offset = (vec2<f32>(t) + vec2<f32>(0.5)) - position;
     let slope = cache_previous_slope(ndc.z, position);
     let expected = cache_expected_depth(ndc.z, slope, vec4<f32>(offset.x), vec4<f32>(offset.y));
@@ -421,7 +432,7 @@ fn cache_packed_checked(texel: vec4<f32>, expected: f32, inside: bool, age: f32)
 // `bilinear-packed` with an rgba16float cache: one filtered sample.
 fn cache_lookup_packed(previous_clip: vec4<f32>) -> CacheLookup {
     let point = cache_point(previous_clip);
-    let at = (point.texel + vec2<f32>(0.5)) / cache_params.viewport;
+    let at = (point.texel + vec2<f32>(0.5)) / cache_params.target_size;
     let texel = textureSampleLevel(cache_previous_payload, cache_sampler, at, 0.0);
     let base = floor(point.texel);
     let age = cache_age(base, point.texel - base);

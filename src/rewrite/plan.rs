@@ -148,7 +148,13 @@ pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
             cache: [0.0, 0.0, 0.0, 0.0],
             depth: options.depth.far_depth().into(),
         },
-        assumes: FrameAssumptions::default(),
+        // The helpers map last frame's positions into the viewport's
+        // rectangle of the target (`viewport_origin`); lowres's samples
+        // are a lattice over the whole target.
+        assumes: FrameAssumptions {
+            partial_viewport: upsampling.is_none(),
+            ..FrameAssumptions::default()
+        },
         shader_defs: shader.defs.clone(),
     })
 }

@@ -39,8 +39,8 @@
 //!   never a panic in the game:
 //!   a plan that does not match the view's layouts, meshes with other
 //!   vertex attributes than the plan reads or of another material, what
-//!   the host refuses (MSAA: the cache holds one value per pixel), a
-//!   camera viewport smaller than its target (split screen). The
+//!   the host refuses (MSAA: the cache holds one value per pixel; a
+//!   lowres variant in a camera viewport smaller than its target). The
 //!   view then leaves the meshes to Bevy's own material, and says why
 //!   once. A mesh the variant's passes cannot draw as Bevy does is left
 //!   to Bevy on its own, with its reason logged once, while the view
@@ -90,7 +90,12 @@
 //!   refused for the view (one-pass is not).
 //!
 //! What it does not do (yet): skinned, morphed, lightmapped, blended or
-//! deferred meshes (left to Bevy, above); split screen.
+//! deferred meshes (left to Bevy, above).
+//!
+//! - **Split screen.** A camera drawing into part of its target has the
+//!   variant's passes draw into its viewport, and the cache's lookups map
+//!   last frame's positions into that rectangle of the target (the plan's
+//!   `viewport_origin`); a viewport that changes makes the cache again.
 
 mod defs;
 mod phase;

@@ -38,7 +38,7 @@ use bevy::render::{Render, RenderSystems};
 use shadecache_host::plan::ResourceKind;
 use shadecache_host::{
     CacheMode, CachedShader, Choice, Coverage, ErrorWatch, FrameLayout, FrameTimer, Governor,
-    NoTimer, Options, PassTimer, Plan, SpeedEstimate, Targets, TwinSources, Twins,
+    NoTimer, Options, PassTimer, Plan, SpeedEstimate, Targets, TwinSources, Twins, Viewport,
 };
 
 use crate::phase::{CacheId, CachedMesh3d, CachingViews, QueuedLayouts};
@@ -60,6 +60,9 @@ struct CacheKey {
     primitive: wgpu::PrimitiveState,
     material_layout: Vec<wgpu::BindGroupLayoutEntry>,
     refresh_period: Option<u32>,
+    /// The camera's viewport where it is part of the target (x, y,
+    /// width, height): a cache is made for one.
+    viewport: Option<[u32; 4]>,
 }
 
 /// One view's variant and what it draws with.
@@ -384,9 +387,7 @@ fn prepare_view_caches(
                     .values()
                     .filter(|item| item.variant == variant && item.layout == index as u32)
                     .collect();
-                let key = match partial_viewport(camera)
-                    .map_or_else(|| cache_key(&id, &items, settings, &sources), Err)
-                {
+                let key = match cache_key(&id, &items, settings, camera, &sources) {
                     Ok(Some(key)) => key,
                     // The material or the view is not prepared yet (or
                     // again, after a change): a view that cached goes on
@@ -457,24 +458,14 @@ fn prepare_cache(
     matches!(slot, Slot::Ready(_))
 }
 
-/// Why a camera's viewport keeps its view from caching: a viewport
-/// smaller than the target (split screen). The cache's pixel addresses,
-/// its refresh pattern and its targets are the whole target's, and the
-/// variant's passes would draw across it.
-fn partial_viewport(camera: &ExtractedCamera) -> Option<String> {
+/// The part of its target a camera draws into (x, y, width, height),
+/// where it is not the whole target (split screen): the variant's passes
+/// draw into it, and map last frame's positions into it.
+fn partial_viewport(camera: &ExtractedCamera) -> Option<[u32; 4]> {
     let viewport = camera.viewport.as_ref()?;
     let whole = camera.physical_target_size?;
-    (viewport.physical_position != UVec2::ZERO || viewport.physical_size != whole).then(|| {
-        format!(
-            "its camera draws into a viewport of {}×{} at {}, {} of its {}×{} target (split screen), which the cache does not take yet: its pixels are the whole target's",
-            viewport.physical_size.x,
-            viewport.physical_size.y,
-            viewport.physical_position.x,
-            viewport.physical_position.y,
-            whole.x,
-            whole.y
-        )
-    })
+    let (at, size) = (viewport.physical_position, viewport.physical_size);
+    (at != UVec2::ZERO || size != whole).then_some([at.x, at.y, size.x, size.y])
 }
 
 /// What the view's cache is made for, from Bevy's prepared view, mesh and
@@ -483,6 +474,7 @@ fn cache_key(
     (view, _, drawn): &CacheId,
     items: &[&CachedMesh3d],
     settings: &ReprojectionCache,
+    camera: &ExtractedCamera,
     sources: &CacheSources,
 ) -> Result<Option<CacheKey>, String> {
     let view_keys = &sources.view_keys;
@@ -530,6 +522,7 @@ fn cache_key(
         primitive: drawn.primitive,
         material_layout,
         refresh_period: settings.refresh_period,
+        viewport: partial_viewport(camera),
     }))
 }
 
@@ -613,6 +606,9 @@ fn try_make_cache(
     let colors = [Some(wgpu::ColorTargetState::from(key.color_format))];
     let mut frame = FrameLayout::new(&vertex, &groups, &colors);
     frame.sample_count = key.samples;
+    if let Some([x, y, width, height]) = key.viewport {
+        frame.viewport = Viewport::Rect([x as f32, y as f32, width as f32, height as f32]);
+    }
     // As Bevy's own pipeline for these meshes: the mesh's topology, the
     // material's culling, whatever its `specialize` set.
     frame.primitive = key.primitive;
@@ -875,6 +871,7 @@ fn draw_cached_passes(
             device: &device,
             queue: &queue,
             uniforms: (uniforms, offset.offset as u64),
+            viewport: cache.key.viewport,
         };
         let name = variants.name(variant);
         match frame.draw(cache, settings.mode, encoder) {
@@ -908,6 +905,8 @@ struct CacheFrame<'a> {
     device: &'a RenderDevice,
     queue: &'a RenderQueue,
     uniforms: (&'a wgpu::Buffer, u64),
+    /// The camera's viewport, where it is part of the target.
+    viewport: Option<[u32; 4]>,
 }
 
 impl CacheFrame<'_> {
@@ -1149,6 +1148,9 @@ impl CacheFrame<'_> {
             ..Default::default()
         });
         let mut pass = TrackedRenderPass::new(self.device, raw);
+        if let Some([x, y, width, height]) = self.viewport {
+            pass.set_viewport(x as f32, y as f32, width as f32, height as f32, 0.0, 1.0);
+        }
         // Batch by batch, as `render_range` draws them (a batch's first
         // item draws every instance of it, each with its own mesh from
         // the indirect parameters), each batch with the pipeline Bevy

@@ -8,6 +8,7 @@ use std::sync::{Arc, Mutex, Weak};
 use shadecache_plan::{DrawKind, LoadOp, Pass, Plan, ResourceKind, TargetKind, MAX_STENCIL_DRAWS};
 
 use crate::formats::{cache_format, host_depth_format, texture_format};
+use crate::frame::Viewport;
 use crate::layouts::CacheResource;
 use crate::pipelines::{pipeline, pipeline_layout, HostFormats, PipelineInputs};
 use crate::timing::{NoTimer, PassTimer};
@@ -89,6 +90,9 @@ pub struct CachedShader {
     formats: HostFormats,
     gbuffer_formats: Vec<wgpu::TextureFormat>,
     size: (u32, u32),
+    /// The part of the target the passes draw into (x, y, width, height),
+    /// where it is not the whole target (split screen).
+    viewport: Option<[f32; 4]>,
     targets: CacheTargets,
     /// Bumped when the targets are made again: bind groups of older ones
     /// are stale.
@@ -286,6 +290,10 @@ impl CachedShader {
             formats,
             gbuffer_formats,
             size,
+            viewport: match frame.viewport {
+                Viewport::Rect(rect) => Some(rect),
+                Viewport::WholeTarget => None,
+            },
             generation: 0,
             params,
             sampler,
@@ -563,6 +571,9 @@ impl CachedShader {
     ) -> Result<(), Error> {
         let state = params::FrameState {
             size: self.size,
+            viewport: self
+                .viewport
+                .unwrap_or([0.0, 0.0, self.size.0 as f32, self.size.1 as f32]),
             frame: self.frame,
             phase: self.phase,
         };
@@ -683,6 +694,10 @@ impl CachedShader {
                 // encoder is used again; wgpu checks that it is.
                 .forget_lifetime();
             render.set_pipeline(&built.pipeline);
+            if let (Some([x, y, width, height]), 1) = (self.viewport, built.pass.resolution_divisor)
+            {
+                render.set_viewport(x, y, width, height, 0.0, 1.0);
+            }
             record(built, &binder, render)?;
             timer.end(encoder, query);
         }

@@ -59,9 +59,14 @@ impl<'a> FrameLayout<'a> {
 /// Where the original pass draws in its targets.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Viewport {
-    /// The whole target, as a cache needs.
+    /// The whole target.
     WholeTarget,
-    /// A rectangle of the target, in pixels: x, y, width, height.
+    /// A rectangle of the target, in pixels: x, y, width, height (split
+    /// screen). The passes draw into it and the cache's lookups map last
+    /// frame's positions into it (the plan's `viewport_origin`); the
+    /// cache's textures stay the target's size. Plans that assume the
+    /// whole target (lowres, older plans) are refused. It is the cache's
+    /// for its life: make the cache again for another.
     Rect([f32; 4]),
 }
 
@@ -101,7 +106,7 @@ pub(crate) fn check(plan: &Plan, frame: &FrameLayout<'_>) -> Result<(), Error> {
     }
     if let (Viewport::Rect(rect), false) = (frame.viewport, assumes.partial_viewport) {
         return Err(Error::Refused(format!(
-            "a viewport of {rect:?}, not the whole target: the cache's pixel addresses and the refresh pattern assume the viewport is the target"
+            "a viewport of {rect:?}, not the whole target, and the plan assumes the whole target (lowres's samples are a lattice over it; a plan written before viewports has no `viewport_origin`)"
         )));
     }
     if let (Some(views), false) = (frame.multiview, assumes.multiview) {

@@ -29,11 +29,18 @@ pub(crate) fn size(fields: &[Field]) -> Result<usize, Error> {
 /// The frame's state the uniform carries.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct FrameState {
+    /// The target's size.
     pub size: (u32, u32),
+    /// The viewport in it: x, y, width, height.
+    pub viewport: [f32; 4],
     /// c, the frame counter.
     pub frame: u64,
     /// c mod Δn, advanced with it.
     pub phase: u32,
+}
+
+fn vec2(x: f32, y: f32) -> Vec<u8> {
+    [x, y].iter().flat_map(|v| v.to_le_bytes()).collect()
 }
 
 /// The uniform's bytes for a frame.
@@ -42,10 +49,9 @@ pub(crate) fn bytes(plan: &Plan, state: FrameState) -> Result<Vec<u8>, Error> {
     let mut bytes = vec![0u8; size(&plan.cache.params)?];
     for field in &plan.cache.params {
         let value: Vec<u8> = match field.name.as_str() {
-            "viewport" => [state.size.0 as f32, state.size.1 as f32]
-                .iter()
-                .flat_map(|v| v.to_le_bytes())
-                .collect(),
+            "viewport" => vec2(state.viewport[2], state.viewport[3]),
+            "viewport_origin" => vec2(state.viewport[0], state.viewport[1]),
+            "target_size" => vec2(state.size.0 as f32, state.size.1 as f32),
             "depth_epsilon" => refresh.depth_epsilon.to_le_bytes().to_vec(),
             "refresh_phase" => state.phase.to_le_bytes().to_vec(),
             "refresh_period" => refresh.period.to_le_bytes().to_vec(),

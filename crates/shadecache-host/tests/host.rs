@@ -631,9 +631,27 @@ fn what_a_cache_cannot_do_is_refused() {
             other => panic!("{why}: {other:?}"),
         };
     refused(&|frame| frame.sample_count = 4, "samples per pixel");
-    refused(
-        &|frame| frame.viewport = Viewport::Rect([0.0, 0.0, 32.0, 32.0]),
-        "viewport",
+    // A viewport in part of the target is the variants' to take (split
+    // screen); a plan that assumes the whole target (lowres's lattice, a
+    // plan from before viewports) refuses it.
+    let part =
+        |frame: &mut FrameLayout<'_>| frame.viewport = Viewport::Rect([8.0, 0.0, 32.0, 32.0]);
+    assert!(make(&gpu, "one-pass", part).is_ok());
+    let (mut plan, files) = variant("one-pass");
+    plan.assumes.partial_viewport = false;
+    let whole_target_only = with_frame(part, |frame| {
+        CachedShader::new(
+            &gpu.device,
+            &plan,
+            |file| files.iter().find(|(n, _)| *n == file).map(|(_, t)| *t),
+            frame,
+            (SIZE, SIZE),
+            Options::default(),
+        )
+    });
+    assert!(
+        matches!(&whole_target_only, Err(Error::Refused(text)) if text.contains("viewport")),
+        "{whole_target_only:?}"
     );
     refused(
         &|frame| frame.multiview = std::num::NonZeroU32::new(2),

@@ -51,8 +51,8 @@ pub struct Headless {
     pub double_sided: bool,
     /// Meshes Bevy draws itself beside the cached ones, in both views.
     pub other_meshes: OtherMeshes,
-    /// Both cameras draw into the left half of their image (a split
-    /// screen's viewport).
+    /// Both cameras draw into the right half of their image (a split
+    /// screen's viewport, away from the target's corner).
     pub half_viewport: bool,
     /// Both cameras with Bevy's depth prepass (`DepthPrepass`, which TAA
     /// and SSAO need): the view's depth holds the cached meshes' own
@@ -351,7 +351,7 @@ fn setup(
             camera.insert(Camera {
                 clear_color: ClearColorConfig::Custom(Color::BLACK),
                 viewport: Some(bevy::camera::Viewport {
-                    physical_position: UVec2::ZERO,
+                    physical_position: UVec2::new(settings.size / 2, 0),
                     physical_size: UVec2::new(settings.size / 2, settings.size),
                     ..default()
                 }),
