@@ -43,6 +43,10 @@ pub struct Headless {
     /// The lava meshes left unmarked: Bevy draws them (the cache draws
     /// only the other cached meshes).
     pub lava_uncached: bool,
+    /// The game's props in `StandardMaterial` (a floor, a pillar, a crate,
+    /// a glass pane, a point light: `scene::spawn_props`), marked for the
+    /// cache where `standard_material`.
+    pub props: bool,
     /// One more lava mesh, with vertex colours: another vertex layout
     /// than the others' in the same view.
     pub coloured_mesh: bool,
@@ -265,7 +269,16 @@ fn setup(
             CachedMaterial,
         ));
     }
-    if settings.standard_material {
+    if settings.props {
+        scene::spawn_props(
+            &mut commands,
+            &mut meshes,
+            &mut standard,
+            settings.standard_material,
+        );
+    }
+    // The lit box of the StandardMaterial test (the props have their own).
+    if settings.standard_material && !settings.props {
         commands.spawn((
             Mesh3d(meshes.add(Cuboid::new(0.6, 0.6, 0.6))),
             MeshMaterial3d(standard.add(StandardMaterial {
@@ -558,7 +571,7 @@ fn finish(
 /// Pixels of lava in an RGBA image: red above green and blue (its crust
 /// and glow are; the clear colour and the other meshes of these scenes,
 /// green, blue and a pale pane, are not).
-fn lava_pixels(data: &[f32]) -> usize {
+pub(crate) fn lava_pixels(data: &[f32]) -> usize {
     data.chunks(4)
         .filter(|p| p[0] > p[1] && p[0] > p[2])
         .count()

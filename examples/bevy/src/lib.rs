@@ -25,7 +25,7 @@ use bevy::render::render_resource::{TextureFormat, TextureUsages};
 use shadecache_bevy::CacheStats;
 
 pub use compare::{run_headless, Compared, Headless, HeadlessRun, LeftToBevy, OtherMeshes};
-pub use measure::{measure, Measure, Measured};
+pub use measure::{measure, Cached, Measure, Measured};
 
 /// Bevy with the game's assets, its material and the cache, run headless
 /// as fast as frames come, its cameras' path `step_degrees` a frame (the
@@ -116,9 +116,4 @@ fn target_image(images: &mut Assets<Image>, size: u32, linear: bool) -> Handle<I
     let mut image = Image::new_target_texture(size, size, format, None);
     image.texture_descriptor.usage |= TextureUsages::COPY_SRC;
     images.add(image)
-}
-
-/// Pixels drawn (not the black clear colour) in an RGBA image.
-fn drawn_pixels(data: &[f32]) -> usize {
-    data.chunks(4).filter(|p| p[..3] != [0.0; 3]).count()
 }

@@ -1,13 +1,16 @@
 //! The GPU time of the material's passes, cached or as Bevy draws it, from
 //! Bevy's render diagnostics.
 //!
-//! One camera draws the scene along the path. Bevy's
-//! `RenderDiagnosticsPlugin` times its passes with timestamp queries: the
-//! main opaque pass (`render/main_opaque_pass_3d/elapsed_gpu`), which
-//! draws the lava meshes when the cache is off and only clears when it is
-//! on, and the plugin's passes (`render/shadecache/elapsed_gpu`). The
-//! material's time is their sum, per frame, over the frames after Bevy's
-//! pipelines are ready.
+//! One camera draws the game's scene along the path: the lava, and the
+//! props in Bevy's `StandardMaterial` (a floor, a pillar, a crate, a glass
+//! pane, a point light). Bevy's `RenderDiagnosticsPlugin` times its passes
+//! with timestamp queries: the main opaque pass
+//! (`render/main_opaque_pass_3d/elapsed_gpu`), which draws every opaque
+//! mesh the cache does not, and the plugin's passes
+//! (`render/shadecache/elapsed_gpu`), which draw the cached ones. Their
+//! sum per frame, over the frames after Bevy's pipelines are ready, is the
+//! time of the opaque meshes, with each material cached or not
+//! ([`Cached`]): a material's cost and saving is the difference it makes.
 
 use std::sync::{Arc, Mutex};
 
@@ -18,7 +21,7 @@ use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use shadecache_bevy::ReprojectionCache;
 
 use crate::scene::{self, FrameCount};
-use crate::{drawn_pixels, headless_app, run_to_exit, target_image, Deadline};
+use crate::{headless_app, run_to_exit, target_image, Deadline};
 
 /// What a timing run does.
 #[derive(Clone, Debug)]
@@ -27,13 +30,54 @@ pub struct Measure {
     pub size: u32,
     /// Frames timed, after the pipelines are ready.
     pub frames: u32,
-    /// Whether the camera draws through the cache.
-    pub cached: bool,
+    /// Which materials the camera draws through the cache.
+    pub cached: Cached,
     /// Degrees the camera moves a frame.
     pub step_degrees: f32,
 }
 
-/// GPU milliseconds of the material's passes, one value a frame.
+/// Which of the game's materials a timing run draws through the cache.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cached {
+    /// None: every mesh as Bevy draws it.
+    Nothing,
+    /// The lava (one-pass, a custom material).
+    Lava,
+    /// The props (two-pass, Bevy's `StandardMaterial`).
+    StandardMaterial,
+    /// Both.
+    Both,
+}
+
+impl Cached {
+    /// Every configuration, in the order the measure runs them.
+    pub const ALL: [Cached; 4] = [
+        Cached::Nothing,
+        Cached::Lava,
+        Cached::StandardMaterial,
+        Cached::Both,
+    ];
+
+    fn lava(self) -> bool {
+        matches!(self, Cached::Lava | Cached::Both)
+    }
+
+    fn standard_material(self) -> bool {
+        matches!(self, Cached::StandardMaterial | Cached::Both)
+    }
+
+    /// In words, for a table.
+    pub fn name(self) -> &'static str {
+        match self {
+            Cached::Nothing => "nothing cached",
+            Cached::Lava => "lava cached",
+            Cached::StandardMaterial => "StandardMaterial cached",
+            Cached::Both => "both cached",
+        }
+    }
+}
+
+/// GPU milliseconds of the opaque meshes' passes, one value a frame.
 #[derive(Clone, Debug, Default)]
 pub struct Measured {
     /// The opaque pass plus the plugin's passes, per frame timed.
@@ -101,14 +145,22 @@ fn setup(
     mut images: ResMut<Assets<Image>>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<scene::LavaMaterial>>,
+    mut standard: ResMut<Assets<StandardMaterial>>,
 ) {
-    scene::spawn_meshes(&mut commands, &mut meshes, &mut materials, true);
     let settings = &run.0;
+    let cached = settings.cached;
+    scene::spawn_meshes(&mut commands, &mut meshes, &mut materials, cached.lava());
+    scene::spawn_props(
+        &mut commands,
+        &mut meshes,
+        &mut standard,
+        cached.standard_material(),
+    );
     let target = target_image(&mut images, settings.size, false);
     commands.spawn((
         scene::camera(target.clone(), settings.step_degrees),
         ReprojectionCache {
-            enabled: settings.cached,
+            enabled: cached != Cached::Nothing,
             ..default()
         },
     ));
@@ -117,7 +169,7 @@ fn setup(
     commands.spawn(Readback::texture(target)).observe(
         |event: On<ReadbackComplete>, mut timing: ResMut<Timing>, frame: Res<FrameCount>| {
             if timing.ready_at.is_none()
-                && drawn_pixels(&crate::compare::channels(&event.data, false)) > 0
+                && crate::compare::lava_pixels(&crate::compare::channels(&event.data, false)) > 0
             {
                 timing.ready_at = Some(frame.0);
             }
@@ -135,9 +187,10 @@ fn take_times(
     mut exit: MessageWriter<AppExit>,
 ) {
     let settings = &run.0;
-    // A few frames more: the timestamps of the first ready frame come
-    // back a few frames later.
-    let Some(ready) = timing.ready_at.filter(|&at| frame.0 > at + 8) else {
+    // Frames more: the timestamps of the first ready frame come back a
+    // few frames later, and the props' pipelines may be made after the
+    // lava's (Bevy compiles each material's when it first meets it).
+    let Some(ready) = timing.ready_at.filter(|&at| frame.0 > at + 30) else {
         if deadline.passed() {
             exit.write(AppExit::Success);
         }
@@ -152,8 +205,8 @@ fn take_times(
     let opaque = newest(OPAQUE);
     let cache = newest(CACHE);
     let total = match (opaque, cache, settings.cached) {
-        (Some(opaque), Some(cache), true) => Some(opaque + cache),
-        (Some(opaque), _, false) => Some(opaque),
+        (Some(opaque), _, Cached::Nothing) => Some(opaque),
+        (Some(opaque), Some(cache), _) => Some(opaque + cache),
         _ => None,
     };
     if let Some(total) = total {

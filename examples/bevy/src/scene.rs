@@ -233,6 +233,70 @@ pub fn spawn_stone(
     }
 }
 
+/// Places the game's props in Bevy's own `StandardMaterial`, each marked
+/// for the cache where `cached`: a floor the lava sphere rests on, a
+/// pillar before the sphere and a crate before the torus (each hides part
+/// of the lava as the camera turns), a point light over them, and a glass
+/// pane before the torus, which blends and which Bevy draws in its
+/// transparent pass over the cached meshes.
+pub fn spawn_props(
+    commands: &mut Commands,
+    meshes: &mut Assets<Mesh>,
+    materials: &mut Assets<StandardMaterial>,
+    cached: bool,
+) {
+    let lit = |color: Color, roughness: f32| StandardMaterial {
+        base_color: color,
+        perceptual_roughness: roughness,
+        ..default()
+    };
+    let props = [
+        (
+            meshes.add(Plane3d::default().mesh().size(9.0, 9.0)),
+            lit(Color::srgb(0.35, 0.4, 0.3), 0.9),
+            Transform::from_xyz(0.0, -0.8, 0.0),
+        ),
+        (
+            meshes.add(Cylinder::new(0.22, 2.0)),
+            lit(Color::srgb(0.6, 0.62, 0.66), 0.5),
+            Transform::from_xyz(-0.5, 0.2, 1.3),
+        ),
+        (
+            meshes.add(Cuboid::new(0.6, 0.6, 0.6)),
+            lit(Color::srgb(0.2, 0.35, 0.8), 0.35),
+            Transform::from_xyz(0.9, -0.5, 1.2).with_rotation(Quat::from_rotation_y(0.5)),
+        ),
+    ];
+    for (mesh, material, transform) in props {
+        let mut entity = commands.spawn((
+            Mesh3d(mesh),
+            MeshMaterial3d(materials.add(material)),
+            transform,
+        ));
+        if cached {
+            entity.insert(CachedMaterial);
+        }
+    }
+    commands.spawn((
+        Mesh3d(meshes.add(Cuboid::new(1.4, 1.0, 0.04))),
+        MeshMaterial3d(materials.add(StandardMaterial {
+            base_color: Color::srgba(0.6, 0.8, 1.0, 0.35),
+            alpha_mode: AlphaMode::Blend,
+            perceptual_roughness: 0.1,
+            ..default()
+        })),
+        Transform::from_xyz(1.3, 0.0, 1.1),
+    ));
+    commands.spawn((
+        PointLight {
+            intensity: 600_000.0,
+            range: 12.0,
+            ..default()
+        },
+        Transform::from_xyz(1.5, 2.5, 2.5),
+    ));
+}
+
 /// Places the lava meshes: a sphere, a torus and a box, each marked for
 /// the cache where `cached`.
 pub fn spawn_meshes(

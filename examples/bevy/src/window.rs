@@ -45,9 +45,11 @@ fn setup(
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<LavaMaterial>>,
     mut stone: ResMut<Assets<StoneMaterial>>,
+    mut standard: ResMut<Assets<StandardMaterial>>,
 ) {
     scene::spawn_meshes(&mut commands, &mut meshes, &mut materials, true);
     scene::spawn_stone(&mut commands, &mut meshes, &mut stone);
+    scene::spawn_props(&mut commands, &mut meshes, &mut standard, true);
     commands.spawn((
         Camera3d::default(),
         // The cache holds one value per pixel.

@@ -77,6 +77,7 @@ fn settings() -> Headless {
         stone: false,
         standard_material: false,
         lava_uncached: false,
+        props: false,
         coloured_mesh: false,
         double_sided: false,
         other_meshes: OtherMeshes::None,
@@ -648,6 +649,40 @@ fn standard_material_is_cached() {
         steady.iter().all(|f| f.psnr > 30.0),
         "the reused box is far from Bevy's\n{steady:?}"
     );
+}
+
+/// The game's scene: the lava (a custom material) and the props in Bevy's
+/// `StandardMaterial` (a floor the sphere rests on, a pillar and a crate
+/// before the lava) cached at once, each through its own variant, a glass
+/// pane blending over them in Bevy's transparent pass and a point light
+/// on them: at Δn = 1 every frame is Bevy's own to the bit (the props and
+/// the lava hide each other as Bevy's depth says), and both variants drew
+/// every frame compared.
+#[test]
+fn game_scene_caches_standard_material_and_lava_together() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        refresh_period: Some(1),
+        frames: 8,
+        standard_material: true,
+        props: true,
+        ..settings()
+    });
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    assert!(run.compared.len() >= 8, "{:?}", run.compared);
+    assert!(
+        run.standard_frames_drawn >= 8,
+        "Bevy PBR's variant drew {} frames",
+        run.standard_frames_drawn
+    );
+    assert!(
+        run.frames_drawn - run.standard_frames_drawn >= 8,
+        "the lava's variant drew {} frames",
+        run.frames_drawn - run.standard_frames_drawn
+    );
+    all_bevys_own(&run.compared);
 }
 
 /// A view with a depth prepass already holds the cached meshes' depth,
