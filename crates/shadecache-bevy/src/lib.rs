@@ -92,6 +92,10 @@
 //! What it does not do (yet): skinned, morphed, lightmapped, blended or
 //! deferred meshes (left to Bevy, above).
 //!
+//! - **Hot reload.** The variant is rewritten at build time; a material
+//!   whose fragment shader changes while the game runs (Bevy's file
+//!   watcher) is handed back to Bevy from then on, said once
+//!   (`reload.rs`), until the game is built again.
 //! - **Split screen.** A camera drawing into part of its target has the
 //!   variant's passes draw into its viewport, and the cache's lookups map
 //!   last frame's positions into that rectangle of the target (the plan's
@@ -99,6 +103,7 @@
 
 mod defs;
 mod phase;
+mod reload;
 mod view_cache;
 
 use std::any::TypeId;
@@ -249,7 +254,7 @@ pub struct ShadecachePlugin<M> {
     material: PhantomData<fn() -> M>,
 }
 
-impl<M: Asset> ShadecachePlugin<M> {
+impl<M: bevy::pbr::Material> ShadecachePlugin<M> {
     /// The plugin for `M`'s variant.
     pub fn new(variant: CachedVariant) -> Self {
         ShadecachePlugin {
@@ -271,7 +276,7 @@ impl<M: Asset> ShadecachePlugin<M> {
     }
 }
 
-impl<M: Asset> Plugin for ShadecachePlugin<M> {
+impl<M: bevy::pbr::Material> Plugin for ShadecachePlugin<M> {
     fn build(&self, app: &mut App) {
         // What every cached material shares (the phase, the cameras'
         // components, the stats) is added with the first.
@@ -290,7 +295,8 @@ impl<M: Asset> Plugin for ShadecachePlugin<M> {
             move |stats: Res<CacheStats>, diagnostics: bevy::diagnostic::Diagnostics| {
                 diagnostics::publish(&name, &stats, diagnostics)
             },
-        );
+        )
+        .add_systems(Update, reload::watch::<M>);
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
             return;
         };
@@ -419,11 +425,14 @@ impl Plugin for SharedPlugin {
         ))
         .add_systems(First, (clear_cuts, copyable_depth));
         let stats = CacheStats::default();
-        app.insert_resource(stats.clone());
+        let reloaded = reload::ReloadedMaterials::default();
+        app.insert_resource(stats.clone())
+            .insert_resource(reloaded.clone());
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
             return;
         };
         render_app
+            .insert_resource(reloaded)
             .init_resource::<CachedVariants>()
             .init_resource::<defs::LibraryDefs>()
             .add_systems(bevy::render::ExtractSchedule, defs::extract_library_defs);

@@ -42,6 +42,7 @@ use shadecache_host::{
 };
 
 use crate::phase::{CacheId, CachedMesh3d, CachingViews, QueuedLayouts};
+use crate::reload::ReloadedMaterials;
 use crate::{CachedVariant, CachedVariants, ReprojectionCache};
 
 /// Bevy's view uniform: group 0, binding 0 of the mesh view bind group.
@@ -350,6 +351,8 @@ fn copyable_view_uniforms(mut uniforms: ResMut<ViewUniforms>) {
 #[derive(SystemParam)]
 struct CacheSources<'w> {
     variants: Res<'w, CachedVariants>,
+    /// The materials whose shader changed since the game started: Bevy's.
+    reloaded: Res<'w, ReloadedMaterials>,
     device: Res<'w, RenderDevice>,
     mesh_pipeline: Res<'w, MeshPipeline>,
     view_keys: Res<'w, ViewKeyCache>,
@@ -371,13 +374,23 @@ fn prepare_view_caches(
     mut refusals: Local<HashMap<CacheId, String>>,
 ) {
     let was_caching = std::mem::take(&mut caching.0);
-    caches.0.retain(|(view, _, _), _| phases.contains_key(view));
+    // A material whose shader changed is Bevy's from then on: its caches
+    // go, and its meshes back to Bevy's opaque pass.
+    let current = |variant: u32| {
+        sources
+            .variants
+            .get(variant)
+            .is_some_and(|m| !sources.reloaded.contains(m.material))
+    };
+    caches
+        .0
+        .retain(|(view, variant, _), _| phases.contains_key(view) && current(*variant));
     let mut seen: HashSet<CacheId> = HashSet::default();
     for (view, camera, settings) in &views {
         let Some(phase) = phases.get(&view.retained_view_entity) else {
             continue;
         };
-        for variant in 0..sources.variants.len() {
+        for variant in (0..sources.variants.len()).filter(|&v| current(v)) {
             let queued = sources.layouts.0.get(&(view.retained_view_entity, variant));
             for (index, layout) in queued.into_iter().flatten().enumerate() {
                 let id: CacheId = (view.retained_view_entity, variant, layout.clone());
@@ -427,7 +440,7 @@ fn prepare_view_caches(
     caching.0.extend(
         was_caching
             .into_iter()
-            .filter(|id| !seen.contains(id) && phases.contains_key(&id.0)),
+            .filter(|id| !seen.contains(id) && phases.contains_key(&id.0) && current(id.1)),
     );
 }
 

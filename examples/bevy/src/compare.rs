@@ -69,6 +69,9 @@ pub struct Headless {
     /// cache off (Bevy draws the meshes again), and `frames` more are
     /// compared.
     pub switch_off_after: Option<u32>,
+    /// After this many compared frames, the lava's shader asset changes
+    /// (as a hot reload changes it), and `frames` more are compared.
+    pub reload_shader_after: Option<u32>,
     /// Both cameras draw in linear HDR (`Hdr`, no tonemapping) into
     /// `rgba16float` images read back as they are, and the frames compare
     /// as `shadecache profile` compares them: PSNR over RGB in linear float,
@@ -145,6 +148,8 @@ pub struct HeadlessRun {
     pub cut_frame: Option<u32>,
     /// The frame the cache was switched off in, if it was.
     pub switch_off_frame: Option<u32>,
+    /// The frame the lava's shader changed in, if it did.
+    pub reload_frame: Option<u32>,
     /// The lava's governor, where the mode is `Auto`.
     pub governor: Option<GovernorReadout>,
     /// The plugin's diagnostics (`render/shadecache/...`) with their
@@ -167,6 +172,7 @@ struct Capture {
     compared: Vec<Compared>,
     cut_frame: Option<u32>,
     switch_off_frame: Option<u32>,
+    reload_frame: Option<u32>,
 }
 
 /// What comes back from the app (its runner takes it).
@@ -175,6 +181,7 @@ struct Outcome {
     compared: Vec<Compared>,
     cut_frame: Option<u32>,
     switch_off_frame: Option<u32>,
+    reload_frame: Option<u32>,
     diagnostics: Vec<(String, f64)>,
 }
 
@@ -216,6 +223,7 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
         errors: stats.errors(),
         cut_frame: outcome.cut_frame,
         switch_off_frame: outcome.switch_off_frame,
+        reload_frame: outcome.reload_frame,
         governor: stats.governor_of::<scene::LavaMaterial>(),
         diagnostics: outcome.diagnostics,
     }
@@ -484,12 +492,16 @@ fn compare(mut capture: ResMut<Capture>, frame: Res<FrameCount>, run: Res<Run>) 
 }
 
 /// Once `cut_after` frames are compared, marks a cut on the caching
-/// camera, once; once `switch_off_after` are, switches its cache off.
+/// camera, once; once `switch_off_after` are, switches its cache off;
+/// once `reload_shader_after` are, changes the lava's shader asset (its
+/// source as it was: Bevy sees a change, as from a hot reload).
 fn cut_or_switch_off(
     run: Res<Run>,
     frame: Res<FrameCount>,
     mut capture: ResMut<Capture>,
     mut caches: Query<&mut ReprojectionCache>,
+    server: Res<AssetServer>,
+    mut shaders: ResMut<Assets<bevy::shader::Shader>>,
 ) {
     let compared = capture.compared.len() as u32;
     let due = |after: Option<u32>, done: Option<u32>| {
@@ -506,6 +518,14 @@ fn cut_or_switch_off(
             cache.enabled = false;
         }
         capture.switch_off_frame = Some(frame.0);
+    }
+    if due(run.0.reload_shader_after, capture.reload_frame) {
+        let lava = server.load::<bevy::shader::Shader>("lava.wesl");
+        // Borrowed mutably, the asset is marked modified.
+        if let Some(mut shader) = shaders.get_mut(&lava) {
+            let _changed: &mut bevy::shader::Shader = &mut shader;
+            capture.reload_frame = Some(frame.0);
+        }
     }
 }
 
@@ -551,12 +571,14 @@ fn finish(
     let wanted = settings.frames
         + settings.resize.map_or(0, |(after, _)| after)
         + settings.cut_after.unwrap_or(0)
-        + settings.switch_off_after.unwrap_or(0);
+        + settings.switch_off_after.unwrap_or(0)
+        + settings.reload_shader_after.unwrap_or(0);
     if capture.compared.len() as u32 >= wanted || deadline.passed() {
         *run.1.lock().unwrap_or_else(|p| p.into_inner()) = Outcome {
             compared: capture.compared.clone(),
             cut_frame: capture.cut_frame,
             switch_off_frame: capture.switch_off_frame,
+            reload_frame: capture.reload_frame,
             diagnostics: store
                 .iter()
                 .flat_map(|store| store.iter())

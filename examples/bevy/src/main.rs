@@ -91,6 +91,7 @@ fn compare_one(args: &Args, cached: Cached) {
         half_viewport: false,
         depth_prepass: false,
         switch_off_after: None,
+        reload_shader_after: None,
         linear: args.linear,
         // Every frame through the cache, to compare each with Bevy's.
         mode: shadecache_bevy::CacheMode::Always,

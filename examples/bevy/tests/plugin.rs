@@ -85,6 +85,7 @@ fn settings() -> Headless {
         half_viewport: false,
         depth_prepass: false,
         switch_off_after: None,
+        reload_shader_after: None,
         linear: false,
         mode: CacheMode::Always,
     }
@@ -739,6 +740,44 @@ fn bevy_plugin_hands_the_meshes_back_when_switched_off() {
     // The switch takes a frame to be extracted, one to queue the meshes
     // again and a few for the images to come back.
     let after: Vec<&Compared> = run.compared.iter().filter(|f| f.frame >= off + 4).collect();
+    assert!(after.len() >= 6, "{:?}", run.compared);
+    all_bevys_own(after);
+}
+
+/// Hot reload: the lava's shader asset changes while the game runs (as
+/// Bevy's file watcher changes it). The variant was rewritten from the
+/// shader the game was built with, so from then on the lava is Bevy's:
+/// the plugin says so once, hands its meshes back, and every frame a few
+/// frames after the change is Bevy's own (before, the cache reused).
+/// Without the watch the cache went on drawing the old variant.
+#[test]
+fn shader_hot_reload_hands_the_material_back_to_bevy() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        frames: 12,
+        reload_shader_after: Some(12),
+        ..settings()
+    });
+    let said: Vec<&String> = run
+        .errors
+        .iter()
+        .filter(|e| e.contains("changed while the game runs"))
+        .collect();
+    assert_eq!(said.len(), 1, "{:?}", run.errors);
+    assert_eq!(run.errors.len(), 1, "{:?}", run.errors);
+    let changed = run.reload_frame.expect("the shader changed");
+    let before: Vec<&Compared> = run.compared.iter().filter(|f| f.frame < changed).collect();
+    assert!(
+        before.iter().any(|f| f.max_error > 2.0 / 255.0),
+        "nothing was reused before: {before:?}"
+    );
+    let after: Vec<&Compared> = run
+        .compared
+        .iter()
+        .filter(|f| f.frame >= changed + 4)
+        .collect();
     assert!(after.len() >= 6, "{:?}", run.compared);
     all_bevys_own(after);
 }
