@@ -35,8 +35,9 @@ struct MorphParams {
     // The eye-tracking damping f(v) = 1 - smoothstep(from, to, v), deg/s.
     track_from: f32,
     track_to: f32,
-    // Selective blur (`selective_blur`): blur only where the motion is at
-    // least this fast (deg/s).
+    // The speed gate (`blur_gated_by_speed`, `--blur-min-speed`): blur
+    // only where the motion is at least this fast (deg/s). Not the paper's
+    // selective blur, which gates by luminance and range.
     blur_min_speed: f32,
     // The grid distortion mapped to full blur: smoothstep(from, to, D).
     distortion_from: f32,
@@ -57,7 +58,7 @@ struct MorphParams {
 // uniform): blur the in-between frames and compensate the rendered one;
 // blur only where the motion is fast enough (`blur_min_speed`).
 override blur: bool = true;
-override selective_blur: bool = false;
+override blur_gated_by_speed: bool = false;
 
 @group(0) @binding(0) var<uniform> params: MorphParams;
 // Linear filtering, clamped to the edge.
@@ -73,7 +74,7 @@ override selective_blur: bool = false;
 // The low-pass: the pyramid level the blur reads.
 @group(0) @binding(6) var low: texture_2d<f32>;
 // The same read back to full resolution (`fs_compensate`'s second
-// output), where selective blur leaves the frame sharp the frame itself:
+// output), where the speed gate leaves the frame sharp the frame itself:
 // what the in-between frames warp.
 @group(0) @binding(9) var low_full: texture_2d<f32>;
 // What the reduction and the pyramid passes halve.
@@ -200,10 +201,10 @@ fn low_pass(p: vec2<f32>) -> vec4<f32> {
         + g1.x * textureSampleLevel(low, linear_clamp, h1, 0.0));
 }
 
-// Whether the blur applies at texel `p`: everywhere, or with selective
-// blur only where the motion is fast enough to be tracked and blurred.
+// Whether the blur applies at texel `p`: everywhere, or with the speed
+// gate only where the motion is fast enough to be tracked and blurred.
 fn blurs_at(p: vec2<i32>) -> bool {
-    return !selective_blur || speed_at(p) >= params.blur_min_speed;
+    return !blur_gated_by_speed || speed_at(p) >= params.blur_min_speed;
 }
 
 // ---- 3. High-frequency compensation ----

@@ -262,10 +262,11 @@ pub struct Options {
     /// Eye-tracking damping f(v) = 1 − smoothstep(a, b, v), deg/s (seed
     /// 004 §6: 70 and 90).
     pub tracking: [f32; 2],
-    /// Selective blur: blur (and compensate) only where the motion is at
+    /// A gate by speed: blur (and compensate) only where the motion is at
     /// least this fast, deg/s (the drift limit below which the eye does
-    /// not track: 0.15); `None` blurs everywhere, as the paper.
-    pub selective_blur: Option<f32>,
+    /// not track: 0.15); `None` blurs everywhere, as the paper. Not the
+    /// paper's selective blur, which gates by luminance and range.
+    pub blur_min_speed: Option<f32>,
     /// The grid distortion mapped to full blur: smoothstep(a, b, D), D the
     /// largest |s − 1| over the warp's singular values.
     pub distortion_blur: [f32; 2],
@@ -332,7 +333,7 @@ impl Default for Options {
             display_hz: 120.0,
             pixels_per_degree: 37.0,
             tracking: [70.0, 90.0],
-            selective_blur: None,
+            blur_min_speed: None,
             distortion_blur: [0.25, 1.0],
             pursuit_substeps: 8,
             size: None,

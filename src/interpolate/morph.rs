@@ -44,8 +44,9 @@ pub struct MorphSetup {
     pub grid: u32,
     pub blur_level: u32,
     /// Blur only where the motion is fast enough (the speed is
-    /// [`MorphParams::blur_min_speed`]).
-    pub selective_blur: bool,
+    /// [`MorphParams::blur_min_speed`]): a gate by speed, not the paper's
+    /// selective blur (by luminance and range).
+    pub blur_gated_by_speed: bool,
 }
 
 /// The knobs of one pass, as `MorphParams` of `shaders/morph.wgsl` lays
@@ -64,7 +65,7 @@ pub struct MorphParams {
     pub speed_scale: f32,
     /// f(v)'s ramp, deg/s.
     pub tracking: [f32; 2],
-    /// Selective blur's least speed, deg/s ([`MorphSetup::selective_blur`]).
+    /// The speed gate's least speed, deg/s ([`MorphSetup::blur_gated_by_speed`]).
     pub blur_min_speed: Option<f32>,
     /// The distortion's ramp to full blur.
     pub distortion: [f32; 2],
@@ -235,7 +236,10 @@ impl Morph {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let selective = ("selective_blur", f64::from(u8::from(setup.selective_blur)));
+        let gated = (
+            "blur_gated_by_speed",
+            f64::from(u8::from(setup.blur_gated_by_speed)),
+        );
         let (flow_edges, argmax_reduce, blur_down, compensate, morph, warp) =
             crate::runtime::validated(device, || {
                 let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -250,12 +254,12 @@ impl Morph {
                         entry,
                         &pipeline_layout,
                         entry,
-                        &[selective],
+                        &[gated],
                         &targets,
                     )
                 };
                 let grid = |blur: bool| {
-                    let constants = [("blur", f64::from(u8::from(blur))), selective];
+                    let constants = [("blur", f64::from(u8::from(blur))), gated];
                     grid_pipeline(device, &module, &pipeline_layout, &constants)
                 };
                 (

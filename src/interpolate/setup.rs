@@ -110,9 +110,9 @@ fn check_morph(options: &Options) -> Result<(), Error> {
             )
         }),
         options
-            .selective_blur
+            .blur_min_speed
             .filter(|v| !(*v >= 0.0 && v.is_finite()))
-            .map(|v| format!("--selective-blur takes a speed of 0 deg/s or more, not {v}")),
+            .map(|v| format!("--blur-min-speed takes a speed of 0 deg/s or more, not {v}")),
         (!(options.snap_threshold >= 0.0 && options.snap_threshold.is_finite())).then(|| {
             format!(
                 "--snap-threshold must be 0 or more, not {}",

@@ -85,18 +85,18 @@ fn iframe_of(frame: &KeptFrame, n: u32) -> u32 {
     frame.frame - (frame.alpha * f64::from(n)).round() as u32
 }
 
-/// Nothing moves: the warp is the identity, and with selective blur
-/// (none below the drift limit) the full method shows the I-frame in every
-/// slot, compensated by nothing. Without selective blur the same frames
-/// are blurred: the identity is selective blur's doing.
+/// Nothing moves: the warp is the identity, and with the blur gated by
+/// speed (none below the drift limit) the full method shows the I-frame
+/// in every slot, compensated by nothing. Without the gate the same frames
+/// are blurred: the identity is the gate's doing.
 #[test]
 fn static_scene_extrapolation_is_identity() {
-    let options = |selective_blur| Options {
+    let options = |blur_min_speed| Options {
         methods: vec![Method::MorphWarp, Method::Morph],
         frames_per_interval: 3,
         frames: Some(6),
         keep_frames: true,
-        selective_blur,
+        blur_min_speed,
         ..Options::default()
     };
     let scene = sphere_over_floor("", "", "");
@@ -241,7 +241,7 @@ fn grid_snaps_to_motion_edge() {
         size,
         grid,
         blur_level: 2,
-        selective_blur: false,
+        blur_gated_by_speed: false,
     };
     let gpu_argmax = argmax_on_gpu(&gpu, setup, &motion, 1.0).unwrap();
     let cpu_argmax = argmax_on_cpu(&motion, size, grid, 1.0);

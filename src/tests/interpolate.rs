@@ -70,7 +70,7 @@ fn static_scene_with(latest_frame_init: bool) {
         latest_frame_init,
         // The morph blurs what it may, moving or not, unless told to
         // blur only what moves.
-        selective_blur: Some(0.15),
+        blur_min_speed: Some(0.15),
         ..Options::default()
     };
     let Some((report, _, _)) = run_interpolation(&marble(), &scene, options) else {
@@ -712,14 +712,14 @@ fn every_interpolation_pass_is_valid_and_builds() {
         interpolate::bframe::BFrames::new(&gpu, (16, 16), &Method::ALL, (3, latest))
             .unwrap_or_else(|err| panic!("{err}"));
     }
-    // The morph's passes, with and without selective blur, at the
+    // The morph's passes, with and without the speed gate, at the
     // smallest and the paper's grid.
-    for (grid, selective_blur) in [(2, false), (8, true)] {
+    for (grid, blur_gated_by_speed) in [(2, false), (8, true)] {
         let setup = interpolate::morph::MorphSetup {
             size: [32, 16],
             grid,
             blur_level: 2,
-            selective_blur,
+            blur_gated_by_speed,
         };
         interpolate::morph::Morph::new(&gpu, setup).unwrap_or_else(|err| panic!("{err}"));
     }
@@ -1152,7 +1152,7 @@ fn motion_blur_composites_b_frames_around_each_i_frame() {
             frames: Some(12),
             motion_blur: true,
             // A still picture stays the I-frame under the morph too.
-            selective_blur: Some(0.15),
+            blur_min_speed: Some(0.15),
             ..Options::default()
         };
         run_interpolation(

@@ -39,7 +39,7 @@ impl Extrapolator<'_> {
             exact_motion: self.method != Method::MorphPast,
             speed_scale: frames.speed_scale(),
             tracking: o.tracking,
-            blur_min_speed: o.selective_blur,
+            blur_min_speed: o.blur_min_speed,
             distortion: o.distortion_blur,
             snap_threshold: o.snap_threshold,
             far_depth: frames.far_depth,
@@ -196,7 +196,7 @@ pub(in crate::interpolate) fn passes(
         size,
         grid: options.grid,
         blur_level: options.blur_level,
-        selective_blur: options.selective_blur.is_some(),
+        blur_gated_by_speed: options.blur_min_speed.is_some(),
     };
     Ok(Some(Morph::new(gpu, setup).map_err(fail)?))
 }

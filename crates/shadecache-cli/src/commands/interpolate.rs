@@ -185,11 +185,12 @@ pub struct Args {
     #[arg(long, value_name = "FROM,TO", value_delimiter = ',', num_args = 1, default_values_t = [70.0, 90.0])]
     pub tracking: Vec<f32>,
 
-    /// Selective blur: the morph blurs and compensates only where the
+    /// A gate by speed: the morph blurs and compensates only where the
     /// motion is at least this fast, deg/s (given without a value: 0.15,
-    /// the drift limit below which the eye does not track).
+    /// the drift limit below which the eye does not track). Not the
+    /// paper's selective blur, which gates by luminance and range.
     #[arg(long, value_name = "DEG_PER_S", num_args = 0..=1, default_missing_value = "0.15")]
-    pub selective_blur: Option<f32>,
+    pub blur_min_speed: Option<f32>,
 
     /// The grid distortion mapped to full blur: a smooth step between the
     /// two (`--distortion-blur 0.25,1`).
@@ -285,7 +286,7 @@ fn interpolate_into(
         display_hz: args.display_hz,
         pixels_per_degree: args.pixels_per_degree,
         tracking: pair(&args.tracking),
-        selective_blur: args.selective_blur,
+        blur_min_speed: args.blur_min_speed,
         distortion_blur: pair(&args.distortion_blur),
         pursuit_substeps: args.pursuit_substeps,
         size: args.size,
