@@ -263,9 +263,10 @@ pub struct Options {
     /// 004 §6: 70 and 90).
     pub tracking: [f32; 2],
     /// A gate by speed: blur (and compensate) only where the motion is at
-    /// least this fast, deg/s (the drift limit below which the eye does
-    /// not track: 0.15); `None` blurs everywhere, as the paper. Not the
-    /// paper's selective blur, which gates by luminance and range.
+    /// least this fast, deg/s (0.15: below it, seed 004 §2 says, drift eye
+    /// movement interferes with smooth pursuit); `None` blurs everywhere.
+    /// Not the paper's selective blur, which gates by luminance and range
+    /// (and which the morph always applies).
     pub blur_min_speed: Option<f32>,
     /// The grid distortion mapped to full blur: smoothstep(a, b, D), D the
     /// largest |s − 1| over the warp's singular values.

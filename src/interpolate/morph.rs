@@ -13,9 +13,11 @@
 //!
 //! The paper blurs each morphed frame (a pyramid per in-between frame);
 //! here the rendered frame's low-pass is warped with it, by the same
-//! grid. The two agree wherever the grid moves as a translation, which is
-//! everywhere but the tiles that stretch or fold; those are blended to the
-//! low-pass by their distortion all the same.
+//! grid. The two agree only where the motion is uniform over the blur's
+//! footprint: near a motion edge the paper's blur of the morphed frame
+//! mixes both sides as they are in that frame, ours as they were in the
+//! rendered one. Tiles that stretch or fold are blended to the low-pass
+//! by their distortion all the same.
 
 use super::gpu::{
     depth_view, fullscreen_pass, linear_clamp, parameters_sampler_and, timed_pass, view,

@@ -10,7 +10,8 @@
 //! measured cost ([`split`]). A cut may fall inside an object's draw: it
 //! is split along its instances when it has several (the paper's
 //! "characters were uniformly partitioned"), else along its triangles
-//! (the terrain's "square grid of cells"), its cost spread evenly over
+//! (the cells of the paper's terrain grid only where the mesh's index
+//! order follows them), its cost spread evenly over
 //! them. The parts keep the draws' order, so drawn one after another
 //! into the same targets, each loading what the one before left
 //! ([`crate::runtime::Runner::frame_part`]), they make the frame drawn

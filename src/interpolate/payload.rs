@@ -1,6 +1,8 @@
 //! Payload interpolation: the reprojection cache's split of the shader
-//! at a node, used between I-frames (what none of the source papers
-//! does).
+//! at a node, used between I-frames: what Yang et al. 2011 §9 proposes
+//! for its terrain and does not evaluate (reprojecting the pixel shader's
+//! inputs and shading each B-frame anew). Unlike that proposal, each
+//! B-frame here rasterises the geometry again.
 //!
 //! Every warping method moves the I-frames' *colours*; what a light or
 //! the view changed in between is dragged along the flow with the

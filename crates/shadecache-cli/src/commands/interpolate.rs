@@ -187,7 +187,7 @@ pub struct Args {
 
     /// A gate by speed: the morph blurs and compensates only where the
     /// motion is at least this fast, deg/s (given without a value: 0.15,
-    /// the drift limit below which the eye does not track). Not the
+    /// below which drift eye movement interferes with smooth pursuit). Not the
     /// paper's selective blur, which gates by luminance and range.
     #[arg(long, value_name = "DEG_PER_S", num_args = 0..=1, default_missing_value = "0.15")]
     pub blur_min_speed: Option<f32>,
