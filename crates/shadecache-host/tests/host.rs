@@ -188,10 +188,20 @@ fn make(
     edit: impl FnOnce(&mut FrameLayout<'_>),
 ) -> Result<CachedShader, Error> {
     let (plan, files) = variant(name);
+    make_from(gpu, &plan, &files, edit)
+}
+
+/// [`make`] with the plan given (a test's edit of a fixture's).
+fn make_from(
+    gpu: &Gpu,
+    plan: &Plan,
+    files: &[(&str, &str)],
+    edit: impl FnOnce(&mut FrameLayout<'_>),
+) -> Result<CachedShader, Error> {
     with_frame(edit, |frame| {
         CachedShader::new(
             &gpu.device,
-            &plan,
+            plan,
             |file| files.iter().find(|(n, _)| *n == file).map(|(_, t)| *t),
             frame,
             (SIZE, SIZE),
@@ -639,16 +649,7 @@ fn what_a_cache_cannot_do_is_refused() {
     assert!(make(&gpu, "one-pass", part).is_ok());
     let (mut plan, files) = variant("one-pass");
     plan.assumes.partial_viewport = false;
-    let whole_target_only = with_frame(part, |frame| {
-        CachedShader::new(
-            &gpu.device,
-            &plan,
-            |file| files.iter().find(|(n, _)| *n == file).map(|(_, t)| *t),
-            frame,
-            (SIZE, SIZE),
-            Options::default(),
-        )
-    });
+    let whole_target_only = make_from(&gpu, &plan, &files, part);
     assert!(
         matches!(&whole_target_only, Err(Error::Refused(text)) if text.contains("viewport")),
         "{whole_target_only:?}"

@@ -582,18 +582,19 @@ fn two_cached_materials_in_one_app() {
         other_meshes: OtherMeshes::OpaqueInFront,
         ..settings()
     });
+    let lava = run.frames_drawn - run.stone_frames_drawn;
+    eight_frames_bevys_own_through(&run, &[("stone", run.stone_frames_drawn), ("lava", lava)]);
+}
+
+/// Asserts that `run` logged no error and compared 8 frames or more, each
+/// Bevy's own, and that each variant named (with the frames it drew) drew
+/// every one of them.
+fn eight_frames_bevys_own_through(run: &HeadlessRun, variants: &[(&str, u64)]) {
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     assert!(run.compared.len() >= 8, "{:?}", run.compared);
-    assert!(
-        run.stone_frames_drawn >= 8,
-        "the stone's variant drew {} frames",
-        run.stone_frames_drawn
-    );
-    assert!(
-        run.frames_drawn - run.stone_frames_drawn >= 8,
-        "the lava's variant drew {} frames",
-        run.frames_drawn - run.stone_frames_drawn
-    );
+    for (variant, drawn) in variants {
+        assert!(*drawn >= 8, "the {variant}'s variant drew {drawn} frames");
+    }
     all_bevys_own(&run.compared);
 }
 
@@ -613,14 +614,7 @@ fn standard_material_is_cached() {
         standard_material: true,
         ..settings()
     });
-    assert!(run.errors.is_empty(), "{:?}", run.errors);
-    assert!(run.compared.len() >= 8, "{:?}", run.compared);
-    assert!(
-        run.standard_frames_drawn >= 8,
-        "Bevy PBR's variant drew {} frames",
-        run.standard_frames_drawn
-    );
-    all_bevys_own(&run.compared);
+    eight_frames_bevys_own_through(&run, &[("StandardMaterial", run.standard_frames_drawn)]);
 
     // At the plan's Δn (32), with the camera orbiting 1° a frame and the
     // box the only cached mesh (Bevy draws the lava), the box's lit colour
@@ -671,19 +665,14 @@ fn game_scene_caches_standard_material_and_lava_together() {
         props: true,
         ..settings()
     });
-    assert!(run.errors.is_empty(), "{:?}", run.errors);
-    assert!(run.compared.len() >= 8, "{:?}", run.compared);
-    assert!(
-        run.standard_frames_drawn >= 8,
-        "Bevy PBR's variant drew {} frames",
-        run.standard_frames_drawn
+    let lava = run.frames_drawn - run.standard_frames_drawn;
+    eight_frames_bevys_own_through(
+        &run,
+        &[
+            ("StandardMaterial", run.standard_frames_drawn),
+            ("lava", lava),
+        ],
     );
-    assert!(
-        run.frames_drawn - run.standard_frames_drawn >= 8,
-        "the lava's variant drew {} frames",
-        run.frames_drawn - run.standard_frames_drawn
-    );
-    all_bevys_own(&run.compared);
 }
 
 /// A view with a depth prepass already holds the cached meshes' depth,
