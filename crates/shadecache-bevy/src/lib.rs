@@ -92,6 +92,10 @@
 //! What it does not do (yet): skinned, morphed, lightmapped, blended or
 //! deferred meshes (left to Bevy, above).
 //!
+//! - **No stall.** A view's cache (the variant's pipelines, compiled by
+//!   the host crate, not by Bevy's `PipelineCache`) is made on Bevy's
+//!   async compute pool, and Bevy draws its meshes until it is ready
+//!   ([`CacheCreation`] makes it in the frame instead).
 //! - **Hot reload.** The variant is rewritten at build time; a material
 //!   whose fragment shader changes while the game runs (Bevy's file
 //!   watcher) is handed back to Bevy from then on, said once
@@ -168,6 +172,23 @@ impl CachedVariant {
             .find(|(n, _)| n == name)
             .map(|(_, source)| source.as_str())
     }
+}
+
+/// How a view's cache is made. By default on Bevy's async compute pool:
+/// compiling the variant's pipelines takes long (hundreds of milliseconds
+/// for a material composed with Bevy's PBR on a CPU rasteriser), and
+/// Bevy draws the meshes itself until the cache is ready, so the frame
+/// does not stall. `synchronous: true` makes it in the frame that needs
+/// it, as Bevy's `RenderPlugin { synchronous_pipeline_compilation }` does
+/// its own pipelines (for tests that compare frames from the first).
+/// Insert it in the app before the first frame.
+#[derive(
+    Resource, Clone, Copy, Debug, Default, bevy::render::extract_resource::ExtractResource,
+)]
+#[extract_app(RenderApp)]
+pub struct CacheCreation {
+    /// Make each cache in the frame that needs it.
+    pub synchronous: bool,
 }
 
 /// Marks a mesh entity to draw through its material's variant (the
@@ -421,18 +442,21 @@ impl Plugin for SharedPlugin {
         app.add_plugins((
             ExtractComponentPlugin::<CachedMaterial>::default(),
             ExtractComponentPlugin::<ReprojectionCache>::default(),
+            bevy::render::extract_resource::ExtractResourcePlugin::<CacheCreation>::default(),
             phase::CachedPhasePlugin,
         ))
         .add_systems(First, (clear_cuts, copyable_depth));
         let stats = CacheStats::default();
         let reloaded = reload::ReloadedMaterials::default();
         app.insert_resource(stats.clone())
-            .insert_resource(reloaded.clone());
+            .insert_resource(reloaded.clone())
+            .init_resource::<CacheCreation>();
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
             return;
         };
         render_app
             .insert_resource(reloaded)
+            .init_resource::<CacheCreation>()
             .init_resource::<CachedVariants>()
             .init_resource::<defs::LibraryDefs>()
             .add_systems(bevy::render::ExtractSchedule, defs::extract_library_defs);

@@ -41,8 +41,11 @@ use shadecache_host::{
     NoTimer, Options, PassTimer, Plan, SpeedEstimate, Targets, TwinSources, Twins, Viewport,
 };
 
+use bevy::tasks::Task;
+
 use crate::phase::{CacheId, CachedMesh3d, CachingViews, QueuedLayouts};
 use crate::reload::ReloadedMaterials;
+use crate::CacheCreation;
 use crate::{CachedVariant, CachedVariants, ReprojectionCache};
 
 /// Bevy's view uniform: group 0, binding 0 of the mesh view bind group.
@@ -207,6 +210,9 @@ pub struct GovernorReadout {
 /// A view's cache, or why it has none.
 enum Slot {
     Ready(Box<ViewCache>),
+    /// Being made on Bevy's async compute pool ([`CacheCreation`]); the
+    /// view leaves its meshes to Bevy meanwhile.
+    Making(CacheKey, Task<Result<ViewCache, String>>),
     /// The error, logged once; the view leaves its meshes to Bevy until
     /// what the cache was made for changes.
     Failed(CacheKey),
@@ -351,6 +357,7 @@ fn copyable_view_uniforms(mut uniforms: ResMut<ViewUniforms>) {
 #[derive(SystemParam)]
 struct CacheSources<'w> {
     variants: Res<'w, CachedVariants>,
+    creation: Res<'w, CacheCreation>,
     /// The materials whose shader changed since the game started: Bevy's.
     reloaded: Res<'w, ReloadedMaterials>,
     device: Res<'w, RenderDevice>,
@@ -463,10 +470,19 @@ fn prepare_cache(
         .unwrap_or_else(|poisoned| poisoned.into_inner());
     let current = match slot {
         Slot::Ready(cache) => &cache.key,
-        Slot::Failed(key) => key,
+        Slot::Making(key, _) | Slot::Failed(key) => key,
     };
     if *current != key {
+        // A cache still being made for the old key is dropped (and its
+        // task cancelled).
         *slot = make_cache(sources, id, key, size, stats);
+    }
+    if let Slot::Making(key, task) = slot {
+        if let Some(made) =
+            bevy::tasks::block_on(bevy::tasks::futures_lite::future::poll_once(task))
+        {
+            *slot = settle(made, key.clone(), sources.variants.name(id.1), stats);
+        }
     }
     matches!(slot, Slot::Ready(_))
 }
@@ -539,8 +555,8 @@ fn cache_key(
     }))
 }
 
-/// Makes a view's cache: the host's pipelines from Bevy's layouts, the
-/// view's copy and its twin. A failure is logged once.
+/// Starts making a view's cache (or makes it, where creation is
+/// synchronous). A failure is logged once.
 fn make_cache(
     sources: &CacheSources,
     (_, variant, drawn): &CacheId,
@@ -554,26 +570,59 @@ fn make_cache(
     let Some(build) = material.builds.get(drawn.build as usize) else {
         return Slot::Failed(key);
     };
-    let made = try_make_cache(build, &sources.device, &sources.mesh_pipeline, &key, size);
+    let inputs = cache_inputs(build, &sources.device, &sources.mesh_pipeline, &key, size);
+    let made = match inputs {
+        Err(err) => Err(err),
+        Ok(inputs) if sources.creation.synchronous => bevy::tasks::block_on(build_cache(inputs)),
+        Ok(inputs) => {
+            let task = bevy::tasks::AsyncComputeTaskPool::get().spawn(build_cache(inputs));
+            return Slot::Making(key, task);
+        }
+    };
+    settle(made, key, &material.name, stats)
+}
+
+/// The slot a made (or failed) cache takes; a failure is logged.
+fn settle(
+    made: Result<ViewCache, String>,
+    key: CacheKey,
+    material: &str,
+    stats: &CacheStats,
+) -> Slot {
     match made {
         Ok(cache) => Slot::Ready(Box::new(cache)),
         Err(err) => {
             stats.error(format!(
-                "the view's cache of {} cannot be made, so Bevy draws it: {err}",
-                material.name
+                "the view's cache of {material} cannot be made, so Bevy draws it: {err}"
             ));
             Slot::Failed(key)
         }
     }
 }
 
-fn try_make_cache(
+/// What making a view's cache takes, owned, so that it can be made on
+/// another thread: the plan (Δn set), the variant's shaders, Bevy's
+/// layouts, the meshes' vertex buffer, the frame's formats.
+struct CacheInputs {
+    plan: Plan,
+    variant: CachedVariant,
+    groups: [(u32, Vec<wgpu::BindGroupLayoutEntry>); 4],
+    vertex: (u64, wgpu::VertexStepMode, Vec<wgpu::VertexAttribute>),
+    key: CacheKey,
+    prepass: bool,
+    size: (u32, u32),
+    device: wgpu::Device,
+}
+
+/// Checks what the view's cache is made for and gathers what making it
+/// takes; the errors a view is refused for.
+fn cache_inputs(
     variant: &CachedVariant,
     device: &RenderDevice,
     mesh_pipeline: &MeshPipeline,
     key: &CacheKey,
     size: (u32, u32),
-) -> Result<ViewCache, String> {
+) -> Result<CacheInputs, String> {
     let mut plan: Plan = variant.plan().clone();
     if let Some(period) = key.refresh_period {
         if period == 0 {
@@ -599,11 +648,11 @@ fn try_make_cache(
     }
     let view_layout = mesh_pipeline.get_view_layout(key.view_layout);
     let mesh_layout = &mesh_pipeline.mesh_layouts.model_only;
-    let groups: [(u32, &[wgpu::BindGroupLayoutEntry]); 4] = [
-        (0, &view_layout.main_layout.entries),
-        (1, &view_layout.binding_array_layout.entries),
-        (2, &mesh_layout.entries),
-        (3, &key.material_layout),
+    let groups = [
+        (0, view_layout.main_layout.entries.clone()),
+        (1, view_layout.binding_array_layout.entries.clone()),
+        (2, mesh_layout.entries.clone()),
+        (3, key.material_layout.clone()),
     ];
     let attributes = vertex_attributes(&plan)?;
     let buffer = key
@@ -611,10 +660,44 @@ fn try_make_cache(
         .0
         .get_layout(&attributes)
         .map_err(|err| format!("the cached meshes lack what the variant reads: {err}"))?;
+    Ok(CacheInputs {
+        plan,
+        variant: variant.clone(),
+        groups,
+        vertex: (
+            buffer.array_stride,
+            buffer.step_mode,
+            buffer.attributes.clone(),
+        ),
+        key: key.clone(),
+        prepass,
+        size,
+        device: device.wgpu_device().clone(),
+    })
+}
+
+/// Makes a view's cache: the host's pipelines from Bevy's layouts, the
+/// view's copy and its twin. Compiling the pipelines is the slow part,
+/// which is why it may run on Bevy's async compute pool.
+async fn build_cache(inputs: CacheInputs) -> Result<ViewCache, String> {
+    let CacheInputs {
+        plan,
+        variant,
+        groups,
+        vertex: (array_stride, step_mode, attributes),
+        key,
+        prepass,
+        size,
+        device,
+    } = inputs;
+    let groups: Vec<(u32, &[wgpu::BindGroupLayoutEntry])> = groups
+        .iter()
+        .map(|(group, entries)| (*group, entries.as_slice()))
+        .collect();
     let vertex = [Some(wgpu::VertexBufferLayout {
-        array_stride: buffer.array_stride,
-        step_mode: buffer.step_mode,
-        attributes: &buffer.attributes,
+        array_stride,
+        step_mode,
+        attributes: &attributes,
     })];
     let colors = [Some(wgpu::ColorTargetState::from(key.color_format))];
     let mut frame = FrameLayout::new(&vertex, &groups, &colors);
@@ -625,9 +708,8 @@ fn try_make_cache(
     // As Bevy's own pipeline for these meshes: the mesh's topology, the
     // material's culling, whatever its `specialize` set.
     frame.primitive = key.primitive;
-    let wgpu_device = device.wgpu_device();
-    let mut shader = CachedShader::new(
-        wgpu_device,
+    let mut shader = CachedShader::new_async(
+        &device,
         &plan,
         |name| variant.shader(name),
         &frame,
@@ -642,9 +724,10 @@ fn try_make_cache(
             ..Options::default()
         },
     )
+    .await
     .map_err(|err| err.to_string())?;
     let view_size = ViewUniform::min_size().get().next_multiple_of(16);
-    let view_now = wgpu_device.create_buffer(&wgpu::BufferDescriptor {
+    let view_now = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("shadecache view uniform, this frame"),
         size: view_size,
         usage: wgpu::BufferUsages::COPY_SRC
@@ -659,7 +742,7 @@ fn try_make_cache(
         })
         .map_err(|err| err.to_string())?;
     Ok(ViewCache {
-        key: key.clone(),
+        key,
         shader,
         view_now,
         twins,

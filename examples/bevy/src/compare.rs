@@ -78,6 +78,9 @@ pub struct Headless {
     /// peak 1, the whole frame (its `psnr_frame`). Otherwise the images are
     /// `rgba8unorm-srgb`, as a game displays them, compared as stored.
     pub linear: bool,
+    /// Caches made on Bevy's async compute pool, as in a game (Bevy draws
+    /// the meshes until each is ready), instead of in the frame.
+    pub async_cache: bool,
     /// The caching camera's `ReprojectionCache::mode`.
     pub mode: CacheMode,
 }
@@ -200,20 +203,25 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
         standard_material: settings.standard_material,
     };
     let mut app = headless_app(false, settings.step_degrees, true, materials);
-    app.insert_resource(Run(settings.clone(), results.clone()))
-        .init_resource::<Capture>()
-        .add_systems(Startup, setup)
-        .add_systems(
-            Update,
-            (
-                scene::move_cameras,
-                compare,
-                resize,
-                cut_or_switch_off,
-                finish,
-            )
-                .chain(),
-        );
+    // Bevy compiles its pipelines before the frame that needs them here;
+    // the caches are made the same way, unless the run asks otherwise.
+    app.insert_resource(shadecache_bevy::CacheCreation {
+        synchronous: !settings.async_cache,
+    })
+    .insert_resource(Run(settings.clone(), results.clone()))
+    .init_resource::<Capture>()
+    .add_systems(Startup, setup)
+    .add_systems(
+        Update,
+        (
+            scene::move_cameras,
+            compare,
+            resize,
+            cut_or_switch_off,
+            finish,
+        )
+            .chain(),
+    );
     let (outcome, stats) = run_to_exit(app, &results);
     HeadlessRun {
         compared: outcome.compared,

@@ -92,6 +92,7 @@ fn compare_one(args: &Args, cached: Cached) {
         depth_prepass: false,
         switch_off_after: None,
         reload_shader_after: None,
+        async_cache: false,
         linear: args.linear,
         // Every frame through the cache, to compare each with Bevy's.
         mode: shadecache_bevy::CacheMode::Always,

@@ -86,6 +86,7 @@ fn settings() -> Headless {
         depth_prepass: false,
         switch_off_after: None,
         reload_shader_after: None,
+        async_cache: false,
         linear: false,
         mode: CacheMode::Always,
     }
@@ -731,6 +732,27 @@ fn bevy_plugin_hands_the_meshes_back_when_switched_off() {
     let after: Vec<&Compared> = run.compared.iter().filter(|f| f.frame >= off + 4).collect();
     assert!(after.len() >= 6, "{:?}", run.compared);
     all_bevys_own(after);
+}
+
+/// The caches made on Bevy's async compute pool, as a game makes them by
+/// default: the frames before a cache is ready are drawn by Bevy (the
+/// meshes stay in its opaque pass), and from then on by the cache; at
+/// Δn = 1 every frame is Bevy's own either way, and the cache draws.
+#[test]
+fn caches_are_made_off_the_frame_while_bevy_draws() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        refresh_period: Some(1),
+        frames: 16,
+        async_cache: true,
+        ..settings()
+    });
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    assert!(run.compared.len() >= 16, "{:?}", run.compared);
+    assert!(run.frames_drawn > 0, "the cache never drew");
+    all_bevys_own(&run.compared);
 }
 
 /// Hot reload: the lava's shader asset changes while the game runs (as
