@@ -4,6 +4,7 @@
 //! profile` measures is of the shader the game draws.
 
 use shadecache::build::{BevyMesh, Build};
+use shadecache::front::compose::ShaderDef;
 use shadecache::rewrite::{DepthConvention, Options, Variant};
 
 /// The node the variant caches, from `shadecache analyze` on the material.
@@ -59,18 +60,19 @@ pub fn game_build() -> Build {
         .variant(Variant::OnePass);
     let build =
         bevy_material(build, "assets/stone.wesl", BevyMesh::default()).variant(Variant::OnePass);
-    build
-        .crate_shader("bevy_pbr", "render/pbr.wesl")
-        .name("standard_material")
-        .crate_package("bevy_pbr")
-        .crate_package("bevy_render")
-        .crate_vertex_shader("bevy_pbr", "render/mesh.wesl")
-        .bevy_mesh(BevyMesh::default())
-        .def(
-            "BINDLESS",
-            shadecache::front::compose::ShaderDef::Bool(true),
-        )
-        .variant(Variant::TwoPass)
+    // Bevy's own `StandardMaterial`: bevy_pbr's `pbr.wesl`, bindless as
+    // Bevy binds it wherever the device has binding arrays.
+    let build = composed_as_bevy(
+        build
+            .crate_shader("bevy_pbr", "render/pbr.wesl")
+            .name("standard_material"),
+        BevyMesh::default(),
+    )
+    .def("BINDLESS", ShaderDef::Bool(true))
+    .variant(Variant::TwoPass);
+    // An `ExtendedMaterial<StandardMaterial, _>`: its extension's shader
+    // (not bindless: the extension is not).
+    bevy_material(build, "assets/rim.wesl", BevyMesh::default()).variant(Variant::TwoPass)
 }
 
 /// Adds a Bevy material's fragment shader to `build`, composed as Bevy
@@ -79,8 +81,12 @@ pub fn game_build() -> Build {
 /// in a forward opaque pass ([`Build::bevy_mesh`]; the plugin checks each
 /// mesh's own against the plan's).
 fn bevy_material(build: Build, shader: &str, mesh: BevyMesh) -> Build {
+    composed_as_bevy(build.shader(shader), mesh)
+}
+
+/// The last shader of `build` composed as Bevy composes a material's.
+fn composed_as_bevy(build: Build, mesh: BevyMesh) -> Build {
     build
-        .shader(shader)
         .crate_package("bevy_pbr")
         .crate_package("bevy_render")
         .crate_vertex_shader("bevy_pbr", "render/mesh.wesl")

@@ -81,6 +81,8 @@
 //!   (`Build::crate_shader`) with Bevy's defs for the mesh layout and
 //!   `BINDLESS` (Bevy binds it bindless where the device can), and its
 //!   meshes are drawn through it with Bevy's bindless material bind group.
+//!   An `ExtendedMaterial<StandardMaterial, _>` is built from its
+//!   extension's shader the same way (bindless only if the extension is).
 //! - **Multi-pass variants and prepasses.** Without a prepass, the view's
 //!   depth holds only Bevy's other meshes and the plan's strict depth
 //!   tests stand, so a later pass (two-pass's second, three-pass's third)

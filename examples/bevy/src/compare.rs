@@ -40,6 +40,9 @@ pub struct Headless {
     /// A lit box in Bevy's own `StandardMaterial`, marked for the cache,
     /// and the plugin for it with Bevy PBR's variant.
     pub standard_material: bool,
+    /// A lit sphere in `scene::RimMaterial` (Bevy's `ExtendedMaterial`),
+    /// marked for the cache, and the plugin for it.
+    pub rim: bool,
     /// The lava meshes left unmarked: Bevy draws them (the cache draws
     /// only the other cached meshes).
     pub lava_uncached: bool,
@@ -145,6 +148,8 @@ pub struct HeadlessRun {
     pub stone_frames_drawn: u64,
     /// Of those, the frames drawn through Bevy PBR's variant.
     pub standard_frames_drawn: u64,
+    /// Of those, the frames drawn through the rim material's variant.
+    pub rim_frames_drawn: u64,
     /// Errors the plugin logged.
     pub errors: Vec<String>,
     /// The frame the cut was marked in, if one was.
@@ -201,6 +206,7 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
     let materials = crate::scene::MaterialsPlugin {
         lava_vertex_colors: settings.left_to_bevy != Some(LeftToBevy::ComposedOtherwise),
         standard_material: settings.standard_material,
+        rim: settings.rim,
     };
     let mut app = headless_app(false, settings.step_degrees, true, materials);
     // Bevy compiles its pipelines before the frame that needs them here;
@@ -228,6 +234,7 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
         frames_drawn: stats.frames_drawn(),
         stone_frames_drawn: stats.frames_drawn_of::<scene::StoneMaterial>(),
         standard_frames_drawn: stats.frames_drawn_of::<StandardMaterial>(),
+        rim_frames_drawn: stats.frames_drawn_of::<scene::RimMaterial>(),
         errors: stats.errors(),
         cut_frame: outcome.cut_frame,
         switch_off_frame: outcome.switch_off_frame,
@@ -237,6 +244,14 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
     }
 }
 
+/// The assets of the materials only some runs draw.
+#[derive(bevy::ecs::system::SystemParam)]
+struct SomeRunsMaterials<'w> {
+    stone: ResMut<'w, Assets<scene::StoneMaterial>>,
+    /// Only where the rim material's plugin was added.
+    rim: Option<ResMut<'w, Assets<scene::RimMaterial>>>,
+}
+
 fn setup(
     mut commands: Commands,
     run: Res<Run>,
@@ -244,7 +259,7 @@ fn setup(
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<scene::LavaMaterial>>,
     mut standard: ResMut<Assets<StandardMaterial>>,
-    mut stone: ResMut<Assets<scene::StoneMaterial>>,
+    mut some_runs: SomeRunsMaterials,
 ) {
     let settings = &run.0;
     scene::spawn_meshes(
@@ -254,7 +269,7 @@ fn setup(
         !settings.lava_uncached,
     );
     if settings.stone {
-        scene::spawn_stone(&mut commands, &mut meshes, &mut stone);
+        scene::spawn_stone(&mut commands, &mut meshes, &mut some_runs.stone);
     }
     if settings.double_sided {
         let lava = scene::LavaMaterial {
@@ -292,6 +307,35 @@ fn setup(
             &mut standard,
             settings.standard_material,
         );
+    }
+    if let (true, Some(rim_materials)) = (settings.rim, some_runs.rim.as_mut()) {
+        let rim = scene::RimMaterial {
+            base: StandardMaterial {
+                base_color: Color::srgb(0.3, 0.3, 0.35),
+                perceptual_roughness: 0.5,
+                ..default()
+            },
+            extension: scene::RimExtension {
+                rim: scene::RimParams {
+                    color: Vec4::new(0.2, 0.6, 1.0, 1.0),
+                    shape: Vec4::new(3.0, 0.0, 0.0, 0.0),
+                },
+            },
+        };
+        commands.spawn((
+            Mesh3d(meshes.add(Sphere::new(0.45).mesh().uv(32, 18))),
+            MeshMaterial3d(rim_materials.add(rim)),
+            Transform::from_xyz(0.3, 0.3, 1.1),
+            CachedMaterial,
+        ));
+        commands.spawn((
+            PointLight {
+                intensity: 400_000.0,
+                range: 10.0,
+                ..default()
+            },
+            Transform::from_xyz(-0.6, 1.8, 2.4),
+        ));
     }
     // The lit box of the StandardMaterial test (the props have their own).
     if settings.standard_material && !settings.props {

@@ -83,6 +83,7 @@ fn compare_one(args: &Args, cached: Cached) {
         stone: false,
         standard_material: cached != Cached::Lava,
         lava_uncached: cached == Cached::StandardMaterial,
+        rim: false,
         props: true,
         coloured_mesh: false,
         double_sided: false,

@@ -51,6 +51,36 @@ pub fn standard_material_variant() -> CachedVariant {
     )
 }
 
+/// The two-pass variant of `assets/rim.wesl`, the extension of
+/// [`RimMaterial`].
+pub fn rim_variant() -> CachedVariant {
+    variant(built::rim::two_pass::PLAN, built::rim::two_pass::SHADERS)
+}
+
+/// Bevy's `StandardMaterial` extended with a rim light of its own.
+pub type RimMaterial = bevy::pbr::ExtendedMaterial<StandardMaterial, RimExtension>;
+
+/// The rim light `assets/rim.wesl` adds to Bevy's PBR.
+#[derive(Asset, TypePath, AsBindGroup, Clone, Debug)]
+pub struct RimExtension {
+    /// `rim` in the shader: its colour, and its exponent in `shape.x`.
+    #[uniform(100)]
+    pub rim: RimParams,
+}
+
+/// The rim's uniform.
+#[derive(Clone, Copy, Debug, ShaderType)]
+pub struct RimParams {
+    pub color: Vec4,
+    pub shape: Vec4,
+}
+
+impl bevy::pbr::MaterialExtension for RimExtension {
+    fn fragment_shader() -> ShaderRef {
+        "rim.wesl".into()
+    }
+}
+
 /// Bevy's materials of the game and a cache for each: the lava (its
 /// variant built for Bevy's primitive shapes and for meshes with vertex
 /// colours) and the stone, each with its variant.
@@ -60,6 +90,9 @@ pub struct MaterialsPlugin {
     pub lava_vertex_colors: bool,
     /// Whether Bevy's `StandardMaterial` is cached too.
     pub standard_material: bool,
+    /// Whether [`RimMaterial`], an `ExtendedMaterial` of Bevy's, is drawn
+    /// and cached.
+    pub rim: bool,
 }
 
 impl Default for MaterialsPlugin {
@@ -67,6 +100,7 @@ impl Default for MaterialsPlugin {
         MaterialsPlugin {
             lava_vertex_colors: true,
             standard_material: true,
+            rim: false,
         }
     }
 }
@@ -86,6 +120,12 @@ impl Plugin for MaterialsPlugin {
         if self.standard_material {
             app.add_plugins(ShadecachePlugin::<StandardMaterial>::new(
                 standard_material_variant(),
+            ));
+        }
+        if self.rim {
+            app.add_plugins((
+                MaterialPlugin::<RimMaterial>::default(),
+                ShadecachePlugin::<RimMaterial>::new(rim_variant()),
             ));
         }
     }

@@ -77,6 +77,7 @@ fn settings() -> Headless {
         stone: false,
         standard_material: false,
         lava_uncached: false,
+        rim: false,
         props: false,
         coloured_mesh: false,
         double_sided: false,
@@ -645,6 +646,24 @@ fn standard_material_is_cached() {
         steady.iter().all(|f| f.psnr > 30.0),
         "the reused box is far from Bevy's\n{steady:?}"
     );
+}
+
+/// `ExtendedMaterial<StandardMaterial, _>` in the cache: a sphere whose
+/// material extends Bevy's PBR with a rim light (`assets/rim.wesl`, built
+/// two-pass), lit by a point light, beside the lava: Bevy's frame to the
+/// bit at Δn = 1, the variant drawing every frame compared.
+#[test]
+fn extended_material_is_cached() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        refresh_period: Some(1),
+        frames: 8,
+        rim: true,
+        ..settings()
+    });
+    eight_frames_bevys_own_through(&run, &[("rim material", run.rim_frames_drawn)]);
 }
 
 /// The game's scene: the lava (a custom material) and the props in Bevy's
