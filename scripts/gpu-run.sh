@@ -34,7 +34,9 @@
 #   6. docs/governor.md's `play` runs: the governor on a winning cache
 #      (the environment map, two-pass) and a losing one (the marble,
 #      three-pass at Δn = 1), and the error watch (its cost on the
-#      environment map, and Δn lowered where a light starts to move), 256².
+#      environment map, and Δn lowered where a light starts to move), 256²;
+#   7. docs/bevy.md's per-material figures (the Bevy example's measure
+#      and compare on its game scene), beside the table.
 # Budget: minutes on a discrete GPU; under an hour on lavapipe (2 cores).
 #
 # With GPU_RUN_REPRODUCTION=1 it runs docs/reproduction.md's experiments
@@ -197,3 +199,21 @@ run play-light-starts-moving-watched play corpus/noise_marble.wgsl \
 mkdir -p docs/runs
 out=$(node scripts/runs-table.mjs "$work" "$manifest" ${quick:+--quick})
 echo "wrote $out" >&2
+
+# 7. docs/bevy.md's per-material figures: the Bevy example's game scene
+#    with the lava, the StandardMaterial props and both cached, timed by
+#    Bevy's render diagnostics, and each against Bevy's own frame, beside
+#    the table (GPU_RUN_BEVY=0 leaves it out: it builds Bevy).
+if [ "${GPU_RUN_BEVY:-1}" != 0 ]; then
+  side=${small%%x*}
+  if [ -n "$quick" ]; then bevy_frames=(16 16); else bevy_frames=(100 60); fi
+  bevy_out="${out%.md}-bevy.txt"
+  {
+    echo "\$ cargo run --release -p shadecache-bevy-example -- measure --size $side --frames ${bevy_frames[0]}"
+    cargo run --release --locked -q -p shadecache-bevy-example -- measure --size "$side" --frames "${bevy_frames[0]}"
+    echo "\$ cargo run --release -p shadecache-bevy-example -- compare --size $side --frames ${bevy_frames[1]}"
+    cargo run --release --locked -q -p shadecache-bevy-example -- compare --size "$side" --frames "${bevy_frames[1]}" \
+      | grep -v "compared frame"
+  } > "$bevy_out"
+  echo "wrote $bevy_out" >&2
+fi
