@@ -31,6 +31,8 @@ pub(super) struct MethodRun {
     pub displayed_iframes: Vec<(u32, FrameError)>,
     /// Its pursuit error per interval.
     pub pursuit: Vec<f64>,
+    /// Its flicker term per interval (`pursuit.rs`).
+    pub flicker: Vec<f64>,
 }
 
 /// Image-based's correspondence errors over the measured B-frames.

@@ -18,6 +18,18 @@
 //! pursuit error the RMS difference over RGB of a method's P and the
 //! reference's (display values, 0 to 1). Frame repetition's error is the
 //! hold-type blur a 1/n rate adds; the reference's is zero.
+//!
+//! Integrating light, the pursuit error cannot see what changes from one
+//! displayed frame to the next and averages out: a sharp frame beside a
+//! blurred one (the morph's blur and compensation), flicker, temporal
+//! aliasing. The flicker term measures that change where the eye is:
+//! each displayed frame sampled where the tracking eye is in the middle
+//! of its display, S_k(p) = D_k(p + ((k + ½)/n)·f·m(p)), and
+//!
+//! F = RMS over p, RGB and k = 1..n−1 of (S_k − S_{k−1}) − (R_k − R_{k−1})
+//!
+//! with R the reference's: its frame-to-frame change against the
+//! reference's, in the same pursuit frame (display values).
 
 use super::frames::{Frames, IntervalAt};
 use super::measured::Measured;
@@ -58,6 +70,52 @@ pub fn integrate(
         }
     }
     out
+}
+
+/// Each of `frames` sampled where an eye tracking `motion` (over the whole
+/// group) is in the middle of that frame's display: frame k at
+/// p + ((k + ½)/n)·m(p), RGB, display values.
+fn stabilized(frames: &[&[f32]], motion: &[[f32; 2]], size: [u32; 2]) -> Vec<Vec<f32>> {
+    let [width, height] = [size[0] as usize, size[1] as usize];
+    let n = frames.len() as f32;
+    frames
+        .iter()
+        .enumerate()
+        .map(|(k, frame)| {
+            let tau = (k as f32 + 0.5) / n;
+            let mut out = Vec::with_capacity(width * height * 3);
+            for y in 0..height {
+                for x in 0..width {
+                    let m = motion[y * width + x];
+                    let at = [x as f32 + 0.5 + tau * m[0], y as f32 + 0.5 + tau * m[1]];
+                    out.extend(bilinear(frame, [width, height], at));
+                }
+            }
+            out
+        })
+        .collect()
+}
+
+/// The flicker term (module comment): the RMS, over pixels, RGB and the
+/// group's n − 1 frame-to-frame steps, of a method's change between
+/// consecutive displayed frames less the reference's, both sampled along
+/// the tracking eye's path ([`stabilized`]). 0 for a group of one frame.
+pub fn flicker(shown: &[&[f32]], reference: &[&[f32]], motion: &[[f32; 2]], size: [u32; 2]) -> f64 {
+    let (ours, theirs) = (
+        stabilized(shown, motion, size),
+        stabilized(reference, motion, size),
+    );
+    let mut squared = 0.0f64;
+    let mut count = 0usize;
+    for k in 1..ours.len().min(theirs.len()) {
+        for i in 0..ours[k].len() {
+            let step = ours[k][i] - ours[k - 1][i];
+            let reference_step = theirs[k][i] - theirs[k - 1][i];
+            squared += f64::from(step - reference_step).powi(2);
+            count += 1;
+        }
+    }
+    (squared / count.max(1) as f64).sqrt()
 }
 
 /// What the eye follows at each pixel of a frame whose flow to the next
@@ -158,16 +216,17 @@ pub(super) fn interval_errors(
             })
             .collect();
         if let Some(shown) = shown {
-            errors.push((*method, error(&seen_of(&shown), &seen)));
+            errors.push((
+                *method,
+                error(&seen_of(&shown), &seen),
+                flicker(&shown, &reference, &motion, size),
+            ));
         }
     }
-    for (method, error) in errors {
-        measured
-            .methods
-            .entry(method)
-            .or_default()
-            .pursuit
-            .push(error);
+    for (method, error, flicker) in errors {
+        let run = measured.methods.entry(method).or_default();
+        run.pursuit.push(error);
+        run.flicker.push(flicker);
     }
     Ok(())
 }
@@ -212,6 +271,30 @@ mod tests {
             "{}",
             error(&reference, &hold)
         );
+    }
+
+    /// A still bar at half brightness, shown by a method bright, dark,
+    /// then at half: over the group the eye gathers the same light at
+    /// every pixel as from the reference's steady bar, so the pursuit
+    /// error is 0, and only the flicker term sees the alternation.
+    #[test]
+    fn a_flickering_bar_has_no_pursuit_error_and_a_flicker_term() {
+        let at = |brightness: f32| bar(5).iter().map(|v| v * brightness).collect::<Vec<f32>>();
+        let (half, bright, dark) = (at(0.5), at(1.0), at(0.0));
+        let still = vec![[0.0f32; 2]; 64];
+        let reference = [half.as_slice(), &half, &half];
+        let flickering = [bright.as_slice(), &dark, &half];
+        // Linear light (γ = 1): the three frames' light is the steady one's.
+        let seen = integrate(&reference, &still, [16, 4], 1.0, 8);
+        let shown = integrate(&flickering, &still, [16, 4], 1.0, 8);
+        assert!(error(&seen, &shown) < 1e-6, "{}", error(&seen, &shown));
+        let flickers = flicker(&flickering, &reference, &still, [16, 4]);
+        assert!(flickers > 0.1, "{flickers}");
+        // The reference against itself, and a still picture held, do not
+        // flicker.
+        assert_eq!(flicker(&reference, &reference, &still, [16, 4]), 0.0);
+        let held = [half.as_slice(), &half, &half];
+        assert_eq!(flicker(&held, &reference, &still, [16, 4]), 0.0);
     }
 
     #[test]

@@ -130,6 +130,12 @@ pub struct MethodReport {
     /// formula); 0 for the reference.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pursuit_error: Option<f64>,
+    /// What the pursuit error cannot see: the change between consecutive
+    /// displayed frames where the tracking eye is, against the
+    /// reference's (RMS over RGB, display values, mean over the
+    /// intervals; `pursuit.rs` has the formula); 0 for the reference.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flicker: Option<f64>,
     /// The extrapolators that compensate: the I-frame as they display it
     /// (its high frequencies amplified) against the reference, mean PSNR
     /// over the intervals (dB).
@@ -384,14 +390,14 @@ pub fn html(report: &Report) -> String {
     );
     let _ = write!(
         out,
-        "<h2>Methods</h2><p>Reference frame {:.3} ms; I-frame with flows {:.3} ms (worst PSNR against the reference {:.1} dB). Latency: displayed frames a method delays the picture (the bidirectional ones wait for the next I-frame). Pursuit error: what an eye tracking the motion integrates over each interval's displayed frames on a hold-type display, against the same for the reference (RMS, display values; frame repetition's is the hold-type blur of rendering fewer frames). Displayed frames: the median and slowest displayed frame (ms), an I-frame's whole or, with partitioning, spread in parts over the interval.</p>\
-         <table><tr><th>method</th><th>I-frame ×</th><th>B-frame ×</th><th>amortised ×</th><th>SSIM mean</th><th>SSIM min</th><th>PSNR mean</th><th>double misses</th><th>latency (frames)</th><th>pursuit error</th><th>displayed frames (ms)</th></tr>",
+        "<h2>Methods</h2><p>Reference frame {:.3} ms; I-frame with flows {:.3} ms (worst PSNR against the reference {:.1} dB). Latency: displayed frames a method delays the picture (the bidirectional ones wait for the next I-frame). Pursuit error: what an eye tracking the motion integrates over each interval's displayed frames on a hold-type display, against the same for the reference (RMS, display values; frame repetition's is the hold-type blur of rendering fewer frames). Flicker: the change between consecutive displayed frames where the tracking eye is, against the reference's (RMS, display values), which the pursuit error averages away. Displayed frames: the median and slowest displayed frame (ms), an I-frame's whole or, with partitioning, spread in parts over the interval.</p>\
+         <table><tr><th>method</th><th>I-frame ×</th><th>B-frame ×</th><th>amortised ×</th><th>SSIM mean</th><th>SSIM min</th><th>PSNR mean</th><th>double misses</th><th>latency (frames)</th><th>pursuit error</th><th>flicker</th><th>displayed frames (ms)</th></tr>",
         report.reference_ms, report.i_frame_ms, report.i_frame_psnr_min
     );
     for m in &report.methods {
         let _ = write!(
             out,
-            "<tr><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.1}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3} median, {:.3} slowest ({:.2}×{})</td></tr>",
+            "<tr><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td><td>{:.4}</td><td>{:.4}</td><td>{:.1}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3} median, {:.3} slowest ({:.2}×{})</td></tr>",
             m.method.name(),
             m.i_frame_time_ratio,
             m.b_frame_time_ratio,
@@ -404,6 +410,7 @@ pub fn html(report: &Report) -> String {
             m.added_latency_frames,
             m.pursuit_error
                 .map_or("—".to_string(), |e| format!("{e:.4}")),
+            m.flicker.map_or("—".to_string(), |e| format!("{e:.4}")),
             m.displayed_frame_ms.median,
             m.displayed_frame_ms.max,
             m.displayed_frame_ms.spread,

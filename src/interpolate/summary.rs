@@ -137,6 +137,12 @@ impl Summary<'_> {
                 run.filter(|r| !r.pursuit.is_empty())
                     .map(|r| metrics::mean(&r.pursuit))
             },
+            flicker: if method == Method::Reference {
+                Some(0.0)
+            } else {
+                run.filter(|r| !r.flicker.is_empty())
+                    .map(|r| metrics::mean(&r.flicker))
+            },
             displayed_i_frame_psnr: run.filter(|r| !r.displayed_iframes.is_empty()).map(|r| {
                 let psnr: Vec<f64> = r
                     .displayed_iframes

@@ -375,7 +375,9 @@ fn interpolate_into(
         ));
         if let Some(error) = m.pursuit_error {
             summary.push_str(&format!(
-                "                   pursuit error {error:.4}, {} frame(s) of added latency{}\n",
+                "                   pursuit error {error:.4}{}, {} frame(s) of added latency{}\n",
+                m.flicker
+                    .map_or(String::new(), |f| format!(", flicker {f:.4}")),
                 m.added_latency_frames,
                 m.displayed_i_frame_psnr
                     .map_or(String::new(), |psnr| format!(
