@@ -328,14 +328,7 @@ fn setup(
             Transform::from_xyz(0.3, 0.3, 1.1),
             CachedMaterial,
         ));
-        commands.spawn((
-            PointLight {
-                intensity: 400_000.0,
-                range: 10.0,
-                ..default()
-            },
-            Transform::from_xyz(-0.6, 1.8, 2.4),
-        ));
+        commands.spawn(scene::point_light(400_000.0, Vec3::new(-0.6, 1.8, 2.4)));
     }
     // The lit box of the StandardMaterial test (the props have their own).
     if settings.standard_material && !settings.props {
@@ -350,14 +343,7 @@ fn setup(
             CachedMaterial,
         ));
         // A light on it: its specular highlight moves with the camera.
-        commands.spawn((
-            PointLight {
-                intensity: 400_000.0,
-                range: 10.0,
-                ..default()
-            },
-            Transform::from_xyz(0.6, 1.6, 2.2),
-        ));
+        commands.spawn(scene::point_light(400_000.0, Vec3::new(0.6, 1.6, 2.2)));
     }
     if settings.foreign_material {
         commands.spawn((

@@ -327,14 +327,20 @@ pub fn spawn_props(
         })),
         Transform::from_xyz(1.3, 0.0, 1.1),
     ));
-    commands.spawn((
+    commands.spawn(point_light(600_000.0, Vec3::new(1.5, 2.5, 2.5)));
+}
+
+/// A point light of `intensity` lumens at `at`, reaching 12 units, with
+/// no shadows (as Bevy's default).
+pub fn point_light(intensity: f32, at: Vec3) -> impl Bundle {
+    (
         PointLight {
-            intensity: 600_000.0,
+            intensity,
             range: 12.0,
             ..default()
         },
-        Transform::from_xyz(1.5, 2.5, 2.5),
-    ));
+        Transform::from_translation(at),
+    )
 }
 
 /// Places the lava meshes: a sphere, a torus and a box, each marked for

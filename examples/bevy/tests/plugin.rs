@@ -741,14 +741,28 @@ fn bevy_plugin_hands_the_meshes_back_when_switched_off() {
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     let off = run.switch_off_frame.expect("the cache was switched off");
-    let before: Vec<&Compared> = run.compared.iter().filter(|f| f.frame < off).collect();
+    reused_before_then_bevys_own(&run, off);
+}
+
+/// Asserts that `run` reused before frame `handed_back` and that every
+/// compared frame from a few after it on is Bevy's own: the hand-back
+/// takes a frame to be extracted, one to queue the meshes again and a few
+/// for the images to come back.
+fn reused_before_then_bevys_own(run: &HeadlessRun, handed_back: u32) {
+    let before: Vec<&Compared> = run
+        .compared
+        .iter()
+        .filter(|f| f.frame < handed_back)
+        .collect();
     assert!(
         before.iter().any(|f| f.max_error > 2.0 / 255.0),
         "nothing was reused before: {before:?}"
     );
-    // The switch takes a frame to be extracted, one to queue the meshes
-    // again and a few for the images to come back.
-    let after: Vec<&Compared> = run.compared.iter().filter(|f| f.frame >= off + 4).collect();
+    let after: Vec<&Compared> = run
+        .compared
+        .iter()
+        .filter(|f| f.frame >= handed_back + 4)
+        .collect();
     assert!(after.len() >= 6, "{:?}", run.compared);
     all_bevys_own(after);
 }
@@ -798,18 +812,7 @@ fn shader_hot_reload_hands_the_material_back_to_bevy() {
     assert_eq!(said.len(), 1, "{:?}", run.errors);
     assert_eq!(run.errors.len(), 1, "{:?}", run.errors);
     let changed = run.reload_frame.expect("the shader changed");
-    let before: Vec<&Compared> = run.compared.iter().filter(|f| f.frame < changed).collect();
-    assert!(
-        before.iter().any(|f| f.max_error > 2.0 / 255.0),
-        "nothing was reused before: {before:?}"
-    );
-    let after: Vec<&Compared> = run
-        .compared
-        .iter()
-        .filter(|f| f.frame >= changed + 4)
-        .collect();
-    assert!(after.len() >= 6, "{:?}", run.compared);
-    all_bevys_own(after);
+    reused_before_then_bevys_own(&run, changed);
 }
 
 /// `CacheMode::Auto` in a headless app: the governor gives one frame in
