@@ -587,7 +587,8 @@ impl Build {
                 packages,
                 defs: job.composition.defs.clone(),
                 composer: job.composition.composer,
-                every_tested_def: job.composition.every_tested_def,
+                // The plans are an engine's: it checks these defs.
+                narrow_defs: true,
             };
             let sources = Sources {
                 path: &path,

@@ -43,10 +43,12 @@ pub struct Composition {
     /// Which composer puts the shader together; `None`: told from the
     /// file ([`ComposerKind::detect`]).
     pub composer: Option<ComposerKind>,
-    /// Keep every def the sources test in the loaded shader's `defs`,
-    /// instead of narrowing them to those that change the code (each
-    /// flipped alone and composed again; see `front::load_with`).
-    pub every_tested_def: bool,
+    /// Narrow the loaded shader's `defs` (every def the sources test) to
+    /// those that change the code: each flipped alone and the shader
+    /// composed again (`front::load_with`). One more composition per
+    /// tested def, so only what writes plans for an engine asks for it
+    /// (a build script, `shadecache rewrite`).
+    pub narrow_defs: bool,
 }
 
 /// The two ways engines compose WGSL from modules.

@@ -411,7 +411,7 @@ pub fn load_with(
         None => shader,
         Some(vertex) => with_vertex_module(shader, &load_one(vertex)?, vertex_entry)?,
     };
-    if !composition.every_tested_def {
+    if composition.narrow_defs {
         shader.defs = defs_that_change_the_code(&shader, |flipped| {
             let mut composition = composition.clone();
             // Unset is absent (naga_oil's `#ifdef` reads a `false` def as
@@ -434,7 +434,7 @@ fn load_without_narrowing(
     vertex_entry: Option<&str>,
 ) -> Result<Shader, Error> {
     let composition = compose::Composition {
-        every_tested_def: true,
+        narrow_defs: false,
         ..composition.clone()
     };
     load_with(path, &composition, vertex, vertex_entry)

@@ -201,3 +201,48 @@ fn a_wesl_variant_says_which_defs_its_composition_tests() {
     .unwrap_or_else(|r| panic!("{r}"));
     assert_eq!(rewritten.plan.shader_defs, fog.defs);
 }
+
+/// Narrowing (`Composition::narrow_defs`, what a build script and
+/// `rewrite` ask for): of the defs the sources test, a plan keeps those
+/// whose flip changes what the entry points run. `WARM` picks the colour
+/// the fragment returns; `DEBUG_UNUSED` only adds a function nothing
+/// calls, so it is tested but changes no code, and is left out. Without
+/// narrowing both are listed.
+#[test]
+fn a_plan_keeps_only_the_defs_that_change_the_code() {
+    use crate::plan::ShaderDefValue;
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("helpers.wesl"),
+        "@if(WARM) const TINT = vec4<f32>(1.0, 0.5, 0.2, 1.0);\n\
+         @if(!WARM) const TINT = vec4<f32>(0.2, 0.5, 1.0, 1.0);\n\
+         @if(DEBUG_UNUSED) fn unused() -> f32 { return 1.0; }\n",
+    )
+    .unwrap();
+    let top = dir.path().join("material.wesl");
+    std::fs::write(
+        &top,
+        "import package::helpers::TINT;\n\
+         @fragment fn fs() -> @location(0) vec4<f32> { return TINT; }\n",
+    )
+    .unwrap();
+    let names = |narrow_defs| {
+        let composition = Composition {
+            narrow_defs,
+            ..Composition::default()
+        };
+        let shader = front::load_with(&top, &composition, None, None)
+            .unwrap_or_else(|e| panic!("{}", e.render()));
+        let defs: Vec<(String, ShaderDefValue)> =
+            shader.defs.into_iter().map(|d| (d.name, d.value)).collect();
+        defs
+    };
+    assert_eq!(
+        names(false),
+        [
+            ("DEBUG_UNUSED".to_string(), ShaderDefValue::Unset),
+            ("WARM".to_string(), ShaderDefValue::Unset)
+        ]
+    );
+    assert_eq!(names(true), [("WARM".to_string(), ShaderDefValue::Unset)]);
+}

@@ -307,7 +307,21 @@ impl StageArgs {
     }
 
     pub fn load(&self, shader: &Path) -> Result<Shader, Error> {
-        let composition = self.compose.composition()?;
+        self.load_composed(shader, self.compose.composition()?)
+    }
+
+    /// [`Stages::load`] for a shader whose plans go to an engine: its
+    /// defs narrowed to those that change the code (`plan.json`'s
+    /// `shader_defs`).
+    pub fn load_for_plans(&self, shader: &Path) -> Result<Shader, Error> {
+        let composition = Composition {
+            narrow_defs: true,
+            ..self.compose.composition()?
+        };
+        self.load_composed(shader, composition)
+    }
+
+    fn load_composed(&self, shader: &Path, composition: Composition) -> Result<Shader, Error> {
         let vertex = self
             .vertex
             .as_deref()

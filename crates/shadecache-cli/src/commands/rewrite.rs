@@ -354,7 +354,7 @@ fn rewrite_into(
     color: Color,
     out: &crate::out_folder::OutFolder,
 ) -> Result<(), Error> {
-    let shader = args.stages.load(&args.shader)?;
+    let shader = args.stages.load_for_plans(&args.shader)?;
     // Every fragment entry point in turn (into `OUT/<entry>`), unless
     // `--entry` names one; with `--node`, the one that has the node.
     let mut analyses = analysis::analyze_entries(
