@@ -275,14 +275,14 @@ pub(crate) struct MeshQueueing<'w> {
 }
 
 impl MeshQueueing<'_> {
-    /// The primitive state of the pipeline Bevy specialised for the mesh
-    /// of `entity` in `view` (the material's `specialize` included), and
-    /// the defs Bevy composed it with; `None` until that pipeline is made.
+    /// The pipeline Bevy specialised for the mesh of `entity` in `view`
+    /// (the material's `specialize` included), and its primitive state;
+    /// `None` until that pipeline is made.
     fn drawn_by_bevy(
         &self,
         view: &RetainedViewEntity,
         entity: MainEntity,
-    ) -> Option<(wgpu::PrimitiveState, BevyDefs)> {
+    ) -> Option<(CachedRenderPipelineId, wgpu::PrimitiveState)> {
         let id = *self.specialized.get(view)?.get(&entity)?;
         // Only a pipeline the cache has processed has its descriptor.
         if !matches!(
@@ -291,20 +291,24 @@ impl MeshQueueing<'_> {
         ) {
             return None;
         }
-        let descriptor = self.pipeline_cache.get_render_pipeline_descriptor(id);
+        let primitive = self
+            .pipeline_cache
+            .get_render_pipeline_descriptor(id)
+            .primitive;
+        Some((id, primitive))
+    }
+
+    /// The first build of the material `variant`'s variant composed as
+    /// Bevy composed `pipeline`; why a mesh drawn with it is left to Bevy
+    /// where none is: the first build's defs that differ.
+    fn build(&self, variant: u32, pipeline: CachedRenderPipelineId) -> Result<u32, String> {
+        let descriptor = self.pipeline_cache.get_render_pipeline_descriptor(pipeline);
         let stages = descriptor
             .vertex
             .shader_defs
             .iter()
             .chain(descriptor.fragment.iter().flat_map(|f| &f.shader_defs));
         let defs = BevyDefs::new(stages, &self.device, &self.library_defs);
-        Some((descriptor.primitive, defs))
-    }
-
-    /// The first build of the material `variant`'s variant composed as
-    /// Bevy composed the mesh's pipeline (`defs`); why the mesh is left to
-    /// Bevy where none is: the first build's defs that differ.
-    fn build(&self, variant: u32, defs: &BevyDefs) -> Result<u32, String> {
         let builds = self.variants.get(variant).map_or(&[][..], |m| &m.builds);
         let differences: Vec<Vec<String>> = builds
             .iter()
@@ -378,6 +382,15 @@ impl MeshQueueing<'_> {
 /// Queues the view's visible cached meshes into its phase, every frame
 /// (the phase is small: the meshes of the cached materials), each with
 /// its material's variant, and notes their vertex layouts.
+/// What queueing keeps from frame to frame: the meshes already refused
+/// (said once), and which build of a variant each of Bevy's pipelines
+/// matches (its defs compared once, not per mesh and frame).
+#[derive(Default)]
+pub(crate) struct QueueMemory {
+    refused: HashSet<MainEntity>,
+    matches: HashMap<(u32, CachedRenderPipelineId), Result<u32, String>>,
+}
+
 pub(crate) fn queue_cached_meshes(
     queueing: MeshQueueing,
     mut phases: ResMut<ViewSortedRenderPhases<CachedMesh3d>>,
@@ -385,8 +398,12 @@ pub(crate) fn queue_cached_meshes(
     cached: Query<(), With<CachedMaterial>>,
     mut layouts: ResMut<QueuedLayouts>,
     stats: Res<CacheStats>,
-    mut refused: Local<HashSet<MainEntity>>,
+    mut memory: Local<QueueMemory>,
 ) {
+    let QueueMemory { refused, matches } = &mut *memory;
+    if queueing.library_defs.is_changed() {
+        matches.clear();
+    }
     let draw = queueing.draw_functions.read().id::<DrawCachedMesh>();
     let (render_meshes, render_mesh_instances) =
         (&queueing.render_meshes, &queueing.render_mesh_instances);
@@ -432,12 +449,17 @@ pub(crate) fn queue_cached_meshes(
             }
             let Ok(variant) = variant else { continue };
             // Not drawn by Bevy yet either: its pipeline is on the way.
-            let Some((primitive, defs)) =
+            let Some((pipeline, primitive)) =
                 queueing.drawn_by_bevy(&view.retained_view_entity, *main_entity)
             else {
                 continue;
             };
-            let build = match queueing.build(variant, &defs) {
+            // Meshes drawn with one pipeline share its defs: matched once.
+            let build = matches
+                .entry((variant, pipeline))
+                .or_insert_with(|| queueing.build(variant, pipeline))
+                .clone();
+            let build = match build {
                 Ok(build) => build,
                 Err(reason) => {
                     if refused.insert(*main_entity) {
