@@ -75,7 +75,7 @@ pub fn integrate(
 /// Each of `frames` sampled where an eye tracking `motion` (over the whole
 /// group) is in the middle of that frame's display: frame k at
 /// p + ((k + ½)/n)·m(p), RGB, display values.
-fn stabilized(frames: &[&[f32]], motion: &[[f32; 2]], size: [u32; 2]) -> Vec<Vec<f32>> {
+pub fn stabilized(frames: &[&[f32]], motion: &[[f32; 2]], size: [u32; 2]) -> Vec<Vec<f32>> {
     let [width, height] = [size[0] as usize, size[1] as usize];
     let n = frames.len() as f32;
     frames
@@ -98,13 +98,10 @@ fn stabilized(frames: &[&[f32]], motion: &[[f32; 2]], size: [u32; 2]) -> Vec<Vec
 
 /// The flicker term (module comment): the RMS, over pixels, RGB and the
 /// group's n − 1 frame-to-frame steps, of a method's change between
-/// consecutive displayed frames less the reference's, both sampled along
-/// the tracking eye's path ([`stabilized`]). 0 for a group of one frame.
-pub fn flicker(shown: &[&[f32]], reference: &[&[f32]], motion: &[[f32; 2]], size: [u32; 2]) -> f64 {
-    let (ours, theirs) = (
-        stabilized(shown, motion, size),
-        stabilized(reference, motion, size),
-    );
+/// consecutive displayed frames (`ours`) less the reference's (`theirs`),
+/// both sampled along the tracking eye's path ([`stabilized`]). 0 for a
+/// group of one frame.
+pub fn flicker(ours: &[Vec<f32>], theirs: &[Vec<f32>]) -> f64 {
     let mut squared = 0.0f64;
     let mut count = 0usize;
     for k in 1..ours.len().min(theirs.len()) {
@@ -199,6 +196,7 @@ pub(super) fn interval_errors(
         .chain(at.pictures.iter().take(n - 1).map(Vec::as_slice))
         .collect();
     let seen = seen_of(&reference);
+    let reference_path = stabilized(&reference, &motion, size);
     let mut errors = Vec::new();
     for (method, group) in &groups {
         // A method that shows the rendered I-frame shows, at k = 0, the
@@ -219,7 +217,7 @@ pub(super) fn interval_errors(
             errors.push((
                 *method,
                 error(&seen_of(&shown), &seen),
-                flicker(&shown, &reference, &motion, size),
+                flicker(&stabilized(&shown, &motion, size), &reference_path),
             ));
         }
     }
@@ -288,13 +286,14 @@ mod tests {
         let seen = integrate(&reference, &still, [16, 4], 1.0, 8);
         let shown = integrate(&flickering, &still, [16, 4], 1.0, 8);
         assert!(error(&seen, &shown) < 1e-6, "{}", error(&seen, &shown));
-        let flickers = flicker(&flickering, &reference, &still, [16, 4]);
+        let along = |frames: &[&[f32]]| stabilized(frames, &still, [16, 4]);
+        let flickers = flicker(&along(&flickering), &along(&reference));
         assert!(flickers > 0.1, "{flickers}");
         // The reference against itself, and a still picture held, do not
         // flicker.
-        assert_eq!(flicker(&reference, &reference, &still, [16, 4]), 0.0);
+        assert_eq!(flicker(&along(&reference), &along(&reference)), 0.0);
         let held = [half.as_slice(), &half, &half];
-        assert_eq!(flicker(&held, &reference, &still, [16, 4]), 0.0);
+        assert_eq!(flicker(&along(&held), &along(&reference)), 0.0);
     }
 
     #[test]
