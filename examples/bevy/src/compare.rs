@@ -3,6 +3,7 @@
 use std::sync::{Arc, Mutex};
 
 use bevy::app::AppExit;
+use bevy::camera::visibility::RenderLayers;
 use bevy::camera::RenderTarget;
 use bevy::prelude::*;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
@@ -86,6 +87,10 @@ pub struct Headless {
     pub async_cache: bool,
     /// The caching camera's `ReprojectionCache::mode`.
     pub mode: CacheMode,
+    /// A third camera on the same path draws which material covers each
+    /// pixel (`Masks`), and each frame's error is measured over each
+    /// material's pixels too (`Compared::psnr_of`).
+    pub masks: bool,
 }
 
 /// Meshes Bevy draws with its own `StandardMaterial` (unlit) beside the
@@ -134,6 +139,56 @@ pub struct Compared {
     pub lava_pixels: usize,
     /// The frame (of the camera's path) the images came back in.
     pub frame: u32,
+    /// With `masks`, the PSNR over the pixels each material covers in
+    /// Bevy's frame, in the order of `Masked::ALL`: `None` where it covers
+    /// none (or without `masks`).
+    pub psnr_of: [Option<f64>; Masked::ALL.len()],
+}
+
+impl Compared {
+    /// The PSNR over the pixels `material` covers, if it covers any.
+    pub fn psnr_over(&self, material: Masked) -> Option<f64> {
+        self.psnr_of[material as usize]
+    }
+}
+
+/// The materials whose pixels a run with `masks` tells apart, each drawn
+/// in its own colour by the mask camera (every other opaque mesh in black,
+/// so that it hides them as in Bevy's frame; blended ones not at all, so
+/// a material seen through the glass pane counts as seen).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Masked {
+    /// `scene::LavaMaterial`'s meshes: red.
+    Lava,
+    /// Opaque `StandardMaterial` meshes: green.
+    StandardMaterial,
+}
+
+impl Masked {
+    pub const ALL: [Masked; 2] = [Masked::Lava, Masked::StandardMaterial];
+
+    fn colour(self) -> Color {
+        match self {
+            Masked::Lava => Color::srgb(1.0, 0.0, 0.0),
+            Masked::StandardMaterial => Color::srgb(0.0, 1.0, 0.0),
+        }
+    }
+
+    /// Whether a pixel of the mask (RGBA out of 1) is this material's.
+    fn covers(self, pixel: &[f32]) -> bool {
+        let channel = match self {
+            Masked::Lava => 0,
+            Masked::StandardMaterial => 1,
+        };
+        pixel[channel] > 0.5
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Masked::Lava => "the lava",
+            Masked::StandardMaterial => "StandardMaterial",
+        }
+    }
 }
 
 /// What a comparison run saw.
@@ -170,13 +225,19 @@ pub struct HeadlessRun {
 enum Role {
     Cached,
     Reference,
+    /// Draws the mask twins (`MASK_LAYER`) only.
+    Mask,
 }
+
+/// The render layer of the mask twins and the mask camera.
+const MASK_LAYER: usize = 1;
 
 /// The images read back, by the frame they arrived in.
 #[derive(Resource, Default)]
 struct Capture {
     cached: Vec<(u32, Vec<u8>)>,
     reference: Vec<(u32, Vec<u8>)>,
+    mask: Vec<(u32, Vec<u8>)>,
     compared: Vec<Compared>,
     cut_frame: Option<u32>,
     switch_off_frame: Option<u32>,
@@ -217,6 +278,7 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
     .insert_resource(Run(settings.clone(), results.clone()))
     .init_resource::<Capture>()
     .add_systems(Startup, setup)
+    .add_systems(PostStartup, spawn_mask_twins)
     .add_systems(
         Update,
         (
@@ -396,10 +458,14 @@ fn setup(
         &mut meshes,
         &mut standard,
     );
-    for role in [Role::Cached, Role::Reference] {
+    let mask = settings.masks.then_some(Role::Mask);
+    for role in [Role::Cached, Role::Reference].into_iter().chain(mask) {
         let target = target_image(&mut images, settings.size, settings.linear);
         let mut camera =
             commands.spawn((scene::camera(target.clone(), settings.step_degrees), role));
+        if role == Role::Mask {
+            camera.insert(RenderLayers::layer(MASK_LAYER));
+        }
         if settings.msaa {
             camera.insert(Msaa::Sample4);
         }
@@ -479,6 +545,59 @@ fn spawn_other_meshes(
     }
 }
 
+/// With `masks`, a twin of each opaque mesh on the mask camera's layer, in
+/// its material's mask colour (`Masked`) or black, unlit: the mask camera
+/// sees the scene's geometry as the other two do, and which material each
+/// pixel shows. Twins cast no shadow, and the scene's meshes do not move,
+/// so one twin each, made once, follows them.
+#[allow(clippy::type_complexity)]
+fn spawn_mask_twins(
+    mut commands: Commands,
+    run: Res<Run>,
+    meshes: Query<(
+        &Mesh3d,
+        &Transform,
+        Option<&MeshMaterial3d<scene::LavaMaterial>>,
+        Option<&MeshMaterial3d<StandardMaterial>>,
+    )>,
+    mut standard: ResMut<Assets<StandardMaterial>>,
+) {
+    if !run.0.masks {
+        return;
+    }
+    let unlit = |colour: Color| StandardMaterial {
+        base_color: colour,
+        unlit: true,
+        cull_mode: None,
+        double_sided: true,
+        ..default()
+    };
+    let mut twins = Vec::new();
+    for (mesh, transform, lava, pbr) in &meshes {
+        let colour = if lava.is_some() {
+            Masked::Lava.colour()
+        } else if let Some(pbr) = pbr {
+            match standard.get(&pbr.0).map(|m| m.alpha_mode) {
+                Some(AlphaMode::Opaque) => Masked::StandardMaterial.colour(),
+                // Blended: the material behind shows through.
+                Some(_) | None => continue,
+            }
+        } else {
+            Color::BLACK
+        };
+        twins.push((mesh.clone(), *transform, colour));
+    }
+    for (mesh, transform, colour) in twins {
+        commands.spawn((
+            mesh,
+            MeshMaterial3d(standard.add(unlit(colour))),
+            transform,
+            RenderLayers::layer(MASK_LAYER),
+            bevy::light::NotShadowCaster,
+        ));
+    }
+}
+
 /// Reads `target` back every frame into the capture of `role`.
 fn spawn_readback(commands: &mut Commands, target: Handle<Image>, role: Role) {
     commands.spawn(Readback::texture(target)).observe(
@@ -486,6 +605,7 @@ fn spawn_readback(commands: &mut Commands, target: Handle<Image>, role: Role) {
             let list = match role {
                 Role::Cached => &mut capture.cached,
                 Role::Reference => &mut capture.reference,
+                Role::Mask => &mut capture.mask,
             };
             list.push((frame.0, event.data.clone()));
         },
@@ -499,16 +619,27 @@ fn spawn_readback(commands: &mut Commands, target: Handle<Image>, role: Role) {
 fn compare(mut capture: ResMut<Capture>, frame: Res<FrameCount>, run: Res<Run>) {
     let mut pairs = Vec::new();
     for (frame, cached) in std::mem::take(&mut capture.cached) {
-        if let Some(at) = capture
+        let Some(at) = capture
             .reference
             .iter()
             .position(|(f, r)| *f == frame && r.len() == cached.len())
-        {
-            pairs.push((cached, capture.reference.remove(at).1));
+        else {
+            continue;
+        };
+        let reference = capture.reference.remove(at).1;
+        let mask = capture
+            .mask
+            .iter()
+            .position(|(f, m)| *f == frame && m.len() == cached.len())
+            .map(|at| capture.mask.remove(at).1);
+        if run.0.masks && mask.is_none() {
+            continue;
         }
+        pairs.push((cached, reference, mask));
     }
     capture.reference.clear();
-    for (cached, reference) in pairs {
+    capture.mask.clear();
+    for (cached, reference, mask) in pairs {
         let linear = run.0.linear;
         let (cached, reference) = (channels(&cached, linear), channels(&reference, linear));
         // Frames count from the first with lava in it: Bevy compiles each
@@ -519,12 +650,20 @@ fn compare(mut capture: ResMut<Capture>, frame: Res<FrameCount>, run: Res<Run>) 
             continue;
         }
         let (psnr, max_error) = image_error(&cached, &reference);
+        let mask = mask.map(|mask| channels(&mask, linear));
+        let psnr_of = Masked::ALL.map(|material| {
+            let mask = mask.as_ref()?;
+            image_error_where(&cached, &reference, |pixel| {
+                material.covers(&mask[pixel * 4..pixel * 4 + 4])
+            })
+        });
         capture.compared.push(Compared {
             size: ((cached.len() / 4) as f64).sqrt() as u32,
             psnr,
             max_error,
             lava_pixels,
             frame: frame.0,
+            psnr_of,
         });
     }
 }
@@ -652,10 +791,27 @@ pub(crate) fn channels(data: &[u8], linear: bool) -> Vec<f32> {
 /// PSNR (dB, peak 1) and largest channel difference (out of 1) of two RGBA
 /// images, over their colour channels.
 pub fn image_error(a: &[f32], b: &[f32]) -> (f64, f64) {
+    let (squared, count, max) = squared_error(a, b, |_| true);
+    (psnr(squared, count), max)
+}
+
+/// The PSNR (dB, peak 1) of two RGBA images over the colour channels of
+/// the pixels (by index) `within` keeps; `None` where it keeps none.
+pub fn image_error_where(a: &[f32], b: &[f32], within: impl Fn(usize) -> bool) -> Option<f64> {
+    let (squared, count, _) = squared_error(a, b, within);
+    (count > 0).then(|| psnr(squared, count))
+}
+
+/// The summed squared difference over the colour channels of the pixels
+/// `within` keeps, how many channels that is, and the largest difference.
+fn squared_error(a: &[f32], b: &[f32], within: impl Fn(usize) -> bool) -> (f64, usize, f64) {
     let mut squared = 0.0f64;
     let mut max = 0.0f64;
     let mut count = 0usize;
-    for (pa, pb) in a.chunks(4).zip(b.chunks(4)) {
+    for (pixel, (pa, pb)) in a.chunks(4).zip(b.chunks(4)).enumerate() {
+        if !within(pixel) {
+            continue;
+        }
         for c in 0..3 {
             let d = f64::from((pa[c] - pb[c]).abs());
             max = max.max(d);
@@ -663,11 +819,14 @@ pub fn image_error(a: &[f32], b: &[f32]) -> (f64, f64) {
             count += 1;
         }
     }
+    (squared, count, max)
+}
+
+fn psnr(squared: f64, count: usize) -> f64 {
     let mse = squared / count.max(1) as f64;
-    let psnr = if mse == 0.0 {
+    if mse == 0.0 {
         f64::INFINITY
     } else {
         10.0 * (1.0 / mse).log10()
-    };
-    (psnr, max)
+    }
 }

@@ -24,7 +24,7 @@ use bevy::prelude::*;
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
 use shadecache_bevy::CacheStats;
 
-pub use compare::{run_headless, Compared, Headless, HeadlessRun, LeftToBevy, OtherMeshes};
+pub use compare::{run_headless, Compared, Headless, HeadlessRun, LeftToBevy, Masked, OtherMeshes};
 pub use measure::{measure, Cached, Measure, Measured};
 
 /// Bevy with the game's assets, its material and the cache, run headless

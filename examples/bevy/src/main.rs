@@ -11,7 +11,7 @@
 //! cargo run -p shadecache-bevy-example --features window -- window
 //! ```
 
-use shadecache_bevy_example::{measure, run_headless, Cached, Headless, Measure};
+use shadecache_bevy_example::{measure, run_headless, Cached, Headless, Masked, Measure};
 
 struct Args {
     size: u32,
@@ -94,6 +94,7 @@ fn compare_one(args: &Args, cached: Cached) {
         switch_off_after: None,
         reload_shader_after: None,
         async_cache: false,
+        masks: true,
         linear: args.linear,
         // Every frame through the cache, to compare each with Bevy's.
         mode: shadecache_bevy::CacheMode::Always,
@@ -112,13 +113,30 @@ fn compare_one(args: &Args, cached: Cached) {
         eprintln!("no frame was compared: Bevy's pipelines were not ready in time");
         std::process::exit(1);
     }
-    let mean = steady.iter().map(|f| f.psnr.min(99.0)).sum::<f64>() / steady.len() as f64;
-    let worst = steady.iter().map(|f| f.psnr).fold(f64::INFINITY, f64::min);
+    let (mean, worst) = mean_and_worst(steady.iter().map(|f| Some(f.psnr)));
     println!(
         "  steady state (last {} frames): mean PSNR {mean:.2} dB (∞ counted as 99), worst {worst:.2} dB; {} frames drawn through the cache",
         steady.len(),
         run.frames_drawn
     );
+    for material in Masked::ALL {
+        let (mean, worst) = mean_and_worst(steady.iter().map(|f| f.psnr_over(material)));
+        let name = material.name();
+        if worst.is_infinite() {
+            println!("    over {name}'s pixels only: Bevy's own in every frame");
+        } else {
+            println!("    over {name}'s pixels only: mean PSNR {mean:.2} dB, worst {worst:.2} dB");
+        }
+    }
+}
+
+/// The mean PSNR (∞ counted as 99) and the worst, of the frames that have
+/// one.
+fn mean_and_worst(psnr: impl Iterator<Item = Option<f64>>) -> (f64, f64) {
+    let psnr: Vec<f64> = psnr.flatten().collect();
+    let mean = psnr.iter().map(|p| p.min(99.0)).sum::<f64>() / psnr.len().max(1) as f64;
+    let worst = psnr.iter().copied().fold(f64::INFINITY, f64::min);
+    (mean, worst)
 }
 
 /// The opaque meshes' GPU time with nothing cached, each material cached
