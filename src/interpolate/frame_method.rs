@@ -44,6 +44,26 @@ pub(super) trait FrameMethod {
         false
     }
 
+    /// Which I-frames its frames are made from: a camera cut between
+    /// them leaves it nothing to reuse ([`IntervalAt::repeats`]).
+    fn reads(&self) -> Reads {
+        Reads::BothIFrames
+    }
+
+    /// In place of [`FrameMethod::prepare`], in an interval where every
+    /// frame of it repeats the earlier I-frame (a camera cut): what it
+    /// shows at the I-frame then, in a recorded interval (the extrapolators
+    /// show the I-frame itself, uncompensated, as nothing after it is
+    /// blurred).
+    fn prepare_held(
+        &mut self,
+        _frames: &Frames,
+        _at: &IntervalAt,
+        _measured: &mut Measured,
+    ) -> Result<(), Error> {
+        Ok(())
+    }
+
     /// Whether it shows each rendered I-frame as it is; the extrapolators
     /// show their own ([`FrameMethod::prepare`] adds it to the
     /// composites).
@@ -103,6 +123,24 @@ pub(super) trait FrameMethod {
     ) -> Result<(), Error> {
         Ok(())
     }
+}
+
+/// Which rendered frames a method's frames between I-frames are made
+/// from: where a camera cut falls between them, its frames repeat the
+/// earlier I-frame instead (design note, hard case 16 of seed 004:
+/// "reset: no morph; repeat the frame").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Reads {
+    /// The earlier I-frame alone, shown again (sample-and-hold): nothing
+    /// to reset.
+    EarlierIFrame,
+    /// The interval's two I-frames, or the motion between them (every
+    /// interpolator, and the extrapolators with the next I-frame's exact
+    /// motion).
+    BothIFrames,
+    /// The earlier I-frame and the motion from the one before it (an
+    /// extrapolator that knows only the past).
+    PastIFrames,
 }
 
 /// What making the methods needs: the run's bench and plan, the

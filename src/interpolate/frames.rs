@@ -8,6 +8,7 @@
 use std::cell::{OnceCell, RefCell};
 
 use super::bframe::{BFrameParams, IFrameTextures};
+use super::frame_method::Reads;
 use super::iframe::IFrameShader;
 use super::measured::Measured;
 use super::report::KeptFrame;
@@ -62,6 +63,47 @@ pub(super) struct IntervalAt<'a> {
     /// I-frame 0's flow to I-frame 1 read back, once an interval, for
     /// what the CPU measures from it ([`IntervalAt::flow_next_0`]).
     pub flow_next_0: OnceCell<LinearFrame>,
+    /// Where the scene's camera cuts fall against the interval.
+    pub cuts: Cuts,
+}
+
+/// Where camera cuts fall against an interval: the shot changes between
+/// the frames on either side of a cut, and nothing of one shot can be
+/// made from the other's frames.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) struct Cuts {
+    /// The first frame `k` (1 ..= n) of the interval that is of a new shot,
+    /// if a cut falls after its I-frame 0 (at `k = n`: the closing I-frame
+    /// starts the new shot).
+    pub within: Option<u32>,
+    /// A cut falls between the I-frame before and the interval's I-frame 0.
+    pub before: bool,
+}
+
+impl Cuts {
+    /// The cuts against an interval: `cut_at(k)` says whether a cut comes
+    /// just before its frame `k`; `before` whether one fell in the
+    /// interval before it.
+    pub fn of(n: u32, cut_at: impl Fn(u32) -> bool, before: bool) -> Cuts {
+        Cuts {
+            within: (1..=n).find(|&k| cut_at(k)),
+            before,
+        }
+    }
+
+    /// Whether a method that `reads` so repeats the earlier I-frame at
+    /// frame `k` instead of making its own: where what it reads is of
+    /// two shots (its two I-frames across a cut, or, for motion from the
+    /// past, the I-frame before and this one), and at every frame of a new
+    /// shot that no I-frame has shown yet.
+    pub fn repeats(&self, reads: Reads, k: u32) -> bool {
+        let new_shot = self.within.is_some_and(|cut| k >= cut);
+        match reads {
+            Reads::EarlierIFrame => false,
+            Reads::BothIFrames => self.within.is_some(),
+            Reads::PastIFrames => self.before || new_shot,
+        }
+    }
 }
 
 impl IntervalAt<'_> {
@@ -369,5 +411,35 @@ impl Frames<'_> {
     pub fn speed_scale(&self) -> f32 {
         let o = self.options;
         o.display_hz / o.frames_per_interval as f32 / o.pixels_per_degree
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Cuts, Reads};
+
+    /// Which frames of an interval of 4 repeat the earlier I-frame, for
+    /// each way a method reads, with a cut at frame 2 of it, at its
+    /// closing I-frame, in the interval before, and none.
+    #[test]
+    fn a_cut_repeats_what_would_be_made_from_two_shots() {
+        let frames = |cuts: Cuts, reads: Reads| -> Vec<u32> {
+            (1..4).filter(|&k| cuts.repeats(reads, k)).collect()
+        };
+        let at = |cut: u32| Cuts::of(4, |k| k == cut, false);
+        let before = Cuts::of(4, |_| false, true);
+        let none = Cuts::of(4, |_| false, false);
+        assert_eq!(at(2).within, Some(2));
+        for cuts in [at(2), at(4), before, none] {
+            assert!(frames(cuts, Reads::EarlierIFrame).is_empty());
+        }
+        assert_eq!(frames(at(2), Reads::BothIFrames), [1, 2, 3]);
+        assert_eq!(frames(at(4), Reads::BothIFrames), [1, 2, 3]);
+        assert!(frames(before, Reads::BothIFrames).is_empty());
+        assert_eq!(frames(at(2), Reads::PastIFrames), [2, 3]);
+        assert!(frames(at(4), Reads::PastIFrames).is_empty());
+        assert_eq!(frames(before, Reads::PastIFrames), [1, 2, 3]);
+        assert!(frames(none, Reads::BothIFrames).is_empty());
+        assert!(frames(none, Reads::PastIFrames).is_empty());
     }
 }

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use super::bframe::BFrames;
 use super::frame_method::{FrameMethod, Setup};
-use super::frames::{Frames, InputsOf, IntervalAt, THRESHOLD};
+use super::frames::{Cuts, Frames, InputsOf, IntervalAt, THRESHOLD};
 use super::iframe::IFrameShader;
 use super::measured::Measured;
 use super::report::{KeptIFrame, Pictures, Report};
@@ -173,6 +173,18 @@ fn scene_notes(scene: &Scene) -> Vec<String> {
                 .to_string(),
         );
     }
+    if !scene.camera.cuts.is_empty() {
+        let frames: Vec<String> = scene
+            .camera
+            .cuts
+            .iter()
+            .map(|c| c.frame.to_string())
+            .collect();
+        notes.push(format!(
+            "camera cuts at motion frames {}: where a method's frames would be made from two shots (both I-frames across a cut, or the motion from the I-frame before it), they repeat the earlier I-frame, as do every method's frames of a new shot that no I-frame has shown yet; an interval with a cut in it is left out of the pursuit error and flicker",
+            frames.join(", ")
+        ));
+    }
     notes
 }
 
@@ -186,10 +198,16 @@ fn bframe_passes(
     thin: bool,
 ) -> Result<BFrames, Error> {
     let latest = options.latest_frame_init.then_some(options.latest_radius);
+    // Sample-and-hold's pass always: every method repeats the frame with
+    // it where a camera cut leaves nothing to reuse.
+    let mut methods = options.methods.clone();
+    if !methods.contains(&Method::SampleAndHold) {
+        methods.push(Method::SampleAndHold);
+    }
     BFrames::writing_depth(
         gpu,
         (size[0], size[1]),
-        &options.methods,
+        &methods,
         (options.iterations, latest),
         thin,
     )
@@ -221,6 +239,8 @@ struct Interval<'a> {
     end: u32,
     record: bool,
     inputs_of: &'a InputsOf<'a>,
+    /// A camera cut fell in the interval before.
+    cut_before: bool,
 }
 
 /// What every interval of the run shares.
@@ -360,6 +380,7 @@ impl Schedule<'_> {
                 frames.shown(m.clock, inputs_of, 0, (color, depth))?;
             }
         }
+        let mut cut_before = false;
         for index in 0..WARMUP_INTERVALS + intervals {
             let start = index * n;
             let interval = Interval {
@@ -368,21 +389,22 @@ impl Schedule<'_> {
                 end: start + n,
                 record: index >= WARMUP_INTERVALS,
                 inputs_of,
+                cut_before,
             };
-            self.interval(m, &mut runs, &interval)?;
+            cut_before = self.interval(m, &mut runs, &interval)?;
         }
         Ok(())
     }
 
     /// Draws `interval`: the reference at each of its displayed frames,
     /// its closing I-frame, every method's frames; keeps the measurements
-    /// when it is recorded.
+    /// when it is recorded. Whether a camera cut fell in it.
     fn interval(
         &self,
         m: &mut Measuring,
         runs: &mut Runs,
         interval: &Interval,
-    ) -> Result<(), Error> {
+    ) -> Result<bool, Error> {
         let Runs {
             reference,
             slots,
@@ -407,6 +429,8 @@ impl Schedule<'_> {
             inputs_of: &inputs_of,
             ..*interval
         };
+        let cut_at = |k: u32| simulated.get(&(start + k)).is_some_and(|frame| frame.cut);
+        let cuts = Cuts::of(n, cut_at, interval.cut_before);
 
         // The reference at every displayed frame of the interval, the
         // closing I-frame's time included.
@@ -445,15 +469,20 @@ impl Schedule<'_> {
             slots: (earlier, later),
             inputs_of: &inputs_of,
             flow_next_0: OnceCell::new(),
+            cuts,
         };
         for method in methods.iter_mut() {
             self.method_frames(m, method.as_mut(), &at)?;
         }
-        if interval.record {
+        if interval.record && cuts.within.is_none() {
             pursuit::interval_errors(&self.frames, &at, m.measured)?;
+        } else {
+            // No eye tracks the motion across a cut: the interval's
+            // frames are left out of the pursuit error and flicker.
+            m.measured.groups.clear();
         }
         m.measured.previous_end = pictures.pop();
-        Ok(())
+        Ok(cuts.within.is_some())
     }
 
     /// One method's frames of the interval: its I-frame passes, then each
@@ -468,7 +497,17 @@ impl Schedule<'_> {
         let frames = &self.frames;
         let n = frames.options.frames_per_interval;
         let name = method.method();
-        let prepared = method.prepare(frames, m.clock, at, m.measured)?;
+        // Where a camera cut leaves it nothing to reuse, the frame before
+        // is shown again: no morph, no blend, no blur (and no preparation
+        // where no frame of the interval is its own).
+        let reads = method.reads();
+        let repeats = |k: u32| at.cuts.repeats(reads, k);
+        let prepared = if (1..n).filter(|&k| method.builds(k, n)).all(repeats) {
+            method.prepare_held(frames, at, m.measured)?;
+            None
+        } else {
+            method.prepare(frames, m.clock, at, m.measured)?
+        };
         if let (Some(time), true) = (prepared, at.record) {
             let run = m.measured.methods.entry(name).or_default();
             run.prepare_times.push(time);
@@ -478,7 +517,13 @@ impl Schedule<'_> {
                 continue;
             }
             let params = frames.params(k);
-            let drawn = method.draw(frames, m.clock, at, k, &params)?;
+            let repeated = repeats(k);
+            let drawn = if repeated {
+                let hold = Method::SampleAndHold;
+                methods::bframe_drawn(self.bframes, hold, frames, m.clock, at, &params)?
+            } else {
+                method.draw(frames, m.clock, at, k, &params)?
+            };
             m.progress.step(name.name());
             if !at.record {
                 continue;
@@ -487,7 +532,9 @@ impl Schedule<'_> {
             let sample = frames.sample(m.clock, at.inputs_of, displayed, &drawn)?;
             let reference = frames.reference_at(k, at.pictures, m.measured)?;
             frames.keep(m.measured, name, sample, &reference);
-            method.measure(frames, at, k, &params, m.measured)?;
+            if !repeated {
+                method.measure(frames, at, k, &params, m.measured)?;
+            }
         }
         Ok(())
     }

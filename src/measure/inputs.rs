@@ -178,7 +178,10 @@ impl<'a> SceneInputs<'a> {
         let scene_meshes = &self.scene_meshes;
 
         let state = scene.frame_sized(frame, self.size);
-        let mut inputs = FrameInputs::default();
+        let mut inputs = FrameInputs {
+            cut: state.cut(),
+            ..FrameInputs::default()
+        };
         // Each mesh as this frame deforms it (`None`: as built), for its
         // vertices and for the shadow it casts.
         let deformed: Vec<Option<scene::Mesh>> = scene_meshes

@@ -97,6 +97,9 @@ pub struct FrameInputs {
     /// a depth texture not listed keeps what it had (at first the far
     /// plane).
     pub depth_maps: HashMap<[u32; 2], std::sync::Arc<super::DepthTexels>>,
+    /// A camera cut comes before this frame (the first of a new shot):
+    /// the cache starts afresh ([`Runner::reset`]) before it is drawn.
+    pub cut: bool,
 }
 
 struct GpuMesh {
@@ -401,6 +404,9 @@ impl Runner {
         inputs: &FrameInputs,
         profiler: Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
     ) -> Result<(), String> {
+        if inputs.cut {
+            self.reset();
+        }
         self.frame_part(gpu, inputs, None, profiler)
     }
 

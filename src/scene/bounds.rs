@@ -176,26 +176,66 @@ fn camera(
             &["camera", "fov_degrees"],
         );
     }
-    let (eye, target) = (Vec3::from(camera.eye), Vec3::from(camera.target));
+    sight(
+        camera.eye,
+        camera.target,
+        "the camera",
+        &["camera", "eye"],
+        fail,
+    )?;
+    let mut last = None;
+    for (index, cut) in camera.cuts.iter().enumerate() {
+        let at = index.to_string();
+        let path = ["camera", "cuts", &at, "frame"];
+        if last.is_some_and(|last| cut.frame <= last) {
+            return fail(
+                format!(
+                    "[[camera.cuts]] are in frame order, each after the one before: frame {} follows frame {}",
+                    cut.frame,
+                    last.unwrap_or_default()
+                ),
+                &path,
+            );
+        }
+        last = Some(cut.frame);
+        let (eye, target) = (
+            cut.eye.unwrap_or(camera.eye),
+            cut.target.unwrap_or(camera.target),
+        );
+        let what = format!("the shot cut to at frame {}", cut.frame);
+        sight(eye, target, &what, &["camera", "cuts", &at], fail)?;
+    }
+    if camera.zoom_per_frame <= 0.0 {
+        return fail(
+            "the camera's zoom_per_frame must be above 0 (1 keeps the field of view)".into(),
+            &["camera", "zoom_per_frame"],
+        );
+    }
+    Ok(())
+}
+
+/// Checks that an eye at `eye` looking at `target` sees something.
+fn sight(
+    eye: [f32; 3],
+    target: [f32; 3],
+    what: &str,
+    path: &[&str],
+    fail: &impl Fn(String, &[&str]) -> Result<(), Error>,
+) -> Result<(), Error> {
+    let (eye, target) = (Vec3::from(eye), Vec3::from(target));
     let sight = target - eye;
     if sight.length() <= 1e-6 * eye.length().max(1.0) {
         return fail(
-            "the camera's eye is at its target: it looks nowhere".into(),
-            &["camera", "eye"],
+            format!("{what}'s eye is at its target: it looks nowhere"),
+            path,
         );
     }
     // The view's up is +y; orbits turn about the target's y axis and pans
     // keep the offset, so a line of sight along y stays along it.
     if sight.normalize().cross(Vec3::Y).length() < 1e-7 {
         return fail(
-            "the camera looks straight up or down: its up direction (+y) is along the line of sight, so the view is undefined; move the eye off the target's vertical".into(),
-            &["camera", "eye"],
-        );
-    }
-    if camera.zoom_per_frame <= 0.0 {
-        return fail(
-            "the camera's zoom_per_frame must be above 0 (1 keeps the field of view)".into(),
-            &["camera", "zoom_per_frame"],
+            format!("{what} looks straight up or down: its up direction (+y) is along the line of sight, so the view is undefined; move the eye off the target's vertical"),
+            path,
         );
     }
     Ok(())

@@ -221,6 +221,25 @@ pub struct Camera {
     /// above 1 zooms in, below 1 out.
     #[serde(default = "no_zoom")]
     pub zoom_per_frame: f32,
+    /// Camera cuts, in frame order: from each cut's `frame` on (frames of
+    /// the motion, as `[[uniform_changes]]`'), the camera is in a new shot,
+    /// with the cut's eye and target, its motion starting afresh from
+    /// there. What reused frames across a cut would show is the old shot:
+    /// every stage that reuses starts again ([`FrameState::shot`]).
+    #[serde(default)]
+    pub cuts: Vec<Cut>,
+}
+
+/// A camera cut: a new shot from `frame` on.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cut {
+    /// The motion frame the new shot starts at.
+    pub frame: u32,
+    /// The eye in the new shot; the camera's own `eye` when not given.
+    pub eye: Option<[f32; 3]>,
+    /// What it looks at; the camera's own `target` when not given.
+    pub target: Option<[f32; 3]>,
 }
 
 impl Default for Camera {
@@ -236,6 +255,7 @@ impl Default for Camera {
             pan_per_frame: [0.0; 3],
             roll_degrees_per_frame: 0.0,
             zoom_per_frame: no_zoom(),
+            cuts: Vec::new(),
         }
     }
 }
@@ -470,6 +490,10 @@ pub struct FrameState {
     /// warm-up included) plus `start_frame`. `[[uniform_changes]]` are on
     /// this timeline, as the motion is.
     pub frame: u32,
+    /// The camera's shot: how many of `[[camera.cuts]]` the motion has
+    /// passed. Two frames of different shots have nothing to reuse
+    /// between them ([`FrameState::cut`]).
+    pub shot: u32,
     /// The frame before (`None` on the first frame, and within that state
     /// itself): what a `previous_` member holds, as engines keep last
     /// frame's transforms beside this frame's (Bevy's
@@ -482,6 +506,12 @@ impl FrameState {
     /// this frame's contents on the first frame).
     pub fn before(&self) -> &FrameState {
         self.previous.as_deref().unwrap_or(self)
+    }
+
+    /// Whether a camera cut comes between the frame before and this one:
+    /// the first frame of a new shot.
+    pub fn cut(&self) -> bool {
+        self.before().shot != self.shot
     }
 
     /// Object `object`'s instances' whole world transforms: its placement
@@ -771,18 +801,29 @@ impl Scene {
     fn frame_alone(&self, n: u32, aspect: f32) -> FrameState {
         let t = self.motion_frame(n);
         let camera = &self.camera;
+        let (shot, cut) = self.shot_at(t);
         let (mut eye, mut target) = (Vec3::from(camera.eye), Vec3::from(camera.target));
+        // The camera's own motion from the start of its shot.
+        let camera_t = match cut {
+            Some(cut) => {
+                eye = Vec3::from(cut.eye.unwrap_or(camera.eye));
+                target = Vec3::from(cut.target.unwrap_or(camera.target));
+                t - cut.frame as f32
+            }
+            None => t,
+        };
         if self.has(Effect::CameraMotion) {
-            let orbit = Mat4::from_rotation_y((camera.orbit_degrees_per_frame * t).to_radians());
+            let orbit =
+                Mat4::from_rotation_y((camera.orbit_degrees_per_frame * camera_t).to_radians());
             eye = target + orbit.transform_vector3(eye - target);
-            let pan = Vec3::from(camera.pan_per_frame) * t;
+            let pan = Vec3::from(camera.pan_per_frame) * camera_t;
             eye += pan;
             target += pan;
         }
         let (fov, roll) = if self.has(Effect::CameraMotion) {
             (
-                camera.fov_after(t),
-                (camera.roll_degrees_per_frame * t).to_radians(),
+                camera.fov_after(camera_t),
+                (camera.roll_degrees_per_frame * camera_t).to_radians(),
             )
         } else {
             (camera.fov_degrees.to_radians(), 0.0)
@@ -853,8 +894,24 @@ impl Scene {
             instances,
             joints: self.joint_poses(t),
             frame: n.saturating_add(self.start_frame),
+            shot,
             previous: None,
         }
+    }
+
+    /// The camera's shot at motion frame `t`, and the cut that began it
+    /// (none for the first shot).
+    fn shot_at(&self, t: f32) -> (u32, Option<&Cut>) {
+        let passed = self
+            .camera
+            .cuts
+            .iter()
+            .take_while(|cut| cut.frame as f32 <= t)
+            .count();
+        (
+            passed as u32,
+            passed.checked_sub(1).map(|last| &self.camera.cuts[last]),
+        )
     }
 
     /// The value of uniform member `name` in motion frame `frame`: the last
@@ -965,6 +1022,47 @@ mod tests {
             later.deformed(0, &mesh, 2).unwrap().positions,
             from_start.deformed(0, &mesh, 9).unwrap().positions
         );
+    }
+
+    /// A camera cut starts a new shot at its frame: the cut's eye, the
+    /// orbit starting afresh there, the shot counted, and only the cut's
+    /// frame says a cut came before it. Cuts out of frame order, or to an
+    /// eye at its target, are errors at their line.
+    #[test]
+    fn camera_cut_starts_a_new_shot() {
+        let cuts = "[camera]\neye = [0.0, 0.5, 3.0]\norbit_degrees_per_frame = 2.0\n[[camera.cuts]]\nframe = 6\neye = [3.0, 0.5, 0.0]\n[[camera.cuts]]\nframe = 9\n";
+        let text = format!(
+            "effects = [\"camera-motion\"]\n{cuts}[[objects]]\nmesh = {{ kind = \"cube\" }}\n"
+        );
+        let scene = Scene::parse(Arc::new(SourceFile::new("s.toml", text))).unwrap();
+        let shots: Vec<u32> = (0..12).map(|n| scene.frame(n, 1.0).shot).collect();
+        assert_eq!(shots, [0, 0, 0, 0, 0, 0, 1, 1, 1, 2, 2, 2]);
+        let cut: Vec<u32> = (0..12).filter(|&n| scene.frame(n, 1.0).cut()).collect();
+        assert_eq!(cut, [6, 9]);
+        assert!((scene.frame(6, 1.0).camera_position - Vec3::new(3.0, 0.5, 0.0)).length() < 1e-5);
+        // The second cut names no eye: the camera's own, its orbit afresh.
+        let (first, second) = (scene.frame(0, 1.0), scene.frame(9, 1.0));
+        assert!((first.camera_position - second.camera_position).length() < 1e-5);
+        assert_ne!(scene.frame(10, 1.0).camera_position, second.camera_position);
+
+        for (cuts, message) in [
+            (
+                "[[camera.cuts]]\nframe = 9\n[[camera.cuts]]\nframe = 6\n",
+                "frame order",
+            ),
+            (
+                "[[camera.cuts]]\nframe = 4\neye = [0.0, 0.0, 0.0]\n",
+                "looks nowhere",
+            ),
+        ] {
+            let text = format!("[[objects]]\nmesh = {{ kind = \"cube\" }}\n{cuts}");
+            let err = Scene::parse(Arc::new(SourceFile::new("s.toml", text)))
+                .map(|_| ())
+                .expect_err(message);
+            let rendered = err.render();
+            assert!(rendered.contains(message), "{rendered}");
+            assert!(rendered.contains("s.toml:"), "{rendered}");
+        }
     }
 
     /// `[[uniform_changes]]` replace `[uniforms]`' values from their

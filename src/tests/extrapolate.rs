@@ -631,3 +631,92 @@ fn long_groups_are_flagged_for_flicker() {
     assert!(flagged(&slow), "{slow:?}");
     assert!(!flagged(&notes(120.0).unwrap()));
 }
+
+/// A camera cut (hard case 16 of seed 004: "reset: no morph; repeat the
+/// frame"): the camera orbits the marble sphere, then cuts to a view from
+/// the other side at frame 10, inside the interval 8–12 (n = 4). There,
+/// every method made from both I-frames (the morph with the next
+/// I-frame's motion, image-based, the blend) shows the earlier I-frame
+/// again, sample-and-hold's frame to the bit; morph-past, whose motion is
+/// the past's, still extrapolates frame 9 (the old shot) and repeats from
+/// the cut on, and in the interval after (its past motion crosses the
+/// cut) repeats every frame. Elsewhere each extrapolates.
+#[test]
+fn camera_cut_resets_extrapolation_and_interpolation() {
+    let camera = r#"orbit_degrees_per_frame = 2.0
+[[camera.cuts]]
+frame = 10
+eye = [2.6, 0.6, -2.2]
+"#;
+    let scene = sphere_over_floor(r#""camera-motion""#, camera, "");
+    let methods = vec![
+        Method::SampleAndHold,
+        Method::LinearBlend,
+        Method::ImageBased,
+        Method::Morph,
+        Method::MorphPast,
+    ];
+    let options = Options {
+        methods,
+        frames_per_interval: 4,
+        frames: Some(16),
+        keep_frames: true,
+        ..Options::default()
+    };
+    let Some((report, pictures, _)) = run_interpolation(&marble(), &scene, options) else {
+        return;
+    };
+    let held = |frame: u32| {
+        kept(&pictures, Method::SampleAndHold)
+            .into_iter()
+            .find(|k| k.frame == frame)
+            .unwrap_or_else(|| panic!("no held frame {frame}"))
+            .result
+            .clone()
+    };
+    let repeats = |method: Method, frame: u32| {
+        let shown = kept(&pictures, method)
+            .into_iter()
+            .find(|k| k.frame == frame && k.alpha > 0.0)
+            .unwrap_or_else(|| panic!("no frame {frame} of {}", method.name()));
+        shown.result == held(frame)
+    };
+    for method in [Method::LinearBlend, Method::ImageBased, Method::Morph] {
+        for frame in [9, 10, 11] {
+            assert!(
+                repeats(method, frame),
+                "{} makes frame {frame} across the cut",
+                method.name()
+            );
+        }
+        for frame in [5, 13] {
+            assert!(
+                !repeats(method, frame),
+                "{} repeats frame {frame}, away from the cut",
+                method.name()
+            );
+        }
+    }
+    assert!(
+        !repeats(Method::MorphPast, 9),
+        "morph-past repeats the old shot's frame 9"
+    );
+    for frame in [10, 11, 13, 14, 15] {
+        assert!(
+            repeats(Method::MorphPast, frame),
+            "morph-past makes frame {frame}"
+        );
+    }
+    assert!(
+        !repeats(Method::MorphPast, 17),
+        "morph-past repeats frame 17"
+    );
+    assert!(
+        report
+            .notes
+            .iter()
+            .any(|n| n.contains("camera cuts at motion frames 10")),
+        "{:?}",
+        report.notes
+    );
+}

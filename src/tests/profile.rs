@@ -122,6 +122,25 @@ fn static_scene_without_refresh_reuses_every_pixel() {
     }
 }
 
+/// A camera cut resets the cache: a still sphere, no refresh, the camera
+/// cutting at frame 3 to a view from 45° aside. Every variant reuses every
+/// covered pixel before the cut, misses every one at the cut (the old
+/// shot's values are never reprojected into the new one, although much of
+/// the sphere is seen from both), and reuses every one again after.
+#[test]
+fn camera_cut_resets_the_cache() {
+    let cut = "[[camera.cuts]]\nframe = 3\neye = [2.26, 0.3, 2.26]\n";
+    let Some((_, report, _)) = run(&marble_scene("", cut), options(&[0], &[4])) else {
+        return;
+    };
+    assert_eq!(report.results.len(), Variant::CACHE.len());
+    for row in &report.results {
+        let hits: Vec<f64> = row.frame_stats.iter().map(|s| s.hit_rate).collect();
+        // The measured frames are 1 to 4, after one warm-up frame.
+        assert_eq!(hits, [1.0, 1.0, 0.0, 1.0], "{}", row.variant);
+    }
+}
+
 /// Δn = 1 recomputes every pixel every frame: each variant's image is the
 /// reference's (differential test; an rgba32float cache so that three-pass,
 /// which reads its payload back, loses nothing).

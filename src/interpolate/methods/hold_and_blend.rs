@@ -4,7 +4,7 @@
 
 use crate::diagnostic::Error;
 use crate::interpolate::bframe::{BFrameParams, BFrames};
-use crate::interpolate::frame_method::FrameMethod;
+use crate::interpolate::frame_method::{FrameMethod, Reads};
 use crate::interpolate::frames::{Drawn, Frames, IntervalAt};
 use crate::interpolate::thin::FrameDepth;
 use crate::interpolate::Method;
@@ -27,6 +27,14 @@ impl FrameMethod for HoldOrBlend<'_> {
         self.method == Method::LinearBlend
     }
 
+    /// Holding shows the earlier I-frame alone; blending reads both.
+    fn reads(&self) -> Reads {
+        match self.method {
+            Method::SampleAndHold => Reads::EarlierIFrame,
+            _ => Reads::BothIFrames,
+        }
+    }
+
     fn draw<'s>(
         &'s mut self,
         frames: &Frames,
@@ -35,15 +43,29 @@ impl FrameMethod for HoldOrBlend<'_> {
         _k: u32,
         params: &BFrameParams,
     ) -> Result<Drawn<'s>, Error> {
-        let textures = at.textures;
-        let time = render_timed(self.bframes, self.method, frames, clock, at, params)?;
-        Ok(Drawn {
-            time,
-            color: self.bframes.color(),
-            depth: FrameDepth::Buffer(textures.0.depth),
-            decisions: Some(self.bframes.decisions()),
-        })
+        drawn(self.bframes, self.method, frames, clock, at, params)
     }
+}
+
+/// `method`'s fullscreen B-frame pass drawn between the interval's two
+/// I-frames at `params`, timed: what it shows. Sample-and-hold's is also
+/// what every method shows where a camera cut leaves it nothing to reuse
+/// ([`IntervalAt::repeats`](crate::interpolate::frames::Cuts::repeats)).
+pub(in crate::interpolate) fn drawn<'s>(
+    bframes: &'s BFrames,
+    method: Method,
+    frames: &Frames,
+    clock: &mut Clock,
+    at: &'s IntervalAt,
+    params: &BFrameParams,
+) -> Result<Drawn<'s>, Error> {
+    let time = render_timed(bframes, method, frames, clock, at, params)?;
+    Ok(Drawn {
+        time,
+        color: bframes.color(),
+        depth: FrameDepth::Buffer(at.textures.0.depth),
+        decisions: Some(bframes.decisions()),
+    })
 }
 
 /// Draws `method`'s fullscreen B-frame pass between the interval's two

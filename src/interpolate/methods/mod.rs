@@ -21,6 +21,7 @@ mod morph;
 mod payload;
 mod scene_assisted;
 
+pub(super) use hold_and_blend::drawn as bframe_drawn;
 pub(super) use morph::passes as morph_passes;
 
 use super::frame_method::{FrameMethod, Setup};

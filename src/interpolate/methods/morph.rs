@@ -8,7 +8,7 @@
 
 use crate::diagnostic::Error;
 use crate::interpolate::bframe::BFrameParams;
-use crate::interpolate::frame_method::FrameMethod;
+use crate::interpolate::frame_method::{FrameMethod, Reads};
 use crate::interpolate::frames::{Drawn, Frames, IntervalAt, THRESHOLD};
 use crate::interpolate::measured::Measured;
 use crate::interpolate::morph::{Morph, MorphParams, MorphSetup, Source};
@@ -126,6 +126,29 @@ impl FrameMethod for Extrapolator<'_> {
 
     fn shows_rendered_iframe(&self) -> bool {
         false
+    }
+
+    /// With the next I-frame's exact motion, both I-frames' flows; with
+    /// the past's, the I-frame before's.
+    fn reads(&self) -> Reads {
+        match self.method {
+            Method::MorphPast => Reads::PastIFrames,
+            _ => Reads::BothIFrames,
+        }
+    }
+
+    /// Nothing is morphed or blurred after the I-frame: it is shown as it
+    /// is, uncompensated.
+    fn prepare_held(
+        &mut self,
+        frames: &Frames,
+        at: &IntervalAt,
+        measured: &mut Measured,
+    ) -> Result<(), Error> {
+        if at.record {
+            self.displayed_iframe(frames, at, measured, false)?;
+        }
+        Ok(())
     }
 
     /// The morph's preparation from I-frame 0, timed; in a recorded
