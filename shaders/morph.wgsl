@@ -359,3 +359,48 @@ fn fs_morph(in: Morphed) -> @location(0) vec4<f32> {
     let shown = in_between(m, l);
     return vec4<f32>(mix(shown, l, smoothstep(params.distortion_from, params.distortion_to, d)), sharp.a);
 }
+
+// ---- 5. The paper's order (`--blur-order paper`) ----
+//
+// Seed 004 blurs each morphed frame: R6 morphs the sharp rendered frame
+// (`fs_warp_and_distortion`, the grid as above, writing the distortion
+// too), R7 blurs the morphed frame with the pyramid passes of step 2,
+// and R8 (`fs_assemble`) makes the in-between frame from the morphed
+// frame and its own low-pass. Near a motion edge the low-pass then mixes
+// both sides as they are in the in-between frame, not as they were in the
+// rendered one; it costs the pyramid again per in-between frame.
+
+// The distortion of the grid at each pixel of the morphed frame (x).
+@group(0) @binding(10) var warp_distortion: texture_2d<f32>;
+
+struct Warped {
+    // M_k: the rendered frame morphed, sharp.
+    @location(0) color: vec4<f32>,
+    // D_k in x.
+    @location(1) distortion: vec4<f32>,
+}
+
+@fragment
+fn fs_warp_and_distortion(in: Morphed) -> Warped {
+    let d = distortion(dpdx(in.source), dpdy(in.source));
+    let sharp = textureSampleLevel(color, linear_clamp, in.source / params.viewport, 0.0);
+    return Warped(sharp, vec4<f32>(d, 0.0, 0.0, 1.0));
+}
+
+// R8: `color` is bound to the morphed frame M_k and `low` to the last
+// level of its own pyramid.
+@fragment
+fn fs_assemble(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
+    let texel = vec2<i32>(position.xy);
+    let sharp = textureLoad(color, texel, 0);
+    let m = clamp(sharp.rgb, vec3<f32>(0.0), vec3<f32>(1.0));
+    var l = m;
+    // The speed gate reads the rendered frame's motion at the pixel: ours,
+    // and only an approximation in the morphed frame.
+    if blurs_at(texel) {
+        l = clamp(low_pass(position.xy).rgb, vec3<f32>(0.0), vec3<f32>(1.0));
+    }
+    let d = textureLoad(warp_distortion, texel, 0).x;
+    let shown = in_between(m, l);
+    return vec4<f32>(mix(shown, l, smoothstep(params.distortion_from, params.distortion_to, d)), sharp.a);
+}

@@ -63,6 +63,9 @@ pub(super) struct IntervalAt<'a> {
     /// I-frame 0's flow to I-frame 1 read back, once an interval, for
     /// what the CPU measures from it ([`IntervalAt::flow_next_0`]).
     pub flow_next_0: OnceCell<LinearFrame>,
+    /// The pixels near a motion edge of I-frame 0's flow, made the first
+    /// time they are asked for ([`IntervalAt::near_motion_edges`]).
+    pub near_edges: OnceCell<Vec<bool>>,
     /// Where the scene's camera cuts fall against the interval.
     pub cuts: Cuts,
 }
@@ -115,6 +118,19 @@ impl IntervalAt<'_> {
         }
         let flow = read_linear(gpu, self.textures.0.flow_next).map_err(fail)?;
         Ok(self.flow_next_0.get_or_init(|| flow))
+    }
+
+    /// The pixels within [`super::edges::EDGE_RADIUS_PX`] of a motion edge
+    /// of I-frame 0's flow to I-frame 1, where every method's error is
+    /// also measured.
+    pub fn near_motion_edges(&self, frames: &Frames) -> Result<&[bool], Error> {
+        if let Some(near) = self.near_edges.get() {
+            return Ok(near);
+        }
+        let flow = self.flow_next_0(frames.gpu)?;
+        let size = [frames.size[0] as usize, frames.size[1] as usize];
+        let near = super::edges::near_motion_edges(flow, size, super::edges::EDGE_RADIUS_PX);
+        Ok(self.near_edges.get_or_init(|| near))
     }
 }
 
@@ -359,6 +375,7 @@ impl Frames<'_> {
         method: Method,
         sample: BFrameSample,
         reference: &[f32],
+        near_edges: &[bool],
     ) {
         let [width, height] = self.size;
         let error = metrics::compare_frames(reference, &sample.frame, width, height, THRESHOLD);
@@ -390,6 +407,9 @@ impl Frames<'_> {
         }
         let entry = measured.methods.entry(method).or_default();
         entry.times.push(sample.time);
+        entry
+            .edge_psnr
+            .extend(metrics::psnr_where(reference, &sample.frame, near_edges));
         for &code in &sample.decisions {
             if let Some(count) = entry.decisions.get_mut(code as usize) {
                 *count += 1;

@@ -33,6 +33,9 @@ pub(super) struct MethodRun {
     pub pursuit: Vec<f64>,
     /// Its flicker term per interval (`pursuit.rs`).
     pub flicker: Vec<f64>,
+    /// Per B-frame with a motion edge near, the PSNR over the pixels near
+    /// one (`edges.rs`).
+    pub edge_psnr: Vec<f64>,
 }
 
 /// Image-based's correspondence errors over the measured B-frames.

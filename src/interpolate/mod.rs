@@ -56,6 +56,7 @@
 pub(crate) mod bframe;
 mod blur;
 pub mod correspondence;
+pub mod edges;
 mod frame_method;
 mod frames;
 mod gpu;
@@ -75,6 +76,7 @@ mod summary;
 pub(crate) mod thin;
 
 pub use bframe::Decision;
+pub use morph::BlurOrder;
 
 use std::path::Path;
 
@@ -268,6 +270,10 @@ pub struct Options {
     /// Not the paper's selective blur, which gates by luminance and range
     /// (and which the morph always applies).
     pub blur_min_speed: Option<f32>,
+    /// Where an in-between frame's blur comes from: the rendered frame's
+    /// low-pass warped with it (ours, the default), or each morphed frame
+    /// blurred (the paper's order).
+    pub blur_order: BlurOrder,
     /// The grid distortion mapped to full blur: smoothstep(a, b, D), D the
     /// largest |s − 1| over the warp's singular values.
     pub distortion_blur: [f32; 2],
@@ -335,6 +341,7 @@ impl Default for Options {
             pixels_per_degree: 37.0,
             tracking: [70.0, 90.0],
             blur_min_speed: None,
+            blur_order: BlurOrder::WarpBlurred,
             distortion_blur: [0.25, 1.0],
             pursuit_substeps: 8,
             size: None,

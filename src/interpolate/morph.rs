@@ -11,13 +11,15 @@
 //! the in-between frame from them, so an extrapolated frame costs one
 //! pass.
 //!
-//! The paper blurs each morphed frame (a pyramid per in-between frame);
-//! here the rendered frame's low-pass is warped with it, by the same
-//! grid. The two agree only where the motion is uniform over the blur's
-//! footprint: near a motion edge the paper's blur of the morphed frame
-//! mixes both sides as they are in that frame, ours as they were in the
-//! rendered one. Tiles that stretch or fold are blended to the low-pass
-//! by their distortion all the same.
+//! Two orders of blur ([`BlurOrder`]). The paper blurs each morphed
+//! frame (a pyramid per in-between frame: [`BlurOrder::Paper`]). By
+//! default the rendered frame's low-pass is warped with it instead, by
+//! the same grid ([`BlurOrder::WarpBlurred`]), which costs no pyramid per
+//! in-between frame. The two agree only where the motion is uniform over
+//! the blur's footprint: near a motion edge the paper's blur of the
+//! morphed frame mixes both sides as they are in that frame, ours as they
+//! were in the rendered one. Tiles that stretch or fold are blended to the
+//! low-pass by their distortion in both.
 
 use super::gpu::{
     depth_view, fullscreen_pass, linear_clamp, parameters_sampler_and, timed_pass, view,
@@ -49,6 +51,33 @@ pub struct MorphSetup {
     /// [`MorphParams::blur_min_speed`]): a gate by speed, not the paper's
     /// selective blur (by luminance and range).
     pub blur_gated_by_speed: bool,
+    /// Whether each morphed frame is blurred (the paper's order) or the
+    /// rendered frame's low-pass warped with it.
+    pub blur_order: BlurOrder,
+}
+
+/// Where the blur of an in-between frame comes from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BlurOrder {
+    /// The rendered frame blurred once and warped by each in-between
+    /// frame's grid with the sharp frame: one pass an in-between frame.
+    #[default]
+    WarpBlurred,
+    /// Seed 004's: each in-between frame morphed sharp, then blurred
+    /// (the pyramid again), then assembled: R6, R7, R8 of the design
+    /// note.
+    Paper,
+}
+
+impl BlurOrder {
+    /// Its name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            BlurOrder::WarpBlurred => "warp-blurred",
+            BlurOrder::Paper => "paper",
+        }
+    }
 }
 
 /// The knobs of one pass, as `MorphParams` of `shaders/morph.wgsl` lays
@@ -124,6 +153,8 @@ struct Reads<'a> {
     /// What a halving pass halves.
     argmax_source: Option<&'a wgpu::Texture>,
     blur_source: Option<&'a wgpu::Texture>,
+    /// The morphed frame's distortion (the paper's order).
+    distortion: bool,
 }
 
 /// The morph's pipelines and targets.
@@ -154,9 +185,24 @@ pub struct Morph {
     low_full: wgpu::Texture,
     color: wgpu::Texture,
     depth: wgpu::Texture,
+    /// With the paper's order, its passes and the morphed frame.
+    paper: Option<PaperOrder>,
     /// Bound to what a pass does not read (1×1).
     no_argmax: wgpu::Texture,
     no_color: wgpu::Texture,
+}
+
+/// The passes and targets of [`BlurOrder::Paper`]: the grid writing the
+/// morphed frame sharp with its distortion, and the assembly from it and
+/// its low-pass.
+#[derive(Debug)]
+struct PaperOrder {
+    warp: wgpu::RenderPipeline,
+    assemble: wgpu::RenderPipeline,
+    /// M_k.
+    warped: wgpu::Texture,
+    /// D_k.
+    distortion: wgpu::Texture,
 }
 
 fn entry(
@@ -181,7 +227,7 @@ fn texture(sample_type: wgpu::TextureSampleType) -> wgpu::BindingType {
 }
 
 /// The morph's bindings, one layout for every pass.
-fn layout_entries() -> [wgpu::BindGroupLayoutEntry; 10] {
+fn layout_entries() -> [wgpu::BindGroupLayoutEntry; 11] {
     let both = wgpu::ShaderStages::VERTEX_FRAGMENT;
     let float = wgpu::TextureSampleType::Float { filterable: true };
     let uint = wgpu::TextureSampleType::Uint;
@@ -208,6 +254,7 @@ fn layout_entries() -> [wgpu::BindGroupLayoutEntry; 10] {
         entry(7, both, texture(uint)),
         entry(8, both, texture(float)),
         entry(9, both, texture(float)),
+        entry(10, both, texture(float)),
     ]
 }
 
@@ -242,7 +289,7 @@ impl Morph {
             "blur_gated_by_speed",
             f64::from(u8::from(setup.blur_gated_by_speed)),
         );
-        let (flow_edges, argmax_reduce, blur_down, compensate, morph, warp) =
+        let ((flow_edges, argmax_reduce, blur_down, compensate), morph, warp, paper) =
             crate::runtime::validated(device, || {
                 let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                     label: Some("shaders/morph.wgsl"),
@@ -260,17 +307,27 @@ impl Morph {
                         &targets,
                     )
                 };
-                let grid = |blur: bool| {
+                let grid = |blur: bool, fragment: &str, targets: &[wgpu::TextureFormat]| {
                     let constants = [("blur", f64::from(u8::from(blur))), gated];
-                    grid_pipeline(device, &module, &pipeline_layout, &constants)
+                    let pipeline = (&module, &pipeline_layout, fragment);
+                    grid_pipeline(device, pipeline, &constants, targets)
                 };
+                let paper = (setup.blur_order == BlurOrder::Paper).then(|| {
+                    (
+                        grid(true, "fs_warp_and_distortion", &[COLOR_FORMAT; 2]),
+                        fullscreen("fs_assemble", &[COLOR_FORMAT]),
+                    )
+                });
                 (
-                    fullscreen("fs_flow_edges", &[ARGMAX_FORMAT]),
-                    fullscreen("fs_argmax_reduce", &[ARGMAX_FORMAT]),
-                    fullscreen("fs_blur_down", &[COLOR_FORMAT]),
-                    fullscreen("fs_compensate", &[COLOR_FORMAT, COLOR_FORMAT]),
-                    grid(true),
-                    grid(false),
+                    (
+                        fullscreen("fs_flow_edges", &[ARGMAX_FORMAT]),
+                        fullscreen("fs_argmax_reduce", &[ARGMAX_FORMAT]),
+                        fullscreen("fs_blur_down", &[COLOR_FORMAT]),
+                        fullscreen("fs_compensate", &[COLOR_FORMAT, COLOR_FORMAT]),
+                    ),
+                    grid(true, "fs_morph", &[COLOR_FORMAT]),
+                    grid(false, "fs_morph", &[COLOR_FORMAT]),
+                    paper,
                 )
             })
             .map_err(|err| format!("the morph passes do not build: {err}"))?;
@@ -321,6 +378,12 @@ impl Morph {
             low_full: target("morph low-pass", (width, height), COLOR_FORMAT),
             color: target("morph in-between frame", (width, height), COLOR_FORMAT),
             depth: target("morph depth", (width, height), DEPTH_FORMAT),
+            paper: paper.map(|(warp, assemble)| PaperOrder {
+                warp,
+                assemble,
+                warped: target("morphed frame", (width, height), COLOR_FORMAT),
+                distortion: target("morph distortion", (width, height), COLOR_FORMAT),
+            }),
             no_argmax: target("no argmax", (1, 1), ARGMAX_FORMAT),
             no_color: target("no colour", (1, 1), COLOR_FORMAT),
         })
@@ -341,6 +404,12 @@ impl Morph {
             argmax(reads.argmax_source),
             color(reads.blur_source),
             color(reads.low_full.then_some(&self.low_full)),
+            color(
+                reads
+                    .distortion
+                    .then(|| self.paper.as_ref().map(|p| &p.distortion))
+                    .flatten(),
+            ),
         ];
         let entries = parameters_sampler_and(&self.params, &self.sampler, &views);
         gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -391,23 +460,7 @@ impl Morph {
             }
         }
         if params.blur {
-            for level in 0..self.pyramid.len() {
-                let from = level
-                    .checked_sub(1)
-                    .map_or(source.color, |l| &self.pyramid[l]);
-                let reads = Reads {
-                    blur_source: Some(from),
-                    ..Reads::default()
-                };
-                let group = self.bind(gpu, source, reads);
-                fullscreen_pass(
-                    &mut encoder,
-                    &mut profiler,
-                    "low-pass",
-                    (&self.blur_down, &group),
-                    &[view(&self.pyramid[level])],
-                );
-            }
+            self.low_pass(gpu, source, source.color, &mut encoder, &mut profiler);
             let reads = Reads {
                 low: true,
                 ..Reads::default()
@@ -424,8 +477,37 @@ impl Morph {
         gpu.queue.submit([encoder.finish()]);
     }
 
+    /// The low-pass pyramid of `frame` (the rendered frame, or with the
+    /// paper's order a morphed one), levels 1 to `blur_level`.
+    fn low_pass(
+        &self,
+        gpu: &Gpu,
+        source: &Source,
+        frame: &wgpu::Texture,
+        encoder: &mut wgpu::CommandEncoder,
+        profiler: &mut Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+    ) {
+        for level in 0..self.pyramid.len() {
+            let from = level.checked_sub(1).map_or(frame, |l| &self.pyramid[l]);
+            let reads = Reads {
+                blur_source: Some(from),
+                ..Reads::default()
+            };
+            let group = self.bind(gpu, source, reads);
+            fullscreen_pass(
+                encoder,
+                profiler,
+                "low-pass",
+                (&self.blur_down, &group),
+                &[view(&self.pyramid[level])],
+            );
+        }
+    }
+
     /// One in-between frame at `params.step` ([`Morph::color`]), after
-    /// [`Morph::prepare`] of the same source, timed as `<label>/morph`.
+    /// [`Morph::prepare`] of the same source, timed as `<label>/morph`
+    /// (and with the paper's order of blur `<label>/low-pass` and
+    /// `<label>/assemble`).
     pub fn render(
         &self,
         gpu: &Gpu,
@@ -435,26 +517,96 @@ impl Morph {
     ) {
         gpu.queue
             .write_buffer(&self.params, 0, &params.bytes(&self.setup));
-        let reads = Reads {
-            snap: params.snap,
-            low_full: params.blur,
-            ..Reads::default()
-        };
-        let group = self.bind(gpu, source, reads);
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         let mut profiler = profiler;
-        let pipeline = if params.blur { &self.morph } else { &self.warp };
-        let (color, depth) = (view(&self.color), view(&self.depth));
-        timed_pass(
-            &mut encoder,
-            &mut profiler,
-            "morph",
-            (
-                std::slice::from_ref(&color),
-                Some((&depth, wgpu::StoreOp::Discard)),
+        match (&self.paper, params.blur) {
+            (Some(paper), true) => self.morph_then_blur(
+                gpu,
+                (source, params.snap),
+                paper,
+                &mut encoder,
+                &mut profiler,
             ),
+            (_, blur) => {
+                let reads = Reads {
+                    snap: params.snap,
+                    low_full: blur,
+                    ..Reads::default()
+                };
+                let pipeline = if blur { &self.morph } else { &self.warp };
+                self.grid(
+                    gpu,
+                    source,
+                    reads,
+                    pipeline,
+                    &[view(&self.color)],
+                    &mut encoder,
+                    &mut profiler,
+                );
+            }
+        }
+        gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// The paper's order: the grid morphs the sharp frame (with its
+    /// distortion), the pyramid blurs the morphed frame, and the assembly
+    /// makes the in-between frame from the two.
+    fn morph_then_blur(
+        &self,
+        gpu: &Gpu,
+        (source, snap): (&Source, bool),
+        paper: &PaperOrder,
+        encoder: &mut wgpu::CommandEncoder,
+        profiler: &mut Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+    ) {
+        let reads = Reads {
+            snap,
+            ..Reads::default()
+        };
+        let targets = [view(&paper.warped), view(&paper.distortion)];
+        self.grid(gpu, source, reads, &paper.warp, &targets, encoder, profiler);
+        self.low_pass(gpu, source, &paper.warped, encoder, profiler);
+        let morphed = Source {
+            color: &paper.warped,
+            ..*source
+        };
+        let reads = Reads {
+            low: true,
+            distortion: true,
+            ..Reads::default()
+        };
+        let group = self.bind(gpu, &morphed, reads);
+        fullscreen_pass(
+            encoder,
+            profiler,
+            "assemble",
+            (&paper.assemble, &group),
+            &[view(&self.color)],
+        );
+    }
+
+    /// One draw of the grid with `pipeline` into `targets`, depth-tested
+    /// with the rendered frame's depth.
+    #[allow(clippy::too_many_arguments)]
+    fn grid(
+        &self,
+        gpu: &Gpu,
+        source: &Source,
+        reads: Reads,
+        pipeline: &wgpu::RenderPipeline,
+        targets: &[wgpu::TextureView],
+        encoder: &mut wgpu::CommandEncoder,
+        profiler: &mut Option<(&mut wgpu_profiler::GpuProfiler, &str)>,
+    ) {
+        let group = self.bind(gpu, source, reads);
+        let depth = view(&self.depth);
+        timed_pass(
+            encoder,
+            profiler,
+            "morph",
+            (targets, Some((&depth, wgpu::StoreOp::Discard))),
             |pass| {
                 pass.set_pipeline(pipeline);
                 pass.set_bind_group(0, &group, &[]);
@@ -462,7 +614,6 @@ impl Morph {
                 pass.draw_indexed(0..self.index_count, 0, 0..1);
             },
         );
-        gpu.queue.submit([encoder.finish()]);
     }
 
     /// The last in-between frame.
@@ -503,10 +654,12 @@ fn grid_indices([width, height]: [u32; 2], grid: u32) -> Vec<u32> {
 /// winding).
 fn grid_pipeline(
     device: &wgpu::Device,
-    module: &wgpu::ShaderModule,
-    layout: &wgpu::PipelineLayout,
+    (module, layout, fragment): (&wgpu::ShaderModule, &wgpu::PipelineLayout, &str),
     constants: &[(&str, f64)],
+    formats: &[wgpu::TextureFormat],
 ) -> wgpu::RenderPipeline {
+    let targets: Vec<Option<wgpu::ColorTargetState>> =
+        formats.iter().map(|f| Some((*f).into())).collect();
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some("morph"),
         layout: Some(layout),
@@ -521,12 +674,12 @@ fn grid_pipeline(
         },
         fragment: Some(wgpu::FragmentState {
             module,
-            entry_point: Some("fs_morph"),
+            entry_point: Some(fragment),
             compilation_options: wgpu::PipelineCompilationOptions {
                 constants,
                 ..Default::default()
             },
-            targets: &[Some(COLOR_FORMAT.into())],
+            targets: &targets,
         }),
         primitive: wgpu::PrimitiveState {
             cull_mode: None,

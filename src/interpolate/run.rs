@@ -469,6 +469,7 @@ impl Schedule<'_> {
             slots: (earlier, later),
             inputs_of: &inputs_of,
             flow_next_0: OnceCell::new(),
+            near_edges: OnceCell::new(),
             cuts,
         };
         for method in methods.iter_mut() {
@@ -531,7 +532,8 @@ impl Schedule<'_> {
             let displayed = (at.start + k, params.alpha);
             let sample = frames.sample(m.clock, at.inputs_of, displayed, &drawn)?;
             let reference = frames.reference_at(k, at.pictures, m.measured)?;
-            frames.keep(m.measured, name, sample, &reference);
+            let near_edges = at.near_motion_edges(frames)?;
+            frames.keep(m.measured, name, sample, &reference, near_edges);
             if !repeated {
                 method.measure(frames, at, k, &params, m.measured)?;
             }

@@ -151,6 +151,16 @@ impl Summary<'_> {
                     .collect();
                 metrics::mean(&psnr)
             }),
+            edge_psnr: if method == Method::Reference {
+                None
+            } else {
+                run.filter(|r| !r.edge_psnr.is_empty())
+                    .map(|r| metrics::mean(&r.edge_psnr))
+            },
+            extrapolated_frame_ratio: (method.extrapolates() && adds_passes).then(|| {
+                let prepare = run.map_or(0.0, |r| metrics::median(&r.prepare_times));
+                (b_ms + prepare / f64::from(n - 1)) / reference_ms
+            }),
         }
     }
 

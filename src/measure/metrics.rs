@@ -164,6 +164,22 @@ pub fn compare_frames(
     compare_where(reference, frame, |_| true, [width, height], threshold)
 }
 
+/// PSNR (dB, linear float, peak 1, capped) over the colour channels of
+/// the pixels `within` marks; `None` where it marks none.
+#[cfg(feature = "interpolate")]
+pub fn psnr_where(reference: &[f32], frame: &[f32], within: &[bool]) -> Option<f64> {
+    let mut squared = 0.0f64;
+    let mut count = 0usize;
+    for (p, _) in within.iter().enumerate().filter(|(_, &w)| w) {
+        for c in 0..3 {
+            let d = channel_difference(reference[p * 4 + c], frame[p * 4 + c]);
+            squared += d * d;
+        }
+        count += 3;
+    }
+    (count > 0).then(|| psnr_of(squared, count))
+}
+
 fn compare_where(
     reference: &[f32],
     frame: &[f32],

@@ -713,13 +713,16 @@ fn every_interpolation_pass_is_valid_and_builds() {
             .unwrap_or_else(|err| panic!("{err}"));
     }
     // The morph's passes, with and without the speed gate, at the
-    // smallest and the paper's grid.
-    for (grid, blur_gated_by_speed) in [(2, false), (8, true)] {
+    // smallest and the paper's grid, in both orders of blur.
+    let paper = interpolate::morph::BlurOrder::Paper;
+    let warp_blurred = interpolate::morph::BlurOrder::WarpBlurred;
+    for (grid, blur_gated_by_speed, blur_order) in [(2, false, paper), (8, true, warp_blurred)] {
         let setup = interpolate::morph::MorphSetup {
             size: [32, 16],
             grid,
             blur_level: 2,
             blur_gated_by_speed,
+            blur_order,
         };
         interpolate::morph::Morph::new(&gpu, setup).unwrap_or_else(|err| panic!("{err}"));
     }

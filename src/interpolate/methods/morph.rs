@@ -220,6 +220,7 @@ pub(in crate::interpolate) fn passes(
         grid: options.grid,
         blur_level: options.blur_level,
         blur_gated_by_speed: options.blur_min_speed.is_some(),
+        blur_order: options.blur_order,
     };
     Ok(Some(Morph::new(gpu, setup).map_err(fail)?))
 }

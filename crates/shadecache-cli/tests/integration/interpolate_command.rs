@@ -183,3 +183,54 @@ fn morph_at_the_largest_size_is_an_error_or_runs() {
         assert!(!out_dir.exists());
     }
 }
+
+/// `--blur-order paper` runs the morph in the paper's order, the report
+/// records it with the edge error and the paper's break-even figure of
+/// each extrapolator, and the summary says whether it breaks even.
+#[test]
+fn blur_order_paper_is_recorded_with_the_break_even_figure() {
+    if crate::util::no_gpu() {
+        return;
+    }
+    let out = tempfile::tempdir().unwrap();
+    let output = crate::util::shadecache([
+        "interpolate",
+        "corpus/noise_marble.wgsl",
+        "--scene",
+        "corpus/scenes/walking_floor.toml",
+        "--method",
+        "morph",
+        "--blur-order",
+        "paper",
+        "--size",
+        "64x64",
+        "--frames-per-interval",
+        "3",
+        "--frames",
+        "6",
+        "--out",
+        out.path().to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", crate::util::stderr(&output));
+    let stdout = crate::util::stdout(&output);
+    assert!(
+        stdout.contains("break even (seed 004's test: below 1)")
+            || stdout.contains("breaks even (seed 004's test: below 1)"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("within 12 px of a motion edge"), "{stdout}");
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.path().join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["parameters"]["blur_order"], "paper", "{report}");
+    let morph = &report["methods"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["method"] == "morph")
+        .unwrap_or_else(|| panic!("morph in {report}"));
+    assert!(
+        morph["extrapolated_frame_ratio"].as_f64().unwrap() > 0.0,
+        "{morph}"
+    );
+    assert!(morph["edge_psnr"].as_f64().unwrap() > 10.0, "{morph}");
+}
