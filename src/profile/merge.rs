@@ -119,8 +119,12 @@ fn identity(report: &Report, with_knobs: bool) -> Identity {
 fn knobs(report: &Report) -> String {
     report.upsampling.as_ref().map_or(String::new(), |u| {
         format!(
-            "s = {}, σn = {}, σz = {}, a = {}",
-            u.factor, u.sigma_normal, u.sigma_depth, u.sensitivity
+            "s = {}, σn = {}, σz = {}, a = {}{}",
+            u.factor,
+            u.sigma_normal,
+            u.sigma_depth,
+            u.sensitivity,
+            if u.lod_bias { "" } else { ", no LOD bias" }
         )
     })
 }

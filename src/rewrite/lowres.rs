@@ -197,7 +197,11 @@ fn samples_entry(
     helpers: &LowresHelpers,
     upsampling: &Upsampling,
 ) -> Result<Function, Refusal> {
-    let payload = biased_payload(module, pieces.payload, upsampling.factor)?;
+    let payload = if upsampling.lod_bias {
+        biased_payload(module, pieces.payload, upsampling.factor)?
+    } else {
+        pieces.payload
+    };
     let output = two_member_output(module, "LowresSamples", pieces.vec4, pieces.vec4);
     let (mut b, frag) = entry_builder(module, pieces, true, output);
     let previous = frag

@@ -11,6 +11,33 @@ pub struct Texels {
     pub width: u32,
     pub height: u32,
     pub rgba: Vec<u8>,
+    /// A full mip chain is made from them (a colour texture's only).
+    pub mipmaps: bool,
+}
+
+impl Texels {
+    /// The texels and, with `mipmaps`, each smaller mip level down to
+    /// 1×1, each the level 0 resized with a triangle filter (the box
+    /// filter's smooth neighbour, what mip generation commonly uses).
+    fn levels(&self) -> Vec<(u32, u32, Vec<u8>)> {
+        let mut levels = vec![(self.width, self.height, self.rgba.clone())];
+        let image = image::RgbaImage::from_raw(self.width, self.height, self.rgba.clone());
+        let (true, Some(image)) = (self.mipmaps, image) else {
+            return levels;
+        };
+        let (mut width, mut height) = (self.width, self.height);
+        while width > 1 || height > 1 {
+            (width, height) = ((width / 2).max(1), (height / 2).max(1));
+            let level = image::imageops::resize(
+                &image,
+                width,
+                height,
+                image::imageops::FilterType::Triangle,
+            );
+            levels.push((width, height, level.into_raw()));
+        }
+        levels
+    }
 }
 
 /// A depth texture's texels: `size`² 16-bit unorm depths, row-major (a
@@ -251,10 +278,20 @@ fn upload(
         height: texels.height,
         depth_or_array_layers: layers,
     };
+    // Whole numbers are not filtered: an integer texture keeps one level.
+    let levels = if format.sample_type(None, None) == Some(wgpu::TextureSampleType::Uint) {
+        Texels {
+            mipmaps: false,
+            ..texels.clone()
+        }
+        .levels()
+    } else {
+        texels.levels()
+    };
     let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("scene texture"),
         size,
-        mip_level_count: 1,
+        mip_level_count: levels.len() as u32,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format,
@@ -262,28 +299,31 @@ fn upload(
         view_formats: &[],
     });
     for layer in 0..layers {
-        gpu.queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d {
-                    x: 0,
-                    y: 0,
-                    z: layer,
+        for (mip_level, (width, height, rgba)) in levels.iter().enumerate() {
+            gpu.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &texture,
+                    mip_level: mip_level as u32,
+                    origin: wgpu::Origin3d {
+                        x: 0,
+                        y: 0,
+                        z: layer,
+                    },
+                    aspect: wgpu::TextureAspect::All,
                 },
-                aspect: wgpu::TextureAspect::All,
-            },
-            &texels.rgba,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(texels.width * 4),
-                rows_per_image: Some(texels.height),
-            },
-            wgpu::Extent3d {
-                depth_or_array_layers: 1,
-                ..size
-            },
-        );
+                rgba,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(width * 4),
+                    rows_per_image: Some(*height),
+                },
+                wgpu::Extent3d {
+                    width: *width,
+                    height: *height,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
     }
     texture.create_view(&wgpu::TextureViewDescriptor {
         dimension: Some(shape.dimension),

@@ -9,12 +9,12 @@ use serde::Deserialize;
 #[serde(try_from = "RawSource")]
 pub enum TextureSource {
     /// A PNG file, relative to the scene file.
-    File { file: String },
+    File { file: String, mipmaps: bool },
     /// A generated pattern.
     Generate {
         generate: Pattern,
-        #[serde(default = "default_size")]
         size: u32,
+        mipmaps: bool,
     },
 }
 
@@ -31,6 +31,10 @@ struct RawSource {
     file: Option<String>,
     generate: Option<Pattern>,
     size: Option<u32>,
+    /// A full mip chain, each level the one above box-filtered, as a
+    /// game's textures have (a colour texture only).
+    #[serde(default)]
+    mipmaps: bool,
 }
 
 /// The largest generated texture's side.
@@ -40,8 +44,9 @@ impl TryFrom<RawSource> for TextureSource {
     type Error = String;
 
     fn try_from(raw: RawSource) -> Result<TextureSource, String> {
+        let mipmaps = raw.mipmaps;
         match (raw.file, raw.generate, raw.size) {
-            (Some(file), None, None) => Ok(TextureSource::File { file }),
+            (Some(file), None, None) => Ok(TextureSource::File { file, mipmaps }),
             (Some(_), _, _) => Err(
                 "a texture is either `file = \"PATH.png\"` or `generate = \"PATTERN\"` (with an optional `size`), not both".into(),
             ),
@@ -52,7 +57,11 @@ impl TryFrom<RawSource> for TextureSource {
                         "a generated texture's size is 1 to {MAX_GENERATED_SIZE} texels, not {size}"
                     ));
                 }
-                Ok(TextureSource::Generate { generate, size })
+                Ok(TextureSource::Generate {
+                    generate,
+                    size,
+                    mipmaps,
+                })
             }
             (None, None, _) => Err(
                 "a texture needs `file = \"PATH.png\"` (relative to the scene) or `generate = \"checker\"` (checker, noise, flat-normal, sky, far, shadow-map or cells)".into(),
@@ -109,7 +118,7 @@ impl TextureSource {
 
     pub fn load(&self, dir: &Path) -> Result<Texels, String> {
         match *self {
-            TextureSource::File { ref file } => {
+            TextureSource::File { ref file, mipmaps } => {
                 let path = dir.join(file);
                 let image = image::open(&path)
                     .map_err(|err| format!("cannot read `{}`: {err}", path.display()))?;
@@ -118,9 +127,17 @@ impl TextureSource {
                     width: rgba.width(),
                     height: rgba.height(),
                     rgba: rgba.into_raw(),
+                    mipmaps,
                 })
             }
-            TextureSource::Generate { generate, size } => Ok(generate_pattern(generate, size)),
+            TextureSource::Generate {
+                generate,
+                size,
+                mipmaps,
+            } => Ok(Texels {
+                mipmaps,
+                ..generate_pattern(generate, size)
+            }),
         }
     }
 }
@@ -175,5 +192,6 @@ fn generate_pattern(pattern: Pattern, size: u32) -> Texels {
         width: size,
         height: size,
         rgba,
+        mipmaps: false,
     }
 }

@@ -415,6 +415,22 @@ pub struct Upsampling {
     /// guess.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub reshade: bool,
+    /// The samples pass reads textures at the full resolution's level of
+    /// detail: its derivatives are s times the full resolution's, so
+    /// implicit-LOD samples get a bias of −log2 s and explicit gradients
+    /// and derivatives are scaled by 1/s. Off, the samples read log2 s
+    /// mip levels coarser (what the bias gives is measured by turning it
+    /// off; the paper is silent on it). Ours.
+    #[serde(default = "yes", skip_serializing_if = "is_yes")]
+    pub lod_bias: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+fn is_yes(value: &bool) -> bool {
+    *value
 }
 
 /// The knobs of seed 001 as the paper sets them: spatio-temporal
@@ -428,6 +444,7 @@ pub const DEFAULT_UPSAMPLING: Upsampling = Upsampling {
     sigma_depth: 0.03,
     sensitivity: 1.0,
     reshade: false,
+    lod_bias: true,
 };
 
 fn spatio_temporal() -> Upsampler {

@@ -424,8 +424,12 @@ fn note_unused_flags(args: &Args) {
 fn lowres_line(report: &report::Report, row: &report::ResultRow) -> String {
     let knobs = report.upsampling.as_ref().map_or(String::new(), |u| {
         format!(
-            "s = {}, σn = {}, σz = {}, a = {}, ",
-            u.factor, u.sigma_normal, u.sigma_depth, u.sensitivity
+            "s = {}, σn = {}, σz = {}, a = {}{}, ",
+            u.factor,
+            u.sigma_normal,
+            u.sigma_depth,
+            u.sensitivity,
+            if u.lod_bias { "" } else { ", no LOD bias" }
         )
     });
     format!(

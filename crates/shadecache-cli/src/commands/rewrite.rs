@@ -143,6 +143,11 @@ pub struct UpsamplingArgs {
     /// changed, undersampled, not sampled this frame).
     #[arg(long)]
     pub reshade_unreliable: bool,
+    /// Lowres's samples read textures log2 S mip levels coarser than the
+    /// full resolution does (no LOD bias in the samples pass): to measure
+    /// what the bias gives.
+    #[arg(long)]
+    pub no_lod_bias: bool,
 }
 
 impl UpsamplingArgs {
@@ -155,6 +160,7 @@ impl UpsamplingArgs {
             sigma_depth: self.sigma_depth.unwrap_or(default.sigma_depth),
             sensitivity: self.sensitivity.unwrap_or(default.sensitivity),
             reshade: self.reshade_unreliable,
+            lod_bias: !self.no_lod_bias,
             ..default
         };
         upsampling
@@ -171,6 +177,7 @@ impl UpsamplingArgs {
             ("--sigma-depth", self.sigma_depth.is_some()),
             ("--sensitivity", self.sensitivity.is_some()),
             ("--reshade-unreliable", self.reshade_unreliable),
+            ("--no-lod-bias", self.no_lod_bias),
         ]
         .into_iter()
         .filter_map(|(flag, given)| given.then_some(flag))
