@@ -731,6 +731,8 @@ struct CacheNeighbours {
     geometry: vec4<f32>,
     distance: vec4<f32>,
     gradient: vec4<f32>,
+    // 1 where a sample shows geometry (any draw), 0 on the background.
+    present: vec4<f32>,
     // The index of the sample at the pixel itself, 4 where none is (the
     // pixel is not on this frame's lattice), and of the nearest.
     own: u32,
@@ -765,6 +767,7 @@ fn cache_neighbours(frag_coord: vec4<f32>, normal: vec3<f32>) -> CacheNeighbours
         out.geometry[i] = select(0.0, (n_w * n_w * n_w) * (d_w * d_w * d_w) * select(CACHE_FOREIGN_WEIGHT, 1.0, idj == id), finite);
         out.distance[i] = length(((vec2<f32>(a) * s) + offset) - pixel);
         out.gradient[i] = (g.w - (4.0 * f32(idj))) - 1.0;
+        out.present[i] = select(0.0, 1.0, g.z > 0.0);
         // The pixel's own sample, when it shows the same surface (at a
         // silhouette the samples pass may see what is behind).
         out.own = select(out.own, u32(i), (out.distance[i] < 0.5) & (out.geometry[i] > 0.5));
@@ -792,14 +795,26 @@ fn cache_image_kernel(n: CacheNeighbours, gamma: f32) -> vec4<f32> {
     return pow(max(vec4<f32>(0.01), vec4<f32>(1.0) - (n.distance / r)), vec4<f32>(gamma));
 }
 
+// `cache_upsample`'s mode: the reconstruction in its low byte, and flags.
+// The paper's spatial filter of the temporal gradient: the absolute
+// gradients, geometry-blind (§3.5.1: a mip of |∇| read at level 2.5, which
+// spreads a disocclusion's maximum into its neighbours, Fig. 6).
+const CACHE_MODE_PAPER_GRADIENT: u32 = 256u;
+// The temporal reconstruction's holes (every pixel the history misses,
+// not shaded this frame) left to the third pass, which shades them at full
+// resolution: the paper's temporal baseline with second-pass hole filling.
+const CACHE_MODE_FILL_HOLES: u32 = 512u;
+
 // The payload at a full-resolution pixel (pass 2), and the history to keep.
-// `mode`: 0 nearest sample, 1 bilinear, 2 spatial (eq. 1 with normal, depth
-// and draw weights, a linear hat in image space), 3 temporal (eq. 4; the
-// spatial result where the history misses), 4 spatio-temporal (eqs. 6–8).
+// `mode & 255`: 0 nearest sample, 1 bilinear, 2 spatial (eq. 1 with
+// normal, depth and draw weights, a linear hat in image space), 3 temporal
+// (eq. 4; the spatial result where the history misses), 4 spatio-temporal
+// (eqs. 6–8); with the flags above.
 // `before` and `hit` are the lookup of last frame's result where this
 // point was (the cache's depth-tested reprojection), `previous_clip` its
 // previous clip position, for the history texel.
-fn cache_upsample(mode: u32, components: u32, frag_coord: vec4<f32>, normal: vec3<f32>, before: vec4<f32>, hit: bool, previous_clip: vec4<f32>) -> CacheUpsampled {
+fn cache_upsample(flags: u32, components: u32, frag_coord: vec4<f32>, normal: vec3<f32>, before: vec4<f32>, hit: bool, previous_clip: vec4<f32>) -> CacheUpsampled {
+    let mode = flags & 255u;
     let n = cache_neighbours(frag_coord, normal);
     let none = vec4<f32>(0.0, 1.0, 1.0, 1.0);
     if (mode == 0u) {
@@ -821,7 +836,9 @@ fn cache_upsample(mode: u32, components: u32, frag_coord: vec4<f32>, normal: vec
     let own_payload = n.payload[min(n.own, 3u)];
     if (mode == 3u) {
         let reused = select(spatial.payload, before, hit);
-        return CacheUpsampled(select(reused, own_payload, own), none, !own & !hit & (spatial.weight < CACHE_UNDERSAMPLED));
+        let hole = !own & !hit;
+        let fill = (flags & CACHE_MODE_FILL_HOLES) != 0u;
+        return CacheUpsampled(select(reused, own_payload, own), none, hole & (fill | (spatial.weight < CACHE_UNDERSAMPLED)));
     }
     // Last frame's history where this point was: its weight and gradients.
     let point = cache_point(previous_clip);
@@ -833,13 +850,24 @@ fn cache_upsample(mode: u32, components: u32, frag_coord: vec4<f32>, normal: vec
     // (the four nearest samples, 2s pixels across, weighted as the spatial
     // upsampling) and over four frames in time (0.4, 0.3, 0.2, 0.1); 1
     // where the history misses.
+    // Ours: the signed gradients weighted as the spatial upsampling weighs
+    // the samples, so that what another surface did does not count. The
+    // paper's (CACHE_MODE_PAPER_GRADIENT): their absolute values, blind to
+    // the geometry (the background's samples left out), so that opposite
+    // changes near each other (a thin shadow's two edges) do not cancel
+    // and a disocclusion spreads to its neighbours.
     let spatial_weights = hat * n.geometry;
-    let now_gradient = dot(spatial_weights, n.gradient) / max(spatial.weight, 1e-30);
+    let signed_gradient = dot(spatial_weights, n.gradient) / max(spatial.weight, 1e-30);
+    let blind_weights = hat * n.present;
+    let blind_weight = dot(blind_weights, vec4<f32>(1.0));
+    let absolute_gradient = dot(blind_weights, abs(n.gradient)) / max(blind_weight, 1e-30);
+    let paper_gradient = (flags & CACHE_MODE_PAPER_GRADIENT) != 0u;
+    let now_gradient = select(signed_gradient, absolute_gradient, paper_gradient);
     // Where no sample shows this surface (a silhouette pixel whose lattice
     // points this frame all fell on another draw or the background), the
     // samples say nothing of its change: it carries its last gradient, and
     // eq. 7 leans on its history.
-    let reliable = spatial.weight > CACHE_RELIABLE;
+    let reliable = select(spatial.weight, blind_weight, paper_gradient) > CACHE_RELIABLE;
     let now = select(1.0, select(history.y, now_gradient, reliable), hit);
     let older = select(vec3<f32>(1.0), history.yzw, hit);
     let filtered = abs((0.4 * now) + dot(vec3<f32>(0.3, 0.2, 0.1), older));

@@ -117,16 +117,10 @@ fn identity(report: &Report, with_knobs: bool) -> Identity {
 
 /// Lowres's knobs as a report sets them, in words (empty without lowres).
 fn knobs(report: &Report) -> String {
-    report.upsampling.as_ref().map_or(String::new(), |u| {
-        format!(
-            "s = {}, σn = {}, σz = {}, a = {}{}",
-            u.factor,
-            u.sigma_normal,
-            u.sigma_depth,
-            u.sensitivity,
-            if u.lod_bias { "" } else { ", no LOD bias" }
-        )
-    })
+    report
+        .upsampling
+        .as_ref()
+        .map_or(String::new(), |u| u.in_words())
 }
 
 /// Joins `shards` into one report; with `keep_apart`, into one per group

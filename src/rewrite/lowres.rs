@@ -30,13 +30,13 @@ use super::helpers::{LowresHelpers, Pieces};
 use super::stage::{LowresStage, Stage};
 use super::Refusal;
 use crate::analysis::graph::ExprSet;
-use crate::plan::{Upsampler, Upsampling};
+use crate::plan::{GradientFilter, Upsampler, Upsampling};
 
 /// Lowres's passes: the samples, the upsampling, and with adaptive
 /// refresh the reshading of the pixels it cannot vouch for.
 pub(crate) fn stages(upsampling: &Upsampling) -> Vec<Stage> {
     let mut stages = vec![LowresStage::Samples, LowresStage::Upsample];
-    if upsampling.reshade {
+    if upsampling.shades_leftovers() {
         stages.push(LowresStage::Reshade);
     }
     stages.into_iter().map(Stage::Lowres).collect()
@@ -78,15 +78,19 @@ fn history(
     }
 }
 
-/// `cache_upsample`'s mode for an upsampler.
-fn mode(upsampler: Upsampler) -> u32 {
-    match upsampler {
+/// `cache_upsample`'s mode for `upsampling`: its reconstruction, and the
+/// flags of the paper's gradient filter and of hole filling
+/// (`CACHE_MODE_*` in `shaders/cache.wgsl`).
+fn mode(upsampling: &Upsampling) -> u32 {
+    let reconstruction = match upsampling.reconstruction {
         Upsampler::Nearest => 0,
         Upsampler::Bilinear => 1,
         Upsampler::Spatial => 2,
         Upsampler::Temporal => 3,
         Upsampler::SpatioTemporal => 4,
-    }
+    };
+    let paper_gradient = upsampling.gradient_filter == GradientFilter::Paper;
+    reconstruction | (u32::from(paper_gradient) << 8) | (u32::from(upsampling.fill_holes) << 9)
 }
 
 /// Where the fragment's normal comes from: an input the shader
@@ -245,8 +249,8 @@ fn upsample_entry(
     helpers: &LowresHelpers,
     upsampling: &Upsampling,
 ) -> Result<Function, Refusal> {
-    let (reconstruction, reshade) = (upsampling.reconstruction, upsampling.reshade);
-    let mode = mode(reconstruction);
+    let (reconstruction, reshade) = (upsampling.reconstruction, upsampling.shades_leftovers());
+    let mode = mode(upsampling);
     let output = fragment::color_and_cache_output(module, pieces, pieces.vec4);
     let (mut b, frag) = entry_builder(module, pieces, true, output.0);
     let previous = frag

@@ -413,6 +413,53 @@ fn lowres_reshades_unreliable_pixels() {
     );
 }
 
+/// The paper's temporal baseline (`--fill-holes`, §5: temporal
+/// amortisation "with second-pass hole filling"): every pixel the history
+/// misses and this frame did not shade (the floor the sliding sphere
+/// reveals) is shaded at full resolution in a third pass, so the revealed
+/// band is the reference's, where the temporal reconstruction without it
+/// shows the spatial guess. Spatio-temporal is not changed by it.
+#[test]
+fn temporal_baseline_fills_every_hole() {
+    let (warmup, frames) = (16, 2);
+    let run_with = |reconstruction, fill_holes| {
+        let mut options = lowres(&[reconstruction], warmup, frames);
+        options.upsampling.fill_holes = fill_holes;
+        run(
+            &sliding_sphere("size = [128, 128]\nframes = 2\nwarmup = 16"),
+            options,
+        )
+    };
+    let Some((guessed, report, scene)) = run_with(Upsampler::Temporal, false) else {
+        return;
+    };
+    assert_eq!(report.results[0].passes.len(), 2);
+    let (filled, report, _) = run_with(Upsampler::Temporal, true).unwrap();
+    assert_eq!(report.results[0].passes.len(), 3);
+    let (_, report, _) = run_with(Upsampler::SpatioTemporal, true).unwrap();
+    assert_eq!(
+        report.results[0].passes.len(),
+        2,
+        "spatio-temporal fills no hole"
+    );
+    let last = warmup + frames - 1;
+    let (w, h) = (128, 128);
+    let before = super::util::silhouette(&scene, 1, last - 1, w, h);
+    let now = super::util::silhouette(&scene, 1, last, w, h);
+    let revealed: Vec<usize> = (0..w * h).filter(|&i| before[i] && !now[i]).collect();
+    assert!(revealed.len() > 50, "{} revealed pixels", revealed.len());
+    let error = |pictures: &crate::report::images::Pictures| {
+        mean_error(&pictures.results[0].0, &pictures.reference, &revealed)
+    };
+    let (guess, fill) = (error(&guessed), error(&filled));
+    eprintln!("revealed band: {guess} upsampled, {fill} with its holes filled");
+    assert!(fill < 0.0005, "revealed band with its holes filled: {fill}");
+    assert!(
+        guess > 4.0 * fill.max(0.001),
+        "upsampled {guess}, filled {fill}"
+    );
+}
+
 /// [`FLAT`] coloured by depth instead of by object: red in front of
 /// z = 0, blue behind it.
 const BY_DEPTH: &str = r#"
@@ -556,5 +603,105 @@ mipmaps = {mipmaps}
     assert!(
         (one_level_biased - one_level).abs() < 0.01,
         "one mip level: {one_level_biased} dB biased, {one_level} dB not"
+    );
+}
+
+/// A floor whose colour is a smooth pattern under a pole's thin shadow
+/// sweeping it (`time`): the band is 5 pixels wide at 128² and moves 3
+/// pixels a frame, so within the four samples around a pixel (2s = 8
+/// pixels across) one edge darkens what it reaches and the other
+/// brightens what it leaves.
+const SHADOW_SWEEP: &str = r#"
+struct Frame {
+    clip_from_world: mat4x4<f32>,
+    world_from_local: mat4x4<f32>,
+    time: f32,
+}
+@group(0) @binding(0) var<uniform> frame: Frame;
+
+struct VertexOutput {
+    @builtin(position) clip_position: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) world_normal: vec3<f32>,
+}
+
+@vertex
+fn vs_main(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>, @location(2) uv: vec2<f32>) -> VertexOutput {
+    var out: VertexOutput;
+    out.clip_position = frame.clip_from_world * frame.world_from_local * vec4<f32>(position, 1.0);
+    out.uv = uv;
+    out.world_normal = (frame.world_from_local * vec4<f32>(normal, 0.0)).xyz;
+    return out;
+}
+
+@fragment
+fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
+    let pattern = 0.6 + (0.25 * (sin(in.uv.x * 9.0) * sin(in.uv.y * 7.0)));
+    let across = fract(in.uv.x - (1.8 * frame.time)) - 0.5;
+    let shadow = 1.0 - (0.75 * (1.0 - smoothstep(0.015, 0.025, abs(across))));
+    let lit = pattern * shadow;
+    return vec4<f32>(vec3<f32>(lit), 1.0);
+}
+"#;
+
+/// Seed 001's temporal gradient filtered as the paper filters it, the
+/// absolute values blind to the geometry (`--gradient-filter paper`),
+/// against ours, the signed values weighted by geometry: under a thin
+/// shadow sweeping a still floor the band's two edges change the shading
+/// in opposite directions within the samples around a pixel. Averaged
+/// signed, they cancel and read as confidence: the history keeps the
+/// band where it was, a ghost of the shadow on floor the reference shows
+/// lit. With the paper's filter the history there is dropped.
+#[test]
+fn moving_shadow_edge_does_not_ghost() {
+    let (_, analysis) = super::util::analyzed("shadow_sweep.wgsl", SHADOW_SWEEP);
+    let lit = super::util::candidate(&analysis, "pattern * shadow");
+    let scene = r#"
+size = [128, 128]
+effects = ["time"]
+[camera]
+eye = [0.0, 0.0, 2.4]
+target = [0.0, 0.0, 0.0]
+[[objects]]
+mesh = { kind = "plane", size = 2.0, subdivisions = 1 }
+rotation_degrees = [90.0, 0.0, 0.0]
+"#;
+    // The last frame's pixels the variant shows darker than the reference
+    // by a tenth or more, away from the shadow (more than 8 pixels, the
+    // samples' footprint, from any pixel of its core in the row, where the
+    // spatial upsampling alone blurs it): where the shadow was.
+    let ghosts = |gradient_filter| {
+        let mut options = lowres(&[Upsampler::SpatioTemporal], 20, 12);
+        options.nodes = crate::profile::Nodes::Ids(vec![lit.node.id.clone()]);
+        options.upsampling.gradient_filter = gradient_filter;
+        let (pictures, report, _) = super::profile::run_shader(SHADOW_SWEEP, scene, options)?;
+        let (result, _) = &pictures.results[0];
+        let (reference, width) = (&pictures.reference, 128usize);
+        let mut count = 0;
+        for (r, v) in reference.chunks(width * 4).zip(result.chunks(width * 4)) {
+            let core: Vec<usize> = (0..width).filter(|&x| r[x * 4] < 50).collect();
+            for x in 0..width {
+                let away = core.iter().all(|&c| c.abs_diff(x) > 8);
+                if away && v[x * 4] + 25 < r[x * 4] {
+                    count += 1;
+                }
+            }
+        }
+        Some((count, report.results[0].psnr))
+    };
+    let Some((ours, ours_psnr)) = ghosts(crate::rewrite::GradientFilter::Ours) else {
+        return;
+    };
+    let (paper, paper_psnr) = ghosts(crate::rewrite::GradientFilter::Paper).unwrap();
+    eprintln!(
+        "a thin shadow sweeping: {paper} ghost pixels ({paper_psnr:.1} dB) with the paper's gradient filter, {ours} ({ours_psnr:.1} dB) with ours"
+    );
+    assert!(
+        ours > 100,
+        "ours left {ours} ghost pixels: the case does not ghost"
+    );
+    assert!(
+        paper * 4 < ours,
+        "the paper's filter left {paper} ghost pixels, ours {ours}"
     );
 }

@@ -423,6 +423,38 @@ pub struct Upsampling {
     /// off; the paper is silent on it). Ours.
     #[serde(default = "yes", skip_serializing_if = "is_yes")]
     pub lod_bias: bool,
+    /// How the temporal gradient is filtered in space before eq. 8.
+    #[serde(default, skip_serializing_if = "GradientFilter::is_ours")]
+    pub gradient_filter: GradientFilter,
+    /// The temporal reconstruction's holes (every pixel the history
+    /// misses and this frame did not shade) shaded at full resolution in
+    /// a third pass: the paper's temporal baseline, "with second-pass hole
+    /// filling" (§5, after Sitthi-amorn et al. 2008). Off, they take the
+    /// spatial upsampling (shaded only where `reshade` says so). The
+    /// other reconstructions are not changed by it.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub fill_holes: bool,
+}
+
+/// How lowres filters the temporal gradient in space (eq. 8's ∇).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum GradientFilter {
+    /// Ours: the samples' signed gradients, weighted as the spatial
+    /// upsampling weighs them (normal, depth, draw and the image hat).
+    #[default]
+    Ours,
+    /// The paper's (§3.5.1, Figs. 6–7): the absolute gradients, blind to
+    /// the geometry, over the same four samples (the paper reads a mip of
+    /// |∇| at level 2.5, a footprint of about the same width). Opposite
+    /// changes side by side do not cancel, and a disocclusion spreads.
+    Paper,
+}
+
+impl GradientFilter {
+    fn is_ours(&self) -> bool {
+        *self == GradientFilter::Ours
+    }
 }
 
 fn yes() -> bool {
@@ -445,6 +477,8 @@ pub const DEFAULT_UPSAMPLING: Upsampling = Upsampling {
     sensitivity: 1.0,
     reshade: false,
     lod_bias: true,
+    gradient_filter: GradientFilter::Ours,
+    fill_holes: false,
 };
 
 fn spatio_temporal() -> Upsampler {
@@ -459,6 +493,44 @@ pub const MIN_SIGMA: f32 = 1e-6;
 pub const MAX_SIGMA: f32 = 1e6;
 
 impl Upsampling {
+    /// These knobs with the paper's path wherever ours differs and is a
+    /// knob: the absolute, geometry-blind gradient filter and the temporal
+    /// baseline's hole filling. (σz of the depth itself, not of the
+    /// near–far range, depth-only disocclusion and the project's two
+    /// rules, the exact sample and the dropped history, stay.)
+    pub fn as_the_paper(&self) -> Upsampling {
+        Upsampling {
+            gradient_filter: GradientFilter::Paper,
+            fill_holes: true,
+            ..self.clone()
+        }
+    }
+
+    /// The knobs in words, as the reports say them: `s = 4, σn = 0.2,
+    /// σz = 0.03, a = 1`, and what differs from the defaults of the rest.
+    pub fn in_words(&self) -> String {
+        let mut words = format!(
+            "s = {}, σn = {}, σz = {}, a = {}",
+            self.factor, self.sigma_normal, self.sigma_depth, self.sensitivity
+        );
+        if !self.lod_bias {
+            words.push_str(", no LOD bias");
+        }
+        if self.gradient_filter == GradientFilter::Paper {
+            words.push_str(", the paper's gradient filter");
+        }
+        if self.fill_holes {
+            words.push_str(", holes filled");
+        }
+        words
+    }
+
+    /// Whether a third pass shades what the upsampling leaves: with
+    /// `reshade`, or for the temporal reconstruction with `fill_holes`.
+    pub fn shades_leftovers(&self) -> bool {
+        self.reshade || (self.fill_holes && self.reconstruction == Upsampler::Temporal)
+    }
+
     /// Checks the knobs: s is 2 or 4, σn and σz lie in
     /// [[`MIN_SIGMA`], [`MAX_SIGMA`]], a in [[`MIN_SIGMA`], 1].
     pub fn check(&self) -> Result<(), String> {

@@ -422,16 +422,10 @@ fn note_unused_flags(args: &Args) {
 /// Lowres's line: its knobs, and what its classes mean for it (pixels
 /// shaded this frame, history reused, history missing).
 fn lowres_line(report: &report::Report, row: &report::ResultRow) -> String {
-    let knobs = report.upsampling.as_ref().map_or(String::new(), |u| {
-        format!(
-            "s = {}, σn = {}, σz = {}, a = {}{}, ",
-            u.factor,
-            u.sigma_normal,
-            u.sigma_depth,
-            u.sensitivity,
-            if u.lod_bias { "" } else { ", no LOD bias" }
-        )
-    });
+    let knobs = report
+        .upsampling
+        .as_ref()
+        .map_or(String::new(), |u| format!("{}, ", u.in_words()));
     format!(
         "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] ({knobs}{}{}, {:.2}× with its fixed costs, P/T {:.2}, shaded this frame {:.0}%, history reused {:.0}%, history missing {:.0}%), {}\n",
         row.variant.as_str(),

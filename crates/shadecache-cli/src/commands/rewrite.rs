@@ -148,6 +148,28 @@ pub struct UpsamplingArgs {
     /// what the bias gives.
     #[arg(long)]
     pub no_lod_bias: bool,
+    /// How lowres filters the temporal gradient over the samples around a
+    /// pixel: `ours` averages the signed gradients weighted by geometry,
+    /// `paper` the absolute ones blind to geometry (§3.5.1)
+    /// [default: ours].
+    #[arg(long, value_enum, value_name = "FILTER")]
+    pub gradient_filter: Option<GradientFilterArg>,
+    /// Lowres's temporal reconstruction shades every hole (a pixel its
+    /// history misses and this frame did not shade) at full resolution in
+    /// a third pass: the paper's temporal baseline, with hole filling.
+    #[arg(long)]
+    pub fill_holes: bool,
+    /// Lowres as the paper runs it, where ours differs and is a knob:
+    /// `--gradient-filter paper --fill-holes`.
+    #[arg(long, conflicts_with = "gradient_filter")]
+    pub paper: bool,
+}
+
+/// A `--gradient-filter` value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum GradientFilterArg {
+    Ours,
+    Paper,
 }
 
 impl UpsamplingArgs {
@@ -161,7 +183,17 @@ impl UpsamplingArgs {
             sensitivity: self.sensitivity.unwrap_or(default.sensitivity),
             reshade: self.reshade_unreliable,
             lod_bias: !self.no_lod_bias,
+            gradient_filter: match self.gradient_filter {
+                Some(GradientFilterArg::Paper) => rewrite::GradientFilter::Paper,
+                Some(GradientFilterArg::Ours) | None => rewrite::GradientFilter::Ours,
+            },
+            fill_holes: self.fill_holes,
             ..default
+        };
+        let upsampling = if self.paper {
+            upsampling.as_the_paper()
+        } else {
+            upsampling
         };
         upsampling
             .check()
@@ -178,6 +210,9 @@ impl UpsamplingArgs {
             ("--sensitivity", self.sensitivity.is_some()),
             ("--reshade-unreliable", self.reshade_unreliable),
             ("--no-lod-bias", self.no_lod_bias),
+            ("--gradient-filter", self.gradient_filter.is_some()),
+            ("--fill-holes", self.fill_holes),
+            ("--paper", self.paper),
         ]
         .into_iter()
         .filter_map(|(flag, given)| given.then_some(flag))
