@@ -35,13 +35,19 @@ struct CacheParams {
     // plane is infinite): 1 for standard depth, 0 for reversed Z.
     far_depth: f32,
     // The lowres variant's knobs (seed 001; the plan's `upsampling`): σn of
-    // the normal weight, σz of the depth weight (relative to the depth), and
+    // the normal weight, σz of the depth weight (relative to the depth, or
+    // with CACHE_MODE_DEPTH_RANGE to `upsample_depth_range`), and
     // a, the history's sensitivity to the temporal gradient (eq. 8). Its
     // factor s is `refresh_quad`, and the sample's phase `refresh_phase`
     // (the host keeps it as frame mod s²).
     upsample_sigma_normal: f32,
     upsample_sigma_depth: f32,
     upsample_sensitivity: f32,
+    // The camera's far − near (view-space distance), where σz is a share of
+    // it (CACHE_MODE_DEPTH_RANGE, the paper's); 0 where the host was not
+    // told the planes or the far plane is infinite: σz is then relative to
+    // the depth.
+    upsample_depth_range: f32,
     // The viewport's top-left corner in the render target, in pixels (0, 0
     // for the whole target), and the render target's size: the cache's
     // textures are the target's size, and a fragment's `@builtin(position)`
@@ -739,7 +745,7 @@ struct CacheNeighbours {
     nearest: u32,
 }
 
-fn cache_neighbours(frag_coord: vec4<f32>, normal: vec3<f32>) -> CacheNeighbours {
+fn cache_neighbours(frag_coord: vec4<f32>, normal: vec3<f32>, flags: u32) -> CacheNeighbours {
     let s = f32(max(cache_params.refresh_quad, 1u));
     let offset = vec2<f32>(cache_sample_offset());
     let last = vec2<i32>(cache_sample_size()) - vec2<i32>(1);
@@ -749,6 +755,8 @@ fn cache_neighbours(frag_coord: vec4<f32>, normal: vec3<f32>) -> CacheNeighbours
     let base = vec2<i32>(floor((pixel - offset) / s));
     let sigma_n = cache_params.upsample_sigma_normal * cache_params.upsample_sigma_normal;
     let sigma_z = cache_params.upsample_sigma_depth * cache_params.upsample_sigma_depth;
+    let range = cache_params.upsample_depth_range;
+    let of_range = ((flags & CACHE_MODE_DEPTH_RANGE) != 0u) & (range > 0.0);
     var out: CacheNeighbours;
     out.own = 4u;
     out.nearest = 0u;
@@ -759,7 +767,7 @@ fn cache_neighbours(frag_coord: vec4<f32>, normal: vec3<f32>) -> CacheNeighbours
         let nj = cache_from_octahedral(g.xy);
         let idj = u32(max(floor(g.w * 0.25), 0.0));
         let bend = max(0.0, 1.0 - dot(normal, nj));
-        let dz = (z - g.z) / max(z, 1e-20);
+        let dz = (z - g.z) / select(max(z, 1e-20), range, of_range);
         let n_w = max(0.01, 1.0 - ((bend * bend) / sigma_n));
         let d_w = max(0.01, 1.0 - ((dz * dz) / sigma_z));
         let finite = cache_finite(l);
@@ -804,6 +812,10 @@ const CACHE_MODE_PAPER_GRADIENT: u32 = 256u;
 // not shaded this frame) left to the third pass, which shades them at full
 // resolution: the paper's temporal baseline with second-pass hole filling.
 const CACHE_MODE_FILL_HOLES: u32 = 512u;
+// σz of the depth weight a share of the camera's depth range (far − near),
+// as the paper sets it (§3.1), where the host gives the range; else of the
+// depth itself.
+const CACHE_MODE_DEPTH_RANGE: u32 = 1024u;
 
 // The payload at a full-resolution pixel (pass 2), and the history to keep.
 // `mode & 255`: 0 nearest sample, 1 bilinear, 2 spatial (eq. 1 with
@@ -815,7 +827,7 @@ const CACHE_MODE_FILL_HOLES: u32 = 512u;
 // previous clip position, for the history texel.
 fn cache_upsample(flags: u32, components: u32, frag_coord: vec4<f32>, normal: vec3<f32>, before: vec4<f32>, hit: bool, previous_clip: vec4<f32>) -> CacheUpsampled {
     let mode = flags & 255u;
-    let n = cache_neighbours(frag_coord, normal);
+    let n = cache_neighbours(frag_coord, normal, flags);
     let none = vec4<f32>(0.0, 1.0, 1.0, 1.0);
     if (mode == 0u) {
         return CacheUpsampled(n.payload[n.nearest], none, false);

@@ -178,8 +178,13 @@ impl<'a> SceneInputs<'a> {
         let scene_meshes = &self.scene_meshes;
 
         let state = scene.frame_sized(frame, self.size);
+        let camera = &scene.camera;
         let mut inputs = FrameInputs {
             cut: state.cut(),
+            depth_range: match camera.far {
+                scene::Far::Distance(far) => Some((camera.near, far)),
+                scene::Far::Infinity => None,
+            },
             ..FrameInputs::default()
         };
         // Each mesh as this frame deforms it (`None`: as built), for its

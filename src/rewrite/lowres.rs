@@ -30,7 +30,7 @@ use super::helpers::{LowresHelpers, Pieces};
 use super::stage::{LowresStage, Stage};
 use super::Refusal;
 use crate::analysis::graph::ExprSet;
-use crate::plan::{GradientFilter, Upsampler, Upsampling};
+use crate::plan::{DepthTolerance, GradientFilter, Upsampler, Upsampling};
 
 /// Lowres's passes: the samples, the upsampling, and with adaptive
 /// refresh the reshading of the pixels it cannot vouch for.
@@ -79,8 +79,8 @@ fn history(
 }
 
 /// `cache_upsample`'s mode for `upsampling`: its reconstruction, and the
-/// flags of the paper's gradient filter and of hole filling
-/// (`CACHE_MODE_*` in `shaders/cache.wgsl`).
+/// flags of the paper's gradient filter, of hole filling and of σz of the
+/// depth range (`CACHE_MODE_*` in `shaders/cache.wgsl`).
 fn mode(upsampling: &Upsampling) -> u32 {
     let reconstruction = match upsampling.reconstruction {
         Upsampler::Nearest => 0,
@@ -90,7 +90,11 @@ fn mode(upsampling: &Upsampling) -> u32 {
         Upsampler::SpatioTemporal => 4,
     };
     let paper_gradient = upsampling.gradient_filter == GradientFilter::Paper;
-    reconstruction | (u32::from(paper_gradient) << 8) | (u32::from(upsampling.fill_holes) << 9)
+    let of_range = upsampling.depth_tolerance == DepthTolerance::OfRange;
+    reconstruction
+        | (u32::from(paper_gradient) << 8)
+        | (u32::from(upsampling.fill_holes) << 9)
+        | (u32::from(of_range) << 10)
 }
 
 /// Where the fragment's normal comes from: an input the shader

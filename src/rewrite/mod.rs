@@ -54,8 +54,8 @@ use variants::Recipe;
 pub const CACHE_WGSL: &str = include_str!("../../shaders/cache.wgsl");
 
 pub use crate::plan::{
-    CacheFormat, CacheRead, DepthConvention, GradientFilter, Reconstruction, Upsampler, Upsampling,
-    Variant, DEFAULT_DEPTH_EPSILON, DEFAULT_UPSAMPLING, MAX_REFRESH_PERIOD,
+    CacheFormat, CacheRead, DepthConvention, DepthTolerance, GradientFilter, Reconstruction,
+    Upsampler, Upsampling, Variant, DEFAULT_DEPTH_EPSILON, DEFAULT_UPSAMPLING, MAX_REFRESH_PERIOD,
 };
 
 /// The index of the pass of `variant` that computes the payload alone

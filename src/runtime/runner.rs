@@ -100,6 +100,9 @@ pub struct FrameInputs {
     /// A camera cut comes before this frame (the first of a new shot):
     /// the cache starts afresh ([`Runner::reset`]) before it is drawn.
     pub cut: bool,
+    /// The camera's near and far planes where the far one is finite (what
+    /// a lowres plan with σz of the depth range reads).
+    pub depth_range: Option<(f32, f32)>,
 }
 
 struct GpuMesh {
@@ -407,6 +410,7 @@ impl Runner {
         if inputs.cut {
             self.reset();
         }
+        self.cached.set_depth_range(inputs.depth_range);
         self.frame_part(gpu, inputs, None, profiler)
     }
 

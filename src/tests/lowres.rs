@@ -543,6 +543,49 @@ mesh = {{ kind = "obj", file = "{}" }}
     assert!(flat > 0.1, "with σz = 100: {flat}");
 }
 
+/// Hard case 15 of the design note (seed 001's σz is "3% of the
+/// difference between the near and far frustum plane", §3.1):
+/// `--depth-tolerance range` takes σz of the scene camera's far − near.
+/// With the far plane at 100 the squares of [`depth_edge_does_not_bleed`],
+/// a unit apart, differ by 1% of the range, within σz: the upsampling
+/// bleeds one onto the other, where σz of the depth (ours: 1/2.5 apart)
+/// keeps them apart. Reversed Z changes nothing (the weight reads the
+/// view depth). With an infinite far plane the range is undefined and σz
+/// is of the depth again.
+#[test]
+fn depth_tolerance_of_the_range_follows_the_camera_planes() {
+    let meshes = tempfile::tempdir().unwrap();
+    let obj = meshes.path().join("squares.obj");
+    std::fs::write(
+        &obj,
+        "v -1.5 -1.5 -0.5\nv 1.5 -1.5 -0.5\nv 1.5 1.5 -0.5\nv -1.5 1.5 -0.5\n\
+         v -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv 0.5 0.5 0.5\nv -0.5 0.5 0.5\nvn 0 0 1\n\
+         f 1//1 2//1 3//1\nf 1//1 3//1 4//1\nf 5//1 6//1 7//1\nf 5//1 7//1 8//1\n",
+    )
+    .unwrap();
+    let error = |tolerance: crate::rewrite::DepthTolerance, camera: &str| {
+        let scene = format!(
+            "size = [128, 128]\nframes = 1\nwarmup = 0\neffects = []\n[camera]\neye = [0.0, 0.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\n{camera}\n[[objects]]\nmesh = {{ kind = \"obj\", file = \"{}\" }}\n",
+            obj.display()
+        );
+        let mut options = lowres_top(&[Upsampler::Spatial], 0, 1);
+        options.upsampling.depth_tolerance = tolerance;
+        let (_, report, _) = super::profile::run_shader(BY_DEPTH, &scene, options)?;
+        Some(report.results[0].max_abs_error)
+    };
+    use crate::rewrite::DepthTolerance::{OfDepth, OfRange};
+    let Some(of_depth) = error(OfDepth, "far = 100.0") else {
+        return;
+    };
+    assert!(of_depth < 0.01, "σz of the depth: {of_depth}");
+    let of_range = error(OfRange, "far = 100.0").unwrap();
+    assert!(of_range > 0.1, "σz of the range 99.9: {of_range}");
+    let reversed = error(OfRange, "far = 100.0\ndepth = \"reversed\"").unwrap();
+    assert!(reversed > 0.1, "σz of the range, reversed Z: {reversed}");
+    let infinite = error(OfRange, "far = \"infinity\"").unwrap();
+    assert!(infinite < 0.01, "σz of an infinite range: {infinite}");
+}
+
 /// Hard case 19 of the design note (seed 001: texture LOD in the
 /// payload): the samples pass rasterises at 1/s × 1/s, so its derivatives
 /// are s times the full resolution's and an implicit-LOD sample reads

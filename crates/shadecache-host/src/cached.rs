@@ -93,6 +93,9 @@ pub struct CachedShader {
     /// The part of the target the passes draw into (x, y, width, height),
     /// where it is not the whole target (split screen).
     viewport: Option<[f32; 4]>,
+    /// The camera's far − near, where the application gave its planes
+    /// ([`CachedShader::set_depth_range`]).
+    depth_range: Option<f32>,
     targets: CacheTargets,
     /// Bumped when the targets are made again: bind groups of older ones
     /// are stale.
@@ -294,6 +297,7 @@ impl CachedShader {
                 Viewport::Rect(rect) => Some(rect),
                 Viewport::WholeTarget => None,
             },
+            depth_range: None,
             generation: 0,
             params,
             sampler,
@@ -576,6 +580,7 @@ impl CachedShader {
                 .unwrap_or([0.0, 0.0, self.size.0 as f32, self.size.1 as f32]),
             frame: self.frame,
             phase: self.phase,
+            depth_range: self.depth_range.unwrap_or(0.0),
         };
         queue.write_buffer(&self.params, 0, &params::bytes(&self.plan, state)?);
         if self.fresh {
@@ -935,6 +940,18 @@ impl CachedShader {
     pub fn reset(&mut self) {
         self.fresh = true;
         self.set_frame_counter(0);
+    }
+
+    /// The camera's near and far planes (view-space distances), from the
+    /// next frame on: a lowres plan whose upsampling takes σz as a share of
+    /// the depth range (the paper's, `depth_tolerance: of-range`) needs
+    /// them. `None`, or a far plane that is not finite and beyond the near
+    /// one (an infinite far plane), leaves σz a share of the depth itself,
+    /// as it is for every plan until this is called. Other plans ignore it.
+    pub fn set_depth_range(&mut self, planes: Option<(f32, f32)>) {
+        self.depth_range = planes
+            .filter(|(near, far)| near.is_finite() && far.is_finite() && far > near)
+            .map(|(near, far)| far - near);
     }
 
     /// Sets the frame counter c, as if that many frames had been run, and

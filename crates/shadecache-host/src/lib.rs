@@ -29,7 +29,9 @@
 //! buffers into their twins after the passes, so they hold last frame's
 //! contents whatever the application writes next. The first frame, a
 //! [`CachedShader::resize`] and a [`CachedShader::reset`] (a camera cut)
-//! miss everywhere. [`Timestamps`] times each pass with plain timestamp
+//! miss everywhere. A lowres plan whose σz is a share of the depth range
+//! needs the camera's planes ([`CachedShader::set_depth_range`]).
+//! [`Timestamps`] times each pass with plain timestamp
 //! queries; [`PassTimer`] lets another timer do it.
 //!
 //! Whether the cache pays is the player's GPU's to say: a [`Governor`]

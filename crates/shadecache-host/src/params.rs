@@ -37,6 +37,8 @@ pub(crate) struct FrameState {
     pub frame: u64,
     /// c mod Δn, advanced with it.
     pub phase: u32,
+    /// The camera's far − near; 0 where not given.
+    pub depth_range: f32,
 }
 
 fn vec2(x: f32, y: f32) -> Vec<u8> {
@@ -71,6 +73,7 @@ pub(crate) fn bytes(plan: &Plan, state: FrameState) -> Result<Vec<u8>, Error> {
             "upsample_sigma_normal" => upsampling(plan, |u| u.sigma_normal),
             "upsample_sigma_depth" => upsampling(plan, |u| u.sigma_depth),
             "upsample_sensitivity" => upsampling(plan, |u| u.sensitivity),
+            "upsample_depth_range" => state.depth_range.to_le_bytes().to_vec(),
             other => {
                 return Err(Error::Plan(format!(
                     "the plan's CacheParams has a field `{other}` this host does not fill"

@@ -402,8 +402,8 @@ pub struct Upsampling {
     pub factor: u32,
     /// σn of the normal weight (eq. 2).
     pub sigma_normal: f32,
-    /// σz of the depth weight, relative: |z_i − z_j| / z_i, z the view
-    /// depth (eq. 2).
+    /// σz of the depth weight: a share of the view depth, |z_i − z_j| /
+    /// z_i, or with `depth_tolerance` of the depth range (eq. 2).
     pub sigma_depth: f32,
     /// a: the sensitivity of the history's weight to the temporal gradient
     /// (eq. 8); 1 in most of the paper's scenes.
@@ -434,6 +434,29 @@ pub struct Upsampling {
     /// other reconstructions are not changed by it.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub fill_holes: bool,
+    /// What σz is a share of.
+    #[serde(default, skip_serializing_if = "DepthTolerance::is_of_depth")]
+    pub depth_tolerance: DepthTolerance,
+}
+
+/// What lowres's σz (eq. 2's depth weight) is a share of.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DepthTolerance {
+    /// Ours: of the pixel's view depth, |z_i − z_j| / z_i, which needs no
+    /// camera planes and holds with reversed Z and an infinite far plane.
+    #[default]
+    OfDepth,
+    /// The paper's (§3.1): of the camera's depth range, far − near, which
+    /// the host must be given (`CachedShader::set_depth_range`); where it
+    /// is not, or the far plane is infinite, of the depth.
+    OfRange,
+}
+
+impl DepthTolerance {
+    fn is_of_depth(&self) -> bool {
+        *self == DepthTolerance::OfDepth
+    }
 }
 
 /// How lowres filters the temporal gradient in space (eq. 8's ∇).
@@ -479,6 +502,7 @@ pub const DEFAULT_UPSAMPLING: Upsampling = Upsampling {
     lod_bias: true,
     gradient_filter: GradientFilter::Ours,
     fill_holes: false,
+    depth_tolerance: DepthTolerance::OfDepth,
 };
 
 fn spatio_temporal() -> Upsampler {
@@ -494,14 +518,15 @@ pub const MAX_SIGMA: f32 = 1e6;
 
 impl Upsampling {
     /// These knobs with the paper's path wherever ours differs and is a
-    /// knob: the absolute, geometry-blind gradient filter and the temporal
-    /// baseline's hole filling. (σz of the depth itself, not of the
-    /// near–far range, depth-only disocclusion and the project's two
-    /// rules, the exact sample and the dropped history, stay.)
+    /// knob: the absolute, geometry-blind gradient filter, the temporal
+    /// baseline's hole filling and σz of the depth range. (Depth-only
+    /// disocclusion and the project's two rules, the exact sample and the
+    /// dropped history, stay.)
     pub fn as_the_paper(&self) -> Upsampling {
         Upsampling {
             gradient_filter: GradientFilter::Paper,
             fill_holes: true,
+            depth_tolerance: DepthTolerance::OfRange,
             ..self.clone()
         }
     }
@@ -521,6 +546,9 @@ impl Upsampling {
         }
         if self.fill_holes {
             words.push_str(", holes filled");
+        }
+        if self.depth_tolerance == DepthTolerance::OfRange {
+            words.push_str(", σz of the depth range");
         }
         words
     }

@@ -159,10 +159,22 @@ pub struct UpsamplingArgs {
     /// a third pass: the paper's temporal baseline, with hole filling.
     #[arg(long)]
     pub fill_holes: bool,
+    /// What lowres's σz is a share of: `depth`, the pixel's view depth
+    /// (ours), or `range`, the camera's far − near (the paper's; where the
+    /// far plane is infinite, of the depth) [default: depth].
+    #[arg(long, value_enum, value_name = "OF")]
+    pub depth_tolerance: Option<DepthToleranceArg>,
     /// Lowres as the paper runs it, where ours differs and is a knob:
-    /// `--gradient-filter paper --fill-holes`.
-    #[arg(long, conflicts_with = "gradient_filter")]
+    /// `--gradient-filter paper --fill-holes --depth-tolerance range`.
+    #[arg(long, conflicts_with_all = ["gradient_filter", "depth_tolerance"])]
     pub paper: bool,
+}
+
+/// A `--depth-tolerance` value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum DepthToleranceArg {
+    Depth,
+    Range,
 }
 
 /// A `--gradient-filter` value.
@@ -188,6 +200,10 @@ impl UpsamplingArgs {
                 Some(GradientFilterArg::Ours) | None => rewrite::GradientFilter::Ours,
             },
             fill_holes: self.fill_holes,
+            depth_tolerance: match self.depth_tolerance {
+                Some(DepthToleranceArg::Range) => rewrite::DepthTolerance::OfRange,
+                Some(DepthToleranceArg::Depth) | None => rewrite::DepthTolerance::OfDepth,
+            },
             ..default
         };
         let upsampling = if self.paper {
@@ -212,6 +228,7 @@ impl UpsamplingArgs {
             ("--no-lod-bias", self.no_lod_bias),
             ("--gradient-filter", self.gradient_filter.is_some()),
             ("--fill-holes", self.fill_holes),
+            ("--depth-tolerance", self.depth_tolerance.is_some()),
             ("--paper", self.paper),
         ]
         .into_iter()
