@@ -497,15 +497,10 @@ fn fs_main(in: VertexOutput) -> @location(0) vec4<f32> {
 }
 "#;
 
-/// One mesh, one draw: a small square a unit in front of a large one,
-/// both facing the camera. Around the small square's outline the samples
-/// of both squares have one normal and one draw id, and only eq. 2's
-/// depth weight (σz, 3% of the depth) tells them apart: the spatial
-/// upsampling does not bleed the back square's colour onto the front one
-/// or the reverse. With the depth weight made flat (σz = 100) it does,
-/// which shows the scene tests what it should.
-#[test]
-fn depth_edge_does_not_bleed() {
+/// An OBJ of two squares facing +z in one mesh: a small one (z = 0.5) a
+/// unit in front of a large one (z = −0.5); the folder it is in, and its
+/// path.
+fn two_squares() -> (tempfile::TempDir, std::path::PathBuf) {
     let meshes = tempfile::tempdir().unwrap();
     let obj = meshes.path().join("squares.obj");
     std::fs::write(
@@ -515,6 +510,19 @@ fn depth_edge_does_not_bleed() {
          f 1//1 2//1 3//1\nf 1//1 3//1 4//1\nf 5//1 6//1 7//1\nf 5//1 7//1 8//1\n",
     )
     .unwrap();
+    (meshes, obj)
+}
+
+/// One mesh, one draw: a small square a unit in front of a large one,
+/// both facing the camera. Around the small square's outline the samples
+/// of both squares have one normal and one draw id, and only eq. 2's
+/// depth weight (σz, 3% of the depth) tells them apart: the spatial
+/// upsampling does not bleed the back square's colour onto the front one
+/// or the reverse. With the depth weight made flat (σz = 100) it does,
+/// which shows the scene tests what it should.
+#[test]
+fn depth_edge_does_not_bleed() {
+    let (_meshes, obj) = two_squares();
     let scene = format!(
         r#"
 size = [128, 128]
@@ -554,15 +562,7 @@ mesh = {{ kind = "obj", file = "{}" }}
 /// is of the depth again.
 #[test]
 fn depth_tolerance_of_the_range_follows_the_camera_planes() {
-    let meshes = tempfile::tempdir().unwrap();
-    let obj = meshes.path().join("squares.obj");
-    std::fs::write(
-        &obj,
-        "v -1.5 -1.5 -0.5\nv 1.5 -1.5 -0.5\nv 1.5 1.5 -0.5\nv -1.5 1.5 -0.5\n\
-         v -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv 0.5 0.5 0.5\nv -0.5 0.5 0.5\nvn 0 0 1\n\
-         f 1//1 2//1 3//1\nf 1//1 3//1 4//1\nf 5//1 6//1 7//1\nf 5//1 7//1 8//1\n",
-    )
-    .unwrap();
+    let (_meshes, obj) = two_squares();
     let error = |tolerance: crate::rewrite::DepthTolerance, camera: &str| {
         let scene = format!(
             "size = [128, 128]\nframes = 1\nwarmup = 0\neffects = []\n[camera]\neye = [0.0, 0.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\n{camera}\n[[objects]]\nmesh = {{ kind = \"obj\", file = \"{}\" }}\n",
