@@ -441,23 +441,29 @@ struct SharedPlugin;
 
 impl Plugin for SharedPlugin {
     fn build(&self, app: &mut App) {
-        app.add_plugins((
-            ExtractComponentPlugin::<CachedMaterial>::default(),
-            ExtractComponentPlugin::<ReprojectionCache>::default(),
-            bevy::render::extract_resource::ExtractResourcePlugin::<CacheCreation>::default(),
-            phase::CachedPhasePlugin,
-        ))
-        .add_systems(First, (clear_cuts, copyable_depth));
+        app
+            .add_plugins(
+                (
+                    ExtractComponentPlugin::<CachedMaterial>::default(),
+                    ExtractComponentPlugin::<ReprojectionCache>::default(),
+                    bevy::render::extract_resource::ExtractResourcePlugin::<CacheCreation>::default(
+                    ),
+                    bevy::render::extract_resource::ExtractResourcePlugin::<
+                        reload::ReloadedMaterials,
+                    >::default(),
+                    phase::CachedPhasePlugin,
+                ),
+            )
+            .add_systems(First, (clear_cuts, copyable_depth));
         let stats = CacheStats::default();
-        let reloaded = reload::ReloadedMaterials::default();
         app.insert_resource(stats.clone())
-            .insert_resource(reloaded.clone())
+            .init_resource::<reload::ReloadedMaterials>()
             .init_resource::<CacheCreation>();
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
             return;
         };
         render_app
-            .insert_resource(reloaded)
+            .init_resource::<reload::ReloadedMaterials>()
             .init_resource::<CacheCreation>()
             .init_resource::<CachedVariants>()
             .init_resource::<defs::LibraryDefs>()

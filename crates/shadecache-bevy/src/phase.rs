@@ -42,6 +42,7 @@ use bevy::render::{Extract, ExtractSchedule, Render, RenderApp, RenderDebugFlags
 use indexmap::IndexMap;
 
 use crate::defs::{BevyDefs, LibraryDefs};
+use crate::reload::ReloadedMaterials;
 use crate::{CacheStats, CachedMaterial, CachedVariants, ReprojectionCache};
 
 /// What each pass draws per cached mesh: Bevy's material draw, without its
@@ -229,10 +230,15 @@ type CachingCameras<'w, 's> =
     Query<'w, 's, (Entity, &'static Camera, &'static ReprojectionCache), With<Camera3d>>;
 
 /// Gives each caching camera's view its phase, and drops the phases of
-/// views that went away.
+/// views that went away. A view whose meshes were taken from Bevy's
+/// opaque phase and that caches no more (switched off, gone inactive) is
+/// handed back now, so that Bevy queues its meshes again in this very
+/// frame: found in the next frame's queue, it would be a frame drawn by
+/// neither.
 fn extract_cached_phases(
     mut phases: ResMut<ViewSortedRenderPhases<CachedMesh3d>>,
     cameras: Extract<CachingCameras>,
+    mut taken: ResMut<TakenViews>,
     mut live: Local<HashSet<RetainedViewEntity>>,
 ) {
     live.clear();
@@ -245,17 +251,37 @@ fn extract_cached_phases(
         live.insert(view);
     }
     phases.retain(|view, _| live.contains(view));
+    let TakenViews { taken, handed_back } = &mut *taken;
+    handed_back.extend(
+        taken
+            .iter()
+            .map(|(view, _, _)| *view)
+            .filter(|view| !live.contains(view)),
+    );
 }
 
 /// A view that stopped caching (switched off, its cache failed) has its
 /// meshes specialised and queued again by Bevy, so that they return to its
 /// opaque phase. Bevy clears its dirty views as each frame is extracted,
-/// so they are marked here, after that, for the frame that queues them.
+/// so they are marked here, after that, for the frame that queues them. A
+/// view that took the meshes of a material whose shader changed this frame
+/// (`reload`) is marked at once too: its caches stop in this frame's queue.
 fn respecialize_handed_back_views(
     mut taken: ResMut<TakenViews>,
     mut dirty: ResMut<DirtySpecializations>,
+    variants: Res<CachedVariants>,
+    reloaded: Res<ReloadedMaterials>,
 ) {
-    dirty.views.extend(taken.handed_back.drain());
+    let TakenViews { taken, handed_back } = &mut *taken;
+    let of_reloaded = taken
+        .iter()
+        .filter(|(_, variant, _)| {
+            variants
+                .get(*variant)
+                .is_some_and(|m| reloaded.contains(m.material))
+        })
+        .map(|(view, _, _)| *view);
+    dirty.views.extend(handed_back.drain().chain(of_reloaded));
 }
 
 /// What queueing a mesh into the phase reads: the phase's draw

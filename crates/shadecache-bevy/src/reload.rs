@@ -11,37 +11,32 @@
 //! the modules it imports.
 
 use std::any::TypeId;
-use std::sync::{Arc, Mutex};
 
 use bevy::asset::AssetEvent;
 use bevy::pbr::Material;
 use bevy::platform::collections::HashSet;
 use bevy::prelude::*;
+use bevy::render::extract_resource::ExtractResource;
+use bevy::render::RenderApp;
 use bevy::shader::{Shader, ShaderRef};
 
 use crate::CacheStats;
 
-/// The cached materials whose shader changed since the game started,
-/// shared by the main world (which sees the change) and the render world
-/// (which stops drawing them through their variants).
-#[derive(Resource, Clone, Default)]
-pub(crate) struct ReloadedMaterials(Arc<Mutex<HashSet<TypeId>>>);
+/// The cached materials whose shader changed since the game started: the
+/// main world sees the change, and the render world (which stops drawing
+/// them through their variants) reads the set as it was extracted with
+/// the frame, so that every render system of a frame agrees on it (read
+/// from the main world while it runs, one system saw the change and an
+/// earlier one of the same frame did not: a frame drew the meshes
+/// through neither).
+#[derive(Resource, Clone, Default, ExtractResource)]
+#[extract_app(RenderApp)]
+pub(crate) struct ReloadedMaterials(HashSet<TypeId>);
 
 impl ReloadedMaterials {
     /// Whether the material asset type `material` changed its shader.
     pub fn contains(&self, material: TypeId) -> bool {
-        self.0
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner())
-            .contains(&material)
-    }
-
-    /// Notes that `material`'s shader changed; whether it was news.
-    fn insert(&self, material: TypeId) -> bool {
-        self.0
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner())
-            .insert(material)
+        self.0.contains(&material)
     }
 }
 
@@ -49,7 +44,7 @@ impl ReloadedMaterials {
 pub(crate) fn watch<M: Material>(
     mut events: MessageReader<AssetEvent<Shader>>,
     server: Res<AssetServer>,
-    reloaded: Res<ReloadedMaterials>,
+    mut reloaded: ResMut<ReloadedMaterials>,
     stats: Res<CacheStats>,
 ) {
     let watched = M::fragment_shader();
@@ -62,7 +57,8 @@ pub(crate) fn watch<M: Material>(
             ShaderRef::Handle(handle) => handle.id() == id,
             ShaderRef::Default => false,
         };
-        if ours && reloaded.insert(TypeId::of::<M>()) {
+        if ours && !reloaded.contains(TypeId::of::<M>()) {
+            reloaded.0.insert(TypeId::of::<M>());
             stats.error(format!(
                 "the shader of {} changed while the game runs (a hot reload), and its variant was rewritten from the one the game was built with: Bevy draws its meshes until the game is built again",
                 bevy::utils::prelude::ShortName::of::<M>()

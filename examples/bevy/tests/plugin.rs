@@ -755,14 +755,28 @@ fn bevy_plugin_hands_the_meshes_back_when_switched_off() {
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     let off = run.switch_off_frame.expect("the cache was switched off");
-    reused_before_then_bevys_own(&run, off);
+    // No frame without the lava: the view is handed back as the frame that
+    // stops caching is extracted, and Bevy queues its meshes in that frame
+    // (found in its queue, they came back a frame late: one frame at
+    // 15 dB, the lava's pixels black).
+    reused_before_then_bevys_own(&run, off, 0);
 }
 
-/// Asserts that `run` reused before frame `handed_back` and that every
-/// compared frame from a few after it on is Bevy's own: the hand-back
-/// takes a frame to be extracted, one to queue the meshes again and a few
-/// for the images to come back.
-fn reused_before_then_bevys_own(run: &HeadlessRun, handed_back: u32) {
+/// Asserts that `run` reused before frame `handed_back`, that every
+/// compared frame from a few after it on is Bevy's own (the images take a
+/// few frames to come back), and that at most `gaps` frames between are
+/// drawn by neither: the others are the cache's (its reuse error, above
+/// 35 dB) or Bevy's.
+fn reused_before_then_bevys_own(run: &HeadlessRun, handed_back: u32, gaps: usize) {
+    let neither: Vec<&Compared> = run
+        .compared
+        .iter()
+        .filter(|f| f.frame >= handed_back && f.psnr <= 35.0)
+        .collect();
+    assert!(
+        neither.len() <= gaps,
+        "frames drawn by neither after the hand-back: {neither:?}"
+    );
     let before: Vec<&Compared> = run
         .compared
         .iter()
@@ -840,7 +854,12 @@ fn shader_hot_reload_hands_the_material_back_to_bevy() {
     assert_eq!(said.len(), 1, "{:?}", run.errors);
     assert_eq!(run.errors.len(), 1, "{:?}", run.errors);
     let changed = run.reload_frame.expect("the shader changed");
-    reused_before_then_bevys_own(&run, changed);
+    // One frame lacks the lava (15 dB) as it is handed back: the view is
+    // marked for Bevy's re-specialisation in the very frame its cache
+    // stops, as on a switch-off (which has no such frame), so the frame is
+    // likely Bevy's pipeline for the changed shader not being ready for
+    // the re-queued meshes. Found, not fixed: at most that one frame.
+    reused_before_then_bevys_own(&run, changed, 1);
 }
 
 /// `CacheMode::Auto` in a headless app: the governor gives one frame in
