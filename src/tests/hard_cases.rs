@@ -690,9 +690,10 @@ fn cache_params(cache: &Cache) -> Vec<u8> {
         params.extend(value.to_le_bytes());
     }
     params.extend(65504.0f32.to_le_bytes());
-    // far depth (standard Z); lowres's knobs (unused here).
+    // far depth (standard Z); lowres's knobs and depth range (unused
+    // here), up to the vec2 alignment of the viewport's origin.
     params.extend(1.0f32.to_le_bytes());
-    params.resize(48, 0);
+    params.resize(56, 0);
     // The viewport is the whole target: its origin, the target's size.
     params.extend([0.0f32, 0.0].iter().flat_map(|v| v.to_le_bytes()));
     params.extend((cache.size.x as f32).to_le_bytes());
