@@ -70,16 +70,6 @@ pub enum BlurOrder {
     Paper,
 }
 
-impl BlurOrder {
-    /// Its name on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            BlurOrder::WarpBlurred => "warp-blurred",
-            BlurOrder::Paper => "paper",
-        }
-    }
-}
-
 /// The knobs of one pass, as `MorphParams` of `shaders/morph.wgsl` lays
 /// them out.
 #[derive(Clone, Copy, Debug)]

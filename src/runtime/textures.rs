@@ -16,15 +16,16 @@ pub struct Texels {
 }
 
 impl Texels {
-    /// The texels and, with `mipmaps`, each smaller mip level down to
-    /// 1×1, each the level 0 resized with a triangle filter (the box
-    /// filter's smooth neighbour, what mip generation commonly uses).
-    fn levels(&self) -> Vec<(u32, u32, Vec<u8>)> {
-        let mut levels = vec![(self.width, self.height, self.rgba.clone())];
-        let image = image::RgbaImage::from_raw(self.width, self.height, self.rgba.clone());
-        let (true, Some(image)) = (self.mipmaps, image) else {
-            return levels;
+    /// The mip levels below the texels, each the texels resized with a
+    /// triangle filter (the box filter's smooth neighbour, what mip
+    /// generation commonly uses) to half the one above, down to 1×1:
+    /// (width, height, RGBA8).
+    fn mip_levels(&self) -> Vec<(u32, u32, Vec<u8>)> {
+        let Some(image) = image::RgbaImage::from_raw(self.width, self.height, self.rgba.clone())
+        else {
+            return Vec::new();
         };
+        let mut levels = Vec::new();
         let (mut width, mut height) = (self.width, self.height);
         while width > 1 || height > 1 {
             (width, height) = ((width / 2).max(1), (height / 2).max(1));
@@ -279,15 +280,16 @@ fn upload(
         depth_or_array_layers: layers,
     };
     // Whole numbers are not filtered: an integer texture keeps one level.
-    let levels = if format.sample_type(None, None) == Some(wgpu::TextureSampleType::Uint) {
-        Texels {
-            mipmaps: false,
-            ..texels.clone()
-        }
-        .levels()
+    let integer = format.sample_type(None, None) == Some(wgpu::TextureSampleType::Uint);
+    let mips = if texels.mipmaps && !integer {
+        texels.mip_levels()
     } else {
-        texels.levels()
+        Vec::new()
     };
+    let levels: Vec<(u32, u32, &[u8])> =
+        std::iter::once((texels.width, texels.height, texels.rgba.as_slice()))
+            .chain(mips.iter().map(|(w, h, rgba)| (*w, *h, rgba.as_slice())))
+            .collect();
     let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
         label: Some("scene texture"),
         size,
@@ -299,7 +301,7 @@ fn upload(
         view_formats: &[],
     });
     for layer in 0..layers {
-        for (mip_level, (width, height, rgba)) in levels.iter().enumerate() {
+        for (mip_level, &(width, height, rgba)) in levels.iter().enumerate() {
             gpu.queue.write_texture(
                 wgpu::TexelCopyTextureInfo {
                     texture: &texture,
@@ -315,11 +317,11 @@ fn upload(
                 wgpu::TexelCopyBufferLayout {
                     offset: 0,
                     bytes_per_row: Some(width * 4),
-                    rows_per_image: Some(*height),
+                    rows_per_image: Some(height),
                 },
                 wgpu::Extent3d {
-                    width: *width,
-                    height: *height,
+                    width,
+                    height,
                     depth_or_array_layers: 1,
                 },
             );

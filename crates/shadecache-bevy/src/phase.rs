@@ -186,6 +186,22 @@ pub(crate) struct TakenViews {
     handed_back: HashSet<RetainedViewEntity>,
 }
 
+impl TakenViews {
+    /// Hands back the views of the caches that took meshes and that
+    /// `keeps` does not keep, once: they leave the taken set, so the queue
+    /// does not find them again.
+    fn hand_back_unless(&mut self, keeps: impl Fn(&CacheId) -> bool) {
+        let TakenViews { taken, handed_back } = self;
+        taken.retain(|id| {
+            let kept = keeps(id);
+            if !kept {
+                handed_back.insert(id.0);
+            }
+            kept
+        });
+    }
+}
+
 /// The caches that draw this frame: their view caches, and they were made
 /// (a view whose cache failed leaves those meshes to Bevy).
 #[derive(Resource, Default)]
@@ -251,13 +267,7 @@ fn extract_cached_phases(
         live.insert(view);
     }
     phases.retain(|view, _| live.contains(view));
-    let TakenViews { taken, handed_back } = &mut *taken;
-    handed_back.extend(
-        taken
-            .iter()
-            .map(|(view, _, _)| *view)
-            .filter(|view| !live.contains(view)),
-    );
+    taken.hand_back_unless(|(view, _, _)| live.contains(view));
 }
 
 /// A view that stopped caching (switched off, its cache failed) has its
@@ -272,16 +282,12 @@ fn respecialize_handed_back_views(
     variants: Res<CachedVariants>,
     reloaded: Res<ReloadedMaterials>,
 ) {
-    let TakenViews { taken, handed_back } = &mut *taken;
-    let of_reloaded = taken
-        .iter()
-        .filter(|(_, variant, _)| {
-            variants
-                .get(*variant)
-                .is_some_and(|m| reloaded.contains(m.material))
-        })
-        .map(|(view, _, _)| *view);
-    dirty.views.extend(handed_back.drain().chain(of_reloaded));
+    taken.hand_back_unless(|(_, variant, _)| {
+        variants
+            .get(*variant)
+            .is_none_or(|m| !reloaded.contains(m.material))
+    });
+    dirty.views.extend(taken.handed_back.drain());
 }
 
 /// What queueing a mesh into the phase reads: the phase's draw
@@ -552,7 +558,6 @@ pub(crate) fn take_from_opaque_phase(
         .filter(|(view, _, _)| opaque.contains_key(view))
         .cloned()
         .collect();
-    let TakenViews { taken, handed_back } = &mut *taken;
-    handed_back.extend(taken.difference(&now).map(|(view, _, _)| *view));
-    *taken = now;
+    taken.hand_back_unless(|id| now.contains(id));
+    taken.taken = now;
 }
