@@ -424,7 +424,7 @@ pub struct Upsampling {
     #[serde(default = "yes", skip_serializing_if = "is_yes")]
     pub lod_bias: bool,
     /// How the temporal gradient is filtered in space before eq. 8.
-    #[serde(default, skip_serializing_if = "GradientFilter::is_ours")]
+    #[serde(default, skip_serializing_if = "is_default")]
     pub gradient_filter: GradientFilter,
     /// The temporal reconstruction's holes (every pixel the history
     /// misses and this frame did not shade) shaded at full resolution in
@@ -435,7 +435,7 @@ pub struct Upsampling {
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub fill_holes: bool,
     /// What σz is a share of.
-    #[serde(default, skip_serializing_if = "DepthTolerance::is_of_depth")]
+    #[serde(default, skip_serializing_if = "is_default")]
     pub depth_tolerance: DepthTolerance,
 }
 
@@ -453,12 +453,6 @@ pub enum DepthTolerance {
     OfRange,
 }
 
-impl DepthTolerance {
-    fn is_of_depth(&self) -> bool {
-        *self == DepthTolerance::OfDepth
-    }
-}
-
 /// How lowres filters the temporal gradient in space (eq. 8's ∇).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -474,10 +468,9 @@ pub enum GradientFilter {
     Paper,
 }
 
-impl GradientFilter {
-    fn is_ours(&self) -> bool {
-        *self == GradientFilter::Ours
-    }
+/// Whether a knob is at its default (and left out of the plan).
+fn is_default<T: Default + PartialEq>(value: &T) -> bool {
+    *value == T::default()
 }
 
 fn yes() -> bool {
