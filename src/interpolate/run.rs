@@ -180,8 +180,9 @@ fn scene_notes(scene: &Scene) -> Vec<String> {
             .iter()
             .map(|c| c.frame.to_string())
             .collect();
+        let plural = if frames.len() == 1 { "" } else { "s" };
         notes.push(format!(
-            "camera cuts at motion frames {}: where a method's frames would be made from two shots (both I-frames across a cut, or the motion from the I-frame before it), they repeat the earlier I-frame, as do every method's frames of a new shot that no I-frame has shown yet; an interval with a cut in it is left out of the pursuit error and flicker",
+            "camera cut{plural} at motion frame{plural} {}: where a method's frames would be made from two shots (both I-frames across a cut, or the motion from the I-frame before it), they repeat the earlier I-frame, as do every method's frames of a new shot that no I-frame has shown yet; an interval with a cut in it is left out of the pursuit error and flicker",
             frames.join(", ")
         ));
     }

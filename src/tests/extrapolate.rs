@@ -716,7 +716,7 @@ eye = [2.6, 0.6, -2.2]
         report
             .notes
             .iter()
-            .any(|n| n.contains("camera cuts at motion frames 10")),
+            .any(|n| n.contains("camera cut at motion frame 10:")),
         "{:?}",
         report.notes
     );
