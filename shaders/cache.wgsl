@@ -570,6 +570,23 @@ fn cache_jitter(position: vec4<f32>) -> vec4<f32> {
     return vec4<f32>(x, y, position.z, w);
 }
 
+// The deferred lowres's samples pass runs in screen space at 1/s × 1/s:
+// low-resolution pixel a shades the full-resolution pixel s·a + offset,
+// whose centre this is (clamped to the frame where s does not divide its
+// size), read from the G-buffer.
+fn cache_lattice_pixel(low: vec4<f32>) -> vec2<f32> {
+    let s = f32(max(cache_params.refresh_quad, 1u));
+    let pixel = (floor(low.xy) * s) + vec2<f32>(cache_sample_offset());
+    return min(pixel, cache_params.viewport - vec2<f32>(1.0)) + vec2<f32>(0.5);
+}
+
+// The draw's ordinal (`cache_draw`), which the deferred lowres's G-buffer
+// keeps at each pixel: its samples pass, at another size than the
+// stencil, tells the draws apart by it.
+fn cache_draw_ordinal() -> u32 {
+    return cache_draw.x;
+}
+
 // A unit normal folded onto the octahedron, two numbers.
 fn cache_octahedral(n: vec3<f32>) -> vec2<f32> {
     let p = n.xy / max(abs(n.x) + abs(n.y) + abs(n.z), 1e-20);

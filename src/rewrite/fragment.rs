@@ -63,7 +63,20 @@ pub(super) enum Inputs<'g> {
 /// ([`super::gbuffer`]) is one; this module builds the passes on it
 /// without depending on how it is laid out.
 pub(super) trait ScreenInputs: std::fmt::Debug {
+    /// At the pixel the fragment is at.
     fn read(&self, b: &mut Builder, module: &mut Module, pieces: &Pieces) -> Fragment;
+    /// At the pixel whose centre is `xy` (a `vec2<f32>`): lowres's samples
+    /// pass, at 1/s × 1/s, reads the pixel of its lattice.
+    fn read_at(
+        &self,
+        b: &mut Builder,
+        module: &mut Module,
+        pieces: &Pieces,
+        xy: Handle<Expression>,
+    ) -> Fragment;
+    /// The ordinal of the draw visible at the pixel whose centre is `xy`
+    /// (0 where none is), where the source keeps it.
+    fn ordinal_at(&self, b: &mut Builder, xy: Handle<Expression>) -> Option<Handle<Expression>>;
 }
 
 /// What a fragment entry point works from: the original entry point's
@@ -198,7 +211,8 @@ pub(super) fn entry_point(
                 | Writes::ColorAndCache
                 | Writes::GBuffer
                 | Writes::Samples
-                | Writes::ColorAndHistory => None,
+                | Writes::ColorAndHistory
+                | Writes::Stencil => None,
             },
         }),
         ..Function::default()
@@ -444,9 +458,11 @@ fn output_value(
                 components: vec![cache, age],
             })
         }
-        Writes::Classes | Writes::GBuffer | Writes::Samples | Writes::ColorAndHistory => {
-            return Err(Refusal::internal(format!("{stage:?} writes no payload")))
-        }
+        Writes::Classes
+        | Writes::GBuffer
+        | Writes::Samples
+        | Writes::ColorAndHistory
+        | Writes::Stencil => return Err(Refusal::internal(format!("{stage:?} writes no payload"))),
         Writes::Color => {
             let mut arguments = at.originals.clone();
             arguments.push(payload);
@@ -520,9 +536,11 @@ fn output_type(
     writes: Writes,
 ) -> (Handle<naga::Type>, Option<u32>) {
     match writes {
-        Writes::Classes | Writes::GBuffer | Writes::Samples | Writes::ColorAndHistory => {
-            (pieces.vec4, None)
-        }
+        Writes::Classes
+        | Writes::GBuffer
+        | Writes::Samples
+        | Writes::ColorAndHistory
+        | Writes::Stencil => (pieces.vec4, None),
         Writes::Cache => {
             let f32_ty = f32_type(module);
             let ty = module.types.insert(

@@ -42,6 +42,7 @@ use naga::{
 use super::builder::{scalar_type, vector_type, Builder};
 use super::fragment::{self, Fragment};
 use super::helpers::Pieces;
+use super::lowres;
 use super::Refusal;
 use crate::plan::TextureFormat;
 
@@ -66,6 +67,8 @@ pub struct GBuffer {
     /// The words of the fragment position's z and w, where kept.
     depth_word: Option<u32>,
     w_word: Option<u32>,
+    /// The word of the draw's ordinal, where kept (deferred lowres).
+    ordinal_word: Option<u32>,
     /// The fragment stage can `discard`: the geometry pass runs the
     /// payload and the shade for their discards alone (their values
     /// unused, so a compiler keeps only what decides the discard), and the
@@ -74,6 +77,18 @@ pub struct GBuffer {
     /// Where the textures are bound: `group`, from `first_binding` on.
     pub group: u32,
     pub first_binding: u32,
+}
+
+/// What a G-buffer keeps beyond the inputs the payload and the shade
+/// read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Keeps {
+    /// The fragment position's depth (a packed cache read compares it).
+    pub depth: bool,
+    /// Lowres's geometry in screen space: the fragment position's depth
+    /// and w, the interpolated normal its weights compare, and the draw's
+    /// ordinal, which tells the draws apart at the samples' size.
+    pub lowres: bool,
 }
 
 /// One input of the original fragment entry point: an argument, or a
@@ -184,24 +199,31 @@ impl GBuffer {
     pub fn new(
         module: &mut Module,
         pieces: &Pieces,
-        packs_depth: bool,
+        keeps: Keeps,
         (group, first_binding): (u32, u32),
     ) -> Result<GBuffer, Refusal> {
-        let inputs = inputs(module, pieces, &arguments_read(module, pieces));
+        let mut read = arguments_read(module, pieces);
+        if keeps.lowres {
+            if let Some((argument, member)) = lowres::normal_input(module, &pieces.arguments) {
+                note_read(&mut read, argument, member);
+            }
+        }
+        let inputs = inputs(module, pieces, &read);
         let reads_position = inputs
             .iter()
             .any(|input| input.is_read && fragment::is_position(&input.binding));
         let mut holds: Vec<String> = ["previous_ndc.x", "previous_ndc.y", "previous_ndc.z"]
             .map(String::from)
             .to_vec();
-        let depth_word = (reads_position || packs_depth).then(|| {
-            holds.push("position.z".into());
-            holds.len() as u32 - 1
-        });
-        let w_word = reads_position.then(|| {
-            holds.push("position.w".into());
-            holds.len() as u32 - 1
-        });
+        let mut keep = |kept: bool, what: &str| {
+            kept.then(|| {
+                holds.push(what.into());
+                holds.len() as u32 - 1
+            })
+        };
+        let depth_word = keep(reads_position || keeps.depth || keeps.lowres, "position.z");
+        let w_word = keep(reads_position || keeps.lowres, "position.w");
+        let ordinal_word = keep(keeps.lowres, "draw ordinal");
         let leaves = inputs
             .into_iter()
             .map(|input| {
@@ -246,6 +268,7 @@ impl GBuffer {
             fullscreen: fullscreen_entry(module, pieces.vec4),
             depth_word,
             w_word,
+            ordinal_word,
             coverage_by_shading: discards(module, pieces),
             group,
             first_binding,
@@ -288,6 +311,9 @@ impl GBuffer {
         }
         if self.w_word.is_some() {
             words.push(b.member(bits, 3));
+        }
+        if self.ordinal_word.is_some() {
+            words.push(b.call(pieces.lowres.draw_ordinal, Vec::new()));
         }
         for leaf in &self.leaves {
             let value = match leaf.member {
@@ -344,35 +370,19 @@ impl GBuffer {
         Ok(b.finish())
     }
 
-    /// Rebuilds, in a screen-space pass whose only argument is the
-    /// fragment position, what the original fragment stage received at
-    /// this pixel, with last frame's clip position.
-    fn read_inputs(&self, b: &mut Builder, module: &mut Module, pieces: &Pieces) -> Fragment {
-        let screen = b.argument(0);
-        let xy = leading(b, screen, VectorSize::Bi);
-        let texel = b.expr(Expression::As {
-            expr: xy,
-            kind: ScalarKind::Sint,
-            convert: Some(4),
-        });
-        b.name(texel, "texel");
-        let level = b.expr(Expression::Literal(naga::Literal::I32(0)));
-        let texels: Vec<Handle<Expression>> = self
-            .textures
-            .iter()
-            .enumerate()
-            .map(|(t, &global)| {
-                let image = b.expr(Expression::GlobalVariable(global));
-                let loaded = b.expr(Expression::ImageLoad {
-                    image,
-                    coordinate: texel,
-                    array_index: None,
-                    sample: None,
-                    level: Some(level),
-                });
-                b.name(loaded, &format!("g{t}"));
-                loaded
-            })
+    /// Rebuilds what the original fragment stage received at the pixel
+    /// whose centre is `xy` (a `vec2<f32>`; `x` and `y` its components),
+    /// with last frame's clip position.
+    fn read_inputs(
+        &self,
+        b: &mut Builder,
+        module: &mut Module,
+        pieces: &Pieces,
+        (xy, x, y): (Handle<Expression>, Handle<Expression>, Handle<Expression>),
+    ) -> Fragment {
+        let texel = texel_of(b, xy);
+        let texels: Vec<Handle<Expression>> = (0..self.textures.len())
+            .map(|t| self.load(b, texel, t))
             .collect();
         let word = |b: &mut Builder, w: u32| load_word(b, &texels, w);
         // Last frame's clip position as the NDC over w = 1: the lookup's
@@ -385,8 +395,6 @@ impl GBuffer {
             components: vec![ndc, one],
         });
         b.name(previous, "previous_clip_position");
-        let x = b.member(screen, 0);
-        let y = b.member(screen, 1);
         let kept = |b: &mut Builder, at: Option<u32>, otherwise: f32| match at {
             Some(at) => {
                 let bits = word(b, at);
@@ -427,6 +435,36 @@ impl GBuffer {
             previous: Some(previous),
             frag_coord,
         }
+    }
+
+    /// Texture `t` of the G-buffer at `texel`.
+    fn load(&self, b: &mut Builder, texel: Handle<Expression>, t: usize) -> Handle<Expression> {
+        let image = b.expr(Expression::GlobalVariable(self.textures[t]));
+        let level = b.expr(Expression::Literal(naga::Literal::I32(0)));
+        let loaded = b.expr(Expression::ImageLoad {
+            image,
+            coordinate: texel,
+            array_index: None,
+            sample: None,
+            level: Some(level),
+        });
+        b.name(loaded, &format!("g{t}"));
+        loaded
+    }
+
+    /// The ordinal of the draw the G-buffer holds at the pixel whose
+    /// centre is `xy` (0 where none drew), where it keeps ordinals.
+    fn ordinal(&self, b: &mut Builder, xy: Handle<Expression>) -> Option<Handle<Expression>> {
+        let at = self.ordinal_word?;
+        let texel = texel_of(b, xy);
+        let loaded = self.load(b, texel, (at / 4) as usize);
+        let ordinal = if format_words(self.formats[(at / 4) as usize]) == 1 {
+            loaded
+        } else {
+            b.member(loaded, at % 4)
+        };
+        b.name(ordinal, "ordinal");
+        Some(ordinal)
     }
 
     /// Each original input (argument, struct member) as this pixel's
@@ -622,18 +660,7 @@ fn arguments_read(module: &Module, pieces: &Pieces) -> BTreeMap<u32, Read> {
         .chain([pieces.presence.map(|(presence, _)| presence)])
         .flatten();
     let mut read: BTreeMap<u32, Read> = BTreeMap::new();
-    let mut note = |argument: u32, member: Option<u32>| match (read.get_mut(&argument), member) {
-        (Some(Read::Whole), _) => {}
-        (Some(Read::Members(set)), Some(m)) => {
-            set.insert(m);
-        }
-        (_, None) => {
-            read.insert(argument, Read::Whole);
-        }
-        (None, Some(m)) => {
-            read.insert(argument, Read::Members(BTreeSet::from([m])));
-        }
-    };
+    let mut note = |argument: u32, member: Option<u32>| note_read(&mut read, argument, member);
     for handle in functions {
         let function = &module.functions[handle];
         let argument_of = |h: Handle<Expression>| match function.expressions[h] {
@@ -662,6 +689,22 @@ fn arguments_read(module: &Module, pieces: &Pieces) -> BTreeMap<u32, Read> {
         });
     }
     read
+}
+
+/// Notes that `argument` (its `member`, or the whole of it) is read.
+fn note_read(read: &mut BTreeMap<u32, Read>, argument: u32, member: Option<u32>) {
+    match (read.get_mut(&argument), member) {
+        (Some(Read::Whole), _) => {}
+        (Some(Read::Members(set)), Some(m)) => {
+            set.insert(m);
+        }
+        (_, None) => {
+            read.insert(argument, Read::Whole);
+        }
+        (None, Some(m)) => {
+            read.insert(argument, Read::Members(BTreeSet::from([m])));
+        }
+    }
 }
 
 /// The values a statement reads directly (not through an expression).
@@ -828,8 +871,37 @@ fn vector_size(count: u32) -> VectorSize {
 
 impl fragment::ScreenInputs for GBuffer {
     fn read(&self, b: &mut Builder, module: &mut Module, pieces: &Pieces) -> Fragment {
-        self.read_inputs(b, module, pieces)
+        let screen = b.argument(0);
+        let xy = leading(b, screen, VectorSize::Bi);
+        let (x, y) = (b.member(screen, 0), b.member(screen, 1));
+        self.read_inputs(b, module, pieces, (xy, x, y))
     }
+
+    fn read_at(
+        &self,
+        b: &mut Builder,
+        module: &mut Module,
+        pieces: &Pieces,
+        xy: Handle<Expression>,
+    ) -> Fragment {
+        let (x, y) = (b.member(xy, 0), b.member(xy, 1));
+        self.read_inputs(b, module, pieces, (xy, x, y))
+    }
+
+    fn ordinal_at(&self, b: &mut Builder, xy: Handle<Expression>) -> Option<Handle<Expression>> {
+        self.ordinal(b, xy)
+    }
+}
+
+/// The integer texel of a pixel centre `xy`.
+fn texel_of(b: &mut Builder, xy: Handle<Expression>) -> Handle<Expression> {
+    let texel = b.expr(Expression::As {
+        expr: xy,
+        kind: ScalarKind::Sint,
+        convert: Some(4),
+    });
+    b.name(texel, "texel");
+    texel
 }
 
 /// The G-buffer's `count` textures (`texture_2d<u32>`), bound in `group`

@@ -63,6 +63,11 @@ pub(crate) struct LowresHelpers {
     pub history: Handle<Function>,
     /// The history of a pixel shaded at full resolution.
     pub exact_history: Handle<Function>,
+    /// In screen space: the full-resolution pixel a sample shades
+    /// (`cache_lattice_pixel`), and the draw's ordinal the G-buffer keeps
+    /// (`cache_draw_ordinal`).
+    pub lattice_pixel: Handle<Function>,
+    pub draw_ordinal: Handle<Function>,
 }
 
 /// How a variant's passes read what last frame left: a cache variant's
@@ -178,6 +183,8 @@ impl CacheHelpers {
                 unit_normal: helper("cache_unit_normal")?,
                 geometric_normal: helper("cache_geometric_normal")?,
                 exact_history: helper("cache_exact_history")?,
+                lattice_pixel: helper("cache_lattice_pixel")?,
+                draw_ordinal: helper("cache_draw_ordinal")?,
                 history: helper(match options.cache_format {
                     CacheFormat::Rgba16float => "cache_history",
                     CacheFormat::Rgba32float => "cache_history_loads",

@@ -20,12 +20,27 @@
 //! history (`cache_upsample`: nearest, bilinear, spatial, temporal or
 //! spatio-temporal), shades with it, and writes the result and its
 //! history for the next frame.
+//!
+//! Deferred lowres (`deferred-lowres`) is the paper's pipeline: the
+//! geometry is drawn once, into the deferred variant's G-buffer
+//! ([`super::gbuffer`], which then also keeps the fragment's depth and w,
+//! the interpolated normal and the draw's ordinal), and the passes above
+//! run in screen space, one triangle over the screen per draw. The
+//! samples pass, at 1/s × 1/s, reads the G-buffer at the lattice pixel
+//! s·a + offset (`cache_lattice_pixel`): no jitter, and its fragment
+//! position is that pixel's at full resolution. The draws' stencil is the
+//! full frame's and cannot be tested at 1/s, so a pass before it (the
+//! lattice) marks a stencil of the samples' size: each draw keeps the
+//! lattice pixels whose G-buffer ordinal is its own and discards the rest,
+//! with nothing after the kill. The upsampling and the reshading are
+//! drawn on each draw's pixels of the frame's stencil, as the deferred
+//! variant's passes are.
 
 use naga::{Binding, Expression, Function, Handle, Module, Statement, TypeInner};
 
 use super::builder::{location, Builder};
 use super::copy::FunctionCopy;
-use super::fragment;
+use super::fragment::{self, Inputs};
 use super::helpers::{LowresHelpers, Pieces};
 use super::stage::{LowresStage, Stage};
 use super::Refusal;
@@ -33,9 +48,14 @@ use crate::analysis::graph::ExprSet;
 use crate::plan::{DepthTolerance, GradientFilter, Upsampler, Upsampling};
 
 /// Lowres's passes: the samples, the upsampling, and with adaptive
-/// refresh the reshading of the pixels it cannot vouch for.
-pub(crate) fn stages(upsampling: &Upsampling) -> Vec<Stage> {
-    let mut stages = vec![LowresStage::Samples, LowresStage::Upsample];
+/// refresh the reshading of the pixels it cannot vouch for. In screen
+/// space the lattice's stencil comes first.
+pub(crate) fn stages(upsampling: &Upsampling, screen: bool) -> Vec<Stage> {
+    let mut stages = Vec::new();
+    if screen {
+        stages.push(LowresStage::Lattice);
+    }
+    stages.extend([LowresStage::Samples, LowresStage::Upsample]);
     if upsampling.shades_leftovers() {
         stages.push(LowresStage::Reshade);
     }
@@ -45,18 +65,21 @@ pub(crate) fn stages(upsampling: &Upsampling) -> Vec<Stage> {
 /// Why lowres cannot be built on a module without its vertex stage.
 pub(crate) const NEEDS_VERTEX_STAGE: &str = "lowres shades its samples with the projection jittered in the vertex stage, and this module has no vertex stage (it is composed with the host's): give the module with the vertex stage (`--vertex FILE`, `Build::vertex_shader`) so the rewrite can jitter it";
 
-/// The fragment entry point of lowres's pass `stage`.
-pub(crate) fn entry(
+/// The fragment entry point of lowres's pass `stage`, drawn over the
+/// geometry (`Inputs::Varyings`) or in screen space from the G-buffer.
+pub(super) fn entry(
     module: &mut Module,
     pieces: &Pieces,
     stage: LowresStage,
     upsampling: &Upsampling,
+    inputs: Inputs,
 ) -> Result<Function, Refusal> {
     let helpers = &pieces.lowres;
     match stage {
-        LowresStage::Samples => samples_entry(module, pieces, helpers, upsampling),
-        LowresStage::Upsample => upsample_entry(module, pieces, helpers, upsampling),
-        LowresStage::Reshade => reshade_entry(module, pieces, helpers),
+        LowresStage::Lattice => lattice_entry(pieces, helpers, inputs),
+        LowresStage::Samples => samples_entry(module, pieces, helpers, upsampling, inputs),
+        LowresStage::Upsample => upsample_entry(module, pieces, helpers, upsampling, inputs),
+        LowresStage::Reshade => reshade_entry(module, pieces, helpers, inputs),
     }
 }
 
@@ -105,6 +128,19 @@ enum NormalSource {
     Argument(u32),
     Member(u32, u32),
     Geometric,
+}
+
+/// The input the normal is read from (argument, struct member), if the
+/// shader interpolates one: the deferred lowres's G-buffer keeps it.
+pub(crate) fn normal_input(
+    module: &Module,
+    arguments: &[naga::FunctionArgument],
+) -> Option<(u32, Option<u32>)> {
+    match normal_source(module, arguments) {
+        NormalSource::Argument(i) => Some((i, None)),
+        NormalSource::Member(i, m) => Some((i, Some(m))),
+        NormalSource::Geometric => None,
+    }
 }
 
 /// The shader's interpolated normal: a `vec3<f32>` input at a location
@@ -169,17 +205,26 @@ fn normal(
     n
 }
 
-/// A fragment entry point drawn over the geometry, returning `output`:
-/// its builder and what it reads (the previous clip position where
-/// `reprojects`).
+/// Which pixel a screen-space pass reads: its own, or (the samples, at
+/// 1/s × 1/s) the pixel of this frame's lattice it shades.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Pixel {
+    Own,
+    Lattice,
+}
+
+/// A fragment entry point returning `output`: its builder and what it
+/// reads. Drawn over the geometry, its arguments are the original's and
+/// (where `reprojects`) the previous clip position; in screen space, the
+/// fragment position alone, the rest read from the G-buffer at `pixel`.
 fn entry_builder(
-    module: &Module,
+    module: &mut Module,
     pieces: &Pieces,
+    (inputs, pixel): (Inputs, Pixel),
     reprojects: bool,
     output: Handle<naga::Type>,
 ) -> (Builder, fragment::Fragment) {
-    let (arguments, at) = fragment::varying_arguments(module, pieces, reprojects);
-    let mut b = Builder::new(Function {
+    let function = |arguments| Function {
         name: Some(pieces.name.clone()),
         arguments,
         result: Some(naga::FunctionResult {
@@ -187,9 +232,62 @@ fn entry_builder(
             binding: None,
         }),
         ..Function::default()
+    };
+    match inputs {
+        Inputs::Varyings => {
+            let (arguments, at) = fragment::varying_arguments(module, pieces, reprojects);
+            let mut b = Builder::new(function(arguments));
+            let frag = fragment::read_varyings(&mut b, &at);
+            (b, frag)
+        }
+        Inputs::Screen(screen) => {
+            let mut b = Builder::new(function(vec![fragment::frag_coord_argument(pieces.vec4)]));
+            let frag = match pixel {
+                Pixel::Own => screen.read(&mut b, module, pieces),
+                Pixel::Lattice => {
+                    let low = b.argument(0);
+                    let xy = b.call(pieces.lowres.lattice_pixel, vec![low]);
+                    screen.read_at(&mut b, module, pieces, xy)
+                }
+            };
+            (b, frag)
+        }
+    }
+}
+
+/// In screen space, before the samples: each draw, drawn over the
+/// samples' stencil, keeps the pixels of the lattice where the G-buffer
+/// holds its ordinal (the stencil replaces there) and discards the rest.
+/// Nothing follows the kill.
+fn lattice_entry(
+    pieces: &Pieces,
+    helpers: &LowresHelpers,
+    inputs: Inputs,
+) -> Result<Function, Refusal> {
+    let Inputs::Screen(screen) = inputs else {
+        return Err(Refusal::internal(
+            "the lattice's stencil is a screen-space pass",
+        ));
+    };
+    let mut b = Builder::new(Function {
+        name: Some(pieces.name.clone()),
+        arguments: vec![fragment::frag_coord_argument(pieces.vec4)],
+        ..Function::default()
     });
-    let frag = fragment::read_varyings(&mut b, &at);
-    (b, frag)
+    let low = b.argument(0);
+    let xy = b.call(helpers.lattice_pixel, vec![low]);
+    let ordinal = screen
+        .ordinal_at(&mut b, xy)
+        .ok_or_else(|| Refusal::internal("the G-buffer keeps no draw ordinals"))?;
+    let own = b.call(helpers.draw_ordinal, Vec::new());
+    let mine = b.expr(Expression::Binary {
+        op: naga::BinaryOperator::Equal,
+        left: ordinal,
+        right: own,
+    });
+    fragment::kill_unless(&mut b, mine);
+    b.push(Statement::Return { value: None });
+    Ok(b.finish())
 }
 
 fn literal_u32(b: &mut Builder, value: u32) -> Handle<Expression> {
@@ -204,6 +302,7 @@ fn samples_entry(
     pieces: &Pieces,
     helpers: &LowresHelpers,
     upsampling: &Upsampling,
+    inputs: Inputs,
 ) -> Result<Function, Refusal> {
     let payload = if upsampling.lod_bias {
         biased_payload(module, pieces.payload, upsampling.factor)?
@@ -211,17 +310,20 @@ fn samples_entry(
         pieces.payload
     };
     let output = two_member_output(module, "LowresSamples", pieces.vec4, pieces.vec4);
-    let (mut b, frag) = entry_builder(module, pieces, true, output);
+    let (mut b, frag) = entry_builder(module, pieces, (inputs, Pixel::Lattice), true, output);
     let previous = frag
         .previous
         .ok_or_else(|| Refusal::internal("the samples pass reads no previous clip position"))?;
+    // In screen space the fragment position is the lattice pixel's, at
+    // full resolution.
+    let low = matches!(inputs, Inputs::Varyings);
     let n = normal(
         &mut b,
         module,
         pieces,
         helpers,
         (&frag.originals, frag.frag_coord),
-        true,
+        low,
     );
     let value = b.call(payload, frag.originals.clone());
     let value = fragment::to_vec4(&mut b, value, pieces.components, pieces.vec4);
@@ -252,11 +354,12 @@ fn upsample_entry(
     pieces: &Pieces,
     helpers: &LowresHelpers,
     upsampling: &Upsampling,
+    inputs: Inputs,
 ) -> Result<Function, Refusal> {
     let (reconstruction, reshade) = (upsampling.reconstruction, upsampling.shades_leftovers());
     let mode = mode(upsampling);
     let output = fragment::color_and_cache_output(module, pieces, pieces.vec4);
-    let (mut b, frag) = entry_builder(module, pieces, true, output.0);
+    let (mut b, frag) = entry_builder(module, pieces, (inputs, Pixel::Own), true, output.0);
     let previous = frag
         .previous
         .ok_or_else(|| Refusal::internal("the upsampling pass reads no previous clip position"))?;
@@ -311,9 +414,10 @@ fn reshade_entry(
     module: &mut Module,
     pieces: &Pieces,
     helpers: &LowresHelpers,
+    inputs: Inputs,
 ) -> Result<Function, Refusal> {
     let output = fragment::color_and_cache_output(module, pieces, pieces.vec4);
-    let (mut b, frag) = entry_builder(module, pieces, false, output.0);
+    let (mut b, frag) = entry_builder(module, pieces, (inputs, Pixel::Own), false, output.0);
     let payload = b.call(pieces.payload, frag.originals.clone());
     let value = fragment::to_vec4(&mut b, payload, pieces.components, pieces.vec4);
     let history = b.call(helpers.exact_history, Vec::new());

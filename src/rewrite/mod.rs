@@ -482,13 +482,13 @@ fn g_buffer(
     slot: CacheSlot,
     vertex: &vertex::VertexStage,
 ) -> Result<Option<gbuffer::GBuffer>, Refusal> {
-    let Some(read) = recipe.screen_space() else {
+    let Some(keeps) = recipe.screen_space() else {
         return Ok(None);
     };
     let first = slot.first_binding
         + first_twin_binding().map_err(Refusal::internal)?
         + vertex.twins.len() as u32;
-    gbuffer::GBuffer::new(module, pieces, read.packs_depth(), (slot.group, first)).map(Some)
+    gbuffer::GBuffer::new(module, pieces, keeps, (slot.group, first)).map(Some)
 }
 
 /// The vertex stage the passes draw with, instrumented: the previous clip
@@ -608,9 +608,10 @@ impl PassContext<'_> {
         ) {
             entry.function = plain.clone();
         }
-        // The samples are shaded on the jittered lattice.
-        if let (Some(entry), Stage::Lowres(stage::LowresStage::Samples)) =
-            (&mut vertex_entry, stage)
+        // The samples are shaded on the jittered lattice (in screen space
+        // they read the lattice's pixels from the G-buffer).
+        if let (Some(entry), Stage::Lowres(stage::LowresStage::Samples), None) =
+            (&mut vertex_entry, stage, self.gbuffer)
         {
             lowres::jitter_vertex(&mut pass, entry, pieces.lowres.jitter)?;
         }
@@ -651,9 +652,20 @@ impl PassContext<'_> {
     ) -> Result<(naga::Function, Option<naga::EntryPoint>), Refusal> {
         let pieces = self.pieces;
         Ok(match (stage, self.gbuffer, self.recipe.upsampling()) {
-            (Stage::Lowres(stage), _, Some(upsampling)) => {
-                (lowres::entry(pass, pieces, stage, upsampling)?, None)
-            }
+            (Stage::Lowres(stage), Some(gbuffer), Some(upsampling)) => (
+                lowres::entry(
+                    pass,
+                    pieces,
+                    stage,
+                    upsampling,
+                    fragment::Inputs::Screen(gbuffer),
+                )?,
+                Some(gbuffer.fullscreen.clone()),
+            ),
+            (Stage::Lowres(stage), None, Some(upsampling)) => (
+                lowres::entry(pass, pieces, stage, upsampling, fragment::Inputs::Varyings)?,
+                None,
+            ),
             (Stage::Lowres(stage), _, None) => {
                 return Err(Refusal::internal(format!(
                     "the {stage:?} pass of a variant without upsampling"

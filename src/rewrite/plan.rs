@@ -65,15 +65,6 @@ pub(crate) fn build(inputs: Inputs) -> Result<Plan, String> {
         .map(|(stage, pass)| plan_pass(module, result, options, (*stage, pass), &names, gbuffer))
         .collect();
     first_writers_clear(&mut plan_passes);
-    // Lowres's samples have a depth buffer of their own: the full-size
-    // pass after them starts the frame's.
-    if let Some(full) = plan_passes
-        .iter_mut()
-        .skip_while(|p| p.resolution_divisor == 1)
-        .find(|p| p.resolution_divisor == 1)
-    {
-        full.depth.load = LoadOp::Clear;
-    }
     let upsampling = recipe.upsampling();
 
     let entries: Vec<usize> = std::iter::once(analysis.entry_index)
@@ -244,6 +235,7 @@ fn plan_pass(
             targets.push(history(cache_location + 1));
             targets
         }
+        Writes::Stencil => Vec::new(),
         Writes::GBuffer => gbuffer
             .map(|g| g.formats.as_slice())
             .unwrap_or_default()
@@ -286,7 +278,7 @@ fn plan_pass(
         },
         stencil: gbuffer.map(|_| deferred_stencil(stage)),
         resolution_divisor: match stage {
-            Stage::Lowres(LowresStage::Samples) => options.upsampling.factor,
+            Stage::Lowres(LowresStage::Lattice | LowresStage::Samples) => options.upsampling.factor,
             _ => 1,
         },
     }
@@ -300,11 +292,14 @@ const REUSED_BIT: u32 = 0x80;
 /// The stencil bits that hold the draw's ordinal.
 const ORDINAL_BITS: u32 = 0x7f;
 
-/// The deferred variant's stencil, by pass: the geometry pass writes
+/// The deferred variants' stencil, by pass: the geometry pass writes
 /// each draw's ordinal where the draw is visible; the lookup, drawn per
 /// draw over the screen, runs on that draw's pixels and marks those it
 /// reuses; the misses run where the draw's pixels are not marked; the
-/// shading (and the classification) on all the draw's pixels.
+/// shading (and the classification) on all the draw's pixels. Deferred
+/// lowres's lattice writes the ordinals into the samples' stencil, its
+/// samples test them there, its upsampling marks what it keeps and its
+/// reshading runs where the upsampling discarded.
 fn deferred_stencil(stage: Stage) -> Stencil {
     let test = |read_mask| Stencil {
         compare: CompareFunction::Equal,
@@ -314,33 +309,38 @@ fn deferred_stencil(stage: Stage) -> Stencil {
         reference_bits: 0,
     };
     match stage {
-        Stage::GBuffer => Stencil {
+        Stage::GBuffer | Stage::Lowres(LowresStage::Lattice) => Stencil {
             compare: CompareFunction::Always,
             read_mask: 0xff,
             write_mask: ORDINAL_BITS,
             replace: true,
             reference_bits: 0,
         },
-        Stage::Cache(CacheStage::ReprojectOrDiscard) => Stencil {
-            write_mask: REUSED_BIT,
-            replace: true,
-            reference_bits: REUSED_BIT,
-            ..test(ORDINAL_BITS)
-        },
-        Stage::Cache(CacheStage::Payload) => test(0xff),
+        Stage::Cache(CacheStage::ReprojectOrDiscard) | Stage::Lowres(LowresStage::Upsample) => {
+            Stencil {
+                write_mask: REUSED_BIT,
+                replace: true,
+                reference_bits: REUSED_BIT,
+                ..test(ORDINAL_BITS)
+            }
+        }
+        Stage::Cache(CacheStage::Payload) | Stage::Lowres(LowresStage::Reshade) => test(0xff),
         _ => test(ORDINAL_BITS),
     }
 }
 
-/// Makes the first pass that writes each kind of target (and the depth)
-/// clear it, and the later ones load it.
+/// Makes the first pass that writes each kind of target clear it, and
+/// the later ones load it; and the first pass at each resolution clear
+/// its depth buffer (lowres's samples have one of their size).
 fn first_writers_clear(passes: &mut [Pass]) {
     let mut written = Vec::new();
-    for (index, pass) in passes.iter_mut().enumerate() {
-        pass.depth.load = if index == 0 {
-            LoadOp::Clear
-        } else {
+    let mut sizes = Vec::new();
+    for pass in passes.iter_mut() {
+        pass.depth.load = if sizes.contains(&pass.resolution_divisor) {
             LoadOp::Load
+        } else {
+            sizes.push(pass.resolution_divisor);
+            LoadOp::Clear
         };
         for target in &mut pass.color_targets {
             let key = (target.target, target.location);
@@ -437,6 +437,10 @@ fn role(stage: Stage, screen: bool) -> &'static str {
             Stage::Cache(CacheStage::Payload) => "screen space, per draw over its unmarked pixels (stencil): compute the payload from the G-buffer into the cache",
             Stage::Cache(CacheStage::ShadeFromCache) => "screen space, per draw over its pixels (stencil): shade from the G-buffer and this frame's cache at the pixel",
             Stage::Cache(CacheStage::Classify) => "diagnostic, after the frame, in screen space: the cache's decision at each visible pixel",
+            Stage::Lowres(LowresStage::Lattice) => "at 1/s × 1/s, screen space, per draw: mark in the samples' stencil the lattice pixels whose G-buffer ordinal is the draw's; discard the rest",
+            Stage::Lowres(LowresStage::Samples) => "at 1/s × 1/s, screen space, per draw over its lattice pixels (stencil): the payload from the G-buffer at this frame's lattice pixel (level of detail biased by −log2 s) into the samples, and their normal, depth, draw id and temporal gradient",
+            Stage::Lowres(LowresStage::Upsample) => "screen space, per draw over its pixels (stencil): rebuild the payload from the four nearest samples and the reprojected history, shade from the G-buffer and it, write colour, the payload and its history (with adaptive refresh: discard the pixels it cannot vouch for, mark the rest)",
+            Stage::Lowres(LowresStage::Reshade) => "screen space, per draw over its unmarked pixels (stencil): compute the payload from the G-buffer at full resolution and shade, write colour, the payload and an exact history",
             _ => "screen space",
         };
     }
@@ -452,6 +456,7 @@ fn role(stage: Stage, screen: bool) -> &'static str {
         Stage::Lowres(LowresStage::Samples) => "at 1/s × 1/s of the pixels, its own depth buffer, the projection jittered onto this frame's lattice: the payload (level of detail biased by −log2 s) into the samples, and their normal, depth, draw id and temporal gradient",
         Stage::Lowres(LowresStage::Upsample) => "every pixel (depth test): rebuild the payload from the four nearest samples and the reprojected history, shade from it, write colour, the payload and its history (with adaptive refresh: discard the pixels it cannot vouch for)",
         Stage::Lowres(LowresStage::Reshade) => "the pixels pass 2 left empty (depth test): compute the payload at full resolution and shade, write colour, the payload and an exact history",
+        Stage::Lowres(LowresStage::Lattice) => "the lattice's stencil (screen space only)",
     }
 }
 

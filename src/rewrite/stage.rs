@@ -20,6 +20,8 @@ pub enum Writes {
     /// The original outputs plus the upsampled payload and its history at
     /// the next two free locations.
     ColorAndHistory,
+    /// No colour: the pass marks the stencil alone.
+    Stencil,
 }
 
 /// The fragment entry point of one pass: one of the stages that read the
@@ -62,6 +64,10 @@ pub enum CacheStage {
 /// Lowres's passes ([`super::lowres`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LowresStage {
+    /// In screen space (deferred lowres), before the samples: each draw's
+    /// pixels of this frame's lattice marked in the stencil of the
+    /// samples' size, from the draw ordinals the G-buffer keeps.
+    Lattice,
     /// Pass 1: the payload at 1/s × 1/s of the pixels, jittered, and the
     /// samples' geometry.
     Samples,
@@ -84,6 +90,7 @@ impl Stage {
             Stage::Cache(C::ShadeFromCache) => Writes::Color,
             Stage::Cache(C::Classify) => Writes::Classes,
             Stage::GBuffer => Writes::GBuffer,
+            Stage::Lowres(LowresStage::Lattice) => Writes::Stencil,
             Stage::Lowres(LowresStage::Samples) => Writes::Samples,
             Stage::Lowres(LowresStage::Upsample | LowresStage::Reshade) => Writes::ColorAndHistory,
         }
@@ -94,6 +101,7 @@ impl Stage {
         matches!(
             self,
             Stage::Cache(CacheStage::ReuseOrDiscard | CacheStage::ReprojectOrDiscard)
+                | Stage::Lowres(LowresStage::Lattice)
         )
     }
 

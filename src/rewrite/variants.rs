@@ -7,6 +7,7 @@
 //! types, so a recipe cannot mix them. Adding a variant is an arm here
 //! and the module that builds its passes.
 
+use super::gbuffer::Keeps;
 use super::helpers::Readback;
 use super::lowres;
 use super::stage::{CacheStage, Stage};
@@ -28,6 +29,9 @@ pub(crate) enum Recipe {
     /// The payload shaded at 1/s × 1/s of the pixels and upsampled
     /// (seed 001, [`super::lowres`]).
     Lowres(Upsampling),
+    /// Lowres's passes in screen space, after one geometry pass into a
+    /// G-buffer: the paper's pipeline.
+    DeferredLowres(Upsampling),
 }
 
 /// How many passes a cache variant draws the geometry in.
@@ -61,6 +65,10 @@ impl Recipe {
                 options.upsampling.check().map_err(Refusal::new)?;
                 Recipe::Lowres(options.upsampling.clone())
             }
+            Variant::DeferredLowres => {
+                options.upsampling.check().map_err(Refusal::new)?;
+                Recipe::DeferredLowres(options.upsampling.clone())
+            }
             Variant::Reference => {
                 return Err(Refusal::new(
                     "the reference is the original shader; there is nothing to rewrite",
@@ -79,6 +87,7 @@ impl Recipe {
             },
             Recipe::Deferred { .. } => Variant::Deferred,
             Recipe::Lowres(_) => Variant::Lowres,
+            Recipe::DeferredLowres(_) => Variant::DeferredLowres,
         }
     }
 
@@ -103,7 +112,12 @@ impl Recipe {
                     C::ShadeFromCache,
                 ]))
                 .collect(),
-            Recipe::Lowres(upsampling) => lowres::stages(upsampling),
+            Recipe::Lowres(upsampling) => lowres::stages(upsampling, false),
+            // The lattice's stencil and lowres's passes in screen space,
+            // after the one geometry pass.
+            Recipe::DeferredLowres(upsampling) => std::iter::once(Stage::GBuffer)
+                .chain(lowres::stages(upsampling, true))
+                .collect(),
         }
     }
 
@@ -111,7 +125,9 @@ impl Recipe {
     pub fn readback(&self) -> Readback {
         match self {
             Recipe::Cache { read, .. } | Recipe::Deferred { read } => Readback::Cache(*read),
-            Recipe::Lowres(upsampling) => Readback::History(upsampling.reconstruction),
+            Recipe::Lowres(upsampling) | Recipe::DeferredLowres(upsampling) => {
+                Readback::History(upsampling.reconstruction)
+            }
         }
     }
 
@@ -126,16 +142,24 @@ impl Recipe {
     /// Its upsampling, when it shades samples and upsamples them.
     pub fn upsampling(&self) -> Option<&Upsampling> {
         match self {
-            Recipe::Lowres(upsampling) => Some(upsampling),
+            Recipe::Lowres(upsampling) | Recipe::DeferredLowres(upsampling) => Some(upsampling),
             _ => None,
         }
     }
 
-    /// With a G-buffer (deferred), how its screen-space passes read the
-    /// cache.
-    pub fn screen_space(&self) -> Option<CacheRead> {
+    /// With a G-buffer (the deferred variants), what it keeps beyond the
+    /// inputs the shader reads: the fragment's depth where the cache packs
+    /// it, and lowres's geometry.
+    pub fn screen_space(&self) -> Option<Keeps> {
         match self {
-            Recipe::Deferred { read } => Some(*read),
+            Recipe::Deferred { read } => Some(Keeps {
+                depth: read.packs_depth(),
+                lowres: false,
+            }),
+            Recipe::DeferredLowres(_) => Some(Keeps {
+                depth: true,
+                lowres: true,
+            }),
             _ => None,
         }
     }
@@ -143,7 +167,7 @@ impl Recipe {
     /// Why it cannot be built on a module without its vertex stage (one
     /// composed with the host's), when it cannot.
     pub fn needs_vertex_stage(&self) -> Option<&'static str> {
-        self.upsampling().map(|_| lowres::NEEDS_VERTEX_STAGE)
+        matches!(self, Recipe::Lowres(_)).then_some(lowres::NEEDS_VERTEX_STAGE)
     }
 }
 
@@ -157,10 +181,10 @@ impl Options {
         reconstruction: Reconstruction,
     ) -> Result<(), Refusal> {
         match Recipe::of(variant, self)? {
-            Recipe::Lowres(_) => {
+            Recipe::Lowres(_) | Recipe::DeferredLowres(_) => {
                 self.upsampling.reconstruction = reconstruction.upsampler().ok_or_else(|| {
                     Refusal::new(format!(
-                        "lowres rebuilds the payload from its samples: its reconstruction is nearest, bilinear, spatial, temporal or spatio-temporal, not {reconstruction}"
+                        "{variant} rebuilds the payload from its samples: its reconstruction is nearest, bilinear, spatial, temporal or spatio-temporal, not {reconstruction}"
                     ))
                 })?;
             }
@@ -180,7 +204,7 @@ impl Options {
     /// pixels it cannot vouch for.
     pub fn set_adaptive(&mut self, variant: Variant, adaptive: bool) -> Result<(), Refusal> {
         match Recipe::of(variant, self)? {
-            Recipe::Lowres(_) => self.upsampling.reshade = adaptive,
+            Recipe::Lowres(_) | Recipe::DeferredLowres(_) => self.upsampling.reshade = adaptive,
             Recipe::Cache { .. } | Recipe::Deferred { .. } => self.adaptive_refresh = adaptive,
         }
         Ok(())

@@ -215,8 +215,8 @@ fn every_reconstruction_validates_and_builds() {
                         // Lowres refuses the packed read-backs; the
                         // cache variants refuse the upsamplings.
                         Err(refusal)
-                            if (variant == Variant::Lowres && reconstruction.packs_depth())
-                                || (variant != Variant::Lowres && reconstruction.upsamples()) =>
+                            if (variant.upsamples() && reconstruction.packs_depth())
+                                || (!variant.upsamples() && reconstruction.upsamples()) =>
                         {
                             assert!(
                                 refusal.reason.contains("upsamples lowres's samples")
@@ -240,7 +240,7 @@ fn every_reconstruction_validates_and_builds() {
                         }
                     };
                     assert_eq!(rewritten.plan.cache.reconstruction, reconstruction);
-                    if variant == Variant::Lowres {
+                    if variant.upsamples() {
                         let out = dir
                             .path()
                             .join(reconstruction.as_str())

@@ -1200,6 +1200,11 @@ pub enum Variant {
     /// lattice and rebuilt at full resolution from the samples and the
     /// reprojected history (seed 001).
     Lowres,
+    /// Lowres in screen space, as seed 001 ran it: one geometry pass into
+    /// the deferred variant's G-buffer, the payload shaded from it at
+    /// 1/s × 1/s of the pixels on the jittered lattice, and the
+    /// upsampling and shading in screen space.
+    DeferredLowres,
     /// The unmodified shader, run by the profiler as the reference; never
     /// a rewrite.
     Reference,
@@ -1216,19 +1221,20 @@ impl Variant {
 
     /// Every variant the toolchain writes, in the profiler's order
     /// ([`Variant::Reference`] is not one).
-    pub const ALL: [Variant; 5] = [
+    pub const ALL: [Variant; 6] = [
         Variant::OnePass,
         Variant::TwoPass,
         Variant::ThreePass,
         Variant::Deferred,
         Variant::Lowres,
+        Variant::DeferredLowres,
     ];
 
     /// Whether it reuses work by shading a share of the pixels each frame
     /// and upsampling them (lowres), rather than by reprojecting a cached
     /// payload: what its classes and its refresh knobs mean.
     pub fn upsamples(self) -> bool {
-        matches!(self, Variant::Lowres)
+        matches!(self, Variant::Lowres | Variant::DeferredLowres)
     }
 
     /// Its name on the command line and in `plan.json`.
@@ -1239,6 +1245,7 @@ impl Variant {
             Variant::ThreePass => "three-pass",
             Variant::Deferred => "deferred",
             Variant::Lowres => "lowres",
+            Variant::DeferredLowres => "deferred-lowres",
             Variant::Reference => "reference",
         }
     }

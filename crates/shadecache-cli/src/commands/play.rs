@@ -74,7 +74,7 @@ pub struct Args {
 pub fn exec(args: Args, color: Color) -> Result<(), Error> {
     if args.variant.contains(&VariantArg::All) {
         return Err(Error::plain(Diagnostic::error(
-            "--variant all: play draws the variants it is given; name them (one-pass, two-pass, three-pass, deferred or lowres, separated by commas)",
+            "--variant all: play draws the variants it is given; name them (one-pass, two-pass, three-pass, deferred, lowres or deferred-lowres, separated by commas)",
         )));
     }
     let out = crate::out_folder::OutFolder::check(&args.out, args.overwrite)?;

@@ -117,6 +117,10 @@ pub enum VariantArg {
     /// lattice, rebuilt at full resolution from the samples and the
     /// reprojected history (Herzog et al. 2010).
     Lowres,
+    /// Lowres as the paper runs it: one geometry pass into a G-buffer,
+    /// the samples shaded from it at 1/s × 1/s and the upsampling in
+    /// screen space.
+    DeferredLowres,
     All,
 }
 

@@ -45,6 +45,8 @@ fn rewrite_all_nodes_writes_every_candidate_and_variant() {
                 Variant::ThreePass => 3,
                 Variant::Deferred => 4,
                 Variant::Lowres => 2,
+                // The G-buffer, the lattice, the samples, the upsampling.
+                Variant::DeferredLowres => 4,
                 Variant::Reference => unreachable!("not a rewrite"),
             };
             assert_eq!(passes.len(), expected);
