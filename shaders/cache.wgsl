@@ -816,8 +816,14 @@ fn cache_blend(n: CacheNeighbours, w: vec4<f32>) -> CacheBlend {
 // Eq. 3's image-space kernel at each sample's distance, max(ε, 1 − d/r)^γ
 // with r the low-resolution pixel's diagonal (s·√2) and ε = 0.01.
 fn cache_image_kernel(n: CacheNeighbours, gamma: f32) -> vec4<f32> {
+    return pow(cache_hat(n), vec4<f32>(gamma));
+}
+
+// The kernel at γ = 1, the linear hat, without a `pow` (four exp2/log2
+// pairs a pixel on a CPU rasteriser).
+fn cache_hat(n: CacheNeighbours) -> vec4<f32> {
     let r = f32(max(cache_params.refresh_quad, 1u)) * 1.41421356;
-    return pow(max(vec4<f32>(0.01), vec4<f32>(1.0) - (n.distance / r)), vec4<f32>(gamma));
+    return max(vec4<f32>(0.01), vec4<f32>(1.0) - (n.distance / r));
 }
 
 // `cache_upsample`'s mode: the reconstruction in its low byte, and flags.
@@ -850,7 +856,7 @@ fn cache_upsample(flags: u32, components: u32, frag_coord: vec4<f32>, normal: ve
         return CacheUpsampled(n.payload[n.nearest], none, false);
     }
     // The linear hat of bilinear and of the spatial upsampling: 1 − d/r.
-    let hat = cache_image_kernel(n, 1.0);
+    let hat = cache_hat(n);
     if (mode == 1u) {
         // Bilinear over the lattice: the product of the hats along x and
         // y is the tent's footprint; the radial hat stands in for it.
