@@ -722,7 +722,42 @@ fn cache_adaptive_age(lookup: CacheLookup, payload: vec4<f32>) -> f32 {
 // The history of a pixel shaded at full resolution (adaptive refresh's
 // third pass): exact, of weight 1, unchanged.
 fn cache_exact_history() -> vec4<f32> {
-    return vec4<f32>(CACHE_EXACT + 1.0, 0.0, 0.0, 0.0);
+    return cache_history_texel(CACHE_EXACT + 1.0, vec3<f32>(0.0));
+}
+
+// A texel of the history: hw (+ CACHE_EXACT when exact), and the three
+// latest gradients, newest first, the oldest packed with the draw's id as
+// the samples' geometry packs it (w = 4·id + gradient + 1), so that the
+// next frame can tell which draw the point showed (CACHE_MODE_MATERIAL_IDS).
+fn cache_history_texel(weight: f32, gradients: vec3<f32>) -> vec4<f32> {
+    let id = f32(cache_draw.x & 511u);
+    return vec4<f32>(weight, gradients.x, gradients.y, ((4.0 * id) + gradients.z) + 1.0);
+}
+
+// The draw's id a history texel keeps (0 where none wrote it).
+fn cache_history_id(history: vec4<f32>) -> u32 {
+    return u32(max(floor(history.w * 0.25), 0.0));
+}
+
+// Whether every texel of the history's bilinear footprint around `texel`
+// (in texels, integers at their centres) showed this draw last frame:
+// with material ids, a lookup that reads another draw's texel misses.
+fn cache_history_same_draw(texel: vec2<f32>) -> bool {
+    let base = vec2<i32>(floor(texel));
+    let last = vec2<i32>(cache_params.viewport) - vec2<i32>(1);
+    let id = cache_draw.x & 511u;
+    var same = true;
+    for (var i = 0; i < 4; i = i + 1) {
+        let at = clamp(base + vec2<i32>(i & 1, i >> 1u), vec2<i32>(0), last);
+        same = same & (cache_history_id(textureLoad(cache_previous_history, at, 0)) == id);
+    }
+    return same;
+}
+
+// The three gradients a history texel keeps, newest first.
+fn cache_history_gradients(history: vec4<f32>) -> vec3<f32> {
+    let oldest = (history.w - (4.0 * f32(cache_history_id(history)))) - 1.0;
+    return vec3<f32>(history.y, history.z, oldest);
 }
 
 struct CacheUpsampled {
@@ -839,6 +874,10 @@ const CACHE_MODE_FILL_HOLES: u32 = 512u;
 // as the paper sets it (§3.1), where the host gives the range; else of the
 // depth itself.
 const CACHE_MODE_DEPTH_RANGE: u32 = 1024u;
+// The history's disocclusion test compares the draw's id with the ones the
+// history keeps around where the point was, beside the depth: the paper's
+// material ids, for contact points (two surfaces meeting at one depth).
+const CACHE_MODE_MATERIAL_IDS: u32 = 2048u;
 
 // The payload at a full-resolution pixel (pass 2), and the history to keep.
 // `mode & 255`: 0 nearest sample, 1 bilinear, 2 spatial (eq. 1 with
@@ -851,7 +890,7 @@ const CACHE_MODE_DEPTH_RANGE: u32 = 1024u;
 fn cache_upsample(flags: u32, components: u32, frag_coord: vec4<f32>, normal: vec3<f32>, before: vec4<f32>, hit: bool, previous_clip: vec4<f32>) -> CacheUpsampled {
     let mode = flags & 255u;
     let n = cache_neighbours(frag_coord, normal, flags);
-    let none = vec4<f32>(0.0, 1.0, 1.0, 1.0);
+    let none = cache_history_texel(0.0, vec3<f32>(1.0));
     if (mode == 0u) {
         return CacheUpsampled(n.payload[n.nearest], none, false);
     }
@@ -869,16 +908,22 @@ fn cache_upsample(flags: u32, components: u32, frag_coord: vec4<f32>, normal: ve
     }
     let own = n.own < 4u;
     let own_payload = n.payload[min(n.own, 3u)];
-    if (mode == 3u) {
-        let reused = select(spatial.payload, before, hit);
-        let hole = !own & !hit;
-        let fill = (flags & CACHE_MODE_FILL_HOLES) != 0u;
-        return CacheUpsampled(select(reused, own_payload, own), none, hole & (fill | (spatial.weight < CACHE_UNDERSAMPLED)));
-    }
     // Last frame's history where this point was: its weight and gradients.
+    // With material ids it is found only where the texels its lookup reads
+    // showed this draw last frame.
     let point = cache_point(previous_clip);
     let texel = round(point.texel);
     let history = textureLoad(cache_previous_history, vec2<i32>(clamp(texel, vec2<f32>(0.0), cache_params.viewport - vec2<f32>(1.0))), 0);
+    var found = hit;
+    if ((flags & CACHE_MODE_MATERIAL_IDS) != 0u) {
+        found = hit & cache_history_same_draw(point.texel);
+    }
+    if (mode == 3u) {
+        let reused = select(spatial.payload, before, found);
+        let hole = !own & !found;
+        let fill = (flags & CACHE_MODE_FILL_HOLES) != 0u;
+        return CacheUpsampled(select(reused, own_payload, own), none, hole & (fill | (spatial.weight < CACHE_UNDERSAMPLED)));
+    }
     let previous_exact = history.x >= CACHE_EXACT;
     let previous_weight = history.x - select(0.0, CACHE_EXACT, previous_exact);
     // Eq. 8: the gradient, filtered over the samples' footprint in space
@@ -903,8 +948,8 @@ fn cache_upsample(flags: u32, components: u32, frag_coord: vec4<f32>, normal: ve
     // samples say nothing of its change: it carries its last gradient, and
     // eq. 7 leans on its history.
     let reliable = select(spatial.weight, blind_weight, paper_gradient) > CACHE_RELIABLE;
-    let now = select(1.0, select(history.y, now_gradient, reliable), hit);
-    let older = select(vec3<f32>(1.0), history.yzw, hit);
+    let now = select(1.0, select(history.y, now_gradient, reliable), found);
+    let older = select(vec3<f32>(1.0), cache_history_gradients(history), found);
     let filtered = abs((0.4 * now) + dot(vec3<f32>(0.3, 0.2, 0.1), older));
     let confidence = 1.0 - clamp(filtered, 0.0, 1.0);
     // Ours: where this frame's samples alone say the shading changed by
@@ -917,7 +962,7 @@ fn cache_upsample(flags: u32, components: u32, frag_coord: vec4<f32>, normal: ve
     // then eq. 7.
     let current = cache_blend(n, cache_image_kernel(n, 4.0 * wf) * n.geometry);
     let weight = max(current.weight, 1e-30);
-    let kept = wf * select(0.0, previous_weight, hit);
+    let kept = wf * select(0.0, previous_weight, found);
     var payload = ((current.payload * weight) + (before * kept)) / (weight + kept);
     var accumulated = min(weight + kept, CACHE_HISTORY_WEIGHT_LIMIT);
     // Ours: a static pixel converges to its own shading. The paper's blend
@@ -929,9 +974,9 @@ fn cache_upsample(flags: u32, components: u32, frag_coord: vec4<f32>, normal: ve
     // frames on: the cache variants' bounded staleness, with Δn = s².
     let still = filtered < CACHE_STILL;
     let centred = all(abs(point.texel - texel) < vec2<f32>(0.01));
-    let keep = hit & previous_exact & centred & still;
+    let keep = found & previous_exact & centred & still;
     payload = select(select(payload, before, keep), own_payload, own);
     accumulated = accumulated + select(0.0, CACHE_EXACT, own | keep);
-    let unreliable = !own & (!hit | changed) & (spatial.weight < CACHE_UNDERSAMPLED);
-    return CacheUpsampled(payload, vec4<f32>(accumulated, now, older.x, older.y), unreliable);
+    let unreliable = !own & (!found | changed) & (spatial.weight < CACHE_UNDERSAMPLED);
+    return CacheUpsampled(payload, cache_history_texel(accumulated, vec3<f32>(now, older.x, older.y)), unreliable);
 }

@@ -102,8 +102,9 @@ fn history(
 }
 
 /// `cache_upsample`'s mode for `upsampling`: its reconstruction, and the
-/// flags of the paper's gradient filter, of hole filling and of σz of the
-/// depth range (`CACHE_MODE_*` in `shaders/cache.wgsl`).
+/// flags of the paper's gradient filter, of hole filling, of σz of the
+/// depth range and of material ids (`CACHE_MODE_*` in
+/// `shaders/cache.wgsl`).
 fn mode(upsampling: &Upsampling) -> u32 {
     let reconstruction = match upsampling.reconstruction {
         Upsampler::Nearest => 0,
@@ -118,6 +119,7 @@ fn mode(upsampling: &Upsampling) -> u32 {
         | (u32::from(paper_gradient) << 8)
         | (u32::from(upsampling.fill_holes) << 9)
         | (u32::from(of_range) << 10)
+        | (u32::from(upsampling.material_ids) << 11)
 }
 
 /// Where the fragment's normal comes from: an input the shader

@@ -437,6 +437,15 @@ pub struct Upsampling {
     /// What σz is a share of.
     #[serde(default, skip_serializing_if = "is_default")]
     pub depth_tolerance: DepthTolerance,
+    /// The history's disocclusion test compares the draw's ordinal with
+    /// the one the history keeps where the point was last frame, beside
+    /// the depth: the paper's material ids, for contact points, where two
+    /// surfaces meet at one depth. Off, depth alone decides. It holds
+    /// where the application draws its meshes in the same order from
+    /// frame to frame (a mesh culled or added shifts the ordinals after
+    /// it, and their histories miss for that frame).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub material_ids: bool,
 }
 
 /// What lowres's σz (eq. 2's depth weight) is a share of.
@@ -496,6 +505,7 @@ pub const DEFAULT_UPSAMPLING: Upsampling = Upsampling {
     gradient_filter: GradientFilter::Ours,
     fill_holes: false,
     depth_tolerance: DepthTolerance::OfDepth,
+    material_ids: false,
 };
 
 fn spatio_temporal() -> Upsampler {
@@ -512,14 +522,15 @@ pub const MAX_SIGMA: f32 = 1e6;
 impl Upsampling {
     /// These knobs with the paper's path wherever ours differs and is a
     /// knob: the absolute, geometry-blind gradient filter, the temporal
-    /// baseline's hole filling and σz of the depth range. (Depth-only
-    /// disocclusion and the project's two rules, the exact sample and the
-    /// dropped history, stay.)
+    /// baseline's hole filling, σz of the depth range and material ids in
+    /// the disocclusion test. (The project's two rules, the exact sample
+    /// and the dropped history, stay.)
     pub fn as_the_paper(&self) -> Upsampling {
         Upsampling {
             gradient_filter: GradientFilter::Paper,
             fill_holes: true,
             depth_tolerance: DepthTolerance::OfRange,
+            material_ids: true,
             ..self.clone()
         }
     }
@@ -542,6 +553,9 @@ impl Upsampling {
         }
         if self.depth_tolerance == DepthTolerance::OfRange {
             words.push_str(", σz of the depth range");
+        }
+        if self.material_ids {
+            words.push_str(", material ids");
         }
         words
     }

@@ -168,8 +168,16 @@ pub struct UpsamplingArgs {
     /// far plane is infinite, of the depth) [default: depth].
     #[arg(long, value_enum, value_name = "OF")]
     pub depth_tolerance: Option<DepthToleranceArg>,
+    /// Lowres's history misses where the draw at the point last frame was
+    /// another (the paper's material ids, for contact points: two
+    /// surfaces meeting at one depth); without it, depth alone decides.
+    /// Draws are told apart by their order in the pass, which must then
+    /// stay the same from frame to frame.
+    #[arg(long)]
+    pub material_ids: bool,
     /// Lowres as the paper runs it, where ours differs and is a knob:
-    /// `--gradient-filter paper --fill-holes --depth-tolerance range`.
+    /// `--gradient-filter paper --fill-holes --depth-tolerance range
+    /// --material-ids`.
     #[arg(long, conflicts_with_all = ["gradient_filter", "depth_tolerance"])]
     pub paper: bool,
 }
@@ -204,6 +212,7 @@ impl UpsamplingArgs {
                 Some(GradientFilterArg::Ours) | None => rewrite::GradientFilter::Ours,
             },
             fill_holes: self.fill_holes,
+            material_ids: self.material_ids,
             depth_tolerance: match self.depth_tolerance {
                 Some(DepthToleranceArg::Range) => rewrite::DepthTolerance::OfRange,
                 Some(DepthToleranceArg::Depth) | None => rewrite::DepthTolerance::OfDepth,
@@ -233,6 +242,7 @@ impl UpsamplingArgs {
             ("--gradient-filter", self.gradient_filter.is_some()),
             ("--fill-holes", self.fill_holes),
             ("--depth-tolerance", self.depth_tolerance.is_some()),
+            ("--material-ids", self.material_ids),
             ("--paper", self.paper),
         ]
         .into_iter()
