@@ -427,7 +427,7 @@ fn lowres_line(report: &report::Report, row: &report::ResultRow) -> String {
         .as_ref()
         .map_or(String::new(), |u| format!("{}, ", u.in_words()));
     format!(
-        "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] ({knobs}{}{}, {:.2}× with its fixed costs, P/T {:.2}, shaded this frame {:.0}%, history reused {:.0}%, history missing {:.0}%), {}\n",
+        "  {:<15} {} `{}`: {:.2}× [{:.2}, {:.2}] ({knobs}{}{}, {:.2}× with its fixed costs, P/T {:.2}, shaded this frame {:.0}%, history reused {:.0}%, history missing {:.0}%), {}\n",
         row.variant.as_str(),
         row.node,
         row.node_text,
@@ -509,7 +509,7 @@ fn summary(report: &report::Report) -> String {
             continue;
         }
         summary.push_str(&format!(
-            "  {:<10} {} `{}`: {:.2}× [{:.2}, {:.2}] (ideal {:.2}×, {:.2}× with its fixed costs, P/T {:.2}, hit {:.0}% miss {:.0}% refresh {:.0}%, oldest value shown {} frames), {}\n",
+            "  {:<15} {} `{}`: {:.2}× [{:.2}, {:.2}] (ideal {:.2}×, {:.2}× with its fixed costs, P/T {:.2}, hit {:.0}% miss {:.0}% refresh {:.0}%, oldest value shown {} frames), {}\n",
             row.variant.as_str(),
             row.node,
             row.node_text,
