@@ -85,9 +85,10 @@ pub struct GBuffer {
 pub(crate) struct Keeps {
     /// The fragment position's depth (a packed cache read compares it).
     pub depth: bool,
-    /// Lowres's geometry in screen space: the fragment position's depth
-    /// and w, the interpolated normal its weights compare, and the draw's
-    /// ordinal, which tells the draws apart at the samples' size.
+    /// Lowres's geometry in screen space: the fragment position's w (its
+    /// weights compare view depths, 1/w), the interpolated normal they
+    /// compare, and the draw's ordinal, which tells the draws apart at the
+    /// samples' size.
     pub lowres: bool,
 }
 
@@ -221,7 +222,7 @@ impl GBuffer {
                 holds.len() as u32 - 1
             })
         };
-        let depth_word = keep(reads_position || keeps.depth || keeps.lowres, "position.z");
+        let depth_word = keep(reads_position || keeps.depth, "position.z");
         let w_word = keep(reads_position || keeps.lowres, "position.w");
         let ordinal_word = keep(keeps.lowres, "draw ordinal");
         let leaves = inputs

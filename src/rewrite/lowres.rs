@@ -23,8 +23,8 @@
 //!
 //! Deferred lowres (`deferred-lowres`) is the paper's pipeline: the
 //! geometry is drawn once, into the deferred variant's G-buffer
-//! ([`super::gbuffer`], which then also keeps the fragment's depth and w,
-//! the interpolated normal and the draw's ordinal), and the passes above
+//! ([`super::gbuffer`], which then also keeps the fragment's w, the
+//! interpolated normal and the draw's ordinal), and the passes above
 //! run in screen space, one triangle over the screen per draw. The
 //! samples pass, at 1/s × 1/s, reads the G-buffer at the lattice pixel
 //! s·a + offset (`cache_lattice_pixel`): no jitter, and its fragment

@@ -157,7 +157,7 @@ impl Recipe {
                 lowres: false,
             }),
             Recipe::DeferredLowres(_) => Some(Keeps {
-                depth: true,
+                depth: false,
                 lowres: true,
             }),
             _ => None,
