@@ -79,10 +79,7 @@ pub(crate) fn assert_refresh_one_equals_reference(
 pub(crate) fn options(periods: &[u32], quads: &[u32]) -> Options {
     Options {
         nodes: Nodes::Ids(vec!["nb0c12cc4".into()]),
-        variants: Variant::ALL
-            .into_iter()
-            .filter(|&v| v != Variant::Lowres)
-            .collect(),
+        variants: Variant::CACHE.to_vec(),
         refresh_periods: periods.to_vec(),
         refresh_quads: quads.to_vec(),
         ..Options::default()
