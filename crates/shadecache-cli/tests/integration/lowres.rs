@@ -77,3 +77,44 @@ fn lowres_bad_knobs_are_errors() {
         assert_eq!(std::fs::read_dir(out.path()).unwrap().count(), 0);
     }
 }
+
+/// `--paper` writes the paper's path into both lowres's plans, forward and
+/// deferred, and into the flags of their upsampling pass's
+/// `cache_upsample` call: the geometry-blind gradient filter (256), hole
+/// filling (512), σz of the depth range (1024) and material ids (2048)
+/// over spatio-temporal (4).
+#[test]
+fn paper_is_written_into_both_lowres_plans() {
+    let shader = root().join("corpus/noise_marble.wgsl");
+    let out = tempfile::tempdir().unwrap();
+    let output = shadecache([
+        "rewrite".as_ref(),
+        shader.as_os_str(),
+        "--variant".as_ref(),
+        "lowres,deferred-lowres".as_ref(),
+        "--node".as_ref(),
+        "nb0c12cc4".as_ref(),
+        "--paper".as_ref(),
+        "--out".as_ref(),
+        out.path().as_os_str(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    for (variant, upsampling_pass) in [("lowres", "pass2"), ("deferred-lowres", "pass4")] {
+        let dir = out.path().join(variant);
+        let plan: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("plan.json")).unwrap()).unwrap();
+        let upsampling = &plan["upsampling"];
+        assert_eq!(
+            upsampling["gradient_filter"], "paper",
+            "{variant}: {upsampling}"
+        );
+        assert_eq!(upsampling["fill_holes"], true, "{variant}: {upsampling}");
+        assert_eq!(
+            upsampling["depth_tolerance"], "of-range",
+            "{variant}: {upsampling}"
+        );
+        assert_eq!(upsampling["material_ids"], true, "{variant}: {upsampling}");
+        let wgsl = std::fs::read_to_string(dir.join(format!("{upsampling_pass}.wgsl"))).unwrap();
+        assert!(wgsl.contains("cache_upsample(3844u"), "{variant}: {wgsl}");
+    }
+}
