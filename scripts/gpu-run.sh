@@ -20,9 +20,10 @@
 #   1. README's two profiles: the environment map (its first command,
 #      which pays) and the marble sphere (its second, which does not);
 #   2. docs/results.md's headline: the profile at 256² and 512²;
-#   2b. docs/results.md's upsampling table (Herzog et al. 2010): every
-#      lowres reconstruction beside two-, three-pass and deferred, on the
-#      environment map at 256² and the marble at 256² and 512²;
+#   2b. docs/results.md's upsampling tables (Herzog et al. 2010): every
+#      reconstruction of the forward and the deferred lowres beside two-,
+#      three-pass and deferred, on the environment map, the marble and the
+#      64-tap blur, each at 256² and 512²;
 #   3. Sitthi-amorn et al. 2008 fig. 8 at 1024×768: one-, two-, three-pass and deferred
 #      for nodes spanning the marble's P/T range (one octave, the partial
 #      octave sums, the turbulence's marble, the albedo, the lit colour),
@@ -170,11 +171,18 @@ run readme-first profile "${envmap_sphere[@]}" --max-error psnr:35 "${frames[@]}
 run readme-profile profile "${marble[@]}" "${frames[@]}"
 run results-256 profile "${marble[@]}" --size "$small" "${frames[@]}"
 run results-512 profile "${marble[@]}" --size "$mid" "${frames[@]}"
-upsampling=(--variant two-pass,three-pass,deferred,lowres
+upsampling=(--variant two-pass,three-pass,deferred,lowres,deferred-lowres
   --lowres-reconstruction nearest,bilinear,spatial,temporal,spatio-temporal --nodes top:1)
 run upsampling-envmap-256 profile "${envmap_sphere[@]}" --size "$small" "${frames[@]}" "${upsampling[@]}"
+run upsampling-envmap-512 profile "${envmap_sphere[@]}" --size "$mid" "${frames[@]}" "${upsampling[@]}"
 run upsampling-marble-256 profile "${marble[@]}" --size "$small" "${frames[@]}" "${upsampling[@]}"
 run upsampling-marble-512 profile "${marble[@]}" --size "$mid" "${frames[@]}" "${upsampling[@]}"
+# The heaviest payload of docs/results.md's lowres tables: the directional
+# blur at 64 taps.
+sed 's/sample_count = 8/sample_count = 64/' corpus/scenes/blurred_texture.toml > "$work/blur64.toml"
+blur64=(corpus/texture_loop.wgsl --scene "$work/blur64.toml")
+run upsampling-blur64-256 profile "${blur64[@]}" --size "$small" "${frames[@]}" "${upsampling[@]}"
+run upsampling-blur64-512 profile "${blur64[@]}" --size "$mid" "${frames[@]}" "${upsampling[@]}"
 run fig8 profile "${marble[@]}" --size "$big" "${frames[@]}" --nodes "$fig8_nodes" \
   --variant one-pass,two-pass,three-pass,deferred --refresh-period 32 --refresh-quad 4
 run fig9 profile "${marble[@]}" --size "$big" "${frames[@]}" --nodes "$two_octaves,$lit" \
