@@ -386,7 +386,7 @@ fn note_unused_flags(args: &Args) {
         }
         super::rewrite::note_unused(
             &given,
-            "lowres's knobs, and --variant does not ask for lowres",
+            "lowres's knobs, and --variant asks for neither lowres nor deferred-lowres",
         );
     }
     let refresh_off = args

@@ -545,7 +545,7 @@ fn rewrite_entry(
     if !variants_asked(args).iter().any(|v| v.upsamples()) {
         note_unused(
             &args.upsampling.given(),
-            "lowres's knobs, and --variant does not ask for lowres",
+            "lowres's knobs, and --variant asks for neither lowres nor deferred-lowres",
         );
     }
     let language = match args.emit {

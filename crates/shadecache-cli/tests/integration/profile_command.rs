@@ -381,7 +381,7 @@ fn flags_that_do_nothing_are_noted() {
     assert!(output.status.success(), "{}", stderr(&output));
     assert!(
         stderr(&output).contains(
-            "note: ignored --sigma-normal, --reshade-unreliable: lowres's knobs, and --variant does not ask for lowres"
+            "note: ignored --sigma-normal, --reshade-unreliable: lowres's knobs, and --variant asks for neither lowres nor deferred-lowres"
         ),
         "{}",
         stderr(&output)
