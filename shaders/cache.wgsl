@@ -580,11 +580,26 @@ fn cache_lattice_pixel(low: vec4<f32>) -> vec2<f32> {
     return min(pixel, cache_params.viewport - vec2<f32>(1.0)) + vec2<f32>(0.5);
 }
 
-// The draw's ordinal (`cache_draw`), which the deferred lowres's G-buffer
-// keeps at each pixel: its samples pass, at another size than the
-// stencil, tells the draws apart by it.
-fn cache_draw_ordinal() -> u32 {
-    return cache_draw.x;
+// The draw's id: its ordinal (`cache_draw`), which the deferred lowres's
+// G-buffer keeps at each pixel (its samples pass, at another size than
+// the stencil, tells the draws apart by it), and which lowres's samples
+// and history keep beside a gradient (`cache_with_id`).
+fn cache_draw_id() -> u32 {
+    return cache_draw.x & 511u;
+}
+
+// A gradient in [−1, 1] and this draw's id in one number, w = 4·id +
+// gradient + 1 (exact to 2^-14 for ids below 2^9), and the two read back.
+fn cache_with_id(gradient: f32) -> f32 {
+    return ((4.0 * f32(cache_draw_id())) + gradient) + 1.0;
+}
+
+fn cache_id_of(w: f32) -> u32 {
+    return u32(max(floor(w * 0.25), 0.0));
+}
+
+fn cache_gradient_of(w: f32) -> f32 {
+    return (w - (4.0 * f32(cache_id_of(w)))) - 1.0;
 }
 
 // A unit normal folded onto the octahedron, two numbers.
@@ -641,15 +656,13 @@ fn cache_relative_gradient(now: vec4<f32>, before: vec4<f32>, hit: bool, compone
     return select(1.0, g, hit & cache_finite(vec4<f32>(a, b, 0.0, 0.0)));
 }
 
-// Pass 1's geometry texel of a sample: its normal, view depth, the draw's
-// id and its temporal gradient against the history where the sample's
-// point was last frame (`before`, a lookup of the previous payload), packed
-// as w = 4·id + gradient + 1 (the gradient in [−1, 1], exact to 2^-14 for
-// ids below 2^9).
+// Pass 1's geometry texel of a sample: its normal, view depth, and its
+// temporal gradient against the history where the sample's point was last
+// frame (`before`, a lookup of the previous payload) with the draw's id
+// (`cache_with_id`).
 fn cache_sample_texel(payload: vec4<f32>, normal: vec3<f32>, frag_coord: vec4<f32>, before: vec4<f32>, hit: bool, components: u32) -> vec4<f32> {
     let gradient = cache_relative_gradient(payload, before, hit, components);
-    let id = f32(cache_draw.x & 511u);
-    return vec4<f32>(cache_octahedral(normal), 1.0 / frag_coord.w, ((4.0 * id) + gradient) + 1.0);
+    return vec4<f32>(cache_octahedral(normal), 1.0 / frag_coord.w, cache_with_id(gradient));
 }
 
 // The tri-weight kernel of eq. 3, g(x, σ, γ) = max(ε, 1 − x/σ)^γ, with
@@ -726,17 +739,11 @@ fn cache_exact_history() -> vec4<f32> {
 }
 
 // A texel of the history: hw (+ CACHE_EXACT when exact), and the three
-// latest gradients, newest first, the oldest packed with the draw's id as
-// the samples' geometry packs it (w = 4·id + gradient + 1), so that the
-// next frame can tell which draw the point showed (CACHE_MODE_MATERIAL_IDS).
+// latest gradients, newest first, the oldest with the draw's id
+// (`cache_with_id`), so that the next frame can tell which draw the point
+// showed (CACHE_MODE_MATERIAL_IDS; 0 where none wrote it).
 fn cache_history_texel(weight: f32, gradients: vec3<f32>) -> vec4<f32> {
-    let id = f32(cache_draw.x & 511u);
-    return vec4<f32>(weight, gradients.x, gradients.y, ((4.0 * id) + gradients.z) + 1.0);
-}
-
-// The draw's id a history texel keeps (0 where none wrote it).
-fn cache_history_id(history: vec4<f32>) -> u32 {
-    return u32(max(floor(history.w * 0.25), 0.0));
+    return vec4<f32>(weight, gradients.x, gradients.y, cache_with_id(gradients.z));
 }
 
 // Whether every texel of the history's bilinear footprint around `texel`
@@ -745,19 +752,17 @@ fn cache_history_id(history: vec4<f32>) -> u32 {
 fn cache_history_same_draw(texel: vec2<f32>) -> bool {
     let base = vec2<i32>(floor(texel));
     let last = vec2<i32>(cache_params.viewport) - vec2<i32>(1);
-    let id = cache_draw.x & 511u;
     var same = true;
     for (var i = 0; i < 4; i = i + 1) {
         let at = clamp(base + vec2<i32>(i & 1, i >> 1u), vec2<i32>(0), last);
-        same = same & (cache_history_id(textureLoad(cache_previous_history, at, 0)) == id);
+        same = same & (cache_id_of(textureLoad(cache_previous_history, at, 0).w) == cache_draw_id());
     }
     return same;
 }
 
 // The three gradients a history texel keeps, newest first.
 fn cache_history_gradients(history: vec4<f32>) -> vec3<f32> {
-    let oldest = (history.w - (4.0 * f32(cache_history_id(history)))) - 1.0;
-    return vec3<f32>(history.y, history.z, oldest);
+    return vec3<f32>(history.y, history.z, cache_gradient_of(history.w));
 }
 
 struct CacheUpsampled {
@@ -803,7 +808,7 @@ fn cache_neighbours(frag_coord: vec4<f32>, normal: vec3<f32>, flags: u32) -> Cac
     let last = vec2<i32>(cache_sample_size()) - vec2<i32>(1);
     let pixel = floor(frag_coord.xy);
     let z = 1.0 / frag_coord.w;
-    let id = cache_draw.x & 511u;
+    let id = cache_draw_id();
     let base = vec2<i32>(floor((pixel - offset) / s));
     let sigma_n = cache_params.upsample_sigma_normal * cache_params.upsample_sigma_normal;
     let sigma_z = cache_params.upsample_sigma_depth * cache_params.upsample_sigma_depth;
@@ -817,7 +822,7 @@ fn cache_neighbours(frag_coord: vec4<f32>, normal: vec3<f32>, flags: u32) -> Cac
         let l = textureLoad(cache_samples, a, 0);
         let g = textureLoad(cache_sample_geometry, a, 0);
         let nj = cache_from_octahedral(g.xy);
-        let idj = u32(max(floor(g.w * 0.25), 0.0));
+        let idj = cache_id_of(g.w);
         let bend = max(0.0, 1.0 - dot(normal, nj));
         let dz = (z - g.z) / select(max(z, 1e-20), range, of_range);
         let n_w = max(0.01, 1.0 - ((bend * bend) / sigma_n));
@@ -826,7 +831,7 @@ fn cache_neighbours(frag_coord: vec4<f32>, normal: vec3<f32>, flags: u32) -> Cac
         out.payload[i] = select(vec4<f32>(0.0), l, finite);
         out.geometry[i] = select(0.0, (n_w * n_w * n_w) * (d_w * d_w * d_w) * select(CACHE_FOREIGN_WEIGHT, 1.0, idj == id), finite);
         out.distance[i] = length(((vec2<f32>(a) * s) + offset) - pixel);
-        out.gradient[i] = (g.w - (4.0 * f32(idj))) - 1.0;
+        out.gradient[i] = cache_gradient_of(g.w);
         out.present[i] = select(0.0, 1.0, g.z > 0.0);
         // The pixel's own sample, when it shows the same surface (at a
         // silhouette the samples pass may see what is behind).

@@ -314,7 +314,7 @@ impl GBuffer {
             words.push(b.member(bits, 3));
         }
         if self.ordinal_word.is_some() {
-            words.push(b.call(pieces.lowres.draw_ordinal, Vec::new()));
+            words.push(b.call(pieces.lowres.draw_id, Vec::new()));
         }
         for leaf in &self.leaves {
             let value = match leaf.member {
@@ -451,21 +451,6 @@ impl GBuffer {
         });
         b.name(loaded, &format!("g{t}"));
         loaded
-    }
-
-    /// The ordinal of the draw the G-buffer holds at the pixel whose
-    /// centre is `xy` (0 where none drew), where it keeps ordinals.
-    fn ordinal(&self, b: &mut Builder, xy: Handle<Expression>) -> Option<Handle<Expression>> {
-        let at = self.ordinal_word?;
-        let texel = texel_of(b, xy);
-        let loaded = self.load(b, texel, (at / 4) as usize);
-        let ordinal = if format_words(self.formats[(at / 4) as usize]) == 1 {
-            loaded
-        } else {
-            b.member(loaded, at % 4)
-        };
-        b.name(ordinal, "ordinal");
-        Some(ordinal)
     }
 
     /// Each original input (argument, struct member) as this pixel's
@@ -890,7 +875,14 @@ impl fragment::ScreenInputs for GBuffer {
     }
 
     fn ordinal_at(&self, b: &mut Builder, xy: Handle<Expression>) -> Option<Handle<Expression>> {
-        self.ordinal(b, xy)
+        let at = self.ordinal_word?;
+        let texel = texel_of(b, xy);
+        // Only the texture that holds the word is read; a load of a
+        // `texture_2d<u32>` is four words whatever its format.
+        let loaded = self.load(b, texel, (at / 4) as usize);
+        let ordinal = b.member(loaded, at % 4);
+        b.name(ordinal, "ordinal");
+        Some(ordinal)
     }
 }
 

@@ -65,9 +65,9 @@ pub(crate) struct LowresHelpers {
     pub exact_history: Handle<Function>,
     /// In screen space: the full-resolution pixel a sample shades
     /// (`cache_lattice_pixel`), and the draw's ordinal the G-buffer keeps
-    /// (`cache_draw_ordinal`).
+    /// (`cache_draw_id`).
     pub lattice_pixel: Handle<Function>,
-    pub draw_ordinal: Handle<Function>,
+    pub draw_id: Handle<Function>,
 }
 
 /// How a variant's passes read what last frame left: a cache variant's
@@ -184,7 +184,7 @@ impl CacheHelpers {
                 geometric_normal: helper("cache_geometric_normal")?,
                 exact_history: helper("cache_exact_history")?,
                 lattice_pixel: helper("cache_lattice_pixel")?,
-                draw_ordinal: helper("cache_draw_ordinal")?,
+                draw_id: helper("cache_draw_id")?,
                 history: helper(match options.cache_format {
                     CacheFormat::Rgba16float => "cache_history",
                     CacheFormat::Rgba32float => "cache_history_loads",

@@ -48,18 +48,19 @@ use crate::analysis::graph::ExprSet;
 use crate::plan::{DepthTolerance, GradientFilter, Upsampler, Upsampling};
 
 /// Lowres's passes: the samples, the upsampling, and with adaptive
-/// refresh the reshading of the pixels it cannot vouch for. In screen
-/// space the lattice's stencil comes first.
-pub(crate) fn stages(upsampling: &Upsampling, screen: bool) -> Vec<Stage> {
+/// refresh the reshading of the pixels it cannot vouch for. `deferred`,
+/// the G-buffer pass and the lattice's stencil come first, and the rest
+/// run in screen space.
+pub(crate) fn stages(upsampling: &Upsampling, deferred: bool) -> Vec<Stage> {
     let mut stages = Vec::new();
-    if screen {
-        stages.push(LowresStage::Lattice);
+    if deferred {
+        stages.extend([Stage::GBuffer, Stage::Lowres(LowresStage::Lattice)]);
     }
-    stages.extend([LowresStage::Samples, LowresStage::Upsample]);
+    stages.extend([LowresStage::Samples, LowresStage::Upsample].map(Stage::Lowres));
     if upsampling.shades_leftovers() {
-        stages.push(LowresStage::Reshade);
+        stages.push(Stage::Lowres(LowresStage::Reshade));
     }
-    stages.into_iter().map(Stage::Lowres).collect()
+    stages
 }
 
 /// Why lowres cannot be built on a module without its vertex stage.
@@ -281,7 +282,7 @@ fn lattice_entry(
     let ordinal = screen
         .ordinal_at(&mut b, xy)
         .ok_or_else(|| Refusal::internal("the G-buffer keeps no draw ordinals"))?;
-    let own = b.call(helpers.draw_ordinal, Vec::new());
+    let own = b.call(helpers.draw_id, Vec::new());
     let mine = b.expr(Expression::Binary {
         op: naga::BinaryOperator::Equal,
         left: ordinal,

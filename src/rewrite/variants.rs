@@ -27,11 +27,13 @@ pub(crate) enum Recipe {
     /// G-buffer ([`super::gbuffer`]).
     Deferred { read: CacheRead },
     /// The payload shaded at 1/s × 1/s of the pixels and upsampled
-    /// (seed 001, [`super::lowres`]).
-    Lowres(Upsampling),
-    /// Lowres's passes in screen space, after one geometry pass into a
-    /// G-buffer: the paper's pipeline.
-    DeferredLowres(Upsampling),
+    /// (seed 001, [`super::lowres`]); `deferred`, its passes in screen
+    /// space after one geometry pass into a G-buffer (the paper's
+    /// pipeline).
+    Lowres {
+        upsampling: Upsampling,
+        deferred: bool,
+    },
 }
 
 /// How many passes a cache variant draws the geometry in.
@@ -61,13 +63,12 @@ impl Recipe {
                 read,
             },
             Variant::Deferred => Recipe::Deferred { read },
-            Variant::Lowres => {
+            Variant::Lowres | Variant::DeferredLowres => {
                 options.upsampling.check().map_err(Refusal::new)?;
-                Recipe::Lowres(options.upsampling.clone())
-            }
-            Variant::DeferredLowres => {
-                options.upsampling.check().map_err(Refusal::new)?;
-                Recipe::DeferredLowres(options.upsampling.clone())
+                Recipe::Lowres {
+                    upsampling: options.upsampling.clone(),
+                    deferred: variant == Variant::DeferredLowres,
+                }
             }
             Variant::Reference => {
                 return Err(Refusal::new(
@@ -86,8 +87,10 @@ impl Recipe {
                 CachePasses::Three => Variant::ThreePass,
             },
             Recipe::Deferred { .. } => Variant::Deferred,
-            Recipe::Lowres(_) => Variant::Lowres,
-            Recipe::DeferredLowres(_) => Variant::DeferredLowres,
+            Recipe::Lowres {
+                deferred: false, ..
+            } => Variant::Lowres,
+            Recipe::Lowres { deferred: true, .. } => Variant::DeferredLowres,
         }
     }
 
@@ -112,12 +115,10 @@ impl Recipe {
                     C::ShadeFromCache,
                 ]))
                 .collect(),
-            Recipe::Lowres(upsampling) => lowres::stages(upsampling, false),
-            // The lattice's stencil and lowres's passes in screen space,
-            // after the one geometry pass.
-            Recipe::DeferredLowres(upsampling) => std::iter::once(Stage::GBuffer)
-                .chain(lowres::stages(upsampling, true))
-                .collect(),
+            Recipe::Lowres {
+                upsampling,
+                deferred,
+            } => lowres::stages(upsampling, *deferred),
         }
     }
 
@@ -125,9 +126,7 @@ impl Recipe {
     pub fn readback(&self) -> Readback {
         match self {
             Recipe::Cache { read, .. } | Recipe::Deferred { read } => Readback::Cache(*read),
-            Recipe::Lowres(upsampling) | Recipe::DeferredLowres(upsampling) => {
-                Readback::History(upsampling.reconstruction)
-            }
+            Recipe::Lowres { upsampling, .. } => Readback::History(upsampling.reconstruction),
         }
     }
 
@@ -142,7 +141,7 @@ impl Recipe {
     /// Its upsampling, when it shades samples and upsamples them.
     pub fn upsampling(&self) -> Option<&Upsampling> {
         match self {
-            Recipe::Lowres(upsampling) | Recipe::DeferredLowres(upsampling) => Some(upsampling),
+            Recipe::Lowres { upsampling, .. } => Some(upsampling),
             _ => None,
         }
     }
@@ -156,7 +155,7 @@ impl Recipe {
                 depth: read.packs_depth(),
                 lowres: false,
             }),
-            Recipe::DeferredLowres(_) => Some(Keeps {
+            Recipe::Lowres { deferred: true, .. } => Some(Keeps {
                 depth: false,
                 lowres: true,
             }),
@@ -167,7 +166,14 @@ impl Recipe {
     /// Why it cannot be built on a module without its vertex stage (one
     /// composed with the host's), when it cannot.
     pub fn needs_vertex_stage(&self) -> Option<&'static str> {
-        matches!(self, Recipe::Lowres(_)).then_some(lowres::NEEDS_VERTEX_STAGE)
+        matches!(
+            self,
+            Recipe::Lowres {
+                deferred: false,
+                ..
+            }
+        )
+        .then_some(lowres::NEEDS_VERTEX_STAGE)
     }
 }
 
@@ -181,7 +187,7 @@ impl Options {
         reconstruction: Reconstruction,
     ) -> Result<(), Refusal> {
         match Recipe::of(variant, self)? {
-            Recipe::Lowres(_) | Recipe::DeferredLowres(_) => {
+            Recipe::Lowres { .. } => {
                 self.upsampling.reconstruction = reconstruction.upsampler().ok_or_else(|| {
                     Refusal::new(format!(
                         "{variant} rebuilds the payload from its samples: its reconstruction is nearest, bilinear, spatial, temporal or spatio-temporal, not {reconstruction}"
@@ -204,7 +210,7 @@ impl Options {
     /// pixels it cannot vouch for.
     pub fn set_adaptive(&mut self, variant: Variant, adaptive: bool) -> Result<(), Refusal> {
         match Recipe::of(variant, self)? {
-            Recipe::Lowres(_) | Recipe::DeferredLowres(_) => self.upsampling.reshade = adaptive,
+            Recipe::Lowres { .. } => self.upsampling.reshade = adaptive,
             Recipe::Cache { .. } | Recipe::Deferred { .. } => self.adaptive_refresh = adaptive,
         }
         Ok(())
