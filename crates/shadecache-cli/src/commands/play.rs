@@ -73,9 +73,14 @@ pub struct Args {
 
 pub fn exec(args: Args, color: Color) -> Result<(), Error> {
     if args.variant.contains(&VariantArg::All) {
-        return Err(Error::plain(Diagnostic::error(
-            "--variant all: play draws the variants it is given; name them (one-pass, two-pass, three-pass, deferred, lowres or deferred-lowres, separated by commas)",
-        )));
+        let names: Vec<&str> = shadecache::rewrite::Variant::ALL
+            .iter()
+            .map(|v| v.as_str())
+            .collect();
+        return Err(Error::plain(Diagnostic::error(format!(
+            "--variant all: play draws the variants it is given; name them ({}, separated by commas)",
+            names.join(", ")
+        ))));
     }
     let out = crate::out_folder::OutFolder::check(&args.out, args.overwrite)?;
     out.run(|out| play_into(&args, color, out))

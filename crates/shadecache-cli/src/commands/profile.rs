@@ -384,10 +384,7 @@ fn note_unused_flags(args: &Args) {
         if args.lowres_reconstruction.is_some() {
             given.push("--lowres-reconstruction");
         }
-        super::rewrite::note_unused(
-            &given,
-            "lowres's knobs, and --variant asks for neither lowres nor deferred-lowres",
-        );
+        super::rewrite::note_unused(&given, super::rewrite::LOWRES_KNOBS_UNUSED);
     }
     let refresh_off = args
         .refresh_period

@@ -182,6 +182,10 @@ pub struct UpsamplingArgs {
     pub paper: bool,
 }
 
+/// Why lowres's knobs were given for nothing.
+pub const LOWRES_KNOBS_UNUSED: &str =
+    "lowres's knobs, and --variant asks for neither lowres nor deferred-lowres";
+
 /// A `--depth-tolerance` value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum DepthToleranceArg {
@@ -543,10 +547,7 @@ fn rewrite_entry(
         Ok(options)
     };
     if !variants_asked(args).iter().any(|v| v.upsamples()) {
-        note_unused(
-            &args.upsampling.given(),
-            "lowres's knobs, and --variant asks for neither lowres nor deferred-lowres",
-        );
+        note_unused(&args.upsampling.given(), LOWRES_KNOBS_UNUSED);
     }
     let language = match args.emit {
         EmitArg::Wgsl => Language::Wgsl,
