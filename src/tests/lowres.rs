@@ -51,6 +51,14 @@ fn static_marble_converges(variant: Variant) {
     assert_eq!(report.results.len(), 1);
     let row = &report.results[0];
     assert_eq!((row.variant, row.refresh_period), (variant, 16));
+    // The deferred lowres's G-buffer, lattice, samples and upsampling;
+    // the forward one's samples and upsampling.
+    let passes = if variant == Variant::DeferredLowres {
+        4
+    } else {
+        2
+    };
+    assert_eq!(row.passes.len(), passes, "{variant}: {:?}", row.passes);
     assert!(
         row.max_abs_error < 0.02 && row.psnr > 61.0,
         "{variant}: largest difference {} after 16 frames (PSNR {} dB)",
@@ -804,6 +812,7 @@ fn deferred_lowres_shades_each_draw_at_its_own_samples() {
     };
     let row = &report.results[0];
     assert_eq!(row.variant, Variant::DeferredLowres);
+    assert_eq!(row.passes.len(), 4, "{:?}", row.passes);
     assert!(row.max_abs_error < 0.01, "{}", row.max_abs_error);
 }
 
