@@ -10,7 +10,10 @@ use shadecache_plan::{DrawKind, LoadOp, Pass, Plan, ResourceKind, TargetKind, MA
 use crate::formats::{cache_format, host_depth_format, texture_format};
 use crate::frame::Viewport;
 use crate::layouts::CacheResource;
-use crate::pipelines::{pipeline, pipeline_layout, HostFormats, PipelineInputs};
+use crate::pipelines::{
+    by_group, describe, pipeline, pipeline_layout, HostFormats, PassPipelineDescriptor,
+    PipelineInputs,
+};
 use crate::timing::{NoTimer, PassTimer};
 use crate::twins::{Shared, TwinSources, Twins, TwinsInner};
 use crate::vertex::TwinSlot;
@@ -120,6 +123,121 @@ pub struct CachedShader {
     next_twins: u64,
 }
 
+/// What a variant's pipelines and bind groups are made from, checked
+/// against the application's frame: the host's formats, the application's
+/// groups, and each pass described with its cache group's layout.
+struct Setup {
+    formats: HostFormats,
+    depth_format: wgpu::TextureFormat,
+    gbuffer_formats: Vec<wgpu::TextureFormat>,
+    cache_group: Option<u32>,
+    /// The application's groups but the cache's (where it shares it, its
+    /// entries are in the cache group's layout).
+    user_groups: BTreeMap<u32, Vec<wgpu::BindGroupLayoutEntry>>,
+    twin_slots: Vec<TwinSlot>,
+    /// The plan's passes, then the classification where it is drawn.
+    passes: Vec<SetupPass>,
+}
+
+/// One pass of a [`Setup`].
+struct SetupPass {
+    pass: Pass,
+    index: usize,
+    described: PassPipelineDescriptor,
+    cache_layout: Option<wgpu::BindGroupLayout>,
+    per_draw: bool,
+}
+
+impl Setup {
+    fn new(
+        device: &wgpu::Device,
+        plan: &Plan,
+        frame: &FrameLayout<'_>,
+        options: Options,
+    ) -> Result<Setup, Error> {
+        plan.check().map_err(Error::Plan)?;
+        frame::check(plan, frame)?;
+        let user_groups = layouts::user_groups(plan, frame.bind_group_layouts)?;
+        let (user_buffers, twin_slots) = vertex::layouts(plan, frame.vertex_buffers)?;
+        let formats = HostFormats {
+            cache: cache_format(plan.cache.format),
+            age: texture_format(shadecache_plan::AGE_FORMAT),
+            classes: wgpu::TextureFormat::Rgba8Unorm,
+            history: wgpu::TextureFormat::Rgba32Float,
+        };
+        let needs_stencil = plan.passes.iter().any(|p| p.stencil.is_some());
+        let depth_format = host_depth_format(device, frame.depth_format, needs_stencil);
+        let gbuffer_formats = gbuffer_formats(plan);
+        let cache_group = layouts::cache_group(plan);
+        let user: BTreeMap<u32, Vec<wgpu::BindGroupLayoutEntry>> = user_groups
+            .iter()
+            .filter(|(&group, _)| Some(group) != cache_group)
+            .map(|(&group, entries)| (group, entries.to_vec()))
+            .collect();
+        // The cache's entries, and the application's when it shares the
+        // cache's group.
+        let mut cache_entries = layouts::cache_entries(plan)?;
+        if let Some(shared) = cache_group.and_then(|group| user_groups.get(&group)) {
+            cache_entries.extend(shared.iter().copied());
+        }
+        let buffers: Vec<Option<wgpu::VertexBufferLayout<'_>>> = user_buffers
+            .iter()
+            .map(|l| l.as_ref().map(|l| l.borrowed()))
+            .chain(twin_slots.iter().map(|t| Some(t.layout.borrowed())))
+            .collect();
+        let inputs = PipelineInputs {
+            buffers: &buffers,
+            frame,
+            formats,
+            depth_format,
+            gbuffer: &gbuffer_formats,
+            options,
+        };
+        let classify = plan.classify.as_ref().filter(|_| options.classify);
+        let mut passes = Vec::with_capacity(plan.passes.len() + 1);
+        for (index, pass) in plan.passes.iter().chain(classify).enumerate() {
+            // The cache group's entries this pass binds, and only those.
+            let cache = cache_group.map(|group| {
+                let entries: Vec<wgpu::BindGroupLayoutEntry> = cache_entries
+                    .iter()
+                    .filter(|e| pass.bindings.contains(&[group, e.binding]))
+                    .copied()
+                    .collect();
+                (group, entries)
+            });
+            let cache_layout = cache.as_ref().map(|(_, entries)| {
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("shadecache cache group"),
+                    entries,
+                })
+            });
+            let groups = by_group(user.clone(), cache, Vec::new());
+            let per_draw = cache_group.is_some_and(|group| {
+                plan.bindings
+                    .cache
+                    .iter()
+                    .any(|r| r.name == "cache_draw" && pass.bindings.contains(&[group, r.binding]))
+            });
+            passes.push(SetupPass {
+                pass: pass.clone(),
+                index,
+                described: describe(pass, &inputs, groups)?,
+                cache_layout,
+                per_draw,
+            });
+        }
+        Ok(Setup {
+            formats,
+            depth_format,
+            gbuffer_formats,
+            cache_group,
+            user_groups: user,
+            twin_slots,
+            passes,
+        })
+    }
+}
+
 impl std::fmt::Debug for CachedShader {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("CachedShader")
@@ -163,90 +281,119 @@ impl CachedShader {
         options: Options,
     ) -> Result<CachedShader, Error> {
         check_size(device, size)?;
-        plan.check().map_err(Error::Plan)?;
-        frame::check(plan, frame)?;
-        let user_groups = layouts::user_groups(plan, frame.bind_group_layouts)?;
-        let (user_buffers, twin_slots) = vertex::layouts(plan, frame.vertex_buffers)?;
-        let formats = HostFormats {
-            cache: cache_format(plan.cache.format),
-            age: texture_format(shadecache_plan::AGE_FORMAT),
-            classes: wgpu::TextureFormat::Rgba8Unorm,
-            history: wgpu::TextureFormat::Rgba32Float,
-        };
-        let needs_stencil = plan.passes.iter().any(|p| p.stencil.is_some());
-        let depth_format = host_depth_format(device, frame.depth_format, needs_stencil);
-        let gbuffer_formats = gbuffer_formats(plan);
-        let layout = |label: &str, entries: &[wgpu::BindGroupLayoutEntry]| {
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries,
+        let setup = Setup::new(device, plan, frame, options)?;
+        let user: BTreeMap<u32, wgpu::BindGroupLayout> = setup
+            .user_groups
+            .iter()
+            .map(|(&group, entries)| {
+                let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("application group"),
+                    entries,
+                });
+                (group, layout)
             })
-        };
-        let cache_group = layouts::cache_group(plan);
-        let user: BTreeMap<u32, wgpu::BindGroupLayout> = user_groups
-            .iter()
-            .filter(|(&group, _)| Some(group) != cache_group)
-            .map(|(&group, entries)| (group, layout("application group", entries)))
             .collect();
-        // The cache's entries, and the application's when it shares the
-        // cache's group.
-        let mut cache_entries = layouts::cache_entries(plan)?;
-        if let Some(shared) = cache_group.and_then(|group| user_groups.get(&group)) {
-            cache_entries.extend(shared.iter().copied());
-        }
-        let buffers: Vec<Option<wgpu::VertexBufferLayout<'_>>> = user_buffers
-            .iter()
-            .map(|l| l.as_ref().map(|l| l.borrowed()))
-            .chain(twin_slots.iter().map(|t| Some(t.layout.borrowed())))
-            .collect();
-        let build = async |index: usize, pass: &Pass| -> Result<Built, Error> {
-            let source = shader(&pass.shader).ok_or_else(|| {
+        let mut pipelines = Vec::with_capacity(setup.passes.len());
+        for pass in &setup.passes {
+            let source = shader(&pass.described.shader).ok_or_else(|| {
                 Error::Mismatch(format!(
                     "{}: no shader `{}` was given",
-                    pass.name, pass.shader
+                    pass.described.label, pass.described.shader
                 ))
             })?;
-            let cache_layout = cache_group.map(|group| {
-                let entries: Vec<wgpu::BindGroupLayoutEntry> = cache_entries
-                    .iter()
-                    .filter(|e| pass.bindings.contains(&[group, e.binding]))
-                    .copied()
-                    .collect();
-                layout("shadecache cache group", &entries)
-            });
-            let pipeline_layout =
-                pipeline_layout(device, &user, cache_group.zip(cache_layout.as_ref()));
-            let inputs = PipelineInputs {
-                layout: &pipeline_layout,
-                buffers: &buffers,
-                frame,
-                formats,
-                depth_format,
-                gbuffer: &gbuffer_formats,
-                options,
-            };
-            let per_draw = cache_group.is_some_and(|group| {
-                plan.bindings
-                    .cache
-                    .iter()
-                    .any(|r| r.name == "cache_draw" && pass.bindings.contains(&[group, r.binding]))
-            });
-            Ok(Built {
-                pass: pass.clone(),
-                pipeline: pipeline(device, pass, source, &inputs).await?,
-                cache_layout,
-                index,
-                per_draw,
-            })
-        };
-        let mut passes = Vec::with_capacity(plan.passes.len());
-        for (index, pass) in plan.passes.iter().enumerate() {
-            passes.push(build(index, pass).await?);
+            let layout = pipeline_layout(
+                device,
+                &user,
+                setup.cache_group.zip(pass.cache_layout.as_ref()),
+            );
+            pipelines.push(pipeline(device, &pass.described, source, &layout).await?);
         }
-        let classify = match (&plan.classify, options.classify) {
-            (Some(pass), true) => Some(build(plan.passes.len(), pass).await?),
-            _ => None,
-        };
+        Self::assemble(device, plan, frame, size, options, setup, pipelines).await
+    }
+
+    /// Every pass's render pipeline described (the plan's passes in order,
+    /// then the classification where [`Options::classify`] asks for it),
+    /// for an application that makes its pipelines itself, as an engine's
+    /// pipeline cache does off the frame. Make each with the pass's WGSL
+    /// (`shader` names the plan's file) and give them, in this order, to
+    /// [`CachedShader::from_pipelines_async`] with the same plan, frame
+    /// and options. Errors as [`CachedShader::new_async`]'s, but for what
+    /// only wgpu can tell.
+    pub fn pipeline_descriptors(
+        device: &wgpu::Device,
+        plan: &Plan,
+        frame: &FrameLayout<'_>,
+        options: Options,
+    ) -> Result<Vec<PassPipelineDescriptor>, Error> {
+        let setup = Setup::new(device, plan, frame, options)?;
+        Ok(setup
+            .passes
+            .into_iter()
+            .map(|pass| pass.described)
+            .collect())
+    }
+
+    /// The variant with pipelines the application made from
+    /// [`CachedShader::pipeline_descriptors`] (one per descriptor, in its
+    /// order), and the cache's targets at `size`: what
+    /// [`CachedShader::new_async`] makes when it makes the pipelines
+    /// itself.
+    pub async fn from_pipelines_async(
+        device: &wgpu::Device,
+        plan: &Plan,
+        frame: &FrameLayout<'_>,
+        size: (u32, u32),
+        options: Options,
+        pipelines: Vec<wgpu::RenderPipeline>,
+    ) -> Result<CachedShader, Error> {
+        check_size(device, size)?;
+        let setup = Setup::new(device, plan, frame, options)?;
+        if pipelines.len() != setup.passes.len() {
+            return Err(Error::Mismatch(format!(
+                "{} pipelines were given for the {} passes described",
+                pipelines.len(),
+                setup.passes.len()
+            )));
+        }
+        Self::assemble(device, plan, frame, size, options, setup, pipelines).await
+    }
+
+    /// The variant from its pipelines (one per pass of `setup`): the
+    /// cache's uniform, sampler and targets.
+    async fn assemble(
+        device: &wgpu::Device,
+        plan: &Plan,
+        frame: &FrameLayout<'_>,
+        size: (u32, u32),
+        options: Options,
+        setup: Setup,
+        pipelines: Vec<wgpu::RenderPipeline>,
+    ) -> Result<CachedShader, Error> {
+        let Setup {
+            formats,
+            depth_format,
+            gbuffer_formats,
+            cache_group,
+            twin_slots,
+            passes: described,
+            ..
+        } = setup;
+        let mut passes = Vec::with_capacity(described.len());
+        let mut classify = None;
+        for (pass, pipeline) in described.into_iter().zip(pipelines) {
+            let built = Built {
+                pipeline,
+                pass: pass.pass,
+                cache_layout: pass.cache_layout,
+                index: pass.index,
+                per_draw: pass.per_draw,
+            };
+            if built.index < plan.passes.len() {
+                passes.push(built);
+            } else {
+                classify = Some(built);
+            }
+        }
         // In an error scope, as the pipelines: a plan's uniform the device
         // refuses is the plan's error, not wgpu's panic.
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);

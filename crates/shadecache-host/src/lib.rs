@@ -121,6 +121,7 @@ pub use governor::{
     CacheMode, Cause, Choice, Decision, GovernedFrame, Governor, GovernorSettings, SpeedEstimate,
     TrialTurn,
 };
+pub use pipelines::{PassPipelineDescriptor, VertexBufferDescriptor};
 
 /// Brings in the Rust module a build script's `shadecache::build::Build`
 /// writes (`$OUT_DIR/shadecache/variants.rs`), naming every variant it

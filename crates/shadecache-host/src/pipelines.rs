@@ -25,27 +25,15 @@ pub(crate) fn pipeline_layout(
     user: &BTreeMap<u32, wgpu::BindGroupLayout>,
     cache: Option<(u32, &wgpu::BindGroupLayout)>,
 ) -> wgpu::PipelineLayout {
-    let last = user
-        .keys()
-        .copied()
-        .chain(cache.map(|(group, _)| group))
-        .max();
     let empty = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("shadecache empty group"),
         entries: &[],
     });
-    let layouts: Vec<Option<&wgpu::BindGroupLayout>> = match last {
-        None => Vec::new(),
-        Some(last) => (0..=last)
-            .map(|group| {
-                Some(
-                    user.get(&group)
-                        .or(cache.filter(|(g, _)| *g == group).map(|(_, l)| l))
-                        .unwrap_or(&empty),
-                )
-            })
-            .collect(),
-    };
+    let layouts: Vec<Option<&wgpu::BindGroupLayout>> =
+        by_group(user.iter().map(|(g, l)| (*g, l)), cache, &empty)
+            .into_iter()
+            .map(Some)
+            .collect();
     device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("shadecache pass layout"),
         bind_group_layouts: &layouts,
@@ -53,9 +41,24 @@ pub(crate) fn pipeline_layout(
     })
 }
 
+/// The groups of a pass's pipeline layout, in order: the application's
+/// (`user`), the cache's, and `empty` between them, up to the last.
+pub(crate) fn by_group<T: Clone>(
+    user: impl IntoIterator<Item = (u32, T)>,
+    cache: Option<(u32, T)>,
+    empty: T,
+) -> Vec<T> {
+    let groups: BTreeMap<u32, T> = user.into_iter().chain(cache).collect();
+    let Some(&last) = groups.keys().next_back() else {
+        return Vec::new();
+    };
+    (0..=last)
+        .map(|group| groups.get(&group).cloned().unwrap_or_else(|| empty.clone()))
+        .collect()
+}
+
 /// What every pass's pipeline is made with.
 pub(crate) struct PipelineInputs<'a> {
-    pub layout: &'a wgpu::PipelineLayout,
     pub buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
     pub frame: &'a FrameLayout<'a>,
     pub formats: HostFormats,
@@ -67,18 +70,64 @@ pub(crate) struct PipelineInputs<'a> {
     pub options: Options,
 }
 
-/// The pass's pipeline; wgpu's validation errors name the pass.
-pub(crate) async fn pipeline(
-    device: &wgpu::Device,
+/// One pass's render pipeline, described for an application that makes
+/// its pipelines itself (an engine's pipeline cache, which compiles them
+/// off the frame): everything `wgpu::RenderPipelineDescriptor` takes,
+/// owned, with the shader by the plan's file name and the pipeline layout
+/// as each group's entries. [`CachedShader::pipeline_descriptors`] gives
+/// them, [`CachedShader::from_pipelines_async`] takes the pipelines made
+/// from them.
+///
+/// [`CachedShader::pipeline_descriptors`]: crate::CachedShader::pipeline_descriptors
+/// [`CachedShader::from_pipelines_async`]: crate::CachedShader::from_pipelines_async
+#[derive(Clone, Debug)]
+pub struct PassPipelineDescriptor {
+    /// The pass's name, the pipeline's label.
+    pub label: String,
+    /// The file the pass is drawn with, as the plan names it.
+    pub shader: String,
+    /// The vertex stage's entry point.
+    pub vertex_entry: String,
+    /// The fragment stage's entry point.
+    pub fragment_entry: String,
+    /// The vertex buffers by slot: the application's, then the host's
+    /// copies of last frame's; `None` where a slot holds nothing.
+    pub vertex_buffers: Vec<Option<VertexBufferDescriptor>>,
+    /// The frame's primitive state for a pass over the application's
+    /// geometry; the default for a screen-space pass.
+    pub primitive: wgpu::PrimitiveState,
+    /// The depth and stencil state, in the host's depth format.
+    pub depth_stencil: wgpu::DepthStencilState,
+    /// One sample: the variants refuse multisampled frames.
+    pub multisample: wgpu::MultisampleState,
+    /// The colour targets by location.
+    pub targets: Vec<Option<wgpu::ColorTargetState>>,
+    /// The pipeline layout: each bind group's entries, by group (empty
+    /// where the pass binds nothing). A bind group made with a layout of
+    /// equal entries binds (wgpu pools equal layouts), so the host's own
+    /// bind groups bind to pipelines made with layouts of these.
+    pub bind_group_layouts: Vec<Vec<wgpu::BindGroupLayoutEntry>>,
+}
+
+/// A vertex buffer's layout, owned.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VertexBufferDescriptor {
+    /// Bytes between elements.
+    pub array_stride: wgpu::BufferAddress,
+    /// Per vertex or per instance.
+    pub step_mode: wgpu::VertexStepMode,
+    /// What each element holds, at which shader location.
+    pub attributes: Vec<wgpu::VertexAttribute>,
+}
+
+/// The pass's pipeline, described: see [`PassPipelineDescriptor`].
+/// `bind_group_layouts` are the entries of the layout [`pipeline_layout`]
+/// makes.
+pub(crate) fn describe(
     pass: &Pass,
-    source: &str,
     inputs: &PipelineInputs<'_>,
-) -> Result<wgpu::RenderPipeline, Error> {
-    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(&pass.shader),
-        source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(source)),
-    });
+    bind_group_layouts: Vec<Vec<wgpu::BindGroupLayoutEntry>>,
+) -> Result<PassPipelineDescriptor, Error> {
     let targets = color_targets(pass, inputs)?;
     // A screen-space pass draws one triangle over the screen, from the
     // vertex index alone, whatever the application's geometry.
@@ -86,43 +135,91 @@ pub(crate) async fn pipeline(
         DrawKind::Geometry => (inputs.buffers, inputs.frame.primitive),
         DrawKind::Fullscreen => (&[][..], wgpu::PrimitiveState::default()),
     };
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(&pass.name),
-        layout: Some(inputs.layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some(&pass.vertex_entry),
-            compilation_options: wgpu::PipelineCompilationOptions::default(),
-            buffers,
-        },
+    let depth_compare = {
+        let compare = compare_function(pass.depth.compare);
+        match (inputs.options.depth_test_or_equal, compare) {
+            (true, wgpu::CompareFunction::Less) => wgpu::CompareFunction::LessEqual,
+            (true, wgpu::CompareFunction::Greater) => wgpu::CompareFunction::GreaterEqual,
+            _ => compare,
+        }
+    };
+    Ok(PassPipelineDescriptor {
+        label: pass.name.clone(),
+        shader: pass.shader.clone(),
+        vertex_entry: pass.vertex_entry.clone(),
+        fragment_entry: pass.fragment_entry.clone(),
+        vertex_buffers: buffers
+            .iter()
+            .map(|buffer| {
+                buffer.as_ref().map(|b| VertexBufferDescriptor {
+                    array_stride: b.array_stride,
+                    step_mode: b.step_mode,
+                    attributes: b.attributes.to_vec(),
+                })
+            })
+            .collect(),
         primitive,
-        depth_stencil: Some(wgpu::DepthStencilState {
+        depth_stencil: wgpu::DepthStencilState {
             format: inputs.depth_format,
             depth_write_enabled: Some(pass.depth.write),
-            depth_compare: Some({
-                let compare = compare_function(pass.depth.compare);
-                match (inputs.options.depth_test_or_equal, compare) {
-                    (true, wgpu::CompareFunction::Less) => wgpu::CompareFunction::LessEqual,
-                    (true, wgpu::CompareFunction::Greater) => wgpu::CompareFunction::GreaterEqual,
-                    _ => compare,
-                }
-            }),
+            depth_compare: Some(depth_compare),
             stencil: pass.stencil.map(stencil_state).unwrap_or_default(),
             bias: wgpu::DepthBiasState::default(),
-        }),
+        },
         multisample: wgpu::MultisampleState::default(),
+        targets,
+        bind_group_layouts,
+    })
+}
+
+/// The described pipeline, made on `device` with `layout` from the pass's
+/// WGSL; wgpu's validation errors name the pass.
+pub(crate) async fn pipeline(
+    device: &wgpu::Device,
+    described: &PassPipelineDescriptor,
+    source: &str,
+    layout: &wgpu::PipelineLayout,
+) -> Result<wgpu::RenderPipeline, Error> {
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(&described.shader),
+        source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(source)),
+    });
+    let buffers: Vec<Option<wgpu::VertexBufferLayout<'_>>> = described
+        .vertex_buffers
+        .iter()
+        .map(|buffer| {
+            buffer.as_ref().map(|b| wgpu::VertexBufferLayout {
+                array_stride: b.array_stride,
+                step_mode: b.step_mode,
+                attributes: &b.attributes,
+            })
+        })
+        .collect();
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(&described.label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some(&described.vertex_entry),
+            compilation_options: wgpu::PipelineCompilationOptions::default(),
+            buffers: &buffers,
+        },
+        primitive: described.primitive,
+        depth_stencil: Some(described.depth_stencil.clone()),
+        multisample: described.multisample,
         fragment: Some(wgpu::FragmentState {
             module: &module,
-            entry_point: Some(&pass.fragment_entry),
+            entry_point: Some(&described.fragment_entry),
             compilation_options: wgpu::PipelineCompilationOptions::default(),
-            targets: &targets,
+            targets: &described.targets,
         }),
         multiview_mask: None,
         cache: None,
     });
     match scope.pop().await {
         None => Ok(pipeline),
-        Some(err) => Err(Error::Wgpu(format!("{}: {err}", pass.name))),
+        Some(err) => Err(Error::Wgpu(format!("{}: {err}", described.label))),
     }
 }
 

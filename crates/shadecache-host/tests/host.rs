@@ -301,11 +301,16 @@ impl App {
                 })
             })
             .collect();
-        let mut cached = make(gpu, name, |frame| {
+        let cached = make(gpu, name, |frame| {
             frame.color_targets = Box::leak(states.into());
             frame.depth_format = depth;
         })
         .expect("the variant is made");
+        App::around(gpu, cached, formats)
+    }
+
+    /// The square drawn through `cached`, into targets of `formats`.
+    fn around(gpu: &Gpu, mut cached: CachedShader, formats: &[wgpu::TextureFormat]) -> App {
         let identity = [
             1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
         ];
@@ -1112,6 +1117,146 @@ fn an_engines_own_draws_give_the_frames_of_the_hosts() {
             );
         }
     }
+}
+
+/// The variant with pipelines the application made itself from the
+/// host's descriptors, as an engine's pipeline cache makes them: each
+/// group's layout from its entries, the pass's WGSL by the plan's name.
+fn made_by_the_application(gpu: &Gpu, name: &str) -> CachedShader {
+    let (plan, files) = variant(name);
+    let device = &gpu.device;
+    let depth =
+        |frame: &mut FrameLayout<'_>| frame.depth_format = wgpu::TextureFormat::Depth32Float;
+    with_frame(depth, |frame| {
+        let described =
+            CachedShader::pipeline_descriptors(device, &plan, frame, Options::default())
+                .expect("the passes are described");
+        let pipelines = described
+            .iter()
+            .map(|pass| {
+                let groups: Vec<wgpu::BindGroupLayout> = pass
+                    .bind_group_layouts
+                    .iter()
+                    .map(|entries| {
+                        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                            label: None,
+                            entries,
+                        })
+                    })
+                    .collect();
+                let groups: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().map(Some).collect();
+                let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: None,
+                    bind_group_layouts: &groups,
+                    immediate_size: 0,
+                });
+                let (_, source) = files
+                    .iter()
+                    .find(|(file, _)| *file == pass.shader)
+                    .expect("the plan's shader is a fixture");
+                let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: None,
+                    source: wgpu::ShaderSource::Wgsl((*source).into()),
+                });
+                let buffers: Vec<Option<wgpu::VertexBufferLayout<'_>>> = pass
+                    .vertex_buffers
+                    .iter()
+                    .map(|b| {
+                        b.as_ref().map(|b| wgpu::VertexBufferLayout {
+                            array_stride: b.array_stride,
+                            step_mode: b.step_mode,
+                            attributes: &b.attributes,
+                        })
+                    })
+                    .collect();
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(&pass.label),
+                    layout: Some(&layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some(&pass.vertex_entry),
+                        compilation_options: Default::default(),
+                        buffers: &buffers,
+                    },
+                    primitive: pass.primitive,
+                    depth_stencil: Some(pass.depth_stencil.clone()),
+                    multisample: pass.multisample,
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(&pass.fragment_entry),
+                        compilation_options: Default::default(),
+                        targets: &pass.targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            })
+            .collect();
+        pollster::block_on(CachedShader::from_pipelines_async(
+            device,
+            &plan,
+            frame,
+            (SIZE, SIZE),
+            Options::default(),
+            pipelines,
+        ))
+        .expect("the variant takes the application's pipelines")
+    })
+}
+
+/// An application that makes the variant's pipelines itself from the
+/// host's descriptors (an engine's pipeline cache, compiling off the
+/// frame) gets the frames of the pipelines the host makes, under motion,
+/// for every kind of variant: the descriptors are the host's pipelines,
+/// and the host's bind groups bind to pipelines of layouts made from
+/// their entries.
+#[test]
+fn pipelines_the_application_makes_from_the_descriptors_give_the_hosts_frames() {
+    let Some(gpu) = gpu() else { return };
+    for name in ["three-pass", "one-pass", "deferred"] {
+        let mut host = App::new(&gpu, name);
+        let mut application = App::around(
+            &gpu,
+            made_by_the_application(&gpu, name),
+            &[wgpu::TextureFormat::Rgba8Unorm],
+        );
+        for x in [-0.25, 0.0, 0.1, 0.1] {
+            host.frame(&gpu, x);
+            application.frame(&gpu, x);
+            assert_eq!(
+                read(&gpu, &host.targets[0], 4),
+                read(&gpu, &application.targets[0], 4),
+                "{name}, x = {x}"
+            );
+            assert_eq!(host.ages(&gpu), application.ages(&gpu), "{name}, x = {x}");
+        }
+    }
+}
+
+/// Pipelines of another count than the passes described are refused.
+#[test]
+fn pipelines_of_another_count_than_the_descriptors_are_refused() {
+    let Some(gpu) = gpu() else { return };
+    let (plan, _) = variant("three-pass");
+    let err = with_frame(
+        |_| {},
+        |frame| {
+            pollster::block_on(CachedShader::from_pipelines_async(
+                &gpu.device,
+                &plan,
+                frame,
+                (SIZE, SIZE),
+                Options::default(),
+                Vec::new(),
+            ))
+        },
+    )
+    .expect_err("no pipelines for three passes");
+    assert!(
+        err.to_string()
+            .contains("0 pipelines were given for the 3 passes"),
+        "{err}"
+    );
 }
 
 /// What WGSL does not say of a buffer binding — a dynamic offset, a least
