@@ -3,6 +3,8 @@
 //! same packages, defs and vertex stage), so that what `shadecache
 //! profile` measures is of the shader the game draws.
 
+use std::path::Path;
+
 use shadecache::build::{BevyMesh, Build};
 use shadecache::front::compose::ShaderDef;
 use shadecache::rewrite::{DepthConvention, Options, Variant};
@@ -14,11 +16,12 @@ pub const NODE: &str = "nfe927310";
 /// `bevy_render::` are the `src/` folders of the crates this game builds
 /// against (found in its dependency graph), and the vertex stage is Bevy's
 /// own mesh vertex shader, as for any material without one of its own;
-/// rewritten into the one-pass variant of [`NODE`].
-pub fn lava_build() -> Build {
+/// rewritten into the one-pass variant of [`NODE`]. `assets` is the
+/// harness's folder of assets (relative to the crate in its build script).
+pub fn lava_build(assets: &Path) -> Build {
     game_options(bevy_material(
         Build::new(),
-        "assets/lava.wesl",
+        &assets.join("lava.wesl"),
         BevyMesh::default(),
     ))
     // The crust: six octaves of object-space noise, the same every
@@ -49,17 +52,17 @@ fn game_options(build: Build) -> Build {
 /// as Bevy's pipeline for it was), and the stone, whose one-pass variant
 /// caches the node the analysis ranks first (no id is named: its colour
 /// reads nothing that changes from frame to frame).
-pub fn game_build() -> Build {
+pub fn game_build(assets: &Path) -> Build {
     let coloured = BevyMesh {
         colors: true,
         ..BevyMesh::default()
     };
-    let build = bevy_material(lava_build(), "assets/lava.wesl", coloured)
+    let build = bevy_material(lava_build(assets), &assets.join("lava.wesl"), coloured)
         .name("lava_vertex_colors")
         .node(NODE)
         .variant(Variant::OnePass);
-    let build =
-        bevy_material(build, "assets/stone.wesl", BevyMesh::default()).variant(Variant::OnePass);
+    let build = bevy_material(build, &assets.join("stone.wesl"), BevyMesh::default())
+        .variant(Variant::OnePass);
     // Bevy's own `StandardMaterial`: bevy_pbr's `pbr.wesl`, bindless as
     // Bevy binds it wherever the device has binding arrays.
     let build = composed_as_bevy(
@@ -72,7 +75,7 @@ pub fn game_build() -> Build {
     .variant(Variant::TwoPass);
     // An `ExtendedMaterial<StandardMaterial, _>`: its extension's shader
     // (not bindless: the extension is not).
-    bevy_material(build, "assets/rim.wesl", BevyMesh::default()).variant(Variant::TwoPass)
+    bevy_material(build, &assets.join("rim.wesl"), BevyMesh::default()).variant(Variant::TwoPass)
 }
 
 /// Adds a Bevy material's fragment shader to `build`, composed as Bevy
@@ -80,7 +83,7 @@ pub fn game_build() -> Build {
 /// the defs Bevy's mesh pipeline sets for meshes with `mesh`'s attributes
 /// in a forward opaque pass ([`Build::bevy_mesh`]; the plugin checks each
 /// mesh's own against the plan's).
-fn bevy_material(build: Build, shader: &str, mesh: BevyMesh) -> Build {
+fn bevy_material(build: Build, shader: &Path, mesh: BevyMesh) -> Build {
     composed_as_bevy(build.shader(shader), mesh)
 }
 

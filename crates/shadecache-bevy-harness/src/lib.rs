@@ -1,22 +1,24 @@
-//! A Bevy 0.20 game whose lava material is drawn through a shadecache
-//! reprojection-cache variant.
+//! The shadecache Bevy plugin's test harness: a game's scene run
+//! headless, through the cache and as Bevy draws it. The plugin's tests
+//! (`crates/shadecache-bevy/tests`) and the example game
+//! (`examples/bevy`) use it; its build script is a game's build script,
+//! rewriting the scene's materials into their variants.
 //!
-//! - [`scene`]: the material (a Bevy `Material` with `assets/lava.wesl`),
-//!   the meshes marked for the cache, the camera's path.
+//! - [`scene`]: the materials (Bevy `Material`s with `assets/lava.wesl`
+//!   and `assets/stone.wesl`, Bevy's `StandardMaterial`, an
+//!   `ExtendedMaterial` with `assets/rim.wesl`), their variants as the
+//!   build script wrote them, the meshes marked for the cache, the
+//!   camera's path.
 //! - [`compare`]: a headless run that draws each frame twice, through the
 //!   cache and as Bevy draws the material, and compares the two (the
 //!   plugin's tests).
 //! - [`measure`]: a headless run of one camera, cached or not, that reads
 //!   the GPU time of the material's passes from Bevy's render
 //!   diagnostics (the figures in `docs/bevy.md`).
-//! - `window` (feature `window`): the game in a window, space toggling
-//!   the cache, with a readout of the GPU time.
 
 pub mod compare;
 pub mod measure;
 pub mod scene;
-#[cfg(feature = "window")]
-pub mod window;
 
 use std::time::{Duration, Instant};
 
@@ -26,6 +28,11 @@ use shadecache_bevy::CacheStats;
 
 pub use compare::{run_headless, Compared, Headless, HeadlessRun, LeftToBevy, Masked, OtherMeshes};
 pub use measure::{measure, Cached, Measure, Measured};
+
+/// The scene's assets (the materials' shaders, the lava's scene for
+/// `shadecache profile`): Bevy's `AssetPlugin::file_path` for an app that
+/// draws the scene.
+pub const ASSETS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets");
 
 /// Bevy with the game's assets, its material and the cache, run headless
 /// as fast as frames come, its cameras' path `step_degrees` a frame (the
@@ -45,7 +52,7 @@ fn headless_app(
     let mut app = App::new();
     let plugins = DefaultPlugins
         .set(AssetPlugin {
-            file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/assets").into(),
+            file_path: ASSETS.into(),
             ..default()
         })
         .set(bevy::render::RenderPlugin {

@@ -9,11 +9,11 @@ use std::path::Path;
 use std::sync::Mutex;
 
 use shadecache_bevy::CacheMode;
-use shadecache_bevy_example::{
+use shadecache_bevy_harness::{
     run_headless, Compared, Headless, HeadlessRun, LeftToBevy, Masked, OtherMeshes,
 };
 
-#[path = "../lava_build.rs"]
+#[path = "../../shadecache-bevy-harness/lava_build.rs"]
 #[allow(dead_code)] // the build script's `game_build`
 mod lava_build;
 
@@ -368,11 +368,11 @@ fn profile_from(start_frame: u32) -> Vec<f64> {
     let worker = std::thread::Builder::new()
         .stack_size(256 * 1024 * 1024)
         .spawn(move || {
-            let shaders = lava_build::lava_build()
+            let shaders = lava_build::lava_build(Path::new(shadecache_bevy_harness::ASSETS))
                 .quiet()
                 .composed()
                 .unwrap_or_else(|e| panic!("{:?}", e.errors));
-            let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/lava.toml");
+            let path = Path::new(shadecache_bevy_harness::ASSETS).join("lava.toml");
             let mut scene =
                 shadecache::scene::Scene::load(&path).unwrap_or_else(|e| panic!("{}", e.render()));
             scene.start_frame = start_frame;

@@ -11,7 +11,10 @@
 //! cargo run -p shadecache-bevy-example --features window -- window
 //! ```
 
-use shadecache_bevy_example::{measure, run_headless, Cached, Headless, Masked, Measure};
+use shadecache_bevy_harness::{measure, run_headless, Cached, Headless, Masked, Measure};
+
+#[cfg(feature = "window")]
+mod window;
 
 struct Args {
     size: u32,
@@ -52,7 +55,7 @@ fn main() {
         "compare" => compare(settings),
         "measure" => time(settings),
         #[cfg(feature = "window")]
-        "window" => shadecache_bevy_example::window::run(),
+        "window" => window::run(),
         #[cfg(not(feature = "window"))]
         "window" => usage("the window needs the `window` feature: --features window"),
         other => usage(&format!("unknown mode `{other}`")),
@@ -87,7 +90,7 @@ fn compare_one(args: &Args, cached: Cached) {
         props: true,
         coloured_mesh: false,
         double_sided: false,
-        other_meshes: shadecache_bevy_example::OtherMeshes::None,
+        other_meshes: shadecache_bevy_harness::OtherMeshes::None,
         left_to_bevy: None,
         half_viewport: false,
         depth_prepass: false,

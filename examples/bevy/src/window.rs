@@ -10,7 +10,7 @@ use bevy::prelude::*;
 use bevy::render::diagnostic::RenderDiagnosticsPlugin;
 use shadecache_bevy::{CacheMode, CacheStats, ReprojectionCache};
 
-use crate::scene::{self, LavaMaterial, StoneMaterial};
+use shadecache_bevy_harness::scene::{self, LavaMaterial, StoneMaterial};
 
 const OPAQUE: &str = "render/main_opaque_pass_3d/elapsed_gpu";
 const CACHE: &str = "render/shadecache/elapsed_gpu";
@@ -31,7 +31,7 @@ pub fn run() {
     }
     App::new()
         .add_plugins(DefaultPlugins.set(AssetPlugin {
-            file_path: concat!(env!("CARGO_MANIFEST_DIR"), "/assets").into(),
+            file_path: shadecache_bevy_harness::ASSETS.into(),
             ..default()
         }))
         .add_plugins((RenderDiagnosticsPlugin, scene::MaterialsPlugin::default()))
