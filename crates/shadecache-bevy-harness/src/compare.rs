@@ -1,5 +1,6 @@
 //! Each frame drawn through the cache and as Bevy draws it, compared.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use bevy::app::AppExit;
@@ -218,6 +219,9 @@ pub struct HeadlessRun {
     /// The plugin's diagnostics (`render/shadecache/...`) with their
     /// latest values, as the run ended.
     pub diagnostics: Vec<(String, f64)>,
+    /// The pipelines Bevy's `PipelineCache` made for the variants'
+    /// passes (labelled `shadecache …`), as the run ended.
+    pub variant_pipelines_in_bevys_cache: usize,
 }
 
 /// Which image a camera draws.
@@ -290,6 +294,12 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
         )
             .chain(),
     );
+    let in_bevys_cache = VariantPipelines::default();
+    if let Some(render_app) = app.get_sub_app_mut(bevy::render::RenderApp) {
+        render_app
+            .insert_resource(in_bevys_cache.clone())
+            .add_systems(bevy::render::Render, count_variant_pipelines);
+    }
     let (outcome, stats) = run_to_exit(app, &results);
     HeadlessRun {
         compared: outcome.compared,
@@ -303,7 +313,32 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
         reload_frame: outcome.reload_frame,
         governor: stats.governor_of::<scene::LavaMaterial>(),
         diagnostics: outcome.diagnostics,
+        variant_pipelines_in_bevys_cache: in_bevys_cache.0.load(Ordering::Relaxed),
     }
+}
+
+/// The pipelines Bevy's pipeline cache holds for the variants' passes,
+/// counted in the render world each frame.
+#[derive(Resource, Clone, Default)]
+struct VariantPipelines(Arc<AtomicUsize>);
+
+fn count_variant_pipelines(
+    cache: Res<bevy::render::render_resource::PipelineCache>,
+    count: Res<VariantPipelines>,
+) {
+    use bevy::render::render_resource::{CachedPipelineState, PipelineDescriptor};
+    let made = cache
+        .pipelines()
+        .filter(|pipeline| matches!(pipeline.state, CachedPipelineState::Ok(_)))
+        .filter(|pipeline| match &pipeline.descriptor {
+            PipelineDescriptor::RenderPipelineDescriptor(descriptor) => descriptor
+                .label
+                .as_deref()
+                .is_some_and(|label| label.starts_with("shadecache ")),
+            _ => false,
+        })
+        .count();
+    count.0.store(made, Ordering::Relaxed);
 }
 
 /// The assets of the materials only some runs draw.

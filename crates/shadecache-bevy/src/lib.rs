@@ -94,10 +94,14 @@
 //! What it does not do (yet): skinned, morphed, lightmapped, blended or
 //! deferred meshes (left to Bevy, above).
 //!
-//! - **No stall.** A view's cache (the variant's pipelines, compiled by
-//!   the host crate, not by Bevy's `PipelineCache`) is made on Bevy's
-//!   async compute pool, and Bevy draws its meshes until it is ready
-//!   ([`CacheCreation`] makes it in the frame instead).
+//! - **Bevy's pipeline model, no stall.** The variant's pass shaders are
+//!   Bevy `Shader` assets, and a view's pipelines are queued in Bevy's
+//!   `PipelineCache` from the host's descriptions of them
+//!   (`CachedShader::pipeline_descriptors`), which compiles them off the
+//!   frame as it compiles its own; Bevy draws the meshes until all are
+//!   ready, then the host takes them (`from_pipelines_async`). With
+//!   `RenderPlugin { synchronous_pipeline_compilation: true }` or
+//!   [`CacheCreation`] they are made in the frame instead.
 //! - **Hot reload.** The variant is rewritten at build time; a material
 //!   whose fragment shader changes while the game runs (Bevy's file
 //!   watcher) is handed back to Bevy from then on, said once
@@ -109,6 +113,7 @@
 
 mod defs;
 mod phase;
+mod pipelines;
 mod reload;
 mod view_cache;
 
@@ -119,6 +124,7 @@ use std::sync::Arc;
 use bevy::prelude::*;
 use bevy::render::extract_component::{ExtractComponent, ExtractComponentPlugin};
 use bevy::render::RenderApp;
+use bevy::shader::Shader;
 use shadecache_host::Plan;
 
 pub use shadecache_host;
@@ -176,13 +182,14 @@ impl CachedVariant {
     }
 }
 
-/// How a view's cache is made. By default on Bevy's async compute pool:
-/// compiling the variant's pipelines takes long (hundreds of milliseconds
-/// for a material composed with Bevy's PBR on a CPU rasteriser), and
-/// Bevy draws the meshes itself until the cache is ready, so the frame
-/// does not stall. `synchronous: true` makes it in the frame that needs
-/// it, as Bevy's `RenderPlugin { synchronous_pipeline_compilation }` does
-/// its own pipelines (for tests that compare frames from the first).
+/// How a view's cache is made. By default its pipelines compile in
+/// Bevy's `PipelineCache`, off the frame: compiling them takes long
+/// (hundreds of milliseconds for a material composed with Bevy's PBR on a
+/// CPU rasteriser), and Bevy draws the meshes itself until the cache is
+/// ready, so the frame does not stall. `synchronous: true` waits for them
+/// in the frame that needs them, as Bevy's `RenderPlugin {
+/// synchronous_pipeline_compilation }` does for its own pipelines (for
+/// tests that compare frames from the first).
 /// Insert it in the app before the first frame.
 #[derive(
     Resource, Clone, Copy, Debug, Default, bevy::render::extract_resource::ExtractResource,
@@ -328,6 +335,28 @@ impl<M: bevy::pbr::Material> Plugin for ShadecachePlugin<M> {
             .resource_mut::<CachedVariants>()
             .add::<M>(self.builds.clone());
     }
+
+    /// The variant's pass shaders become Bevy `Shader` assets (Bevy's
+    /// pipeline cache compiles from those), once every plugin is built.
+    fn finish(&self, app: &mut App) {
+        let name = bevy::utils::prelude::ShortName::of::<M>().to_string();
+        let Some(mut shaders) = app.world_mut().get_resource_mut::<Assets<Shader>>() else {
+            return;
+        };
+        let handles: Vec<pipelines::ShaderHandles> = self
+            .builds
+            .iter()
+            .enumerate()
+            .map(|(index, build)| pipelines::ShaderHandles::add(&mut shaders, &name, index, build))
+            .collect();
+        let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+            return;
+        };
+        let mut variants = render_app.world_mut().resource_mut::<CachedVariants>();
+        if let Some(index) = variants.index_of(TypeId::of::<M>()) {
+            variants.0[index as usize].shaders = handles;
+        }
+    }
 }
 
 /// The governor's state in Bevy's diagnostics, per cached material:
@@ -393,6 +422,10 @@ pub(crate) struct MaterialVariant {
     /// ([`ShadecachePlugin::and`]); a mesh is drawn through the first
     /// composed as Bevy composes its pipeline.
     pub builds: Vec<CachedVariant>,
+    /// Each build's pass shaders as Bevy assets, which Bevy's pipeline
+    /// cache compiles the variant's pipelines from (added as the app is
+    /// finished: empty before).
+    pub shaders: Vec<pipelines::ShaderHandles>,
 }
 
 impl CachedVariants {
@@ -403,6 +436,7 @@ impl CachedVariants {
             material: TypeId::of::<M>(),
             name: bevy::utils::prelude::ShortName::of::<M>().to_string(),
             builds,
+            shaders: Vec::new(),
         });
     }
 

@@ -28,7 +28,7 @@ use bevy::render::erased_render_asset::ErasedRenderAssets;
 use bevy::render::render_phase::{
     SortedPhaseItem, SortedRenderPhase, TrackedRenderPass, ViewSortedRenderPhases,
 };
-use bevy::render::render_resource::{BufferUsages, ShaderType};
+use bevy::render::render_resource::{BufferUsages, PipelineCache, ShaderType};
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
 use bevy::render::view::{
     ExtractedView, ViewDepthStencilTexture, ViewTarget, ViewUniform, ViewUniformOffset,
@@ -41,9 +41,8 @@ use shadecache_host::{
     NoTimer, Options, PassTimer, Plan, SpeedEstimate, Targets, TwinSources, Twins, Viewport,
 };
 
-use bevy::tasks::Task;
-
 use crate::phase::{CacheId, CachedMesh3d, CachingViews, QueuedLayouts};
+use crate::pipelines::{Compiled, Compiling};
 use crate::reload::ReloadedMaterials;
 use crate::CacheCreation;
 use crate::{CachedVariant, CachedVariants, ReprojectionCache};
@@ -210,9 +209,10 @@ pub struct GovernorReadout {
 /// A view's cache, or why it has none.
 enum Slot {
     Ready(Box<ViewCache>),
-    /// Being made on Bevy's async compute pool ([`CacheCreation`]); the
-    /// view leaves its meshes to Bevy meanwhile.
-    Making(CacheKey, Task<Result<ViewCache, String>>),
+    /// Its pipelines being compiled by Bevy's pipeline cache (off the
+    /// frame unless [`CacheCreation`] says otherwise); the view leaves its
+    /// meshes to Bevy meanwhile.
+    Compiling(CacheKey, Box<(CacheInputs, Compiling)>),
     /// The error, logged once; the view leaves its meshes to Bevy until
     /// what the cache was made for changes.
     Failed(CacheKey),
@@ -375,7 +375,8 @@ fn prepare_view_caches(
     sources: CacheSources,
     phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
     views: Query<(&ExtractedView, &ExtractedCamera, &ReprojectionCache)>,
-    mut caches: ResMut<ViewCaches>,
+    // The caches, and Bevy's pipeline cache that compiles their pipelines.
+    (mut caches, mut pipeline_cache): (ResMut<ViewCaches>, ResMut<PipelineCache>),
     mut caching: ResMut<CachingViews>,
     stats: Res<CacheStats>,
     mut refusals: Local<HashMap<CacheId, String>>,
@@ -436,7 +437,15 @@ fn prepare_view_caches(
                     .physical_target_size
                     .map(|s| (s.x, s.y))
                     .unwrap_or((1, 1));
-                if prepare_cache(&mut caches, &id, key, size, &sources, &stats) {
+                let made = prepare_cache(
+                    (&mut caches, &mut pipeline_cache),
+                    &id,
+                    key,
+                    size,
+                    &sources,
+                    &stats,
+                );
+                if made {
                     caching.0.insert(id);
                 }
             }
@@ -454,34 +463,57 @@ fn prepare_view_caches(
 /// Makes the cache `id` for `key`, or again if it was made for another
 /// key; whether it is ready.
 fn prepare_cache(
-    caches: &mut ViewCaches,
+    (caches, pipeline_cache): (&mut ViewCaches, &mut PipelineCache),
     id: &CacheId,
     key: CacheKey,
     size: (u32, u32),
     sources: &CacheSources,
     stats: &CacheStats,
 ) -> bool {
-    let slot = caches
-        .0
-        .entry(id.clone())
-        .or_insert_with(|| Mutex::new(make_cache(sources, id, key.clone(), size, stats)));
+    let slot = caches.0.entry(id.clone()).or_insert_with(|| {
+        Mutex::new(make_cache(
+            sources,
+            pipeline_cache,
+            id,
+            key.clone(),
+            size,
+            stats,
+        ))
+    });
     let slot = slot
         .get_mut()
         .unwrap_or_else(|poisoned| poisoned.into_inner());
     let current = match slot {
         Slot::Ready(cache) => &cache.key,
-        Slot::Making(key, _) | Slot::Failed(key) => key,
+        Slot::Compiling(key, _) | Slot::Failed(key) => key,
     };
     if *current != key {
-        // A cache still being made for the old key is dropped (and its
-        // task cancelled).
-        *slot = make_cache(sources, id, key, size, stats);
+        // A cache still being made for the old key is dropped (Bevy's
+        // cache keeps its pipelines, unused).
+        *slot = make_cache(sources, pipeline_cache, id, key, size, stats);
     }
-    if let Slot::Making(key, task) = slot {
-        if let Some(made) =
-            bevy::tasks::block_on(bevy::tasks::futures_lite::future::poll_once(task))
+    if let Slot::Compiling(key, compiling) = slot {
+        let made = match compiling
+            .1
+            .poll(pipeline_cache, sources.creation.synchronous)
         {
-            *slot = settle(made, key.clone(), sources.variants.name(id.1), stats);
+            Compiled::Waiting => None,
+            Compiled::Failed(err) => Some(Err(err)),
+            Compiled::Ready(pipelines) => {
+                let key = key.clone();
+                let Slot::Compiling(_, compiling) = std::mem::replace(slot, Slot::Failed(key))
+                else {
+                    unreachable!("the slot was compiling")
+                };
+                Some(build_cache(compiling.0, pipelines))
+            }
+        };
+        if let Some(made) = made {
+            let key = match slot {
+                Slot::Ready(cache) => cache.key.clone(),
+                Slot::Compiling(key, _) | Slot::Failed(key) => key.clone(),
+            };
+            *slot = settle(made, key, sources.variants.name(id.1), stats);
         }
     }
     matches!(slot, Slot::Ready(_))
@@ -555,10 +587,11 @@ fn cache_key(
     }))
 }
 
-/// Starts making a view's cache (or makes it, where creation is
-/// synchronous). A failure is logged once.
+/// Starts making a view's cache: its pipelines are queued in Bevy's
+/// pipeline cache. A failure is logged once.
 fn make_cache(
     sources: &CacheSources,
+    pipeline_cache: &PipelineCache,
     (_, variant, drawn): &CacheId,
     key: CacheKey,
     size: (u32, u32),
@@ -570,16 +603,26 @@ fn make_cache(
     let Some(build) = material.builds.get(drawn.build as usize) else {
         return Slot::Failed(key);
     };
-    let inputs = cache_inputs(build, &sources.device, &sources.mesh_pipeline, &key, size);
-    let made = match inputs {
-        Err(err) => Err(err),
-        Ok(inputs) if sources.creation.synchronous => bevy::tasks::block_on(build_cache(inputs)),
-        Ok(inputs) => {
-            let task = bevy::tasks::AsyncComputeTaskPool::get().spawn(build_cache(inputs));
-            return Slot::Making(key, task);
-        }
+    let Some(shaders) = material.shaders.get(drawn.build as usize) else {
+        // The app is not finished yet: its shaders are not assets.
+        return Slot::Failed(key);
     };
-    settle(made, key, &material.name, stats)
+    let queued = cache_inputs(build, &sources.device, &sources.mesh_pipeline, &key, size).and_then(
+        |inputs| {
+            let described = with_frame(&inputs, |frame, options| {
+                CachedShader::pipeline_descriptors(&inputs.device, &inputs.plan, frame, options)
+            })
+            .map_err(|err| err.to_string())?;
+            Ok((
+                inputs,
+                Compiling::queue(pipeline_cache, described, shaders)?,
+            ))
+        },
+    );
+    match queued {
+        Ok(compiling) => Slot::Compiling(key, Box::new(compiling)),
+        Err(err) => settle(Err(err), key, &material.name, stats),
+    }
 }
 
 /// The slot a made (or failed) cache takes; a failure is logged.
@@ -600,12 +643,11 @@ fn settle(
     }
 }
 
-/// What making a view's cache takes, owned, so that it can be made on
-/// another thread: the plan (Δn set), the variant's shaders, Bevy's
-/// layouts, the meshes' vertex buffer, the frame's formats.
+/// What making a view's cache takes, owned, kept while Bevy compiles its
+/// pipelines: the plan (Δn set), Bevy's layouts, the meshes' vertex
+/// buffer, the frame's formats.
 struct CacheInputs {
     plan: Plan,
-    variant: CachedVariant,
     groups: [(u32, Vec<wgpu::BindGroupLayoutEntry>); 4],
     vertex: (u64, wgpu::VertexStepMode, Vec<wgpu::VertexAttribute>),
     key: CacheKey,
@@ -662,7 +704,6 @@ fn cache_inputs(
         .map_err(|err| format!("the cached meshes lack what the variant reads: {err}"))?;
     Ok(CacheInputs {
         plan,
-        variant: variant.clone(),
         groups,
         vertex: (
             buffer.array_stride,
@@ -676,29 +717,21 @@ fn cache_inputs(
     })
 }
 
-/// Makes a view's cache: the host's pipelines from Bevy's layouts, the
-/// view's copy and its twin. Compiling the pipelines is the slow part,
-/// which is why it may run on Bevy's async compute pool.
-async fn build_cache(inputs: CacheInputs) -> Result<ViewCache, String> {
-    let CacheInputs {
-        plan,
-        variant,
-        groups,
-        vertex: (array_stride, step_mode, attributes),
-        key,
-        prepass,
-        size,
-        device,
-    } = inputs;
-    let groups: Vec<(u32, &[wgpu::BindGroupLayoutEntry])> = groups
+/// Calls `f` with the application's frame as Bevy's pipeline for the
+/// cached meshes has it, and the host's options for the view.
+fn with_frame<R>(inputs: &CacheInputs, f: impl FnOnce(&FrameLayout<'_>, Options) -> R) -> R {
+    let (array_stride, step_mode, attributes) = &inputs.vertex;
+    let groups: Vec<(u32, &[wgpu::BindGroupLayoutEntry])> = inputs
+        .groups
         .iter()
         .map(|(group, entries)| (*group, entries.as_slice()))
         .collect();
     let vertex = [Some(wgpu::VertexBufferLayout {
-        array_stride,
-        step_mode,
-        attributes: &attributes,
+        array_stride: *array_stride,
+        step_mode: *step_mode,
+        attributes,
     })];
+    let key = &inputs.key;
     let colors = [Some(wgpu::ColorTargetState::from(key.color_format))];
     let mut frame = FrameLayout::new(&vertex, &groups, &colors);
     frame.sample_count = key.samples;
@@ -708,24 +741,38 @@ async fn build_cache(inputs: CacheInputs) -> Result<ViewCache, String> {
     // As Bevy's own pipeline for these meshes: the mesh's topology, the
     // material's culling, whatever its `specialize` set.
     frame.primitive = key.primitive;
-    let mut shader = CachedShader::new_async(
-        &device,
-        &plan,
-        |name| variant.shader(name),
-        &frame,
-        size,
-        // The view's depth is shared. After a prepass (which TAA, SSAO
-        // and motion blur need) it already holds the cached meshes' depth:
-        // their own tests must pass on it. Without one it holds only
-        // Bevy's other meshes, and the plan's strict tests stand (a later
-        // pass tells the pixels an earlier one left by them).
-        Options {
-            depth_test_or_equal: prepass,
-            ..Options::default()
-        },
-    )
-    .await
+    // The view's depth is shared. After a prepass (which TAA, SSAO and
+    // motion blur need) it already holds the cached meshes' depth: their
+    // own tests must pass on it. Without one it holds only Bevy's other
+    // meshes, and the plan's strict tests stand (a later pass tells the
+    // pixels an earlier one left by them).
+    let options = Options {
+        depth_test_or_equal: inputs.prepass,
+        ..Options::default()
+    };
+    f(&frame, options)
+}
+
+/// Makes a view's cache from the pipelines Bevy compiled for it: the
+/// host's targets, the view's copy and its twin. Quick (the pipelines
+/// are the slow part): it waits on wgpu's error scopes, which a native
+/// device has answered by then.
+fn build_cache(
+    inputs: CacheInputs,
+    pipelines: Vec<wgpu::RenderPipeline>,
+) -> Result<ViewCache, String> {
+    let mut shader = with_frame(&inputs, |frame, options| {
+        bevy::tasks::block_on(CachedShader::from_pipelines_async(
+            &inputs.device,
+            &inputs.plan,
+            frame,
+            inputs.size,
+            options,
+            pipelines,
+        ))
+    })
     .map_err(|err| err.to_string())?;
+    let CacheInputs { key, device, .. } = inputs;
     let view_size = ViewUniform::min_size().get().next_multiple_of(16);
     let view_now = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("shadecache view uniform, this frame"),

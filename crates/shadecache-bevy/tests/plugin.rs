@@ -795,7 +795,8 @@ fn reused_before_then_bevys_own(run: &HeadlessRun, handed_back: u32, gaps: usize
     all_bevys_own(after);
 }
 
-/// The caches made on Bevy's async compute pool, as a game makes them by
+/// The caches' pipelines compiled by Bevy's `PipelineCache` (found there,
+/// labelled `shadecache …`), off the frame as a game makes them by
 /// default: the frames before a cache is ready are drawn by Bevy (the
 /// meshes stay in its opaque pass), and from then on by the cache. At
 /// Δn = 1 every frame is Bevy's own either way; the cache draws, and over
@@ -820,6 +821,10 @@ fn caches_are_made_off_the_frame_while_bevy_draws() {
         assert!(run.errors.is_empty(), "{:?}", run.errors);
         assert!(run.compared.len() >= 16, "{:?}", run.compared);
         all_bevys_own(&run.compared);
+        assert!(
+            run.variant_pipelines_in_bevys_cache >= 1,
+            "the variant's pipelines are not Bevy's pipeline cache's"
+        );
     }
     assert!(off_the_frame.frames_drawn > 0, "the cache never drew");
     assert!(
