@@ -77,6 +77,10 @@ pub struct Headless {
     /// After this many compared frames, the lava's shader asset changes
     /// (as a hot reload changes it), and `frames` more are compared.
     pub reload_shader_after: Option<u32>,
+    /// After this many compared frames, every `StandardMaterial`'s base
+    /// colour changes (as a game edits a material's values), and `frames`
+    /// more are compared.
+    pub edit_standard_material_after: Option<u32>,
     /// Both cameras draw in linear HDR (`Hdr`, no tonemapping) into
     /// `rgba16float` images read back as they are, and the frames compare
     /// as `shadecache profile` compares them: PSNR over RGB in linear float,
@@ -214,6 +218,8 @@ pub struct HeadlessRun {
     pub switch_off_frame: Option<u32>,
     /// The frame the lava's shader changed in, if it did.
     pub reload_frame: Option<u32>,
+    /// The frame the `StandardMaterial`s' colour changed in, if it did.
+    pub edit_frame: Option<u32>,
     /// The lava's governor, where the mode is `Auto`.
     pub governor: Option<GovernorReadout>,
     /// The plugin's diagnostics (`render/shadecache/...`) with their
@@ -246,6 +252,7 @@ struct Capture {
     cut_frame: Option<u32>,
     switch_off_frame: Option<u32>,
     reload_frame: Option<u32>,
+    edit_frame: Option<u32>,
 }
 
 /// What comes back from the app (its runner takes it).
@@ -255,6 +262,7 @@ struct Outcome {
     cut_frame: Option<u32>,
     switch_off_frame: Option<u32>,
     reload_frame: Option<u32>,
+    edit_frame: Option<u32>,
     diagnostics: Vec<(String, f64)>,
 }
 
@@ -311,6 +319,7 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
         cut_frame: outcome.cut_frame,
         switch_off_frame: outcome.switch_off_frame,
         reload_frame: outcome.reload_frame,
+        edit_frame: outcome.edit_frame,
         governor: stats.governor_of::<scene::LavaMaterial>(),
         diagnostics: outcome.diagnostics,
         variant_pipelines_in_bevys_cache: in_bevys_cache.0.load(Ordering::Relaxed),
@@ -706,7 +715,9 @@ fn compare(mut capture: ResMut<Capture>, frame: Res<FrameCount>, run: Res<Run>) 
 /// Once `cut_after` frames are compared, marks a cut on the caching
 /// camera, once; once `switch_off_after` are, switches its cache off;
 /// once `reload_shader_after` are, changes the lava's shader asset (its
-/// source as it was: Bevy sees a change, as from a hot reload).
+/// source as it was: Bevy sees a change, as from a hot reload); once
+/// `edit_standard_material_after` are, changes every `StandardMaterial`'s
+/// base colour.
 fn cut_or_switch_off(
     run: Res<Run>,
     frame: Res<FrameCount>,
@@ -714,6 +725,7 @@ fn cut_or_switch_off(
     mut caches: Query<&mut ReprojectionCache>,
     server: Res<AssetServer>,
     mut shaders: ResMut<Assets<bevy::shader::Shader>>,
+    mut standard: ResMut<Assets<StandardMaterial>>,
 ) {
     let compared = capture.compared.len() as u32;
     let due = |after: Option<u32>, done: Option<u32>| {
@@ -738,6 +750,15 @@ fn cut_or_switch_off(
             let _changed: &mut bevy::shader::Shader = &mut shader;
             capture.reload_frame = Some(frame.0);
         }
+    }
+    if due(run.0.edit_standard_material_after, capture.edit_frame) {
+        let ids: Vec<AssetId<StandardMaterial>> = standard.ids().collect();
+        for id in ids {
+            if let Some(mut material) = standard.get_mut(id) {
+                material.base_color = Color::srgb(0.2, 0.35, 0.9);
+            }
+        }
+        capture.edit_frame = Some(frame.0);
     }
 }
 
@@ -784,13 +805,15 @@ fn finish(
         + settings.resize.map_or(0, |(after, _)| after)
         + settings.cut_after.unwrap_or(0)
         + settings.switch_off_after.unwrap_or(0)
-        + settings.reload_shader_after.unwrap_or(0);
+        + settings.reload_shader_after.unwrap_or(0)
+        + settings.edit_standard_material_after.unwrap_or(0);
     if capture.compared.len() as u32 >= wanted || deadline.passed() {
         *run.1.lock().unwrap_or_else(|p| p.into_inner()) = Outcome {
             compared: capture.compared.clone(),
             cut_frame: capture.cut_frame,
             switch_off_frame: capture.switch_off_frame,
             reload_frame: capture.reload_frame,
+            edit_frame: capture.edit_frame,
             diagnostics: store
                 .iter()
                 .flat_map(|store| store.iter())

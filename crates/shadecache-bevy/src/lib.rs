@@ -112,6 +112,7 @@
 //!   `viewport_origin`); a viewport that changes makes the cache again.
 
 mod defs;
+mod edits;
 mod phase;
 mod pipelines;
 mod reload;
@@ -326,7 +327,11 @@ impl<M: bevy::pbr::Material> Plugin for ShadecachePlugin<M> {
                 diagnostics::publish(&name, &stats, diagnostics)
             },
         )
-        .add_systems(Update, reload::watch::<M>);
+        .add_systems(Update, reload::watch::<M>)
+        .add_systems(
+            PostUpdate,
+            edits::watch::<M>.after(bevy::asset::AssetEventSystems),
+        );
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
             return;
         };
@@ -485,19 +490,24 @@ impl Plugin for SharedPlugin {
                     bevy::render::extract_resource::ExtractResourcePlugin::<
                         reload::ReloadedMaterials,
                     >::default(),
+                    bevy::render::extract_resource::ExtractResourcePlugin::<
+                        edits::EditedMaterials,
+                    >::default(),
                     phase::CachedPhasePlugin,
                 ),
             )
-            .add_systems(First, (clear_cuts, copyable_depth));
+            .add_systems(First, (clear_cuts, edits::clear, copyable_depth));
         let stats = CacheStats::default();
         app.insert_resource(stats.clone())
             .init_resource::<reload::ReloadedMaterials>()
+            .init_resource::<edits::EditedMaterials>()
             .init_resource::<CacheCreation>();
         let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
             return;
         };
         render_app
             .init_resource::<reload::ReloadedMaterials>()
+            .init_resource::<edits::EditedMaterials>()
             .init_resource::<CacheCreation>()
             .init_resource::<CachedVariants>()
             .init_resource::<defs::LibraryDefs>()

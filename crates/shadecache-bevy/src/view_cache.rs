@@ -41,6 +41,7 @@ use shadecache_host::{
     NoTimer, Options, PassTimer, Plan, SpeedEstimate, Targets, TwinSources, Twins, Viewport,
 };
 
+use crate::edits::EditedMaterials;
 use crate::phase::{CacheId, CachedMesh3d, CachingViews, QueuedLayouts};
 use crate::pipelines::{Compiled, Compiling};
 use crate::reload::ReloadedMaterials;
@@ -920,6 +921,7 @@ struct CachedDraws<'w> {
     layouts: Res<'w, QueuedLayouts>,
     variants: Res<'w, CachedVariants>,
     view_uniforms: Res<'w, ViewUniforms>,
+    edited: Res<'w, EditedMaterials>,
 }
 
 /// Records the view's variants after Bevy's opaque pass, one cached
@@ -948,6 +950,7 @@ fn draw_cached_passes(
         layouts,
         variants,
         view_uniforms,
+        edited,
     } = drawn;
     let view_entity = view.entity();
     let (extracted, target, depth, offset, settings) = view.into_inner();
@@ -1001,7 +1004,12 @@ fn draw_cached_passes(
             stats.error(err.to_string());
             continue;
         }
-        if settings.is_cut() {
+        // A cut, or the material's values edited this frame: what the
+        // cache holds is of another shot or other values.
+        let values_edited = variants
+            .get(variant)
+            .is_some_and(|material| edited.contains(material.material));
+        if settings.is_cut() || values_edited {
             cache.shader.reset();
         }
         let frame = CacheFrame {

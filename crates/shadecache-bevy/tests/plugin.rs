@@ -87,6 +87,7 @@ fn settings() -> Headless {
         depth_prepass: false,
         switch_off_after: None,
         reload_shader_after: None,
+        edit_standard_material_after: None,
         async_cache: false,
         masks: false,
         linear: false,
@@ -461,6 +462,49 @@ fn bevy_plugin_resets_on_camera_cut() {
     assert!(
         after[exact + 1..].iter().any(|f| f.max_error > 1.0 / 255.0),
         "{after:?}"
+    );
+}
+
+/// A material's values edited while the game runs (every
+/// `StandardMaterial`'s base colour, as a game recolours a mesh) reach the
+/// cached frame at once: the frame of the edit, the box's caches start
+/// afresh and the frame is Bevy's own with the new colour (without the
+/// reset the box showed its old colour where it reused, up to Δn frames),
+/// and reuse resumes after it.
+#[test]
+fn edited_material_values_reset_its_caches() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        frames: 8,
+        step_degrees: 1.0,
+        standard_material: true,
+        lava_uncached: true,
+        edit_standard_material_after: Some(40),
+        ..settings()
+    });
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    let edit = run.edit_frame.expect("the material was edited");
+    let before: Vec<&Compared> = run.compared.iter().filter(|f| f.frame < edit).collect();
+    assert!(
+        before
+            .iter()
+            .rev()
+            .take(4)
+            .all(|f| f.max_error > 1.0 / 255.0),
+        "the frames before the edit reuse: {before:?}"
+    );
+    // The edit's frame comes back a few frames after it was made.
+    let after: Vec<&Compared> = run.compared.iter().filter(|f| f.frame >= edit).collect();
+    let exact = after
+        .iter()
+        .take(4)
+        .position(|f| f.max_error <= 1.0 / 255.0)
+        .unwrap_or_else(|| panic!("no frame after the edit is Bevy's own: {after:?}"));
+    assert!(
+        after[exact + 1..].iter().any(|f| f.max_error > 1.0 / 255.0),
+        "reuse does not resume after the edit: {after:?}"
     );
 }
 

@@ -96,6 +96,7 @@ fn compare_one(args: &Args, cached: Cached) {
         depth_prepass: false,
         switch_off_after: None,
         reload_shader_after: None,
+        edit_standard_material_after: None,
         async_cache: false,
         masks: true,
         linear: args.linear,
