@@ -309,19 +309,26 @@ pub(crate) struct MeshQueueing<'w> {
 impl MeshQueueing<'_> {
     /// The pipeline Bevy specialised for the mesh of `entity` in `view`
     /// (the material's `specialize` included), and its primitive state;
-    /// `None` until that pipeline is made.
+    /// `None` until that pipeline is made. `made` holds the pipelines seen
+    /// made before: one being made again (its shader changed, a hot
+    /// reload) still draws the mesh through the cache meanwhile, as Bevy's
+    /// retained phase items wait for it; dropped from the cache's phase in
+    /// that frame, the mesh was drawn by neither (it is out of Bevy's).
     fn drawn_by_bevy(
         &self,
         view: &RetainedViewEntity,
         entity: MainEntity,
+        made: &mut HashSet<CachedRenderPipelineId>,
     ) -> Option<(CachedRenderPipelineId, wgpu::PrimitiveState)> {
         let id = *self.specialized.get(view)?.get(&entity)?;
         // Only a pipeline the cache has processed has its descriptor.
-        if !matches!(
-            self.pipeline_cache.get_render_pipeline_state(id),
-            CachedPipelineState::Ok(_)
-        ) {
-            return None;
+        match self.pipeline_cache.get_render_pipeline_state(id) {
+            CachedPipelineState::Ok(_) => {
+                made.insert(id);
+            }
+            CachedPipelineState::Queued | CachedPipelineState::Creating(_)
+                if made.contains(&id) => {}
+            _ => return None,
         }
         let primitive = self
             .pipeline_cache
@@ -411,17 +418,20 @@ impl MeshQueueing<'_> {
     }
 }
 
-/// Queues the view's visible cached meshes into its phase, every frame
-/// (the phase is small: the meshes of the cached materials), each with
-/// its material's variant, and notes their vertex layouts.
 /// What queueing keeps from frame to frame: the meshes already refused
-/// (said once), and which build of a variant each of Bevy's pipelines
-/// matches (its defs compared once, not per mesh and frame).
+/// (said once), which build of a variant each of Bevy's pipelines
+/// matches (its defs compared once, not per mesh and frame), and the
+/// pipelines seen made.
 #[derive(Default)]
 pub(crate) struct QueueMemory {
     refused: HashSet<MainEntity>,
     matches: HashMap<(u32, CachedRenderPipelineId), Result<u32, String>>,
+    made: HashSet<CachedRenderPipelineId>,
 }
+
+/// Queues the view's visible cached meshes into its phase, every frame
+/// (the phase is small: the meshes of the cached materials), each with
+/// its material's variant, and notes their vertex layouts.
 
 pub(crate) fn queue_cached_meshes(
     queueing: MeshQueueing,
@@ -432,7 +442,11 @@ pub(crate) fn queue_cached_meshes(
     stats: Res<CacheStats>,
     mut memory: Local<QueueMemory>,
 ) {
-    let QueueMemory { refused, matches } = &mut *memory;
+    let QueueMemory {
+        refused,
+        matches,
+        made,
+    } = &mut *memory;
     if queueing.library_defs.is_changed() {
         matches.clear();
     }
@@ -482,7 +496,7 @@ pub(crate) fn queue_cached_meshes(
             let Ok(variant) = variant else { continue };
             // Not drawn by Bevy yet either: its pipeline is on the way.
             let Some((pipeline, primitive)) =
-                queueing.drawn_by_bevy(&view.retained_view_entity, *main_entity)
+                queueing.drawn_by_bevy(&view.retained_view_entity, *main_entity, made)
             else {
                 continue;
             };
