@@ -432,7 +432,6 @@ pub(crate) struct QueueMemory {
 /// Queues the view's visible cached meshes into its phase, every frame
 /// (the phase is small: the meshes of the cached materials), each with
 /// its material's variant, and notes their vertex layouts.
-
 pub(crate) fn queue_cached_meshes(
     queueing: MeshQueueing,
     mut phases: ResMut<ViewSortedRenderPhases<CachedMesh3d>>,
