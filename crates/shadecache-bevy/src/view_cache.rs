@@ -494,26 +494,14 @@ fn prepare_cache(
         *slot = make_cache(sources, pipeline_cache, id, key, size, stats);
     }
     if let Slot::Compiling(key, compiling) = slot {
-        let made = match compiling
-            .1
-            .poll(pipeline_cache, sources.creation.synchronous)
-        {
+        let key = key.clone();
+        let (inputs, queued) = &**compiling;
+        let made = match queued.poll(pipeline_cache, sources.creation.synchronous) {
             Compiled::Waiting => None,
             Compiled::Failed(err) => Some(Err(err)),
-            Compiled::Ready(pipelines) => {
-                let key = key.clone();
-                let Slot::Compiling(_, compiling) = std::mem::replace(slot, Slot::Failed(key))
-                else {
-                    unreachable!("the slot was compiling")
-                };
-                Some(build_cache(compiling.0, pipelines))
-            }
+            Compiled::Ready(pipelines) => Some(build_cache(inputs, pipelines)),
         };
         if let Some(made) = made {
-            let key = match slot {
-                Slot::Ready(cache) => cache.key.clone(),
-                Slot::Compiling(key, _) | Slot::Failed(key) => key.clone(),
-            };
             *slot = settle(made, key, sources.variants.name(id.1), stats);
         }
     }
@@ -605,8 +593,8 @@ fn make_cache(
         return Slot::Failed(key);
     };
     let Some(shaders) = material.shaders.get(drawn.build as usize) else {
-        // The app is not finished yet: its shaders are not assets.
-        return Slot::Failed(key);
+        let err = "the variant's shaders are not Bevy assets: they are added as the app is finished (`Plugin::finish`), which this app did not reach";
+        return settle(Err(err.into()), key, &material.name, stats);
     };
     let queued = cache_inputs(build, &sources.device, &sources.mesh_pipeline, &key, size).and_then(
         |inputs| {
@@ -759,10 +747,10 @@ fn with_frame<R>(inputs: &CacheInputs, f: impl FnOnce(&FrameLayout<'_>, Options)
 /// are the slow part): it waits on wgpu's error scopes, which a native
 /// device has answered by then.
 fn build_cache(
-    inputs: CacheInputs,
+    inputs: &CacheInputs,
     pipelines: Vec<wgpu::RenderPipeline>,
 ) -> Result<ViewCache, String> {
-    let mut shader = with_frame(&inputs, |frame, options| {
+    let mut shader = with_frame(inputs, |frame, options| {
         bevy::tasks::block_on(CachedShader::from_pipelines_async(
             &inputs.device,
             &inputs.plan,
@@ -773,7 +761,7 @@ fn build_cache(
         ))
     })
     .map_err(|err| err.to_string())?;
-    let CacheInputs { key, device, .. } = inputs;
+    let (key, device) = (inputs.key.clone(), &inputs.device);
     let view_size = ViewUniform::min_size().get().next_multiple_of(16);
     let view_now = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("shadecache view uniform, this frame"),

@@ -166,13 +166,26 @@ fn lavapipe_22_reproducer_profiles() {
 }
 
 /// The folder of a package of the lock file, from cargo's own registry
-/// copy (`cargo metadata`, offline: the build has fetched it).
+/// copy (`cargo metadata`). Offline first (the build has fetched the
+/// package); where that fails, once more with the network: the metadata
+/// lists every package of the lock file, those of other platforms too (a
+/// window crate's Android backend), which a build never downloads.
 fn package_dir(name: &str) -> PathBuf {
-    let output = Command::new(env!("CARGO"))
-        .args(["metadata", "--format-version", "1", "--locked", "--offline"])
-        .current_dir(root())
-        .output()
-        .expect("cargo runs");
+    let metadata = |offline: bool| {
+        let mut args = vec!["metadata", "--format-version", "1", "--locked"];
+        if offline {
+            args.push("--offline");
+        }
+        Command::new(env!("CARGO"))
+            .args(args)
+            .current_dir(root())
+            .output()
+            .expect("cargo runs")
+    };
+    let mut output = metadata(true);
+    if !output.status.success() {
+        output = metadata(false);
+    }
     assert!(output.status.success(), "{}", stderr(&output));
     let metadata: Value = serde_json::from_slice(&output.stdout).unwrap();
     let manifest = metadata["packages"]
