@@ -56,6 +56,12 @@
 //! natively (Vulkan); the `wasm32-unknown-unknown` target itself was not
 //! built.
 //!
+//! An engine that compiles its pipelines itself (off the frame, in its
+//! own pipeline cache) makes them from
+//! [`CachedShader::pipeline_descriptors`] and gives them to
+//! [`CachedShader::from_pipelines_async`]: each pass's pipeline
+//! described, its layout as each bind group's entries.
+//!
 //! The crate depends on wgpu, serde and the plan schema only: an
 //! application links neither naga's front ends nor the toolchain.
 //!
