@@ -212,6 +212,20 @@ impl Setup {
                 })
             });
             let groups = by_group(user.clone(), cache, Vec::new());
+            let device_groups = device.limits().max_bind_groups;
+            if groups.len() as u32 > device_groups {
+                let last = groups.len() - 1;
+                return Err(Error::Mismatch(match cache_group {
+                    Some(group) => format!(
+                        "`{}` binds groups 0 to {last} (the cache's is group {group}), and the device has {device_groups}: rewrite the variant with `--max-bind-groups {device_groups}` (`Options::max_bind_groups`) or fewer, so that the cache shares a group of the application's",
+                        pass.name
+                    ),
+                    None => format!(
+                        "`{}` binds groups 0 to {last}, and the device has {device_groups}",
+                        pass.name
+                    ),
+                }));
+            }
             let per_draw = cache_group.is_some_and(|group| {
                 plan.bindings
                     .cache

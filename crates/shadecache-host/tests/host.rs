@@ -113,6 +113,11 @@ fn gpu() -> Option<Gpu> {
 
 /// A device with `features`, where the adapter has them.
 fn gpu_with(features: wgpu::Features) -> Option<Gpu> {
+    gpu_with_limits(features, wgpu::Limits::default())
+}
+
+/// A device with `features` and no more than `limits`.
+fn gpu_with_limits(features: wgpu::Features, limits: wgpu::Limits) -> Option<Gpu> {
     let instance =
         wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     let Ok(adapter) =
@@ -133,6 +138,7 @@ fn gpu_with(features: wgpu::Features) -> Option<Gpu> {
     let features = features & adapter.features();
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         required_features: features,
+        required_limits: limits,
         ..Default::default()
     }))
     .expect("a device");
@@ -1257,6 +1263,32 @@ fn pipelines_of_another_count_than_the_descriptors_are_refused() {
             .contains("0 pipelines were given for the 3 passes"),
         "{err}"
     );
+}
+
+/// A variant whose passes bind more groups than the device has is refused
+/// with the reason when its pipelines are described, before anything is
+/// made: an engine that makes them itself (Bevy's pipeline cache makes
+/// them outside an error scope) would otherwise meet wgpu's error
+/// handler.
+#[test]
+fn more_bind_groups_than_the_device_has_are_refused_when_described() {
+    let limits = wgpu::Limits {
+        max_bind_groups: 2,
+        ..wgpu::Limits::default()
+    };
+    let Some(gpu) = gpu_with_limits(wgpu::Features::empty(), limits) else {
+        return;
+    };
+    let (plan, _) = variant("three-pass");
+    let described = with_frame(
+        |_| {},
+        |frame| CachedShader::pipeline_descriptors(&gpu.device, &plan, frame, Options::default()),
+    );
+    let err = described.expect_err("three groups on a device of two");
+    assert!(err.to_string().contains("and the device has 2"), "{err}");
+    let made = make(&gpu, "three-pass", |_| {});
+    let err = made.expect_err("three groups on a device of two");
+    assert!(err.to_string().contains("and the device has 2"), "{err}");
 }
 
 /// What WGSL does not say of a buffer binding — a dynamic offset, a least
