@@ -74,6 +74,9 @@ pub struct Headless {
     /// cache off (Bevy draws the meshes again), and `frames` more are
     /// compared.
     pub switch_off_after: Option<u32>,
+    /// After this many compared frames (more than `switch_off_after`),
+    /// the cache is switched on again.
+    pub switch_on_after: Option<u32>,
     /// After this many compared frames, the lava's shader asset changes
     /// (as a hot reload changes it), and `frames` more are compared.
     pub reload_shader_after: Option<u32>,
@@ -251,6 +254,7 @@ struct Capture {
     compared: Vec<Compared>,
     cut_frame: Option<u32>,
     switch_off_frame: Option<u32>,
+    switch_on_frame: Option<u32>,
     reload_frame: Option<u32>,
     edit_frame: Option<u32>,
 }
@@ -737,6 +741,13 @@ fn cut_or_switch_off(
         }
         capture.cut_frame = Some(frame.0);
     }
+    let switched_off = capture.switch_off_frame.is_some();
+    if switched_off && due(run.0.switch_on_after, capture.switch_on_frame) {
+        for mut cache in &mut caches {
+            cache.enabled = true;
+        }
+        capture.switch_on_frame = Some(frame.0);
+    }
     if due(run.0.switch_off_after, capture.switch_off_frame) {
         for mut cache in &mut caches {
             cache.enabled = false;
@@ -805,6 +816,7 @@ fn finish(
         + settings.resize.map_or(0, |(after, _)| after)
         + settings.cut_after.unwrap_or(0)
         + settings.switch_off_after.unwrap_or(0)
+        + settings.switch_on_after.unwrap_or(0)
         + settings.reload_shader_after.unwrap_or(0)
         + settings.edit_standard_material_after.unwrap_or(0);
     if capture.compared.len() as u32 >= wanted || deadline.passed() {

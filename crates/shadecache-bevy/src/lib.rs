@@ -510,6 +510,7 @@ impl Plugin for SharedPlugin {
             .init_resource::<edits::EditedMaterials>()
             .init_resource::<CacheCreation>()
             .init_resource::<CachedVariants>()
+            .init_resource::<pipelines::QueuedPipelines>()
             .init_resource::<defs::LibraryDefs>()
             .add_systems(bevy::render::ExtractSchedule, defs::extract_library_defs);
         view_cache::build(render_app, stats);

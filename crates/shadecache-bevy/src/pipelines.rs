@@ -51,6 +51,14 @@ impl ShaderHandles {
     }
 }
 
+/// The variant pipelines queued in Bevy's pipeline cache, by their
+/// descriptor: a cache made again for what it was made for before (a view
+/// switched off and on, a refresh period set back) takes the pipelines
+/// queued then, as Bevy's specialised pipelines do, rather than adding
+/// more to Bevy's cache (which keeps every pipeline queued in it).
+#[derive(Resource, Default)]
+pub(crate) struct QueuedPipelines(Vec<(RenderPipelineDescriptor, CachedRenderPipelineId)>);
+
 /// A view's pipelines, queued in Bevy's pipeline cache.
 pub(crate) struct Compiling(Vec<CachedRenderPipelineId>);
 
@@ -65,15 +73,26 @@ pub(crate) enum Compiled {
 }
 
 impl Compiling {
-    /// Queues the described pipelines, with the build's shaders.
+    /// Queues the described pipelines, with the build's shaders (those
+    /// queued before are not queued again).
     pub fn queue(
-        cache: &PipelineCache,
+        (cache, queued): (&PipelineCache, &mut QueuedPipelines),
         described: Vec<PassPipelineDescriptor>,
         shaders: &ShaderHandles,
     ) -> Result<Compiling, String> {
         let mut ids = Vec::with_capacity(described.len());
         for pass in described {
-            ids.push(cache.queue_render_pipeline(bevy_descriptor(pass, shaders)?));
+            let descriptor = bevy_descriptor(pass, shaders)?;
+            let before = queued.0.iter().find(|(d, _)| *d == descriptor);
+            let id = match before {
+                Some(&(_, id)) => id,
+                None => {
+                    let id = cache.queue_render_pipeline(descriptor.clone());
+                    queued.0.push((descriptor, id));
+                    id
+                }
+            };
+            ids.push(id);
         }
         Ok(Compiling(ids))
     }

@@ -43,7 +43,7 @@ use shadecache_host::{
 
 use crate::edits::EditedMaterials;
 use crate::phase::{CacheId, CachedMesh3d, CachingViews, QueuedLayouts};
-use crate::pipelines::{Compiled, Compiling};
+use crate::pipelines::{Compiled, Compiling, QueuedPipelines};
 use crate::reload::ReloadedMaterials;
 use crate::CacheCreation;
 use crate::{CachedVariant, CachedVariants, ReprojectionCache};
@@ -369,6 +369,13 @@ struct CacheSources<'w> {
     materials: Res<'w, ErasedRenderAssets<PreparedMaterial>>,
 }
 
+/// Bevy's pipeline cache, and the variant pipelines queued in it.
+#[derive(SystemParam)]
+struct Pipelines<'w> {
+    cache: ResMut<'w, PipelineCache>,
+    queued: ResMut<'w, QueuedPipelines>,
+}
+
 /// Makes, keeps or drops each caching view's caches: one per variant and
 /// vertex layout its visible cached meshes have, before the cached meshes
 /// are taken from Bevy's opaque phase (only meshes with a cache are).
@@ -376,8 +383,9 @@ fn prepare_view_caches(
     sources: CacheSources,
     phases: Res<ViewSortedRenderPhases<CachedMesh3d>>,
     views: Query<(&ExtractedView, &ExtractedCamera, &ReprojectionCache)>,
-    // The caches, and Bevy's pipeline cache that compiles their pipelines.
-    (mut caches, mut pipeline_cache): (ResMut<ViewCaches>, ResMut<PipelineCache>),
+    // The caches, and Bevy's pipeline cache that compiles their pipelines
+    // (with those queued in it).
+    (mut caches, mut pipelines): (ResMut<ViewCaches>, Pipelines),
     mut caching: ResMut<CachingViews>,
     stats: Res<CacheStats>,
     mut refusals: Local<HashMap<CacheId, String>>,
@@ -439,7 +447,7 @@ fn prepare_view_caches(
                     .map(|s| (s.x, s.y))
                     .unwrap_or((1, 1));
                 let made = prepare_cache(
-                    (&mut caches, &mut pipeline_cache),
+                    (&mut caches, &mut pipelines),
                     &id,
                     key,
                     size,
@@ -464,7 +472,7 @@ fn prepare_view_caches(
 /// Makes the cache `id` for `key`, or again if it was made for another
 /// key; whether it is ready.
 fn prepare_cache(
-    (caches, pipeline_cache): (&mut ViewCaches, &mut PipelineCache),
+    (caches, pipelines): (&mut ViewCaches, &mut Pipelines),
     id: &CacheId,
     key: CacheKey,
     size: (u32, u32),
@@ -472,14 +480,7 @@ fn prepare_cache(
     stats: &CacheStats,
 ) -> bool {
     let slot = caches.0.entry(id.clone()).or_insert_with(|| {
-        Mutex::new(make_cache(
-            sources,
-            pipeline_cache,
-            id,
-            key.clone(),
-            size,
-            stats,
-        ))
+        Mutex::new(make_cache(sources, pipelines, id, key.clone(), size, stats))
     });
     let slot = slot
         .get_mut()
@@ -491,12 +492,12 @@ fn prepare_cache(
     if *current != key {
         // A cache still being made for the old key is dropped (Bevy's
         // cache keeps its pipelines, unused).
-        *slot = make_cache(sources, pipeline_cache, id, key, size, stats);
+        *slot = make_cache(sources, pipelines, id, key, size, stats);
     }
     if let Slot::Compiling(key, compiling) = slot {
         let key = key.clone();
         let (inputs, queued) = &**compiling;
-        let made = match queued.poll(pipeline_cache, sources.creation.synchronous) {
+        let made = match queued.poll(&mut pipelines.cache, sources.creation.synchronous) {
             Compiled::Waiting => None,
             Compiled::Failed(err) => Some(Err(err)),
             Compiled::Ready(pipelines) => Some(build_cache(inputs, pipelines)),
@@ -580,7 +581,7 @@ fn cache_key(
 /// pipeline cache. A failure is logged once.
 fn make_cache(
     sources: &CacheSources,
-    pipeline_cache: &PipelineCache,
+    pipelines: &mut Pipelines,
     (_, variant, drawn): &CacheId,
     key: CacheKey,
     size: (u32, u32),
@@ -604,7 +605,11 @@ fn make_cache(
             .map_err(|err| err.to_string())?;
             Ok((
                 inputs,
-                Compiling::queue(pipeline_cache, described, shaders)?,
+                Compiling::queue(
+                    (&pipelines.cache, &mut pipelines.queued),
+                    described,
+                    shaders,
+                )?,
             ))
         },
     );

@@ -86,6 +86,7 @@ fn settings() -> Headless {
         half_viewport: false,
         depth_prepass: false,
         switch_off_after: None,
+        switch_on_after: None,
         reload_shader_after: None,
         edit_standard_material_after: None,
         async_cache: false,
@@ -877,6 +878,31 @@ fn caches_are_made_off_the_frame_while_bevy_draws() {
         off_the_frame.frames_drawn,
         in_the_frame.frames_drawn
     );
+}
+
+/// A cache made again for what it was made for before (its camera's
+/// cache switched off, then on) takes the pipelines queued for it then:
+/// Bevy's pipeline cache, which keeps every pipeline queued in it, holds
+/// the one-pass variant's one pipeline once, and the cache draws again.
+#[test]
+fn a_cache_made_again_takes_its_pipelines_from_bevys_cache() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        frames: 8,
+        switch_off_after: Some(8),
+        switch_on_after: Some(16),
+        ..settings()
+    });
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    let on = run.compared.len() as u64;
+    assert!(
+        run.frames_drawn > on / 2,
+        "the cache did not draw again: {} frames drawn of {on}",
+        run.frames_drawn
+    );
+    assert_eq!(run.variant_pipelines_in_bevys_cache, 1);
 }
 
 /// Hot reload: the lava's shader asset changes while the game runs (as

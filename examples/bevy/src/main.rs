@@ -95,6 +95,7 @@ fn compare_one(args: &Args, cached: Cached) {
         half_viewport: false,
         depth_prepass: false,
         switch_off_after: None,
+        switch_on_after: None,
         reload_shader_after: None,
         edit_standard_material_after: None,
         async_cache: false,
