@@ -444,25 +444,28 @@ fn bevy_plugin_resets_on_camera_cut() {
         ..settings()
     });
     let cut = cut.expect("the cut was marked");
-    let before: Vec<&Compared> = compared.iter().filter(|f| f.frame < cut).collect();
+    starts_afresh_at(&compared, cut, "cut");
+}
+
+/// The frames before `at` reuse; one of the four after it is Bevy's own
+/// (the cache started afresh: it came back a few frames after it was
+/// drawn), and reuse resumes after that one.
+fn starts_afresh_at(compared: &[Compared], at: u32, what: &str) {
+    let reused = |f: &&Compared| f.max_error > 1.0 / 255.0;
+    let before: Vec<&Compared> = compared.iter().filter(|f| f.frame < at).collect();
     assert!(
-        before
-            .iter()
-            .rev()
-            .take(4)
-            .all(|f| f.max_error > 1.0 / 255.0),
-        "the frames before the cut reuse: {before:?}"
+        before.iter().rev().take(4).all(reused),
+        "the frames before the {what} reuse: {before:?}"
     );
-    // The cut's frame comes back a few frames after it was marked.
-    let after: Vec<&Compared> = compared.iter().filter(|f| f.frame >= cut).collect();
+    let after: Vec<&Compared> = compared.iter().filter(|f| f.frame >= at).collect();
     let exact = after
         .iter()
         .take(4)
-        .position(|f| f.max_error <= 1.0 / 255.0)
-        .unwrap_or_else(|| panic!("no frame after the cut misses everywhere: {after:?}"));
+        .position(|f| !reused(f))
+        .unwrap_or_else(|| panic!("no frame after the {what} is Bevy's own: {after:?}"));
     assert!(
-        after[exact + 1..].iter().any(|f| f.max_error > 1.0 / 255.0),
-        "{after:?}"
+        after[exact + 1..].iter().any(reused),
+        "reuse does not resume after the {what}: {after:?}"
     );
 }
 
@@ -487,26 +490,7 @@ fn edited_material_values_reset_its_caches() {
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     let edit = run.edit_frame.expect("the material was edited");
-    let before: Vec<&Compared> = run.compared.iter().filter(|f| f.frame < edit).collect();
-    assert!(
-        before
-            .iter()
-            .rev()
-            .take(4)
-            .all(|f| f.max_error > 1.0 / 255.0),
-        "the frames before the edit reuse: {before:?}"
-    );
-    // The edit's frame comes back a few frames after it was made.
-    let after: Vec<&Compared> = run.compared.iter().filter(|f| f.frame >= edit).collect();
-    let exact = after
-        .iter()
-        .take(4)
-        .position(|f| f.max_error <= 1.0 / 255.0)
-        .unwrap_or_else(|| panic!("no frame after the edit is Bevy's own: {after:?}"));
-    assert!(
-        after[exact + 1..].iter().any(|f| f.max_error > 1.0 / 255.0),
-        "reuse does not resume after the edit: {after:?}"
-    );
+    starts_afresh_at(&run.compared, edit, "edit");
 }
 
 /// What the host refuses is an error at start-up, never a panic in the
