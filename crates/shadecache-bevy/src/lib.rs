@@ -97,7 +97,7 @@
 //! - **Bevy's pipeline model, no stall.** The variant's pass shaders are
 //!   Bevy `Shader` assets, and a view's pipelines are queued in Bevy's
 //!   `PipelineCache` from the host's descriptions of them
-//!   (`CachedShader::pipeline_descriptors`), which compiles them off the
+//!   (`CachedShader::describe_pipelines`), which compiles them off the
 //!   frame as it compiles its own; Bevy draws the meshes until all are
 //!   ready, then the host takes them (`from_pipelines_async`). With
 //!   `RenderPlugin { synchronous_pipeline_compilation: true }` or

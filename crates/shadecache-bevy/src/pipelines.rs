@@ -75,9 +75,9 @@ pub(crate) enum Compiled {
 impl Compiling {
     /// Queues the described pipelines, with the build's shaders (those
     /// queued before are not queued again).
-    pub fn queue(
+    pub fn queue<'d>(
         (cache, queued): (&PipelineCache, &mut QueuedPipelines),
-        described: Vec<PassPipelineDescriptor>,
+        described: impl ExactSizeIterator<Item = &'d PassPipelineDescriptor>,
         shaders: &ShaderHandles,
     ) -> Result<Compiling, String> {
         let mut ids = Vec::with_capacity(described.len());
@@ -120,7 +120,7 @@ impl Compiling {
 
 /// The host's description of a pass's pipeline in Bevy's terms.
 fn bevy_descriptor(
-    pass: PassPipelineDescriptor,
+    pass: &PassPipelineDescriptor,
     shaders: &ShaderHandles,
 ) -> Result<RenderPipelineDescriptor, String> {
     let shader = shaders
@@ -134,14 +134,15 @@ fn bevy_descriptor(
         .clone();
     let buffers = pass
         .vertex_buffers
-        .into_iter()
+        .iter()
         .enumerate()
         .map(|(slot, buffer)| {
             buffer
+                .as_ref()
                 .map(|b| VertexBufferLayout {
                     array_stride: b.array_stride,
                     step_mode: b.step_mode,
-                    attributes: b.attributes,
+                    attributes: b.attributes.clone(),
                 })
                 .ok_or_else(|| {
                     format!(
@@ -163,18 +164,18 @@ fn bevy_descriptor(
         vertex: VertexState {
             shader: shader.clone(),
             shader_defs: Vec::new(),
-            entry_point: Some(pass.vertex_entry.into()),
+            entry_point: Some(pass.vertex_entry.clone().into()),
             buffers,
             constants: Vec::new(),
         },
         primitive: pass.primitive,
-        depth_stencil: Some(pass.depth_stencil),
+        depth_stencil: Some(pass.depth_stencil.clone()),
         multisample: pass.multisample,
         fragment: Some(FragmentState {
             shader,
             shader_defs: Vec::new(),
-            entry_point: Some(pass.fragment_entry.into()),
-            targets: pass.targets,
+            entry_point: Some(pass.fragment_entry.clone().into()),
+            targets: pass.targets.clone(),
             constants: Vec::new(),
         }),
         zero_initialize_workgroup_memory: false,

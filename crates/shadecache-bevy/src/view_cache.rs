@@ -37,8 +37,9 @@ use bevy::render::view::{
 use bevy::render::{Render, RenderSystems};
 use shadecache_host::plan::ResourceKind;
 use shadecache_host::{
-    CacheMode, CachedShader, Choice, Coverage, ErrorWatch, FrameLayout, FrameTimer, Governor,
-    NoTimer, Options, PassTimer, Plan, SpeedEstimate, Targets, TwinSources, Twins, Viewport,
+    CacheMode, CachedShader, Choice, Coverage, DescribedPipelines, ErrorWatch, FrameLayout,
+    FrameTimer, Governor, NoTimer, Options, PassTimer, Plan, SpeedEstimate, Targets, TwinSources,
+    Twins, Viewport,
 };
 
 use crate::edits::EditedMaterials;
@@ -213,7 +214,7 @@ enum Slot {
     /// Its pipelines being compiled by Bevy's pipeline cache (off the
     /// frame unless [`CacheCreation`] says otherwise); the view leaves its
     /// meshes to Bevy meanwhile.
-    Compiling(CacheKey, Box<(CacheInputs, Compiling)>),
+    Compiling(CacheKey, Box<Pending>),
     /// The error, logged once; the view leaves its meshes to Bevy until
     /// what the cache was made for changes.
     Failed(CacheKey),
@@ -494,13 +495,20 @@ fn prepare_cache(
         // cache keeps its pipelines, unused).
         *slot = make_cache(sources, pipelines, id, key, size, stats);
     }
-    if let Slot::Compiling(key, compiling) = slot {
+    if let Slot::Compiling(key, pending) = slot {
         let key = key.clone();
-        let (inputs, queued) = &**compiling;
-        let made = match queued.poll(&mut pipelines.cache, sources.creation.synchronous) {
+        let compiled = pending
+            .compiling
+            .poll(&mut pipelines.cache, sources.creation.synchronous);
+        let made = match compiled {
             Compiled::Waiting => None,
             Compiled::Failed(err) => Some(Err(err)),
-            Compiled::Ready(pipelines) => Some(build_cache(inputs, pipelines)),
+            Compiled::Ready(made) => Some(build_cache(
+                sources.device.wgpu_device(),
+                key.clone(),
+                pending,
+                made,
+            )),
         };
         if let Some(made) = made {
             *slot = settle(made, key, sources.variants.name(id.1), stats);
@@ -597,24 +605,19 @@ fn make_cache(
         let err = "the variant's shaders are not Bevy assets: they are added as the app is finished (`Plugin::finish`), which this app did not reach";
         return settle(Err(err.into()), key, &material.name, stats);
     };
-    let queued = cache_inputs(build, &sources.device, &sources.mesh_pipeline, &key, size).and_then(
-        |inputs| {
-            let described = with_frame(&inputs, |frame, options| {
-                CachedShader::pipeline_descriptors(&inputs.device, &inputs.plan, frame, options)
+    let queued = cache_inputs(build, &sources.mesh_pipeline, &key)
+        .and_then(|inputs| describe_pipelines(&inputs, sources.device.wgpu_device()))
+        .and_then(|described| {
+            let queue = (&*pipelines.cache, &mut *pipelines.queued);
+            let compiling = Compiling::queue(queue, described.descriptors(), shaders)?;
+            Ok(Pending {
+                described,
+                compiling,
+                size,
             })
-            .map_err(|err| err.to_string())?;
-            Ok((
-                inputs,
-                Compiling::queue(
-                    (&pipelines.cache, &mut pipelines.queued),
-                    described,
-                    shaders,
-                )?,
-            ))
-        },
-    );
+        });
     match queued {
-        Ok(compiling) => Slot::Compiling(key, Box::new(compiling)),
+        Ok(pending) => Slot::Compiling(key, Box::new(pending)),
         Err(err) => settle(Err(err), key, &material.name, stats),
     }
 }
@@ -637,27 +640,30 @@ fn settle(
     }
 }
 
-/// What making a view's cache takes, owned, kept while Bevy compiles its
-/// pipelines: the plan (Δn set), Bevy's layouts, the meshes' vertex
-/// buffer, the frame's formats.
+/// What a view's cache is described from: the plan (Δn set), Bevy's
+/// layouts, the meshes' vertex buffer, the frame's formats.
 struct CacheInputs {
     plan: Plan,
     groups: [(u32, Vec<wgpu::BindGroupLayoutEntry>); 4],
     vertex: (u64, wgpu::VertexStepMode, Vec<wgpu::VertexAttribute>),
     key: CacheKey,
     prepass: bool,
+}
+
+/// A view's cache while Bevy compiles its pipelines: the host's
+/// description of them, those queued, and the size to make it at.
+struct Pending {
+    described: DescribedPipelines,
+    compiling: Compiling,
     size: (u32, u32),
-    device: wgpu::Device,
 }
 
 /// Checks what the view's cache is made for and gathers what making it
 /// takes; the errors a view is refused for.
 fn cache_inputs(
     variant: &CachedVariant,
-    device: &RenderDevice,
     mesh_pipeline: &MeshPipeline,
     key: &CacheKey,
-    size: (u32, u32),
 ) -> Result<CacheInputs, String> {
     let mut plan: Plan = variant.plan().clone();
     if let Some(period) = key.refresh_period {
@@ -706,14 +712,16 @@ fn cache_inputs(
         ),
         key: key.clone(),
         prepass,
-        size,
-        device: device.wgpu_device().clone(),
     })
 }
 
-/// Calls `f` with the application's frame as Bevy's pipeline for the
-/// cached meshes has it, and the host's options for the view.
-fn with_frame<R>(inputs: &CacheInputs, f: impl FnOnce(&FrameLayout<'_>, Options) -> R) -> R {
+/// The view's pipelines described by the host, from the application's
+/// frame as Bevy's pipeline for the cached meshes has it and the host's
+/// options for the view.
+fn describe_pipelines(
+    inputs: &CacheInputs,
+    device: &wgpu::Device,
+) -> Result<DescribedPipelines, String> {
     let (array_stride, step_mode, attributes) = &inputs.vertex;
     let groups: Vec<(u32, &[wgpu::BindGroupLayoutEntry])> = inputs
         .groups
@@ -744,7 +752,8 @@ fn with_frame<R>(inputs: &CacheInputs, f: impl FnOnce(&FrameLayout<'_>, Options)
         depth_test_or_equal: inputs.prepass,
         ..Options::default()
     };
-    f(&frame, options)
+    CachedShader::describe_pipelines(device, &inputs.plan, &frame, options)
+        .map_err(|err| err.to_string())
 }
 
 /// Makes a view's cache from the pipelines Bevy compiled for it: the
@@ -752,21 +761,18 @@ fn with_frame<R>(inputs: &CacheInputs, f: impl FnOnce(&FrameLayout<'_>, Options)
 /// are the slow part): it waits on wgpu's error scopes, which a native
 /// device has answered by then.
 fn build_cache(
-    inputs: &CacheInputs,
+    device: &wgpu::Device,
+    key: CacheKey,
+    pending: &Pending,
     pipelines: Vec<wgpu::RenderPipeline>,
 ) -> Result<ViewCache, String> {
-    let mut shader = with_frame(inputs, |frame, options| {
-        bevy::tasks::block_on(CachedShader::from_pipelines_async(
-            &inputs.device,
-            &inputs.plan,
-            frame,
-            inputs.size,
-            options,
-            pipelines,
-        ))
-    })
+    let mut shader = bevy::tasks::block_on(CachedShader::from_pipelines_async(
+        device,
+        pending.described.clone(),
+        pending.size,
+        pipelines,
+    ))
     .map_err(|err| err.to_string())?;
-    let (key, device) = (inputs.key.clone(), &inputs.device);
     let view_size = ViewUniform::min_size().get().next_multiple_of(16);
     let view_now = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("shadecache view uniform, this frame"),

@@ -126,7 +126,14 @@ pub struct CachedShader {
 /// What a variant's pipelines and bind groups are made from, checked
 /// against the application's frame: the host's formats, the application's
 /// groups, and each pass described with its cache group's layout.
+#[derive(Clone)]
 struct Setup {
+    plan: Plan,
+    options: Options,
+    /// The frame's viewport, where it is not the whole target.
+    viewport: Option<[f32; 4]>,
+    /// The application's vertex buffer slots.
+    vertex_slots: u32,
     formats: HostFormats,
     depth_format: wgpu::TextureFormat,
     gbuffer_formats: Vec<wgpu::TextureFormat>,
@@ -140,6 +147,7 @@ struct Setup {
 }
 
 /// One pass of a [`Setup`].
+#[derive(Clone)]
 struct SetupPass {
     pass: Pass,
     index: usize,
@@ -241,6 +249,13 @@ impl Setup {
             });
         }
         Ok(Setup {
+            plan: plan.clone(),
+            options,
+            viewport: match frame.viewport {
+                Viewport::Rect(rect) => Some(rect),
+                Viewport::WholeTarget => None,
+            },
+            vertex_slots: frame.vertex_buffers.len() as u32,
             formats,
             depth_format,
             gbuffer_formats,
@@ -249,6 +264,30 @@ impl Setup {
             twin_slots,
             passes,
         })
+    }
+}
+
+/// A variant's pipelines described for an application that makes them
+/// itself ([`CachedShader::describe_pipelines`]), and what the variant is
+/// then made from with them ([`CachedShader::from_pipelines_async`]):
+/// the plan, frame and options are checked once, here.
+#[derive(Clone)]
+pub struct DescribedPipelines(Setup);
+
+impl DescribedPipelines {
+    /// Each pass's pipeline: the plan's passes in order, then the
+    /// classification where [`Options::classify`] asks for it.
+    pub fn descriptors(&self) -> impl ExactSizeIterator<Item = &PassPipelineDescriptor> {
+        self.0.passes.iter().map(|pass| &pass.described)
+    }
+}
+
+impl std::fmt::Debug for DescribedPipelines {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("DescribedPipelines")
+            .field("variant", &self.0.plan.variant)
+            .field("passes", &self.0.passes.len())
+            .finish_non_exhaustive()
     }
 }
 
@@ -322,46 +361,36 @@ impl CachedShader {
             );
             pipelines.push(pipeline(device, &pass.described, source, &layout).await?);
         }
-        Self::assemble(device, plan, frame, size, options, setup, pipelines).await
+        Self::assemble(device, setup, size, pipelines).await
     }
 
-    /// Every pass's render pipeline described (the plan's passes in order,
-    /// then the classification where [`Options::classify`] asks for it),
-    /// for an application that makes its pipelines itself, as an engine's
-    /// pipeline cache does off the frame. Make each with the pass's WGSL
-    /// (`shader` names the plan's file) and give them, in this order, to
-    /// [`CachedShader::from_pipelines_async`] with the same plan, frame
-    /// and options. Errors as [`CachedShader::new_async`]'s, but for what
-    /// only wgpu can tell.
-    pub fn pipeline_descriptors(
+    /// Every pass's render pipeline described, for an application that
+    /// makes its pipelines itself, as an engine's pipeline cache does off
+    /// the frame: make each with the pass's WGSL (`shader` names the
+    /// plan's file) and give them, in order, to
+    /// [`CachedShader::from_pipelines_async`]. Errors as
+    /// [`CachedShader::new_async`]'s, but for what only wgpu can tell.
+    pub fn describe_pipelines(
         device: &wgpu::Device,
         plan: &Plan,
         frame: &FrameLayout<'_>,
         options: Options,
-    ) -> Result<Vec<PassPipelineDescriptor>, Error> {
-        let setup = Setup::new(device, plan, frame, options)?;
-        Ok(setup
-            .passes
-            .into_iter()
-            .map(|pass| pass.described)
-            .collect())
+    ) -> Result<DescribedPipelines, Error> {
+        Setup::new(device, plan, frame, options).map(DescribedPipelines)
     }
 
-    /// The variant with pipelines the application made from
-    /// [`CachedShader::pipeline_descriptors`] (one per descriptor, in its
-    /// order), and the cache's targets at `size`: what
-    /// [`CachedShader::new_async`] makes when it makes the pipelines
-    /// itself.
+    /// The variant with pipelines the application made from `described`
+    /// (one per descriptor, in its order), and the cache's targets at
+    /// `size`: what [`CachedShader::new_async`] makes when it makes the
+    /// pipelines itself.
     pub async fn from_pipelines_async(
         device: &wgpu::Device,
-        plan: &Plan,
-        frame: &FrameLayout<'_>,
+        described: DescribedPipelines,
         size: (u32, u32),
-        options: Options,
         pipelines: Vec<wgpu::RenderPipeline>,
     ) -> Result<CachedShader, Error> {
         check_size(device, size)?;
-        let setup = Setup::new(device, plan, frame, options)?;
+        let DescribedPipelines(setup) = described;
         if pipelines.len() != setup.passes.len() {
             return Err(Error::Mismatch(format!(
                 "{} pipelines were given for the {} passes described",
@@ -369,21 +398,22 @@ impl CachedShader {
                 setup.passes.len()
             )));
         }
-        Self::assemble(device, plan, frame, size, options, setup, pipelines).await
+        Self::assemble(device, setup, size, pipelines).await
     }
 
     /// The variant from its pipelines (one per pass of `setup`): the
     /// cache's uniform, sampler and targets.
     async fn assemble(
         device: &wgpu::Device,
-        plan: &Plan,
-        frame: &FrameLayout<'_>,
-        size: (u32, u32),
-        options: Options,
         setup: Setup,
+        size: (u32, u32),
         pipelines: Vec<wgpu::RenderPipeline>,
     ) -> Result<CachedShader, Error> {
         let Setup {
+            plan,
+            options,
+            viewport,
+            vertex_slots,
             formats,
             depth_format,
             gbuffer_formats,
@@ -441,10 +471,10 @@ impl CachedShader {
                 size,
                 formats,
                 depth_format,
-                (&gbuffer_formats, lowres_divisor(plan)),
+                (&gbuffer_formats, lowres_divisor(&plan)),
             ),
             draw_ids,
-            plan: plan.clone(),
+            plan,
             options,
             passes,
             classify,
@@ -454,16 +484,13 @@ impl CachedShader {
             formats,
             gbuffer_formats,
             size,
-            viewport: match frame.viewport {
-                Viewport::Rect(rect) => Some(rect),
-                Viewport::WholeTarget => None,
-            },
+            viewport,
             depth_range: None,
             generation: 0,
             params,
             sampler,
             id: NEXT_SHADER.fetch_add(1, Ordering::Relaxed),
-            vertex_slots: frame.vertex_buffers.len() as u32,
+            vertex_slots,
             max_bind_groups: device.limits().max_bind_groups,
             current: 0,
             frame: 0,

@@ -58,7 +58,7 @@
 //!
 //! An engine that compiles its pipelines itself (off the frame, in its
 //! own pipeline cache) makes them from
-//! [`CachedShader::pipeline_descriptors`] and gives them to
+//! [`CachedShader::describe_pipelines`] and gives them to
 //! [`CachedShader::from_pipelines_async`]: each pass's pipeline
 //! described, its layout as each bind group's entries.
 //!
@@ -120,7 +120,7 @@ mod twins;
 mod vertex;
 mod watch;
 
-pub use cached::{CachedShader, Draw, Options};
+pub use cached::{CachedShader, DescribedPipelines, Draw, Options};
 pub use error::Error;
 pub use frame::{FrameLayout, Targets, Viewport};
 pub use governor::{

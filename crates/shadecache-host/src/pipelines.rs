@@ -74,11 +74,11 @@ pub(crate) struct PipelineInputs<'a> {
 /// its pipelines itself (an engine's pipeline cache, which compiles them
 /// off the frame): everything `wgpu::RenderPipelineDescriptor` takes,
 /// owned, with the shader by the plan's file name and the pipeline layout
-/// as each group's entries. [`CachedShader::pipeline_descriptors`] gives
+/// as each group's entries. [`CachedShader::describe_pipelines`] gives
 /// them, [`CachedShader::from_pipelines_async`] takes the pipelines made
 /// from them.
 ///
-/// [`CachedShader::pipeline_descriptors`]: crate::CachedShader::pipeline_descriptors
+/// [`CachedShader::describe_pipelines`]: crate::CachedShader::describe_pipelines
 /// [`CachedShader::from_pipelines_async`]: crate::CachedShader::from_pipelines_async
 #[derive(Clone, Debug)]
 pub struct PassPipelineDescriptor {

@@ -1134,11 +1134,10 @@ fn made_by_the_application(gpu: &Gpu, name: &str) -> CachedShader {
     let depth =
         |frame: &mut FrameLayout<'_>| frame.depth_format = wgpu::TextureFormat::Depth32Float;
     with_frame(depth, |frame| {
-        let described =
-            CachedShader::pipeline_descriptors(device, &plan, frame, Options::default())
-                .expect("the passes are described");
+        let described = CachedShader::describe_pipelines(device, &plan, frame, Options::default())
+            .expect("the passes are described");
         let pipelines = described
-            .iter()
+            .descriptors()
             .map(|pass| {
                 let groups: Vec<wgpu::BindGroupLayout> = pass
                     .bind_group_layouts
@@ -1200,10 +1199,8 @@ fn made_by_the_application(gpu: &Gpu, name: &str) -> CachedShader {
             .collect();
         pollster::block_on(CachedShader::from_pipelines_async(
             device,
-            &plan,
-            frame,
+            described,
             (SIZE, SIZE),
-            Options::default(),
             pipelines,
         ))
         .expect("the variant takes the application's pipelines")
@@ -1244,19 +1241,17 @@ fn pipelines_the_application_makes_from_the_descriptors_give_the_hosts_frames() 
 fn pipelines_of_another_count_than_the_descriptors_are_refused() {
     let Some(gpu) = gpu() else { return };
     let (plan, _) = variant("three-pass");
-    let err = with_frame(
+    let described = with_frame(
         |_| {},
-        |frame| {
-            pollster::block_on(CachedShader::from_pipelines_async(
-                &gpu.device,
-                &plan,
-                frame,
-                (SIZE, SIZE),
-                Options::default(),
-                Vec::new(),
-            ))
-        },
+        |frame| CachedShader::describe_pipelines(&gpu.device, &plan, frame, Options::default()),
     )
+    .expect("the passes are described");
+    let err = pollster::block_on(CachedShader::from_pipelines_async(
+        &gpu.device,
+        described,
+        (SIZE, SIZE),
+        Vec::new(),
+    ))
     .expect_err("no pipelines for three passes");
     assert!(
         err.to_string()
@@ -1282,7 +1277,7 @@ fn more_bind_groups_than_the_device_has_are_refused_when_described() {
     let (plan, _) = variant("three-pass");
     let described = with_frame(
         |_| {},
-        |frame| CachedShader::pipeline_descriptors(&gpu.device, &plan, frame, Options::default()),
+        |frame| CachedShader::describe_pipelines(&gpu.device, &plan, frame, Options::default()),
     );
     let err = described.expect_err("three groups on a device of two");
     assert!(err.to_string().contains("and the device has 2"), "{err}");
