@@ -913,12 +913,9 @@ fn cache_upsample(flags: u32, components: u32, frag_coord: vec4<f32>, normal: ve
     }
     let own = n.own < 4u;
     let own_payload = n.payload[min(n.own, 3u)];
-    // Last frame's history where this point was: its weight and gradients.
-    // With material ids it is found only where the texels its lookup reads
-    // showed this draw last frame.
+    // Where this point was last frame. With material ids its history is
+    // found only where the texels its lookup reads showed this draw.
     let point = cache_point(previous_clip);
-    let texel = round(point.texel);
-    let history = textureLoad(cache_previous_history, vec2<i32>(clamp(texel, vec2<f32>(0.0), cache_params.viewport - vec2<f32>(1.0))), 0);
     var found = hit;
     if ((flags & CACHE_MODE_MATERIAL_IDS) != 0u) {
         found = hit & cache_history_same_draw(point.texel);
@@ -929,6 +926,9 @@ fn cache_upsample(flags: u32, components: u32, frag_coord: vec4<f32>, normal: ve
         let fill = (flags & CACHE_MODE_FILL_HOLES) != 0u;
         return CacheUpsampled(select(reused, own_payload, own), none, hole & (fill | (spatial.weight < CACHE_UNDERSAMPLED)));
     }
+    // Last frame's history there: its weight and gradients.
+    let texel = round(point.texel);
+    let history = textureLoad(cache_previous_history, vec2<i32>(clamp(texel, vec2<f32>(0.0), cache_params.viewport - vec2<f32>(1.0))), 0);
     let previous_exact = history.x >= CACHE_EXACT;
     let previous_weight = history.x - select(0.0, CACHE_EXACT, previous_exact);
     // Eq. 8: the gradient, filtered over the samples' footprint in space
