@@ -199,6 +199,43 @@ impl Masked {
     }
 }
 
+/// A short run of the lava alone, cached every frame: 24 frames compared
+/// at 128², the camera 0.5° a frame, the plan's Δn, nothing else drawn or
+/// done.
+impl Default for Headless {
+    fn default() -> Headless {
+        Headless {
+            size: 128,
+            frames: 24,
+            refresh_period: None,
+            step_degrees: 0.5,
+            resize: None,
+            cut_after: None,
+            msaa: false,
+            foreign_material: false,
+            stone: false,
+            standard_material: false,
+            lava_uncached: false,
+            rim: false,
+            props: false,
+            coloured_mesh: false,
+            double_sided: false,
+            other_meshes: OtherMeshes::None,
+            left_to_bevy: None,
+            half_viewport: false,
+            depth_prepass: false,
+            switch_off_after: None,
+            switch_on_after: None,
+            reload_shader_after: None,
+            edit_standard_material_after: None,
+            async_cache: false,
+            masks: false,
+            linear: false,
+            mode: CacheMode::Always,
+        }
+    }
+}
+
 /// What a comparison run saw.
 #[derive(Clone, Debug)]
 pub struct HeadlessRun {

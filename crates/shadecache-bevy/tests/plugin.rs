@@ -64,38 +64,6 @@ fn all_bevys_own<'a>(frames: impl IntoIterator<Item = &'a Compared>) {
     }
 }
 
-fn settings() -> Headless {
-    Headless {
-        size: 128,
-        frames: 24,
-        refresh_period: None,
-        step_degrees: 0.5,
-        resize: None,
-        cut_after: None,
-        msaa: false,
-        foreign_material: false,
-        stone: false,
-        standard_material: false,
-        lava_uncached: false,
-        rim: false,
-        props: false,
-        coloured_mesh: false,
-        double_sided: false,
-        other_meshes: OtherMeshes::None,
-        left_to_bevy: None,
-        half_viewport: false,
-        depth_prepass: false,
-        switch_off_after: None,
-        switch_on_after: None,
-        reload_shader_after: None,
-        edit_standard_material_after: None,
-        async_cache: false,
-        masks: false,
-        linear: false,
-        mode: CacheMode::Always,
-    }
-}
-
 /// With Δn = 1 every pixel is computed every frame, so the variant's pass,
 /// drawn with Bevy's view, mesh and material bind groups and Bevy's
 /// `DrawMesh`, is Bevy's own frame: the one-pass variant writes what it
@@ -107,7 +75,7 @@ fn bevy_plugin_at_refresh_period_one_equals_the_uncached_frame() {
     }
     let compared = run(Headless {
         refresh_period: Some(1),
-        ..settings()
+        ..Headless::default()
     });
     assert!(compared.len() >= 24, "{} frames compared", compared.len());
     all_bevys_own(&compared);
@@ -135,7 +103,7 @@ fn cached_mesh_is_occluded_by_bevys_meshes() {
     if skipped() {
         return;
     }
-    bevys_own_frames_with(OtherMeshes::OpaqueInFront, settings());
+    bevys_own_frames_with(OtherMeshes::OpaqueInFront, Headless::default());
 }
 
 /// A translucent pane of Bevy's behind the lava sphere is hidden by it:
@@ -146,7 +114,7 @@ fn cached_mesh_occludes_bevys_meshes() {
     if skipped() {
         return;
     }
-    bevys_own_frames_with(OtherMeshes::TranslucentBehind, settings());
+    bevys_own_frames_with(OtherMeshes::TranslucentBehind, Headless::default());
 }
 
 /// A translucent pane before the lava sphere blends over it: the cached
@@ -157,7 +125,7 @@ fn transparent_mesh_over_cached_mesh_blends_in_order() {
     if skipped() {
         return;
     }
-    bevys_own_frames_with(OtherMeshes::TranslucentInFront, settings());
+    bevys_own_frames_with(OtherMeshes::TranslucentInFront, Headless::default());
 }
 
 /// With Bevy's depth prepass on the cameras (TAA's and SSAO's), the
@@ -173,7 +141,7 @@ fn cached_mesh_is_drawn_over_its_own_depth_prepass() {
         OtherMeshes::All,
         Headless {
             depth_prepass: true,
-            ..settings()
+            ..Headless::default()
         },
     );
 }
@@ -184,7 +152,7 @@ fn bevy_plugin_shares_the_depth_of_bevys_own_meshes() {
     if skipped() {
         return;
     }
-    bevys_own_frames_with(OtherMeshes::All, settings());
+    bevys_own_frames_with(OtherMeshes::All, Headless::default());
 }
 
 /// A lava mesh marked for the cache that the variant cannot draw as Bevy
@@ -196,7 +164,7 @@ fn left_to_bevy_with_a_reason(which: LeftToBevy, reason: &str) {
         refresh_period: Some(1),
         left_to_bevy: Some(which),
         frames: 10,
-        ..settings()
+        ..Headless::default()
     });
     assert!(run.frames_drawn > 0, "{:?}", run.errors);
     let said: Vec<&String> = run.errors.iter().filter(|e| e.contains(reason)).collect();
@@ -260,7 +228,7 @@ fn split_screen_viewport_is_honoured() {
         refresh_period: Some(1),
         frames: 8,
         half_viewport: true,
-        ..settings()
+        ..Headless::default()
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     assert!(run.frames_drawn >= 8, "{} frames drawn", run.frames_drawn);
@@ -269,7 +237,7 @@ fn split_screen_viewport_is_honoured() {
     let run = in_turn(Headless {
         frames: 72,
         half_viewport: true,
-        ..settings()
+        ..Headless::default()
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     let steady = &run.compared[run.compared.len() - 24..];
@@ -317,7 +285,7 @@ fn bevy_plugin_reuses_under_camera_motion() {
         frames: WARMUP + MEASURED + 8,
         cut_after: Some(4),
         linear: true,
-        ..settings()
+        ..Headless::default()
     });
     let cut = cut.expect("the cut was marked");
     // The frame drawn at the cut comes back a few frames later (Bevy
@@ -409,7 +377,7 @@ fn bevy_plugin_resets_on_resize() {
     let compared = run(Headless {
         frames: 4,
         resize: Some((12, 192)),
-        ..settings()
+        ..Headless::default()
     });
     let first_resized = compared
         .iter()
@@ -441,7 +409,7 @@ fn bevy_plugin_resets_on_camera_cut() {
     let (compared, cut) = run_with_cut(Headless {
         frames: 6,
         cut_after: Some(12),
-        ..settings()
+        ..Headless::default()
     });
     let cut = cut.expect("the cut was marked");
     starts_afresh_at(&compared, cut, "cut");
@@ -486,7 +454,7 @@ fn edited_material_values_reset_its_caches() {
         standard_material: true,
         lava_uncached: true,
         edit_standard_material_after: Some(40),
-        ..settings()
+        ..Headless::default()
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     let edit = run.edit_frame.expect("the material was edited");
@@ -505,7 +473,7 @@ fn bevy_plugin_refuses_msaa_and_leaves_the_material_to_bevy() {
     let run = in_turn(Headless {
         frames: 8,
         msaa: true,
-        ..settings()
+        ..Headless::default()
     });
     assert_eq!(run.frames_drawn, 0);
     assert!(
@@ -532,7 +500,7 @@ fn mesh_of_a_material_without_a_variant_is_left_to_bevy_with_a_reason() {
         refresh_period: Some(1),
         frames: 8,
         foreign_material: true,
-        ..settings()
+        ..Headless::default()
     });
     assert!(run.frames_drawn > 0, "{:?}", run.errors);
     let said: Vec<&String> = run
@@ -579,7 +547,7 @@ fn meshes_of_several_vertex_layouts_in_one_view() {
     }
     two_caches_each_frame(Headless {
         coloured_mesh: true,
-        ..settings()
+        ..Headless::default()
     });
 }
 
@@ -595,7 +563,7 @@ fn material_specialize_is_honoured() {
     }
     two_caches_each_frame(Headless {
         double_sided: true,
-        ..settings()
+        ..Headless::default()
     });
 }
 
@@ -612,7 +580,7 @@ fn two_cached_materials_in_one_app() {
         frames: 8,
         stone: true,
         other_meshes: OtherMeshes::OpaqueInFront,
-        ..settings()
+        ..Headless::default()
     });
     let lava = run.frames_drawn - run.stone_frames_drawn;
     eight_frames_bevys_own_through(&run, &[("stone", run.stone_frames_drawn), ("lava", lava)]);
@@ -644,7 +612,7 @@ fn standard_material_is_cached() {
         refresh_period: Some(1),
         frames: 8,
         standard_material: true,
-        ..settings()
+        ..Headless::default()
     });
     eight_frames_bevys_own_through(&run, &[("StandardMaterial", run.standard_frames_drawn)]);
 
@@ -662,7 +630,7 @@ fn standard_material_is_cached() {
         standard_material: true,
         lava_uncached: true,
         masks: true,
-        ..settings()
+        ..Headless::default()
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     assert_eq!(run.frames_drawn, run.standard_frames_drawn);
@@ -704,7 +672,7 @@ fn extended_material_is_cached() {
         refresh_period: Some(1),
         frames: 8,
         rim: true,
-        ..settings()
+        ..Headless::default()
     });
     eight_frames_bevys_own_through(&run, &[("rim material", run.rim_frames_drawn)]);
 }
@@ -726,7 +694,7 @@ fn game_scene_caches_standard_material_and_lava_together() {
         frames: 8,
         standard_material: true,
         props: true,
-        ..settings()
+        ..Headless::default()
     });
     let lava = run.frames_drawn - run.standard_frames_drawn;
     eight_frames_bevys_own_through(
@@ -755,7 +723,7 @@ fn multi_pass_variant_over_a_prepass_is_left_to_bevy_with_a_reason() {
         frames: 10,
         standard_material: true,
         depth_prepass: true,
-        ..settings()
+        ..Headless::default()
     });
     let said: Vec<&String> = run
         .errors
@@ -780,7 +748,7 @@ fn bevy_plugin_hands_the_meshes_back_when_switched_off() {
     let run = in_turn(Headless {
         frames: 12,
         switch_off_after: Some(12),
-        ..settings()
+        ..Headless::default()
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     let off = run.switch_off_frame.expect("the cache was switched off");
@@ -842,7 +810,7 @@ fn caches_are_made_off_the_frame_while_bevy_draws() {
             refresh_period: Some(1),
             frames: 16,
             async_cache,
-            ..settings()
+            ..Headless::default()
         })
     };
     let (off_the_frame, in_the_frame) = (run_with(true), run_with(false));
@@ -877,7 +845,7 @@ fn a_cache_made_again_takes_its_pipelines_from_bevys_cache() {
         frames: 8,
         switch_off_after: Some(8),
         switch_on_after: Some(16),
-        ..settings()
+        ..Headless::default()
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     let on = run.compared.len() as u64;
@@ -903,7 +871,7 @@ fn shader_hot_reload_hands_the_material_back_to_bevy() {
     let run = in_turn(Headless {
         frames: 12,
         reload_shader_after: Some(12),
-        ..settings()
+        ..Headless::default()
     });
     let said: Vec<&String> = run
         .errors
@@ -938,7 +906,7 @@ fn bevy_plugin_auto_probes_with_bevys_own_pipelines_and_measures_both() {
         refresh_period: Some(1),
         frames: 48,
         mode: CacheMode::Auto { min_psnr: None },
-        ..settings()
+        ..Headless::default()
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     assert!(run.compared.len() >= 48, "{} compared", run.compared.len());
@@ -979,7 +947,7 @@ fn cache_mode_off_draws_every_frame_with_bevys_pipelines() {
     let run = in_turn(Headless {
         frames: 12,
         mode: CacheMode::Off,
-        ..settings()
+        ..Headless::default()
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     assert!(run.compared.len() >= 12, "{} compared", run.compared.len());
@@ -1007,7 +975,7 @@ fn bevy_plugin_auto_watches_the_error_against_bevys_own_frame() {
         refresh_period: Some(1),
         frames: 40,
         mode: budget,
-        ..settings()
+        ..Headless::default()
     });
     assert!(exact.errors.is_empty(), "{:?}", exact.errors);
     all_bevys_own(&exact.compared);
@@ -1018,7 +986,7 @@ fn bevy_plugin_auto_watches_the_error_against_bevys_own_frame() {
         frames: 60,
         step_degrees: 1.0,
         mode: budget,
-        ..settings()
+        ..Headless::default()
     });
     assert!(reused.errors.is_empty(), "{:?}", reused.errors);
     let psnr = reused.governor.and_then(|g| g.psnr);

@@ -79,30 +79,14 @@ fn compare_one(args: &Args, cached: Cached) {
         frames: args.frames,
         refresh_period: args.refresh_period,
         step_degrees: args.step_degrees,
-        resize: None,
-        cut_after: None,
-        msaa: false,
-        foreign_material: false,
-        stone: false,
         standard_material: cached != Cached::Lava,
         lava_uncached: cached == Cached::StandardMaterial,
-        rim: false,
         props: true,
-        coloured_mesh: false,
-        double_sided: false,
-        other_meshes: shadecache_bevy_harness::OtherMeshes::None,
-        left_to_bevy: None,
-        half_viewport: false,
-        depth_prepass: false,
-        switch_off_after: None,
-        switch_on_after: None,
-        reload_shader_after: None,
-        edit_standard_material_after: None,
-        async_cache: false,
         masks: true,
         linear: args.linear,
         // Every frame through the cache, to compare each with Bevy's.
         mode: shadecache_bevy::CacheMode::Always,
+        ..Headless::default()
     });
     for err in &run.errors {
         eprintln!("error: {err}");
