@@ -136,9 +136,12 @@ fn governor_keeps_a_winning_cache() {
 }
 
 /// A cache near 1× (three-pass at Δn = 32 on the marble at 128²: 0.90×
-/// to 1.00× on lavapipe) has a speed-up interval that straddles 1× most of
-/// the time: in 1000 frames the governor switches at most twice, never
-/// twice within its minimum dwell of 120 frames.
+/// to 1.00× on one lavapipe machine, 0.77× on another) has a speed-up
+/// interval near or across 1×: in 1000 frames the governor switches at
+/// most twice, never twice within its minimum dwell of 120 frames. How
+/// near 1× the cache lands is the machine's, not asserted here (no test
+/// asserts a timing); the governor's own tests play a cache at exactly 1×
+/// under noise.
 #[test]
 fn governor_does_not_flap_on_noise() {
     if no_gpu() {
@@ -159,18 +162,17 @@ fn governor_does_not_flap_on_noise() {
         ],
     );
     let fixed = number(&played, "original_ms") / number(&played, "fixed_ms");
-    assert!(
-        (0.8..1.2).contains(&fixed),
-        "the fixed cache at {fixed:.2}×: not near 1×"
-    );
     let frames: Vec<u64> = played["decisions"]
         .as_array()
         .unwrap()
         .iter()
         .map(|d| d["frame"].as_u64().unwrap())
         .collect();
-    assert!(frames.len() <= 2, "{frames:?}");
-    assert!(frames.windows(2).all(|w| w[1] - w[0] >= 120), "{frames:?}");
+    assert!(frames.len() <= 2, "fixed cache at {fixed:.2}×: {frames:?}");
+    assert!(
+        frames.windows(2).all(|w| w[1] - w[0] >= 120),
+        "fixed cache at {fixed:.2}×: {frames:?}"
+    );
 }
 
 /// The payload's weight drops halfway (the blur's 64 taps become 1 at
