@@ -67,6 +67,8 @@ struct CacheTargets {
     /// Depth-aspect views, to bind.
     depth_sampled: [wgpu::TextureView; 2],
     classes_view: wgpu::TextureView,
+    /// The bytes of all of the above, as their formats lay them out.
+    bytes: u64,
 }
 
 /// The lowres variant's own targets.
@@ -1119,6 +1121,17 @@ impl CachedShader {
         Ok(())
     }
 
+    /// The bytes of GPU memory the targets this cache owns take, as their
+    /// formats lay them out (drivers may pad and align them further): the
+    /// payload, age and depth twice (this frame's and last frame's), the
+    /// classification, the deferred variant's G-buffer, lowres's samples
+    /// and history. Three-pass with an `rgba16float` payload and 32-bit
+    /// depth owns 32 bytes a pixel. Pipelines, bind groups and the
+    /// application's own targets are not counted.
+    pub fn target_bytes(&self) -> u64 {
+        self.targets.bytes
+    }
+
     /// Forgets last frame (a camera cut, a teleport): the cache starts
     /// over as one just made. The next frame misses everywhere, and the
     /// frame counter and refresh phase start again from 0, so the frames
@@ -1287,7 +1300,12 @@ impl CacheTargets {
         depth_format: wgpu::TextureFormat,
         (gbuffer_formats, lowres_divisor): (&[wgpu::TextureFormat], Option<u32>),
     ) -> CacheTargets {
-        let make = |label: &str, format| render_target(device, label, size, format);
+        let bytes = std::cell::Cell::new(0u64);
+        let target = |label: &str, size: (u32, u32), format| {
+            bytes.set(bytes.get() + target_bytes(size, format));
+            render_target(device, label, size, format)
+        };
+        let make = |label: &str, format| target(label, size, format);
         let pair = |label: &str, format| [make(label, format), make(label, format)];
         let payload = pair("shadecache payload", formats.cache);
         let age = pair("shadecache age", formats.age);
@@ -1306,12 +1324,11 @@ impl CacheTargets {
             .collect();
         let lowres = lowres_divisor.map(|d| {
             let low = (size.0.div_ceil(d), size.1.div_ceil(d));
-            let small = |label: &str, format| view(&render_target(device, label, low, format));
+            let small = |label: &str, format| view(&target(label, low, format));
             LowresTargets {
                 samples: small("shadecache samples", formats.cache),
                 geometry: small("shadecache sample geometry", formats.history),
-                depth: depth_only_attachment(&render_target(
-                    device,
+                depth: depth_only_attachment(&target(
                     "shadecache samples' depth",
                     low,
                     depth_format,
@@ -1330,12 +1347,36 @@ impl CacheTargets {
             depth_views: [view(&depth[0]), view(&depth[1])],
             depth_sampled: [depth_only(&depth[0]), depth_only(&depth[1])],
             classes_view: view(&classes),
+            bytes: bytes.get(),
             payload,
             age,
             depth,
             classes,
         }
     }
+}
+
+/// The bytes a target of `size` and `format` holds, as the format lays
+/// its texels out: a depth format without a defined layout counts 4 bytes
+/// for 24-bit depth and 4 for a stencil beside 32-bit depth, as most
+/// drivers store them. Drivers may pad rows and align allocations, so
+/// this is what the targets need at least.
+fn target_bytes(size: (u32, u32), format: wgpu::TextureFormat) -> u64 {
+    let texel = format.block_copy_size(None).unwrap_or(match format {
+        wgpu::TextureFormat::Depth32FloatStencil8 => 8,
+        _ => 4,
+    });
+    u64::from(size.0.max(1)) * u64::from(size.1.max(1)) * u64::from(texel)
+}
+
+/// The bytes a texture holds, counted as [`CachedShader::target_bytes`]
+/// counts the cache's: every layer and sample of its first mip level.
+/// For an application that adds its own copies (a watch's) to the cache's.
+pub fn texture_bytes(texture: &wgpu::Texture) -> u64 {
+    let size = texture.size();
+    target_bytes((size.width, size.height), texture.format())
+        * u64::from(size.depth_or_array_layers.max(1))
+        * u64::from(texture.sample_count().max(1))
 }
 
 /// The divisor of the plan's reduced-resolution pass (lowres's samples),

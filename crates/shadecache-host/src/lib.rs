@@ -120,7 +120,7 @@ mod twins;
 mod vertex;
 mod watch;
 
-pub use cached::{CachedShader, DescribedPipelines, Draw, Options};
+pub use cached::{texture_bytes, CachedShader, DescribedPipelines, Draw, Options};
 pub use error::Error;
 pub use frame::{FrameLayout, Targets, Viewport};
 pub use governor::{

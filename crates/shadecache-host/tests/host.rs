@@ -864,6 +864,36 @@ fn resize_and_reset_give_misses_not_stale_reuse() {
     assert!(share_at(&app.ages(&gpu), inside(0.0, small), 1.0) > REUSED);
 }
 
+/// The bytes a cache says its targets take are those its plan asks for,
+/// counted by hand: the payload, age (`r16float`) and depth (32-bit) twice
+/// and the classification (`rgba8unorm`) once, the deferred variant's
+/// G-buffer besides; a resize counts the new size.
+#[test]
+fn target_bytes_count_every_target_the_cache_owns() {
+    let Some(gpu) = gpu() else { return };
+    let pixels = u64::from(SIZE * SIZE);
+    let one = make(&gpu, "one-pass", |_| {}).expect("one-pass");
+    // An rgba16float payload: 32 bytes a pixel.
+    assert_eq!(one.target_bytes(), pixels * (2 * 8 + 2 * 2 + 2 * 4 + 4));
+    let mut three = make(&gpu, "three-pass", |_| {}).expect("three-pass");
+    // An rgba32float payload (the node is unbounded): 48.
+    assert_eq!(three.target_bytes(), pixels * 48);
+    three.resize((48, 32)).expect("48×32 fits");
+    assert_eq!(three.target_bytes(), 48 * 32 * 48);
+    let deferred = make(&gpu, "deferred", |_| {}).expect("deferred");
+    // Its depth has the stencil its plan tests.
+    let depth = match deferred.depth().format() {
+        wgpu::TextureFormat::Depth24PlusStencil8 => 4,
+        wgpu::TextureFormat::Depth32FloatStencil8 => 8,
+        other => panic!("{other:?} has no stencil"),
+    };
+    // rgba32uint and r32uint: 20 bytes of G-buffer.
+    assert_eq!(
+        deferred.target_bytes(),
+        pixels * (2 * 16 + 2 * 2 + 2 * depth + 4 + 20)
+    );
+}
+
 /// After `reset()` the cache starts over as one just made: the frames
 /// after it, ages and refreshed blocks included, are a new cache's (the
 /// refresh pattern starts from its first frame again), so a profile of a
