@@ -252,6 +252,8 @@ pub struct HeadlessRun {
     pub rim_frames_drawn: u64,
     /// Errors the plugin logged.
     pub errors: Vec<String>,
+    /// The bytes of GPU memory the caches owned as the run ended.
+    pub target_bytes: u64,
     /// The frame the cut was marked in, if one was.
     pub cut_frame: Option<u32>,
     /// The frame the cache was switched off in, if it was.
@@ -357,6 +359,7 @@ pub fn run_headless(settings: Headless) -> HeadlessRun {
         standard_frames_drawn: stats.frames_drawn_of::<StandardMaterial>(),
         rim_frames_drawn: stats.frames_drawn_of::<scene::RimMaterial>(),
         errors: stats.errors(),
+        target_bytes: stats.target_bytes(),
         cut_frame: outcome.cut_frame,
         switch_off_frame: outcome.switch_off_frame,
         reload_frame: outcome.reload_frame,

@@ -82,6 +82,24 @@ struct ViewCache {
     governed: Option<Governed>,
 }
 
+impl ViewCache {
+    /// The bytes its targets and its watch's copies take.
+    fn target_bytes(&self) -> u64 {
+        let watch = self
+            .governed
+            .as_ref()
+            .and_then(|governed| governed.watch.as_ref())
+            .and_then(|watch| watch.as_ref().ok())
+            .map_or(0, |watch| {
+                [&watch.base, watch.watch.spare(), &watch.depth]
+                    .into_iter()
+                    .map(shadecache_host::texture_bytes)
+                    .sum()
+            });
+        self.shader.target_bytes() + watch
+    }
+}
+
 /// A cache's mode and what runs it: a governor for every mode (`Always`
 /// and `Off` draw one way and decide nothing), and for `Auto` the timer
 /// that measures it.
@@ -239,6 +257,8 @@ struct StatsInner {
     errors: Vec<String>,
     /// Each governed material's governor, by its name.
     governors: Vec<(String, GovernorReadout)>,
+    /// The bytes of GPU memory every view's caches own.
+    target_bytes: u64,
 }
 
 impl CacheStats {
@@ -257,6 +277,17 @@ impl CacheStats {
             .iter()
             .find(|(n, _)| *n == name)
             .map_or(0, |(_, frames)| *frames)
+    }
+
+    /// The bytes of GPU memory the caches of every caching view own, as
+    /// of the last frame prepared: each cache's targets
+    /// ([`CachedShader::target_bytes`]: 32 bytes a pixel for a one- or
+    /// three-pass variant with an `rgba16float` payload, more for a wider
+    /// payload, the deferred variant's G-buffer or lowres's history) and,
+    /// with an error budget, the watch's copies of the view's colour and
+    /// depth. A view caching two materials owns two caches.
+    pub fn target_bytes(&self) -> u64 {
+        self.lock().target_bytes
     }
 
     /// Every error logged, in order.
@@ -468,6 +499,14 @@ fn prepare_view_caches(
             .into_iter()
             .filter(|id| !seen.contains(id) && phases.contains_key(&id.0) && current(id.1)),
     );
+    stats.lock().target_bytes = caches
+        .0
+        .values_mut()
+        .map(|slot| match slot.get_mut() {
+            Ok(Slot::Ready(cache)) => cache.target_bytes(),
+            _ => 0,
+        })
+        .sum();
 }
 
 /// Makes the cache `id` for `key`, or again if it was made for another

@@ -398,6 +398,36 @@ fn bevy_plugin_resets_on_resize() {
     );
 }
 
+/// The memory a game reads (`CacheStats::target_bytes`) is the caching
+/// view's cache at the view's size: the lava's one-pass variant owns its
+/// payload (`rgba16float`, or `rgba32float` for an unbounded node), age
+/// and depth twice and its classification once, 32 or 48 bytes a pixel,
+/// and a quarter of that once the view is half as wide and high.
+#[test]
+fn cache_memory_is_its_targets_at_the_views_size() {
+    if skipped() {
+        return;
+    }
+    let whole = in_turn(Headless {
+        frames: 4,
+        ..Headless::default()
+    });
+    assert!(whole.errors.is_empty(), "{:?}", whole.errors);
+    let pixels = 128 * 128;
+    assert!(
+        [32 * pixels, 48 * pixels].contains(&whole.target_bytes),
+        "{} bytes at 128²",
+        whole.target_bytes
+    );
+    let resized = in_turn(Headless {
+        frames: 4,
+        resize: Some((4, 64)),
+        ..Headless::default()
+    });
+    assert!(resized.errors.is_empty(), "{:?}", resized.errors);
+    assert_eq!(resized.target_bytes * 4, whole.target_bytes);
+}
+
 /// A camera cut forgets last frame: the frame drawn after it, with the
 /// plan's Δn, is Bevy's own, though the camera moved on smoothly (so
 /// without the cut the cache would reuse), and reuse resumes after it.
