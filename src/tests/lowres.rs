@@ -2,6 +2,7 @@
 //! a jittered lattice and rebuilt at full resolution (seed 001).
 
 use crate::profile::Options;
+use crate::report::ResultRow;
 use crate::rewrite::{CacheFormat, Upsampler, Variant};
 
 use super::profile::{options, run};
@@ -37,19 +38,61 @@ fn static_scene_lowres_converges_to_full_resolution() {
     static_marble_converges(Variant::Lowres);
 }
 
+/// At a size the lattice does not divide (130 × 126 at s = 4: 33 × 32
+/// samples, the last column and row of cells cut short), the forward
+/// samples pass's projection is scaled as well as moved (`cache_jitter`),
+/// so each sample still lands on its pixel's centre and those past the
+/// window shade outside it; the deferred one reads its lattice pixel from
+/// the G-buffer, clamped to the frame. Every pixel, those of the short
+/// cells included, is shaded on its own within s² frames: 60.1 dB for
+/// both. What is left is at the sphere's silhouette (6 pixels 3 to 6
+/// steps of 8 bits off, 0.033 at most, the same in both, so of the
+/// upsampling they share), not at the short cells. Checked: with the
+/// forward projection moved but not scaled (m = 1, the samples drifting
+/// off their pixels towards the window's far edges), 51.7 dB.
+#[test]
+fn lowres_converges_at_a_size_the_lattice_does_not_divide() {
+    for variant in [Variant::Lowres, Variant::DeferredLowres] {
+        let Some(row) = static_marble(variant, (130, 126)) else {
+            return;
+        };
+        assert!(
+            row.max_abs_error < 0.04 && row.psnr > 58.0,
+            "{variant}: largest difference {} after 16 frames (PSNR {} dB)",
+            row.max_abs_error,
+            row.psnr
+        );
+    }
+}
+
 /// The still marble through `variant`'s spatio-temporal reconstruction
 /// after s² + 1 frames: within 0.02 of the reference, above 61 dB.
 fn static_marble_converges(variant: Variant) {
-    let scene = marble_scene("", "").replace("turbulence_amount = 6.0", "turbulence_amount = 1.0");
+    let Some(row) = static_marble(variant, (128, 128)) else {
+        return;
+    };
+    assert!(
+        row.max_abs_error < 0.02 && row.psnr > 61.0,
+        "{variant}: largest difference {} after 16 frames (PSNR {} dB)",
+        row.max_abs_error,
+        row.psnr
+    );
+}
+
+/// The still marble (turbulence 1) at `size` through `variant`'s
+/// spatio-temporal reconstruction after s² + 1 frames: its one row, whose
+/// passes are checked. `None` without a GPU.
+fn static_marble(variant: Variant, (width, height): (u32, u32)) -> Option<ResultRow> {
+    let scene = marble_scene("", "")
+        .replace("turbulence_amount = 6.0", "turbulence_amount = 1.0")
+        .replace("size = [128, 128]", &format!("size = [{width}, {height}]"));
     let options = Options {
         variants: vec![variant],
         ..lowres(&[Upsampler::SpatioTemporal], 17, 3)
     };
-    let Some((_, report, _)) = run(&scene, options) else {
-        return;
-    };
+    let (_, report, _) = run(&scene, options)?;
     assert_eq!(report.results.len(), 1);
-    let row = &report.results[0];
+    let row = report.results.into_iter().next()?;
     assert_eq!((row.variant, row.refresh_period), (variant, 16));
     // The deferred lowres's G-buffer, lattice, samples and upsampling;
     // the forward one's samples and upsampling.
@@ -59,12 +102,7 @@ fn static_marble_converges(variant: Variant) {
         2
     };
     assert_eq!(row.passes.len(), passes, "{variant}: {:?}", row.passes);
-    assert!(
-        row.max_abs_error < 0.02 && row.psnr > 61.0,
-        "{variant}: largest difference {} after 16 frames (PSNR {} dB)",
-        row.max_abs_error,
-        row.psnr
-    );
+    Some(row)
 }
 
 /// Before the lattice has covered the window, only a sixteenth of the
