@@ -84,6 +84,9 @@ pub struct Headless {
     /// colour changes (as a game edits a material's values), and `frames`
     /// more are compared.
     pub edit_standard_material_after: Option<u32>,
+    /// The edit changes only the `StandardMaterial`s that no mesh marked
+    /// for the cache binds.
+    pub edit_only_uncached: bool,
     /// Both cameras draw in linear HDR (`Hdr`, no tonemapping) into
     /// `rgba16float` images read back as they are, and the frames compare
     /// as `shadecache profile` compares them: PSNR over RGB in linear float,
@@ -228,6 +231,7 @@ impl Default for Headless {
             switch_on_after: None,
             reload_shader_after: None,
             edit_standard_material_after: None,
+            edit_only_uncached: false,
             async_cache: false,
             masks: false,
             linear: false,
@@ -756,12 +760,16 @@ fn compare(mut capture: ResMut<Capture>, frame: Res<FrameCount>, run: Res<Run>) 
     }
 }
 
+/// The `StandardMaterial`s of meshes marked for the cache.
+type MarkedStandard<'w, 's> =
+    Query<'w, 's, &'static MeshMaterial3d<StandardMaterial>, With<CachedMaterial>>;
+
 /// Once `cut_after` frames are compared, marks a cut on the caching
 /// camera, once; once `switch_off_after` are, switches its cache off;
 /// once `reload_shader_after` are, changes the lava's shader asset (its
 /// source as it was: Bevy sees a change, as from a hot reload); once
 /// `edit_standard_material_after` are, changes every `StandardMaterial`'s
-/// base colour.
+/// base colour (with `edit_only_uncached`, of those no marked mesh binds).
 fn cut_or_switch_off(
     run: Res<Run>,
     frame: Res<FrameCount>,
@@ -769,7 +777,8 @@ fn cut_or_switch_off(
     mut caches: Query<&mut ReprojectionCache>,
     server: Res<AssetServer>,
     mut shaders: ResMut<Assets<bevy::shader::Shader>>,
-    mut standard: ResMut<Assets<StandardMaterial>>,
+    // The materials to edit, and those of meshes marked for the cache.
+    (mut standard, marked): (ResMut<Assets<StandardMaterial>>, MarkedStandard),
 ) {
     let compared = capture.compared.len() as u32;
     let due = |after: Option<u32>, done: Option<u32>| {
@@ -803,7 +812,11 @@ fn cut_or_switch_off(
         }
     }
     if due(run.0.edit_standard_material_after, capture.edit_frame) {
-        let ids: Vec<AssetId<StandardMaterial>> = standard.ids().collect();
+        let cached: Vec<AssetId<StandardMaterial>> = marked.iter().map(|m| m.id()).collect();
+        let ids: Vec<AssetId<StandardMaterial>> = standard
+            .ids()
+            .filter(|id| !run.0.edit_only_uncached || !cached.contains(id))
+            .collect();
         for id in ids {
             if let Some(mut material) = standard.get_mut(id) {
                 material.base_color = Color::srgb(0.2, 0.35, 0.9);

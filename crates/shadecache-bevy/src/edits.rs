@@ -1,35 +1,35 @@
 //! A cached material's values edited while the game runs (a colour
 //! changed on hover, a slider moved): Bevy draws the new values at once,
 //! while the cache would show the old ones where it reuses, for up to
-//! Δn frames. The frame an asset of a cached material's type is modified,
-//! each view's caches of that material start afresh, as at a cut, and
-//! reuse resumes from the new values.
+//! Δn frames. The frame a material asset is modified, each view's cache
+//! that draws a mesh binding it starts afresh, as at a cut, and reuse
+//! resumes from the new values.
 //!
-//! By type, not by asset: an edit of one `StandardMaterial` resets every
-//! cache of `StandardMaterial`. A game that borrows a material mutably
-//! every frame (`Assets::get_mut` marks it modified whether or not it
-//! changes it) resets its caches every frame, so caches nothing.
+//! By asset: an edit of a `StandardMaterial` no cached mesh binds (a
+//! hovered prop Bevy draws) leaves the caches of `StandardMaterial` as
+//! they are. A cache holds all its meshes' pixels in one, so an edit of
+//! one of its meshes' materials resets the whole of it. A game that
+//! borrows a material mutably every frame (`Assets::get_mut` marks it
+//! modified whether or not it changes it) resets the caches drawing it
+//! every frame, so caches nothing of them.
 
-use std::any::TypeId;
-
-use bevy::asset::AssetEvent;
+use bevy::asset::{AssetEvent, UntypedAssetId};
 use bevy::pbr::Material;
 use bevy::platform::collections::HashSet;
 use bevy::prelude::*;
 use bevy::render::extract_resource::ExtractResource;
 use bevy::render::RenderApp;
 
-/// The cached material types with an asset modified this frame, extracted
-/// with the frame (in which Bevy's render world prepares the new values).
+/// The cached materials' assets modified this frame, extracted with the
+/// frame (in which Bevy's render world prepares the new values).
 #[derive(Resource, Clone, Default, ExtractResource)]
 #[extract_app(RenderApp)]
-pub(crate) struct EditedMaterials(HashSet<TypeId>);
+pub(crate) struct EditedMaterials(HashSet<UntypedAssetId>);
 
 impl EditedMaterials {
-    /// Whether an asset of the material type `material` was modified this
-    /// frame.
-    pub fn contains(&self, material: TypeId) -> bool {
-        self.0.contains(&material)
+    /// Whether the material asset `asset` was modified this frame.
+    pub fn contains(&self, asset: UntypedAssetId) -> bool {
+        self.0.contains(&asset)
     }
 }
 
@@ -39,11 +39,10 @@ pub(crate) fn watch<M: Material>(
     mut events: MessageReader<AssetEvent<M>>,
     mut edited: ResMut<EditedMaterials>,
 ) {
-    let modified = events
-        .read()
-        .any(|event| matches!(event, AssetEvent::Modified { .. }));
-    if modified {
-        edited.0.insert(TypeId::of::<M>());
+    for event in events.read() {
+        if let AssetEvent::Modified { id } = event {
+            edited.0.insert(id.untyped());
+        }
     }
 }
 

@@ -960,6 +960,7 @@ struct CachedDraws<'w> {
     variants: Res<'w, CachedVariants>,
     view_uniforms: Res<'w, ViewUniforms>,
     edited: Res<'w, EditedMaterials>,
+    material_instances: Res<'w, RenderMaterialInstances>,
 }
 
 /// Records the view's variants after Bevy's opaque pass, one cached
@@ -989,6 +990,7 @@ fn draw_cached_passes(
         variants,
         view_uniforms,
         edited,
+        material_instances,
     } = drawn;
     let view_entity = view.entity();
     let (extracted, target, depth, offset, settings) = view.into_inner();
@@ -1042,11 +1044,17 @@ fn draw_cached_passes(
             stats.error(err.to_string());
             continue;
         }
-        // A cut, or the material's values edited this frame: what the
-        // cache holds is of another shot or other values.
-        let values_edited = variants
-            .get(variant)
-            .is_some_and(|material| edited.contains(material.material));
+        // A cut, or the values of a material one of its meshes binds
+        // edited this frame: what the cache holds is of another shot or
+        // other values.
+        use bevy::render::render_phase::PhaseItem;
+        let values_edited = phase
+            .items
+            .values()
+            .skip(items.start)
+            .take(items.len())
+            .filter_map(|item| material_instances.instances.get(&item.main_entity()))
+            .any(|instance| edited.contains(instance.asset_id));
         if settings.is_cut() || values_edited {
             cache.shader.reset();
         }

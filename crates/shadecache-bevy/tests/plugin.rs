@@ -491,6 +491,41 @@ fn edited_material_values_reset_its_caches() {
     starts_afresh_at(&run.compared, edit, "edit");
 }
 
+/// An edit of a material no cached mesh binds (the `StandardMaterial` of
+/// an opaque box Bevy draws, beside the cached box's own) leaves the
+/// caches of `StandardMaterial` as they are: every frame from the edit on
+/// reuses, as before it. Checked: with the caches reset whenever any asset
+/// of the material's type is modified, a frame after the edit is Bevy's
+/// own.
+#[test]
+fn an_edit_of_a_material_no_cached_mesh_binds_leaves_the_cache_reusing() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        frames: 8,
+        step_degrees: 1.0,
+        standard_material: true,
+        lava_uncached: true,
+        other_meshes: OtherMeshes::OpaqueInFront,
+        edit_standard_material_after: Some(40),
+        edit_only_uncached: true,
+        ..Headless::default()
+    });
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    let edit = run.edit_frame.expect("the material was edited");
+    let around: Vec<&Compared> = run
+        .compared
+        .iter()
+        .filter(|f| f.frame + 4 >= edit)
+        .take(10)
+        .collect();
+    assert!(
+        around.iter().all(|f| f.max_error > 1.0 / 255.0),
+        "a frame around the edit at {edit} is Bevy's own: {around:?}"
+    );
+}
+
 /// What the host refuses is an error at start-up, never a panic in the
 /// game: with MSAA (a cache holds one value per pixel) the view's cache
 /// is not made, the error says why, and Bevy draws the material as
