@@ -80,13 +80,12 @@ pub struct Headless {
     /// After this many compared frames, the lava's shader asset changes
     /// (as a hot reload changes it), and `frames` more are compared.
     pub reload_shader_after: Option<u32>,
-    /// After this many compared frames, every `StandardMaterial`'s base
-    /// colour changes (as a game edits a material's values), and `frames`
+    /// After this many compared frames, the `StandardMaterial`s are edited
+    /// as `material_edit` says (as a game recolours a mesh), and `frames`
     /// more are compared.
     pub edit_standard_material_after: Option<u32>,
-    /// The edit changes only the `StandardMaterial`s that no mesh marked
-    /// for the cache binds.
-    pub edit_only_uncached: bool,
+    /// What the edit of `edit_standard_material_after` does.
+    pub material_edit: MaterialEdit,
     /// Both cameras draw in linear HDR (`Hdr`, no tonemapping) into
     /// `rgba16float` images read back as they are, and the frames compare
     /// as `shadecache profile` compares them: PSNR over RGB in linear float,
@@ -102,6 +101,20 @@ pub struct Headless {
     /// pixel (`Masks`), and each frame's error is measured over each
     /// material's pixels too (`Compared::psnr_of`).
     pub masks: bool,
+}
+
+/// How a run edits the `StandardMaterial`s.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MaterialEdit {
+    /// Every `StandardMaterial`'s base colour changes.
+    #[default]
+    EveryColour,
+    /// The base colour changes of the `StandardMaterial`s no mesh marked
+    /// for the cache binds.
+    UncachedColours,
+    /// Each marked mesh with a `StandardMaterial` is given a new asset, of
+    /// another colour (as a game highlights a selected mesh).
+    SwapMarked,
 }
 
 /// Meshes Bevy draws with its own `StandardMaterial` (unlit) beside the
@@ -231,7 +244,7 @@ impl Default for Headless {
             switch_on_after: None,
             reload_shader_after: None,
             edit_standard_material_after: None,
-            edit_only_uncached: false,
+            material_edit: MaterialEdit::EveryColour,
             async_cache: false,
             masks: false,
             linear: false,
@@ -762,14 +775,14 @@ fn compare(mut capture: ResMut<Capture>, frame: Res<FrameCount>, run: Res<Run>) 
 
 /// The `StandardMaterial`s of meshes marked for the cache.
 type MarkedStandard<'w, 's> =
-    Query<'w, 's, &'static MeshMaterial3d<StandardMaterial>, With<CachedMaterial>>;
+    Query<'w, 's, &'static mut MeshMaterial3d<StandardMaterial>, With<CachedMaterial>>;
 
 /// Once `cut_after` frames are compared, marks a cut on the caching
 /// camera, once; once `switch_off_after` are, switches its cache off;
 /// once `reload_shader_after` are, changes the lava's shader asset (its
 /// source as it was: Bevy sees a change, as from a hot reload); once
-/// `edit_standard_material_after` are, changes every `StandardMaterial`'s
-/// base colour (with `edit_only_uncached`, of those no marked mesh binds).
+/// `edit_standard_material_after` are, edits the `StandardMaterial`s as
+/// `material_edit` says.
 fn cut_or_switch_off(
     run: Res<Run>,
     frame: Res<FrameCount>,
@@ -778,7 +791,7 @@ fn cut_or_switch_off(
     server: Res<AssetServer>,
     mut shaders: ResMut<Assets<bevy::shader::Shader>>,
     // The materials to edit, and those of meshes marked for the cache.
-    (mut standard, marked): (ResMut<Assets<StandardMaterial>>, MarkedStandard),
+    (mut standard, mut marked): (ResMut<Assets<StandardMaterial>>, MarkedStandard),
 ) {
     let compared = capture.compared.len() as u32;
     let due = |after: Option<u32>, done: Option<u32>| {
@@ -812,14 +825,32 @@ fn cut_or_switch_off(
         }
     }
     if due(run.0.edit_standard_material_after, capture.edit_frame) {
+        let colour = Color::srgb(0.2, 0.35, 0.9);
         let cached: Vec<AssetId<StandardMaterial>> = marked.iter().map(|m| m.id()).collect();
-        let ids: Vec<AssetId<StandardMaterial>> = standard
-            .ids()
-            .filter(|id| !run.0.edit_only_uncached || !cached.contains(id))
-            .collect();
-        for id in ids {
+        let recoloured: Vec<AssetId<StandardMaterial>> = match run.0.material_edit {
+            MaterialEdit::EveryColour => standard.ids().collect(),
+            MaterialEdit::UncachedColours => {
+                standard.ids().filter(|id| !cached.contains(id)).collect()
+            }
+            MaterialEdit::SwapMarked => Vec::new(),
+        };
+        for id in recoloured {
             if let Some(mut material) = standard.get_mut(id) {
-                material.base_color = Color::srgb(0.2, 0.35, 0.9);
+                material.base_color = colour;
+            }
+        }
+        if run.0.material_edit == MaterialEdit::SwapMarked {
+            for mut material in &mut marked {
+                let swapped = standard
+                    .get(&material.0)
+                    .cloned()
+                    .map(|old| StandardMaterial {
+                        base_color: colour,
+                        ..old
+                    });
+                if let Some(swapped) = swapped {
+                    material.0 = standard.add(swapped);
+                }
             }
         }
         capture.edit_frame = Some(frame.0);

@@ -26,7 +26,9 @@ use bevy::prelude::*;
 use bevy::render::render_resource::{TextureFormat, TextureUsages};
 use shadecache_bevy::CacheStats;
 
-pub use compare::{run_headless, Compared, Headless, HeadlessRun, LeftToBevy, Masked, OtherMeshes};
+pub use compare::{
+    run_headless, Compared, Headless, HeadlessRun, LeftToBevy, Masked, MaterialEdit, OtherMeshes,
+};
 pub use measure::{measure, Cached, Measure, Measured};
 
 /// The scene's assets (the materials' shaders, the lava's scene for

@@ -12,6 +12,11 @@
 //! borrows a material mutably every frame (`Assets::get_mut` marks it
 //! modified whether or not it changes it) resets the caches drawing it
 //! every frame, so caches nothing of them.
+//!
+//! A mesh given another asset (a material swapped on selection) is the
+//! same change by another road: the view's cache keeps the asset each of
+//! its meshes bound when last drawn and starts afresh when one binds
+//! another (`ViewCache::materials_changed`).
 
 use bevy::asset::{AssetEvent, UntypedAssetId};
 use bevy::pbr::Material;

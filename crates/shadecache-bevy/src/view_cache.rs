@@ -12,6 +12,7 @@
 use std::ops::Range;
 use std::sync::{Arc, Mutex};
 
+use bevy::asset::UntypedAssetId;
 use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d};
 use bevy::core_pipeline::{schedule::Core3d, Core3dSystems};
 use bevy::ecs::system::SystemParam;
@@ -30,6 +31,7 @@ use bevy::render::render_phase::{
 };
 use bevy::render::render_resource::{BufferUsages, PipelineCache, ShaderType};
 use bevy::render::renderer::{RenderContext, RenderDevice, RenderQueue, ViewQuery};
+use bevy::render::sync_world::MainEntity;
 use bevy::render::view::{
     ExtractedView, ViewDepthStencilTexture, ViewTarget, ViewUniform, ViewUniformOffset,
     ViewUniforms,
@@ -80,9 +82,31 @@ struct ViewCache {
     twins: Twins,
     /// How it runs, as its camera says (made again when that changes).
     governed: Option<Governed>,
+    /// The material asset each mesh it drew last bound.
+    bound: HashMap<MainEntity, UntypedAssetId>,
 }
 
 impl ViewCache {
+    /// Whether what the cache holds of its meshes is of other material
+    /// values than this frame's: a mesh binds another asset than when it
+    /// was last drawn (a material swapped on selection), or an asset whose
+    /// values were edited this frame. Keeps this frame's bindings.
+    fn materials_changed(
+        &mut self,
+        bound: impl Iterator<Item = (MainEntity, UntypedAssetId)>,
+        edited: &EditedMaterials,
+    ) -> bool {
+        let mut changed = false;
+        let mut now = HashMap::default();
+        for (mesh, asset) in bound {
+            changed |=
+                edited.contains(asset) || self.bound.get(&mesh).is_some_and(|last| *last != asset);
+            now.insert(mesh, asset);
+        }
+        self.bound = now;
+        changed
+    }
+
     /// The bytes its targets and its watch's copies take.
     fn target_bytes(&self) -> u64 {
         let watch = self
@@ -833,6 +857,7 @@ fn build_cache(
         view_now,
         twins,
         governed: None,
+        bound: HashMap::default(),
     })
 }
 
@@ -1044,18 +1069,21 @@ fn draw_cached_passes(
             stats.error(err.to_string());
             continue;
         }
-        // A cut, or the values of a material one of its meshes binds
-        // edited this frame: what the cache holds is of another shot or
-        // other values.
+        // A cut, or its meshes' material values changed this frame (an
+        // asset swapped or edited): what the cache holds is of another
+        // shot or other values.
         use bevy::render::render_phase::PhaseItem;
-        let values_edited = phase
+        let bound = phase
             .items
             .values()
             .skip(items.start)
             .take(items.len())
-            .filter_map(|item| material_instances.instances.get(&item.main_entity()))
-            .any(|instance| edited.contains(instance.asset_id));
-        if settings.is_cut() || values_edited {
+            .filter_map(|item| {
+                let instance = material_instances.instances.get(&item.main_entity())?;
+                Some((item.main_entity(), instance.asset_id))
+            });
+        let materials_changed = cache.materials_changed(bound, &edited);
+        if settings.is_cut() || materials_changed {
             cache.shader.reset();
         }
         let frame = CacheFrame {

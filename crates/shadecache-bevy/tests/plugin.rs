@@ -10,7 +10,7 @@ use std::sync::Mutex;
 
 use shadecache_bevy::CacheMode;
 use shadecache_bevy_harness::{
-    run_headless, Compared, Headless, HeadlessRun, LeftToBevy, Masked, OtherMeshes,
+    run_headless, Compared, Headless, HeadlessRun, LeftToBevy, Masked, MaterialEdit, OtherMeshes,
 };
 
 #[path = "../../shadecache-bevy-harness/lava_build.rs"]
@@ -491,6 +491,31 @@ fn edited_material_values_reset_its_caches() {
     starts_afresh_at(&run.compared, edit, "edit");
 }
 
+/// A cached mesh given another material asset while the game runs (as a
+/// game highlights a selected mesh) shows it at once: the frame of the
+/// swap, the box's caches start afresh and the frame is Bevy's own with
+/// the new asset's colour, and reuse resumes after it. Checked: without
+/// the plugin comparing each mesh's asset with last frame's, no frame
+/// after the swap is Bevy's own.
+#[test]
+fn a_cached_meshs_material_swapped_resets_its_caches() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        frames: 8,
+        step_degrees: 1.0,
+        standard_material: true,
+        lava_uncached: true,
+        edit_standard_material_after: Some(40),
+        material_edit: MaterialEdit::SwapMarked,
+        ..Headless::default()
+    });
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    let swap = run.edit_frame.expect("the material was swapped");
+    starts_afresh_at(&run.compared, swap, "swap");
+}
+
 /// An edit of a material no cached mesh binds (the `StandardMaterial` of
 /// an opaque box Bevy draws, beside the cached box's own) leaves the
 /// caches of `StandardMaterial` as they are: every frame from the edit on
@@ -509,7 +534,7 @@ fn an_edit_of_a_material_no_cached_mesh_binds_leaves_the_cache_reusing() {
         lava_uncached: true,
         other_meshes: OtherMeshes::OpaqueInFront,
         edit_standard_material_after: Some(40),
-        edit_only_uncached: true,
+        material_edit: MaterialEdit::UncachedColours,
         ..Headless::default()
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
