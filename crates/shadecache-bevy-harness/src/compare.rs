@@ -67,6 +67,10 @@ pub struct Headless {
     /// and SSAO need): the view's depth holds the cached meshes' own
     /// before their passes run.
     pub depth_prepass: bool,
+    /// Both cameras with Bevy's TAA (`TemporalAntiAliasing`, which jitters
+    /// the projection every frame and adds the depth and motion-vector
+    /// prepasses).
+    pub taa: bool,
     /// One more lava mesh marked for the cache that the variant's passes
     /// cannot draw as Bevy does, which the plugin leaves to Bevy.
     pub left_to_bevy: Option<LeftToBevy>,
@@ -240,6 +244,7 @@ impl Default for Headless {
             left_to_bevy: None,
             half_viewport: false,
             depth_prepass: false,
+            taa: false,
             switch_off_after: None,
             switch_on_after: None,
             reload_shader_after: None,
@@ -576,6 +581,12 @@ fn setup(
         }
         if settings.depth_prepass {
             camera.insert(bevy::core_pipeline::prepass::DepthPrepass);
+        }
+        if settings.taa {
+            camera.insert((
+                bevy::anti_alias::taa::TemporalAntiAliasing::default(),
+                Msaa::Off,
+            ));
         }
         if settings.half_viewport {
             camera.insert(Camera {

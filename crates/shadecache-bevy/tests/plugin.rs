@@ -516,6 +516,41 @@ fn a_cached_meshs_material_swapped_resets_its_caches() {
     starts_afresh_at(&run.compared, swap, "swap");
 }
 
+/// Under Bevy's TAA, which jitters the projection every frame, the cache
+/// reprojects through last frame's jittered view (its twin of Bevy's view
+/// uniform), so it finds each point where last frame's jittered raster
+/// shaded it. At Δn = 1 every frame is Bevy's own TAA frame; at the plan's
+/// Δn it reuses.
+#[test]
+fn taa_camera_caches_under_its_jitter() {
+    if skipped() {
+        return;
+    }
+    let run = in_turn(Headless {
+        refresh_period: Some(1),
+        frames: 8,
+        taa: true,
+        ..Headless::default()
+    });
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    assert!(run.frames_drawn >= 8, "{} frames drawn", run.frames_drawn);
+    all_bevys_own(&run.compared);
+
+    let run = in_turn(Headless {
+        frames: 48,
+        taa: true,
+        ..Headless::default()
+    });
+    assert!(run.errors.is_empty(), "{:?}", run.errors);
+    let steady = &run.compared[run.compared.len() - 24..];
+    let psnr: Vec<String> = steady.iter().map(|f| format!("{:.1}", f.psnr)).collect();
+    eprintln!("TAA, PSNR of the steady frames: {}", psnr.join(" "));
+    assert!(
+        steady.iter().all(|f| f.max_error > 0.0),
+        "a frame equals Bevy's: nothing was reused\n{steady:?}"
+    );
+}
+
 /// An edit of a material no cached mesh binds (the `StandardMaterial` of
 /// an opaque box Bevy draws, beside the cached box's own) leaves the
 /// caches of `StandardMaterial` as they are: every frame from the edit on
