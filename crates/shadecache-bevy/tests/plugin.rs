@@ -224,28 +224,34 @@ fn split_screen_viewport_is_honoured() {
     if skipped() {
         return;
     }
+    bevys_own_at_one_then_reusing(
+        Headless {
+            half_viewport: true,
+            ..Headless::default()
+        },
+        72,
+        "split screen",
+    );
+}
+
+/// `with` at Δn = 1 for 8 frames: every frame is Bevy's own. Then for
+/// `frames` at the plan's Δn: the last 24 reuse, each above 30 dB (their
+/// PSNRs said on stderr, as `what`).
+fn bevys_own_at_one_then_reusing(with: Headless, frames: u32, what: &str) {
     let run = in_turn(Headless {
         refresh_period: Some(1),
         frames: 8,
-        half_viewport: true,
-        ..Headless::default()
+        ..with.clone()
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     assert!(run.frames_drawn >= 8, "{} frames drawn", run.frames_drawn);
     all_bevys_own(&run.compared);
 
-    let run = in_turn(Headless {
-        frames: 72,
-        half_viewport: true,
-        ..Headless::default()
-    });
+    let run = in_turn(Headless { frames, ..with });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     let steady = &run.compared[run.compared.len() - 24..];
     let psnr: Vec<String> = steady.iter().map(|f| format!("{:.1}", f.psnr)).collect();
-    eprintln!(
-        "split screen, PSNR of the steady frames: {}",
-        psnr.join(" ")
-    );
+    eprintln!("{what}, PSNR of the steady frames: {}", psnr.join(" "));
     assert!(
         steady.iter().all(|f| f.max_error > 0.0),
         "a frame equals Bevy's: nothing was reused\n{steady:?}"
@@ -478,17 +484,28 @@ fn edited_material_values_reset_its_caches() {
     if skipped() {
         return;
     }
+    let (run, edit) = material_edited(MaterialEdit::EveryColour, OtherMeshes::None);
+    starts_afresh_at(&run.compared, edit, "edit");
+}
+
+/// The box cached in Bevy's `StandardMaterial` under a 1°/frame orbit
+/// (the lava left to Bevy, `others` beside it), its `StandardMaterial`s
+/// edited as `edit` says after 40 compared frames and 8 more compared: the
+/// run, and the frame of the edit.
+fn material_edited(edit: MaterialEdit, others: OtherMeshes) -> (HeadlessRun, u32) {
     let run = in_turn(Headless {
         frames: 8,
         step_degrees: 1.0,
         standard_material: true,
         lava_uncached: true,
+        other_meshes: others,
         edit_standard_material_after: Some(40),
+        material_edit: edit,
         ..Headless::default()
     });
     assert!(run.errors.is_empty(), "{:?}", run.errors);
     let edit = run.edit_frame.expect("the material was edited");
-    starts_afresh_at(&run.compared, edit, "edit");
+    (run, edit)
 }
 
 /// A cached mesh given another material asset while the game runs (as a
@@ -502,17 +519,7 @@ fn a_cached_meshs_material_swapped_resets_its_caches() {
     if skipped() {
         return;
     }
-    let run = in_turn(Headless {
-        frames: 8,
-        step_degrees: 1.0,
-        standard_material: true,
-        lava_uncached: true,
-        edit_standard_material_after: Some(40),
-        material_edit: MaterialEdit::SwapMarked,
-        ..Headless::default()
-    });
-    assert!(run.errors.is_empty(), "{:?}", run.errors);
-    let swap = run.edit_frame.expect("the material was swapped");
+    let (run, swap) = material_edited(MaterialEdit::SwapMarked, OtherMeshes::None);
     starts_afresh_at(&run.compared, swap, "swap");
 }
 
@@ -526,28 +533,13 @@ fn taa_camera_caches_under_its_jitter() {
     if skipped() {
         return;
     }
-    let run = in_turn(Headless {
-        refresh_period: Some(1),
-        frames: 8,
-        taa: true,
-        ..Headless::default()
-    });
-    assert!(run.errors.is_empty(), "{:?}", run.errors);
-    assert!(run.frames_drawn >= 8, "{} frames drawn", run.frames_drawn);
-    all_bevys_own(&run.compared);
-
-    let run = in_turn(Headless {
-        frames: 48,
-        taa: true,
-        ..Headless::default()
-    });
-    assert!(run.errors.is_empty(), "{:?}", run.errors);
-    let steady = &run.compared[run.compared.len() - 24..];
-    let psnr: Vec<String> = steady.iter().map(|f| format!("{:.1}", f.psnr)).collect();
-    eprintln!("TAA, PSNR of the steady frames: {}", psnr.join(" "));
-    assert!(
-        steady.iter().all(|f| f.max_error > 0.0),
-        "a frame equals Bevy's: nothing was reused\n{steady:?}"
+    bevys_own_at_one_then_reusing(
+        Headless {
+            taa: true,
+            ..Headless::default()
+        },
+        48,
+        "TAA",
     );
 }
 
@@ -562,18 +554,7 @@ fn an_edit_of_a_material_no_cached_mesh_binds_leaves_the_cache_reusing() {
     if skipped() {
         return;
     }
-    let run = in_turn(Headless {
-        frames: 8,
-        step_degrees: 1.0,
-        standard_material: true,
-        lava_uncached: true,
-        other_meshes: OtherMeshes::OpaqueInFront,
-        edit_standard_material_after: Some(40),
-        material_edit: MaterialEdit::UncachedColours,
-        ..Headless::default()
-    });
-    assert!(run.errors.is_empty(), "{:?}", run.errors);
-    let edit = run.edit_frame.expect("the material was edited");
+    let (run, edit) = material_edited(MaterialEdit::UncachedColours, OtherMeshes::OpaqueInFront);
     let around: Vec<&Compared> = run
         .compared
         .iter()
