@@ -86,6 +86,8 @@ pub struct Measured {
     pub frames_drawn: u64,
     /// Errors the plugin logged.
     pub errors: Vec<String>,
+    /// The bytes of GPU memory the caches owned as the run ended.
+    pub target_bytes: u64,
 }
 
 impl Measured {
@@ -136,6 +138,7 @@ pub fn measure(settings: Measure) -> Measured {
         material_ms,
         frames_drawn: stats.frames_drawn(),
         errors: stats.errors(),
+        target_bytes: stats.target_bytes(),
     }
 }
 

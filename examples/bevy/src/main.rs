@@ -148,8 +148,12 @@ fn time(args: Args) {
                 let speedup = medians.first().map_or(String::new(), |nothing| {
                     format!(", {:.2}× against nothing cached", nothing / median)
                 });
+                let memory = match run.target_bytes {
+                    0 => String::new(),
+                    bytes => format!("; the caches own {:.2} MB", bytes as f64 / 1e6),
+                };
                 println!(
-                    "{label}: opaque meshes {median:.3} ms GPU per frame [{low:.3}, {high:.3}] (median, 2.5–97.5th percentile, {} frames, {}²){speedup}",
+                    "{label}: opaque meshes {median:.3} ms GPU per frame [{low:.3}, {high:.3}] (median, 2.5–97.5th percentile, {} frames, {}²){speedup}{memory}",
                     run.material_ms.len(),
                     args.size
                 );
