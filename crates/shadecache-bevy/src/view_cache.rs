@@ -41,7 +41,7 @@ use shadecache_host::plan::ResourceKind;
 use shadecache_host::{
     CacheMode, CachedShader, Choice, Coverage, DescribedPipelines, ErrorWatch, FrameLayout,
     FrameTimer, Governor, NoTimer, Options, PassTimer, Plan, SpeedEstimate, Targets, TwinSources,
-    Twins, Viewport,
+    Twins, VertexBufferDescriptor, Viewport,
 };
 
 use crate::edits::EditedMaterials;
@@ -708,7 +708,7 @@ fn settle(
 struct CacheInputs {
     plan: Plan,
     groups: [(u32, Vec<wgpu::BindGroupLayoutEntry>); 4],
-    vertex: (u64, wgpu::VertexStepMode, Vec<wgpu::VertexAttribute>),
+    vertex: VertexBufferDescriptor,
     key: CacheKey,
     prepass: bool,
 }
@@ -768,11 +768,11 @@ fn cache_inputs(
     Ok(CacheInputs {
         plan,
         groups,
-        vertex: (
-            buffer.array_stride,
-            buffer.step_mode,
-            buffer.attributes.clone(),
-        ),
+        vertex: VertexBufferDescriptor {
+            array_stride: buffer.array_stride,
+            step_mode: buffer.step_mode,
+            attributes: buffer.attributes.clone(),
+        },
         key: key.clone(),
         prepass,
     })
@@ -785,17 +785,12 @@ fn describe_pipelines(
     inputs: &CacheInputs,
     device: &wgpu::Device,
 ) -> Result<DescribedPipelines, String> {
-    let (array_stride, step_mode, attributes) = &inputs.vertex;
     let groups: Vec<(u32, &[wgpu::BindGroupLayoutEntry])> = inputs
         .groups
         .iter()
         .map(|(group, entries)| (*group, entries.as_slice()))
         .collect();
-    let vertex = [Some(wgpu::VertexBufferLayout {
-        array_stride: *array_stride,
-        step_mode: *step_mode,
-        attributes,
-    })];
+    let vertex = [Some(inputs.vertex.borrowed())];
     let key = &inputs.key;
     let colors = [Some(wgpu::ColorTargetState::from(key.color_format))];
     let mut frame = FrameLayout::new(&vertex, &groups, &colors);

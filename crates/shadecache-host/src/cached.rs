@@ -16,7 +16,7 @@ use crate::pipelines::{
 };
 use crate::timing::{NoTimer, PassTimer};
 use crate::twins::{Shared, TwinSources, Twins, TwinsInner};
-use crate::vertex::TwinSlot;
+use crate::vertex::{TwinSlot, VertexBufferDescriptor};
 use crate::{frame, layouts, params, vertex, Error, FrameLayout, Targets};
 
 /// What the host does beyond the plan's passes.
@@ -190,10 +190,9 @@ impl Setup {
         if let Some(shared) = cache_group.and_then(|group| user_groups.get(&group)) {
             cache_entries.extend(shared.iter().copied());
         }
-        let buffers: Vec<Option<wgpu::VertexBufferLayout<'_>>> = user_buffers
-            .iter()
-            .map(|l| l.as_ref().map(|l| l.borrowed()))
-            .chain(twin_slots.iter().map(|t| Some(t.layout.borrowed())))
+        let buffers: Vec<Option<VertexBufferDescriptor>> = user_buffers
+            .into_iter()
+            .chain(twin_slots.iter().map(|t| Some(t.layout.clone())))
             .collect();
         let inputs = PipelineInputs {
             buffers: &buffers,
@@ -1302,8 +1301,9 @@ impl CacheTargets {
     ) -> CacheTargets {
         let bytes = std::cell::Cell::new(0u64);
         let target = |label: &str, size: (u32, u32), format| {
-            bytes.set(bytes.get() + target_bytes(size, format));
-            render_target(device, label, size, format)
+            let texture = render_target(device, label, size, format);
+            bytes.set(bytes.get() + texture_bytes(&texture));
+            texture
         };
         let make = |label: &str, format| target(label, size, format);
         let pair = |label: &str, format| [make(label, format), make(label, format)];
@@ -1356,27 +1356,30 @@ impl CacheTargets {
     }
 }
 
-/// The bytes a target of `size` and `format` holds, as the format lays
-/// its texels out: a depth format without a defined layout counts 4 bytes
-/// for 24-bit depth and 4 for a stencil beside 32-bit depth, as most
-/// drivers store them. Drivers may pad rows and align allocations, so
-/// this is what the targets need at least.
-fn target_bytes(size: (u32, u32), format: wgpu::TextureFormat) -> u64 {
+/// The bytes a texture holds, as its format lays its texels out: every
+/// layer and sample of its first mip level. A depth format without a
+/// defined layout counts 4 bytes for 24-bit depth and 4 for a stencil
+/// beside 32-bit depth, as most drivers store them; drivers may pad rows
+/// and align allocations, so this is what it needs at least. How
+/// [`CachedShader::target_bytes`] counts the cache's, for an application
+/// that adds its own copies (a watch's) to them.
+pub fn texture_bytes(texture: &wgpu::Texture) -> u64 {
+    let format = texture.format();
     let texel = format.block_copy_size(None).unwrap_or(match format {
         wgpu::TextureFormat::Depth32FloatStencil8 => 8,
         _ => 4,
     });
-    u64::from(size.0.max(1)) * u64::from(size.1.max(1)) * u64::from(texel)
-}
-
-/// The bytes a texture holds, counted as [`CachedShader::target_bytes`]
-/// counts the cache's: every layer and sample of its first mip level.
-/// For an application that adds its own copies (a watch's) to the cache's.
-pub fn texture_bytes(texture: &wgpu::Texture) -> u64 {
     let size = texture.size();
-    target_bytes((size.width, size.height), texture.format())
-        * u64::from(size.depth_or_array_layers.max(1))
-        * u64::from(texture.sample_count().max(1))
+    [
+        size.width,
+        size.height,
+        size.depth_or_array_layers,
+        texture.sample_count(),
+        texel,
+    ]
+    .into_iter()
+    .map(u64::from)
+    .product()
 }
 
 /// The divisor of the plan's reduced-resolution pass (lowres's samples),

@@ -127,7 +127,8 @@ pub use governor::{
     CacheMode, Cause, Choice, Decision, GovernedFrame, Governor, GovernorSettings, SpeedEstimate,
     TrialTurn,
 };
-pub use pipelines::{PassPipelineDescriptor, VertexBufferDescriptor};
+pub use pipelines::PassPipelineDescriptor;
+pub use vertex::VertexBufferDescriptor;
 
 /// Brings in the Rust module a build script's `shadecache::build::Build`
 /// writes (`$OUT_DIR/shadecache/variants.rs`), naming every variant it

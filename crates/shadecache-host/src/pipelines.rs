@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use shadecache_plan::{DrawKind, Pass, TargetKind};
 
 use crate::formats::{compare_function, stencil_state};
-use crate::{Error, FrameLayout, Options};
+use crate::{Error, FrameLayout, Options, VertexBufferDescriptor};
 
 /// The formats of the targets the host owns.
 #[derive(Clone, Copy, Debug)]
@@ -59,7 +59,7 @@ pub(crate) fn by_group<T: Clone>(
 
 /// What every pass's pipeline is made with.
 pub(crate) struct PipelineInputs<'a> {
-    pub buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+    pub buffers: &'a [Option<VertexBufferDescriptor>],
     pub frame: &'a FrameLayout<'a>,
     pub formats: HostFormats,
     /// The format of the host's depth buffers: the frame's, or one with a
@@ -109,17 +109,6 @@ pub struct PassPipelineDescriptor {
     pub bind_group_layouts: Vec<Vec<wgpu::BindGroupLayoutEntry>>,
 }
 
-/// A vertex buffer's layout, owned.
-#[derive(Clone, Debug, PartialEq)]
-pub struct VertexBufferDescriptor {
-    /// Bytes between elements.
-    pub array_stride: wgpu::BufferAddress,
-    /// Per vertex or per instance.
-    pub step_mode: wgpu::VertexStepMode,
-    /// What each element holds, at which shader location.
-    pub attributes: Vec<wgpu::VertexAttribute>,
-}
-
 /// The pass's pipeline, described: see [`PassPipelineDescriptor`].
 /// `bind_group_layouts` are the entries of the layout [`pipeline_layout`]
 /// makes.
@@ -148,16 +137,7 @@ pub(crate) fn describe(
         shader: pass.shader.clone(),
         vertex_entry: pass.vertex_entry.clone(),
         fragment_entry: pass.fragment_entry.clone(),
-        vertex_buffers: buffers
-            .iter()
-            .map(|buffer| {
-                buffer.as_ref().map(|b| VertexBufferDescriptor {
-                    array_stride: b.array_stride,
-                    step_mode: b.step_mode,
-                    attributes: b.attributes.to_vec(),
-                })
-            })
-            .collect(),
+        vertex_buffers: buffers.to_vec(),
         primitive,
         depth_stencil: wgpu::DepthStencilState {
             format: inputs.depth_format,
@@ -188,13 +168,7 @@ pub(crate) async fn pipeline(
     let buffers: Vec<Option<wgpu::VertexBufferLayout<'_>>> = described
         .vertex_buffers
         .iter()
-        .map(|buffer| {
-            buffer.as_ref().map(|b| wgpu::VertexBufferLayout {
-                array_stride: b.array_stride,
-                step_mode: b.step_mode,
-                attributes: &b.attributes,
-            })
-        })
+        .map(|buffer| buffer.as_ref().map(VertexBufferDescriptor::borrowed))
         .collect();
     let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(&described.label),

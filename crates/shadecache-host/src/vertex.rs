@@ -6,21 +6,36 @@ use shadecache_plan::{Plan, StepMode};
 use crate::formats::vertex_format;
 use crate::Error;
 
-/// A vertex buffer layout the host owns: the slot it is bound at and what
-/// it holds.
-#[derive(Clone, Debug)]
-pub(crate) struct OwnedLayout {
-    pub stride: wgpu::BufferAddress,
-    pub step: wgpu::VertexStepMode,
+/// A vertex buffer's layout, owned: the application's as the host keeps
+/// it, a twin slot's, and each buffer of a
+/// [`PassPipelineDescriptor`](crate::PassPipelineDescriptor).
+#[derive(Clone, Debug, PartialEq)]
+pub struct VertexBufferDescriptor {
+    /// Bytes between elements.
+    pub array_stride: wgpu::BufferAddress,
+    /// Per vertex or per instance.
+    pub step_mode: wgpu::VertexStepMode,
+    /// What each element holds, at which shader location.
     pub attributes: Vec<wgpu::VertexAttribute>,
 }
 
-impl OwnedLayout {
+impl VertexBufferDescriptor {
+    /// The layout as wgpu takes it.
     pub fn borrowed(&self) -> wgpu::VertexBufferLayout<'_> {
         wgpu::VertexBufferLayout {
-            array_stride: self.stride,
-            step_mode: self.step,
+            array_stride: self.array_stride,
+            step_mode: self.step_mode,
             attributes: &self.attributes,
+        }
+    }
+}
+
+impl From<&wgpu::VertexBufferLayout<'_>> for VertexBufferDescriptor {
+    fn from(layout: &wgpu::VertexBufferLayout<'_>) -> VertexBufferDescriptor {
+        VertexBufferDescriptor {
+            array_stride: layout.array_stride,
+            step_mode: layout.step_mode,
+            attributes: layout.attributes.to_vec(),
         }
     }
 }
@@ -33,7 +48,7 @@ pub(crate) struct TwinSlot {
     pub source: u32,
     /// The slot the host binds the copy at.
     pub slot: u32,
-    pub layout: OwnedLayout,
+    pub layout: VertexBufferDescriptor,
 }
 
 /// The vertex buffers of the variant's pipelines: the application's, as
@@ -43,16 +58,10 @@ pub(crate) struct TwinSlot {
 pub(crate) fn layouts(
     plan: &Plan,
     given: &[Option<wgpu::VertexBufferLayout<'_>>],
-) -> Result<(Vec<Option<OwnedLayout>>, Vec<TwinSlot>), Error> {
-    let user: Vec<Option<OwnedLayout>> = given
+) -> Result<(Vec<Option<VertexBufferDescriptor>>, Vec<TwinSlot>), Error> {
+    let user: Vec<Option<VertexBufferDescriptor>> = given
         .iter()
-        .map(|l| {
-            l.as_ref().map(|l| OwnedLayout {
-                stride: l.array_stride,
-                step: l.step_mode,
-                attributes: l.attributes.to_vec(),
-            })
-        })
+        .map(|l| l.as_ref().map(VertexBufferDescriptor::from))
         .collect();
     let find = |location: u32| {
         user.iter().enumerate().find_map(|(slot, layout)| {
@@ -78,10 +87,10 @@ pub(crate) fn layouts(
                     input.location, input.name
                 ))
             })?;
-            if attribute.format != format || layout.step != step {
+            if attribute.format != format || layout.step_mode != step {
                 return Err(Error::Mismatch(format!(
                     "vertex input @location({}) `{}` is {} stepping per {:?} in the shader, {:?} stepping per {:?} in the frame",
-                    input.location, input.name, input.format, input.step, attribute.format, layout.step
+                    input.location, input.name, input.format, input.step, attribute.format, layout.step_mode
                 )));
             }
             continue;
@@ -109,9 +118,9 @@ pub(crate) fn layouts(
             None => twins.push(TwinSlot {
                 source,
                 slot: (user.len() + twins.len()) as u32,
-                layout: OwnedLayout {
-                    stride: layout.stride,
-                    step: layout.step,
+                layout: VertexBufferDescriptor {
+                    array_stride: layout.array_stride,
+                    step_mode: layout.step_mode,
                     attributes: vec![attribute],
                 },
             }),
