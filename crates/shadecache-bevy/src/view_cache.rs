@@ -82,7 +82,7 @@ struct ViewCache {
     twins: Twins,
     /// How it runs, as its camera says (made again when that changes).
     governed: Option<Governed>,
-    /// The material asset each mesh it drew last bound.
+    /// The material asset each mesh it has drawn bound when last drawn.
     bound: HashMap<MainEntity, UntypedAssetId>,
 }
 
@@ -90,20 +90,21 @@ impl ViewCache {
     /// Whether what the cache holds of its meshes is of other material
     /// values than this frame's: a mesh binds another asset than when it
     /// was last drawn (a material swapped on selection), or an asset whose
-    /// values were edited this frame. Keeps this frame's bindings.
+    /// values were edited this frame. Keeps this frame's bindings (in
+    /// place: no map is made a frame).
     fn materials_changed(
         &mut self,
         bound: impl Iterator<Item = (MainEntity, UntypedAssetId)>,
         edited: &EditedMaterials,
     ) -> bool {
         let mut changed = false;
-        let mut now = HashMap::default();
         for (mesh, asset) in bound {
-            changed |=
-                edited.contains(asset) || self.bound.get(&mesh).is_some_and(|last| *last != asset);
-            now.insert(mesh, asset);
+            let swapped = self
+                .bound
+                .insert(mesh, asset)
+                .is_some_and(|last| last != asset);
+            changed |= swapped || edited.contains(asset);
         }
-        self.bound = now;
         changed
     }
 
