@@ -837,30 +837,30 @@ fn cut_or_switch_off(
     }
     if due(run.0.edit_standard_material_after, capture.edit_frame) {
         let colour = Color::srgb(0.2, 0.35, 0.9);
-        let cached: Vec<AssetId<StandardMaterial>> = marked.iter().map(|m| m.id()).collect();
-        let recoloured: Vec<AssetId<StandardMaterial>> = match run.0.material_edit {
-            MaterialEdit::EveryColour => standard.ids().collect(),
-            MaterialEdit::UncachedColours => {
-                standard.ids().filter(|id| !cached.contains(id)).collect()
+        match run.0.material_edit {
+            MaterialEdit::EveryColour | MaterialEdit::UncachedColours => {
+                let kept: Vec<AssetId<StandardMaterial>> =
+                    if run.0.material_edit == MaterialEdit::UncachedColours {
+                        marked.iter().map(|m| m.id()).collect()
+                    } else {
+                        Vec::new()
+                    };
+                let ids: Vec<AssetId<StandardMaterial>> =
+                    standard.ids().filter(|id| !kept.contains(id)).collect();
+                for id in ids {
+                    if let Some(mut material) = standard.get_mut(id) {
+                        material.base_color = colour;
+                    }
+                }
             }
-            MaterialEdit::SwapMarked => Vec::new(),
-        };
-        for id in recoloured {
-            if let Some(mut material) = standard.get_mut(id) {
-                material.base_color = colour;
-            }
-        }
-        if run.0.material_edit == MaterialEdit::SwapMarked {
-            for mut material in &mut marked {
-                let swapped = standard
-                    .get(&material.0)
-                    .cloned()
-                    .map(|old| StandardMaterial {
-                        base_color: colour,
-                        ..old
-                    });
-                if let Some(swapped) = swapped {
-                    material.0 = standard.add(swapped);
+            MaterialEdit::SwapMarked => {
+                for mut material in &mut marked {
+                    if let Some(old) = standard.get(&material.0).cloned() {
+                        material.0 = standard.add(StandardMaterial {
+                            base_color: colour,
+                            ..old
+                        });
+                    }
                 }
             }
         }
