@@ -8,7 +8,8 @@
 //! unless `SHADECACHE_SKIP_GPU_TESTS=1` says to skip them.
 
 use shadecache_host::{
-    CachedShader, Error, FrameLayout, Options, Plan, Targets, TwinSources, Twins, Viewport,
+    CachedShader, Error, FrameLayout, Options, Plan, Targets, TwinSources, Twins,
+    VertexBufferDescriptor, Viewport,
 };
 
 const SIZE: u32 = 64;
@@ -1196,13 +1197,7 @@ fn made_by_the_application(gpu: &Gpu, name: &str) -> CachedShader {
                 let buffers: Vec<Option<wgpu::VertexBufferLayout<'_>>> = pass
                     .vertex_buffers
                     .iter()
-                    .map(|b| {
-                        b.as_ref().map(|b| wgpu::VertexBufferLayout {
-                            array_stride: b.array_stride,
-                            step_mode: b.step_mode,
-                            attributes: &b.attributes,
-                        })
-                    })
+                    .map(|b| b.as_ref().map(VertexBufferDescriptor::borrowed))
                     .collect();
                 device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                     label: Some(&pass.label),
