@@ -165,39 +165,16 @@ fn lavapipe_22_reproducer_profiles() {
     assert!(out.path().join("report.json").is_file());
 }
 
-/// The folder of a package of the lock file, from cargo's own registry
-/// copy (`cargo metadata`). Offline first (the build has fetched the
-/// package); where that fails, once more with the network: the metadata
-/// lists every package of the lock file, those of other platforms too (a
-/// window crate's Android backend), which a build never downloads.
+/// The folder of a crate of the workspace's dependency graph, found as
+/// the library finds a WESL package's (`cargo metadata`, with the network
+/// where offline cannot list every platform's packages).
 fn package_dir(name: &str) -> PathBuf {
-    let metadata = |offline: bool| {
-        let mut args = vec!["metadata", "--format-version", "1", "--locked"];
-        if offline {
-            args.push("--offline");
-        }
-        Command::new(env!("CARGO"))
-            .args(args)
-            .current_dir(root())
-            .output()
-            .expect("cargo runs")
-    };
-    let mut output = metadata(true);
-    if !output.status.success() {
-        output = metadata(false);
-    }
-    assert!(output.status.success(), "{}", stderr(&output));
-    let metadata: Value = serde_json::from_slice(&output.stdout).unwrap();
-    let manifest = metadata["packages"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|package| package["name"] == name)
-        .unwrap_or_else(|| panic!("{name} is not in the lock file"))["manifest_path"]
-        .as_str()
-        .unwrap()
-        .to_string();
-    PathBuf::from(manifest).parent().unwrap().to_path_buf()
+    use shadecache::front::crate_package::{source_dir, Lookup};
+    let root = root();
+    let src = source_dir(name, &Lookup::command_line(&root)).unwrap_or_else(|err| panic!("{err}"));
+    src.parent()
+        .expect("`src/` is in the crate's folder")
+        .to_path_buf()
 }
 
 /// Bevy's PBR shader as the naga_oil crate ships it (its example, composed
